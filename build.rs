@@ -1,0 +1,3 @@
+//! Build script: computes each stage kind's code fingerprint (being built).
+
+fn main() {}

@@ -1,0 +1,81 @@
+//! The contract between the engine and a stage kind: typed params in, artifacts (bytes) out.
+//!
+//! A stage is a pure function of its params and input artifacts. It never touches the file
+//! system: the engine reads inputs into memory, calls `run`, checks every declared output is
+//! present, and writes the outputs into the store atomically.
+
+use std::collections::BTreeMap;
+
+/// One artifact: a single file's bytes, or a collection of named items (e.g. one per run).
+/// Collection item names are file-name safe (`[A-Za-z0-9._-]`), and iterate in sorted order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Artifact {
+    File(Vec<u8>),
+    Collection(BTreeMap<String, Vec<u8>>),
+}
+
+/// What a stage receives.
+pub struct StageInput<'a> {
+    /// The stage's params, already checked by `StageKind::canonical_params`.
+    pub params: &'a toml::Table,
+    /// Input artifacts by the input names the kind declares. For a per-item stage the
+    /// `foreach` input holds only the current item, as `Artifact::File`.
+    pub inputs: BTreeMap<&'a str, &'a Artifact>,
+    /// For a per-item stage: the current item's name.
+    pub item: Option<&'a str>,
+    /// The pipeline seed (from `pipeline.toml`), mixed with the stage name by the engine.
+    pub seed: u64,
+}
+
+/// What a stage returns: artifacts by output name. Every declared output must be present.
+pub type StageOutputs = BTreeMap<String, Artifact>;
+
+/// A failure of a stage on its inputs (bad data, a numerical breakdown). Lowercase, says how to fix.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct StageError(pub String);
+
+/// An invalid params table: which key, what is wrong, how to fix.
+#[derive(Debug, thiserror::Error)]
+#[error("param `{key}`: {message}")]
+pub struct ParamError {
+    pub key: String,
+    pub message: String,
+}
+
+/// A built-in kind of stage.
+pub trait StageKind: Sync + Send {
+    /// The `kind = "..."` name in `pipeline.toml`.
+    fn kind(&self) -> &'static str;
+    /// Input names this kind needs (each bound in `pipeline.toml`), and those it may take.
+    fn inputs(&self) -> &'static [&'static str];
+    fn optional_inputs(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// Output names this kind produces.
+    fn outputs(&self) -> &'static [&'static str];
+    /// Validate the params (unknown key, wrong type, out of range) and return them with every
+    /// default filled in, as the canonical JSON value that goes into the cache key.
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError>;
+    /// Run the stage.
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError>;
+}
+
+/// Deserialize a params table into a typed struct (use `#[serde(deny_unknown_fields, default)]`),
+/// returning it and its canonical JSON form. Shared by every built-in kind.
+pub fn typed_params<P>(params: &toml::Table) -> Result<(P, serde_json::Value), ParamError>
+where
+    P: serde::de::DeserializeOwned + serde::Serialize,
+{
+    let typed: P = toml::Value::Table(params.clone())
+        .try_into()
+        .map_err(|e: toml::de::Error| ParamError {
+            key: e.message().split('`').nth(1).unwrap_or("params").to_string(),
+            message: e.message().to_string(),
+        })?;
+    let json = serde_json::to_value(&typed).map_err(|e| ParamError {
+        key: "params".into(),
+        message: e.to_string(),
+    })?;
+    Ok((typed, json))
+}

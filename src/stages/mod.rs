@@ -1,0 +1,12 @@
+//! The built-in stage kinds: each adapts a pure analysis function to the engine's `StageKind` contract.
+
+use crate::engine::stage::StageKind;
+
+/// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
+/// engine's own kind and is not listed.
+pub fn registry() -> Vec<Box<dyn StageKind>> {
+    #[allow(unused_mut)]
+    let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
+    // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
+    kinds
+}
