@@ -1,1 +1,3 @@
 //! fit (being built)
+
+pub mod collision;
