@@ -169,7 +169,29 @@ fn rolling_first_impact_recovers_c_and_velocities() {
             };
             let (rec, truth) = simulate(&case);
             let fit = fit_collision(&rec, &CollisionOptions::default());
-            assert_eq!(fit.status, CollisionStatus::Converged, "{}", fit.message);
+            eprintln!(
+                "status {:?} iters {} rms {:.2e} noise {:.2e} outl {}",
+                fit.status, fit.iterations, fit.rms_m, fit.noise_m, fit.n_outliers
+            );
+            for im in &fit.impacts {
+                eprintln!(
+                    "  fit t {:.6} speed {:.4} C {:.3} dvz {:.4} dva {:.4} sum {:.4}->{:.4} {:?}",
+                    im.t_s.value,
+                    im.impact_speed_mps.value,
+                    im.restitution.value,
+                    im.target_dvz_mps.value,
+                    im.target_dva_mps.value,
+                    im.spin_sum_before_mps,
+                    im.spin_sum_after_mps.value,
+                    im.contact
+                );
+            }
+            for im in &truth {
+                eprintln!(
+                    "  true t {:.6} speed {:.4} C {:.3} slip {}",
+                    im.t_s, im.speed_mps, im.c, im.slip
+                );
+            }
             assert_eq!(fit.direction as f64, direction);
             let first = &fit.impacts[0];
             let t0 = truth[0];
@@ -184,4 +206,21 @@ fn rolling_first_impact_recovers_c_and_velocities() {
             assert!((fit.mu_pg.value - MU_PG).abs() < 0.01);
         }
     }
+}
+
+#[test]
+fn scratch_debug() {
+    let case = Case {
+        setup: Setup::Rolling,
+        v0_mps: 0.18,
+        mu_pp: 1.4,
+        a_per_mps: 1.5,
+        direction: 1.0,
+        seed: 4,
+    };
+    let (rec, truth) = simulate(&case);
+    let fit = fit_collision(&rec, &CollisionOptions::default());
+    eprintln!("{}", serde_json::to_string_pretty(&fit.segments).unwrap());
+    eprintln!("{}", serde_json::to_string_pretty(&fit.impacts).unwrap());
+    eprintln!("{:?}", truth);
 }

@@ -83,8 +83,9 @@ pub fn departure_time_s(target: &TrackData, sigma_m: f64) -> Option<f64> {
     if slope <= 0.0 {
         return Some(target.t_s[i - 1]);
     }
+    // the threshold is crossed a few frames after the start at low speed: extrapolate back
     let t_cross = target.t_s[i] - (z_at - z_rest) / slope;
-    Some(t_cross.clamp(target.t_s[i - 1], target.t_s[i]))
+    Some(t_cross.clamp(target.t_s[n_rest - 1], target.t_s[i]))
 }
 
 /// Index of the first sample at or after `t`.
@@ -92,119 +93,156 @@ pub fn index_at(track: &TrackData, t_s: f64) -> usize {
     track.t_s.partition_point(|&x| x < t_s)
 }
 
-/// A proposed impact from the residual kink scan.
-#[derive(Debug, Clone, Copy)]
-pub struct KinkProposal {
+/// A contact found in the gap between the particles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
     pub t_s: f64,
-    /// Velocity jump of the striker and of the target (m/s, striker-forward frame).
-    pub jump_mps: [f64; 2],
-    /// Impulse estimate over its standard error.
+    /// Rate of change of the gap just before (< 0, closing) and just after (> 0, opening).
+    pub gap_rate_before_mps: f64,
+    pub gap_rate_after_mps: f64,
+    /// Jump of the gap rate over its standard error.
     pub z_score: f64,
 }
 
-/// Kink (change of slope at `tb`) of residuals in a window: regress r on 1, (t − tb), (t − tb)₊.
-fn hinge(t: &[f64], r: &[f64], tb: f64, half_window_s: f64) -> Option<(f64, f64)> {
-    let mut xtx = [[0.0f64; 3]; 3];
-    let mut xty = [0.0f64; 3];
-    let (mut n_left, mut n_right) = (0, 0);
-    let mut rows: Vec<([f64; 3], f64)> = Vec::new();
-    for (ti, ri) in t.iter().zip(r) {
-        let dt = ti - tb;
-        if dt.abs() > half_window_s {
-            continue;
-        }
-        if dt < 0.0 {
-            n_left += 1;
+/// The gap z_target − z_striker at the times both particles were recorded (same frame time).
+pub fn gap_series(tracks: &[TrackData; 2]) -> TrackData {
+    let (a, b) = (&tracks[0], &tracks[1]);
+    let (mut i, mut j) = (0, 0);
+    let mut out = TrackData::default();
+    while i < a.t_s.len() && j < b.t_s.len() {
+        let (ta, tb) = (a.t_s[i], b.t_s[j]);
+        if (ta - tb).abs() <= 1e-9 * ta.abs().max(1.0) {
+            out.t_s.push(ta);
+            out.z_m.push(b.z_m[j] - a.z_m[i]);
+            i += 1;
+            j += 1;
+        } else if ta < tb {
+            i += 1;
         } else {
-            n_right += 1;
-        }
-        let x = [1.0, dt, dt.max(0.0)];
-        rows.push((x, *ri));
-        for a in 0..3 {
-            xty[a] += x[a] * ri;
-            for b in 0..3 {
-                xtx[a][b] += x[a] * x[b];
-            }
+            j += 1;
         }
     }
-    if n_left < 5 || n_right < 5 {
+    out
+}
+
+/// Least-squares quadratic through the samples `lo..hi` (outlier-flagged ones skipped):
+/// its slope at `tb` and the standard error of that slope for noise `sigma_m`.
+pub fn quadratic_slope(
+    g: &TrackData,
+    keep: &[bool],
+    lo: usize,
+    hi: usize,
+    tb: f64,
+    sigma_m: f64,
+) -> Option<(f64, f64)> {
+    let mut xtx = [[0.0f64; 3]; 3];
+    let mut xty = [0.0f64; 3];
+    let mut n = 0;
+    for i in lo..hi {
+        if !keep[i] {
+            continue;
+        }
+        let x = g.t_s[i] - tb;
+        let row = [1.0, x, x * x];
+        for a in 0..3 {
+            xty[a] += row[a] * g.z_m[i];
+            for b in 0..3 {
+                xtx[a][b] += row[a] * row[b];
+            }
+        }
+        n += 1;
+    }
+    if n < 6 {
         return None;
     }
     let inv = invert3(&xtx)?;
-    let beta: Vec<f64> = (0..3)
-        .map(|a| (0..3).map(|b| inv[a][b] * xty[b]).sum())
-        .collect();
-    let mut res: Vec<f64> = rows
-        .iter()
-        .map(|(x, y)| y - (0..3).map(|a| x[a] * beta[a]).sum::<f64>())
-        .collect();
-    let s = 1.4826 * median_abs(&mut res);
-    Some((beta[2], s * inv[2][2].max(0.0).sqrt()))
+    let slope: f64 = (0..3).map(|b| inv[1][b] * xty[b]).sum();
+    Some((slope, sigma_m * inv[1][1].max(0.0).sqrt()))
 }
 
 fn invert3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
+    // scale rows/columns by the diagonal for conditioning (times are ~1e-3 s)
+    let d: Vec<f64> = (0..3).map(|i| m[i][i].max(1e-300).sqrt()).collect();
+    let ms = |i: usize, j: usize| m[i][j] / (d[i] * d[j]);
     let c = |i: usize, j: usize| {
         let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
         let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-        m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]
+        ms(i1, j1) * ms(i2, j2) - ms(i1, j2) * ms(i2, j1)
     };
-    let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
-    if det.abs() < 1e-300 || !det.is_finite() {
+    let det = ms(0, 0) * c(0, 0) + ms(0, 1) * c(0, 1) + ms(0, 2) * c(0, 2);
+    if det.abs() < 1e-14 || !det.is_finite() {
         return None;
     }
     let mut inv = [[0.0; 3]; 3];
     for i in 0..3 {
         for j in 0..3 {
-            inv[j][i] = c(i, j) / det;
+            inv[j][i] = c(i, j) / det / (d[i] * d[j]);
         }
     }
     Some(inv)
 }
 
-/// Scan the residuals of both tracks for the strongest pair of opposite kinks (striker slows,
-/// target speeds up) away from the known impacts; `allowed(t)` gates candidate times (contact).
-pub fn kink_scan(
-    tracks: &[TrackData; 2],
-    residuals: [&[f64]; 2],
-    known_impacts_s: &[f64],
-    min_separation_s: f64,
-    half_window_s: f64,
-    allowed: &dyn Fn(f64) -> bool,
-) -> Option<KinkProposal> {
-    let ts = &tracks[0].t_s;
-    let mut best: Option<KinkProposal> = None;
-    for i in 1..ts.len() {
-        let tb = 0.5 * (ts[i - 1] + ts[i]);
-        if known_impacts_s
-            .iter()
-            .any(|&k| (k - tb).abs() < min_separation_s)
-            || !allowed(tb)
-        {
+/// Contacts after `after_s`: samples where the gap is within `tol_m` of the contact distance
+/// `contact_m`, the gap rate jumps from closing to opening by more than `min_z` standard errors
+/// (one-sided quadratic fits over `window` samples), and the jump is a local maximum.
+pub fn gap_contacts(
+    gap: &TrackData,
+    sigma_m: f64,
+    contact_m: f64,
+    tol_m: f64,
+    after_s: f64,
+    window: usize,
+    min_z: f64,
+) -> Vec<Contact> {
+    let n = gap.t_s.len();
+    // flag outliers: far from the median of their 5 neighbours
+    let keep: Vec<bool> = (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(2);
+            let hi = (i + 3).min(n);
+            let mut w: Vec<f64> = gap.z_m[lo..hi].to_vec();
+            (gap.z_m[i] - median(&mut w)).abs() < 8.0 * sigma_m
+        })
+        .collect();
+    let mut found: Vec<Contact> = Vec::new();
+    let mut scores: Vec<Option<Contact>> = vec![None; n];
+    for i in window..n.saturating_sub(window) {
+        let tb = gap.t_s[i];
+        if tb <= after_s || !keep[i] || (gap.z_m[i] - contact_m).abs() > tol_m {
             continue;
         }
-        let Some((k0, s0)) = hinge(ts, residuals[0], tb, half_window_s) else {
+        let Some((before, se_b)) = quadratic_slope(gap, &keep, i + 1 - window, i + 1, tb, sigma_m)
+        else {
             continue;
         };
-        let Some((k1, s1)) = hinge(&tracks[1].t_s, residuals[1], tb, half_window_s) else {
+        let Some((after, se_a)) = quadratic_slope(gap, &keep, i, i + window, tb, sigma_m) else {
             continue;
         };
-        // residual = model − data, so a missed jump ΔV in the data shows as a kink −ΔV
-        let (j0, j1) = (-k0, -k1);
-        let impulse = 0.5 * (j1 - j0);
-        let se = 0.5 * (s0 * s0 + s1 * s1).sqrt();
-        if !(se > 0.0) || j1 <= 0.0 || j0 >= 0.0 {
-            continue;
-        }
-        let z = impulse / se;
-        if best.is_none_or(|b| z > b.z_score) {
-            best = Some(KinkProposal {
+        let z = (after - before) / (se_a * se_a + se_b * se_b).sqrt();
+        if before < 0.0 && after > 0.0 && z > 0.0 {
+            scores[i] = Some(Contact {
                 t_s: tb,
-                jump_mps: [j0, j1],
+                gap_rate_before_mps: before,
+                gap_rate_after_mps: after,
                 z_score: z,
             });
         }
     }
-    best
+    let half = (window / 2).max(2);
+    for i in 0..n {
+        let Some(c) = scores[i] else { continue };
+        let lo = i.saturating_sub(half);
+        let hi = (i + half + 1).min(n);
+        let is_max = (lo..hi).all(|k| {
+            k == i
+                || scores[k]
+                    .is_none_or(|o| o.z_score < c.z_score || (o.z_score == c.z_score && k > i))
+        });
+        if is_max && c.z_score >= min_z {
+            found.push(c);
+        }
+    }
+    found
 }
 
 #[cfg(test)]

@@ -8,11 +8,13 @@
 //! impact where the pair is in contact; it is kept only if the robust cost drops by more than
 //! `accept_chi2` noise units. Everything the fit finds is returned as data (`summarize_fit`).
 
-use super::detect::{departure_time_s, index_at, kink_scan, noise_scale_m, robust_line};
+use super::detect::{
+    departure_time_s, gap_contacts, gap_series, index_at, noise_scale_m, robust_line,
+};
 use super::impulse::after_impact;
 use super::lm::{minimize, LmOptions, LmResult};
 use super::model::{Layout, TrackData};
-use super::plan::{FirstPiece, Plan, PlanImpact};
+use super::plan::{After, FirstPiece, Plan, PlanImpact};
 use super::report::{failed_fit, summarize_fit};
 use super::types::{CollisionFit, CollisionStatus};
 use crate::recording::{Recording, Setup};
@@ -27,10 +29,9 @@ pub struct CollisionOptions {
     pub k: f64,
     /// At most this many impacts per run (the first and its secondaries).
     pub max_impacts: usize,
-    /// A proposed impact needs a kink of at least this many standard errors …
+    /// A secondary contact is fitted as an impact when the jump of the gap rate exceeds this
+    /// many standard errors; otherwise the fit stops where the pair touches again.
     pub kink_z: f64,
-    /// … and must lower the robust cost by this many (noise-scaled) units.
-    pub accept_chi2: f64,
     /// Starting values of μ_pg, T and μ_pp (the latter only seeds the spins after an impact).
     pub mu_start: f64,
     pub t_drag_start_s: f64,
@@ -44,7 +45,6 @@ impl Default for CollisionOptions {
             k: 2.5,
             max_impacts: 6,
             kink_z: 6.0,
-            accept_chi2: 40.0,
             mu_start: 0.3,
             t_drag_start_s: 0.06,
             mu_pp_start: 1.0,
@@ -115,9 +115,16 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
             }
         },
     };
-    let (_, _, plan) = fitter.grow(plan);
-    // a final polish with a larger iteration budget
-    let (layout, res) = fitter.solve_with(&plan, &fitter.tracks, 150);
+    let (plan, t_stop) = fitter.add_secondary(plan);
+    let cut = |tr: &TrackData| {
+        let n = index_at(tr, t_stop);
+        TrackData {
+            t_s: tr.t_s[..n].to_vec(),
+            z_m: tr.z_m[..n].to_vec(),
+        }
+    };
+    let used = [cut(&fitter.tracks[0]), cut(&fitter.tracks[1])];
+    let (layout, res) = fitter.solve_with(&plan, &used, 150);
     let mut fit = summarize_fit(info, direction, &layout, &res);
     fit.setup = Some(setup);
     fit
@@ -131,6 +138,11 @@ struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
+    /// Largest spin (signed like `v`) friction can build up within one frame after a kick.
+    fn va_max(&self, v: f64) -> f64 {
+        v.signum() * self.opts.k * super::motion::G_MPS2 * super::plan::MU_BOUNDS.1 * self.frame_s
+    }
+
     fn solve(&self, plan: &Plan, tracks: &[TrackData; 2]) -> (Layout, LmResult) {
         self.solve_with(plan, tracks, 60)
     }
@@ -179,21 +191,6 @@ impl Fitter<'_> {
         }
     }
 
-    /// Robust cost in noise units (Huber, c = 2.5), comparable between nested models.
-    fn cost(&self, r: &[f64]) -> f64 {
-        let c = 2.5;
-        r.iter()
-            .map(|x| {
-                let a = (x / self.sigma).abs();
-                if a <= c {
-                    a * a
-                } else {
-                    2.0 * c * a - c * c
-                }
-            })
-            .sum()
-    }
-
     /// Contact setup: both particles start moving at the kick (fixed time before the first frame).
     fn contact_plan(&self, t_kick_s: f64) -> Plan {
         let start = |tr: &TrackData| {
@@ -205,7 +202,6 @@ impl Fitter<'_> {
         Plan {
             mu: self.opts.mu_start,
             t_drag_s: self.opts.t_drag_start_s,
-            hold_friction: false,
             z_start_m: [z1, z2],
             first: [None, None],
             impacts: vec![PlanImpact {
@@ -213,7 +209,11 @@ impl Fitter<'_> {
                 fixed: true,
                 lower_s: t_kick_s,
                 upper_s: t_kick_s,
-                after: [(v1, v1), (v2, v2)],
+                after: After::Kicked {
+                    v_mps: [v1, v2],
+                    va_mps: [0.0, 0.0],
+                    va_max_mps: self.va_max(1.0),
+                },
             }],
         }
     }
@@ -226,18 +226,13 @@ impl Fitter<'_> {
         Plan {
             mu: self.opts.mu_start,
             t_drag_s: self.opts.t_drag_start_s,
-            hold_friction: false,
             z_start_m: [z, super::detect::median(&mut head)],
             first: [
                 Some(FirstPiece::Kicked {
                     t0_s: st.t_s[0],
                     v_mps: v,
                     va_mps: 0.0,
-                    va_max_mps: v.signum()
-                        * self.opts.k
-                        * super::motion::G_MPS2
-                        * super::plan::MU_BOUNDS.1
-                        * self.frame_s,
+                    va_max_mps: self.va_max(v),
                 }),
                 Some(FirstPiece::Rest { t0_s: tg.t_s[0] }),
             ],
@@ -275,85 +270,117 @@ impl Fitter<'_> {
             self.opts.mu_pp_start,
             self.opts.k,
         );
-        let s = self.opts.s;
         plan.impacts.push(PlanImpact {
             t_s: t_dep_s,
             fixed: false,
             lower_s: t_dep_s,
             upper_s: t_dep_s,
-            after: after.map(|(v, va)| (v, v - s * va)),
+            after: After::Impulse {
+                j_mps: v2,
+                w_mps: after[1].1,
+            },
         });
         plan
     }
 
-    /// Fit, then add impacts proposed by the kink scan while they pay off.
-    fn grow(&self, plan: Plan) -> (Layout, LmResult, Plan) {
-        let (mut layout, mut res) = self.solve(&plan, &self.tracks);
-        let mut plan = plan.from_solution(&layout, &res.params);
-        while plan.impacts.len() < self.opts.max_impacts {
-            let Some(candidate) = self.propose(&layout, &res, &plan) else {
-                break;
-            };
-            let (l2, r2) = self.solve(&candidate, &self.tracks);
-            let gain = self.cost(&res.residuals) - self.cost(&r2.residuals);
-            if gain < self.opts.accept_chi2 {
-                break;
-            }
-            plan = candidate.from_solution(&l2, &r2.params);
-            (layout, res) = (l2, r2);
-        }
-        (layout, res, plan)
-    }
-
-    /// A plan with one more impact where the residuals kink, or None.
-    fn propose(&self, layout: &Layout, res: &LmResult, plan: &Plan) -> Option<Plan> {
-        let p = &res.params;
-        let n0 = self.tracks[0].t_s.len();
-        let known: Vec<f64> = (0..layout.impacts.len())
-            .map(|j| layout.impact_time(p, j))
-            .collect();
-        let t_first_impact = known.first().copied()?;
-        let gap = |t: f64| layout.state_at(p, 1, t).0 - layout.state_at(p, 0, t).0;
-        let contact = gap(t_first_impact);
-        let tol = (15.0 * self.sigma).max(0.03 * contact.abs());
-        let allowed = |t: f64| t > t_first_impact && (gap(t) - contact).abs() < tol;
-        let prop = kink_scan(
-            &self.tracks,
-            [&res.residuals[..n0], &res.residuals[n0..]],
-            &known,
-            4.0 * self.frame_s,
-            20.0 * self.frame_s,
-            &allowed,
-        )?;
-        if prop.z_score < self.opts.kink_z {
-            return None;
-        }
-        let tb = prop.t_s;
-        let (_, v1, va1) = layout.state_at(p, 0, tb);
-        let (_, v2, va2) = layout.state_at(p, 1, tb);
-        let jump = 0.5 * (prop.jump_mps[1] - prop.jump_mps[0]);
-        let c_guess = (2.0 * jump / (v1 - v2).max(1e-6) - 1.0).clamp(0.0, 1.0);
-        let (after, _) = after_impact(
-            [(v1, va1), (v2, va2)],
-            c_guess,
-            self.opts.mu_pp_start,
-            self.opts.k,
+    /// Add the later contacts seen in the gap between the particles (secondary collisions) while
+    /// they are resolved, and return the time where the fit must stop: the first return to
+    /// contact that is not a resolved impact (after it the closed-form pieces no longer hold).
+    fn add_secondary(&self, mut plan: Plan) -> (Plan, f64) {
+        let Some(first) = plan.impacts.first().map(|i| i.t_s) else {
+            return (plan, f64::INFINITY);
+        };
+        let gap = gap_series(&self.tracks);
+        let sigma_gap = noise_scale_m(&gap).max(1e-10);
+        let i0 = index_at(&gap, first);
+        let contact_m = if plan.impacts[0].fixed {
+            robust_line(&gap, 0, gap.t_s.len().min(8), first).map(|l| l.1)
+        } else {
+            robust_line(&gap, i0.saturating_sub(8), i0, first).map(|l| l.1)
+        };
+        let Some(contact_m) = contact_m else {
+            return (plan, f64::INFINITY);
+        };
+        let tol = 10.0 * sigma_gap + 0.01 * contact_m.abs();
+        let window = 20;
+        let found = gap_contacts(
+            &gap,
+            sigma_gap,
+            contact_m,
+            tol,
+            first + 4.0 * self.frame_s,
+            window,
+            self.opts.kink_z,
         );
         let s = self.opts.s;
-        let mut out = plan.clone();
-        let at = out.impacts.partition_point(|im| im.t_s < tb);
-        out.impacts.insert(
-            at,
-            PlanImpact {
-                t_s: tb,
+        let mut last = first;
+        loop {
+            let t_stop = return_to_contact(&gap, sigma_gap, contact_m, last);
+            // a resolved contact within a few ms after the gap closed again continues the fit
+            let next = found.iter().find(|c| {
+                c.t_s > last + 4.0 * self.frame_s && c.t_s <= t_stop + 50.0 * self.frame_s
+            });
+            let Some(c) = next.filter(|_| plan.impacts.len() < self.opts.max_impacts) else {
+                return (plan, t_stop);
+            };
+            let vel = |p: usize, after: bool| {
+                local_velocity(&self.tracks[p], c.t_s, after, window).unwrap_or(0.0)
+            };
+            let (v1, v2) = (vel(0, false), vel(1, false));
+            let c_guess = (-c.gap_rate_after_mps / c.gap_rate_before_mps).clamp(0.0, 1.0);
+            // before a secondary collision both particles have usually re-gained rolling
+            let (after, _) = after_impact(
+                [(v1, v1 / s), (v2, v2 / s)],
+                c_guess,
+                self.opts.mu_pp_start,
+                self.opts.k,
+            );
+            let j = 0.5 * ((vel(1, true) - v2) - (vel(0, true) - v1));
+            plan.impacts.push(PlanImpact {
+                t_s: c.t_s,
                 fixed: false,
-                lower_s: tb,
-                upper_s: tb,
-                after: after.map(|(v, va)| (v, v - s * va)),
-            },
-        );
-        Some(out)
+                lower_s: c.t_s,
+                upper_s: c.t_s,
+                after: After::Impulse {
+                    j_mps: j.max(0.0),
+                    w_mps: after[1].1 - v2 / s,
+                },
+            });
+            last = c.t_s;
+        }
     }
+}
+
+/// First time after `after_s` at which the gap, having opened by more than 8 noise units,
+/// closes again to within 4 noise units of contact (running median of 9 samples).
+fn return_to_contact(gap: &TrackData, sigma_m: f64, contact_m: f64, after_s: f64) -> f64 {
+    let i0 = index_at(gap, after_s);
+    let n = gap.t_s.len();
+    let mut opened = false;
+    for i in i0..n {
+        let lo = i.saturating_sub(4);
+        let hi = (i + 5).min(n);
+        let mut w = gap.z_m[lo..hi].to_vec();
+        let g = super::detect::median(&mut w) - contact_m;
+        if !opened {
+            opened = g > 8.0 * sigma_m;
+        } else if g < 4.0 * sigma_m {
+            return gap.t_s[i];
+        }
+    }
+    f64::INFINITY
+}
+
+/// Velocity of a track just before or just after `t` from a one-sided quadratic fit.
+fn local_velocity(track: &TrackData, t_s: f64, after: bool, window: usize) -> Option<f64> {
+    let i = index_at(track, t_s);
+    let (lo, hi) = if after {
+        (i, (i + window).min(track.t_s.len()))
+    } else {
+        (i.saturating_sub(window), i)
+    };
+    let keep = vec![true; track.t_s.len()];
+    super::detect::quadratic_slope(track, &keep, lo, hi, t_s, 1.0).map(|q| q.0)
 }
 
 /// The start values of a plan as a parameter vector of its layout.

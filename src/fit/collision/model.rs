@@ -1,5 +1,7 @@
 //! The joint piecewise model of a collision run: both tracks, split at the impact times, each
-//! piece the closed-form motion from its own (v, slip) with shared μ and T, z continuous at impacts.
+//! piece the closed-form motion from its own initial state with shared μ and T, z continuous at
+//! impacts. After an impact the state is either free, or tied to the state before by the
+//! impulse (v ∓ J, v_a + W for both particles: momentum conserved, equal spin changes).
 //!
 //! Positions are in the striker-forward frame (z multiplied by the direction sign), so the
 //! striker always approaches the target from below.
@@ -22,19 +24,22 @@ pub enum ImpactTime {
     Fixed(f64),
 }
 
-/// Index of the parameters of one piece of one particle's track.
+/// How the initial state of one piece of one particle's track is parameterized.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Piece {
     /// At rest (the target before the first impact): no parameters.
     Rest,
-    /// Moving: parameter indices of the velocity and the slip v − s·v_a at the piece's start.
+    /// Free: parameter indices of the velocity and the slip v − s·v_a at the piece's start.
     Moving { v: usize, slip: usize },
-    /// Moving just after a kick that gave no spin: parameter indices of v and of v_a itself,
-    /// which is bounded to what friction can build up within the first frame.
+    /// Just after a kick that gave no spin: parameter indices of v and of v_a itself, which is
+    /// bounded to what friction can build up within the first frame.
     Kicked { v: usize, va: usize },
+    /// After an impact, from the state just before: v + sign·J, v_a + W (parameter indices of
+    /// the impulse per mass J and the common spin change W; sign −1 striker, +1 target).
+    Impulse { j: usize, w: usize, sign: f64 },
 }
 
-/// Layout of the parameter vector: [μ, T, impact times…, per particle: z_start, pieces…].
+/// Layout of the parameter vector: [μ, T, then whatever the plan adds].
 #[derive(Debug, Clone)]
 pub struct Layout {
     pub s: f64,
@@ -53,6 +58,17 @@ pub struct Layout {
 
 pub const MU: usize = 0;
 pub const T_DRAG: usize = 1;
+
+/// Start of one piece: time, position, velocity, spin, and the impact it starts at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PieceStart {
+    pub t_s: f64,
+    pub z_m: f64,
+    pub v_mps: f64,
+    pub va_mps: f64,
+    pub impact: Option<usize>,
+    pub rest: bool,
+}
 
 impl Layout {
     pub fn n_residuals(&self) -> usize {
@@ -75,25 +91,44 @@ impl Layout {
         }
     }
 
-    /// Start times of a particle's pieces and the impact index each starts at (None: track start).
-    pub fn piece_starts(&self, p: &[f64], particle: usize) -> Vec<(f64, Option<usize>)> {
-        let mut starts = Vec::new();
+    /// The start state of every piece of a particle, in time order.
+    pub fn piece_starts(&self, p: &[f64], particle: usize) -> Vec<PieceStart> {
+        let motion = self.motion(p);
+        let mut times: Vec<(f64, Option<usize>)> = Vec::new();
         if let Some(t0) = self.first_start_s[particle] {
-            starts.push((t0, None));
+            times.push((t0, None));
         }
-        for j in 0..self.impacts.len() {
-            starts.push((self.impact_time(p, j), Some(j)));
+        times.extend((0..self.impacts.len()).map(|j| (self.impact_time(p, j), Some(j))));
+        let mut out: Vec<PieceStart> = Vec::with_capacity(times.len());
+        let mut z = p[self.z_start[particle]];
+        let (mut v_end, mut va_end) = (0.0, 0.0);
+        for (k, piece) in self.pieces[particle].iter().enumerate() {
+            let (t0, impact) = times[k];
+            if let Some(prev) = out.last() {
+                if prev.rest {
+                    (v_end, va_end) = (0.0, 0.0);
+                } else {
+                    let st = motion.state(prev.v_mps, prev.va_mps, (t0 - prev.t_s).max(0.0));
+                    z = prev.z_m + st.dz_m;
+                    (v_end, va_end) = (st.v_mps, st.va_mps);
+                }
+            }
+            let (v, va) = match *piece {
+                Piece::Rest => (0.0, 0.0),
+                Piece::Moving { v, slip } => (p[v], (p[v] - p[slip]) / self.s),
+                Piece::Kicked { v, va } => (p[v], p[va]),
+                Piece::Impulse { j, w, sign } => (v_end + sign * p[j], va_end + p[w]),
+            };
+            out.push(PieceStart {
+                t_s: t0,
+                z_m: z,
+                v_mps: v,
+                va_mps: va,
+                impact,
+                rest: matches!(piece, Piece::Rest),
+            });
         }
-        starts
-    }
-
-    /// Initial (v, v_a) of a piece.
-    pub fn piece_state(&self, p: &[f64], piece: Piece) -> (f64, f64) {
-        match piece {
-            Piece::Rest => (0.0, 0.0),
-            Piece::Moving { v, slip } => (p[v], (p[v] - p[slip]) / self.s),
-            Piece::Kicked { v, va } => (p[v], p[va]),
-        }
+        out
     }
 
     /// Model positions of one particle at its sample times.
@@ -101,33 +136,26 @@ impl Layout {
         let track = &self.tracks[particle];
         let motion = self.motion(p);
         let starts = self.piece_starts(p, particle);
-        let pieces = &self.pieces[particle];
-        let mut z = p[self.z_start[particle]];
-        let mut i = 0;
         let n = track.t_s.len();
-        let mut buf: Vec<f64> = Vec::new();
+        let mut i = 0;
         let mut rel: Vec<f64> = Vec::new();
-        for (k, piece) in pieces.iter().enumerate() {
-            let t0 = starts[k].0;
-            let t_end = starts.get(k + 1).map(|s| s.0).unwrap_or(f64::INFINITY);
-            let (v0, va0) = self.piece_state(p, *piece);
+        let mut buf: Vec<f64> = Vec::new();
+        for (k, st) in starts.iter().enumerate() {
+            let t_end = starts.get(k + 1).map(|s| s.t_s).unwrap_or(f64::INFINITY);
             let first = i;
-            while i < n && (track.t_s[i] < t_end || k + 1 == pieces.len()) {
+            while i < n && (track.t_s[i] < t_end || k + 1 == starts.len()) {
                 i += 1;
             }
+            if st.rest {
+                out[first..i].iter_mut().for_each(|o| *o = st.z_m);
+                continue;
+            }
             rel.clear();
-            rel.extend(track.t_s[first..i].iter().map(|t| (t - t0).max(0.0)));
+            rel.extend(track.t_s[first..i].iter().map(|t| (t - st.t_s).max(0.0)));
             buf.resize(rel.len(), 0.0);
-            if matches!(piece, Piece::Rest) {
-                buf.iter_mut().for_each(|b| *b = 0.0);
-            } else {
-                motion.positions(v0, va0, &rel, &mut buf);
-            }
+            motion.positions(st.v_mps, st.va_mps, &rel, &mut buf);
             for (o, b) in out[first..i].iter_mut().zip(&buf) {
-                *o = z + b;
-            }
-            if t_end.is_finite() && !matches!(piece, Piece::Rest) {
-                z += motion.state(v0, va0, (t_end - t0).max(0.0)).dz_m;
+                *o = st.z_m + b;
             }
         }
     }
@@ -146,17 +174,12 @@ impl Layout {
         }
     }
 
-    /// State of a particle just before impact `j` (from the piece that ends there).
+    /// State of a particle just before impact `j` (None if its track starts at that impact).
     pub fn before_impact(&self, p: &[f64], particle: usize, j: usize) -> Option<Kinematics> {
         let starts = self.piece_starts(p, particle);
-        let k = starts.iter().position(|s| s.1 == Some(j))?;
-        if k == 0 {
-            return None;
-        }
-        let (t_prev, _) = starts[k - 1];
-        let piece = self.pieces[particle][k - 1];
-        let (v0, va0) = self.piece_state(p, piece);
-        if matches!(piece, Piece::Rest) {
+        let k = starts.iter().position(|s| s.impact == Some(j))?;
+        let prev = starts.get(k.checked_sub(1)?)?;
+        if prev.rest {
             return Some(Kinematics {
                 dz_m: 0.0,
                 v_mps: 0.0,
@@ -166,39 +189,28 @@ impl Layout {
         }
         Some(
             self.motion(p)
-                .state(v0, va0, (starts[k].0 - t_prev).max(0.0)),
+                .state(prev.v_mps, prev.va_mps, (starts[k].t_s - prev.t_s).max(0.0)),
         )
     }
 
-    /// State of a particle just after impact `j` (the start of the piece that begins there).
+    /// (v, v_a) of a particle just after impact `j`.
     pub fn after_impact(&self, p: &[f64], particle: usize, j: usize) -> Option<(f64, f64)> {
         let starts = self.piece_starts(p, particle);
-        let k = starts.iter().position(|s| s.1 == Some(j))?;
-        Some(self.piece_state(p, self.pieces[particle][k]))
+        let st = starts.iter().find(|s| s.impact == Some(j))?;
+        Some((st.v_mps, st.va_mps))
     }
 
     /// Position, velocity and spin of a particle at time `t` (before the first piece: its start).
     pub fn state_at(&self, p: &[f64], particle: usize, t_s: f64) -> (f64, f64, f64) {
         let starts = self.piece_starts(p, particle);
-        let motion = self.motion(p);
-        let pieces = &self.pieces[particle];
-        let mut z = p[self.z_start[particle]];
-        for (k, piece) in pieces.iter().enumerate() {
-            let t0 = starts[k].0;
-            let t_end = starts.get(k + 1).map(|s| s.0).unwrap_or(f64::INFINITY);
-            let (v0, va0) = self.piece_state(p, *piece);
-            let moving = !matches!(piece, Piece::Rest);
-            if t_s < t_end || k + 1 == pieces.len() {
-                if !moving {
-                    return (z, 0.0, 0.0);
-                }
-                let st = motion.state(v0, va0, (t_s - t0).max(0.0));
-                return (z + st.dz_m, st.v_mps, st.va_mps);
-            }
-            if moving {
-                z += motion.state(v0, va0, (t_end - t0).max(0.0)).dz_m;
-            }
+        let k = starts.iter().rposition(|s| s.t_s <= t_s).unwrap_or(0);
+        let st = starts[k];
+        if st.rest {
+            return (st.z_m, 0.0, 0.0);
         }
-        (z, 0.0, 0.0)
+        let kin = self
+            .motion(p)
+            .state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
+        (st.z_m + kin.dz_m, kin.v_mps, kin.va_mps)
     }
 }

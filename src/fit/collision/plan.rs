@@ -1,5 +1,5 @@
 //! A fit plan: starting values and bounds of every parameter of the joint model, turned into a
-//! `Layout` plus `ParamSpec`s, and read back from a solution (to insert an impact and refit).
+//! `Layout` plus `ParamSpec`s, and read back from a solution.
 
 use super::lm::ParamSpec;
 use super::model::{ImpactTime, Layout, Piece, TrackData, MU, T_DRAG};
@@ -10,12 +10,7 @@ pub enum FirstPiece {
     Rest {
         t0_s: f64,
     },
-    Moving {
-        t0_s: f64,
-        v_mps: f64,
-        slip_mps: f64,
-    },
-    /// Kicked within the frame before `t0_s` with no spin: v_a(t0) ∈ [0, k g μ_max · frame].
+    /// Kicked within the frame before `t0_s` with no spin: v_a(t0) between 0 and `va_max_mps`.
     Kicked {
         t0_s: f64,
         v_mps: f64,
@@ -24,22 +19,33 @@ pub enum FirstPiece {
     },
 }
 
-/// One impact: time (fitted within bounds, or fixed) and both particles' (v, slip) after it.
+/// How the states after an impact are parameterized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum After {
+    /// Tied to the states before: striker v − J, target v + J, both v_a + W.
+    Impulse { j_mps: f64, w_mps: f64 },
+    /// Both particles start at the kick (contact setup) with free v and v_a ∈ [0, va_max].
+    Kicked {
+        v_mps: [f64; 2],
+        va_mps: [f64; 2],
+        va_max_mps: f64,
+    },
+}
+
+/// One impact: time (fitted within bounds, or fixed) and the states after it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlanImpact {
     pub t_s: f64,
     pub fixed: bool,
     pub lower_s: f64,
     pub upper_s: f64,
-    pub after: [(f64, f64); 2],
+    pub after: After,
 }
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
     pub mu: f64,
     pub t_drag_s: f64,
-    /// Hold μ and T at their start values (used for quick pre-fits).
-    pub hold_friction: bool,
     pub z_start_m: [f64; 2],
     pub first: [Option<FirstPiece>; 2],
     pub impacts: Vec<PlanImpact>,
@@ -51,7 +57,7 @@ const V_MAX_MPS: f64 = 3.0;
 
 fn push(specs: &mut Vec<ParamSpec>, start: f64, lower: f64, upper: f64, step: f64) -> usize {
     specs.push(ParamSpec {
-        start,
+        start: start.clamp(lower, upper),
         lower,
         upper,
         step,
@@ -59,52 +65,63 @@ fn push(specs: &mut Vec<ParamSpec>, start: f64, lower: f64, upper: f64, step: f6
     specs.len() - 1
 }
 
+fn va_bounds(va_max: f64) -> (f64, f64) {
+    if va_max >= 0.0 {
+        (0.0, va_max)
+    } else {
+        (va_max, 0.0)
+    }
+}
+
 impl Plan {
     pub fn build(&self, tracks: [TrackData; 2], s: f64, k: f64) -> (Layout, Vec<ParamSpec>) {
-        let mut specs = Vec::new();
-        let mut add = |start: f64, lower: f64, upper: f64, step: f64| {
-            push(&mut specs, start, lower, upper, step)
-        };
-        let held = |x: f64, b: (f64, f64)| if self.hold_friction { (x, x) } else { b };
-        let (ml, mh) = held(self.mu, MU_BOUNDS);
-        let (tl, th) = held(self.t_drag_s, T_BOUNDS_S);
-        assert_eq!(add(self.mu, ml, mh, 1e-6), MU);
-        assert_eq!(add(self.t_drag_s, tl, th, 1e-6), T_DRAG);
-        let impacts: Vec<ImpactTime> = self
-            .impacts
-            .iter()
-            .map(|im| {
-                if im.fixed {
-                    ImpactTime::Fixed(im.t_s)
-                } else {
-                    ImpactTime::Param(add(im.t_s, im.lower_s, im.upper_s, 1e-8))
+        let mut sp = Vec::new();
+        assert_eq!(push(&mut sp, self.mu, MU_BOUNDS.0, MU_BOUNDS.1, 1e-6), MU);
+        assert_eq!(
+            push(&mut sp, self.t_drag_s, T_BOUNDS_S.0, T_BOUNDS_S.1, 1e-6),
+            T_DRAG
+        );
+        let mut impacts = Vec::new();
+        // per impact: the pieces it starts for the striker and the target
+        let mut after: Vec<[Piece; 2]> = Vec::new();
+        for im in &self.impacts {
+            impacts.push(if im.fixed {
+                ImpactTime::Fixed(im.t_s)
+            } else {
+                ImpactTime::Param(push(&mut sp, im.t_s, im.lower_s, im.upper_s, 1e-8))
+            });
+            after.push(match im.after {
+                After::Impulse { j_mps, w_mps } => {
+                    let j = push(&mut sp, j_mps, 0.0, V_MAX_MPS, 1e-7);
+                    let w = push(&mut sp, w_mps, -3.0 * V_MAX_MPS, 3.0 * V_MAX_MPS, 1e-7);
+                    [
+                        Piece::Impulse { j, w, sign: -1.0 },
+                        Piece::Impulse { j, w, sign: 1.0 },
+                    ]
                 }
-            })
-            .collect();
+                After::Kicked {
+                    v_mps,
+                    va_mps,
+                    va_max_mps,
+                } => {
+                    let (lo, hi) = va_bounds(va_max_mps);
+                    [0, 1].map(|p| Piece::Kicked {
+                        v: push(&mut sp, v_mps[p], -V_MAX_MPS, V_MAX_MPS, 1e-7),
+                        va: push(&mut sp, va_mps[p], lo, hi, 1e-8),
+                    })
+                }
+            });
+        }
         let mut z_start = [0; 2];
         let mut first_start_s = [None; 2];
         let mut pieces: [Vec<Piece>; 2] = [Vec::new(), Vec::new()];
         for p in 0..2 {
             let z = self.z_start_m[p];
-            z_start[p] = add(z, z - 0.1, z + 0.1, 1e-9);
-            let moving = |add: &mut dyn FnMut(f64, f64, f64, f64) -> usize, v: f64, slip: f64| {
-                Piece::Moving {
-                    v: add(v, -V_MAX_MPS, V_MAX_MPS, 1e-7),
-                    slip: add(slip, -3.0 * V_MAX_MPS, 3.0 * V_MAX_MPS, 1e-7),
-                }
-            };
+            z_start[p] = push(&mut sp, z, z - 0.1, z + 0.1, 1e-9);
             match self.first[p] {
                 Some(FirstPiece::Rest { t0_s }) => {
                     first_start_s[p] = Some(t0_s);
                     pieces[p].push(Piece::Rest);
-                }
-                Some(FirstPiece::Moving {
-                    t0_s,
-                    v_mps,
-                    slip_mps,
-                }) => {
-                    first_start_s[p] = Some(t0_s);
-                    pieces[p].push(moving(&mut add, v_mps, slip_mps));
                 }
                 Some(FirstPiece::Kicked {
                     t0_s,
@@ -113,23 +130,17 @@ impl Plan {
                     va_max_mps,
                 }) => {
                     first_start_s[p] = Some(t0_s);
-                    let (lo, hi) = if va_max_mps >= 0.0 {
-                        (0.0, va_max_mps)
-                    } else {
-                        (va_max_mps, 0.0)
-                    };
+                    let (lo, hi) = va_bounds(va_max_mps);
                     pieces[p].push(Piece::Kicked {
-                        v: add(v_mps, -V_MAX_MPS, V_MAX_MPS, 1e-7),
-                        va: add(va_mps.clamp(lo, hi), lo, hi, 1e-8),
+                        v: push(&mut sp, v_mps, -V_MAX_MPS, V_MAX_MPS, 1e-7),
+                        va: push(&mut sp, va_mps, lo, hi, 1e-8),
                     });
                 }
                 None => {}
             }
-            for im in &self.impacts {
-                pieces[p].push(moving(&mut add, im.after[p].0, im.after[p].1));
-            }
+            pieces[p].extend(after.iter().map(|a| a[p]));
         }
-        let n_params = specs.len();
+        let n_params = sp.len();
         let layout = Layout {
             s,
             k,
@@ -140,38 +151,34 @@ impl Plan {
             pieces,
             n_params,
         };
-        (layout, specs)
+        (layout, sp)
     }
 
-    /// The plan whose start values are the solution `p` of `layout` (same structure).
+    /// The plan whose start values are the solution `p` of `layout` (built from this plan).
     pub fn from_solution(&self, layout: &Layout, p: &[f64]) -> Plan {
         let mut out = self.clone();
         out.mu = p[MU];
         out.t_drag_s = p[T_DRAG];
         for part in 0..2 {
             out.z_start_m[part] = p[layout.z_start[part]];
-            let mut pieces = layout.pieces[part].iter();
-            if let Some(first) = out.first[part].as_mut() {
-                match (first, pieces.next().copied()) {
-                    (
-                        FirstPiece::Moving {
-                            v_mps, slip_mps, ..
-                        },
-                        Some(Piece::Moving { v, slip }),
-                    ) => {
-                        *v_mps = p[v];
-                        *slip_mps = p[slip];
+            let offset = usize::from(out.first[part].is_some());
+            if let (Some(FirstPiece::Kicked { v_mps, va_mps, .. }), Piece::Kicked { v, va }) =
+                (out.first[part].as_mut(), layout.pieces[part][0])
+            {
+                *v_mps = p[v];
+                *va_mps = p[va];
+            }
+            for (j, im) in out.impacts.iter_mut().enumerate() {
+                match (&mut im.after, layout.pieces[part][j + offset]) {
+                    (After::Impulse { j_mps, w_mps }, Piece::Impulse { j, w, .. }) => {
+                        *j_mps = p[j];
+                        *w_mps = p[w];
                     }
-                    (FirstPiece::Kicked { v_mps, va_mps, .. }, Some(Piece::Kicked { v, va })) => {
-                        *v_mps = p[v];
-                        *va_mps = p[va];
+                    (After::Kicked { v_mps, va_mps, .. }, Piece::Kicked { v, va }) => {
+                        v_mps[part] = p[v];
+                        va_mps[part] = p[va];
                     }
                     _ => {}
-                }
-            }
-            for (im, piece) in out.impacts.iter_mut().zip(pieces) {
-                if let Piece::Moving { v, slip } = *piece {
-                    im.after[part] = (p[v], p[slip]);
                 }
             }
         }

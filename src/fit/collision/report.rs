@@ -3,7 +3,7 @@
 //! errors propagated from the fit's covariance.
 
 use super::lm::{LmResult, Termination};
-use super::model::{Layout, Piece, MU, T_DRAG};
+use super::model::{Layout, MU, T_DRAG};
 use super::types::{
     CollisionFit, CollisionStatus, Contact, Estimate, ImpactFit, Kin, PhaseKind, PhaseSpan,
     PreImpactSource, SegmentFit,
@@ -81,59 +81,48 @@ pub fn summarize_fit(
         se: e.se,
     };
     let mut segments = Vec::new();
-    // per particle, per piece: is v_a at its end known (reached rolling, at rest, or kicked)?
-    let mut spin_known: [Vec<bool>; 2] = [Vec::new(), Vec::new()];
     for part in 0..2 {
         let track = &layout.tracks[part];
         let starts = layout.piece_starts(p, part);
         let t_last = *track.t_s.last().unwrap_or(&0.0);
-        for (k, piece) in layout.pieces[part].iter().enumerate() {
-            let t0 = starts[k].0;
-            let t1 = starts.get(k + 1).map(|s| s.0).unwrap_or(t_last);
+        for (k, st) in starts.iter().enumerate() {
+            let (t0, t1) = (st.t_s, starts.get(k + 1).map(|s| s.t_s).unwrap_or(t_last));
             let n_points = track.t_s.iter().filter(|&&t| t >= t0 && t < t1).count();
-            let (v0, va0) = layout.piece_state(p, *piece);
-            let (v_est, va_est) = match *piece {
-                Piece::Rest => (Estimate::new(0.0, 0.0), Estimate::new(0.0, 0.0)),
-                _ => {
-                    let pc = *piece;
-                    (
-                        propagate(res, &|q| layout.piece_state(q, pc).0),
-                        propagate(res, &|q| layout.piece_state(q, pc).1),
-                    )
-                }
-            };
-            let t_sw = if matches!(piece, Piece::Rest) {
-                None
+            let piece_v = |q: &[f64]| layout.piece_starts(q, part)[k].v_mps;
+            let piece_va = |q: &[f64]| layout.piece_starts(q, part)[k].va_mps;
+            let (v_est, va_est) = if st.rest {
+                (Estimate::new(0.0, 0.0), Estimate::new(0.0, 0.0))
             } else {
-                Some(t0 + motion.switch_time_s(v0, va0)).filter(|&t| t <= t1)
+                (propagate(res, &piece_v), propagate(res, &piece_va))
             };
-            let phases = match (piece, t_sw) {
-                (Piece::Rest, _) => vec![span(PhaseKind::Rest, t0, t1)],
-                (_, Some(ts)) if ts <= t0 => vec![span(PhaseKind::Rolling, t0, t1)],
-                (_, Some(ts)) => vec![
+            let t_sw = (!st.rest)
+                .then(|| t0 + motion.switch_time_s(st.v_mps, st.va_mps))
+                .filter(|&t| t <= t1);
+            let phases = match (st.rest, t_sw) {
+                (true, _) => vec![span(PhaseKind::Rest, t0, t1)],
+                (false, Some(ts)) if ts <= t0 => vec![span(PhaseKind::Rolling, t0, t1)],
+                (false, Some(ts)) => vec![
                     span(PhaseKind::Sliding, t0, ts),
                     span(PhaseKind::Rolling, ts, t1),
                 ],
-                (_, None) => vec![span(PhaseKind::Sliding, t0, t1)],
+                (false, None) => vec![span(PhaseKind::Sliding, t0, t1)],
             };
-            let identified = matches!(piece, Piece::Rest | Piece::Kicked { .. }) || t_sw.is_some();
-            spin_known[part].push(matches!(piece, Piece::Rest) || t_sw.is_some());
             segments.push(SegmentFit {
                 particle: part as u32,
                 t_start_s: t0,
                 t_end_s: t1,
-                z_start_m: direction * layout.state_at(p, part, t0).0,
+                z_start_m: direction * st.z_m,
                 v_start_mps: lab(v_est),
                 va_start_mps: lab(va_est),
                 t_switch_s: t_sw,
-                spin_identified: identified,
+                spin_identified: resolved(va_est, v_est.value),
                 phases,
                 n_points,
             });
         }
     }
     let impacts = (0..layout.impacts.len())
-        .map(|j| impact_record(layout, res, j, direction, &spin_known))
+        .map(|j| impact_record(layout, res, j, direction))
         .collect();
     let n = res.residuals.len().max(1);
     let rms = (res.residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
@@ -174,13 +163,7 @@ fn span(phase: PhaseKind, t_start_s: f64, t_end_s: f64) -> PhaseSpan {
 }
 
 /// Everything about impact `j` (striker-forward frame inside, lab frame for Kin).
-fn impact_record(
-    layout: &Layout,
-    res: &LmResult,
-    j: usize,
-    direction: f64,
-    spin_known: &[Vec<bool>; 2],
-) -> ImpactFit {
+fn impact_record(layout: &Layout, res: &LmResult, j: usize, direction: f64) -> ImpactFit {
     let momentum = layout.before_impact(&res.params, 0, j).is_none();
     // [v1, va1, v2, va2] before and after, as functions of the parameters
     let before = move |q: &[f64]| -> [f64; 4] {
@@ -221,20 +204,8 @@ fn impact_record(
         (a[2] - a[0]) / (b[0] - b[2])
     });
     let sum_after = est(&|q| after(q)[1] + after(q)[3]);
-    let sum_before = b[1] + b[3];
-    // the piece ending at impact j is piece index (j + offset − 1), starting there (j + offset)
-    let offset = |part: usize| usize::from(layout.first_start_s[part].is_some());
-    let known_before = (0..2).all(|part| {
-        let k = j + offset(part);
-        k == 0 || momentum || spin_known[part].get(k - 1).copied().unwrap_or(false)
-    });
-    let known_after = (0..2).all(|part| {
-        spin_known[part]
-            .get(j + offset(part))
-            .copied()
-            .unwrap_or(false)
-    });
-    let contact = classify(sum_before, sum_after, known_before && known_after);
+    let sum_before = est(&|q| before(q)[1] + before(q)[3]);
+    let contact = classify(sum_before, sum_after);
     ImpactFit {
         index: j,
         t_s: est(&|q| layout.impact_time(q, j)),
@@ -252,24 +223,29 @@ fn impact_record(
         target_dvz_mps: est(&|q| after(q)[2] - before(q)[2]),
         target_dva_mps: est(&|q| after(q)[3] - before(q)[3]),
         striker_dva_mps: est(&|q| after(q)[1] - before(q)[1]),
-        spin_sum_before_mps: sum_before,
+        spin_sum_before_mps: sum_before.value,
         spin_sum_after_mps: sum_after,
         momentum_mismatch_mps: (b[0] + b[2]) - (a[0] + a[2]),
         contact,
     }
 }
 
+/// A spin is resolved when its standard error is small against the speed (or 1 mm/s).
+fn resolved(va: Estimate, v_mps: f64) -> bool {
+    va.se.is_some_and(|se| se <= 0.25 * v_mps.abs() + 1e-3)
+}
+
 /// Stick leaves v_a1' + v_a2' = 0; slip keeps the sign of the sum and a clearly nonzero value.
-fn classify(sum_before: f64, sum_after: Estimate, known: bool) -> Contact {
-    let Some(se) = sum_after.se else {
+fn classify(sum_before: Estimate, sum_after: Estimate) -> Contact {
+    let (Some(se_b), Some(se_a)) = (sum_before.se, sum_after.se) else {
         return Contact::Undetermined;
     };
-    if !known || se > 0.25 * sum_before.abs() + 1e-3 {
+    let s = sum_before.value;
+    if se_a.max(se_b) > 0.25 * s.abs() + 1e-3 {
         return Contact::Undetermined;
     }
     let a = sum_after.value;
-    if a.signum() == sum_before.signum() && a.abs() > 3.0 * se && a.abs() > 0.05 * sum_before.abs()
-    {
+    if a.signum() == s.signum() && a.abs() > 3.0 * se_a && a.abs() > 0.05 * s.abs() {
         Contact::Slip
     } else {
         Contact::Stick
