@@ -208,7 +208,7 @@ pub fn gap_contacts(
     let mut scores: Vec<Option<Contact>> = vec![None; n];
     for i in window..n.saturating_sub(window) {
         let tb = gap.t_s[i];
-        if tb <= after_s || !keep[i] || (gap.z_m[i] - contact_m).abs() > tol_m {
+        if !keep[i] || (gap.z_m[i] - contact_m).abs() > tol_m {
             continue;
         }
         let Some((before, se_b)) = quadratic_slope(gap, &keep, i + 1 - window, i + 1, tb, sigma_m)
@@ -238,7 +238,8 @@ pub fn gap_contacts(
                 || scores[k]
                     .is_none_or(|o| o.z_score < c.z_score || (o.z_score == c.z_score && k > i))
         });
-        if is_max && c.z_score >= min_z {
+        // a contact's own tail must not pass as a later one: select maxima first, then by time
+        if is_max && c.z_score >= min_z && c.t_s > after_s {
             found.push(c);
         }
     }

@@ -308,7 +308,7 @@ impl Fitter<'_> {
             sigma_gap,
             contact_m,
             tol,
-            first + 4.0 * self.frame_s,
+            first + 0.5 * window as f64 * self.frame_s,
             window,
             self.opts.kink_z,
         );

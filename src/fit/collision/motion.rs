@@ -1,14 +1,12 @@
-//! Closed-form motion of one sphere in the groove (Coulomb μ, linear drag v/T) from any initial
-//! velocity and spin: the model each phase of a collision track is fitted with.
+//! The closed-form motion of one sphere in the groove (Coulomb μ, linear drag v/T) from any
+//! initial velocity and spin — `physics::Baseline::state_from` — as each phase of a collision
+//! track is fitted with it.
 //!
-//! Sliding while v ≠ s·v_a with d = sign(v0 − s·v_a0) (either sign; friction may accelerate):
-//! v(t) = (v0 + A) e^{−t/T} − A with A = d·g·μ·T/s, v_a(t) = v_a0 + d·k·g·μ·t, until v = s·v_a at
-//! t1; then constrained rolling v = v1 e^{−(t−t1)/Te}, Te = T(1 + ks²)/ks² (physics.md).
-//! This is the same model as `physics::Baseline::state_from`; the collision fitter keeps its own
-//! copy with a (v, slip) parameterization, and a test checks the two agree.
+//! Sliding while v ≠ s·v_a with d = sign(v0 − s·v_a0) (either sign; friction may accelerate),
+//! then constrained rolling decaying with Te = T(1 + ks²)/ks² (physics.md).
 
-/// Gravity (m/s²); the same value as `physics::G_MPS2`.
-pub const G_MPS2: f64 = 9.81;
+pub use crate::physics::G_MPS2;
+use crate::physics::{Baseline, Groove, Phase};
 
 /// Friction, drag and groove geometry of one run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,93 +29,44 @@ pub struct Kinematics {
 }
 
 impl Motion {
-    fn ks2(&self) -> f64 {
-        self.k * self.s * self.s
+    fn baseline(&self) -> Baseline {
+        Baseline {
+            mu: self.mu,
+            t_drag_s: self.t_drag_s,
+            groove: Groove {
+                s: self.s,
+                k: self.k,
+            },
+        }
     }
 
     /// Decay time of constrained rolling, Te = T (1 + ks²) / ks².
     pub fn te_s(&self) -> f64 {
-        self.t_drag_s * (1.0 + self.ks2()) / self.ks2()
+        let ks2 = self.k * self.s * self.s;
+        self.t_drag_s * (1.0 + ks2) / ks2
     }
 
-    /// Time (s, from the state's instant) at which sliding ends; 0 when already rolling.
+    /// Time (s, from the state's instant) at which sliding ends; 0 when already rolling,
+    /// ∞ when it never rolls.
     pub fn switch_time_s(&self, v0_mps: f64, va0_mps: f64) -> f64 {
-        let slip0 = v0_mps - self.s * va0_mps;
-        if slip0.abs() < 1e-12 {
-            return 0.0;
-        }
-        let d = slip0.signum();
-        let gm = G_MPS2 * self.mu;
-        let t = self.t_drag_s;
-        let a = d * gm * t / self.s;
-        let f = |x: f64| -> f64 {
-            let e = (-x / t).exp();
-            (v0_mps + a) * e - a - self.s * (va0_mps + d * self.k * gm * x)
-        };
-        // slip shrinks at about g μ (1 + ks²) / s; bracket the root by doubling from there
-        let mut hi = 2.0 * slip0.abs() * self.s / (gm * (1.0 + self.ks2())) + 1e-9;
-        let mut n = 0;
-        while d * f(hi) > 0.0 && n < 200 {
-            hi *= 2.0;
-            n += 1;
-        }
-        let mut lo = 0.0;
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if d * f(mid) > 0.0 {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-            if hi - lo < 1e-13 {
-                break;
-            }
-        }
-        0.5 * (lo + hi)
+        self.baseline().switch_time_from_s(v0_mps, va0_mps)
     }
 
     /// State at `t_s` ≥ 0 after the state (v0, va0) at 0.
     pub fn state(&self, v0_mps: f64, va0_mps: f64, t_s: f64) -> Kinematics {
-        let t1 = self.switch_time_s(v0_mps, va0_mps);
-        self.state_with_switch(v0_mps, va0_mps, t1, t_s)
-    }
-
-    fn state_with_switch(&self, v0: f64, va0: f64, t1: f64, t_s: f64) -> Kinematics {
-        let t = self.t_drag_s;
-        let gm = G_MPS2 * self.mu;
-        let d = (v0 - self.s * va0).signum();
-        let a = d * gm * t / self.s;
-        let slide = |x: f64| -> (f64, f64) {
-            let e = (-x / t).exp();
-            ((t * (v0 + a) * (1.0 - e) - a * x), (v0 + a) * e - a)
-        };
-        if t_s < t1 {
-            let (dz, v) = slide(t_s);
-            return Kinematics {
-                dz_m: dz,
-                v_mps: v,
-                va_mps: va0 + d * self.k * gm * t_s,
-                sliding: true,
-            };
-        }
-        let (z1, v1) = if t1 > 0.0 { slide(t1) } else { (0.0, v0) };
-        let te = self.te_s();
-        let e = (-(t_s - t1) / te).exp();
-        let v = v1 * e;
+        let (dz_m, v_mps, va_mps, phase) = self.baseline().state_from(v0_mps, va0_mps, t_s);
         Kinematics {
-            dz_m: z1 + v1 * te * (1.0 - e),
-            v_mps: v,
-            va_mps: v / self.s,
-            sliding: false,
+            dz_m,
+            v_mps,
+            va_mps,
+            sliding: phase == Phase::Sliding,
         }
     }
 
-    /// Position changes at many times ≥ 0 (the fit's fast path: one root find per call).
+    /// Position changes at many times ≥ 0 (the fit's fast path).
     pub fn positions(&self, v0_mps: f64, va0_mps: f64, t_s: &[f64], out_dz_m: &mut [f64]) {
-        let t1 = self.switch_time_s(v0_mps, va0_mps);
-        for (o, &t) in out_dz_m.iter_mut().zip(t_s) {
-            *o = self.state_with_switch(v0_mps, va0_mps, t1, t).dz_m;
-        }
+        self.baseline()
+            .positions_from(v0_mps, va0_mps, t_s, out_dz_m);
     }
 }
 
@@ -132,7 +81,7 @@ mod tests {
         k: 2.5,
     };
 
-    /// Euler–free check: integrate the sliding/rolling equations with small RK4 steps.
+    /// Independent check: integrate the sliding/rolling equations with small RK4 steps.
     fn integrate(v0: f64, va0: f64, t_end: f64) -> (f64, f64, f64) {
         let (mut z, mut v, mut va) = (0.0, v0, va0);
         let n = 200_000;

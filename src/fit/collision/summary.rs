@@ -48,6 +48,10 @@ pub struct RestitutionCurve {
     pub slope_per_mps: Interval,
     /// C = 1 − a · v, the chapter's "C → 1 at low speed" form.
     pub a_per_mps: Interval,
+    /// C = c_inf + (1 − c_inf) e^{−v/v_ref}: 1 for a gentle touch, falling to c_inf
+    /// (the form `physics::Restitution::SpeedDependent` simulates).
+    pub c_inf: Interval,
+    pub v_ref_mps: Interval,
     pub mean_c: f64,
     pub min_speed_mps: f64,
     pub max_speed_mps: f64,
@@ -286,6 +290,8 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
             c0: iv(&|p| line_fit(p).map(|l| l.0)),
             slope_per_mps: iv(&|p| line_fit(p).map(|l| -l.1)),
             a_per_mps: iv(&one_minus_av),
+            c_inf: iv(&|p| exp_fit(p).map(|f| f.0)),
+            v_ref_mps: iv(&|p| exp_fit(p).map(|f| f.1)),
             mean_c: all_pts.iter().map(|p| p.1).sum::<f64>() / all_pts.len() as f64,
             min_speed_mps: speeds.clone().fold(f64::INFINITY, f64::min),
             max_speed_mps: speeds.fold(0.0, f64::max),
@@ -394,4 +400,46 @@ fn one_minus_av(p: &[(f64, f64, f64)]) -> Option<f64> {
         den += w * x * x;
     }
     (den > 0.0).then(|| num / den)
+}
+
+/// Weighted least squares of C = c_inf + (1 − c_inf) e^{−v/v_ref}: for each v_ref on a log
+/// grid, 1 − C = (1 − c_inf)(1 − e^{−v/v_ref}) is linear in (1 − c_inf); keep the best pair.
+fn exp_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
+    let solve = |v_ref: f64| -> (f64, f64) {
+        let (mut num, mut den) = (0.0, 0.0);
+        for &(x, y, se) in p {
+            let w = 1.0 / (se * se);
+            let f = 1.0 - (-x / v_ref).exp();
+            num += w * f * (1.0 - y);
+            den += w * f * f;
+        }
+        let b = if den > 0.0 { num / den } else { 0.0 };
+        let sse = p
+            .iter()
+            .map(|&(x, y, se)| ((1.0 - y) - b * (1.0 - (-x / v_ref).exp())).powi(2) / (se * se))
+            .sum();
+        (1.0 - b, sse)
+    };
+    if p.len() < 3 {
+        return None;
+    }
+    let grid: Vec<f64> = (0..=200)
+        .map(|i| 1e-3 * 10f64.powf(i as f64 / 66.0))
+        .collect();
+    let best = (0..grid.len()).min_by(|&a, &b| solve(grid[a]).1.total_cmp(&solve(grid[b]).1))?;
+    let (mut lo, mut hi) = (
+        grid[best.saturating_sub(1)].ln(),
+        grid[(best + 1).min(grid.len() - 1)].ln(),
+    );
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..50 {
+        let (a, b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        if solve(a.exp()).1 < solve(b.exp()).1 {
+            hi = b;
+        } else {
+            lo = a;
+        }
+    }
+    let v_ref = (0.5 * (lo + hi)).exp();
+    Some((solve(v_ref).0, v_ref))
 }

@@ -5,11 +5,30 @@
 use crate::recording::Setup;
 use serde::{Deserialize, Serialize};
 
-/// A fitted value and its standard error (None when the data do not constrain it).
+/// A fitted value and its standard error (None when the data do not constrain it). A value
+/// that could not be computed is NaN in memory and `null` in JSON.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Estimate {
+    #[serde(with = "nan_as_null")]
     pub value: f64,
     pub se: Option<f64>,
+}
+
+/// Serde for an f64 that may be NaN: JSON has no NaN, so it travels as `null`.
+pub mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if x.is_finite() {
+            s.serialize_f64(*x)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
 }
 
 impl Estimate {
@@ -120,9 +139,11 @@ pub struct ImpactFit {
     /// Δv_a of the striker, same frame.
     pub striker_dva_mps: Estimate,
     /// v_a1 + v_a2 before and after (striker-forward frame).
+    #[serde(with = "nan_as_null")]
     pub spin_sum_before_mps: f64,
     pub spin_sum_after_mps: Estimate,
-    /// (v1 + v2) − (v1' + v2'): zero for equal masses if the fit is right (m/s).
+    /// (v1 + v2) − (v1' + v2'): zero by construction when the impulse ties the states (m/s).
+    #[serde(with = "nan_as_null")]
     pub momentum_mismatch_mps: f64,
     pub contact: Contact,
 }
@@ -142,8 +163,10 @@ pub struct CollisionFit {
     pub t_drag_s: Estimate,
     pub segments: Vec<SegmentFit>,
     pub impacts: Vec<ImpactFit>,
+    #[serde(with = "nan_as_null")]
     pub rms_m: f64,
     /// Robust residual scale (1.4826·MAD) of the joint fit.
+    #[serde(with = "nan_as_null")]
     pub noise_m: f64,
     pub n_points: usize,
     /// Samples with |residual| > 5 noise scales (down-weighted by the robust loss).
