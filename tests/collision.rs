@@ -365,11 +365,11 @@ fn run_without_impact_or_target_is_reported_not_fatal() {
 #[test]
 fn scratch_debug() {
     let case = Case {
-        setup: Setup::Rolling,
-        v0_mps: 0.09,
+        setup: Setup::Contact,
+        v0_mps: 0.08,
         mu_pp: 1.4,
         direction: -1.0,
-        seed: 1,
+        seed: 11,
     };
     let (rec, truth) = record(&case);
     let fit = fit_collision(&rec, &CollisionOptions::default());
@@ -414,10 +414,10 @@ fn scratch_debug2() {
     use groove::fit::collision::model::TrackData;
     let case = Case {
         setup: Setup::Rolling,
-        v0_mps: 0.09,
+        v0_mps: 0.21,
         mu_pp: 1.4,
         direction: -1.0,
-        seed: 1,
+        seed: 4,
     };
     let (rec, truth) = record(&case);
     let tr = |p: u32| {

@@ -46,6 +46,8 @@ pub struct PlanImpact {
 pub struct Plan {
     pub mu: f64,
     pub t_drag_s: f64,
+    /// Hold μ and T at their start values (a short approach cannot separate them).
+    pub hold_friction: bool,
     pub z_start_m: [f64; 2],
     pub first: [Option<FirstPiece>; 2],
     pub impacts: Vec<PlanImpact>,
@@ -76,11 +78,11 @@ fn va_bounds(va_max: f64) -> (f64, f64) {
 impl Plan {
     pub fn build(&self, tracks: [TrackData; 2], s: f64, k: f64) -> (Layout, Vec<ParamSpec>) {
         let mut sp = Vec::new();
-        assert_eq!(push(&mut sp, self.mu, MU_BOUNDS.0, MU_BOUNDS.1, 1e-6), MU);
-        assert_eq!(
-            push(&mut sp, self.t_drag_s, T_BOUNDS_S.0, T_BOUNDS_S.1, 1e-6),
-            T_DRAG
-        );
+        let held = |x: f64, b: (f64, f64)| if self.hold_friction { (x, x) } else { b };
+        let (mu_lo, mu_hi) = held(self.mu, MU_BOUNDS);
+        let (t_lo, t_hi) = held(self.t_drag_s, T_BOUNDS_S);
+        assert_eq!(push(&mut sp, self.mu, mu_lo, mu_hi, 1e-6), MU);
+        assert_eq!(push(&mut sp, self.t_drag_s, t_lo, t_hi, 1e-6), T_DRAG);
         let mut impacts = Vec::new();
         // per impact: the pieces it starts for the striker and the target
         let mut after: Vec<[Piece; 2]> = Vec::new();
