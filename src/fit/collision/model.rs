@@ -53,6 +53,9 @@ pub struct Layout {
     /// Per particle: its pieces in time order. A particle whose first piece starts at an impact
     /// (contact setup) has one piece per impact; otherwise one more.
     pub pieces: [Vec<Piece>; 2],
+    /// Per particle, per piece: the parameter index of its drag time T (the run's shared T, or
+    /// one per piece, which absorbs a drag that is not linear in v).
+    pub drag: [Vec<usize>; 2],
     pub n_params: usize,
 }
 
@@ -75,13 +78,10 @@ impl Layout {
         self.tracks[0].t_s.len() + self.tracks[1].t_s.len()
     }
 
-    pub fn motion(&self, p: &[f64]) -> Motion {
-        Motion {
-            mu: p[MU],
-            t_drag_s: p[T_DRAG],
-            s: self.s,
-            k: self.k,
-        }
+    /// The motion of piece `k` of `particle`.
+    pub fn motion(&self, p: &[f64], particle: usize, k: usize) -> Motion {
+        let t = self.drag[particle].get(k).copied().unwrap_or(T_DRAG);
+        Motion { mu: p[MU], t_drag_s: p[t], s: self.s, k: self.k }
     }
 
     pub fn impact_time(&self, p: &[f64], j: usize) -> f64 {
@@ -93,7 +93,6 @@ impl Layout {
 
     /// The start state of every piece of a particle, in time order.
     pub fn piece_starts(&self, p: &[f64], particle: usize) -> Vec<PieceStart> {
-        let motion = self.motion(p);
         let mut times: Vec<(f64, Option<usize>)> = Vec::new();
         if let Some(t0) = self.first_start_s[particle] {
             times.push((t0, None));
@@ -108,6 +107,7 @@ impl Layout {
                 if prev.rest {
                     (v_end, va_end) = (0.0, 0.0);
                 } else {
+                    let motion = self.motion(p, particle, k - 1);
                     let st = motion.state(prev.v_mps, prev.va_mps, (t0 - prev.t_s).max(0.0));
                     z = prev.z_m + st.dz_m;
                     (v_end, va_end) = (st.v_mps, st.va_mps);
@@ -134,7 +134,6 @@ impl Layout {
     /// Model positions of one particle at its sample times.
     pub fn positions(&self, p: &[f64], particle: usize, out: &mut [f64]) {
         let track = &self.tracks[particle];
-        let motion = self.motion(p);
         let starts = self.piece_starts(p, particle);
         let n = track.t_s.len();
         let mut i = 0;
@@ -153,7 +152,7 @@ impl Layout {
             rel.clear();
             rel.extend(track.t_s[first..i].iter().map(|t| (t - st.t_s).max(0.0)));
             buf.resize(rel.len(), 0.0);
-            motion.positions(st.v_mps, st.va_mps, &rel, &mut buf);
+            self.motion(p, particle, k).positions(st.v_mps, st.va_mps, &rel, &mut buf);
             for (o, b) in out[first..i].iter_mut().zip(&buf) {
                 *o = st.z_m + b;
             }
@@ -187,10 +186,8 @@ impl Layout {
                 sliding: false,
             });
         }
-        Some(
-            self.motion(p)
-                .state(prev.v_mps, prev.va_mps, (starts[k].t_s - prev.t_s).max(0.0)),
-        )
+        let motion = self.motion(p, particle, k - 1);
+        Some(motion.state(prev.v_mps, prev.va_mps, (starts[k].t_s - prev.t_s).max(0.0)))
     }
 
     /// (v, v_a) of a particle just after impact `j`.
@@ -208,9 +205,7 @@ impl Layout {
         if st.rest {
             return (st.z_m, 0.0, 0.0);
         }
-        let kin = self
-            .motion(p)
-            .state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
+        let kin = self.motion(p, particle, k).state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
         (st.z_m + kin.dz_m, kin.v_mps, kin.va_mps)
     }
 }

@@ -48,6 +48,9 @@ pub struct Plan {
     pub t_drag_s: f64,
     /// Hold μ and T at their start values (a short approach cannot separate them).
     pub hold_friction: bool,
+    /// One drag time per piece (start values below, default `t_drag_s`) instead of one per run.
+    pub drag_per_piece: bool,
+    pub piece_t_drag_s: [Vec<f64>; 2],
     pub z_start_m: [f64; 2],
     pub first: [Option<FirstPiece>; 2],
     pub impacts: Vec<PlanImpact>,
@@ -80,7 +83,11 @@ impl Plan {
         let mut sp = Vec::new();
         let held = |x: f64, b: (f64, f64)| if self.hold_friction { (x, x) } else { b };
         let (mu_lo, mu_hi) = held(self.mu, MU_BOUNDS);
-        let (t_lo, t_hi) = held(self.t_drag_s, T_BOUNDS_S);
+        let (t_lo, t_hi) = if self.drag_per_piece {
+            (self.t_drag_s, self.t_drag_s)
+        } else {
+            held(self.t_drag_s, T_BOUNDS_S)
+        };
         assert_eq!(push(&mut sp, self.mu, mu_lo, mu_hi, 1e-6), MU);
         assert_eq!(push(&mut sp, self.t_drag_s, t_lo, t_hi, 1e-6), T_DRAG);
         let mut impacts = Vec::new();
@@ -117,6 +124,7 @@ impl Plan {
         let mut z_start = [0; 2];
         let mut first_start_s = [None; 2];
         let mut pieces: [Vec<Piece>; 2] = [Vec::new(), Vec::new()];
+        let mut drag: [Vec<usize>; 2] = [Vec::new(), Vec::new()];
         for p in 0..2 {
             let z = self.z_start_m[p];
             z_start[p] = push(&mut sp, z, z - 0.1, z + 0.1, 1e-9);
@@ -141,6 +149,15 @@ impl Plan {
                 None => {}
             }
             pieces[p].extend(after.iter().map(|a| a[p]));
+            for (k, piece) in pieces[p].iter().enumerate() {
+                drag[p].push(if self.drag_per_piece && *piece != Piece::Rest {
+                    let t = self.piece_t_drag_s[p].get(k).copied().unwrap_or(self.t_drag_s);
+                    let (lo, hi) = held(t, T_BOUNDS_S);
+                    push(&mut sp, t, lo, hi, 1e-6)
+                } else {
+                    T_DRAG
+                });
+            }
         }
         let n_params = sp.len();
         let layout = Layout {
@@ -151,6 +168,7 @@ impl Plan {
             z_start,
             first_start_s,
             pieces,
+            drag,
             n_params,
         };
         (layout, sp)
@@ -187,6 +205,7 @@ impl Plan {
         for (j, im) in out.impacts.iter_mut().enumerate() {
             im.t_s = layout.impact_time(p, j);
         }
+        out.piece_t_drag_s = [0, 1].map(|part| layout.drag[part].iter().map(|&i| p[i]).collect());
         out
     }
 }

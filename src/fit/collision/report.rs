@@ -75,7 +75,6 @@ pub fn summarize_fit(
     res: &LmResult,
 ) -> CollisionFit {
     let p = &res.params;
-    let motion = layout.motion(p);
     let lab = |e: Estimate| Estimate {
         value: direction * e.value,
         se: e.se,
@@ -95,6 +94,8 @@ pub fn summarize_fit(
             } else {
                 (propagate(res, &piece_v), propagate(res, &piece_va))
             };
+            let motion = layout.motion(p, part, k);
+            let t_drag = layout.drag[part][k];
             let t_sw = (!st.rest)
                 .then(|| t0 + motion.switch_time_s(st.v_mps, st.va_mps))
                 .filter(|&t| t <= t1);
@@ -114,6 +115,7 @@ pub fn summarize_fit(
                 z_start_m: direction * st.z_m,
                 v_start_mps: lab(v_est),
                 va_start_mps: lab(va_est),
+                t_drag_s: Estimate::new(p[t_drag], res.se(t_drag)),
                 t_switch_s: t_sw,
                 spin_identified: resolved(va_est, v_est.value),
                 phases,
@@ -139,7 +141,11 @@ pub fn summarize_fit(
         status,
         message: String::new(),
         mu_pg: Estimate::new(p[MU], res.se(MU)),
-        t_drag_s: Estimate::new(p[T_DRAG], res.se(T_DRAG)),
+        t_drag_s: if layout.drag.iter().flatten().any(|&i| i != T_DRAG) {
+            Estimate { value: f64::NAN, se: None }
+        } else {
+            Estimate::new(p[T_DRAG], res.se(T_DRAG))
+        },
         segments,
         impacts,
         rms_m: rms,

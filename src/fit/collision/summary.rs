@@ -36,7 +36,8 @@ pub struct MuPp {
     pub n_undetermined: usize,
 }
 
-/// C against impact speed for one material and setup.
+/// C against impact speed for one material and setup, over the first impact of each run
+/// (secondary impacts are slow and short-lived; they are listed in `restitution_points`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RestitutionCurve {
     pub material: String,
@@ -228,7 +229,7 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
     for idx in groups.values() {
         let pts = |sel: &[usize]| -> Vec<(f64, f64, f64)> {
             sel.iter()
-                .flat_map(|&i| runs[idx[i]].1.impacts.iter())
+                .flat_map(|&i| runs[idx[i]].1.impacts.first())
                 .filter_map(|im| {
                     let se = im.restitution.se?;
                     (se <= MAX_C_SE

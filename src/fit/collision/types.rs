@@ -81,6 +81,8 @@ pub struct SegmentFit {
     pub z_start_m: f64,
     pub v_start_mps: Estimate,
     pub va_start_mps: Estimate,
+    /// Drag time of this segment (the run's T unless fitted per segment).
+    pub t_drag_s: Estimate,
     /// When sliding ends (absolute time); None if not within the segment.
     pub t_switch_s: Option<f64>,
     /// False when the segment ends before the switch to rolling, so v_a is only bounded.
@@ -158,8 +160,9 @@ pub struct CollisionFit {
     pub direction: i32,
     pub status: CollisionStatus,
     pub message: String,
-    /// Particle–groove friction and drag time, shared by both particles and all segments.
+    /// Particle–groove friction, shared by both particles and all segments.
     pub mu_pg: Estimate,
+    /// Drag time shared by all segments; null when fitted per segment (see `segments`).
     pub t_drag_s: Estimate,
     pub segments: Vec<SegmentFit>,
     pub impacts: Vec<ImpactFit>,
