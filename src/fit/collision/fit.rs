@@ -229,6 +229,7 @@ impl Fitter<'_> {
             hold_friction: false,
             drag_per_piece: self.opts.drag_per_piece,
             piece_t_drag_s: [Vec::new(), Vec::new()],
+            noise_m: self.sigma,
             z_start_m: [z1, z2],
             first: [None, None],
             impacts: vec![PlanImpact {
@@ -256,6 +257,7 @@ impl Fitter<'_> {
             hold_friction: false,
             drag_per_piece: self.opts.drag_per_piece,
             piece_t_drag_s: [Vec::new(), Vec::new()],
+            noise_m: self.sigma,
             z_start_m: [z, super::detect::median(&mut head)],
             first: [
                 Some(FirstPiece::Kicked {

@@ -56,7 +56,18 @@ pub struct Layout {
     /// Per particle, per piece: the parameter index of its drag time T (the run's shared T, or
     /// one per piece, which absorbs a drag that is not linear in v).
     pub drag: [Vec<usize>; 2],
+    /// With one T per piece: each piece's ln T is drawn toward the run's shared T with this
+    /// standard deviation, a pseudo-residual in units of the position noise `noise_m`. Short
+    /// pieces that say little about drag keep the run's T; long ones speak for themselves.
+    pub drag_prior: Option<DragPrior>,
     pub n_params: usize,
+}
+
+/// Shrinkage of per-piece drag times toward the run's T.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DragPrior {
+    pub sigma_ln: f64,
+    pub noise_m: f64,
 }
 
 pub const MU: usize = 0;
@@ -74,8 +85,17 @@ pub struct PieceStart {
 }
 
 impl Layout {
-    pub fn n_residuals(&self) -> usize {
+    /// Number of position samples (the first residuals).
+    pub fn n_data(&self) -> usize {
         self.tracks[0].t_s.len() + self.tracks[1].t_s.len()
+    }
+
+    fn prior_params(&self) -> impl Iterator<Item = usize> + '_ {
+        self.drag.iter().flatten().copied().filter(|&i| i != T_DRAG)
+    }
+
+    pub fn n_residuals(&self) -> usize {
+        self.n_data() + if self.drag_prior.is_some() { self.prior_params().count() } else { 0 }
     }
 
     /// The motion of piece `k` of `particle`.
@@ -162,7 +182,13 @@ impl Layout {
     /// Residuals model − data of both tracks, concatenated (striker first).
     pub fn residuals(&self, p: &[f64], out: &mut [f64]) {
         let n0 = self.tracks[0].t_s.len();
-        let (a, b) = out.split_at_mut(n0);
+        let (data, prior) = out.split_at_mut(self.n_data());
+        if let Some(dp) = self.drag_prior {
+            for (o, i) in prior.iter_mut().zip(self.prior_params()) {
+                *o = (p[i] / p[T_DRAG]).ln() / dp.sigma_ln * dp.noise_m;
+            }
+        }
+        let (a, b) = data.split_at_mut(n0);
         self.positions(p, 0, a);
         self.positions(p, 1, b);
         for (o, z) in a.iter_mut().zip(&self.tracks[0].z_m) {
