@@ -207,8 +207,10 @@ impl Fitter<'_> {
                 .get(j + 1)
                 .map(|n| 0.5 * (n + times[j]))
                 .unwrap_or(f64::INFINITY);
-            im.lower_s = (im.t_s - 3.0 * self.frame_s).max(prev);
-            im.upper_s = (im.t_s + 3.0 * self.frame_s).min(next);
+            // the first impact is located to a frame by the departure; later ones only to a few
+            let reach = if j == 0 { 3.0 } else { 8.0 } * self.frame_s;
+            im.lower_s = (im.t_s - reach).max(prev);
+            im.upper_s = (im.t_s + reach).min(next);
         }
     }
 
@@ -350,7 +352,7 @@ impl Fitter<'_> {
         let s = self.opts.s;
         let mut last = first;
         loop {
-            let t_stop = return_to_contact(&gap, sigma_gap, contact_m, last);
+            let t_stop = return_to_contact(&gap, sigma_gap, contact_m, last, 30);
             // a resolved contact within a few ms after the gap closed again continues the fit
             let next = found.iter().find(|c| {
                 c.t_s > last + 4.0 * self.frame_s && c.t_s <= t_stop + 50.0 * self.frame_s
@@ -386,9 +388,11 @@ impl Fitter<'_> {
     }
 }
 
-/// First time after `after_s` at which the gap, having opened by more than 8 noise units,
-/// closes again to within 4 noise units of contact (running median of 9 samples).
-fn return_to_contact(gap: &TrackData, sigma_m: f64, contact_m: f64, after_s: f64) -> f64 {
+/// Where the fit must stop after the impact at `after_s`: the first time the gap, having
+/// opened by more than 6 noise units, closes again to within 3 (running median of 9 samples);
+/// if it never opens within `open_within` samples the pair moves on touching, and the fit stops
+/// there.
+fn return_to_contact(gap: &TrackData, sigma_m: f64, contact_m: f64, after_s: f64, open_within: usize) -> f64 {
     let i0 = index_at(gap, after_s);
     let n = gap.t_s.len();
     let mut opened = false;
@@ -398,8 +402,11 @@ fn return_to_contact(gap: &TrackData, sigma_m: f64, contact_m: f64, after_s: f64
         let mut w = gap.z_m[lo..hi].to_vec();
         let g = super::detect::median(&mut w) - contact_m;
         if !opened {
-            opened = g > 8.0 * sigma_m;
-        } else if g < 4.0 * sigma_m {
+            opened = g > 6.0 * sigma_m;
+            if !opened && i >= i0 + open_within {
+                return gap.t_s[i];
+            }
+        } else if g < 3.0 * sigma_m {
             return gap.t_s[i];
         }
     }
