@@ -95,13 +95,23 @@ impl Layout {
     }
 
     pub fn n_residuals(&self) -> usize {
-        self.n_data() + if self.drag_prior.is_some() { self.prior_params().count() } else { 0 }
+        self.n_data()
+            + if self.drag_prior.is_some() {
+                self.prior_params().count()
+            } else {
+                0
+            }
     }
 
     /// The motion of piece `k` of `particle`.
     pub fn motion(&self, p: &[f64], particle: usize, k: usize) -> Motion {
         let t = self.drag[particle].get(k).copied().unwrap_or(T_DRAG);
-        Motion { mu: p[MU], t_drag_s: p[t], s: self.s, k: self.k }
+        Motion {
+            mu: p[MU],
+            t_drag_s: p[t],
+            s: self.s,
+            k: self.k,
+        }
     }
 
     pub fn impact_time(&self, p: &[f64], j: usize) -> f64 {
@@ -172,7 +182,8 @@ impl Layout {
             rel.clear();
             rel.extend(track.t_s[first..i].iter().map(|t| (t - st.t_s).max(0.0)));
             buf.resize(rel.len(), 0.0);
-            self.motion(p, particle, k).positions(st.v_mps, st.va_mps, &rel, &mut buf);
+            self.motion(p, particle, k)
+                .positions(st.v_mps, st.va_mps, &rel, &mut buf);
             for (o, b) in out[first..i].iter_mut().zip(&buf) {
                 *o = st.z_m + b;
             }
@@ -231,7 +242,9 @@ impl Layout {
         if st.rest {
             return (st.z_m, 0.0, 0.0);
         }
-        let kin = self.motion(p, particle, k).state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
+        let kin = self
+            .motion(p, particle, k)
+            .state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
         (st.z_m + kin.dz_m, kin.v_mps, kin.va_mps)
     }
 }

@@ -151,7 +151,10 @@ impl Plan {
             pieces[p].extend(after.iter().map(|a| a[p]));
             for (k, piece) in pieces[p].iter().enumerate() {
                 drag[p].push(if self.drag_per_piece && *piece != Piece::Rest {
-                    let t = self.piece_t_drag_s[p].get(k).copied().unwrap_or(self.t_drag_s);
+                    let t = self.piece_t_drag_s[p]
+                        .get(k)
+                        .copied()
+                        .unwrap_or(self.t_drag_s);
                     let (lo, hi) = held(t, T_BOUNDS_S);
                     push(&mut sp, t, lo, hi, 1e-6)
                 } else {

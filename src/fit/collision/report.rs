@@ -147,10 +147,7 @@ pub fn summarize_fit(
         rms_m: rms,
         noise_m: res.scale,
         n_points: data.len(),
-        n_outliers: data
-            .iter()
-            .filter(|r| r.abs() > 5.0 * res.scale)
-            .count(),
+        n_outliers: data.iter().filter(|r| r.abs() > 5.0 * res.scale).count(),
         iterations: res.iterations,
     }
 }
