@@ -163,8 +163,8 @@ fn fit_baseline(t: &[f64], z: &[f64], guess: [f64; 4]) -> [f64; 4] {
         let mut improved = false;
         for _ in 0..20 {
             let mut aa = a;
-            for j in 0..4 {
-                aa[j][j] *= 1.0 + lambda;
+            for (j, row) in aa.iter_mut().enumerate() {
+                row[j] *= 1.0 + lambda;
             }
             let step = solve4(aa, g);
             let mut q = p;
@@ -200,8 +200,9 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> [f64; 4] {
         b.swap(c, piv);
         for r in c + 1..4 {
             let f = a[r][c] / a[c][c];
-            for k in c..4 {
-                a[r][k] -= f * a[c][k];
+            let pivot_row = a[c];
+            for (k, x) in a[r].iter_mut().enumerate().skip(c) {
+                *x -= f * pivot_row[k];
             }
             b[r] -= f * b[c];
         }
