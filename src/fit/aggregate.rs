@@ -32,13 +32,22 @@ impl AggregateOptions {
     /// Check ranges; the error names the key and a valid range.
     pub fn validate(&self) -> Result<(), (String, String)> {
         if !(100..=1_000_000).contains(&self.bootstrap_resamples) {
-            return Err(("bootstrap_resamples".into(), "must be between 100 and 1000000, e.g. 2000".into()));
+            return Err((
+                "bootstrap_resamples".into(),
+                "must be between 100 and 1000000, e.g. 2000".into(),
+            ));
         }
         if !(self.level > 0.5 && self.level < 1.0) {
-            return Err(("level".into(), "must be between 0.5 and 1, e.g. 0.95".into()));
+            return Err((
+                "level".into(),
+                "must be between 0.5 and 1, e.g. 0.95".into(),
+            ));
         }
         if !(self.fast_min_speed_mps >= 0.0 && self.fast_min_speed_mps.is_finite()) {
-            return Err(("fast_min_speed_mps".into(), "must be a speed ≥ 0 in m/s, e.g. 0.03".into()));
+            return Err((
+                "fast_min_speed_mps".into(),
+                "must be a speed ≥ 0 in m/s, e.g. 0.03".into(),
+            ));
         }
         Ok(())
     }
@@ -76,7 +85,14 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let stats = |idx: &[usize]| {
         let (ta, tb) = line_fit(&speed, &t, idx);
         let (ma, mb) = line_fit(&speed, &mu, idx);
-        [weighted_mean(&mu, &mu_se, idx), mean_where(&mu, idx, fast), ta, tb, ma, mb]
+        [
+            weighted_mean(&mu, &mu_se, idx),
+            mean_where(&mu, idx, fast),
+            ta,
+            tb,
+            ma,
+            mb,
+        ]
     };
     let all: Vec<usize> = (0..ok.len()).collect();
     let point = stats(&all);
@@ -111,5 +127,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
 
 /// FNV-1a of a name: a fixed, platform-independent way to give each material its own stream.
 fn fnv1a(s: &str) -> u64 {
-    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3))
+    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    })
 }

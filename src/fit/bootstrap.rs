@@ -58,7 +58,10 @@ pub fn percentile_intervals<const K: usize>(
             d[i] + f * (d[(i + 1).min(d.len() - 1)] - d[i])
         };
         let a = 0.5 * (1.0 - level);
-        out[k] = Some(Interval { lo: q(a), hi: q(1.0 - a) });
+        out[k] = Some(Interval {
+            lo: q(a),
+            hi: q(1.0 - a),
+        });
     }
     out
 }

@@ -118,11 +118,7 @@ fn robust_cost(r: &[f64], excluded: &[bool], loss: Loss, scale: f64) -> f64 {
 }
 
 /// Weighted normal equations H = Σ w JᵀJ (upper and lower filled) and gradient g = Σ w J r.
-pub fn normal_equations(
-    jac: &[[f64; NP]],
-    r: &[f64],
-    w: &[f64],
-) -> ([[f64; NP]; NP], [f64; NP]) {
+pub fn normal_equations(jac: &[[f64; NP]], r: &[f64], w: &[f64]) -> ([[f64; NP]; NP], [f64; NP]) {
     let mut h = [[0.0; NP]; NP];
     let mut g = [0.0; NP];
     for ((row, &ri), &wi) in jac.iter().zip(r).zip(w) {
@@ -351,12 +347,34 @@ mod tests {
             hi: [10.0, 10.0, 10.0, 0.0, 0.0, 0.0],
             free: [true, true, true, false, false, false],
         };
-        let out = minimize(&prob, [0.5, 3.0, 0.0, 0.0, 0.0, 0.0], &bounds, Loss::Linear, 1.0, &settings, &mut ws);
+        let out = minimize(
+            &prob,
+            [0.5, 3.0, 0.0, 0.0, 0.0, 0.0],
+            &bounds,
+            Loss::Linear,
+            1.0,
+            &settings,
+            &mut ws,
+        );
         assert!(out.termination.is_converged(), "{:?}", out.termination);
-        assert!((out.x[0] - 2.0).abs() < 1e-8 && (out.x[1] - 0.7).abs() < 1e-8 && (out.x[2] - 0.5).abs() < 1e-8, "{:?}", out.x);
+        assert!(
+            (out.x[0] - 2.0).abs() < 1e-8
+                && (out.x[1] - 0.7).abs() < 1e-8
+                && (out.x[2] - 0.5).abs() < 1e-8,
+            "{:?}",
+            out.x
+        );
         // an upper bound below the truth holds the rate at the bound
         bounds.hi[1] = 0.5;
-        let out = minimize(&prob, [0.5, 0.3, 0.0, 0.0, 0.0, 0.0], &bounds, Loss::Linear, 1.0, &settings, &mut ws);
+        let out = minimize(
+            &prob,
+            [0.5, 0.3, 0.0, 0.0, 0.0, 0.0],
+            &bounds,
+            Loss::Linear,
+            1.0,
+            &settings,
+            &mut ws,
+        );
         assert_eq!(out.x[1], 0.5);
         assert!(out.termination.is_converged(), "{:?}", out.termination);
     }

@@ -104,7 +104,12 @@ impl Prepared {
             let e = (-tt / t).exp();
             slide_v(v0, da, e) - s * (va0 + spin_rate * tt)
         };
-        let t1 = switch_root(g, slip, v0.abs() + s * va0.abs() + c * t, c + s * spin_rate.abs())?;
+        let t1 = switch_root(
+            g,
+            slip,
+            v0.abs() + s * va0.abs() + c * t,
+            c + s * spin_rate.abs(),
+        )?;
         let e1 = (-t1 / t).exp();
         let om1 = -(-t1 / t).exp_m1(); // 1 − e1, accurate for small t1/T
         let v1 = slide_v(v0, da, e1);
@@ -141,7 +146,7 @@ impl Prepared {
     /// Displacement Δz(τ), velocity and whether the particle is still sliding, at τ after the kick.
     #[inline]
     pub fn state(&self, tau_s: f64) -> (f64, f64, bool) {
-        if tau_s <= 0.0 {
+        if tau_s < 0.0 {
             return (0.0, 0.0, false);
         }
         let (v0, t) = (self.p[V0], self.p[TD]);
@@ -154,7 +159,11 @@ impl Prepared {
             let x = (tau_s - self.t1_s) / self.te_s;
             let f = (-x).exp();
             let om = -(-x).exp_m1();
-            (self.z1_m + self.v1_mps * self.te_s * om, self.v1_mps * f, false)
+            (
+                self.z1_m + self.v1_mps * self.te_s * om,
+                self.v1_mps * f,
+                false,
+            )
         }
     }
 
@@ -164,7 +173,7 @@ impl Prepared {
         let tau = t_s - t_ref_s + self.p[T0];
         *grad = [0.0; NP];
         grad[Z0] = 1.0;
-        if tau <= 0.0 {
+        if tau < 0.0 {
             return self.p[Z0];
         }
         let (v0, t) = (self.p[V0], self.p[TD]);
@@ -299,7 +308,12 @@ mod tests {
         let (s, k) = (groove().s, groove().k);
         // at the switch v equals s·va with va = k g μ t1
         let va1 = k * G_MPS2 * 0.337 * m.t1_s;
-        assert!((m.v1_mps - s * va1).abs() < 1e-12, "{} vs {}", m.v1_mps, s * va1);
+        assert!(
+            (m.v1_mps - s * va1).abs() < 1e-12,
+            "{} vs {}",
+            m.v1_mps,
+            s * va1
+        );
         let (za, va, _) = m.state(m.t1_s * (1.0 - 1e-12));
         let (zb, vb, _) = m.state(m.t1_s * (1.0 + 1e-12));
         assert!((za - zb).abs() < 1e-12 && (va - vb).abs() < 1e-9);

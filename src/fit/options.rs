@@ -46,19 +46,28 @@ impl FitOptions {
     pub fn validate(&self) -> Result<(), (String, String)> {
         let bad = |key: &str, msg: &str| Err((key.to_string(), msg.to_string()));
         if !(self.groove_angle_deg > 0.0 && self.groove_angle_deg < 180.0) {
-            return bad("groove_angle_deg", "must be between 0 and 180 degrees, e.g. 70.6");
+            return bad(
+                "groove_angle_deg",
+                "must be between 0 and 180 degrees, e.g. 70.6",
+            );
         }
         if !(self.k > 0.0 && self.k.is_finite()) {
             return bad("k", "must be positive (2.5 for a solid sphere)");
         }
         if !(self.outlier_sigma >= 2.0 && self.outlier_sigma.is_finite()) {
-            return bad("outlier_sigma", "must be at least 2 (robust scales), e.g. 5");
+            return bad(
+                "outlier_sigma",
+                "must be at least 2 (robust scales), e.g. 5",
+            );
         }
         if self.max_iterations == 0 {
             return bad("max_iterations", "must be at least 1, e.g. 200");
         }
         if self.min_frames < 8 {
-            return bad("min_frames", "must be at least 8 (the model has 5 free parameters)");
+            return bad(
+                "min_frames",
+                "must be at least 8 (the model has 5 free parameters)",
+            );
         }
         Ok(())
     }

@@ -95,7 +95,11 @@ impl Acc {
                 self.lag_den += x * x;
             }
             if x != 0.0 {
-                if x > 0.0 { plus += 1.0 } else { minus += 1.0 }
+                if x > 0.0 {
+                    plus += 1.0
+                } else {
+                    minus += 1.0
+                }
                 if prev == 0.0 || x.signum() != prev.signum() {
                     runs += 1.0;
                 }
@@ -144,7 +148,10 @@ fn finish<K: Ord>(m: BTreeMap<K, Acc>) -> BTreeMap<K, GroupStats> {
 }
 
 fn speed_bin(v: f64) -> usize {
-    SPEED_EDGES_MPS.iter().position(|&e| v.abs() < e).unwrap_or(SPEED_EDGES_MPS.len())
+    SPEED_EDGES_MPS
+        .iter()
+        .position(|&e| v.abs() < e)
+        .unwrap_or(SPEED_EDGES_MPS.len())
 }
 
 /// Pool the residuals of many runs (any order; runs are taken sorted by id).
@@ -173,7 +180,11 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
         }
     }
     let width = (z_hi - z_lo) / POSITION_BINS as f64;
-    let pos_bin = |z: f64| ((z - z_lo) / width).floor().clamp(0.0, (POSITION_BINS - 1) as f64) as usize;
+    let pos_bin = |z: f64| {
+        ((z - z_lo) / width)
+            .floor()
+            .clamp(0.0, (POSITION_BINS - 1) as f64) as usize
+    };
 
     let mut overall = BTreeMap::new();
     let mut by_phase = BTreeMap::new();
@@ -190,9 +201,19 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
         let dir = if r.direction >= 0 { "+z" } else { "-z" };
         feed(&mut overall, r, |_| Some(()), &mut buf);
         feed(&mut by_phase, r, |i| Some(r.phase[i]), &mut buf);
-        feed(&mut by_speed, r, |i| Some(speed_bin(r.v_fit_mps[i])), &mut buf);
+        feed(
+            &mut by_speed,
+            r,
+            |i| Some(speed_bin(r.v_fit_mps[i])),
+            &mut buf,
+        );
         if width > 0.0 {
-            feed(&mut by_position, r, |i| Some(pos_bin(r.z_obs_m[i])), &mut buf);
+            feed(
+                &mut by_position,
+                r,
+                |i| Some(pos_bin(r.z_obs_m[i])),
+                &mut buf,
+            );
         }
         feed(&mut by_direction, r, |_| Some(dir.to_string()), &mut buf);
         feed(&mut by_material, r, |_| Some(r.material.clone()), &mut buf);
@@ -252,7 +273,9 @@ mod tests {
 
     #[test]
     fn alternating_signs_give_negative_autocorrelation_and_many_runs() {
-        let alt: Vec<f64> = (0..200).map(|i| if i % 2 == 0 { 1e-6 } else { -1e-6 }).collect();
+        let alt: Vec<f64> = (0..200)
+            .map(|i| if i % 2 == 0 { 1e-6 } else { -1e-6 })
+            .collect();
         let c = compare(&[run("a", alt)]);
         let s = c.overall;
         assert_eq!(s.n, 200);

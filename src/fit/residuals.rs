@@ -84,7 +84,10 @@ fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
         return RunResiduals::empty(rec, "skipped: the run has no track of particle 0".into());
     };
     if f.status == "failed" {
-        return RunResiduals::empty(rec, format!("skipped: the fit failed ({:?})", f.termination));
+        return RunResiduals::empty(
+            rec,
+            format!("skipped: the fit failed ({:?})", f.termination),
+        );
     }
     let model = Baseline {
         mu: f.mu,

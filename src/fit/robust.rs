@@ -114,12 +114,11 @@ pub fn fit_robust<P: Problem>(
     }
     // ws.r, ws.jac, ws.w are at out.x; refresh the weights at the final scale
     lm::cost_and_weights(&ws.r, &ws.excluded, opts.loss, scale, &mut ws.w);
-    let (sum_sq, m) = ws
-        .r
-        .iter()
-        .zip(&ws.excluded)
-        .filter(|(_, &e)| !e)
-        .fold((0.0, 0usize), |(s, m), (r, _)| (s + r * r, m + 1));
+    let (sum_sq, m) =
+        ws.r.iter()
+            .zip(&ws.excluded)
+            .filter(|(_, &e)| !e)
+            .fold((0.0, 0usize), |(s, m), (r, _)| (s + r * r, m + 1));
     fit.rms = (sum_sq / m.max(1) as f64).sqrt();
     fit.se = standard_errors(&ws.jac, &ws.r, &ws.w, &bounds.free, scale);
     fit

@@ -2,7 +2,7 @@
 //! parameters free. The single-run fit and the collision phases both build on it.
 
 use super::lm::{Bounds, Settings, Workspace};
-use super::model::{Prepared, NP, MU, T0, TD, V0, VA0, Z0};
+use super::model::{Prepared, MU, NP, T0, TD, V0, VA0, Z0};
 use super::options::FitOptions;
 use super::robust::{fit_robust, RobustFit, RobustOptions};
 use super::status::Termination;

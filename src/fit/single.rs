@@ -72,7 +72,13 @@ pub fn fit_single_with(rec: &Recording, opts: &FitOptions, ws: &mut Workspace) -
 }
 
 /// Fit the frames of one single-particle track recorded at `fps`; `run` and `material` are left empty.
-pub fn fit_track(t_s: &[f64], z_m: &[f64], fps: f64, opts: &FitOptions, ws: &mut Workspace) -> SingleFit {
+pub fn fit_track(
+    t_s: &[f64],
+    z_m: &[f64],
+    fps: f64,
+    opts: &FitOptions,
+    ws: &mut Workspace,
+) -> SingleFit {
     let n = t_s.len().min(z_m.len());
     let groove = opts.groove();
     if n < opts.min_frames.max(8) || !(fps > 0.0) {
@@ -88,7 +94,12 @@ pub fn fit_track(t_s: &[f64], z_m: &[f64], fps: f64, opts: &FitOptions, ws: &mut
     } else {
         bounds.hi[V0] = -1e-7;
     }
-    let prob = TrackProblem { t_s, z_m, t_ref_s: 0.0, groove };
+    let prob = TrackProblem {
+        t_s,
+        z_m,
+        t_ref_s: 0.0,
+        groove,
+    };
     let r = fit_robust(&prob, x0, &bounds, &settings(opts), ws);
     let x = r.x;
     let t1_s = Prepared::new(&x, groove).map_or(f64::NAN, |m| m.t1_s);

@@ -8,7 +8,13 @@ use super::model::{MU, NP, T0, TD, V0, Z0};
 use crate::physics::{Groove, G_MPS2};
 
 /// Start values [z0, t0, v0, 0, μ, T] for the frames `t_s`, `z_m` (at least 10) of a single run.
-pub fn single_start(t_s: &[f64], z_m: &[f64], fps: f64, groove: Groove, scratch: &mut Vec<f64>) -> [f64; NP] {
+pub fn single_start(
+    t_s: &[f64],
+    z_m: &[f64],
+    fps: f64,
+    groove: Groove,
+    scratch: &mut Vec<f64>,
+) -> [f64; NP] {
     let n = t_s.len();
     let ks2 = groove.k * groove.s * groove.s;
     let head = median_of(&z_m[..n.min(5)], scratch);
@@ -64,7 +70,11 @@ pub fn single_start(t_s: &[f64], z_m: &[f64], fps: f64, groove: Groove, scratch:
             scratch.push(dir * (z_m[i] - head) - amp * -(-t_s[i] / te).exp_m1());
         }
     }
-    let lead = if scratch.is_empty() { 0.0 } else { median_in_place(scratch) };
+    let lead = if scratch.is_empty() {
+        0.0
+    } else {
+        median_in_place(scratch)
+    };
     let v0 = v1 * (1.0 + ks2) / ks2;
     // sliding runs ahead of the extrapolated rolling by (v0 − v1)·t1/2
     let t1 = (2.0 * lead / (v0 - v1)).clamp(1.0 / fps, 0.5 * t_end);

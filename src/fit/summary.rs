@@ -59,7 +59,7 @@ pub struct SingleSummary {
 }
 
 /// How the intervals were made.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BootstrapInfo {
     pub resamples: usize,
     pub level: f64,

@@ -2,7 +2,9 @@
 // groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/aggregate.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_info};
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::fit::aggregate::{aggregate_single, AggregateOptions};
 use crate::fit::summary::{BootstrapInfo, Summary};
 use crate::fit::{collision, fits_csv, RunFit};
@@ -26,7 +28,8 @@ impl StageKind for Aggregate {
         Ok(json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
-        let (opts, _) = typed_params::<AggregateOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let (opts, _) = typed_params::<AggregateOptions>(input.params)
+            .map_err(|e| StageError(e.to_string()))?;
         let fits = collection_input(input, "fits", "aggregate")?;
         let runs = collection_input(input, "runs", "aggregate")?;
         let mut singles = Vec::new();
@@ -46,13 +49,17 @@ impl StageKind for Aggregate {
         }
         let mut notes = Vec::new();
         let single = if singles.is_empty() {
-            notes.push("no single runs in this dataset: μ_pg and the T-vs-v0 line are skipped".to_string());
+            notes.push(
+                "no single runs in this dataset: μ_pg and the T-vs-v0 line are skipped".to_string(),
+            );
             None
         } else {
             Some(aggregate_single(&singles, &opts, input.seed))
         };
         let collisions = if collisions.is_empty() {
-            notes.push("no collision runs in this dataset: μ_pp and restitution are skipped".to_string());
+            notes.push(
+                "no collision runs in this dataset: μ_pp and restitution are skipped".to_string(),
+            );
             None
         } else {
             Some(collision::summarize(&collisions))
@@ -69,8 +76,14 @@ impl StageKind for Aggregate {
             },
         };
         Ok([
-            ("summary".to_string(), Artifact::File(json_pretty(&summary)?)),
-            ("fits_csv".to_string(), Artifact::File(fits_csv::render(&singles).into_bytes())),
+            (
+                "summary".to_string(),
+                Artifact::File(json_pretty(&summary)?),
+            ),
+            (
+                "fits_csv".to_string(),
+                Artifact::File(fits_csv::render(&singles).into_bytes()),
+            ),
         ]
         .into())
     }

@@ -2,7 +2,9 @@
 // groove:uses src/fit src/recording.rs src/engine/stage.rs src/stages/compare.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, json_pretty, parse_item};
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::fit::residual_stats::compare;
 use crate::fit::residuals::RunResiduals;
 use serde::{Deserialize, Serialize};
@@ -34,6 +36,10 @@ impl StageKind for Compare {
             all.push(parse_item::<RunResiduals>(item, bytes, "the residuals")?);
         }
         let comparison = compare(&all);
-        Ok([("comparison".to_string(), Artifact::File(json_pretty(&comparison)?))].into())
+        Ok([(
+            "comparison".to_string(),
+            Artifact::File(json_pretty(&comparison)?),
+        )]
+        .into())
     }
 }

@@ -2,7 +2,9 @@
 // groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/fit.rs src/stages/fit_io.rs
 
 use super::fit_io::{file_input, json_bytes, param_error};
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::fit::{collision, single, FitOptions, RunFit};
 use crate::recording::{Experiment, Recording};
 
@@ -25,7 +27,8 @@ impl StageKind for Fit {
         Ok(json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
-        let (opts, _) = typed_params::<FitOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let (opts, _) =
+            typed_params::<FitOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
         let bytes = file_input(input, "runs", "fit")?;
         let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
             StageError(format!(

@@ -12,7 +12,11 @@ pub fn param_error((key, message): (String, String)) -> ParamError {
 }
 
 /// The bytes of the per-item input `name` of a `foreach` stage.
-pub fn file_input<'a>(input: &'a StageInput, name: &str, kind: &str) -> Result<&'a [u8], StageError> {
+pub fn file_input<'a>(
+    input: &'a StageInput,
+    name: &str,
+    kind: &str,
+) -> Result<&'a [u8], StageError> {
     match input.inputs.get(name) {
         Some(Artifact::File(b)) => Ok(b),
         Some(Artifact::Collection(_)) => Err(StageError(format!(
@@ -42,9 +46,15 @@ pub fn collection_input<'a>(
 }
 
 /// Parse one JSON item of a collection, naming the item and the stage that made it on failure.
-pub fn parse_item<T: serde::de::DeserializeOwned>(item: &str, bytes: &[u8], what: &str) -> Result<T, StageError> {
+pub fn parse_item<T: serde::de::DeserializeOwned>(
+    item: &str,
+    bytes: &[u8],
+    what: &str,
+) -> Result<T, StageError> {
     serde_json::from_slice(bytes).map_err(|e| {
-        StageError(format!("{what} of `{item}` is not valid JSON ({e}); rerun the stage that makes it"))
+        StageError(format!(
+            "{what} of `{item}` is not valid JSON ({e}); rerun the stage that makes it"
+        ))
     })
 }
 
@@ -59,14 +69,20 @@ pub fn run_info(item: &str, bytes: &[u8]) -> Result<RunInfo, StageError> {
 
 /// Compact, deterministic JSON bytes (per-run artifacts).
 pub fn json_bytes<T: serde::Serialize>(value: &T) -> Result<Vec<u8>, StageError> {
-    serde_json::to_vec(value)
-        .map_err(|e| StageError(format!("cannot write JSON ({e}); this is a bug, please report it")))
+    serde_json::to_vec(value).map_err(|e| {
+        StageError(format!(
+            "cannot write JSON ({e}); this is a bug, please report it"
+        ))
+    })
 }
 
 /// Indented, deterministic JSON bytes with a final newline (files people read).
 pub fn json_pretty<T: serde::Serialize>(value: &T) -> Result<Vec<u8>, StageError> {
-    let mut v = serde_json::to_vec_pretty(value)
-        .map_err(|e| StageError(format!("cannot write JSON ({e}); this is a bug, please report it")))?;
+    let mut v = serde_json::to_vec_pretty(value).map_err(|e| {
+        StageError(format!(
+            "cannot write JSON ({e}); this is a bug, please report it"
+        ))
+    })?;
     v.push(b'\n');
     Ok(v)
 }

@@ -2,7 +2,9 @@
 // groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/simulate.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, file_input, json_bytes, parse_item};
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::fit::residuals::residuals;
 use crate::fit::RunFit;
 use crate::recording::Recording;
@@ -31,7 +33,11 @@ impl StageKind for Simulate {
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let item = input.item.unwrap_or("?");
-        let rec: Recording = parse_item(item, file_input(input, "runs", "simulate")?, "the recording")?;
+        let rec: Recording = parse_item(
+            item,
+            file_input(input, "runs", "simulate")?,
+            "the recording",
+        )?;
         let fits = collection_input(input, "fits", "simulate")?;
         let bytes = fits.get(item).ok_or_else(|| {
             StageError(format!(

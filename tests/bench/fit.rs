@@ -18,7 +18,12 @@ use std::time::Instant;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let arg = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned();
+    let arg = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
     let n: usize = arg("--runs").map_or(10_000, |s| s.parse().expect("--runs takes a count"));
     let dump = arg("--dump");
     let parallel = args.iter().any(|a| a == "--parallel");
@@ -27,7 +32,12 @@ fn main() {
     let mut all = runs(2026, n / 2, (0.005, 0.1), 0.337, Camera::CHAPTER);
     all.extend(runs(2027, n - n / 2, (0.005, 0.1), 0.293, Camera::CHAPTER));
     let frames: usize = all.iter().map(|r| r.t_s.len()).sum();
-    println!("synthesized {} runs, {:.0} frames per run on average, in {:.2} s", all.len(), frames as f64 / n as f64, t_synth.elapsed().as_secs_f64());
+    println!(
+        "synthesized {} runs, {:.0} frames per run on average, in {:.2} s",
+        all.len(),
+        frames as f64 / n as f64,
+        t_synth.elapsed().as_secs_f64()
+    );
 
     let opts = FitOptions::default();
     let fps = Camera::CHAPTER.fps;
@@ -56,17 +66,24 @@ fn main() {
         let start = Instant::now();
         let done: usize = all
             .par_iter()
-            .map_init(Workspace::default, |ws, r| (fit_track(&r.t_s, &r.z_m, fps, &opts, ws).status == "converged") as usize)
+            .map_init(Workspace::default, |ws, r| {
+                (fit_track(&r.t_s, &r.z_m, fps, &opts, ws).status == "converged") as usize
+            })
             .sum();
         let secs = start.elapsed().as_secs_f64();
-        println!("{threads} threads: {n} fits in {secs:.2} s = {:.0} runs/s ({done} converged)", n as f64 / secs);
+        println!(
+            "{threads} threads: {n} fits in {secs:.2} s = {:.0} runs/s ({done} converged)",
+            n as f64 / secs
+        );
     }
 
     if let Some(dir) = dump {
         let dir = std::path::PathBuf::from(dir);
         std::fs::create_dir_all(&dir).expect("cannot create the dump directory");
         let mut runs_csv = String::from("run,t_s,z_m\n");
-        let mut starts = String::from("run,fps,z0_m,t0_s,v0_mps,mu,t_drag_s,true_v0_mps,true_mu,true_t_drag_s\n");
+        let mut starts = String::from(
+            "run,fps,z0_m,t0_s,v0_mps,mu,t_drag_s,true_v0_mps,true_mu,true_t_drag_s\n",
+        );
         let mut scratch = Vec::new();
         for (i, r) in all.iter().enumerate() {
             for (t, z) in r.t_s.iter().zip(&r.z_m) {
@@ -81,7 +98,11 @@ fn main() {
         }
         std::fs::write(dir.join("runs.csv"), runs_csv).expect("cannot write runs.csv");
         std::fs::write(dir.join("starts.csv"), starts).expect("cannot write starts.csv");
-        std::fs::write(dir.join("rust_rate.txt"), format!("{rate}\n")).expect("cannot write rust_rate.txt");
-        println!("wrote {}/runs.csv, starts.csv, rust_rate.txt", dir.display());
+        std::fs::write(dir.join("rust_rate.txt"), format!("{rate}\n"))
+            .expect("cannot write rust_rate.txt");
+        println!(
+            "wrote {}/runs.csv, starts.csv, rust_rate.txt",
+            dir.display()
+        );
     }
 }

@@ -77,7 +77,11 @@ pub fn sample(truth: Truth, cam: Camera, rng: &mut ChaCha8Rng) -> Run {
         let (dz, _, _) = model.state(truth.v0_mps, t + truth.t0_s);
         let bad = u_out < cam.outlier_rate;
         let sign = if jump < 0.5 { -1.0 } else { 1.0 };
-        let off = if bad { sign * (10e-6 + 80e-6 * (jump - 0.5).abs()) } else { 0.0 };
+        let off = if bad {
+            sign * (10e-6 + 80e-6 * (jump - 0.5).abs())
+        } else {
+            0.0
+        };
         run.t_s.push(t);
         run.z_m.push(truth.z0_m + dz + noise + off);
         run.outlier.push(bad);
