@@ -1,8 +1,9 @@
 //! Levenberg–Marquardt for a robust loss at a fixed scale, with box bounds and fixed parameters.
 //!
-//! Each iteration reweights the residuals by the loss (iteratively reweighted least squares),
-//! solves the damped normal equations (Marquardt's diagonal scaling, so the step does not depend
-//! on the parameters' units) and accepts the step only if the robust cost falls. Parameters at a
+//! Each iteration takes a damped Newton step on the robust cost: gradient Σ ψ(u)·∂r, curvature
+//! Σ ρ''(u)·JᵀJ (the Gauss–Newton matrix of the loss; for Huber only the inliers count, so the step
+//! is exact once the inlier set settles), Marquardt's diagonal damping (the step does not depend
+//! on the parameters' units), and accepts the step only if the robust cost falls. Parameters at a
 //! bound whose gradient points outward are held for that step (an active set). Stopping is data:
 //! [`Termination`] says why, never a panic. The caller owns the buffers ([`Workspace`]), so the
 //! iterations allocate nothing.
@@ -59,6 +60,8 @@ pub struct Workspace {
     r_try: Vec<f64>,
     jac_try: Vec<[f64; NP]>,
     pub w: Vec<f64>,
+    /// Curvature weights ρ''(u) of the Newton matrix.
+    pub wh: Vec<f64>,
     pub excluded: Vec<bool>,
     pub scratch: Vec<f64>,
 }
@@ -71,6 +74,7 @@ impl Workspace {
         self.jac.resize(n, [0.0; NP]);
         self.jac_try.resize(n, [0.0; NP]);
         self.w.resize(n, 1.0);
+        self.wh.resize(n, 1.0);
         self.excluded.clear();
         self.excluded.resize(n, false);
         self.scratch.resize(n, 0.0);
@@ -86,23 +90,28 @@ pub struct Outcome {
     pub termination: Termination,
 }
 
-/// Robust cost Σ scale² ρ(r/scale) over the included residuals; also fills the IRLS weights.
+/// Robust cost Σ scale² ρ(r/scale) over the included residuals; also fills the IRLS weights
+/// ψ(u)/u (`w`) and the curvature weights ρ''(u) (`wh`).
 pub fn cost_and_weights(
     r: &[f64],
     excluded: &[bool],
     loss: Loss,
     scale: f64,
     w: &mut [f64],
+    wh: &mut [f64],
 ) -> f64 {
     let mut cost = 0.0;
     for i in 0..r.len() {
         if excluded[i] {
             w[i] = 0.0;
+            wh[i] = 0.0;
             continue;
         }
-        let (rho, wi) = loss.rho_weight(r[i] / scale);
+        let u = r[i] / scale;
+        let (rho, wi) = loss.rho_weight(u);
         cost += rho;
         w[i] = wi;
+        wh[i] = loss.curvature(u);
     }
     cost * scale * scale
 }
@@ -117,17 +126,22 @@ fn robust_cost(r: &[f64], excluded: &[bool], loss: Loss, scale: f64) -> f64 {
     cost * scale * scale
 }
 
-/// Weighted normal equations H = Σ w JᵀJ (upper and lower filled) and gradient g = Σ w J r.
-pub fn normal_equations(jac: &[[f64; NP]], r: &[f64], w: &[f64]) -> ([[f64; NP]; NP], [f64; NP]) {
+/// Weighted normal equations H = Σ wh JᵀJ (upper and lower filled) and gradient g = Σ w J r.
+pub fn normal_equations(
+    jac: &[[f64; NP]],
+    r: &[f64],
+    w: &[f64],
+    wh: &[f64],
+) -> ([[f64; NP]; NP], [f64; NP]) {
     let mut h = [[0.0; NP]; NP];
     let mut g = [0.0; NP];
-    for ((row, &ri), &wi) in jac.iter().zip(r).zip(w) {
+    for (((row, &ri), &wi), &whi) in jac.iter().zip(r).zip(w).zip(wh) {
         if wi == 0.0 {
             continue;
         }
         for a in 0..NP {
-            let wa = wi * row[a];
-            g[a] += wa * ri;
+            g[a] += wi * ri * row[a];
+            let wa = whi * row[a];
             for b in a..NP {
                 h[a][b] += wa * row[b];
             }
@@ -204,6 +218,61 @@ pub fn solve_spd(a: &[[f64; NP]; NP], b: &[f64; NP], on: &[bool; NP]) -> Option<
     Some(out)
 }
 
+/// The damped step A δ = −g that stays inside the bounds: a parameter the full step would push
+/// through a bound is moved exactly onto it and the others re-solved given that move (so the
+/// step stays optimal in the remaining subspace, unlike a clipped step). `on` marks the
+/// parameters that may move.
+fn bounded_step(
+    a: &[[f64; NP]; NP],
+    g: &[f64; NP],
+    x: &[f64; NP],
+    bounds: &Bounds,
+    mut on: [bool; NP],
+) -> Option<[f64; NP]> {
+    let mut pinned = [None::<f64>; NP];
+    for _ in 0..NP {
+        let mut rhs = [0.0; NP];
+        for i in 0..NP {
+            rhs[i] = -g[i];
+            for j in 0..NP {
+                if let Some(d) = pinned[j] {
+                    rhs[i] -= a[i][j] * d;
+                }
+            }
+        }
+        let mut step = solve_spd(a, &rhs, &on)?;
+        for j in 0..NP {
+            if let Some(d) = pinned[j] {
+                step[j] = d;
+            }
+        }
+        let mut hit = false;
+        for i in 0..NP {
+            if !on[i] {
+                continue;
+            }
+            let to = x[i] + step[i];
+            let bound = if to < bounds.lo[i] {
+                bounds.lo[i]
+            } else if to > bounds.hi[i] {
+                bounds.hi[i]
+            } else {
+                continue;
+            };
+            on[i] = false;
+            pinned[i] = Some(bound - x[i]);
+            hit = true;
+        }
+        if !hit {
+            return Some(step);
+        }
+        if !on.iter().any(|&o| o) {
+            return Some(pinned.map(|d| d.unwrap_or(0.0)));
+        }
+    }
+    None
+}
+
 /// Minimise the robust cost at a fixed `scale` from `x0` (clamped into the bounds).
 pub fn minimize<P: Problem>(
     prob: &P,
@@ -225,12 +294,12 @@ pub fn minimize<P: Problem>(
     if !prob.residuals(&x, &mut ws.r, Some(&mut ws.jac)) {
         return out;
     }
-    let mut cost = cost_and_weights(&ws.r, &ws.excluded, loss, scale, &mut ws.w);
+    let mut cost = cost_and_weights(&ws.r, &ws.excluded, loss, scale, &mut ws.w, &mut ws.wh);
     out.cost = cost;
     let mut lambda = 1e-3;
     for iter in 1..=settings.max_iterations {
         out.iterations = iter;
-        let (h, g) = normal_equations(&ws.jac, &ws.r, &ws.w);
+        let (h, g) = normal_equations(&ws.jac, &ws.r, &ws.w, &ws.wh);
         // active set: hold parameters pressed against a bound
         let mut on = bounds.free;
         for i in 0..NP {
@@ -244,14 +313,13 @@ pub fn minimize<P: Problem>(
             out.termination = Termination::AtBounds;
             break;
         }
-        let neg_g = g.map(|v| -v);
         let mut accepted = false;
         while lambda < 1e12 {
             let mut a = h;
             for i in 0..NP {
                 a[i][i] += lambda * h[i][i].max(1e-300);
             }
-            let Some(step) = solve_spd(&a, &neg_g, &on) else {
+            let Some(step) = bounded_step(&a, &g, &x, bounds, on) else {
                 lambda *= 10.0;
                 continue;
             };
@@ -273,7 +341,7 @@ pub fn minimize<P: Problem>(
                 std::mem::swap(&mut ws.r, &mut ws.r_try);
                 std::mem::swap(&mut ws.jac, &mut ws.jac_try);
                 x = x_try;
-                cost = cost_and_weights(&ws.r, &ws.excluded, loss, scale, &mut ws.w);
+                cost = cost_and_weights(&ws.r, &ws.excluded, loss, scale, &mut ws.w, &mut ws.wh);
                 lambda = (lambda / 3.0).max(1e-12);
                 accepted = true;
                 if small_step {

@@ -39,12 +39,34 @@ impl Loss {
     }
 }
 
-/// Normal-consistent median absolute deviation of the values not excluded (1.4826·MAD), using
-/// `scratch` (at least as long as `r`) so that nothing is allocated.
-pub fn mad_scale(r: &[f64], excluded: &[bool], scratch: &mut [f64]) -> f64 {
+impl Loss {
+    /// ρ''(u): the weight of a residual in the Newton (curvature) matrix. Unlike the IRLS weight it
+    /// is 0 on Huber's linear part, which makes the step exact once the set of inliers is settled.
+    #[inline]
+    pub fn curvature(self, u: f64) -> f64 {
+        match self {
+            Loss::Linear => 1.0,
+            Loss::Huber => {
+                if u.abs() <= HUBER_K {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            Loss::SoftL1 => {
+                let q = 1.0 + u * u;
+                1.0 / (q * q.sqrt())
+            }
+        }
+    }
+}
+
+/// Normal-consistent median absolute deviation (1.4826·MAD) of the values not excluded (all if
+/// `excluded` is None), using `scratch` (at least as long as `r`) so that nothing is allocated.
+pub fn mad_scale(r: &[f64], excluded: Option<&[bool]>, scratch: &mut [f64]) -> f64 {
     let mut m = 0;
     for (i, &v) in r.iter().enumerate() {
-        if !excluded[i] {
+        if !excluded.is_some_and(|e| e[i]) {
             scratch[m] = v;
             m += 1;
         }
@@ -84,6 +106,14 @@ mod tests {
         // influence ψ = u·w stays bounded for the robust losses
         assert!((Loss::Huber.rho_weight(100.0).1 * 100.0 - HUBER_K).abs() < 1e-12);
         assert!(Loss::SoftL1.rho_weight(1e4).1 * 1e4 < 1.0 + 1e-9);
+        // curvature is the derivative of ψ(u) = u·w(u), by central differences
+        for loss in [Loss::Linear, Loss::Huber, Loss::SoftL1] {
+            for u in [0.3, -0.9, 2.0, -5.0] {
+                let psi = |u: f64| u * loss.rho_weight(u).1;
+                let d = (psi(u + 1e-6) - psi(u - 1e-6)) / 2e-6;
+                assert!((d - loss.curvature(u)).abs() < 1e-6, "{loss:?} at {u}");
+            }
+        }
     }
 
     #[test]
@@ -91,9 +121,9 @@ mod tests {
         let r = [1.0, -1.0, 2.0, -2.0, 100.0];
         let mut s = [0.0; 5];
         // median 1, deviations 0, 2, 1, 3, 99 → median 2
-        assert!((mad_scale(&r, &[false; 5], &mut s) - 1.4826 * 2.0).abs() < 1e-12);
+        assert!((mad_scale(&r, None, &mut s) - 1.4826 * 2.0).abs() < 1e-12);
         // excluding the outlier: values -2,-1,1,2 → median 0, deviations 2,1,1,2 → 1.5
         let ex = [false, false, false, false, true];
-        assert!((mad_scale(&r, &ex, &mut s) - 1.4826 * 1.5).abs() < 1e-12);
+        assert!((mad_scale(&r, Some(&ex), &mut s) - 1.4826 * 1.5).abs() < 1e-12);
     }
 }

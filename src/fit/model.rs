@@ -52,6 +52,13 @@ pub struct Prepared {
     groove: Groove,
 }
 
+/// (e^{−x}, 1 − e^{−x}) from one `exp_m1`: the second stays accurate for small x.
+#[inline]
+fn decay(x: f64) -> (f64, f64) {
+    let em1 = (-x).exp_m1();
+    (1.0 + em1, -em1)
+}
+
 /// Sliding velocity (without the d·A shift folded in) at time τ after the kick.
 #[inline]
 fn slide_v(v0: f64, da: f64, e: f64) -> f64 {
@@ -110,8 +117,7 @@ impl Prepared {
             v0.abs() + s * va0.abs() + c * t,
             c + s * spin_rate.abs(),
         )?;
-        let e1 = (-t1 / t).exp();
-        let om1 = -(-t1 / t).exp_m1(); // 1 − e1, accurate for small t1/T
+        let (e1, om1) = decay(t1 / t);
         let v1 = slide_v(v0, da, e1);
         let z1 = t * (v0 + da) * om1 - da * t1;
         let a1 = -(v0 + da) * e1 / t;
@@ -151,14 +157,12 @@ impl Prepared {
         }
         let (v0, t) = (self.p[V0], self.p[TD]);
         if tau_s < self.t1_s {
-            let e = (-tau_s / t).exp();
-            let om = -(-tau_s / t).exp_m1();
+            let (e, om) = decay(tau_s / t);
             let z = t * (v0 + self.da) * om - self.da * tau_s;
             (z, slide_v(v0, self.da, e), true)
         } else {
             let x = (tau_s - self.t1_s) / self.te_s;
-            let f = (-x).exp();
-            let om = -(-x).exp_m1();
+            let (f, om) = decay(x);
             (
                 self.z1_m + self.v1_mps * self.te_s * om,
                 self.v1_mps * f,
@@ -179,8 +183,7 @@ impl Prepared {
         let (v0, t) = (self.p[V0], self.p[TD]);
         let (s, dir, da) = (self.groove.s, self.dir, self.da);
         if tau < self.t1_s {
-            let e = (-tau / t).exp();
-            let om = -(-tau / t).exp_m1();
+            let (e, om) = decay(tau / t);
             let c = G_MPS2 * self.p[MU] / s;
             grad[T0] = slide_v(v0, da, e);
             grad[V0] = t * om;
@@ -191,8 +194,7 @@ impl Prepared {
             let te = self.te_s;
             let v1 = self.v1_mps;
             let x = (tau - self.t1_s) / te;
-            let f = (-x).exp();
-            let om = -(-x).exp_m1();
+            let (f, om) = decay(x);
             grad[T0] = v1 * f;
             // ∂R/∂Te · ∂Te/∂T with R = v1 Te (1 − F)
             let dr_dte = v1 * (om - f * x);

@@ -1,6 +1,6 @@
-//! A robust fit around [`lm::minimize`]: the scale from the MAD of the residuals (re-estimated
-//! until it settles), then frames beyond `outlier_sigma` scales excluded and the fit polished,
-//! then standard errors from the Jacobian scaled by the robust residual scale.
+//! A robust fit around [`lm::minimize`]: rounds of LM in which the scale (MAD of the residuals)
+//! and the outlier mask (frames beyond `outlier_sigma` scales, left out) come from the previous
+//! round, until both settle; then standard errors from the Jacobian scaled by the robust scale.
 
 use super::lm::{self, Bounds, Problem, Settings, Workspace};
 use super::loss::{mad_scale, Loss};
@@ -34,7 +34,7 @@ pub struct RobustFit {
     pub termination: Termination,
 }
 
-const MAX_SCALE_ROUNDS: usize = 5;
+const MAX_ROUNDS: usize = 6;
 
 /// Fit `prob` robustly from `x0`. `ws` is resized as needed; its buffers hold the final state.
 pub fn fit_robust<P: Problem>(
@@ -70,42 +70,49 @@ pub fn fit_robust<P: Problem>(
         fit.termination = Termination::NonFinite;
         return fit;
     }
-    let mut scale = mad_scale(&ws.r, &ws.excluded, &mut ws.scratch).max(opts.scale_floor);
+    // Round 0 is a loose least-squares fit from the start values (their residuals are model
+    // error, not noise, so a robust scale means nothing yet); each later round takes the scale
+    // (MAD of all residuals) and the outlier mask from the previous one and minimises the robust
+    // cost, until neither changes.
+    let mut scale = mad_scale(&ws.r, None, &mut ws.scratch).max(opts.scale_floor);
+    let loose = Settings {
+        ftol: opts.settings.ftol.max(1e-6),
+        xtol: opts.settings.xtol.max(1e-5),
+        ..opts.settings
+    };
     let mut out = None;
-    for _ in 0..MAX_SCALE_ROUNDS {
-        let o = lm::minimize(prob, x, bounds, opts.loss, scale, &opts.settings, ws);
+    for round in 0..MAX_ROUNDS {
+        let (loss, settings) = if round == 0 {
+            (Loss::Linear, &loose)
+        } else {
+            (opts.loss, &opts.settings)
+        };
+        let o = lm::minimize(prob, x, bounds, loss, scale, settings, ws);
         fit.iterations += o.iterations;
         x = o.x;
         out = Some(o);
         if o.termination == Termination::NonFinite {
             break;
         }
-        let new_scale = mad_scale(&ws.r, &ws.excluded, &mut ws.scratch).max(opts.scale_floor);
-        let settled = (new_scale - scale).abs() <= 0.02 * scale;
+        let new_scale = mad_scale(&ws.r, None, &mut ws.scratch).max(opts.scale_floor);
+        let cut = opts.outlier_sigma * new_scale;
+        let n_out = ws.r.iter().filter(|r| r.abs() > cut).count();
+        let keep_all = n - n_out < n_free + 2;
+        let mut changed = false;
+        for i in 0..n {
+            let bad = !keep_all && ws.r[i].abs() > cut;
+            changed |= bad != ws.excluded[i];
+            ws.excluded[i] = bad;
+        }
+        let settled = round > 0 && !changed && (new_scale - scale).abs() <= 0.02 * scale;
         scale = new_scale;
         if settled {
             break;
         }
     }
-    let mut out = out.expect("at least one round ran");
-    if out.termination != Termination::NonFinite {
-        let mut n_out = 0;
-        for i in 0..n {
-            let bad = ws.r[i].abs() > opts.outlier_sigma * scale;
-            ws.excluded[i] = bad;
-            n_out += bad as usize;
-        }
-        if n_out > 0 && n - n_out >= n_free + 2 {
-            let o = lm::minimize(prob, x, bounds, opts.loss, scale, &opts.settings, ws);
-            fit.iterations += o.iterations;
-            out = o;
-        } else if n_out > 0 {
-            ws.excluded.iter_mut().for_each(|e| *e = false);
-            n_out = 0;
-        }
-        fit.n_outliers = n_out;
-        fit.n_used = n - n_out;
-    }
+    let out = out.expect("at least one round ran");
+    fit.n_outliers = ws.excluded.iter().filter(|&&e| e).count();
+    fit.n_used = n - fit.n_outliers;
     fit.x = out.x;
     fit.termination = out.termination;
     fit.scale = scale;
@@ -113,7 +120,7 @@ pub fn fit_robust<P: Problem>(
         return fit;
     }
     // ws.r, ws.jac, ws.w are at out.x; refresh the weights at the final scale
-    lm::cost_and_weights(&ws.r, &ws.excluded, opts.loss, scale, &mut ws.w);
+    lm::cost_and_weights(&ws.r, &ws.excluded, opts.loss, scale, &mut ws.w, &mut ws.wh);
     let (sum_sq, m) =
         ws.r.iter()
             .zip(&ws.excluded)
@@ -124,7 +131,8 @@ pub fn fit_robust<P: Problem>(
     fit
 }
 
-/// Standard errors σ·sqrt(diag((Σ w JᵀJ)⁻¹)) of the free parameters, or None if singular.
+/// Standard errors σ·sqrt(diag((Σ w JᵀJ)⁻¹)) of the free parameters, with the IRLS weights w
+/// (1 for inliers, less for the few frames in the loss's tails), or None if singular.
 fn standard_errors(
     jac: &[[f64; NP]],
     r: &[f64],
@@ -132,7 +140,7 @@ fn standard_errors(
     free: &[bool; NP],
     scale: f64,
 ) -> [Option<f64>; NP] {
-    let (h, _) = lm::normal_equations(jac, r, w);
+    let (h, _) = lm::normal_equations(jac, r, w, w);
     let mut se = [None; NP];
     for i in 0..NP {
         if !free[i] {

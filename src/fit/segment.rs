@@ -85,8 +85,8 @@ pub(crate) fn settings(opts: &FitOptions) -> RobustOptions {
         scale_floor: 1e-10,
         settings: Settings {
             max_iterations: opts.max_iterations,
-            ftol: 1e-12,
-            xtol: 1e-9,
+            ftol: 1e-8,
+            xtol: 1e-8,
             typical: [1e-6, 1e-6, 1e-4, 1e-4, 1e-3, 1e-3],
         },
     }

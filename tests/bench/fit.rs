@@ -1,8 +1,9 @@
 //! Benchmark: fit 10,000 synthetic single runs of 600 frames on one core and print runs/s.
 //!
-//! `cargo bench --bench fit -- [--runs N] [--parallel] [--dump DIR]`. With `--dump`, the runs
-//! (`runs.csv`: run,t_s,z_m), the fit's start values (`starts.csv`) and the measured rate
-//! (`rust_rate.txt`) are written for `tests/bench/fit_vs_scipy.sh`.
+//! `cargo bench --bench fit -- [--runs N] [--parallel] [--dump DIR [--dump-count M]]`. With
+//! `--dump`, the first M runs (`runs.csv`: run,t_s,z_m), the fit's start values (`starts.csv`) and
+//! the measured rate (`rust_rate.txt`) are written for `tests/bench/fit_vs_scipy.sh`. Rates are
+//! per core: CPU seconds of the single-threaded loop (wall time is printed beside them).
 
 #[path = "../support/single_runs.rs"]
 mod single_runs;
@@ -16,6 +17,16 @@ use single_runs::{runs, Camera};
 use std::fmt::Write as _;
 use std::time::Instant;
 
+/// CPU time of this process in seconds (Linux: utime + stime from /proc/self/stat), so that the
+/// rate per core is right on a shared machine; None elsewhere.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0) // USER_HZ is 100 on Linux
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let arg = |name: &str| {
@@ -26,6 +37,8 @@ fn main() {
     };
     let n: usize = arg("--runs").map_or(10_000, |s| s.parse().expect("--runs takes a count"));
     let dump = arg("--dump");
+    let dump_count: usize =
+        arg("--dump-count").map_or(n, |s| s.parse().expect("--dump-count takes a count"));
     let parallel = args.iter().any(|a| a == "--parallel");
 
     let t_synth = Instant::now();
@@ -42,6 +55,7 @@ fn main() {
     let opts = FitOptions::default();
     let fps = Camera::CHAPTER.fps;
     let start = Instant::now();
+    let cpu0 = cpu_seconds();
     let mut ws = Workspace::default();
     let mut converged = 0usize;
     let mut iterations = 0u64;
@@ -52,10 +66,15 @@ fn main() {
         iterations += f.iterations as u64;
         worst_v0 = worst_v0.max((f.v0_mps / r.truth.v0_mps - 1.0).abs());
     }
-    let secs = start.elapsed().as_secs_f64();
+    let wall = start.elapsed().as_secs_f64();
+    // per core: CPU seconds of this (single-threaded) loop when available, else wall time
+    let secs = match (cpu0, cpu_seconds()) {
+        (Some(a), Some(b)) if b > a => b - a,
+        _ => wall,
+    };
     let rate = n as f64 / secs;
     println!(
-        "one core: {n} fits in {secs:.2} s = {rate:.0} runs/s ({:.1} µs per run); {converged} converged, {:.1} LM iterations per run, worst |v0 error| {:.2} %",
+        "one core: {n} fits in {secs:.2} CPU s ({wall:.2} s wall) = {rate:.0} runs/s per core ({:.1} µs per run); {converged} converged, {:.1} LM iterations per run, worst |v0 error| {:.2} %",
         1e6 / rate,
         iterations as f64 / n as f64,
         100.0 * worst_v0
@@ -85,7 +104,7 @@ fn main() {
             "run,fps,z0_m,t0_s,v0_mps,mu,t_drag_s,true_v0_mps,true_mu,true_t_drag_s\n",
         );
         let mut scratch = Vec::new();
-        for (i, r) in all.iter().enumerate() {
+        for (i, r) in all.iter().enumerate().take(dump_count) {
             for (t, z) in r.t_s.iter().zip(&r.z_m) {
                 let _ = writeln!(runs_csv, "{i},{t:.7e},{z:.10e}");
             }

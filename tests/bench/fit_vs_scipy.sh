@@ -16,7 +16,9 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
     "$venv/bin/pip" install --quiet numpy scipy
 fi
-(cd "$root" && cargo bench --bench fit -- --runs "$runs" --dump "$work")
+# GROOVE_BENCH_CARGO_ARGS: extra cargo arguments, e.g. "--profile dev" on a machine where a
+# release build of the dependencies is too costly (with CARGO_PROFILE_DEV_OPT_LEVEL=3 for groove).
+(cd "$root" && cargo bench ${GROOVE_BENCH_CARGO_ARGS:-} --bench fit -- --runs "$runs" --dump "$work" --dump-count "$scipy_runs")
 "$venv/bin/python" - "$work" "$scipy_runs" <<'PY'
 import sys, time
 import numpy as np
@@ -58,7 +60,7 @@ def mad(r):
     return 1.4826 * np.median(np.abs(r - np.median(r)))
 
 errs = []
-t_start = time.perf_counter()
+t_start = time.process_time()
 for i in range(n_fit):
     t = data[bounds_at[i]:bounds_at[i + 1], 1]
     z = data[bounds_at[i]:bounds_at[i + 1], 2]
@@ -77,9 +79,9 @@ for i in range(n_fit):
             break
         scale = new
     errs.append(abs(res.x[2] / starts[i, 7] - 1.0))
-secs = time.perf_counter() - t_start
+secs = time.process_time() - t_start
 rate_scipy = n_fit / secs
-print(f"scipy least_squares: {n_fit} fits in {secs:.2f} s = {rate_scipy:.1f} runs/s on one core "
+print(f"scipy least_squares: {n_fit} fits in {secs:.2f} CPU s = {rate_scipy:.1f} runs/s per core "
       f"(median |v0 error| {100 * np.median(errs):.3f} %, worst {100 * max(errs):.2f} %)")
 print(f"groove (Rust, one core): {rate_rust:.0f} runs/s")
 print(f"ratio groove / scipy per core: {rate_rust / rate_scipy:.0f}x")
