@@ -265,8 +265,8 @@ fn shipped_truth_gives_the_chapters_rising_drag_time() {
         println!(
             "{name}: T = {t0:.4} + {tp:.3} v0, mean mu (v0 > 0.03) {mu_mean:.4} (truth {mu_true})"
         );
-        assert!((t0 - 0.052).abs() < 0.006, "{name}: T0 {t0}");
-        assert!((tp - 1.10).abs() < 0.15, "{name}: T' {tp}");
+        assert!((t0 - 0.052).abs() < 0.002, "{name}: T0 {t0}");
+        assert!((tp - 1.10).abs() < 0.03, "{name}: T' {tp}");
         assert!(
             (mu_mean - mu_true).abs() < 0.01,
             "{name}: mu {mu_mean} vs {mu_true}"

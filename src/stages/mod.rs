@@ -6,6 +6,7 @@ pub mod aggregate;
 pub mod compare;
 pub mod fit;
 pub mod fit_io;
+pub mod ingest;
 pub mod simulate;
 
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
@@ -14,6 +15,7 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     #[allow(unused_mut)]
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
     // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
+    kinds.push(Box::new(ingest::Ingest));
     kinds.push(Box::new(fit::Fit));
     kinds.push(Box::new(aggregate::Aggregate));
     kinds.push(Box::new(simulate::Simulate));
