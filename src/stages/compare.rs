@@ -23,6 +23,11 @@ impl StageKind for Compare {
     fn inputs(&self) -> &'static [&'static str] {
         &["residuals"]
     }
+    /// `runs` is accepted (pipeline.toml binds it) but not needed: each residuals item carries
+    /// its run's material and direction.
+    fn optional_inputs(&self) -> &'static [&'static str] {
+        &["runs"]
+    }
     fn outputs(&self) -> &'static [&'static str] {
         &["comparison"]
     }
