@@ -38,7 +38,9 @@ impl StageKind for Fit {
         })?;
         let fit = match rec.info.experiment {
             Experiment::Single => RunFit::Single(single::fit_single(&rec, &opts)),
-            Experiment::Collision => RunFit::Collision(collision::fit_collision(&rec, &opts)),
+            Experiment::Collision => {
+                RunFit::Collision(collision::fit_collision(&rec, &opts.collision_options()))
+            }
         };
         Ok([("fits".to_string(), Artifact::File(json_bytes(&fit)?))].into())
     }

@@ -1,37 +1,22 @@
-//! PLACEHOLDER for the collision fits (owned by the collision helper, branch `collision`): only the
-//! contract's names, so that `fit::RunFit` and the aggregate stage compile before that branch is
-//! merged. Every function here says plainly that collision fitting is not built.
+//! Collision runs: split both tracks at the impacts, fit each phase with the closed-form motion
+//! (nonzero initial spin), recover velocities and spins before and after every impact, and
+//! summarize μ_pp and the coefficient of restitution over a dataset.
+//!
+//! Code map: `detect` (noise, departure from rest, kink scan) → `plan` + `model` (the joint
+//! piecewise model) → `lm` (robust solver) → `report` (the per-run record, `types`) →
+//! `summary` (dataset aggregates). `motion` is the closed form, `impulse` the impact model.
 
-use super::FitOptions;
-use crate::recording::{Recording, RunInfo};
-use serde::{Deserialize, Serialize};
+pub mod detect;
+mod fit;
+pub mod impulse;
+pub mod lm;
+pub mod model;
+pub mod motion;
+pub mod plan;
+mod report;
+pub mod summary;
+pub mod types;
 
-/// The fit of one collision run (placeholder: carries only a status).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CollisionFit {
-    pub run: String,
-    pub status: String,
-}
-
-/// Collision aggregates (placeholder).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CollisionSummary {
-    pub status: String,
-}
-
-const NOT_BUILT: &str = "not_built: collision fitting is not merged into this build";
-
-/// Fit a collision run (placeholder: returns the status `not_built`).
-pub fn fit_collision(rec: &Recording, _opts: &FitOptions) -> CollisionFit {
-    CollisionFit {
-        run: rec.info.run.clone(),
-        status: NOT_BUILT.to_string(),
-    }
-}
-
-/// Aggregate collision fits (placeholder: returns the status `not_built`).
-pub fn summarize(_fits: &[(RunInfo, CollisionFit)]) -> CollisionSummary {
-    CollisionSummary {
-        status: NOT_BUILT.to_string(),
-    }
-}
+pub use fit::{fit_collision, CollisionOptions};
+pub use summary::{summarize, summarize_seeded, CollisionSummary};
+pub use types::CollisionFit;
