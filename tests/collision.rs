@@ -179,6 +179,22 @@ fn rolling_setup_first_impact_both_directions() {
                 im.target_dva_mps.value
             );
             assert_eq!(im.contact, Contact::Stick);
+            // the fitted trajectory (Fig. 4.3c–d) follows the striker's samples within 5 µm
+            let (rec, _) = record(&case);
+            let st = rec.track(0).unwrap();
+            let off: Vec<f64> = st
+                .t_s
+                .iter()
+                .zip(&st.z_m)
+                .filter_map(|(&t, &z)| Some(fit.position_m(0, t, Groove::CHAPTER)? - z))
+                .collect();
+            let mut dev: Vec<f64> = off.iter().map(|d| d.abs()).collect();
+            dev.sort_by(|a, b| a.total_cmp(b));
+            assert!(
+                off.len() > 100 && dev[dev.len() / 2] < 2e-6 && dev[dev.len() * 9 / 10] < 5e-6,
+                "median {}",
+                dev[dev.len() / 2]
+            );
             assert!(!tr.slip);
             // lab-frame velocities carry the direction
             assert!(im.striker_before.v_mps.value * direction > 0.0);
