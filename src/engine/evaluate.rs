@@ -69,6 +69,8 @@ pub struct Evaluated {
     pub current: Option<LockStage>,
     /// Upstream stages whose outputs are unknown.
     pub waiting_on: Vec<String>,
+    /// While waiting: the key parts known without the inputs (kind, params, cmd, code, seed).
+    pub pending: Option<LockStage>,
     /// Every key has a complete entry in the store, so `current.outputs` is known.
     pub complete: bool,
     /// Keys that had no entry when the evaluation began (item names; `None` = the whole stage).
@@ -199,9 +201,24 @@ fn evaluate_stage(
             InputSpec::Provenance => {}
         }
     }
+    let code = ctx.catalog.fingerprint(&spec.kind);
+    let seed = stage_seed(pipeline.seed, &spec.name);
+    let parts = |inputs: BTreeMap<String, Stored>| LockStage {
+        kind: spec.kind.clone(),
+        key: String::new(),
+        code: code.to_string(),
+        groove_version: ctx.catalog.version.clone(),
+        seed,
+        params: spec.canonical_params.clone(),
+        cmd: spec.cmd.clone(),
+        inputs,
+        outputs: BTreeMap::new(),
+        items: BTreeMap::new(),
+    };
     if !waiting.is_empty() {
         return Ok(Evaluated {
             waiting_on: waiting.into_iter().collect(),
+            pending: Some(parts(BTreeMap::new())),
             ..Evaluated::default()
         });
     }
@@ -221,8 +238,6 @@ fn evaluate_stage(
         }
     }
 
-    let code = ctx.catalog.fingerprint(&spec.kind);
-    let seed = stage_seed(pipeline.seed, &spec.name);
     let digests: BTreeMap<String, String> = bound
         .iter()
         .map(|(n, b)| (n.clone(), b.stored.digest()))
@@ -334,16 +349,10 @@ fn evaluate_stage(
         Some(_) => items_digest(&items),
     };
     let current = LockStage {
-        kind: spec.kind.clone(),
         key,
-        code: code.to_string(),
-        groove_version: ctx.catalog.version.clone(),
-        seed,
-        params: spec.canonical_params.clone(),
-        cmd: spec.cmd.clone(),
-        inputs: bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
         outputs,
         items,
+        ..parts(bound.into_iter().map(|(n, b)| (n, b.stored)).collect())
     };
 
     let mut stale_outputs = Vec::new();
@@ -377,6 +386,7 @@ fn evaluate_stage(
     Ok(Evaluated {
         current: Some(current),
         waiting_on: Vec::new(),
+        pending: None,
         complete,
         missing,
         executed,
