@@ -102,12 +102,13 @@ pub fn stage_seed(seed: u64, stage: &str) -> u64 {
 
 /// Evaluate the selected stages wave by wave. Failed stages are reported and their
 /// descendants wait; independent stages still complete.
-/// `after_wave` sees the results so far after every wave (the runner saves `pipeline.lock` there).
+/// `after_wave` sees the results so far and the names in the wave just done (the runner saves
+/// `pipeline.lock` there).
 pub fn evaluate(
     ctx: &Context,
     selected: &BTreeSet<String>,
     action: impl Fn(&str) -> Action + Sync,
-    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>),
+    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>, &[String]),
 ) -> (BTreeMap<String, Evaluated>, Vec<EngineError>) {
     let waves = dag::order(ctx.pipeline).expect("validated pipelines have no cycle");
     let mut done: BTreeMap<String, Evaluated> = BTreeMap::new();
@@ -140,7 +141,7 @@ pub fn evaluate(
                 }
             }
         }
-        after_wave(&done);
+        after_wave(&done, &wave);
     }
     (done, errors)
 }
