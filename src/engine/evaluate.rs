@@ -465,13 +465,27 @@ fn execute(
         command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
-        kind.run(&StageInput {
+        let input = StageInput {
             params: &spec.params,
             inputs,
             item,
             seed,
-        })
-        .map_err(|e| failed(e.to_string()))?
+        };
+        // a panicking kind fails its stage; the other stages and the store are unaffected
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
+            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return Err(failed(format!(
+                    "kind `{}` panicked ({what}); this is a bug in groove, please report it",
+                    spec.kind
+                )));
+            }
+        }
     };
     for name in spec.outputs.keys() {
         match outputs.get(name) {
