@@ -659,3 +659,22 @@ fn every_verb_has_help() {
         assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: groove"));
     }
 }
+
+#[test]
+fn independent_stages_run_at_the_same_time() {
+    // each stage waits (up to 20 s) for the other's flag: only a parallel run finishes quickly
+    let wait = |me: &str, other: &str| {
+        format!(
+            "touch {me}.flag; i=0; while [ ! -e {other}.flag ]; do sleep 0.05; i=$((i+1)); if [ $i -gt 400 ]; then exit 1; fi; done; echo {me} > {{out.o}}"
+        )
+    };
+    let p = Project::new(&format!(
+        "[stages.a]\nkind = \"command\"\ncmd = \"{}\"\ninputs = {{ x = \"x.txt\" }}\noutputs = {{ o = \"reports/a.txt\" }}\n\n[stages.b]\nkind = \"command\"\ncmd = \"{}\"\ninputs = {{ x = \"x.txt\" }}\noutputs = {{ o = \"reports/b.txt\" }}\n",
+        wait("a", "b"),
+        wait("b", "a")
+    ));
+    p.write("x.txt", "x\n");
+    p.ok(&["run", "--jobs", "2"]);
+    assert_eq!(p.read("reports/a.txt"), "a\n");
+    assert_eq!(p.read("reports/b.txt"), "b\n");
+}

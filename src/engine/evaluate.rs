@@ -296,18 +296,17 @@ fn evaluate_stage(
         if !todo.is_empty() {
             ctx.progress.started(&spec.name, todo.len());
             let shared = load_shared(ctx, spec, &bound)?;
+            let finished = std::sync::atomic::AtomicUsize::new(0);
             let results: Vec<Result<Entry, EngineError>> = todo
                 .par_iter()
                 .map(|&i| {
-                    execute(
-                        ctx,
-                        spec,
-                        &bound,
-                        &shared,
-                        units[i].0.as_deref(),
-                        &units[i].1,
-                        seed,
-                    )
+                    let (item, key) = (units[i].0.as_deref(), &units[i].1);
+                    let result = execute(ctx, spec, &bound, &shared, item, key, seed);
+                    if spec.foreach.is_some() {
+                        let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                        ctx.progress.item_done(&spec.name, n, todo.len());
+                    }
+                    result
                 })
                 .collect();
             for (&i, r) in todo.iter().zip(results) {

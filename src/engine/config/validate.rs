@@ -53,7 +53,10 @@ pub fn validate(
         stages: BTreeMap::new(),
     };
     let mut lines = Lines::default();
-    for (name, stage) in raw.stages {
+    // in file order, so the first error reported is the first in the file
+    let mut stages: Vec<_> = raw.stages.into_iter().collect();
+    stages.sort_by_key(|(name, _)| name.span().start);
+    for (name, stage) in stages {
         let line = file.line_of(name.span().start);
         let name = name.into_inner();
         if name.is_empty()
