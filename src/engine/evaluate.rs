@@ -259,26 +259,49 @@ fn evaluate_stage(
     };
     let units: Vec<(Option<String>, String)> = match &spec.foreach {
         None => vec![(None, key_of(&digests, None))],
-        Some(f) => match bound.get(f).map(|b| &b.stored) {
-            None => Vec::new(),
-            Some(Stored::File { .. }) => {
-                return Err(EngineError::StageFailed {
-                    stage: spec.name.clone(),
-                    item: None,
-                    message: format!(
-                        "foreach input `{f}` is a single file; bind it to a folder or to a per-item output"
-                    ),
-                })
+        Some(f) => {
+            // every per-item input (present) as item → hash; the first one names the items
+            let mut per_item: Vec<(&String, &BTreeMap<String, String>)> = Vec::new();
+            for name in std::iter::once(f).chain(&spec.foreach_with) {
+                match bound.get(name).map(|b| &b.stored) {
+                    None => {}
+                    Some(Stored::Collection { items }) => per_item.push((name, items)),
+                    Some(Stored::File { .. }) => {
+                        return Err(EngineError::StageFailed {
+                            stage: spec.name.clone(),
+                            item: None,
+                            message: format!(
+                                "foreach input `{name}` is a single file; bind it to a folder or to a per-item output"
+                            ),
+                        })
+                    }
+                }
             }
-            Some(Stored::Collection { items }) => items
-                .iter()
-                .map(|(item, h)| {
-                    let mut d = digests.clone();
-                    d.insert(f.clone(), h.clone());
-                    (Some(item.clone()), key_of(&d, Some(item)))
-                })
-                .collect(),
-        },
+            match per_item.first() {
+                Some((first, items)) if *first == f => {
+                    let mut units = Vec::new();
+                    for item in items.keys() {
+                        let mut d = digests.clone();
+                        for (name, items) in &per_item {
+                            let Some(h) = items.get(item) else {
+                                return Err(EngineError::StageFailed {
+                                    stage: spec.name.clone(),
+                                    item: Some(item.clone()),
+                                    message: format!(
+                                        "per-item input `{name}` has no item `{item}`; the inputs in `foreach` must have the same items"
+                                    ),
+                                });
+                            };
+                            d.insert((*name).clone(), h.clone());
+                        }
+                        units.push((Some(item.clone()), key_of(&d, Some(item))));
+                    }
+                    units
+                }
+                // the primary per-item input is an absent optional input: no items
+                _ => Vec::new(),
+            }
+        }
     };
 
     let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
@@ -403,7 +426,7 @@ fn load_shared(
 ) -> Result<BTreeMap<String, Artifact>, EngineError> {
     let mut out = BTreeMap::new();
     for (name, b) in bound {
-        if spec.foreach.as_deref() == Some(name.as_str()) {
+        if spec.is_item_input(name) {
             continue;
         }
         let artifact = match &b.source {
@@ -431,11 +454,12 @@ fn execute(
         item: item.map(str::to_string),
         message,
     };
-    let item_artifact = match (&spec.foreach, item) {
-        (Some(f), Some(item)) => {
-            let b = &bound[f];
+    let mut item_artifacts: Vec<(&str, Artifact)> = Vec::new();
+    if let Some(item) = item {
+        for name in spec.foreach.iter().chain(&spec.foreach_with) {
+            let Some(b) = bound.get(name) else { continue };
             let Stored::Collection { items } = &b.stored else {
-                unreachable!("checked above")
+                unreachable!("checked when the keys were made")
             };
             let bytes = match &b.source {
                 Source::Path(dir) => {
@@ -451,13 +475,12 @@ fn execute(
                 }
                 _ => ctx.store.read_object(&items[item])?,
             };
-            Some((f.as_str(), Artifact::File(bytes)))
+            item_artifacts.push((name.as_str(), Artifact::File(bytes)));
         }
-        _ => None,
-    };
+    }
     let mut inputs: BTreeMap<&str, &Artifact> =
         shared.iter().map(|(k, v)| (k.as_str(), v)).collect();
-    if let Some((name, artifact)) = &item_artifact {
+    for (name, artifact) in &item_artifacts {
         inputs.insert(name, artifact);
     }
     let outputs: StageOutputs = if spec.kind == "command" {

@@ -1,6 +1,6 @@
 //! The validation step: raw config → typed [`Pipeline`], every error located at its TOML line.
 
-use super::raw::{RawInput, RawPipeline, RawStage};
+use super::raw::{Foreach, RawInput, RawPipeline, RawStage};
 use super::span::Source;
 use super::Overrides;
 use crate::engine::catalog::Catalog;
@@ -231,16 +231,28 @@ fn validate_stage(
         (super::super::key::canonical_json(json), Some(cmd))
     };
 
-    let foreach = match raw.foreach {
+    let (foreach, foreach_with) = match raw.foreach {
         Some(f) => {
-            let f_line = here(&f);
-            let f = f.into_inner();
-            if !inputs.contains_key(&f) {
-                return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+            let f_line = file.line_of(f.span().start);
+            let mut names = match f.into_inner() {
+                Foreach::One(one) => vec![one],
+                Foreach::Many(many) => many,
+            };
+            if names.is_empty() {
+                return Err(file.error(f_line, format!("stage `{name}`: foreach = [] names no input; name the collection input to map over")));
             }
-            Some(f)
+            for f in &names {
+                if !inputs.contains_key(f) {
+                    return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+                }
+                if matches!(inputs[f], InputSpec::Provenance) {
+                    return Err(file.error(f_line, format!("stage `{name}`: foreach cannot step through `{f}`, the provenance record; name a collection input")));
+                }
+            }
+            let first = names.remove(0);
+            (Some(first), names)
         }
-        None => None,
+        None => (None, Vec::new()),
     };
 
     Ok(StageSpec {
@@ -248,6 +260,7 @@ fn validate_stage(
         kind,
         line,
         foreach,
+        foreach_with,
         inputs,
         outputs,
         params,
