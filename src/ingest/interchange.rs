@@ -42,7 +42,7 @@ pub fn pick<'a>(
         (Some(_), Some(_)) => Err(Problem::file(
             &csv,
             format!("both {csv} and {parquet} are in the dataset folder"),
-            format!("keep one of them"),
+            "keep one of them",
         )),
         (None, None) => Err(Problem::file(
             &csv,
@@ -127,7 +127,7 @@ fn run_info(
     };
     let extra = extra_columns
         .iter()
-        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v)))
+        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v.into_owned())))
         .collect();
     Ok(RunInfo {
         run: run.to_string(),
@@ -157,17 +157,18 @@ pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Pr
     let mut samples = Vec::with_capacity(table.height());
     let mut problems = Vec::new();
     for i in 0..table.height() {
-        let run = match table.string("run", i, "write a run id from runs.csv") {
-            Ok(r) => r,
-            Err(p) => {
-                problems.push(p);
-                continue;
+        let Some(name) = table.text("run", i) else {
+            problems.push(table.problem("run", i, "is empty", "write a run id from runs.csv"));
+            continue;
+        };
+        let run: Arc<str> = match interned.get(name.as_ref()) {
+            Some(r) => r.clone(),
+            None => {
+                let r: Arc<str> = Arc::from(name.as_ref());
+                interned.insert(name.into_owned(), r.clone());
+                r
             }
         };
-        let run: Arc<str> = interned
-            .entry(run)
-            .or_insert_with_key(|k| Arc::from(k.as_str()))
-            .clone();
         match sample(table, i, run.clone()) {
             Ok(s) => samples.push(s),
             Err(p) => problems.push(p.in_run(&run)),

@@ -3,13 +3,14 @@
 
 use super::error::Problem;
 use polars::prelude::*;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 
 /// One column's cells. CSV columns are all text; Parquet columns keep their type.
 #[derive(Debug, Clone)]
 enum Cells {
-    Text(Vec<Option<String>>),
+    Text(StringChunked),
     Float(Vec<Option<f64>>),
     Int(Vec<Option<i64>>),
     /// A Parquet type groove does not read; the text is the type's name.
@@ -130,7 +131,7 @@ impl Table {
         self.rows.drain(..n);
         for cells in self.columns.values_mut() {
             match cells {
-                Cells::Text(v) => drop(v.drain(..n)),
+                Cells::Text(v) => *v = v.slice(n as i64, v.len() - n),
                 Cells::Float(v) => drop(v.drain(..n)),
                 Cells::Int(v) => drop(v.drain(..n)),
                 Cells::Unsupported(_) => {}
@@ -162,15 +163,15 @@ impl Table {
 
     /// The cell's text, trimmed; `None` for an empty cell. Numbers of Parquet files are written
     /// in their shortest round-trip form.
-    pub fn text(&self, column: &str, i: usize) -> Option<String> {
+    pub fn text(&self, column: &str, i: usize) -> Option<Cow<'_, str>> {
         match self.columns.get(column)? {
-            Cells::Text(v) => v[i]
-                .as_deref()
+            Cells::Text(v) => v
+                .get(i)
                 .map(str::trim)
                 .filter(|s| !s.is_empty())
-                .map(str::to_string),
-            Cells::Float(v) => v[i].map(|x| x.to_string()),
-            Cells::Int(v) => v[i].map(|x| x.to_string()),
+                .map(Cow::Borrowed),
+            Cells::Float(v) => v[i].map(|x| Cow::Owned(x.to_string())),
+            Cells::Int(v) => v[i].map(|x| Cow::Owned(x.to_string())),
             Cells::Unsupported(_) => None,
         }
     }
@@ -179,6 +180,7 @@ impl Table {
     pub fn string(&self, column: &str, i: usize, fix: &str) -> Result<String, Problem> {
         self.check_supported(column, i)?;
         self.text(column, i)
+            .map(Cow::into_owned)
             .ok_or_else(|| self.problem(column, i, "is empty", fix))
     }
 
@@ -249,7 +251,7 @@ impl Table {
 fn cells_of(col: &Column) -> PolarsResult<Cells> {
     let dtype = col.dtype().clone();
     Ok(match dtype {
-        DataType::String => Cells::Text(col.str()?.iter().map(|s| s.map(str::to_string)).collect()),
+        DataType::String => Cells::Text(col.str()?.rechunk().into_owned()),
         DataType::Float32 | DataType::Float64 => {
             let c = col.cast(&DataType::Float64)?;
             Cells::Float(c.f64()?.iter().collect())
@@ -258,7 +260,10 @@ fn cells_of(col: &Column) -> PolarsResult<Cells> {
             let c = col.cast(&DataType::Int64)?;
             Cells::Int(c.i64()?.iter().collect())
         }
-        DataType::Null => Cells::Text(vec![None; col.len()]),
+        DataType::Null => {
+            let c = col.cast(&DataType::String)?;
+            Cells::Text(c.str()?.rechunk().into_owned())
+        }
         other => Cells::Unsupported(other.to_string()),
     })
 }
