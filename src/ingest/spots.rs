@@ -4,6 +4,7 @@
 use super::error::Problem;
 use super::params::{Axis, CheckedCalibration};
 use super::samples::{RunRow, Sample, SampleFile};
+use super::table::Table;
 use crate::recording::{Experiment, RunInfo};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -29,20 +30,69 @@ pub struct SpotFile {
     pub spots: Vec<Spot>,
 }
 
+/// The names of a tracker table's columns.
+pub struct SpotColumns {
+    pub track: &'static str,
+    pub frame: &'static str,
+    pub x: &'static str,
+    pub y: &'static str,
+    /// The columns that identify a spot, for messages about duplicates.
+    pub key: &'static str,
+}
+
+/// Reads the spots of a tracker table holding one run (named after the file). Rows with problems
+/// are left out and returned as problems of the run. An empty track id (or `None`, `NaN`) marks an
+/// unlinked spot.
+pub fn read_spots(table: &Table, names: &SpotColumns, axis: Axis) -> (SpotFile, Vec<Problem>) {
+    let run = run_id(&table.file);
+    let track = table.col(names.track);
+    let frame = table.col(names.frame);
+    let position = table.col(match axis {
+        Axis::X => names.x,
+        Axis::Y => names.y,
+    });
+    let mut spots = Vec::with_capacity(table.height());
+    let mut problems = Vec::new();
+    for i in 0..table.height() {
+        let spot = (|| {
+            let unlinked = track
+                .text(i)
+                .is_none_or(|s| s.eq_ignore_ascii_case("none") || s.eq_ignore_ascii_case("nan"));
+            Ok::<Spot, Problem>(Spot {
+                track: match unlinked {
+                    true => None,
+                    false => Some(track.int(
+                        i,
+                        "write the track id, a whole number, or leave it empty for an unlinked spot",
+                    )?),
+                },
+                frame: frame.int(i, "write the frame index, a whole number")?,
+                p_px: position.float(i, "write a finite number in pixels")?,
+                row: table.row(i),
+            })
+        })();
+        match spot {
+            Ok(s) => spots.push(s),
+            Err(p) => problems.push(p.in_run(&run)),
+        }
+    }
+    let file = SpotFile {
+        file: table.file.clone(),
+        run,
+        key_columns: names.key,
+        frame_column: names.frame,
+        track_column: names.track,
+        spots,
+    };
+    (file, problems)
+}
+
 /// The run id of a tracker file: its name without the `.csv` extension.
 pub fn run_id(file: &str) -> String {
     file.strip_suffix(".csv")
         .or_else(|| file.strip_suffix(".CSV"))
         .unwrap_or(file)
         .to_string()
-}
-
-/// The pixel coordinate column for `axis` among `(x column, y column)`.
-pub fn axis_column(axis: Axis, columns: (&'static str, &'static str)) -> &'static str {
-    match axis {
-        Axis::X => columns.0,
-        Axis::Y => columns.1,
-    }
 }
 
 /// Converts a tracker file into its run row and samples. Unlinked spots are left out. In a single
