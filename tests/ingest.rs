@@ -955,3 +955,72 @@ fn trackmate_bad_value_names_the_file_row() {
         &["s01.csv row 11, column POSITION_X: \"1x2\" is not a number"],
     );
 }
+
+#[test]
+fn duplicate_run_and_unknown_setup_are_named() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    let runs = format!("{}s02,single,316,0.004,200,\n", runs_csv(&recs));
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 5, column run: run \"s02\" is listed twice (also row 4)"],
+    );
+    let mut files = interchange_csv(&recs);
+    let runs = runs_csv(&recs).replace(
+        "collision,316,0.004,200,rolling",
+        "collision,316,0.004,200,thrown",
+    );
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 2, column setup: \"thrown\" is not a known setup; write rolling"],
+    );
+}
+
+#[test]
+fn csv_and_parquet_of_one_table_together_are_ambiguous() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "runs.parquet".into(),
+        interchange_parquet(&recs)["runs.parquet"].clone(),
+    );
+    assert_mentions(
+        &run_err(&files),
+        &["both runs.csv and runs.parquet", "keep one of them"],
+    );
+}
+
+#[test]
+fn trackmate_with_two_header_rows_reads_the_same() {
+    let rec = &known_recordings()[1];
+    let cal = Cal {
+        m_per_px: 1e-5,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    let full = String::from_utf8(to_trackmate(rec, &cal, 200.0, 4)).unwrap();
+    // keep the key line and the names line only
+    let short: String = full
+        .lines()
+        .enumerate()
+        .filter(|(k, _)| !(2..=3).contains(k))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let mut p = params();
+    p.calibration.m_per_px = Some(1e-5);
+    p.calibration.fps = Some(200.0);
+    p.calibration.material = Some("316".into());
+    p.calibration.diameter_m = Some(0.004);
+    let four = run_ok(
+        &Files::from([("s01.csv".to_string(), full.into_bytes())]),
+        &p,
+    );
+    let two = run_ok(
+        &Files::from([("s01.csv".to_string(), short.into_bytes())]),
+        &p,
+    );
+    assert_eq!(four, two);
+    assert_eq!(two[0].tracks[0].frame, rec.tracks[0].frame);
+}
