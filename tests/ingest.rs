@@ -1024,3 +1024,51 @@ fn trackmate_with_two_header_rows_reads_the_same() {
     assert_eq!(four, two);
     assert_eq!(two[0].tracks[0].frame, rec.tracks[0].frame);
 }
+
+#[test]
+fn shipped_dataset_ingests_every_run() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let listed = std::fs::read_to_string(dir.join("runs.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    let recs = ingest::read_dataset_dir(&dir, &params()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(recs.len(), listed);
+    for r in &recs {
+        let wanted = if r.info.experiment == Experiment::Single {
+            1
+        } else {
+            2
+        };
+        assert_eq!(r.tracks.len(), wanted, "run {}", r.info.run);
+        for t in &r.tracks {
+            assert!(
+                t.frame.windows(2).all(|w| w[0] < w[1]),
+                "run {} frames unsorted",
+                r.info.run
+            );
+            assert!(t.frame.len() >= 20);
+        }
+    }
+}
+
+#[test]
+fn many_problems_are_counted_and_listed_in_file_order() {
+    let recs = known_recordings();
+    let mut lines = trajectory_lines(&recs);
+    for line in lines.iter_mut().take(25) {
+        *line = set_field(line, 4, "?");
+    }
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    let e = run_err(&files);
+    assert!(e.starts_with("25 problems in the dataset:"), "{e}");
+    assert_mentions(&e, &["... and 5 more"]);
+    let first = e.find("row 2,").unwrap();
+    let second = e.find("row 3,").unwrap();
+    assert!(first < second, "{e}");
+}
