@@ -254,18 +254,35 @@ impl Cal {
 }
 
 /// A trackpy export of one run: index column, pixels, track ids 7 (particle 0) and 3 (particle 1).
+/// In a single run the track is split into fragments 7 and 8 (the tracker lost the sphere) and a
+/// spurious short track 99 sits in frames the sphere's track covers.
 fn to_trackpy(rec: &Recording, cal: &Cal) -> Vec<u8> {
     let mut s = String::from(",y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle\n");
     let mut index = 0;
+    let single = rec.info.experiment == Experiment::Single;
     for t in &rec.tracks {
-        let id = if t.particle == 0 { 7 } else { 3 };
         for k in 0..t.frame.len() {
+            let id = match (t.particle, single) {
+                (0, true) if k > t.frame.len() / 2 => 8,
+                (0, _) => 7,
+                _ => 3,
+            };
             let (x, y) = cal.xy(t.z_m[k]);
             s += &format!(
                 "{index},{y},{x},812.3,2.1,0.05,41.0,9120.0,0.012,{},{id}\n",
                 t.frame[k]
             );
             index += 1;
+        }
+        if single {
+            for k in 5..8 {
+                let (x, y) = cal.xy(t.z_m[k] + 0.01);
+                s += &format!(
+                    "{index},{y},{x},90.0,1.1,0.3,4.0,800.0,0.2,{},99\n",
+                    t.frame[k]
+                );
+                index += 1;
+            }
         }
     }
     s.into_bytes()

@@ -6,7 +6,7 @@ use super::params::{Axis, CheckedCalibration};
 use super::samples::{RunRow, Sample, SampleFile};
 use super::table::Table;
 use crate::recording::{Experiment, RunInfo};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 /// One detected spot: its track id (`None` if unlinked), frame, pixel position along the groove
@@ -96,9 +96,9 @@ pub fn run_id(file: &str) -> String {
 }
 
 /// Converts a tracker file into its run row and samples. Unlinked spots are left out. In a single
-/// run every linked track is the one particle 0 (trackers often split one sphere's track); in a
-/// collision run there must be exactly two tracks, and the one starting at smaller z is the striker
-/// (particle 0), so `direction` must point from striker to target.
+/// run the tracks are merged into particle 0 (see `merge_fragments`); in a collision run there must
+/// be exactly two tracks, and the one starting at smaller z is the striker (particle 0), so
+/// `direction` must point from striker to target.
 pub fn calibrate(
     spots: &SpotFile,
     cal: &CheckedCalibration,
@@ -150,8 +150,12 @@ pub fn calibrate(
                 .collect()
         }
     };
-    let frame0 = linked.iter().map(|s| s.frame).min().unwrap_or(0);
-    let samples = linked
+    let used = match cal.experiment {
+        Experiment::Single => merge_fragments(&tracks),
+        Experiment::Collision => linked,
+    };
+    let frame0 = used.iter().map(|s| s.frame).min().unwrap_or(0);
+    let samples = used
         .iter()
         .map(|s| Sample {
             run: run.clone(),
@@ -185,4 +189,25 @@ pub fn calibrate(
             samples,
         },
     ))
+}
+
+/// The spots of a single run's one sphere from its tracks: trackers split one sphere's track into
+/// fragments when it is briefly lost, and link the odd spurious detection into a short track. The
+/// longest track is taken whole; each shorter one (longest first, then lower id) adds its spots in
+/// frames not yet covered by an earlier track, and its other spots are left out as spurious.
+fn merge_fragments<'a>(tracks: &BTreeMap<i64, Vec<&'a Spot>>) -> Vec<&'a Spot> {
+    let mut order: Vec<(i64, &Vec<&'a Spot>)> = tracks.iter().map(|(&id, ss)| (id, ss)).collect();
+    order.sort_by_key(|&(id, ss)| (std::cmp::Reverse(ss.len()), id));
+    let mut covered: BTreeSet<i64> = BTreeSet::new();
+    let mut kept = Vec::new();
+    for (_, ss) in order {
+        let fresh: Vec<&Spot> = ss
+            .iter()
+            .filter(|s| !covered.contains(&s.frame))
+            .copied()
+            .collect();
+        covered.extend(fresh.iter().map(|s| s.frame));
+        kept.extend(fresh);
+    }
+    kept
 }
