@@ -3,6 +3,7 @@
 use crate::engine::stage::StageKind;
 
 pub mod ingest;
+pub mod validate;
 
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
 /// engine's own kind and is not listed.
@@ -11,5 +12,6 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
     // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
     kinds.push(Box::new(ingest::Ingest));
+    kinds.push(Box::new(validate::Validate));
     kinds
 }
