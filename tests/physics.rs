@@ -373,11 +373,10 @@ fn velocity_dependent_friction_slides_longer_and_tends_to_coulomb() {
         simulate(&m, kick(0.02, 0.0), &t)
     };
     let sharp = with(1e-7);
-    for k in 0..t.len() {
+    for (k, tk) in t.iter().enumerate() {
         assert!(
             (sharp.z_m[k] - coulomb.z_m[k]).abs() < 2e-9,
-            "v_c → 0 is Coulomb: t {} {} vs {}",
-            t[k],
+            "v_c → 0 is Coulomb: t {tk} {} vs {}",
             sharp.z_m[k],
             coulomb.z_m[k]
         );
