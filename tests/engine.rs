@@ -514,6 +514,12 @@ fn bad_configs() -> Vec<(&'static str, String, &'static str, &'static str)> {
             "unknown field `parms`",
         ),
         (
+            "unknown param of a built-in kind",
+            format!("{good}\n[stages.b]\nkind = \"ingest\"\ninputs = {{ dataset = \"x.txt\" }}\nparams = {{ formt = \"auto\" }}\n"),
+            "formt",
+            "param `formt`",
+        ),
+        (
             "mistyped value",
             "[project]\nseed = \"seven\"\n".to_string(),
             "seed",
