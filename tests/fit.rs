@@ -339,7 +339,7 @@ fn residuals_of_a_good_fit_are_the_noise_and_flag_the_outliers() {
     let run = &runs(13, 1, (0.05, 0.06), 0.3, Camera::CHAPTER)[0];
     let rec = recording("r1", "316", run);
     let fit = RunFit::Single(groove::fit::fit_single(&rec, &FitOptions::default()));
-    let res = residuals(&rec, &fit);
+    let res = residuals(&rec, &fit, Groove::CHAPTER);
     assert_eq!(res.status, "ok");
     assert_eq!(
         res.outlier, run.outlier,
