@@ -5,7 +5,9 @@
 //! sliding with direction d = sign(v0 − s·va0), a switch at t1 where v = s·va, then constrained
 //! rolling decaying with Te = T(1 + ks²)/ks². The observation model adds an offset and a time shift:
 //!
-//!     z(t) = z0 + Δz(t − t_ref + t0; v0, va0, μ, T)
+//! ```text
+//! z(t) = z0 + Δz(t − t_ref + t0; v0, va0, μ, T)
+//! ```
 //!
 //! where t_ref is a fixed origin (the first frame, or a segment start) and t0 the time elapsed
 //! between the kick and t_ref. Before the kick (τ < 0) the particle rests at z0.

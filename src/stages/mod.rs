@@ -8,6 +8,7 @@ pub mod fit;
 pub mod fit_io;
 pub mod ingest;
 pub mod simulate;
+pub mod validate;
 
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
 /// engine's own kind and is not listed.
@@ -20,5 +21,6 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     kinds.push(Box::new(aggregate::Aggregate));
     kinds.push(Box::new(simulate::Simulate));
     kinds.push(Box::new(compare::Compare));
+    kinds.push(Box::new(validate::Validate));
     kinds
 }

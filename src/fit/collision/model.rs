@@ -56,7 +56,18 @@ pub struct Layout {
     /// Per particle, per piece: the parameter index of its drag time T (the run's shared T, or
     /// one per piece, which absorbs a drag that is not linear in v).
     pub drag: [Vec<usize>; 2],
+    /// With one T per piece: each piece's ln T is drawn toward the run's shared T with this
+    /// standard deviation, a pseudo-residual in units of the position noise `noise_m`. Short
+    /// pieces that say little about drag keep the run's T; long ones speak for themselves.
+    pub drag_prior: Option<DragPrior>,
     pub n_params: usize,
+}
+
+/// Shrinkage of per-piece drag times toward the run's T.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DragPrior {
+    pub sigma_ln: f64,
+    pub noise_m: f64,
 }
 
 pub const MU: usize = 0;
@@ -74,14 +85,33 @@ pub struct PieceStart {
 }
 
 impl Layout {
-    pub fn n_residuals(&self) -> usize {
+    /// Number of position samples (the first residuals).
+    pub fn n_data(&self) -> usize {
         self.tracks[0].t_s.len() + self.tracks[1].t_s.len()
+    }
+
+    fn prior_params(&self) -> impl Iterator<Item = usize> + '_ {
+        self.drag.iter().flatten().copied().filter(|&i| i != T_DRAG)
+    }
+
+    pub fn n_residuals(&self) -> usize {
+        self.n_data()
+            + if self.drag_prior.is_some() {
+                self.prior_params().count()
+            } else {
+                0
+            }
     }
 
     /// The motion of piece `k` of `particle`.
     pub fn motion(&self, p: &[f64], particle: usize, k: usize) -> Motion {
         let t = self.drag[particle].get(k).copied().unwrap_or(T_DRAG);
-        Motion { mu: p[MU], t_drag_s: p[t], s: self.s, k: self.k }
+        Motion {
+            mu: p[MU],
+            t_drag_s: p[t],
+            s: self.s,
+            k: self.k,
+        }
     }
 
     pub fn impact_time(&self, p: &[f64], j: usize) -> f64 {
@@ -152,7 +182,8 @@ impl Layout {
             rel.clear();
             rel.extend(track.t_s[first..i].iter().map(|t| (t - st.t_s).max(0.0)));
             buf.resize(rel.len(), 0.0);
-            self.motion(p, particle, k).positions(st.v_mps, st.va_mps, &rel, &mut buf);
+            self.motion(p, particle, k)
+                .positions(st.v_mps, st.va_mps, &rel, &mut buf);
             for (o, b) in out[first..i].iter_mut().zip(&buf) {
                 *o = st.z_m + b;
             }
@@ -162,7 +193,13 @@ impl Layout {
     /// Residuals model − data of both tracks, concatenated (striker first).
     pub fn residuals(&self, p: &[f64], out: &mut [f64]) {
         let n0 = self.tracks[0].t_s.len();
-        let (a, b) = out.split_at_mut(n0);
+        let (data, prior) = out.split_at_mut(self.n_data());
+        if let Some(dp) = self.drag_prior {
+            for (o, i) in prior.iter_mut().zip(self.prior_params()) {
+                *o = (p[i] / p[T_DRAG]).ln() / dp.sigma_ln * dp.noise_m;
+            }
+        }
+        let (a, b) = data.split_at_mut(n0);
         self.positions(p, 0, a);
         self.positions(p, 1, b);
         for (o, z) in a.iter_mut().zip(&self.tracks[0].z_m) {
@@ -205,7 +242,9 @@ impl Layout {
         if st.rest {
             return (st.z_m, 0.0, 0.0);
         }
-        let kin = self.motion(p, particle, k).state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
+        let kin = self
+            .motion(p, particle, k)
+            .state(st.v_mps, st.va_mps, (t_s - st.t_s).max(0.0));
         (st.z_m + kin.dz_m, kin.v_mps, kin.va_mps)
     }
 }

@@ -2,7 +2,7 @@
 //! `Layout` plus `ParamSpec`s, and read back from a solution.
 
 use super::lm::ParamSpec;
-use super::model::{ImpactTime, Layout, Piece, TrackData, MU, T_DRAG};
+use super::model::{DragPrior, ImpactTime, Layout, Piece, TrackData, MU, T_DRAG};
 
 /// The first piece of a particle's track when it does not start at an impact.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,6 +51,8 @@ pub struct Plan {
     /// One drag time per piece (start values below, default `t_drag_s`) instead of one per run.
     pub drag_per_piece: bool,
     pub piece_t_drag_s: [Vec<f64>; 2],
+    /// Position noise (m): the unit of the drag prior's pseudo-residuals.
+    pub noise_m: f64,
     pub z_start_m: [f64; 2],
     pub first: [Option<FirstPiece>; 2],
     pub impacts: Vec<PlanImpact>,
@@ -59,6 +61,8 @@ pub struct Plan {
 pub const MU_BOUNDS: (f64, f64) = (0.02, 1.5);
 pub const T_BOUNDS_S: (f64, f64) = (0.003, 10.0);
 const V_MAX_MPS: f64 = 3.0;
+/// Spread of a piece's ln T around the run's T: a factor e^0.5 ≈ 1.6.
+pub const DRAG_PRIOR_SIGMA_LN: f64 = 0.5;
 
 fn push(specs: &mut Vec<ParamSpec>, start: f64, lower: f64, upper: f64, step: f64) -> usize {
     specs.push(ParamSpec {
@@ -83,11 +87,7 @@ impl Plan {
         let mut sp = Vec::new();
         let held = |x: f64, b: (f64, f64)| if self.hold_friction { (x, x) } else { b };
         let (mu_lo, mu_hi) = held(self.mu, MU_BOUNDS);
-        let (t_lo, t_hi) = if self.drag_per_piece {
-            (self.t_drag_s, self.t_drag_s)
-        } else {
-            held(self.t_drag_s, T_BOUNDS_S)
-        };
+        let (t_lo, t_hi) = held(self.t_drag_s, T_BOUNDS_S);
         assert_eq!(push(&mut sp, self.mu, mu_lo, mu_hi, 1e-6), MU);
         assert_eq!(push(&mut sp, self.t_drag_s, t_lo, t_hi, 1e-6), T_DRAG);
         let mut impacts = Vec::new();
@@ -151,7 +151,10 @@ impl Plan {
             pieces[p].extend(after.iter().map(|a| a[p]));
             for (k, piece) in pieces[p].iter().enumerate() {
                 drag[p].push(if self.drag_per_piece && *piece != Piece::Rest {
-                    let t = self.piece_t_drag_s[p].get(k).copied().unwrap_or(self.t_drag_s);
+                    let t = self.piece_t_drag_s[p]
+                        .get(k)
+                        .copied()
+                        .unwrap_or(self.t_drag_s);
                     let (lo, hi) = held(t, T_BOUNDS_S);
                     push(&mut sp, t, lo, hi, 1e-6)
                 } else {
@@ -169,6 +172,10 @@ impl Plan {
             first_start_s,
             pieces,
             drag,
+            drag_prior: self.drag_per_piece.then_some(DragPrior {
+                sigma_ln: DRAG_PRIOR_SIGMA_LN,
+                noise_m: self.noise_m,
+            }),
             n_params,
         };
         (layout, sp)

@@ -126,8 +126,8 @@ pub fn summarize_fit(
     let impacts = (0..layout.impacts.len())
         .map(|j| impact_record(layout, res, j, direction))
         .collect();
-    let n = res.residuals.len().max(1);
-    let rms = (res.residuals.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
+    let data = &res.residuals[..layout.n_data()];
+    let rms = (data.iter().map(|r| r * r).sum::<f64>() / data.len().max(1) as f64).sqrt();
     let status = match res.termination {
         Termination::Converged => CollisionStatus::Converged,
         Termination::MaxIterations => CollisionStatus::MaxIterations,
@@ -141,21 +141,13 @@ pub fn summarize_fit(
         status,
         message: String::new(),
         mu_pg: Estimate::new(p[MU], res.se(MU)),
-        t_drag_s: if layout.drag.iter().flatten().any(|&i| i != T_DRAG) {
-            Estimate { value: f64::NAN, se: None }
-        } else {
-            Estimate::new(p[T_DRAG], res.se(T_DRAG))
-        },
+        t_drag_s: Estimate::new(p[T_DRAG], res.se(T_DRAG)),
         segments,
         impacts,
         rms_m: rms,
         noise_m: res.scale,
-        n_points: res.residuals.len(),
-        n_outliers: res
-            .residuals
-            .iter()
-            .filter(|r| r.abs() > 5.0 * res.scale)
-            .count(),
+        n_points: data.len(),
+        n_outliers: data.iter().filter(|r| r.abs() > 5.0 * res.scale).count(),
         iterations: res.iterations,
     }
 }

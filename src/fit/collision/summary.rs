@@ -3,7 +3,8 @@
 //! restitution against impact speed per material and setup, with seeded bootstrap intervals
 //! over whole runs. Also the points behind Figs. 4.4a–c.
 
-use super::impulse::spin_change;
+use super::curves::{exp_fit, line_fit, one_minus_av};
+use super::mu_pp::{impulse_fit, slip_slope};
 use super::types::{CollisionFit, CollisionStatus, Contact, ImpactFit, PreImpactSource};
 use crate::recording::{RunInfo, Setup};
 use rand::{Rng, SeedableRng};
@@ -319,128 +320,4 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
         bootstrap_resamples: RESAMPLES,
         notes,
     }
-}
-
-/// μ_pp = slope / k of y = −sign(S)·Δv_a2 against x = Δv_z2 through the origin, slip impacts.
-fn slip_slope(impacts: &[&ImpactFit], k: f64) -> Option<f64> {
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for im in impacts.iter().filter(|im| im.contact == Contact::Slip) {
-        let x = im.target_dvz_mps.value;
-        let y = -im.spin_sum_before_mps.signum() * im.target_dva_mps.value;
-        sxy += x * y;
-        sxx += x * x;
-    }
-    (sxx > 0.0).then(|| sxy / sxx / k)
-}
-
-/// μ_pp minimizing Σ (Δv_a,meas − Δv_a,model(μ))² / se² over both particles of every impact
-/// with resolved spins, by a log-grid search refined by golden sections.
-fn impulse_fit(impacts: &[&ImpactFit], k: f64) -> Option<f64> {
-    let used: Vec<&&ImpactFit> = impacts
-        .iter()
-        .filter(|im| im.contact != Contact::Undetermined)
-        .collect();
-    if !used.iter().any(|im| im.contact == Contact::Slip) {
-        return None;
-    }
-    let cost = |mu: f64| -> f64 {
-        used.iter()
-            .map(|im| {
-                let (pred, _) = spin_change(im.spin_sum_before_mps, im.target_dvz_mps.value, mu, k);
-                let w = |se: Option<f64>| 1.0 / se.unwrap_or(1.0).max(1e-4).powi(2);
-                w(im.target_dva_mps.se) * (im.target_dva_mps.value - pred).powi(2)
-                    + w(im.striker_dva_mps.se) * (im.striker_dva_mps.value - pred).powi(2)
-            })
-            .sum()
-    };
-    let grid: Vec<f64> = (0..=240)
-        .map(|i| 0.01 * 10f64.powf(i as f64 / 80.0))
-        .collect();
-    let best = (0..grid.len()).min_by(|&a, &b| cost(grid[a]).total_cmp(&cost(grid[b])))?;
-    let (mut lo, mut hi) = (
-        grid[best.saturating_sub(1)],
-        grid[(best + 1).min(grid.len() - 1)],
-    );
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..60 {
-        let (a, b) = (hi - g * (hi - lo), lo + g * (hi - lo));
-        if cost(a) < cost(b) {
-            hi = b;
-        } else {
-            lo = a;
-        }
-    }
-    Some(0.5 * (lo + hi))
-}
-
-/// Weighted least squares C = c0 + b v: (c0, b).
-fn line_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
-    let (mut sw, mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(x, y, se) in p {
-        let w = 1.0 / (se * se);
-        sw += w;
-        sx += w * x;
-        sy += w * y;
-        sxx += w * x * x;
-        sxy += w * x * y;
-    }
-    let det = sw * sxx - sx * sx;
-    if p.len() < 2 || det <= 1e-12 * sw * sxx {
-        return None;
-    }
-    let b = (sw * sxy - sx * sy) / det;
-    Some(((sy - b * sx) / sw, b))
-}
-
-/// Weighted least squares of 1 − C = a v through the origin.
-fn one_minus_av(p: &[(f64, f64, f64)]) -> Option<f64> {
-    let (mut num, mut den) = (0.0, 0.0);
-    for &(x, y, se) in p {
-        let w = 1.0 / (se * se);
-        num += w * x * (1.0 - y);
-        den += w * x * x;
-    }
-    (den > 0.0).then(|| num / den)
-}
-
-/// Weighted least squares of C = c_inf + (1 − c_inf) e^{−v/v_ref}: for each v_ref on a log
-/// grid, 1 − C = (1 − c_inf)(1 − e^{−v/v_ref}) is linear in (1 − c_inf); keep the best pair.
-fn exp_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
-    let solve = |v_ref: f64| -> (f64, f64) {
-        let (mut num, mut den) = (0.0, 0.0);
-        for &(x, y, se) in p {
-            let w = 1.0 / (se * se);
-            let f = 1.0 - (-x / v_ref).exp();
-            num += w * f * (1.0 - y);
-            den += w * f * f;
-        }
-        let b = if den > 0.0 { num / den } else { 0.0 };
-        let sse = p
-            .iter()
-            .map(|&(x, y, se)| ((1.0 - y) - b * (1.0 - (-x / v_ref).exp())).powi(2) / (se * se))
-            .sum();
-        (1.0 - b, sse)
-    };
-    if p.len() < 3 {
-        return None;
-    }
-    let grid: Vec<f64> = (0..=200)
-        .map(|i| 1e-3 * 10f64.powf(i as f64 / 66.0))
-        .collect();
-    let best = (0..grid.len()).min_by(|&a, &b| solve(grid[a]).1.total_cmp(&solve(grid[b]).1))?;
-    let (mut lo, mut hi) = (
-        grid[best.saturating_sub(1)].ln(),
-        grid[(best + 1).min(grid.len() - 1)].ln(),
-    );
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..50 {
-        let (a, b) = (hi - g * (hi - lo), lo + g * (hi - lo));
-        if solve(a.exp()).1 < solve(b.exp()).1 {
-            hi = b;
-        } else {
-            lo = a;
-        }
-    }
-    let v_ref = (0.5 * (lo + hi)).exp();
-    Some((solve(v_ref).0, v_ref))
 }

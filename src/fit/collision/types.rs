@@ -162,7 +162,8 @@ pub struct CollisionFit {
     pub message: String,
     /// Particle–groove friction, shared by both particles and all segments.
     pub mu_pg: Estimate,
-    /// Drag time shared by all segments; null when fitted per segment (see `segments`).
+    /// Drag time of the run: shared by all segments, or the centre their own T (see
+    /// `segments`) are drawn toward when fitted per segment.
     pub t_drag_s: Estimate,
     pub segments: Vec<SegmentFit>,
     pub impacts: Vec<ImpactFit>,
