@@ -2,11 +2,14 @@
 
 use crate::engine::stage::StageKind;
 
+pub mod discover;
+
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
 /// engine's own kind and is not listed.
 pub fn registry() -> Vec<Box<dyn StageKind>> {
     #[allow(unused_mut)]
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
     // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
+    kinds.push(Box::new(discover::Discover));
     kinds
 }
