@@ -148,11 +148,65 @@ fn block(spec: &Spec, params: &[ParamInfo], g: &[f64], l: &[f64; N_LOCAL], run: 
 }
 
 /// The LM step for damping λ: (δg, δl per run), and the undamped Schur matrix when λ = 0.
-fn solve_step(blocks: &[Block], ng: usize, lambda: f64, free_global: bool) -> (Vec<f64>, Vec<[f64; 3]>, Vec<f64>) {
+/// Parameters held at a bound for one step (active set), globals and per-run locals.
+struct Frozen {
+    global: Vec<bool>,
+    local: Vec<[bool; N_LOCAL]>,
+}
+
+fn solve_step(
+    blocks: &[Block],
+    ng: usize,
+    lambda: f64,
+    free_global: bool,
+    frozen: &Frozen,
+) -> (Vec<f64>, Vec<[f64; 3]>, Vec<f64>) {
     let mut s = vec![0.0; ng * ng];
     let mut rhs = vec![0.0; ng];
     let mut cfac = Vec::with_capacity(blocks.len());
-    for blk in blocks {
+    let mut held: Vec<Block> = Vec::new();
+    for (r, blk) in blocks.iter().enumerate() {
+        // a frozen parameter loses its column: zero its couplings, unit diagonal, no gradient
+        let blk = if frozen.local[r].iter().any(|f| *f) || blk.idx.iter().any(|j| frozen.global[*j]) {
+            let mut b = Block {
+                idx: blk.idx.clone(),
+                a: blk.a.clone(),
+                b: blk.b.clone(),
+                c: blk.c,
+                bg: blk.bg.clone(),
+                bl: blk.bl,
+            };
+            let na = b.idx.len();
+            for k in 0..3 {
+                if frozen.local[r][k] {
+                    for m in 0..3 {
+                        b.c[k * 3 + m] = 0.0;
+                        b.c[m * 3 + k] = 0.0;
+                    }
+                    b.c[k * 4] = 1.0;
+                    b.bl[k] = 0.0;
+                    for i in 0..na {
+                        b.b[i * 3 + k] = 0.0;
+                    }
+                }
+            }
+            for i in 0..na {
+                if frozen.global[b.idx[i]] {
+                    for j in 0..na {
+                        b.a[i * na + j] = 0.0;
+                        b.a[j * na + i] = 0.0;
+                    }
+                    b.bg[i] = 0.0;
+                    for k in 0..3 {
+                        b.b[i * 3 + k] = 0.0;
+                    }
+                }
+            }
+            held.push(b);
+            held.last().expect("just pushed")
+        } else {
+            blk
+        };
         let mut c = blk.c;
         for k in 0..3 {
             c[k * 4] *= 1.0 + lambda;
@@ -177,7 +231,7 @@ fn solve_step(blocks: &[Block], ng: usize, lambda: f64, free_global: bool) -> (V
             let corr: f64 = (0..3).map(|k| bci[i * 3 + k] * blk.bl[k]).sum();
             rhs[gi] += blk.bg[i] - corr;
         }
-        cfac.push(lc);
+        cfac.push((lc, r));
     }
     for i in 0..ng {
         if s[i * ng + i] == 0.0 {
@@ -194,19 +248,33 @@ fn solve_step(blocks: &[Block], ng: usize, lambda: f64, free_global: bool) -> (V
         let l = cholesky_jittered(&sd, ng);
         dg = rhs;
         chol_solve(&l, ng, &mut dg);
+        for j in 0..ng {
+            if frozen.global[j] {
+                dg[j] = 0.0;
+            }
+        }
     }
+    let mut held_iter = held.iter();
     let dl = blocks
         .iter()
+        .enumerate()
         .zip(&cfac)
-        .map(|(blk, lc)| {
-            let mut r = blk.bl;
+        .map(|((r, orig), (lc, _))| {
+            let modified = frozen.local[r].iter().any(|f| *f) || orig.idx.iter().any(|j| frozen.global[*j]);
+            let blk = if modified { held_iter.next().expect("one per modified block") } else { orig };
+            let mut x = blk.bl;
             for (i, &gi) in blk.idx.iter().enumerate() {
                 for k in 0..3 {
-                    r[k] -= blk.b[i * 3 + k] * dg[gi];
+                    x[k] -= blk.b[i * 3 + k] * dg[gi];
                 }
             }
-            chol_solve(lc, 3, &mut r);
-            r
+            chol_solve(lc, 3, &mut x);
+            for k in 0..3 {
+                if frozen.local[r][k] {
+                    x[k] = 0.0;
+                }
+            }
+            x
         })
         .collect();
     (dg, dl, schur)
@@ -249,9 +317,42 @@ pub fn fit_joint(
             .zip(l.par_iter())
             .map(|(r, lr)| block(spec, params, &g, lr, r, ctl.free_global))
             .collect();
-        schur = solve_step(&blocks, ng, 0.0, false).2;
+        let none = Frozen {
+            global: vec![false; ng],
+            local: vec![[false; N_LOCAL]; runs.len()],
+        };
+        schur = solve_step(&blocks, ng, 0.0, false, &none).2;
         loop {
-            let (dg, dl, _) = solve_step(&blocks, ng, lambda, ctl.free_global);
+            // active set: a parameter on a bound whose step points outward is held this step
+            let mut frozen = Frozen {
+                global: vec![false; ng],
+                local: vec![[false; N_LOCAL]; runs.len()],
+            };
+            let (mut dg, mut dl, _) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen);
+            for _ in 0..4 {
+                let mut changed = false;
+                for j in 0..ng {
+                    let p = &params[j];
+                    if !frozen.global[j] && ((g[j] <= p.lo && dg[j] < 0.0) || (g[j] >= p.hi && dg[j] > 0.0)) {
+                        frozen.global[j] = true;
+                        changed = true;
+                    }
+                }
+                for (r, run) in runs.iter().enumerate() {
+                    let lb = local_bounds(run);
+                    for k in 0..N_LOCAL {
+                        let x = l[r][k];
+                        if !frozen.local[r][k] && ((x <= lb[k].0 && dl[r][k] < 0.0) || (x >= lb[k].1 && dl[r][k] > 0.0)) {
+                            frozen.local[r][k] = true;
+                            changed = true;
+                        }
+                    }
+                }
+                if !changed {
+                    break;
+                }
+                (dg, dl, _) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen);
+            }
             let mut g2: Vec<f64> = g.iter().zip(&dg).map(|(a, b)| a + b).collect();
             clamp_g(&mut g2);
             let l2: Vec<[f64; N_LOCAL]> = l

@@ -147,7 +147,7 @@ impl SimModel {
             } else {
                 0.5 * (a + b)
             };
-            let c = c.clamp(a + 1e-12, b);
+            let c = if c > a && c <= b { c } else { 0.5 * (a + b) };
             let xc = self.rk4(x, c * h, motion, d);
             let gc = g(xc);
             best = (c, xc);
@@ -235,9 +235,15 @@ impl SimModel {
                         t += h;
                     }
                     Motion::Rolling => {
-                        if self.roll_c > 0.0 && next.v * x.v < 0.0 {
-                            let (f, xs) = self.locate(x, h, motion, d, |y| y.v);
-                            t += f * h;
+                        // a resistance opposing motion stops the particle in finite time: the
+                        // stop lies in this step when the current deceleration reaches v = 0
+                        // (RK4 stages straddling the sign change would stall just short of it)
+                        let dv = self.deriv_roll(x).1;
+                        let tau = if dv * x.v < 0.0 { -x.v / dv } else { f64::INFINITY };
+                        if self.roll_c > 0.0 && (tau <= h || next.v * x.v < 0.0) {
+                            let tau = tau.min(h);
+                            let xs = self.rk4(x, tau, motion, d);
+                            t += tau;
                             x = St {
                                 z: xs.z,
                                 v: 0.0,
@@ -245,6 +251,9 @@ impl SimModel {
                             };
                             if self.conservative(x.z).abs() <= self.roll_c * G_MPS2 {
                                 motion = Motion::Rest;
+                            } else {
+                                // pushed on: restart from rest in the direction of the push
+                                x.v = 1e-12 * self.conservative(x.z).signum();
                             }
                             continue;
                         }
