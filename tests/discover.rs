@@ -84,8 +84,8 @@ fn saturating_drag_is_named_and_sized() {
 
 #[test]
 fn quadratic_drag_is_named_and_sized() {
-    let truth = Truth { quad_c_per_m: 20.0, ..Truth::baseline() };
-    check_found(&truth, &SMALL, 3, "velocity_dependent_drag", "c_per_m", 20.0);
+    let truth = Truth { quad_c_per_m: 40.0, ..Truth::baseline() };
+    check_found(&truth, &SMALL, 3, "velocity_dependent_drag", "c_per_m", 40.0);
 }
 
 #[test]
