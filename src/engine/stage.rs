@@ -67,12 +67,18 @@ pub fn typed_params<P>(params: &toml::Table) -> Result<(P, serde_json::Value), P
 where
     P: serde::de::DeserializeOwned + serde::Serialize,
 {
-    let typed: P = toml::Value::Table(params.clone())
-        .try_into()
-        .map_err(|e: toml::de::Error| ParamError {
-            key: e.message().split('`').nth(1).unwrap_or("params").to_string(),
-            message: e.message().to_string(),
-        })?;
+    let typed: P =
+        toml::Value::Table(params.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| ParamError {
+                key: e
+                    .message()
+                    .split('`')
+                    .nth(1)
+                    .unwrap_or("params")
+                    .to_string(),
+                message: e.message().to_string(),
+            })?;
     let json = serde_json::to_value(&typed).map_err(|e| ParamError {
         key: "params".into(),
         message: e.to_string(),
