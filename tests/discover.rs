@@ -84,8 +84,8 @@ fn saturating_drag_is_named_and_sized() {
 
 #[test]
 fn quadratic_drag_is_named_and_sized() {
-    let truth = Truth { quad_c_per_m: 40.0, ..Truth::baseline() };
-    check_found(&truth, &SMALL, 3, "velocity_dependent_drag", "c_per_m", 40.0);
+    let truth = Truth { quad_c_per_m: 80.0, ..Truth::baseline() };
+    check_found(&truth, &SMALL, 3, "velocity_dependent_drag", "c_per_m", 80.0);
 }
 
 #[test]
@@ -126,4 +126,30 @@ fn nothing_missing_twenty_seeds_of_sixty_runs() {
         }
     }
     assert!(false_findings <= 1, "{false_findings} of 20 null data sets gave a finding");
+}
+
+#[test]
+fn reference_integrator_agrees_with_physics_simulate() {
+    use groove::physics::{simulate, State};
+    let t: Vec<f64> = (0..600).map(|k| k as f64 * 1e-4 + 4e-5).collect();
+    let cases = [
+        Truth::baseline(),
+        Truth { quad_c_per_m: 80.0, ..Truth::baseline() },
+        Truth { sat_tp: Some(1.1), t_s: 0.052, ..Truth::baseline() },
+        Truth { roll_c: 0.004, ..Truth::baseline() },
+        Truth { tilt_deg: 0.2, ..Truth::baseline() },
+        Truth { vc_mps: Some(0.004), ..Truth::baseline() },
+        Truth { position: Some((0.05, 8e-3, 0.3)), ..Truth::baseline() },
+    ];
+    for (c, truth) in cases.iter().enumerate() {
+        for (material, v0) in [(0, 0.08), (1, -0.03), (0, 0.006)] {
+            let m = truth.model(material);
+            let mut z = vec![0.0; t.len()];
+            m.simulate_reference(1e-3, v0, &t, &mut z, None, None);
+            let traj = simulate(&m.to_physics(), State { z_m: 1e-3, v_mps: v0, va_mps: 0.0 }, &t);
+            let worst = z.iter().zip(&traj.z_m).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            // 1 nm: a thousandth of the measurement noise
+            assert!(worst < 1e-9, "case {c}, v0 {v0}: discovery and physics integrators differ by {worst:e} m");
+        }
+    }
 }

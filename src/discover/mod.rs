@@ -31,8 +31,7 @@ pub use run::discover;
 
 use serde::{Deserialize, Serialize};
 
-/// Gravity (m/s²), as in physics.md.
-pub const G_MPS2: f64 = 9.81;
+pub use crate::physics::G_MPS2;
 
 /// Every candidate effect id the library knows, in the order they are listed.
 pub const EFFECTS: [&str; 5] = [

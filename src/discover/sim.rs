@@ -1,9 +1,9 @@
 //! One-particle trajectories for the discovery fits: baseline friction plus any candidate terms.
 //!
-//! `SimModel` is the flat, per-run physics a candidate model expands to; `simulate_z` samples the
-//! position at the requested times. It follows physics.md: sliding while v ≠ s·v_a, constrained
-//! rolling (dv/dt = ks²/(1+ks²)·a) while the friction needed stays ≤ gμ, rest with stiction when a
-//! resistance opposing motion holds the particle. Both directions of motion.
+//! `SimModel` is the flat, per-run physics a candidate model expands to; `simulate` samples it with
+//! `physics::simulate`. `simulate_reference` is an independent fixed-step check of that integrator
+//! following physics.md: sliding while v ≠ s·v_a, constrained rolling (dv/dt = ks²/(1+ks²)·a) while
+//! the friction needed stays ≤ gμ, rest when a resistance opposing motion holds the particle.
 
 use super::G_MPS2;
 
@@ -58,6 +58,43 @@ const H_ROLL_S: f64 = 1.0e-4;
 const SLIP_EPS_MPS: f64 = 1.0e-9;
 
 impl SimModel {
+    /// The same physics as a `physics::Model` (for cross-checks against the event-driven integrator).
+    pub fn to_physics(&self) -> crate::physics::Model {
+        use crate::physics::{Friction, Groove, Model, Term};
+        let mut terms = vec![match self.drag {
+            Drag::Quadratic { t_s, .. } => Term::LinearDrag { t_s },
+            Drag::Saturating { t0_s, tp_s_per_mps } => Term::SaturatingDrag { t0_s, tp_s_per_mps },
+        }];
+        if let Drag::Quadratic { c_per_m, .. } = self.drag {
+            if c_per_m != 0.0 {
+                terms.push(Term::QuadraticDrag { c_per_m });
+            }
+        }
+        if self.roll_c != 0.0 {
+            terms.push(Term::RollingResistance { c: self.roll_c });
+        }
+        if self.tilt_mps2 != 0.0 {
+            terms.push(Term::GrooveTilt {
+                alpha_deg: (-self.tilt_mps2 / G_MPS2).asin().to_degrees(),
+            });
+        }
+        for &(amp_mps2, kz, phase_rad) in &self.position {
+            terms.push(Term::PositionForce {
+                amp_mps2,
+                wavelength_m: std::f64::consts::TAU / kz,
+                phase_rad,
+            });
+        }
+        Model {
+            groove: Groove { s: self.s, k: self.k },
+            friction: match self.vc_mps {
+                None => Friction::Constant { mu: self.mu },
+                Some(v_c_mps) => Friction::VelocityDependent { mu_inf: self.mu, v_c_mps },
+            },
+            terms,
+        }
+    }
+
     fn ks2(&self) -> f64 {
         self.k * self.s * self.s
     }
@@ -173,8 +210,41 @@ impl SimModel {
         best
     }
 
-    /// Positions (and speeds, phases if asked) at sorted times t_s ≥ 0, from z0, v0 and no spin at t = 0.
+    /// Positions (and speeds, phases if asked) at sorted times t_s ≥ 0, from z0, v0 and no spin at
+    /// t = 0, by the event-driven integrator of `physics` (adaptive, events located).
     pub fn simulate(
+        &self,
+        z0_m: f64,
+        v0_mps: f64,
+        t_s: &[f64],
+        z_out: &mut [f64],
+        v_out: Option<&mut [f64]>,
+        phase_out: Option<&mut [Motion]>,
+    ) {
+        let init = crate::physics::State {
+            z_m: z0_m,
+            v_mps: v0_mps,
+            va_mps: 0.0,
+        };
+        let traj = crate::physics::simulate(&self.to_physics(), init, t_s);
+        z_out.copy_from_slice(&traj.z_m);
+        if let Some(v) = v_out {
+            v.copy_from_slice(&traj.v_mps);
+        }
+        if let Some(p) = phase_out {
+            for (o, ph) in p.iter_mut().zip(&traj.phase) {
+                *o = match ph {
+                    crate::physics::Phase::Sliding => Motion::Sliding,
+                    crate::physics::Phase::Rolling => Motion::Rolling,
+                    crate::physics::Phase::Rest => Motion::Rest,
+                };
+            }
+        }
+    }
+
+    /// The same trajectory by an independent fixed-step RK4 with located switches: a reference the
+    /// tests hold `physics::simulate` to (they agree within 1 nm for every candidate term).
+    pub fn simulate_reference(
         &self,
         z0_m: f64,
         v0_mps: f64,
@@ -330,7 +400,7 @@ mod tests {
         let t: Vec<f64> = (0..600).map(|i| i as f64 * 1e-4 + 3e-5).collect();
         for v0 in [0.08, -0.08, 0.01] {
             let mut z = vec![0.0; t.len()];
-            m.simulate(0.0, v0, &t, &mut z, None, None);
+            m.simulate_reference(0.0, v0, &t, &mut z, None, None);
             for (ti, zi) in t.iter().zip(&z) {
                 let want = v0.signum() * closed_form(&m, v0.abs(), *ti);
                 assert!((zi - want).abs() < 1e-9, "t {ti} z {zi} want {want}");
@@ -345,7 +415,7 @@ mod tests {
         let t: Vec<f64> = (0..400).map(|i| i as f64 * 1e-3).collect();
         let mut z = vec![0.0; t.len()];
         let mut ph = vec![Motion::Sliding; t.len()];
-        m.simulate(0.0, -0.02, &t, &mut z, None, Some(&mut ph));
+        m.simulate_reference(0.0, -0.02, &t, &mut z, None, Some(&mut ph));
         assert_eq!(*ph.last().unwrap(), Motion::Rest);
         // rolling decelerates at ks²/(1+ks²)·c·g; the stop is reached and z stays put
         assert_eq!(z[398], z[399]);
