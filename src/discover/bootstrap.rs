@@ -19,7 +19,12 @@ pub struct Alternative {
 }
 
 /// One synthetic data set drawn from the fitted null model.
-pub fn synthetic_runs(spec: &Spec, fit: &Fitted, runs: &[RunData], rng: &mut ChaCha8Rng) -> Vec<RunData> {
+pub fn synthetic_runs(
+    spec: &Spec,
+    fit: &Fitted,
+    runs: &[RunData],
+    rng: &mut ChaCha8Rng,
+) -> Vec<RunData> {
     runs.iter()
         .zip(&fit.local)
         .map(|(run, l)| {
@@ -32,7 +37,10 @@ pub fn synthetic_runs(spec: &Spec, fit: &Fitted, runs: &[RunData], rng: &mut Cha
                 *zi += e;
                 e = rho * e + innov * rng.sample::<f64, _>(StandardNormal);
             }
-            RunData { z_m: z, ..run.clone() }
+            RunData {
+                z_m: z,
+                ..run.clone()
+            }
         })
         .collect()
 }
@@ -51,10 +59,22 @@ pub fn lr_replicates(
     let per_rep: Vec<Vec<f64>> = (0..replicates)
         .into_par_iter()
         .map(|b| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let mut rng = ChaCha8Rng::seed_from_u64(
+                seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+            );
             let data = synthetic_runs(null_spec, null_fit, runs, &mut rng);
-            let ctl = FitControl { max_iter: iters, free_global: true };
-            let f0 = fit_joint(null_spec, null_params, &data, &null_fit.global, &null_fit.local, ctl);
+            let ctl = FitControl {
+                max_iter: iters,
+                free_global: true,
+            };
+            let f0 = fit_joint(
+                null_spec,
+                null_params,
+                &data,
+                &null_fit.global,
+                &null_fit.local,
+                ctl,
+            );
             alts.iter()
                 .map(|a| {
                     let mut g = f0.global.clone();
@@ -66,5 +86,7 @@ pub fn lr_replicates(
                 .collect()
         })
         .collect();
-    (0..alts.len()).map(|a| per_rep.iter().map(|r| r[a]).collect()).collect()
+    (0..alts.len())
+        .map(|a| per_rep.iter().map(|r| r[a]).collect())
+        .collect()
 }

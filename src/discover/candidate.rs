@@ -18,8 +18,9 @@ pub enum Extra {
     RollingResistance,
     /// a = −g·sin α, fixed lab-frame sign.
     GrooveTilt,
-    /// μ(u) = μ∞·(1 − exp(−|u|/v_c)) of the slip speed u; fitted as ln v_c.
-    VelocityFriction,
+    /// μ(u) = μ∞·(1 − exp(−|u|/v_c)) of the slip speed u, v_c per material (fitted as ln v_c; a
+    /// material whose v_c runs to the lower bound keeps a constant μ).
+    VelocityFriction { materials: usize },
     /// a(z) = Σ_k a_k sin(πk(z−z_min)/span) + b_k cos(πk(z−z_min)/span), k = 1..harmonics.
     PositionForce {
         harmonics: usize,
@@ -61,7 +62,7 @@ impl Extra {
             Extra::QuadraticDrag | Extra::SaturatingDrag => Some("velocity_dependent_drag"),
             Extra::RollingResistance => Some("rolling_resistance"),
             Extra::GrooveTilt => Some("groove_tilt"),
-            Extra::VelocityFriction => Some("velocity_dependent_friction"),
+            Extra::VelocityFriction { .. } => Some("velocity_dependent_friction"),
             Extra::PositionForce { .. } => Some("position_dependent_force"),
             _ => None,
         }
@@ -74,7 +75,9 @@ impl Extra {
             Extra::SaturatingDrag => "saturating: a = -v/(T0 + T'|v|)".into(),
             Extra::RollingResistance => "constant resistance: a = -c g sign(v)".into(),
             Extra::GrooveTilt => "tilt: a = -g sin(alpha)".into(),
-            Extra::VelocityFriction => "mu(u) = mu_inf (1 - exp(-|u|/v_c)), u slip speed".into(),
+            Extra::VelocityFriction { .. } => {
+                "mu(u) = mu_inf (1 - exp(-|u|/v_c)), u slip speed".into()
+            }
             Extra::PositionForce { harmonics, .. } => {
                 format!("a(z) = Fourier series over the observed z range, {harmonics} harmonics")
             }
@@ -91,7 +94,9 @@ impl Extra {
             Extra::SaturatingDrag => vec![p("tp_s_per_mps", 0.0, 0.0, 1e3, 1e-3)],
             Extra::RollingResistance => vec![p("c", 0.0, 0.0, 0.5, 1e-6)],
             Extra::GrooveTilt => vec![p("alpha_deg", 0.0, -10.0, 10.0, 1e-4)],
-            Extra::VelocityFriction => vec![p("ln_vc_mps", (1e-4f64).ln(), -14.0, 0.0, 1e-3)],
+            Extra::VelocityFriction { materials } => (0..*materials)
+                .map(|m| p(&format!("ln_vc_mps_{m}"), (1e-4f64).ln(), -14.0, 0.0, 1e-3))
+                .collect(),
             Extra::PositionForce { harmonics, .. } => (1..=*harmonics)
                 .flat_map(|k| {
                     [
@@ -141,7 +146,13 @@ impl Spec {
             out.push(p(&format!("{name}_{m}"), 0.08, 1e-3, 1e3, 1e-5));
         }
         for e in &self.extras {
-            out.extend(e.params());
+            let mut ps = e.params();
+            if let Extra::VelocityFriction { .. } = e {
+                for (p, m) in ps.iter_mut().zip(materials) {
+                    p.name = format!("ln_vc_mps_{m}");
+                }
+            }
+            out.extend(ps);
         }
         out
     }
@@ -196,7 +207,7 @@ impl Spec {
                 Extra::SaturatingDrag => tp = Some(x[0]),
                 Extra::RollingResistance => m.roll_c = x[0],
                 Extra::GrooveTilt => m.tilt_mps2 = -G_MPS2 * x[0].to_radians().sin(),
-                Extra::VelocityFriction => m.vc_mps = Some(x[0].exp()),
+                Extra::VelocityFriction { .. } => m.vc_mps = Some(x[material].exp()),
                 Extra::PositionForce {
                     harmonics,
                     z_min_m,

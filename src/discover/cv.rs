@@ -36,7 +36,14 @@ pub fn folds(runs: &[RunData], local: &[[f64; N_LOCAL]], k: usize) -> Vec<usize>
 }
 
 /// Cross-validate `spec` starting every fold from the full-data fit `full`.
-pub fn cross_validate(spec: &Spec, params: &[ParamInfo], runs: &[RunData], full: &Fitted, fold: &[usize], k: usize) -> CvResult {
+pub fn cross_validate(
+    spec: &Spec,
+    params: &[ParamInfo],
+    runs: &[RunData],
+    full: &Fitted,
+    fold: &[usize],
+    k: usize,
+) -> CvResult {
     let mut sq = 0.0;
     let mut count = 0usize;
     let mut per_run = vec![0.0; runs.len()];
@@ -47,12 +54,35 @@ pub fn cross_validate(spec: &Spec, params: &[ParamInfo], runs: &[RunData], full:
             continue;
         }
         let pick = |idx: &[usize]| -> (Vec<RunData>, Vec<[f64; N_LOCAL]>) {
-            (idx.iter().map(|i| runs[*i].clone()).collect(), idx.iter().map(|i| full.local[*i]).collect())
+            (
+                idx.iter().map(|i| runs[*i].clone()).collect(),
+                idx.iter().map(|i| full.local[*i]).collect(),
+            )
         };
         let (tr, trl) = pick(&train);
-        let trained = fit_joint(spec, params, &tr, &full.global, &trl, FitControl { max_iter: 8, free_global: true });
+        let trained = fit_joint(
+            spec,
+            params,
+            &tr,
+            &full.global,
+            &trl,
+            FitControl {
+                max_iter: 8,
+                free_global: true,
+            },
+        );
         let (te, tel) = pick(&test);
-        let held = fit_joint(spec, params, &te, &trained.global, &tel, FitControl { max_iter: 12, free_global: false });
+        let held = fit_joint(
+            spec,
+            params,
+            &te,
+            &trained.global,
+            &tel,
+            FitControl {
+                max_iter: 12,
+                free_global: false,
+            },
+        );
         for (j, &i) in test.iter().enumerate() {
             let n = runs[i].n_used().max(1);
             // chi2_run is Σ (r/σ)²
@@ -69,7 +99,12 @@ pub fn cross_validate(spec: &Spec, params: &[ParamInfo], runs: &[RunData], full:
 
 /// One-sided paired t of the per-run improvement (base − extended); positive: the extension predicts better.
 pub fn paired_t(base: &CvResult, ext: &CvResult) -> f64 {
-    let d: Vec<f64> = base.per_run_msn.iter().zip(&ext.per_run_msn).map(|(a, b)| a - b).collect();
+    let d: Vec<f64> = base
+        .per_run_msn
+        .iter()
+        .zip(&ext.per_run_msn)
+        .map(|(a, b)| a - b)
+        .collect();
     let n = d.len() as f64;
     if d.len() < 2 {
         return 0.0;

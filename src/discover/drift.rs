@@ -35,7 +35,11 @@ pub fn line(x: &[f64], y: &[f64]) -> Option<Line> {
         .map(|(a, b)| (b - intercept - slope * a).powi(2))
         .sum();
     let slope_se = (rss / (nf - 2.0) / sxx).sqrt();
-    let t = if slope_se > 0.0 { slope / slope_se } else { 0.0 };
+    let t = if slope_se > 0.0 {
+        slope / slope_se
+    } else {
+        0.0
+    };
     Some(Line {
         n,
         intercept,
@@ -50,7 +54,10 @@ mod tests {
     #[test]
     fn recovers_a_known_line() {
         let x: Vec<f64> = (0..20).map(|i| i as f64).collect();
-        let y: Vec<f64> = x.iter().map(|v| 0.052 + 1.1 * v + if (*v as i32) % 2 == 0 { 0.01 } else { -0.01 }).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|v| 0.052 + 1.1 * v + if (*v as i32) % 2 == 0 { 0.01 } else { -0.01 })
+            .collect();
         let l = super::line(&x, &y).unwrap();
         assert!((l.slope - 1.1).abs() < 1e-3 && (l.intercept - 0.052).abs() < 0.02);
         assert!(l.t > 100.0);

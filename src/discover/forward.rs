@@ -26,16 +26,42 @@ pub struct Model {
 }
 
 impl Model {
-    pub fn fit(spec: Spec, materials: &[String], runs: &[RunData], g: &[f64], l: &[[f64; N_LOCAL]], max_iter: usize) -> Model {
+    pub fn fit(
+        spec: Spec,
+        materials: &[String],
+        runs: &[RunData],
+        g: &[f64],
+        l: &[[f64; N_LOCAL]],
+        max_iter: usize,
+    ) -> Model {
         let params = spec.global_params(materials);
-        let fit = fit_joint(&spec, &params, runs, g, l, FitControl { max_iter, free_global: true });
+        let fit = fit_joint(
+            &spec,
+            &params,
+            runs,
+            g,
+            l,
+            FitControl {
+                max_iter,
+                free_global: true,
+            },
+        );
         Model { spec, params, fit }
     }
 
     /// The model with `extra` added, fitted from this model's values (best of several starts).
-    pub fn extend(&self, extra: &Extra, materials: &[String], runs: &[RunData], max_iter: usize) -> Model {
+    pub fn extend(
+        &self,
+        extra: &Extra,
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
         let starts: Vec<Vec<f64>> = match extra {
-            Extra::VelocityFriction => [1e-4f64, 2e-3, 2e-2].iter().map(|v| vec![v.ln()]).collect(),
+            Extra::VelocityFriction { materials } => [1e-4f64, 2e-3, 2e-2]
+                .iter()
+                .map(|v| vec![v.ln(); *materials])
+                .collect(),
             e => vec![e.params().iter().map(|p| p.start).collect()],
         };
         starts
@@ -43,7 +69,14 @@ impl Model {
             .map(|s| {
                 let mut g = self.fit.global.clone();
                 g.extend(s);
-                Model::fit(self.spec.with(extra.clone()), materials, runs, &g, &self.fit.local, max_iter)
+                Model::fit(
+                    self.spec.with(extra.clone()),
+                    materials,
+                    runs,
+                    &g,
+                    &self.fit.local,
+                    max_iter,
+                )
             })
             .min_by(|a, b| a.fit.chi2.total_cmp(&b.fit.chi2))
             .expect("at least one start")
@@ -51,7 +84,13 @@ impl Model {
 
     pub fn score(&self, runs: &[RunData], cv: Option<&CvResult>) -> ModelScore {
         let n: usize = runs.iter().map(|r| r.n_used()).sum();
-        let sq: f64 = self.fit.chi2_run.iter().zip(runs).map(|(c, r)| c * r.sigma_m * r.sigma_m).sum();
+        let sq: f64 = self
+            .fit
+            .chi2_run
+            .iter()
+            .zip(runs)
+            .map(|(c, r)| c * r.sigma_m * r.sigma_m)
+            .sum();
         ModelScore {
             cv_rms_m: cv.map(|c| c.cv_rms_m).unwrap_or(f64::NAN),
             rms_m: (sq / n.max(1) as f64).sqrt(),
@@ -84,20 +123,27 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
             }
         }
         Extra::RollingResistance => {
-            out.insert("deceleration_mps2".into(), est(g[off] * G_MPS2, se[off] * G_MPS2));
+            out.insert(
+                "deceleration_mps2".into(),
+                est(g[off] * G_MPS2, se[off] * G_MPS2),
+            );
             out.insert("coefficient".into(), est(g[off], se[off]));
         }
         Extra::GrooveTilt => {
             out.insert("alpha_deg".into(), est(g[off], se[off]));
         }
-        Extra::VelocityFriction => {
-            let vc = g[off].exp();
-            out.insert("v_c_mps".into(), est(vc, vc * se[off]));
+        Extra::VelocityFriction { .. } => {
             for (k, name) in materials.iter().enumerate() {
+                let vc = g[off + k].exp();
+                out.insert(format!("v_c_mps_{name}"), est(vc, vc * se[off + k]));
                 out.insert(format!("mu_inf_{name}"), est(g[k], se[k]));
             }
         }
-        Extra::PositionForce { harmonics, z_min_m, span_m } => {
+        Extra::PositionForce {
+            harmonics,
+            z_min_m,
+            span_m,
+        } => {
             let mut peak: f64 = 0.0;
             for j in 0..=200 {
                 let z = z_min_m + span_m * j as f64 / 200.0;
@@ -160,7 +206,10 @@ pub fn run_round(
     fold: &[usize],
 ) -> Round {
     let all: Vec<&Extra> = entries.iter().chain(probes).collect();
-    let fitted: Vec<Model> = all.iter().map(|e| current.extend(e, materials, runs, 40)).collect();
+    let fitted: Vec<Model> = all
+        .iter()
+        .map(|e| current.extend(e, materials, runs, 40))
+        .collect();
     let alts: Vec<Alternative> = all
         .iter()
         .zip(&fitted)
@@ -181,7 +230,10 @@ pub fn run_round(
         seed,
         opts.bootstrap_iterations,
     );
-    let lr: Vec<f64> = fitted.iter().map(|m| (current.fit.chi2 - m.fit.chi2).max(0.0)).collect();
+    let lr: Vec<f64> = fitted
+        .iter()
+        .map(|m| (current.fit.chi2 - m.fit.chi2).max(0.0))
+        .collect();
     let nulls: Vec<NullFit> = all
         .iter()
         .zip(&reps)
@@ -197,7 +249,11 @@ pub fn run_round(
     let mut best: Option<(usize, CvResult)> = None;
     for (i, e) in all.iter().enumerate() {
         let is_probe = i >= ne;
-        let p_holm = if is_probe { p_holm_p[i - ne] } else { p_holm_e[i] };
+        let p_holm = if is_probe {
+            p_holm_p[i - ne]
+        } else {
+            p_holm_e[i]
+        };
         let mut ev = Evidence {
             round,
             lr: lr[i],
@@ -212,7 +268,14 @@ pub fn run_round(
             decision: String::new(),
         };
         if !is_probe && p_holm < opts.alpha {
-            let cv = cross_validate(&fitted[i].spec, &fitted[i].params, runs, &fitted[i].fit, fold, opts.folds);
+            let cv = cross_validate(
+                &fitted[i].spec,
+                &fitted[i].params,
+                runs,
+                &fitted[i].fit,
+                fold,
+                opts.folds,
+            );
             let t = paired_t(current_cv, &cv);
             ev.cv_paired_t = Some(t);
             ev.cv_rms_m = Some(cv.cv_rms_m);
@@ -225,7 +288,11 @@ pub fn run_round(
                 ev.decision = "rejected: held-out runs do not improve".into();
             }
         } else if is_probe {
-            ev.decision = if p_holm < opts.alpha { "probe flags a mismatch".into() } else { "probe: no drift".into() };
+            ev.decision = if p_holm < opts.alpha {
+                "probe flags a mismatch".into()
+            } else {
+                "probe: no drift".into()
+            };
         } else {
             ev.decision = "rejected: likelihood ratio within the bootstrap null".into();
         }
@@ -237,7 +304,11 @@ pub fn run_round(
         (i, fitted[i].clone(), cv)
     });
     let probe_rows: Vec<CandidateRow> = rows[ne..].to_vec();
-    let flagged_probes = probe_rows.iter().filter(|r| r.evidence.p_holm < opts.alpha).cloned().collect();
+    let flagged_probes = probe_rows
+        .iter()
+        .filter(|r| r.evidence.p_holm < opts.alpha)
+        .cloned()
+        .collect();
     rows.truncate(ne);
     Round {
         rows,
@@ -262,7 +333,12 @@ pub fn normal_upper_quantile(p: f64) -> f64 {
 }
 
 /// Build a finding from an accepted row.
-pub fn finding(row: &CandidateRow, before: ModelScore, after: ModelScore, where_: BTreeMap<String, serde_json::Value>) -> Finding {
+pub fn finding(
+    row: &CandidateRow,
+    before: ModelScore,
+    after: ModelScore,
+    where_: BTreeMap<String, serde_json::Value>,
+) -> Finding {
     Finding {
         effect: row.effect.clone(),
         accepted: row.accepted,

@@ -68,13 +68,26 @@ fn local_bounds(run: &RunData) -> [(f64, f64); N_LOCAL] {
     ]
 }
 
-fn block(spec: &Spec, params: &[ParamInfo], g: &[f64], l: &[f64; N_LOCAL], run: &RunData, free_global: bool) -> Block {
+fn block(
+    spec: &Spec,
+    params: &[ParamInfo],
+    g: &[f64],
+    l: &[f64; N_LOCAL],
+    run: &RunData,
+    free_global: bool,
+) -> Block {
     let n = run.t_s.len();
     let w = 1.0 / run.sigma_m;
     let mut base = vec![0.0; n];
     predict(spec, g, l, run, &mut base);
     let e: Vec<f64> = (0..n)
-        .map(|i| if run.keep[i] { (run.z_m[i] - base[i]) * w } else { 0.0 })
+        .map(|i| {
+            if run.keep[i] {
+                (run.z_m[i] - base[i]) * w
+            } else {
+                0.0
+            }
+        })
         .collect();
     let idx: Vec<usize> = if free_global {
         spec.affecting(run.material)
@@ -89,7 +102,13 @@ fn block(spec: &Spec, params: &[ParamInfo], g: &[f64], l: &[f64; N_LOCAL], run: 
     let mut buf = vec![0.0; n];
     let column = |pred: &[f64], h: f64| -> Vec<f64> {
         (0..n)
-            .map(|i| if run.keep[i] { (pred[i] - base[i]) / h * w } else { 0.0 })
+            .map(|i| {
+                if run.keep[i] {
+                    (pred[i] - base[i]) / h * w
+                } else {
+                    0.0
+                }
+            })
             .collect()
     };
     for &j in &idx {
@@ -167,7 +186,8 @@ fn solve_step(
     let mut held: Vec<Block> = Vec::new();
     for (r, blk) in blocks.iter().enumerate() {
         // a frozen parameter loses its column: zero its couplings, unit diagonal, no gradient
-        let blk = if frozen.local[r].iter().any(|f| *f) || blk.idx.iter().any(|j| frozen.global[*j]) {
+        let blk = if frozen.local[r].iter().any(|f| *f) || blk.idx.iter().any(|j| frozen.global[*j])
+        {
             let mut b = Block {
                 idx: blk.idx.clone(),
                 a: blk.a.clone(),
@@ -260,8 +280,13 @@ fn solve_step(
         .enumerate()
         .zip(&cfac)
         .map(|((r, orig), (lc, _))| {
-            let modified = frozen.local[r].iter().any(|f| *f) || orig.idx.iter().any(|j| frozen.global[*j]);
-            let blk = if modified { held_iter.next().expect("one per modified block") } else { orig };
+            let modified =
+                frozen.local[r].iter().any(|f| *f) || orig.idx.iter().any(|j| frozen.global[*j]);
+            let blk = if modified {
+                held_iter.next().expect("one per modified block")
+            } else {
+                orig
+            };
             let mut x = blk.bl;
             for (i, &gi) in blk.idx.iter().enumerate() {
                 for k in 0..3 {
@@ -333,7 +358,9 @@ pub fn fit_joint(
                 let mut changed = false;
                 for j in 0..ng {
                     let p = &params[j];
-                    if !frozen.global[j] && ((g[j] <= p.lo && dg[j] < 0.0) || (g[j] >= p.hi && dg[j] > 0.0)) {
+                    if !frozen.global[j]
+                        && ((g[j] <= p.lo && dg[j] < 0.0) || (g[j] >= p.hi && dg[j] > 0.0))
+                    {
                         frozen.global[j] = true;
                         changed = true;
                     }
@@ -342,7 +369,10 @@ pub fn fit_joint(
                     let lb = local_bounds(run);
                     for k in 0..N_LOCAL {
                         let x = l[r][k];
-                        if !frozen.local[r][k] && ((x <= lb[k].0 && dl[r][k] < 0.0) || (x >= lb[k].1 && dl[r][k] > 0.0)) {
+                        if !frozen.local[r][k]
+                            && ((x <= lb[k].0 && dl[r][k] < 0.0)
+                                || (x >= lb[k].1 && dl[r][k] > 0.0))
+                        {
                             frozen.local[r][k] = true;
                             changed = true;
                         }
@@ -396,7 +426,9 @@ pub fn fit_joint(
     let global_se = if ng > 0 && ctl.free_global {
         let lf = cholesky_jittered(&schur, ng);
         let inv = chol_inverse(&lf, ng);
-        (0..ng).map(|i| (inv[i * ng + i].max(0.0) * scale).sqrt()).collect()
+        (0..ng)
+            .map(|i| (inv[i * ng + i].max(0.0) * scale).sqrt())
+            .collect()
     } else {
         vec![0.0; ng]
     };

@@ -93,7 +93,10 @@ impl Options {
     pub fn validate(&self) -> Result<(), (String, String)> {
         let bad = |k: &str, m: String| Err((k.to_string(), m));
         if self.bootstrap < 5 {
-            return bad("bootstrap", "needs at least 5 replicates; use 20 or more".into());
+            return bad(
+                "bootstrap",
+                "needs at least 5 replicates; use 20 or more".into(),
+            );
         }
         if !(self.alpha > 0.0 && self.alpha < 0.5) {
             return bad("alpha", "must lie in (0, 0.5); the default is 0.01".into());
@@ -103,11 +106,17 @@ impl Options {
         }
         for c in &self.candidates {
             if !EFFECTS.contains(&c.as_str()) {
-                return bad("candidates", format!("unknown effect `{c}`; use any of {}", EFFECTS.join(", ")));
+                return bad(
+                    "candidates",
+                    format!("unknown effect `{c}`; use any of {}", EFFECTS.join(", ")),
+                );
             }
         }
         if self.position_harmonics.is_empty() || self.position_harmonics.contains(&0) {
-            return bad("position_harmonics", "list basis sizes ≥ 1, e.g. [1, 2, 3]".into());
+            return bad(
+                "position_harmonics",
+                "list basis sizes ≥ 1, e.g. [1, 2, 3]".into(),
+            );
         }
         if !(self.groove_angle_deg > 0.0 && self.groove_angle_deg < 180.0) {
             return bad("groove_angle_deg", "must lie in (0, 180) degrees".into());

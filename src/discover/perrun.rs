@@ -47,12 +47,19 @@ pub fn local_start(run: &RunData) -> [f64; N_LOCAL] {
 }
 
 /// A one-material spec holding `base`'s extra terms fixed at `extra_values`.
-fn single_spec(base: &Spec, base_params: &[ParamInfo], extra_values: &[f64]) -> (Spec, Vec<ParamInfo>) {
+fn single_spec(
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+) -> (Spec, Vec<ParamInfo>) {
     let spec = Spec {
         n_materials: 1,
         ..base.clone()
     };
-    let mut params = vec![base_params[0].clone(), base_params[base.n_materials].clone()];
+    let mut params = vec![
+        base_params[0].clone(),
+        base_params[base.n_materials].clone(),
+    ];
     let off = 2 * base.n_materials;
     for (i, p) in base_params[off..].iter().enumerate() {
         let mut p = p.clone();
@@ -102,7 +109,13 @@ pub fn fit_each_run(
 }
 
 /// Residuals (observed − fitted) of a per-run fit at every sample.
-pub fn residuals(run: &RunData, base: &Spec, base_params: &[ParamInfo], extra_values: &[f64], fit: &PerRunFit) -> Vec<f64> {
+pub fn residuals(
+    run: &RunData,
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+    fit: &PerRunFit,
+) -> Vec<f64> {
     let (spec, _) = single_spec(base, base_params, extra_values);
     let mut r = run.clone();
     r.material = 0;
@@ -114,7 +127,11 @@ pub fn residuals(run: &RunData, base: &Spec, base_params: &[ParamInfo], extra_va
 }
 
 /// Measure each run's noise from its baseline fit and flag outliers (|r| > 5 robust σ), twice.
-pub fn measure_noise(runs: &mut [RunData], base: &Spec, base_params: &[ParamInfo]) -> Vec<PerRunFit> {
+pub fn measure_noise(
+    runs: &mut [RunData],
+    base: &Spec,
+    base_params: &[ParamInfo],
+) -> Vec<PerRunFit> {
     let mut fits = fit_each_run(runs, base, base_params, &[], None);
     for pass in 0..2 {
         for (run, fit) in runs.iter_mut().zip(&fits) {
@@ -125,9 +142,16 @@ pub fn measure_noise(runs: &mut [RunData], base: &Spec, base_params: &[ParamInfo
             for (k, r) in run.keep.iter_mut().zip(&res) {
                 *k = r.abs() <= 5.0 * mad_sigma;
             }
-            let kept: Vec<f64> = res.iter().zip(&run.keep).filter(|(_, k)| **k).map(|(r, _)| *r).collect();
+            let kept: Vec<f64> = res
+                .iter()
+                .zip(&run.keep)
+                .filter(|(_, k)| **k)
+                .map(|(r, _)| *r)
+                .collect();
             let dof = (kept.len() as f64 - 5.0).max(1.0);
-            run.sigma_m = (kept.iter().map(|r| r * r).sum::<f64>() / dof).sqrt().max(1e-12);
+            run.sigma_m = (kept.iter().map(|r| r * r).sum::<f64>() / dof)
+                .sqrt()
+                .max(1e-12);
             run.rho1 = lag1_autocorrelation(&kept).clamp(0.0, 0.95);
         }
         if pass == 0 {

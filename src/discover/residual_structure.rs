@@ -127,7 +127,10 @@ fn edges_label(lo: f64, hi: f64, unit: &str, scale: f64) -> String {
 
 /// Pool the residuals of every run. Speed bins are quintiles of |v|, position bins 8 equal widths.
 pub fn structure(runs: &[RunResiduals]) -> Structure {
-    let mut speeds: Vec<f64> = runs.iter().flat_map(|r| r.speed_mps.iter().map(|v| v.abs())).collect();
+    let mut speeds: Vec<f64> = runs
+        .iter()
+        .flat_map(|r| r.speed_mps.iter().map(|v| v.abs()))
+        .collect();
     speeds.sort_by(f64::total_cmp);
     let q = |p: f64| -> f64 {
         if speeds.is_empty() {
@@ -137,8 +140,14 @@ pub fn structure(runs: &[RunResiduals]) -> Structure {
         }
     };
     let sedges: Vec<f64> = (0..=5).map(|i| q(i as f64 / 5.0)).collect();
-    let zmin = runs.iter().flat_map(|r| r.z_m.iter().copied()).fold(f64::INFINITY, f64::min);
-    let zmax = runs.iter().flat_map(|r| r.z_m.iter().copied()).fold(f64::NEG_INFINITY, f64::max);
+    let zmin = runs
+        .iter()
+        .flat_map(|r| r.z_m.iter().copied())
+        .fold(f64::INFINITY, f64::min);
+    let zmax = runs
+        .iter()
+        .flat_map(|r| r.z_m.iter().copied())
+        .fold(f64::NEG_INFINITY, f64::max);
     let zw = ((zmax - zmin) / 8.0).max(1e-12);
     let mut phase: BTreeMap<String, Acc> = BTreeMap::new();
     let mut speed: BTreeMap<String, Acc> = BTreeMap::new();
@@ -159,7 +168,10 @@ pub fn structure(runs: &[RunResiduals]) -> Structure {
             phase.entry(ph.into()).or_default().add(ri, r, s);
             let v = run.speed_mps[i].abs();
             let b = (1..5).filter(|k| v >= sedges[*k]).count();
-            let label = format!("{b}: {}", edges_label(sedges[b], sedges[b + 1], "mm/s", 1e3));
+            let label = format!(
+                "{b}: {}",
+                edges_label(sedges[b], sedges[b + 1], "mm/s", 1e3)
+            );
             speed.entry(label).or_default().add(ri, r, s);
             let pb = (((run.z_m[i] - zmin) / zw) as usize).min(7);
             let lo = zmin + pb as f64 * zw;
@@ -180,8 +192,16 @@ pub fn structure(runs: &[RunResiduals]) -> Structure {
         }
     }
     let done = |m: BTreeMap<String, Acc>| m.into_iter().map(|(k, a)| (k, a.bin())).collect();
-    let runs_test_z = if zcount > 0 { zsum / (zcount as f64).sqrt() } else { 0.0 };
-    let lag1_z = if rho_count > 0 { rho_z / (rho_count as f64).sqrt() } else { 0.0 };
+    let runs_test_z = if zcount > 0 {
+        zsum / (zcount as f64).sqrt()
+    } else {
+        0.0
+    };
+    let lag1_z = if rho_count > 0 {
+        rho_z / (rho_count as f64).sqrt()
+    } else {
+        0.0
+    };
     Structure {
         by_phase: done(phase),
         by_speed: done(speed),
@@ -190,7 +210,11 @@ pub fn structure(runs: &[RunResiduals]) -> Structure {
         by_material: done(mat),
         runs_test_z,
         runs_test_p: normal_sf(-runs_test_z).min(1.0),
-        lag1_autocorrelation: if rho_count > 0 { rho_sum / rho_count as f64 } else { 0.0 },
+        lag1_autocorrelation: if rho_count > 0 {
+            rho_sum / rho_count as f64
+        } else {
+            0.0
+        },
         lag1_z,
     }
 }
@@ -201,8 +225,12 @@ mod tests {
 
     #[test]
     fn runs_test_sees_a_smooth_pattern() {
-        let alternating: Vec<f64> = (0..100).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
-        let blocks: Vec<f64> = (0..100).map(|i| if (i / 25) % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let alternating: Vec<f64> = (0..100)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let blocks: Vec<f64> = (0..100)
+            .map(|i| if (i / 25) % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         assert!(runs_test_z(&alternating).unwrap() > 5.0);
         assert!(runs_test_z(&blocks).unwrap() < -5.0);
         assert!(lag1(&blocks).unwrap() > 0.9);

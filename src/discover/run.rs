@@ -3,7 +3,9 @@
 use super::candidate::{Extra, Spec, N_LOCAL};
 use super::cv::{cross_validate, CvResult};
 use super::data::{prepare_runs, RunData};
-use super::diagnosis::{CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ModelScore, Settings};
+use super::diagnosis::{
+    CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ModelScore, Settings,
+};
 use super::drift::line;
 use super::forward::{finding, fold_of, median_speed, run_round, Model};
 use super::locate::locate;
@@ -23,7 +25,13 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-fn library(opts: &Options, z_min_m: f64, span_m: f64, harmonics: usize) -> Vec<Extra> {
+fn library(
+    opts: &Options,
+    n_materials: usize,
+    z_min_m: f64,
+    span_m: f64,
+    harmonics: usize,
+) -> Vec<Extra> {
     let mut out = Vec::new();
     for c in &opts.candidates {
         match c.as_str() {
@@ -33,8 +41,14 @@ fn library(opts: &Options, z_min_m: f64, span_m: f64, harmonics: usize) -> Vec<E
             }
             "rolling_resistance" => out.push(Extra::RollingResistance),
             "groove_tilt" => out.push(Extra::GrooveTilt),
-            "velocity_dependent_friction" => out.push(Extra::VelocityFriction),
-            "position_dependent_force" => out.push(Extra::PositionForce { harmonics, z_min_m, span_m }),
+            "velocity_dependent_friction" => out.push(Extra::VelocityFriction {
+                materials: n_materials,
+            }),
+            "position_dependent_force" => out.push(Extra::PositionForce {
+                harmonics,
+                z_min_m,
+                span_m,
+            }),
             _ => {}
         }
     }
@@ -55,7 +69,10 @@ fn drift_points(runs: &[RunData], fits: &[PerRunFit], materials: &[String]) -> V
         .collect()
 }
 
-fn drift_lines(points: &[DriftPoint], materials: &[String]) -> BTreeMap<String, super::drift::Line> {
+fn drift_lines(
+    points: &[DriftPoint],
+    materials: &[String],
+) -> BTreeMap<String, super::drift::Line> {
     let mut out = BTreeMap::new();
     for m in materials {
         let p: Vec<&DriftPoint> = points.iter().filter(|p| &p.material == m).collect();
@@ -140,13 +157,30 @@ fn settings(opts: &Options) -> Settings {
 }
 
 /// Choose the Fourier basis size of the position-dependent force by cross-validation against `current`.
-fn position_harmonics(current: &Model, opts: &Options, materials: &[String], runs: &[RunData], fold: &[usize], z_min_m: f64, span_m: f64) -> usize {
+fn position_harmonics(
+    current: &Model,
+    opts: &Options,
+    materials: &[String],
+    runs: &[RunData],
+    fold: &[usize],
+    z_min_m: f64,
+    span_m: f64,
+) -> usize {
     let mut best = (opts.position_harmonics[0], f64::INFINITY);
     if opts.position_harmonics.len() == 1 {
         return best.0;
     }
     for &h in &opts.position_harmonics {
-        let m = current.extend(&Extra::PositionForce { harmonics: h, z_min_m, span_m }, materials, runs, 40);
+        let m = current.extend(
+            &Extra::PositionForce {
+                harmonics: h,
+                z_min_m,
+                span_m,
+            },
+            materials,
+            runs,
+            40,
+        );
         let cv = cross_validate(&m.spec, &m.params, runs, &m.fit, fold, opts.folds);
         if cv.cv_rms_m < best.1 {
             best = (h, cv.cv_rms_m);
@@ -159,28 +193,65 @@ fn position_harmonics(current: &Model, opts: &Options, materials: &[String], run
 pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
     let (mut runs, materials) = prepare_runs(recordings, opts.min_frames);
     if runs.len() < 2 * opts.folds.max(2) {
-        return empty(opts, runs.len(), materials, "too few single runs for a joint model and cross-validation: nothing tested");
+        return empty(
+            opts,
+            runs.len(),
+            materials,
+            "too few single runs for a joint model and cross-validation: nothing tested",
+        );
     }
     let s = (opts.groove_angle_deg.to_radians() / 2.0).sin();
-    let base_spec = Spec { n_materials: materials.len(), s, k: opts.k, extras: vec![] };
+    let base_spec = Spec {
+        n_materials: materials.len(),
+        s,
+        k: opts.k,
+        extras: vec![],
+    };
     let base_params = base_spec.global_params(&materials);
     let per_run = measure_noise(&mut runs, &base_spec, &base_params);
     let mut g0 = Vec::new();
     for m in 0..materials.len() {
-        g0.push(median(runs.iter().zip(&per_run).filter(|(r, _)| r.material == m).map(|(_, f)| f.mu).collect()));
+        g0.push(median(
+            runs.iter()
+                .zip(&per_run)
+                .filter(|(r, _)| r.material == m)
+                .map(|(_, f)| f.mu)
+                .collect(),
+        ));
     }
     for m in 0..materials.len() {
-        g0.push(median(runs.iter().zip(&per_run).filter(|(r, _)| r.material == m).map(|(_, f)| f.t_s).collect()));
+        g0.push(median(
+            runs.iter()
+                .zip(&per_run)
+                .filter(|(r, _)| r.material == m)
+                .map(|(_, f)| f.t_s)
+                .collect(),
+        ));
     }
     let l0: Vec<[f64; N_LOCAL]> = per_run.iter().map(|f| f.local).collect();
     let baseline = Model::fit(base_spec.clone(), &materials, &runs, &g0, &l0, 80);
     let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
-    let base_cv = cross_validate(&baseline.spec, &baseline.params, &runs, &baseline.fit, &fold, opts.folds);
+    let base_cv = cross_validate(
+        &baseline.spec,
+        &baseline.params,
+        &runs,
+        &baseline.fit,
+        &fold,
+        opts.folds,
+    );
     let vref = median_speed(&baseline.fit.local);
     let (zmin, zmax) = runs
         .iter()
-        .flat_map(|r| r.z_m.iter().zip(&r.keep).filter(|(_, k)| **k).map(|(z, _)| *z))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| (a.min(z), b.max(z)));
+        .flat_map(|r| {
+            r.z_m
+                .iter()
+                .zip(&r.keep)
+                .filter(|(_, k)| **k)
+                .map(|(z, _)| *z)
+        })
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
+            (a.min(z), b.max(z))
+        });
     let span = (zmax - zmin).max(1e-6);
     let probes = vec![
         Extra::SpeedDriftT { v_ref_mps: vref },
@@ -198,21 +269,40 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
     let mut round = 0;
     loop {
         round += 1;
-        let uses_position = opts.candidates.iter().any(|c| c == "position_dependent_force")
-            && !accepted_effects.iter().any(|e| e == "position_dependent_force");
+        let uses_position = opts
+            .candidates
+            .iter()
+            .any(|c| c == "position_dependent_force")
+            && !accepted_effects
+                .iter()
+                .any(|e| e == "position_dependent_force");
         let harmonics = if uses_position {
             position_harmonics(&current, opts, &materials, &runs, &fold, zmin, span)
         } else {
             1
         };
-        let entries: Vec<Extra> = library(opts, zmin, span, harmonics)
+        let entries: Vec<Extra> = library(opts, materials.len(), zmin, span, harmonics)
             .into_iter()
-            .filter(|e| !accepted_effects.iter().any(|a| Some(a.as_str()) == e.effect()))
+            .filter(|e| {
+                !accepted_effects
+                    .iter()
+                    .any(|a| Some(a.as_str()) == e.effect())
+            })
             .collect();
         if entries.is_empty() {
             break;
         }
-        let r = run_round(round, &current, &current_cv, &entries, &probes, &materials, &runs, opts, &fold);
+        let r = run_round(
+            round,
+            &current,
+            &current_cv,
+            &entries,
+            &probes,
+            &materials,
+            &runs,
+            opts,
+            &fold,
+        );
         table.extend(r.rows.iter().cloned());
         table.extend(r.probe_rows.iter().cloned());
         if let Some(last) = accepted.last_mut() {
@@ -223,7 +313,11 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
                 let before = current.score(&runs, Some(&current_cv));
                 let after = model.score(&runs, Some(&cv));
                 let mut row = r.rows[i].clone();
-                row.evidence.decision = format!("{} (flagged by {} probe(s))", row.evidence.decision, r.flagged_probes.len());
+                row.evidence.decision = format!(
+                    "{} (flagged by {} probe(s))",
+                    row.evidence.decision,
+                    r.flagged_probes.len()
+                );
                 accepted_effects.push(row.effect.clone());
                 accepted.push((row, before, after, vec![]));
                 current = model;
@@ -245,7 +339,13 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
     let residuals_after = locate(&current.spec, &current.fit, &runs, &materials);
     // per-run drift with the final model's extra terms held at their joint values
     let extra_values: Vec<f64> = current.fit.global[2 * materials.len()..].to_vec();
-    let after_fits = fit_each_run(&runs, &current.spec, &current.params, &extra_values, Some(&per_run));
+    let after_fits = fit_each_run(
+        &runs,
+        &current.spec,
+        &current.params,
+        &extra_values,
+        Some(&per_run),
+    );
     let before_pts = drift_points(&runs, &per_run, &materials);
     let after_pts = drift_points(&runs, &after_fits, &materials);
     let drift = Drift {
@@ -265,7 +365,10 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
             .collect();
         w.insert("drift_probes_before".to_string(), probes_json(&flagged));
         w.insert("drift_probes_after".to_string(), probes_json(probes_after));
-        w.insert("residuals_before".to_string(), worst_bins(&residuals_before));
+        w.insert(
+            "residuals_before".to_string(),
+            worst_bins(&residuals_before),
+        );
         findings.push(finding(row, before.clone(), after.clone(), w));
     }
     let final_score = current.score(&runs, Some(&current_cv));
@@ -286,22 +389,47 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
         findings.push(Finding {
             effect: "unexplained".into(),
             accepted: false,
-            form: unexplained.iter().map(|r| r.form.clone()).collect::<Vec<_>>().join("; "),
+            form: unexplained
+                .iter()
+                .map(|r| r.form.clone())
+                .collect::<Vec<_>>()
+                .join("; "),
             parameters,
             evidence: strongest.evidence.clone(),
             where_: w,
             baseline: final_score.clone(),
-            extended: ModelScore { cv_rms_m: f64::NAN, ..final_score.clone() },
+            extended: ModelScore {
+                cv_rms_m: f64::NAN,
+                ..final_score.clone()
+            },
         });
     }
     for row in &last_rows {
         let mut w = BTreeMap::new();
         w.insert("drift_probes".to_string(), probes_json(&last_probes));
-        findings.push(finding(row, final_score.clone(), ModelScore { cv_rms_m: row.evidence.cv_rms_m.unwrap_or(f64::NAN), ..Default::default() }, w));
+        findings.push(finding(
+            row,
+            final_score.clone(),
+            ModelScore {
+                cv_rms_m: row.evidence.cv_rms_m.unwrap_or(f64::NAN),
+                ..Default::default()
+            },
+            w,
+        ));
     }
     let mut model_parameters = BTreeMap::new();
-    for (p, (v, se)) in current.params.iter().zip(current.fit.global.iter().zip(&current.fit.global_se)) {
-        model_parameters.insert(p.name.clone(), Estimate { value: *v, stderr: *se });
+    for (p, (v, se)) in current
+        .params
+        .iter()
+        .zip(current.fit.global.iter().zip(&current.fit.global_se))
+    {
+        model_parameters.insert(
+            p.name.clone(),
+            Estimate {
+                value: *v,
+                stderr: *se,
+            },
+        );
     }
     Diagnosis {
         mismatch: !accepted.is_empty() || !unexplained.is_empty(),

@@ -86,10 +86,16 @@ impl SimModel {
             });
         }
         Model {
-            groove: Groove { s: self.s, k: self.k },
+            groove: Groove {
+                s: self.s,
+                k: self.k,
+            },
             friction: match self.vc_mps {
                 None => Friction::Constant { mu: self.mu },
-                Some(v_c_mps) => Friction::VelocityDependent { mu_inf: self.mu, v_c_mps },
+                Some(v_c_mps) => Friction::VelocityDependent {
+                    mu_inf: self.mu,
+                    v_c_mps,
+                },
             },
             terms,
         }
@@ -165,14 +171,7 @@ impl SimModel {
 
     /// Fraction f in (0, 1] of a step of size h at which `g(state)` crosses zero (g(x) ≠ 0 at f = 0),
     /// by the Illinois variant of regula falsi on RK4 sub-steps from `x`.
-    fn locate(
-        &self,
-        x: St,
-        h: f64,
-        motion: Motion,
-        d: f64,
-        g: impl Fn(St) -> f64,
-    ) -> (f64, St) {
+    fn locate(&self, x: St, h: f64, motion: Motion, d: f64, g: impl Fn(St) -> f64) -> (f64, St) {
         let (mut a, mut ga) = (0.0, g(x));
         let end = self.rk4(x, h, motion, d);
         let (mut b, mut gb) = (1.0, g(end));
@@ -309,7 +308,11 @@ impl SimModel {
                         // stop lies in this step when the current deceleration reaches v = 0
                         // (RK4 stages straddling the sign change would stall just short of it)
                         let dv = self.deriv_roll(x).1;
-                        let tau = if dv * x.v < 0.0 { -x.v / dv } else { f64::INFINITY };
+                        let tau = if dv * x.v < 0.0 {
+                            -x.v / dv
+                        } else {
+                            f64::INFINITY
+                        };
                         if self.roll_c > 0.0 && (tau <= h || next.v * x.v < 0.0) {
                             let tau = tau.min(h);
                             let xs = self.rk4(x, tau, motion, d);

@@ -2,7 +2,9 @@
 // groove:uses src/discover src/physics src/fit src/recording.rs src/stages/discover.rs
 
 use crate::discover::{discover, Options};
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::recording::Recording;
 
 /// Finds missing physics over all single runs (issue 5).
@@ -10,7 +12,8 @@ pub struct Discover;
 
 fn options(params: &toml::Table) -> Result<(Options, serde_json::Value), ParamError> {
     let (opts, json): (Options, _) = typed_params(params)?;
-    opts.validate().map_err(|(key, message)| ParamError { key, message })?;
+    opts.validate()
+        .map_err(|(key, message)| ParamError { key, message })?;
     Ok((opts, json))
 }
 
@@ -37,8 +40,11 @@ impl StageKind for Discover {
         };
         let mut recordings = Vec::with_capacity(items.len());
         for (name, bytes) in items {
-            let rec: Recording = serde_json::from_slice(bytes)
-                .map_err(|e| StageError(format!("run `{name}`: not a recording ({e}); re-run ingest")))?;
+            let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
+                StageError(format!(
+                    "run `{name}`: not a recording ({e}); re-run ingest"
+                ))
+            })?;
             recordings.push(rec);
         }
         // the per-run fits are not re-read: discovery refits every run with its own integrator to

@@ -47,8 +47,14 @@ impl Truth {
             mu: self.mu[material],
             vc_mps: self.vc_mps,
             drag: match self.sat_tp {
-                Some(tp) => Drag::Saturating { t0_s: self.t_s, tp_s_per_mps: tp },
-                None => Drag::Quadratic { t_s: self.t_s, c_per_m: self.quad_c_per_m },
+                Some(tp) => Drag::Saturating {
+                    t0_s: self.t_s,
+                    tp_s_per_mps: tp,
+                },
+                None => Drag::Quadratic {
+                    t_s: self.t_s,
+                    c_per_m: self.quad_c_per_m,
+                },
             },
             roll_c: self.roll_c,
             tilt_mps2: -G_MPS2 * self.tilt_deg.to_radians().sin(),
@@ -68,7 +74,12 @@ pub struct Shape {
     pub shuffle: bool,
 }
 
-pub const SMALL: Shape = Shape { runs: 24, frames: 400, outliers: false, shuffle: false };
+pub const SMALL: Shape = Shape {
+    runs: 24,
+    frames: 400,
+    outliers: false,
+    shuffle: false,
+};
 
 pub fn synthesize(truth: &Truth, shape: &Shape, seed: u64) -> Vec<Recording> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -83,7 +94,9 @@ pub fn synthesize(truth: &Truth, shape: &Shape, seed: u64) -> Vec<Recording> {
             let mut t: Vec<f64> = (0..shape.frames).map(|k| k as f64 / fps).collect();
             let tt: Vec<f64> = t.iter().map(|x| x + t0).collect();
             let mut z = vec![0.0; t.len()];
-            truth.model(material).simulate(z0, dir * speed, &tt, &mut z, None, None);
+            truth
+                .model(material)
+                .simulate(z0, dir * speed, &tt, &mut z, None, None);
             for zi in z.iter_mut() {
                 *zi += 1e-6 * rng.sample::<f64, _>(StandardNormal);
                 if shape.outliers && rng.random::<f64>() < 0.005 {
@@ -109,9 +122,13 @@ pub fn synthesize(truth: &Truth, shape: &Shape, seed: u64) -> Vec<Recording> {
                     setup: None,
                     extra: BTreeMap::new(),
                 },
-                tracks: vec![Track { particle: 0, frame, t_s: t, z_m: z }],
+                tracks: vec![Track {
+                    particle: 0,
+                    frame,
+                    t_s: t,
+                    z_m: z,
+                }],
             }
         })
         .collect()
 }
-
