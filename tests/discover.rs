@@ -20,7 +20,7 @@ use discover_data::{synthesize, Shape, Truth, S, SMALL};
 fn fast_options(seed: u64) -> Options {
     Options {
         bootstrap: 12,
-        bootstrap_iterations: 3,
+        bootstrap_iterations: 5,
         folds: 4,
         position_harmonics: vec![1, 2],
         max_terms: 2,

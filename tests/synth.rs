@@ -332,3 +332,23 @@ phase_rad = 0.0
     assert_eq!(tables.runs_csv.lines().count(), 1 + 6 * 2);
     assert!(tables.trajectories_csv.lines().count() > 12 * 500);
 }
+
+#[test]
+fn shipped_dataset_ingests_cleanly() {
+    use groove::recording::{Experiment, Setup};
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let recs = groove::ingest::read_dataset_dir(&dir, &Default::default())
+        .unwrap_or_else(|e| panic!("shipped data must ingest: {e}"));
+    assert_eq!(recs.len(), 2 * 48 + 4 * 12);
+    for r in &recs {
+        match r.info.experiment {
+            Experiment::Single => assert!(r.tracks.len() == 1 && r.info.setup.is_none()),
+            Experiment::Collision => assert!(
+                r.tracks.len() == 2
+                    && matches!(r.info.setup, Some(Setup::Rolling | Setup::Contact))
+            ),
+        }
+        assert_eq!(r.info.fps, 10_000.0);
+        assert!((r.info.diameter_m - 3e-4).abs() < 1e-12);
+    }
+}

@@ -101,6 +101,17 @@ impl Model {
     }
 }
 
+/// Starting values of a term's parameters: where it vanishes, plus a few for a nonlinear scale.
+pub fn extra_starts(extra: &Extra) -> Vec<Vec<f64>> {
+    match extra {
+        Extra::VelocityFriction { materials } => [1e-4f64, 2e-3, 2e-2]
+            .iter()
+            .map(|v| vec![v.ln(); *materials])
+            .collect(),
+        e => vec![e.params().iter().map(|p| p.start).collect()],
+    }
+}
+
 /// The parameters of extra term `i` of `m`, in SI units with physical names.
 pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<String, Estimate> {
     let off = m.spec.extra_offset(i);
@@ -213,10 +224,14 @@ pub fn run_round(
     let alts: Vec<Alternative> = all
         .iter()
         .zip(&fitted)
-        .map(|(e, m)| Alternative {
-            spec: m.spec.clone(),
-            params: m.params.clone(),
-            null_extra: e.params().iter().map(|p| p.start).collect(),
+        .map(|(e, m)| {
+            let mut extra_starts = extra_starts(e);
+            extra_starts.push(m.fit.global[current.spec.n_global()..].to_vec());
+            Alternative {
+                spec: m.spec.clone(),
+                params: m.params.clone(),
+                extra_starts,
+            }
         })
         .collect();
     let seed = opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
