@@ -186,7 +186,10 @@ fn rolling_setup_first_impact_both_directions() {
             // drag: every segment's T within 3 standard errors (short runs constrain it weakly)
             for seg in &fit.segments {
                 let (t, se) = (seg.t_drag_s.value, seg.t_drag_s.se.unwrap());
-                assert!((t - T_DRAG_S).abs() < 3.0 * se && se < 0.5 * T_DRAG_S, "T {t} ± {se}");
+                assert!(
+                    (t - T_DRAG_S).abs() < 3.0 * se && se < 0.5 * T_DRAG_S,
+                    "T {t} ± {se}"
+                );
             }
         }
     }
@@ -251,7 +254,18 @@ fn mu_pp_from_slip_impacts_within_ten_percent() {
             };
             let (fit, truth, info) = fit(&case);
             assert!(truth[0].slip, "the test needs slip impacts");
-            let im = &fit.impacts[0]; assert_eq!(im.contact, Contact::Slip, "seed {seed}: sums {} -> {:?}, before {:?} after {:?} / {:?} {:?}", im.spin_sum_before_mps, im.spin_sum_after_mps, im.striker_before, im.striker_after, im.target_before, im.target_after);
+            let im = &fit.impacts[0];
+            assert_eq!(
+                im.contact,
+                Contact::Slip,
+                "seed {seed}: sums {} -> {:?}, before {:?} after {:?} / {:?} {:?}",
+                im.spin_sum_before_mps,
+                im.spin_sum_after_mps,
+                im.striker_before,
+                im.striker_after,
+                im.target_before,
+                im.target_after
+            );
             fits.push((info, fit));
         }
         let summary = summarize_seeded(&fits, 2.5, 7);
