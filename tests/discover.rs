@@ -455,3 +455,27 @@ fn stage_writes_the_contract_deterministically() {
         err.message
     );
 }
+
+#[test]
+fn a_mismatch_no_candidate_explains_is_reported_unexplained() {
+    // saturating drag, but only a tilt may be tried: the T-vs-|v0| probe must flag what is left
+    let truth = Truth {
+        sat_tp: Some(1.1),
+        t_s: 0.052,
+        ..Truth::baseline()
+    };
+    let opts = Options {
+        candidates: vec!["groove_tilt".into()],
+        ..fast_options(8)
+    };
+    let d = discover(&synthesize(&truth, &SMALL, 8), &opts);
+    assert!(accepted(&d).is_empty(), "accepted {:?}", accepted(&d));
+    assert!(d.mismatch);
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.effect == "unexplained")
+        .expect("an unexplained finding");
+    assert!(f.form.contains("T drifts with |v0|"), "{}", f.form);
+    assert!(f.where_.contains_key("residuals"));
+}

@@ -11,9 +11,9 @@ use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
 /// A larger model to test against the null: its spec, parameters, and the starting values of its
-/// extra parameters. The replicates are refitted from the same starts as the data (those where the
-/// term vanishes, any multi-starts, and the values fitted to the data), keeping the best: a
-/// replicate searched less thoroughly than the data would make the test anti-conservative.
+/// extra parameters. The replicates are refitted from the same starts as the data (where the term
+/// vanishes, plus the multi-starts of a nonlinear scale), keeping the best: a replicate searched
+/// less thoroughly than the data would make the test anti-conservative.
 pub struct Alternative {
     pub spec: Spec,
     pub params: Vec<ParamInfo>,

@@ -224,14 +224,10 @@ pub fn run_round(
     let alts: Vec<Alternative> = all
         .iter()
         .zip(&fitted)
-        .map(|(e, m)| {
-            let mut extra_starts = extra_starts(e);
-            extra_starts.push(m.fit.global[current.spec.n_global()..].to_vec());
-            Alternative {
-                spec: m.spec.clone(),
-                params: m.params.clone(),
-                extra_starts,
-            }
+        .map(|(e, m)| Alternative {
+            spec: m.spec.clone(),
+            params: m.params.clone(),
+            extra_starts: extra_starts(e),
         })
         .collect();
     let seed = opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
@@ -260,8 +256,30 @@ pub fn run_round(
     let p_holm_p = holm(&p[ne..]);
     // the held-out check confirms a term the LR test already found; one-sided 5 % on the paired t
     let z_cv = normal_upper_quantile(CV_LEVEL);
-    let mut rows = Vec::new();
+    // cross-validate the significant candidates strongest first; the first that also predicts
+    // held-out runs better is the one accepted, so weaker ones need no cross-validation
+    let mut order: Vec<usize> = (0..ne).filter(|i| p_holm_e[*i] < opts.alpha).collect();
+    order.sort_by(|a, b| lr[*b].total_cmp(&lr[*a]).then(a.cmp(b)));
+    let mut cv_of: Vec<Option<(CvResult, f64)>> = vec![None; ne];
     let mut best: Option<(usize, CvResult)> = None;
+    for &i in &order {
+        let cv = cross_validate(
+            &fitted[i].spec,
+            &fitted[i].params,
+            runs,
+            &fitted[i].fit,
+            fold,
+            opts.folds,
+        );
+        let t = paired_t(current_cv, &cv);
+        let passes = cv.cv_rms_m < current_cv.cv_rms_m && t > z_cv;
+        cv_of[i] = Some((cv.clone(), t));
+        if passes {
+            best = Some((i, cv));
+            break;
+        }
+    }
+    let mut rows = Vec::new();
     for (i, e) in all.iter().enumerate() {
         let is_probe = i >= ne;
         let p_holm = if is_probe {
@@ -282,35 +300,26 @@ pub fn run_round(
             cv_rms_m: None,
             decision: String::new(),
         };
-        if !is_probe && p_holm < opts.alpha {
-            let cv = cross_validate(
-                &fitted[i].spec,
-                &fitted[i].params,
-                runs,
-                &fitted[i].fit,
-                fold,
-                opts.folds,
-            );
-            let t = paired_t(current_cv, &cv);
-            ev.cv_paired_t = Some(t);
-            ev.cv_rms_m = Some(cv.cv_rms_m);
-            if cv.cv_rms_m < current_cv.cv_rms_m && t > z_cv {
-                ev.decision = "passes: bootstrap LR test and held-out runs".into();
-                if best.as_ref().map(|(b, _)| lr[i] > lr[*b]).unwrap_or(true) {
-                    best = Some((i, cv));
-                }
+        ev.decision = if is_probe {
+            if p_holm < opts.alpha {
+                "probe flags a mismatch"
             } else {
-                ev.decision = "rejected: held-out runs do not improve".into();
+                "probe: no drift"
             }
-        } else if is_probe {
-            ev.decision = if p_holm < opts.alpha {
-                "probe flags a mismatch".into()
+            .into()
+        } else if p_holm >= opts.alpha {
+            "rejected: likelihood ratio within the bootstrap null".into()
+        } else if let Some((cv, t)) = &cv_of[i] {
+            ev.cv_paired_t = Some(*t);
+            ev.cv_rms_m = Some(cv.cv_rms_m);
+            if best.as_ref().map(|(b, _)| *b == i).unwrap_or(false) {
+                "passes: bootstrap LR test and held-out runs".into()
             } else {
-                "probe: no drift".into()
-            };
+                "rejected: held-out runs do not improve".into()
+            }
         } else {
-            ev.decision = "rejected: likelihood ratio within the bootstrap null".into();
-        }
+            "significant, not cross-validated: a stronger term passed both tests".into()
+        };
         rows.push(row(round, e, &fitted[i], materials, ev));
     }
     let accepted = best.map(|(i, cv)| {

@@ -74,7 +74,7 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             bootstrap: 24,
-            bootstrap_iterations: 6,
+            bootstrap_iterations: 4,
             alpha: 0.01,
             folds: 5,
             candidates: EFFECTS.iter().map(|s| s.to_string()).collect(),
