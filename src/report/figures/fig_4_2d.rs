@@ -1,0 +1,52 @@
+//! Fig. 4.2d: fitted μ_pg against |v0| for each material, our means for |v0| > 0.03 m/s (solid) and the
+//! chapter's means (dashed).
+
+use super::common::{error_bars, legend, line, linear_chart, render, scatter, span};
+use crate::report::inputs::ReportData;
+use crate::report::summary::mu_fast;
+use crate::report::{chapter, style};
+use plotters::prelude::*;
+
+/// Render Fig. 4.2d, or None without single-run fits.
+pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
+    let mats: Vec<String> = d.materials().into_iter().filter(|m| d.singles_of(m).next().is_some()).collect();
+    if mats.is_empty() {
+        return Ok(None);
+    }
+    let x_max = span(d.singles.iter().map(|r| r.v0_mps.value.abs()), 0.05).1.max(0.01);
+    let mut ys: Vec<f64> = d.singles.iter().filter(|r| r.converged()).map(|r| r.mu.value).collect();
+    ys.extend([chapter::MU_316, chapter::MU_440C]);
+    let (lo, hi) = span(ys, 0.08);
+    let yr = (lo.min(0.2), hi.max(0.4));
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            "Fig. 4.2d: particle–groove friction against initial speed",
+            (0.0, x_max),
+            yr,
+            "initial speed |v0| (m/s)",
+            "fitted friction coefficient μ_pg (1)",
+        )?;
+        let t = chapter::MU_MEAN_V0_MIN_MPS;
+        line(&mut c, vec![(t, yr.0), (t, yr.1)], style::GREY, 1, true, None)?;
+        for (i, m) in mats.iter().enumerate() {
+            let col = style::material_colour(m, i);
+            let pts: Vec<(f64, f64)> = d.singles_of(m).map(|r| (r.v0_mps.value.abs(), r.mu.value)).collect();
+            let bars: Vec<(f64, f64, f64)> = d
+                .singles_of(m)
+                .filter_map(|r| Some((r.v0_mps.value.abs(), r.mu.value, r.mu.stderr?)))
+                .collect();
+            error_bars(&mut c, &bars, col)?;
+            scatter(&mut c, &pts, style::marker(m, false), col, true, Some(&format!("{m}: fitted μ_pg")))?;
+            if let Some(a) = mu_fast(d, m) {
+                let v = a.est.value;
+                line(&mut c, vec![(t, v), (x_max, v)], col, 3, false, Some(&format!("{m}: our mean {v:.3}")))?;
+            }
+            if let Some(v) = chapter::mu_for(m) {
+                line(&mut c, vec![(t, v), (x_max, v)], col, 2, true, Some(&format!("{m}: chapter {v:.3}")))?;
+            }
+        }
+        legend(&mut c, SeriesLabelPosition::LowerRight)
+    })?;
+    Ok(Some(svg))
+}

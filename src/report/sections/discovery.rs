@@ -1,0 +1,164 @@
+//! Section 4: discovery — where the mismatch is, the candidates and their evidence, the accepted
+//! physics, before/after figures, and a comparison with the chapter's own correction (Eq. 4.8).
+
+use super::{Block, Table};
+use crate::report::chapter as ch;
+use crate::report::inputs::ReportData;
+use crate::report::value::{as_num, num, sig, text};
+use serde_json::Value;
+use std::collections::BTreeMap;
+
+/// A compact one-line rendering of a JSON value: `a = 1.2; b.c = yes` (at most `max` entries).
+pub fn short(v: &Value, max: usize) -> String {
+    let mut parts = Vec::new();
+    flatten(v, String::new(), &mut parts);
+    let more = parts.len().saturating_sub(max);
+    parts.truncate(max);
+    let mut s = parts.join("; ");
+    if more > 0 {
+        s.push_str(&format!("; … {more} more"));
+    }
+    if s.is_empty() {
+        "—".into()
+    } else {
+        s
+    }
+}
+
+fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
+    let name = |p: &str| if p.is_empty() { "value".to_string() } else { p.replace('_', " ") };
+    match v {
+        Value::Object(m) => {
+            for (k, x) in m {
+                let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                flatten(x, p, out);
+            }
+        }
+        Value::Array(a) if a.iter().all(|x| x.is_number()) && a.len() <= 4 => {
+            let xs: Vec<String> = a.iter().filter_map(as_num).map(|x| sig(x, 3)).collect();
+            out.push(format!("{} = [{}]", name(&path), xs.join(", ")));
+        }
+        Value::Array(a) => out.push(format!("{}: {} entries", name(&path), a.len())),
+        Value::Number(_) => out.push(format!("{} = {}", name(&path), as_num(v).map_or("—".into(), |x| sig(x, 4)))),
+        Value::Bool(b) => out.push(format!("{} = {}", name(&path), if *b { "yes" } else { "no" })),
+        Value::String(s) => out.push(format!("{} = {s}", name(&path))),
+        Value::Null => {}
+    }
+}
+
+/// `name = value ± stderr` for each parameter of a finding.
+pub fn params_text(f: &Value) -> String {
+    let Some(Value::Object(ps)) = f.get("parameters") else { return "—".into() };
+    let parts: Vec<String> = ps
+        .iter()
+        .map(|(k, p)| {
+            let v = as_num(p).map_or("—".into(), |x| sig(x, 4));
+            match num(p, &["stderr", "se"]) {
+                Some(se) => format!("{k} = {v} ± {}", sig(se, 2)),
+                None => format!("{k} = {v}"),
+            }
+        })
+        .collect();
+    if parts.is_empty() {
+        "—".into()
+    } else {
+        parts.join(", ")
+    }
+}
+
+fn param(f: &Value, names: &[&str]) -> Option<f64> {
+    f.get("parameters").and_then(|p| num(p, names))
+}
+
+/// How an accepted finding relates to the chapter's Eq. 4.8 correction, in words and numbers.
+fn compare_with_eq_4_8(f: &Value) -> String {
+    let effect = text(f, &["effect"]).unwrap_or("");
+    let form = text(f, &["form"]).unwrap_or("").to_ascii_lowercase();
+    let v_star = ch::L_M / ch::T0_S * 1e3;
+    match effect {
+        "velocity_dependent_drag" if form.contains("satur") => {
+            let t0 = param(f, &["t0_s", "T0_s", "T0"]);
+            let tp = param(f, &["tp_s_per_mps", "t_prime_s_per_mps", "Tp_s_per_mps", "tp"]);
+            format!(
+                "The accepted drag v/(T0 + T'|v|) is the form the chapter's line T = T0 + T'·v0 suggests before Eq. 4.7 truncates it. Ours: T0 = {}, T' = {} (chapter 0.052 s and 1.10 s per m/s). Unlike Eq. 4.8's v/T0 − v²/L, it stays dissipative at every speed; Eq. 4.8 turns into propulsion above L/T0 = {v_star:.0} mm/s.",
+                t0.map_or("—".into(), |x| format!("{} s", sig(x, 3))),
+                tp.map_or("—".into(), |x| format!("{} s per m/s", sig(x, 3)))
+            )
+        }
+        "velocity_dependent_drag" => {
+            let c = param(f, &["c_per_m", "c"]);
+            format!(
+                "The accepted quadratic drag c·v|v| has c = {} (Eq. 4.8's −v²/L corresponds to c = −1/L = −400 per m). A fitted sign and size, unlike Eq. 4.8's, is what the data support; Eq. 4.8 with L = 2.5 mm changes sign at {v_star:.0} mm/s.",
+                c.map_or("—".into(), |x| format!("{} per m", sig(x, 3)))
+            )
+        }
+        "rolling_resistance" => format!(
+            "A constant resistance c·g opposing motion also makes the fitted linear-drag T grow with v0, the signature the chapter read as a quadratic drag term (Eq. 4.8). Discovery tested both as candidates and the evidence selects rolling resistance (deceleration {}); Eq. 4.8's v/T0 − v²/L would in addition change sign at {v_star:.0} mm/s.",
+            param(f, &["deceleration_mps2", "c_g_mps2", "a_mps2", "decel_mps2"]).map_or("see the table".into(), |x| format!("{} m/s²", sig(x, 3)))
+        ),
+        _ => format!(
+            "Eq. 4.8 corrects only the drag (v/T0 − v²/L); the accepted {} is a different physical effect that the chapter's model does not contain.",
+            effect.replace('_', " ")
+        ),
+    }
+}
+
+pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
+    let mut b = Block::new("discovery", "4. Discovery");
+    let Some(diag) = &d.diagnosis else {
+        b.missing = Some("discovery did not run for this report (no diagnosis.json)".into());
+        return b;
+    };
+    let mismatch = diag.get("mismatch").and_then(Value::as_bool).unwrap_or(false);
+    let findings: Vec<&Value> = diag.get("findings").and_then(Value::as_array).map(|a| a.iter().collect()).unwrap_or_default();
+    let accepted: Vec<&&Value> = findings.iter().filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true)).collect();
+    b.para(if mismatch {
+        "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."
+    } else {
+        "No systematic mismatch: the pooled residuals and the per-run parameters show no structure beyond the noise, so nothing is missing from the baseline."
+    });
+    for f in &findings {
+        if let Some(w) = f.get("where").filter(|w| !w.is_null() && w.as_object().is_none_or(|o| !o.is_empty())) {
+            let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
+            b.para(format!("Where ({effect}): {}.", short(w, 8)));
+            break;
+        }
+    }
+    let mut t = Table::new("Every candidate: evidence and fitted size (accepted first)", &[
+        "effect", "form", "accepted", "parameters", "evidence", "held-out RMS (µm): baseline → extended",
+    ]);
+    for f in &findings {
+        let cv = |k: &str| f.get(k).and_then(|x| num(x, &["cv_rms_m"])).map(|x| format!("{:.3}", x * 1e6));
+        t.push(vec![
+            text(f, &["effect"]).unwrap_or("?").replace('_', " "),
+            text(f, &["form"]).unwrap_or("—").to_string(),
+            (if f.get("accepted").and_then(Value::as_bool) == Some(true) { "yes" } else { "no" }).into(),
+            params_text(f),
+            f.get("evidence").map_or("—".into(), |e| short(e, 6)),
+            match (cv("baseline"), cv("extended")) {
+                (Some(a), Some(e)) => format!("{a} → {e}"),
+                _ => "—".into(),
+            },
+        ]);
+    }
+    if !t.rows.is_empty() {
+        b.tables.push(t);
+    }
+    if accepted.is_empty() {
+        b.para(if mismatch {
+            "No candidate explains the mismatch well enough to be accepted (see the unexplained finding, if any, for where it is)."
+        } else {
+            "No candidate term was accepted."
+        });
+    } else {
+        let names: Vec<String> = accepted.iter().map(|f| text(f, &["effect"]).unwrap_or("?").replace('_', " ")).collect();
+        b.para(format!("Accepted physics: {}.", names.join(", ")));
+    }
+    b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");
+    b.figure(figs, "fig_discovery_drift.svg", "The drift that flagged the mismatch: fitted T against |v0| for the baseline (grey) and for the extended model (green), with regression lines.");
+    b.para(match accepted.first() {
+        Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(f)),
+        None => "Comparison with the chapter's correction (Eq. 4.8): with nothing accepted there is no extended model to compare; Eq. 4.8's v/T0 − v²/L is in any case unphysical above L/T0 ≈ 48 mm/s (see the audit).".into(),
+    });
+    b
+}

@@ -1,0 +1,376 @@
+//! Report tests: figures and pages rendered from small hand-made artifacts; content, self-containment,
+//! well-formedness and byte-identical re-rendering.
+
+use groove::engine::stage::{Artifact, StageInput};
+use groove::physics::{Baseline, Groove};
+use groove::report::{render_figures, render_pages, FigureOptions, ReportData};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+// ---------------------------------------------------------------- fixtures
+
+/// A single run with known parameters, sampled at 10 kHz for 40 ms from the closed form.
+fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, Value, String) {
+    let b = Baseline { mu, t_drag_s: t_drag, groove: Groove::CHAPTER };
+    let (z0, t0) = (1.0e-3, 4.0e-5);
+    let t: Vec<f64> = (0..400).map(|i| i as f64 * 1e-4).collect();
+    let z: Vec<f64> = t.iter().map(|&ti| z0 + b.state(v0, ti + t0).0 + 1e-6 * (ti * 7919.0).sin()).collect();
+    let frame: Vec<i64> = (0..400).collect();
+    let rec = json!({"info": {"run": run, "experiment": "single", "material": material, "diameter_m": 3.0e-4,
+                              "fps": 10000.0, "setup": null, "extra": {}},
+                     "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": z}]});
+    let t1 = b.switch_time_s(v0);
+    let fit = json!({"experiment": "single", "run": run,
+        "params": {"v0_mps": {"value": v0, "stderr": 1e-4}, "mu": {"value": mu, "stderr": 0.004},
+                   "T_s": {"value": t_drag, "stderr": 0.002}, "z0_m": {"value": z0, "stderr": 1e-7},
+                   "t0_s": {"value": t0, "stderr": 1e-6}},
+        "t1_s": t1, "rms_m": 1.0e-6, "status": "converged"});
+    let csv = format!("{run},{material},{v0:.6},0.0001,{mu:.6},0.004,{t_drag:.6},0.002,{t1:.6},0.000001,converged\n");
+    (rec, fit, csv)
+}
+
+fn collision(run: &str, material: &str, setup: &str, speeds: &[(f64, f64, f64, f64)]) -> (Value, Value) {
+    // striker rolls at 0.1 m/s into a target resting 1 mm ahead; after the impact at 5 ms it slows to
+    // 0.01 m/s and the target moves at 0.08 m/s (shapes only matter for the drawing)
+    let t: Vec<f64> = (0..300).map(|i| i as f64 * 1e-4).collect();
+    let zs: Vec<f64> = t.iter().map(|&ti| if ti < 5e-3 { 0.1 * ti } else { 5e-4 + 0.01 * (ti - 5e-3) + 0.0004 * (ti - 5e-3).sqrt() }).collect();
+    let zt: Vec<f64> = t.iter().map(|&ti| if ti < 5e-3 { 8e-4 } else { 8e-4 + 0.08 * (ti - 5e-3) * (1.0 - (ti - 5e-3) * 10.0) }).collect();
+    let frame: Vec<i64> = (0..300).collect();
+    let rec = json!({"info": {"run": run, "experiment": "collision", "material": material, "diameter_m": 3.0e-4,
+                              "fps": 10000.0, "setup": setup, "extra": {}},
+                     "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": zs},
+                                {"particle": 1, "frame": frame, "t_s": t, "z_m": zt}]});
+    let impacts: Vec<Value> = speeds
+        .iter()
+        .enumerate()
+        .map(|(i, &(v1, v2p, va2p, va1))| {
+            json!({"t_s": 5e-3 + i as f64 * 1e-3, "slip": i % 2 == 0,
+                   "pre": {"v_mps": [v1, 0.0], "va_mps": [va1, 0.0]},
+                   "post": {"v_mps": [v1 - v2p * 0.95, v2p], "va_mps": [va1 - va2p, va2p]}})
+        })
+        .collect();
+    let fit = json!({"experiment": "collision", "run": run, "status": "converged", "impacts": impacts,
+        "segments": [{"particle": 0, "t_start_s": 0.0, "t_end_s": 5e-3, "t_switch_s": 2e-3},
+                     {"particle": 0, "t_start_s": 5e-3, "t_end_s": 0.03, "t_switch_s": 9e-3}]});
+    (rec, fit)
+}
+
+struct Fixture {
+    runs: BTreeMap<String, Vec<u8>>,
+    fits: BTreeMap<String, Vec<u8>>,
+    files: BTreeMap<&'static str, Vec<u8>>,
+}
+
+fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
+    let mut runs = BTreeMap::new();
+    let mut fits = BTreeMap::new();
+    let mut csv = String::from("run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status\n");
+    let singles = [
+        ("s316_a", "316", 0.025, 0.337, 0.0795),
+        ("s316_b", "316", 0.05, 0.340, 0.107),
+        ("s316_c", "316", -0.08, 0.334, 0.14),
+        ("s440_a", "440c", 0.02, 0.29, 0.074),
+        ("s440_b", "440c", 0.06, 0.294, 0.118),
+        ("s440_c", "440c", -0.09, 0.292, 0.151),
+    ];
+    for (run, m, v0, mu, t) in singles {
+        let (rec, fit, line) = single(run, m, v0, mu, t);
+        runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+        fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
+        csv.push_str(&line);
+    }
+    if with_collisions {
+        let sets = [
+            ("c316_r", "316", "rolling", vec![(0.1, 0.08, -0.25, 0.17), (0.2, 0.15, -0.5, 0.35)]),
+            ("c316_c", "316", "contact", vec![(0.15, 0.14, -0.2, 0.0)]),
+            ("c440_r", "440c", "rolling", vec![(0.12, 0.1, -0.33, 0.2)]),
+            ("c440_c", "440c", "contact", vec![(0.05, 0.05, -0.1, 0.0)]),
+        ];
+        for (run, m, setup, sp) in sets {
+            let (rec, fit) = collision(run, m, setup, &sp);
+            runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+            fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
+        }
+    }
+    let mut files = BTreeMap::new();
+    files.insert("fits_csv", csv.into_bytes());
+    if with_extras {
+        let summary = json!({"materials": {
+            "316": {"mu": {"value": 0.337, "stderr": 0.002, "interval": [0.333, 0.341]},
+                    "mu_fast": {"value": 0.337, "stderr": 0.003, "interval": [0.331, 0.343]},
+                    "t_line": {"intercept_s": {"value": 0.052, "stderr": 0.003, "interval": [0.047, 0.058]},
+                               "slope_s_per_mps": {"value": 1.1, "stderr": 0.05, "interval": [1.0, 1.2]}}},
+            "440c": {"mu": {"value": 0.292, "stderr": 0.002},
+                     "mu_fast": {"value": 0.293, "stderr": 0.002, "interval": [0.289, 0.297]}}},
+            "collisions": {"mu_pp": {"value": 1.38, "stderr": 0.06, "interval": [1.27, 1.5]}}});
+        let diagnosis = json!({"mismatch": true, "findings": [
+            {"effect": "velocity_dependent_drag", "accepted": true, "form": "saturating",
+             "parameters": {"t0_s": {"value": 0.051, "stderr": 0.002}, "tp_s_per_mps": {"value": 1.12, "stderr": 0.04}},
+             "evidence": {"lr": 85.2, "p_bootstrap": 0.001, "p_holm": 0.004, "cv_improvement": 0.21},
+             "where": {"phase": "rolling", "speed": "all", "drift": "T rises with v0"},
+             "baseline": {"cv_rms_m": 1.31e-6}, "extended": {"cv_rms_m": 1.02e-6}},
+            {"effect": "rolling_resistance", "accepted": false, "form": "c g sign(v)",
+             "parameters": {"deceleration_mps2": {"value": 0.011, "stderr": 0.003}},
+             "evidence": {"lr": 3.1, "p_bootstrap": 0.3}, "where": {},
+             "baseline": {"cv_rms_m": 1.31e-6}, "extended": {"cv_rms_m": 1.29e-6}}],
+            "drift": {"before": [{"v0_mps": 0.02, "T_s": 0.074}, {"v0_mps": 0.06, "T_s": 0.118}, {"v0_mps": 0.09, "T_s": 0.151}],
+                      "after": [{"v0_mps": 0.02, "T_s": 0.052}, {"v0_mps": 0.06, "T_s": 0.051}, {"v0_mps": 0.09, "T_s": 0.053}]}});
+        let validation = json!({"truth": true, "materials": {
+            "316": {"mu": {"truth": 0.337, "recovered": 0.337, "ok": true}},
+            "440c": {"mu": {"truth": 0.293, "recovered": 0.293, "ok": true}}},
+            "collisions": {"mu_pp": {"truth": 1.4, "recovered": 1.38, "ok": true}}});
+        let provenance = json!({"groove_version": "0.1.0", "code_commit": "0123456789abcdef0123456789abcdef01234567",
+            "fingerprints": {"figures": "aa11", "report": "bb22"}, "seed": 20261122,
+            "inputs": [{"path": "data/runs.csv", "sha256": "c0ffee"}, {"path": "data/trajectories.csv", "sha256": "beef"}],
+            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}]});
+        files.insert("summary", serde_json::to_vec(&summary).unwrap());
+        files.insert("diagnosis", serde_json::to_vec(&diagnosis).unwrap());
+        files.insert("validation", serde_json::to_vec(&validation).unwrap());
+        files.insert("provenance", serde_json::to_vec(&provenance).unwrap());
+    } else {
+        files.insert("validation", br#"{"truth": false}"#.to_vec());
+    }
+    Fixture { runs, fits, files }
+}
+
+fn artifacts(f: &Fixture) -> BTreeMap<String, Artifact> {
+    let mut a = BTreeMap::new();
+    a.insert("runs".to_string(), Artifact::Collection(f.runs.clone()));
+    a.insert("fits".to_string(), Artifact::Collection(f.fits.clone()));
+    for (k, v) in &f.files {
+        a.insert(k.to_string(), Artifact::File(v.clone()));
+    }
+    a
+}
+
+fn data(a: &BTreeMap<String, Artifact>) -> ReportData {
+    let refs: BTreeMap<&str, &Artifact> = a.iter().map(|(k, v)| (k.as_str(), v)).collect();
+    ReportData::from_artifacts(&refs).expect("fixture artifacts read")
+}
+
+/// figures, html, md of a fixture.
+fn render(f: &Fixture, date: Option<i64>) -> (BTreeMap<String, String>, String, String) {
+    let a = artifacts(f);
+    let d = data(&a);
+    let figs = render_figures(&d, &FigureOptions::default()).expect("figures render");
+    let pages = render_pages(&d, &figs, "groove report", date).expect("pages render");
+    (figs, pages.html, pages.md)
+}
+
+// ---------------------------------------------------------------- a tiny well-formedness check
+
+const VOID: [&str; 6] = ["meta", "link", "br", "hr", "img", "input"];
+
+/// Check that every element is closed in order (HTML void elements excepted); returns the number of
+/// elements seen, or where the nesting breaks.
+fn well_formed(doc: &str) -> Result<usize, String> {
+    let mut stack: Vec<String> = Vec::new();
+    let mut n = 0;
+    let mut rest = doc;
+    while let Some(i) = rest.find('<') {
+        rest = &rest[i..];
+        if rest.starts_with("<!--") {
+            let end = rest.find("-->").ok_or("unclosed comment")?;
+            rest = &rest[end + 3..];
+            continue;
+        }
+        if rest.starts_with("<!") || rest.starts_with("<?") {
+            let end = rest.find('>').ok_or("unclosed declaration")?;
+            rest = &rest[end + 1..];
+            continue;
+        }
+        let end = rest.find('>').ok_or_else(|| format!("unclosed tag near {:?}", &rest[..rest.len().min(40)]))?;
+        let tag = &rest[1..end];
+        rest = &rest[end + 1..];
+        if let Some(name) = tag.strip_prefix('/') {
+            let name = name.trim().to_ascii_lowercase();
+            match stack.pop() {
+                Some(open) if open == name => {}
+                other => return Err(format!("</{name}> closes {other:?}")),
+            }
+            continue;
+        }
+        let name = tag.split(|c: char| c.is_whitespace() || c == '/').next().unwrap_or("").to_ascii_lowercase();
+        if name.is_empty() || !name.chars().next().unwrap().is_ascii_alphabetic() {
+            return Err(format!("bad tag <{tag}>"));
+        }
+        n += 1;
+        if tag.ends_with('/') || VOID.contains(&name.as_str()) {
+            continue;
+        }
+        if name == "style" || name == "script" {
+            let close = format!("</{name}>");
+            let e = rest.find(&close).ok_or("unclosed style")?;
+            rest = &rest[e + close.len()..];
+            continue;
+        }
+        stack.push(name);
+    }
+    if stack.is_empty() {
+        Ok(n)
+    } else {
+        Err(format!("unclosed elements {stack:?}"))
+    }
+}
+
+// ---------------------------------------------------------------- tests
+
+const ALL_FIGURES: [&str; 11] = [
+    "fig_4_2b.svg",
+    "fig_4_2c.svg",
+    "fig_4_2d.svg",
+    "fig_4_3c.svg",
+    "fig_4_3d.svg",
+    "fig_4_4a.svg",
+    "fig_4_4b.svg",
+    "fig_4_4c.svg",
+    "fig_secondary.svg",
+    "fig_discovery_cv.svg",
+    "fig_discovery_drift.svg",
+];
+
+#[test]
+fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
+    let (figs, _, _) = render(&fixture(true, true), None);
+    let names: Vec<&str> = figs.keys().map(String::as_str).collect();
+    let mut want = ALL_FIGURES.to_vec();
+    want.sort();
+    assert_eq!(names, want);
+    for (name, svg) in &figs {
+        assert!(svg.contains("<svg"), "{name}");
+        well_formed(svg).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    // units on the axes
+    assert!(figs["fig_4_2b.svg"].contains("time t (ms)") && figs["fig_4_2b.svg"].contains("(mm)"));
+    assert!(figs["fig_4_2c.svg"].contains("|v0| (m/s)") && figs["fig_4_2c.svg"].contains("T (s"));
+    assert!(figs["fig_4_2c.svg"].contains("Stokes drag in free air: 2.18 s"));
+    assert!(figs["fig_4_2d.svg"].contains("316: chapter 0.337") && figs["fig_4_2d.svg"].contains("440c: chapter 0.293"));
+    assert!(figs["fig_4_4a.svg"].contains("μ_pp = 1.38"));
+    assert!(figs["fig_secondary.svg"].contains("78.5°"));
+}
+
+#[test]
+fn markdown_has_every_section_in_order_and_the_numbers() {
+    let (figs, _, md) = render(&fixture(true, true), Some(1_795_305_600));
+    let heads = ["## 1. Summary", "## 2. The data", "## 3. The chapter reproduced", "## 4. Discovery", "## 5. Equation audit", "## 6. Provenance"];
+    let pos: Vec<usize> = heads.iter().map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}"))).collect();
+    assert!(pos.windows(2).all(|w| w[0] < w[1]), "sections out of order");
+    let sub = [
+        "### 3.1 Fig. 4.2b",
+        "### 3.2 Fig. 4.2c",
+        "### 3.3 Fig. 4.2d",
+        "### 3.4 Figs. 4.3c–d",
+        "### 3.5 Fig. 4.4a",
+        "### 3.6 Figs. 4.4b–c",
+        "### 3.7 Secondary collisions",
+    ];
+    let pos: Vec<usize> = sub.iter().map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}"))).collect();
+    assert!(pos.windows(2).all(|w| w[0] < w[1]), "chapter figures out of order");
+    for name in figs.keys() {
+        assert!(md.contains(&format!("](figures/{name})")), "report.md does not reference {name}");
+    }
+    assert!(md.contains("2026-11-22"));
+    // key numbers: ours, chapter's, truth; Stokes; the factor and bound; the audit's sign change
+    for needle in [
+        "0.337 ± 0.003 [0.331, 0.343]",
+        "| 0.337 |",
+        "| truth |",
+        "2.18",
+        "0.074 (wrong)",
+        "0.0900",
+        "78.46",
+        "48.1",
+        "1.38 ± 0.06",
+        "velocity dependent drag (saturating)",
+        "0123456789abcdef0123456789abcdef01234567",
+        "| data/runs.csv | c0ffee |",
+    ] {
+        assert!(md.contains(needle), "report.md lacks {needle:?}");
+    }
+    // table cells with |v0| are escaped so the table stays a table
+    assert!(md.contains("\\|v0\\|"));
+    assert!(!md.contains("\n\n\n"));
+}
+
+#[test]
+fn html_is_self_contained_well_formed_and_has_every_figure() {
+    let (figs, html, _) = render(&fixture(true, true), None);
+    let n = well_formed(&html).unwrap_or_else(|e| panic!("report.html: {e}"));
+    assert!(n > 500, "suspiciously few elements: {n}");
+    for bad in ["http://", "https://", " src=", "<script", "<link", "@import", "url("] {
+        assert!(!html.contains(bad), "report.html contains {bad:?}");
+    }
+    assert_eq!(html.matches("<svg").count(), figs.len());
+    for name in figs.keys() {
+        assert!(html.contains(&format!("<figure id=\"{}\">", name.trim_end_matches(".svg"))), "{name}");
+    }
+    assert!(html.contains("<style>") && html.starts_with("<!DOCTYPE html>"));
+    assert!(html.contains("|v0| &gt; 0.03"), "text is HTML-escaped");
+}
+
+#[test]
+fn two_renders_are_byte_identical() {
+    let f = fixture(true, true);
+    let a = render(&f, Some(0));
+    let b = render(&f, Some(0));
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1, b.1);
+    assert_eq!(a.2, b.2);
+}
+
+#[test]
+fn missing_parts_are_said_not_fatal() {
+    let (figs, html, md) = render(&fixture(false, false), None);
+    assert!(!figs.contains_key("fig_4_3c.svg") && !figs.contains_key("fig_discovery_cv.svg"));
+    assert!(figs.contains_key("fig_4_2b.svg") && figs.contains_key("fig_secondary.svg"));
+    assert!(md.contains("no collision runs in this dataset"));
+    assert!(md.contains("no diagnosis.json"));
+    assert!(md.contains("no provenance input"));
+    assert!(!md.contains("| truth |"), "no truth column without a truth file");
+    well_formed(&html).unwrap();
+}
+
+#[test]
+fn stage_kinds_run_through_the_contract() {
+    let reg = groove::stages::registry();
+    let figures = reg.iter().find(|k| k.kind() == "figures").expect("figures registered");
+    let report = reg.iter().find(|k| k.kind() == "report").expect("report registered");
+    let f = fixture(true, true);
+    let a = artifacts(&f);
+    let params = toml::Table::new();
+    let input = StageInput { params: &params, inputs: a.iter().map(|(k, v)| (k.as_str(), v)).collect(), item: None, seed: 1 };
+    let out = figures.run(&input).expect("figures stage runs");
+    let Artifact::Collection(items) = &out["figures"] else { panic!("figures is a collection") };
+    assert_eq!(items.len(), ALL_FIGURES.len());
+    let mut a2 = a.clone();
+    a2.insert("figures".into(), out["figures"].clone());
+    let p: toml::Table = toml::from_str("source_date_epoch = 86400").unwrap();
+    let input = StageInput { params: &p, inputs: a2.iter().map(|(k, v)| (k.as_str(), v)).collect(), item: None, seed: 1 };
+    let pages = report.run(&input).expect("report stage runs");
+    let Artifact::File(md) = &pages["md"] else { panic!() };
+    assert!(String::from_utf8_lossy(md).contains("1970-01-02"));
+    let bad: toml::Table = toml::from_str("colour = 1").unwrap();
+    let err = report.canonical_params(&bad).unwrap_err().to_string();
+    assert!(err.contains("colour"), "{err}");
+}
+
+#[test]
+fn fixture_report_is_written_for_the_browser_check() {
+    // tests/browser.sh renders this file in headless Chromium
+    let (figs, html, md) = render(&fixture(true, true), Some(1_795_305_600));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-fixture");
+    std::fs::create_dir_all(dir.join("figures")).unwrap();
+    std::fs::write(dir.join("report.html"), &html).unwrap();
+    std::fs::write(dir.join("report.md"), &md).unwrap();
+    for (k, v) in &figs {
+        std::fs::write(dir.join("figures").join(k), v).unwrap();
+    }
+    assert_eq!(std::fs::read_to_string(dir.join("report.html")).unwrap(), html);
+}
+
+#[test]
+fn the_checker_catches_broken_nesting() {
+    assert!(well_formed("<div><p>x</div></p>").is_err());
+    assert!(well_formed("<div><br></div>").is_ok());
+    assert!(well_formed("<div>").is_err());
+}
