@@ -1,0 +1,46 @@
+//! A one-particle model (groove, friction law, extra terms) and the particle state.
+
+use super::{Friction, Groove, Term};
+use serde::{Deserialize, Serialize};
+
+/// Everything that sets the motion of one particle in the groove.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    pub groove: Groove,
+    pub friction: Friction,
+    pub terms: Vec<Term>,
+}
+
+/// Position, velocity and spin surface speed `va = R ω` of one particle.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    pub z_m: f64,
+    pub v_mps: f64,
+    pub va_mps: f64,
+}
+
+impl Model {
+    /// The chapter's groove with constant μ and a linear drag T (the baseline as a model).
+    pub fn baseline(mu: f64, t_drag_s: f64) -> Model {
+        Model {
+            groove: Groove::CHAPTER,
+            friction: Friction::Constant { mu },
+            terms: vec![Term::LinearDrag { t_s: t_drag_s }],
+        }
+    }
+
+    /// Sum of the extra accelerations at (z, v).
+    pub fn accel(&self, z_m: f64, v_mps: f64) -> f64 {
+        self.terms.iter().map(|t| t.accel(z_m, v_mps)).sum()
+    }
+
+    /// Some term jumps where v changes sign.
+    pub fn has_sign_jump(&self) -> bool {
+        self.terms.iter().any(Term::has_sign_jump)
+    }
+
+    /// What the terms can hold at rest (m/s²).
+    pub fn static_hold_mps2(&self) -> f64 {
+        self.terms.iter().map(Term::static_hold_mps2).sum()
+    }
+}

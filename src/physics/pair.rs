@@ -1,0 +1,252 @@
+//! Two equal particles in one groove: one-particle dynamics for each, impulses at contact (2R),
+//! and the cascade of secondary collisions.
+//!
+//! The cascade of an ideal rolling pair is infinite but converges (Zeno): once the approach speed
+//! at an impact is below `V_TOGETHER_MPS` (or after `MAX_IMPACTS`), the impact is completed by
+//! giving both particles their mean v and va, so they move on together in contact.
+
+use super::advance::{advance, Sampler};
+use super::impulse::collide;
+use super::mode::{start, Mode};
+use super::rk::Tolerance;
+use super::{Model, Phase, Restitution, State, SwitchEvent, Trajectory};
+use serde::{Deserialize, Serialize};
+
+/// Approach speed (m/s) below which an impact ends the cascade: the pair moves on together.
+pub const V_TOGETHER_MPS: f64 = 1e-7;
+/// Most impacts resolved one by one in a simulation.
+const MAX_IMPACTS: usize = 1000;
+/// Cap on all events (phase switches and impacts).
+const MAX_EVENTS: usize = 20_000;
+
+const TOL: Tolerance<6> = Tolerance {
+    atol: [1e-12, 1e-11, 1e-11, 1e-12, 1e-11, 1e-11],
+    rtol: 1e-10,
+};
+
+/// Contact parameters of the pair.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairParams {
+    pub restitution: Restitution,
+    /// Particle–particle Coulomb friction.
+    pub mu_pp: f64,
+    pub radius_m: f64,
+}
+
+/// One impact: time, states of both particles just before and just after.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Impact {
+    pub t_s: f64,
+    /// Approach speed `v_l − v_r` (> 0) of the lower-z and upper-z particle.
+    pub v_impact_mps: f64,
+    /// Coefficient of restitution used (0 for the closing impact that joins the pair).
+    pub restitution: f64,
+    /// The contact slipped (spin change μ_pp k J) rather than stuck.
+    pub slip: bool,
+    /// This impact ended the cascade: the pair moves on together.
+    pub joined: bool,
+    pub pre: [State; 2],
+    pub post: [State; 2],
+}
+
+/// Both particles sampled at the requested times (index = particle), and every impact.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PairTrajectory {
+    pub particles: [Trajectory; 2],
+    pub impacts: Vec<Impact>,
+}
+
+fn state_of(y: &[f64; 6], i: usize) -> State {
+    State {
+        z_m: y[3 * i],
+        v_mps: y[3 * i + 1],
+        va_mps: y[3 * i + 2],
+    }
+}
+
+/// Simulate two particles from `init` at t = 0 (their centres at least 2R apart; touching
+/// particles that approach collide at once) and sample both at `t_s` (sorted ascending).
+pub fn simulate_pair(
+    model: &Model,
+    pair: &PairParams,
+    init: [State; 2],
+    t_s: &[f64],
+) -> PairTrajectory {
+    assert!(
+        t_s.windows(2).all(|w| w[0] <= w[1]),
+        "simulate_pair: sample times must be sorted ascending"
+    );
+    let mut out = PairTrajectory {
+        particles: [
+            Trajectory::with_capacity(t_s.len()),
+            Trajectory::with_capacity(t_s.len()),
+        ],
+        impacts: Vec::new(),
+    };
+    let Some(&t_end) = t_s.last() else {
+        return out;
+    };
+    // l is the particle at lower z; the order never changes
+    let (l, r) = if init[0].z_m <= init[1].z_m {
+        (0, 1)
+    } else {
+        (1, 0)
+    };
+    let two_r = 2.0 * pair.radius_m;
+    let mut modes = [Mode::Rest; 2];
+    let mut y = [0.0; 6];
+    for i in 0..2 {
+        let (m, yi) = start(model, init[i].z_m, init[i].v_mps, init[i].va_mps);
+        modes[i] = m;
+        y[3 * i..3 * i + 3].copy_from_slice(&yi);
+    }
+    let mut t = 0.0;
+    let mut h = 1e-4;
+    let mut next = 0;
+    let mut n_events = 0;
+    loop {
+        // an impact is due when the particles touch and approach
+        let gap = y[3 * r] - y[3 * l] - two_r;
+        let approach = y[3 * l + 1] - y[3 * r + 1];
+        if gap <= 1e-12 * two_r && approach > 0.0 && n_events < MAX_EVENTS {
+            impact(model, pair, t, &mut y, &mut modes, (l, r), &mut out);
+            n_events += 1;
+            continue;
+        }
+        let phases = [modes[0].phase(), modes[1].phase()];
+        let ms = modes;
+        let both_rest = ms[0] == Mode::Rest && ms[1] == Mode::Rest;
+        let (p0, p1) = out.particles.split_at_mut(1);
+        let mut sampler = Sampler {
+            times: t_s,
+            next,
+            store: |i: usize, yy: &[f64; 6]| {
+                p0[0].push(t_s[i], &yy[0..3], phases[0]);
+                p1[0].push(t_s[i], &yy[3..6], phases[1]);
+            },
+        };
+        if both_rest || n_events >= MAX_EVENTS {
+            let yy = y;
+            for i in next..t_s.len() {
+                (sampler.store)(i, &yy);
+            }
+            break;
+        }
+        let stop = advance(
+            &|yy: &[f64; 6]| {
+                let a: [f64; 3] = ms[0].rhs(model, &[yy[0], yy[1], yy[2]]);
+                let b: [f64; 3] = ms[1].rhs(model, &[yy[3], yy[4], yy[5]]);
+                [a[0], a[1], a[2], b[0], b[1], b[2]]
+            },
+            &|yy: &[f64; 6]| {
+                let a = ms[0].events(model, &[yy[0], yy[1], yy[2]]);
+                let b = ms[1].events(model, &[yy[3], yy[4], yy[5]]);
+                [a[0], a[1], b[0], b[1], yy[3 * r] - yy[3 * l] - two_r]
+            },
+            t,
+            y,
+            t_end,
+            &mut sampler,
+            &TOL,
+            &mut h,
+        );
+        next = sampler.next;
+        t = stop.t_s;
+        y = stop.y;
+        n_events += 1;
+        match stop.event {
+            None => break,
+            Some(4) => {
+                // touching: put them exactly 2R apart about their centre, then the impact fires
+                let mid = 0.5 * (y[3 * l] + y[3 * r]);
+                y[3 * l] = mid - 0.5 * two_r;
+                y[3 * r] = mid + 0.5 * two_r;
+            }
+            Some(e) => {
+                let i = e / 2;
+                let yi = [y[3 * i], y[3 * i + 1], y[3 * i + 2]];
+                let (m, y_new) = modes[i].after_event(model, e % 2, &yi);
+                note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
+                modes[i] = m;
+                y[3 * i..3 * i + 3].copy_from_slice(&y_new);
+            }
+        }
+    }
+    out
+}
+
+fn note_switch(traj: &mut Trajectory, t_s: f64, from: Mode, to: Mode, y: &[f64; 3]) {
+    let flip = matches!((from, to), (Mode::Slide { d: a, .. }, Mode::Slide { d: b, .. }) if a != b);
+    if from.phase() != to.phase() || flip {
+        traj.events.push(SwitchEvent {
+            t_s,
+            from: from.phase(),
+            to: to.phase(),
+            z_m: y[0],
+            v_mps: y[1],
+            va_mps: y[2],
+        });
+    }
+}
+
+/// Resolve one impact in place: new velocities, spins and modes of both particles.
+fn impact(
+    model: &Model,
+    pair: &PairParams,
+    t_s: f64,
+    y: &mut [f64; 6],
+    modes: &mut [Mode; 2],
+    (l, r): (usize, usize),
+    out: &mut PairTrajectory,
+) {
+    let pre = [state_of(y, 0), state_of(y, 1)];
+    let v = [y[3 * l + 1], y[3 * r + 1]];
+    let va = [y[3 * l + 2], y[3 * r + 2]];
+    let approach = v[0] - v[1];
+    let joined = approach < V_TOGETHER_MPS || out.impacts.len() >= MAX_IMPACTS;
+    let (c, slip, v_new, va_new) = if joined {
+        let vm = 0.5 * (v[0] + v[1]);
+        let vam = 0.5 * (va[0] + va[1]);
+        (0.0, false, [vm, vm], [vam, vam])
+    } else {
+        let c = pair.restitution.at(approach);
+        let kick = collide(v, va, c, pair.mu_pp, model.groove.k);
+        (c, kick.slip, kick.v, kick.va)
+    };
+    for (idx, p) in [l, r].into_iter().enumerate() {
+        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx]);
+        let from = modes[p];
+        note_switch_phase(&mut out.particles[p], t_s, from, m, &yi);
+        modes[p] = m;
+        y[3 * p..3 * p + 3].copy_from_slice(&yi);
+    }
+    out.impacts.push(Impact {
+        t_s,
+        v_impact_mps: approach,
+        restitution: c,
+        slip,
+        joined,
+        pre,
+        post: [state_of(y, 0), state_of(y, 1)],
+    });
+}
+
+fn note_switch_phase(traj: &mut Trajectory, t_s: f64, from: Mode, to: Mode, y: &[f64; 3]) {
+    if from.phase() != to.phase() {
+        traj.events.push(SwitchEvent {
+            t_s,
+            from: from.phase(),
+            to: to.phase(),
+            z_m: y[0],
+            v_mps: y[1],
+            va_mps: y[2],
+        });
+    }
+}
+
+impl PairTrajectory {
+    /// Phase of particle `i` at sample `k`.
+    pub fn phase(&self, i: usize, k: usize) -> Phase {
+        self.particles[i].phase[k]
+    }
+}

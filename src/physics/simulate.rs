@@ -1,0 +1,77 @@
+//! Event-driven simulation of one particle under any `Model`, sampled at requested times.
+
+use super::advance::{advance, Sampler};
+use super::mode::{start, Mode};
+use super::rk::Tolerance;
+use super::{Model, State, SwitchEvent, Trajectory};
+
+/// Cap on mode switches in one simulation (a guard against Zeno behaviour of odd models).
+const MAX_SWITCHES: usize = 10_000;
+
+/// Integration tolerances for one particle `[z, v, va]`.
+pub(crate) const TOL: Tolerance<3> = Tolerance {
+    atol: [1e-12, 1e-11, 1e-11],
+    rtol: 1e-10,
+};
+
+/// Simulate one particle from `init` at t = 0 and sample it at `t_s` (sorted ascending; times
+/// ≤ 0 get the initial state). Switches between sliding, rolling and rest are located as events.
+pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
+    assert!(
+        t_s.windows(2).all(|w| w[0] <= w[1]),
+        "simulate: sample times must be sorted ascending"
+    );
+    let mut traj = Trajectory::with_capacity(t_s.len());
+    let Some(&t_end) = t_s.last() else {
+        return traj;
+    };
+    let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps);
+    let mut t = 0.0;
+    let mut h = 1e-4;
+    let mut next = 0;
+    let mut switches = 0;
+    loop {
+        let phase = mode.phase();
+        if mode == Mode::Rest || switches >= MAX_SWITCHES {
+            for &ts in &t_s[next..] {
+                traj.push(ts, &y, phase);
+            }
+            break;
+        }
+        let m = mode;
+        let mut sampler = Sampler {
+            times: t_s,
+            next,
+            store: |i: usize, yy: &[f64; 3]| traj.push(t_s[i], yy, phase),
+        };
+        let stop = advance(
+            &|yy: &[f64; 3]| m.rhs(model, yy),
+            &|yy: &[f64; 3]| m.events(model, yy),
+            t,
+            y,
+            t_end,
+            &mut sampler,
+            &TOL,
+            &mut h,
+        );
+        next = sampler.next;
+        t = stop.t_s;
+        let Some(k) = stop.event else { break };
+        let (new_mode, new_y) = mode.after_event(model, k, &stop.y);
+        let slip_flip = matches!((mode, new_mode), (Mode::Slide { d: a, .. }, Mode::Slide { d: b, .. }) if a != b);
+        if new_mode.phase() != phase || slip_flip {
+            traj.events.push(SwitchEvent {
+                t_s: t,
+                from: phase,
+                to: new_mode.phase(),
+                z_m: new_y[0],
+                v_mps: new_y[1],
+                va_mps: new_y[2],
+            });
+        }
+        mode = new_mode;
+        y = new_y;
+        switches += 1;
+    }
+    traj
+}
