@@ -11,10 +11,17 @@ use std::collections::BTreeMap;
 
 /// A single run with known parameters, sampled at 10 kHz for 40 ms from the closed form.
 fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, Value, String) {
-    let b = Baseline { mu, t_drag_s: t_drag, groove: Groove::CHAPTER };
+    let b = Baseline {
+        mu,
+        t_drag_s: t_drag,
+        groove: Groove::CHAPTER,
+    };
     let (z0, t0) = (1.0e-3, 4.0e-5);
     let t: Vec<f64> = (0..400).map(|i| i as f64 * 1e-4).collect();
-    let z: Vec<f64> = t.iter().map(|&ti| z0 + b.state(v0, ti + t0).0 + 1e-6 * (ti * 7919.0).sin()).collect();
+    let z: Vec<f64> = t
+        .iter()
+        .map(|&ti| z0 + b.state(v0, ti + t0).0 + 1e-6 * (ti * 7919.0).sin())
+        .collect();
     let frame: Vec<i64> = (0..400).collect();
     let rec = json!({"info": {"run": run, "experiment": "single", "material": material, "diameter_m": 3.0e-4,
                               "fps": 10000.0, "setup": null, "extra": {}},
@@ -29,12 +36,35 @@ fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, V
     (rec, fit, csv)
 }
 
-fn collision(run: &str, material: &str, setup: &str, speeds: &[(f64, f64, f64, f64)]) -> (Value, Value) {
+fn collision(
+    run: &str,
+    material: &str,
+    setup: &str,
+    speeds: &[(f64, f64, f64, f64)],
+) -> (Value, Value) {
     // striker rolls at 0.1 m/s into a target resting 1 mm ahead; after the impact at 5 ms it slows to
     // 0.01 m/s and the target moves at 0.08 m/s (shapes only matter for the drawing)
     let t: Vec<f64> = (0..300).map(|i| i as f64 * 1e-4).collect();
-    let zs: Vec<f64> = t.iter().map(|&ti| if ti < 5e-3 { 0.1 * ti } else { 5e-4 + 0.01 * (ti - 5e-3) + 0.0004 * (ti - 5e-3).sqrt() }).collect();
-    let zt: Vec<f64> = t.iter().map(|&ti| if ti < 5e-3 { 8e-4 } else { 8e-4 + 0.08 * (ti - 5e-3) * (1.0 - (ti - 5e-3) * 10.0) }).collect();
+    let zs: Vec<f64> = t
+        .iter()
+        .map(|&ti| {
+            if ti < 5e-3 {
+                0.1 * ti
+            } else {
+                5e-4 + 0.01 * (ti - 5e-3) + 0.0004 * (ti - 5e-3).sqrt()
+            }
+        })
+        .collect();
+    let zt: Vec<f64> = t
+        .iter()
+        .map(|&ti| {
+            if ti < 5e-3 {
+                8e-4
+            } else {
+                8e-4 + 0.08 * (ti - 5e-3) * (1.0 - (ti - 5e-3) * 10.0)
+            }
+        })
+        .collect();
     let frame: Vec<i64> = (0..300).collect();
     let rec = json!({"info": {"run": run, "experiment": "collision", "material": material, "diameter_m": 3.0e-4,
                               "fps": 10000.0, "setup": setup, "extra": {}},
@@ -81,7 +111,12 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
     }
     if with_collisions {
         let sets = [
-            ("c316_r", "316", "rolling", vec![(0.1, 0.08, -0.25, 0.17), (0.2, 0.15, -0.5, 0.35)]),
+            (
+                "c316_r",
+                "316",
+                "rolling",
+                vec![(0.1, 0.08, -0.25, 0.17), (0.2, 0.15, -0.5, 0.35)],
+            ),
             ("c316_c", "316", "contact", vec![(0.15, 0.14, -0.2, 0.0)]),
             ("c440_r", "440c", "rolling", vec![(0.12, 0.1, -0.33, 0.2)]),
             ("c440_c", "440c", "contact", vec![(0.05, 0.05, -0.1, 0.0)]),
@@ -179,7 +214,9 @@ fn well_formed(doc: &str) -> Result<usize, String> {
             rest = &rest[end + 1..];
             continue;
         }
-        let end = rest.find('>').ok_or_else(|| format!("unclosed tag near {:?}", &rest[..rest.len().min(40)]))?;
+        let end = rest
+            .find('>')
+            .ok_or_else(|| format!("unclosed tag near {:?}", &rest[..rest.len().min(40)]))?;
         let tag = &rest[1..end];
         rest = &rest[end + 1..];
         if let Some(name) = tag.strip_prefix('/') {
@@ -190,7 +227,11 @@ fn well_formed(doc: &str) -> Result<usize, String> {
             }
             continue;
         }
-        let name = tag.split(|c: char| c.is_whitespace() || c == '/').next().unwrap_or("").to_ascii_lowercase();
+        let name = tag
+            .split(|c: char| c.is_whitespace() || c == '/')
+            .next()
+            .unwrap_or("")
+            .to_ascii_lowercase();
         if name.is_empty() || !name.chars().next().unwrap().is_ascii_alphabetic() {
             return Err(format!("bad tag <{tag}>"));
         }
@@ -244,7 +285,10 @@ fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
     assert!(figs["fig_4_2b.svg"].contains("time t (ms)") && figs["fig_4_2b.svg"].contains("(mm)"));
     assert!(figs["fig_4_2c.svg"].contains("|v0| (m/s)") && figs["fig_4_2c.svg"].contains("T (s"));
     assert!(figs["fig_4_2c.svg"].contains("Stokes drag in free air: 2.18 s"));
-    assert!(figs["fig_4_2d.svg"].contains("316: chapter 0.337") && figs["fig_4_2d.svg"].contains("440c: chapter 0.293"));
+    assert!(
+        figs["fig_4_2d.svg"].contains("316: chapter 0.337")
+            && figs["fig_4_2d.svg"].contains("440c: chapter 0.293")
+    );
     assert!(figs["fig_4_4a.svg"].contains("μ_pp = 1.38"));
     assert!(figs["fig_secondary.svg"].contains("78.5°"));
 }
@@ -252,8 +296,18 @@ fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
 #[test]
 fn markdown_has_every_section_in_order_and_the_numbers() {
     let (figs, _, md) = render(&fixture(true, true), Some(1_795_305_600));
-    let heads = ["## 1. Summary", "## 2. The data", "## 3. The chapter reproduced", "## 4. Discovery", "## 5. Equation audit", "## 6. Provenance"];
-    let pos: Vec<usize> = heads.iter().map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}"))).collect();
+    let heads = [
+        "## 1. Summary",
+        "## 2. The data",
+        "## 3. The chapter reproduced",
+        "## 4. Discovery",
+        "## 5. Equation audit",
+        "## 6. Provenance",
+    ];
+    let pos: Vec<usize> = heads
+        .iter()
+        .map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}")))
+        .collect();
     assert!(pos.windows(2).all(|w| w[0] < w[1]), "sections out of order");
     let sub = [
         "### 3.1 Fig. 4.2b",
@@ -264,15 +318,24 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         "### 3.6 Figs. 4.4b–c",
         "### 3.7 Secondary collisions",
     ];
-    let pos: Vec<usize> = sub.iter().map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}"))).collect();
-    assert!(pos.windows(2).all(|w| w[0] < w[1]), "chapter figures out of order");
+    let pos: Vec<usize> = sub
+        .iter()
+        .map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}")))
+        .collect();
+    assert!(
+        pos.windows(2).all(|w| w[0] < w[1]),
+        "chapter figures out of order"
+    );
     for name in figs.keys() {
-        assert!(md.contains(&format!("](figures/{name})")), "report.md does not reference {name}");
+        assert!(
+            md.contains(&format!("](figures/{name})")),
+            "report.md does not reference {name}"
+        );
     }
     assert!(md.contains("2026-11-22"));
     // key numbers: ours, chapter's, truth; Stokes; the factor and bound; the audit's sign change
     for needle in [
-        "0.337 ± 0.003 [0.331, 0.343]",
+        "0.3370 ± 0.0030 [0.3310, 0.3430]",
         "| 0.337 |",
         "| truth |",
         "2.18",
@@ -280,7 +343,7 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         "0.0900",
         "78.46",
         "48.1",
-        "1.38 ± 0.06",
+        "1.380 ± 0.060",
         "velocity dependent drag (saturating)",
         "0123456789abcdef0123456789abcdef01234567",
         "| data/runs.csv | c0ffee |",
@@ -297,12 +360,20 @@ fn html_is_self_contained_well_formed_and_has_every_figure() {
     let (figs, html, _) = render(&fixture(true, true), None);
     let n = well_formed(&html).unwrap_or_else(|e| panic!("report.html: {e}"));
     assert!(n > 500, "suspiciously few elements: {n}");
-    for bad in ["http://", "https://", " src=", "<script", "<link", "@import", "url("] {
+    for bad in [
+        "http://", "https://", " src=", "<script", "<link", "@import", "url(",
+    ] {
         assert!(!html.contains(bad), "report.html contains {bad:?}");
     }
     assert_eq!(html.matches("<svg").count(), figs.len());
     for name in figs.keys() {
-        assert!(html.contains(&format!("<figure id=\"{}\">", name.trim_end_matches(".svg"))), "{name}");
+        assert!(
+            html.contains(&format!(
+                "<figure id=\"{}\">",
+                name.trim_end_matches(".svg")
+            )),
+            "{name}"
+        );
     }
     assert!(html.contains("<style>") && html.starts_with("<!DOCTYPE html>"));
     assert!(html.contains("|v0| &gt; 0.03"), "text is HTML-escaped");
@@ -326,28 +397,51 @@ fn missing_parts_are_said_not_fatal() {
     assert!(md.contains("no collision runs in this dataset"));
     assert!(md.contains("no diagnosis.json"));
     assert!(md.contains("no provenance input"));
-    assert!(!md.contains("| truth |"), "no truth column without a truth file");
+    assert!(
+        !md.contains("| truth |"),
+        "no truth column without a truth file"
+    );
     well_formed(&html).unwrap();
 }
 
 #[test]
 fn stage_kinds_run_through_the_contract() {
     let reg = groove::stages::registry();
-    let figures = reg.iter().find(|k| k.kind() == "figures").expect("figures registered");
-    let report = reg.iter().find(|k| k.kind() == "report").expect("report registered");
+    let figures = reg
+        .iter()
+        .find(|k| k.kind() == "figures")
+        .expect("figures registered");
+    let report = reg
+        .iter()
+        .find(|k| k.kind() == "report")
+        .expect("report registered");
     let f = fixture(true, true);
     let a = artifacts(&f);
     let params = toml::Table::new();
-    let input = StageInput { params: &params, inputs: a.iter().map(|(k, v)| (k.as_str(), v)).collect(), item: None, seed: 1 };
+    let input = StageInput {
+        params: &params,
+        inputs: a.iter().map(|(k, v)| (k.as_str(), v)).collect(),
+        item: None,
+        seed: 1,
+    };
     let out = figures.run(&input).expect("figures stage runs");
-    let Artifact::Collection(items) = &out["figures"] else { panic!("figures is a collection") };
+    let Artifact::Collection(items) = &out["figures"] else {
+        panic!("figures is a collection")
+    };
     assert_eq!(items.len(), ALL_FIGURES.len());
     let mut a2 = a.clone();
     a2.insert("figures".into(), out["figures"].clone());
     let p: toml::Table = toml::from_str("source_date_epoch = 86400").unwrap();
-    let input = StageInput { params: &p, inputs: a2.iter().map(|(k, v)| (k.as_str(), v)).collect(), item: None, seed: 1 };
+    let input = StageInput {
+        params: &p,
+        inputs: a2.iter().map(|(k, v)| (k.as_str(), v)).collect(),
+        item: None,
+        seed: 1,
+    };
     let pages = report.run(&input).expect("report stage runs");
-    let Artifact::File(md) = &pages["md"] else { panic!() };
+    let Artifact::File(md) = &pages["md"] else {
+        panic!()
+    };
     assert!(String::from_utf8_lossy(md).contains("1970-01-02"));
     let bad: toml::Table = toml::from_str("colour = 1").unwrap();
     let err = report.canonical_params(&bad).unwrap_err().to_string();
@@ -365,7 +459,10 @@ fn fixture_report_is_written_for_the_browser_check() {
     for (k, v) in &figs {
         std::fs::write(dir.join("figures").join(k), v).unwrap();
     }
-    assert_eq!(std::fs::read_to_string(dir.join("report.html")).unwrap(), html);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("report.html")).unwrap(),
+        html
+    );
 }
 
 #[test]

@@ -26,7 +26,11 @@ fn row(q: &str, v: String) -> (String, String) {
 pub fn eq_4_6(g: Groove) -> AuditItem {
     let (v0, mu) = (chapter::FIG_4_2B_V0_MPS, chapter::MU_316);
     let t_drag = chapter::t_line_s(v0);
-    let b = Baseline { mu, t_drag_s: t_drag, groove: g };
+    let b = Baseline {
+        mu,
+        t_drag_s: t_drag,
+        groove: g,
+    };
     let t1 = b.switch_time_s(v0);
     let (z1, v1, _) = b.state(v0, t1);
     let dt = 0.05;
@@ -65,7 +69,11 @@ pub fn eq_4_7(d: &ReportData) -> AuditItem {
     let diss = |v: f64| v / chapter::T0_S - v * v / chapter::L_M;
     let sat = |v: f64| v / chapter::t_line_s(v);
     let v_star = chapter::L_M / chapter::T0_S;
-    let v_max = d.singles.iter().map(|r| r.v0_mps.value.abs()).fold(0.1, f64::max);
+    let v_max = d
+        .singles
+        .iter()
+        .map(|r| r.v0_mps.value.abs())
+        .fold(0.1, f64::max);
     AuditItem {
         id: "eq_4_7",
         title: "Eqs. 4.7–4.8: the quadratic correction turns drag into propulsion".into(),
@@ -89,13 +97,29 @@ pub fn eq_4_7(d: &ReportData) -> AuditItem {
 
 /// The Stokes time of a 150 µm steel sphere in air, against the printed 0.074 s.
 pub fn stokes(d: &ReportData) -> AuditItem {
-    let ts = chapter::stokes_time_s(chapter::RADIUS_M, chapter::DENSITY_KG_M3, chapter::AIR_VISCOSITY_PA_S);
+    let ts = chapter::stokes_time_s(
+        chapter::RADIUS_M,
+        chapter::DENSITY_KG_M3,
+        chapter::AIR_VISCOSITY_PA_S,
+    );
     let ours = t_line(d, None).map(|(a, _)| a.est.value);
     let mut numbers = vec![
-        row("m/(6πηR) = 2ρR²/(9η), R = 150 µm, ρ = 7900 kg/m³, η = 1.81e-5 Pa·s (s)", format!("{ts:.3}")),
-        row("printed Stokes time (s)", format!("{:.3}", chapter::STOKES_PRINTED_S)),
-        row("chapter's own T = 0.052 + 1.10·v0 at v0 = 0.02 m/s (s)", format!("{:.3}", chapter::t_line_s(0.02))),
-        row("Stokes time / chapter's T0", format!("{:.0}×", ts / chapter::T0_S)),
+        row(
+            "m/(6πηR) = 2ρR²/(9η), R = 150 µm, ρ = 7900 kg/m³, η = 1.81e-5 Pa·s (s)",
+            format!("{ts:.3}"),
+        ),
+        row(
+            "printed Stokes time (s)",
+            format!("{:.3}", chapter::STOKES_PRINTED_S),
+        ),
+        row(
+            "chapter's own T = 0.052 + 1.10·v0 at v0 = 0.02 m/s (s)",
+            format!("{:.3}", chapter::t_line_s(0.02)),
+        ),
+        row(
+            "Stokes time / chapter's T0",
+            format!("{:.0}×", ts / chapter::T0_S),
+        ),
     ];
     if let Some(a) = ours {
         numbers.push(row("our fitted T at v0 → 0 (s)", format!("{a:.4}")));
@@ -115,7 +139,11 @@ pub fn stokes(d: &ReportData) -> AuditItem {
 
 /// Steady state after re-acceleration (no drag): the physics closed form run to long times.
 fn steady(g: Groove, v_mps: f64, va_mps: f64) -> f64 {
-    let b = Baseline { mu: 0.3, t_drag_s: 1e12, groove: g };
+    let b = Baseline {
+        mu: 0.3,
+        t_drag_s: f64::INFINITY,
+        groove: g,
+    };
     b.state_from(v_mps, va_mps, 5.0).1
 }
 
@@ -124,8 +152,8 @@ pub fn eq_4_15(g: Groove) -> AuditItem {
     let (s, k, ks2, mpp) = (g.s, g.k, g.ks2(), chapter::MU_PP);
     let (u1, u2) = (0.05, 0.01);
     let f = (1.0 - ks2) / (1.0 + ks2);
-    // slip impulse (Eq. 4.14, elastic): velocities swap, spins change by ∓μ_pp·k·(u1 − u2)
-    let (va1, va2) = (u1 / s - mpp * k * (u1 - u2), u2 / s + mpp * k * (u1 - u2));
+    // slip impulse (Eq. 4.14, elastic): velocities swap, both spins change by −μ_pp·k·(u1 − u2)
+    let (va1, va2) = (u1 / s - mpp * k * (u1 - u2), u2 / s - mpp * k * (u1 - u2));
     let (w1, w2) = (steady(g, u2, va1), steady(g, u1, va2));
     let p415 = |x: f64| ((1.0 - s * mpp * k) * u1 + (ks2 + s * mpp * k) * x) / (1.0 + ks2);
     let p415b = |x: f64| ((ks2 - s * mpp * k) * u1 + (1.0 + s * mpp * k) * x) / (1.0 + ks2);
@@ -134,7 +162,12 @@ pub fn eq_4_15(g: Groove) -> AuditItem {
     let (x1, x2) = (steady(g, u2, sa1), steady(g, u1, sa2));
     let p417 = |x: f64| (0.5 * u1 + (ks2 - 0.5) * x) / (1.0 + ks2);
     let p417b = |x: f64| ((ks2 - 0.5) * u1 + 0.5 * x) / (1.0 + ks2);
-    let fmt = |a: f64, b: f64| format!("{:.3}, {:.3} (Δ = {:.3})", a * 1e3, b * 1e3, (a - b) * 1e3);
+    // mm/s to three decimals, rounding errors of order 1e-15 shown as a plain 0.000 (not −0.000)
+    let mm = |x: f64| {
+        let y = (x * 1e6).round() / 1e3;
+        format!("{:.3}", if y == 0.0 { 0.0 } else { y })
+    };
+    let fmt = |a: f64, b: f64| format!("{}, {} (Δ = {})", mm(a), mm(b), mm(a - b));
     AuditItem {
         id: "eq_4_15",
         title: "Eqs. 4.15 and 4.17: the second term multiplies u2, not u1".into(),
@@ -142,7 +175,7 @@ pub fn eq_4_15(g: Groove) -> AuditItem {
         correct: "the second term of each line multiplies u2; then v_z1⁽²⁾ − v_z2⁽²⁾ = (1 − ks²)/(1 + ks²)·(u1 − u2)".into(),
         numbers: vec![
             row("example: u1, u2 (mm/s)", format!("{:.1}, {:.1}", u1 * 1e3, u2 * 1e3)),
-            row("slip: physics steady state v_z1, v_z2 (mm/s)", fmt(w1, w2)),
+            row("slip formulas (Eq. 4.14): physics steady state v_z1, v_z2 (mm/s)", fmt(w1, w2)),
             row("slip: Eq. 4.15 as printed (mm/s)", fmt(p415(u1), p415b(u1))),
             row("slip: Eq. 4.15 with u2 (mm/s)", fmt(p415(u2), p415b(u2))),
             row("stick: physics steady state (mm/s)", fmt(x1, x2)),
@@ -181,22 +214,46 @@ pub fn citation(g: Groove) -> AuditItem {
 
 /// Fig. 4.2's caption (0.296) against the text and Eq. 4.8 (0.293) for 440c.
 pub fn mu_440c(d: &ReportData) -> AuditItem {
-    let mat = d.materials().into_iter().find(|m| m.eq_ignore_ascii_case("440c"));
+    let mat = d
+        .materials()
+        .into_iter()
+        .find(|m| m.eq_ignore_ascii_case("440c"));
     let ours = mat.as_deref().and_then(|m| mu_fast(d, m));
     let mut numbers = vec![
-        row("caption of Fig. 4.2", format!("{:.3}", chapter::MU_440C_CAPTION)),
+        row(
+            "caption of Fig. 4.2",
+            format!("{:.3}", chapter::MU_440C_CAPTION),
+        ),
         row("text and Eq. 4.8", format!("{:.3}", chapter::MU_440C)),
-        row("difference (relative)", format!("{:.1} %", (chapter::MU_440C_CAPTION - chapter::MU_440C) / chapter::MU_440C * 100.0)),
+        row(
+            "difference (relative)",
+            format!(
+                "{:.1} %",
+                (chapter::MU_440C_CAPTION - chapter::MU_440C) / chapter::MU_440C * 100.0
+            ),
+        ),
     ];
-    let mut verdict = "the two printed values differ by 0.003; this report uses 0.293 (the text and Eq. 4.8)".to_string();
+    let mut verdict =
+        "the two printed values differ by 0.003; this report uses 0.293 (the text and Eq. 4.8)"
+            .to_string();
     if let Some(a) = ours {
-        numbers.push(row("our 440c mean for |v0| > 0.03 m/s", super::value::pm(a.est)));
+        numbers.push(row(
+            "our 440c mean for |v0| > 0.03 m/s",
+            super::value::pm(a.est),
+        ));
         if let Some(se) = a.est.stderr {
             let z = |c: f64| (a.est.value - c) / se;
-            numbers.push(row("distance from 0.293 / 0.296 (standard errors)", format!("{:.1} / {:.1}", z(0.293), z(0.296))));
+            numbers.push(row(
+                "distance from 0.293 / 0.296 (standard errors)",
+                format!("{:.1} / {:.1}", z(0.293), z(0.296)),
+            ));
             verdict.push_str(&format!(
                 "; our estimate's standard error ({se:.4}) is {} the 0.003 between them",
-                if se > 0.003 { "larger than" } else { "smaller than" }
+                if se > 0.003 {
+                    "larger than"
+                } else {
+                    "smaller than"
+                }
             ));
         }
     }
@@ -213,5 +270,12 @@ pub fn mu_440c(d: &ReportData) -> AuditItem {
 /// Every audit item in physics.md's order.
 pub fn audit(d: &ReportData) -> Vec<AuditItem> {
     let g = Groove::CHAPTER;
-    vec![eq_4_6(g), eq_4_7(d), stokes(d), eq_4_15(g), citation(g), mu_440c(d)]
+    vec![
+        eq_4_6(g),
+        eq_4_7(d),
+        stokes(d),
+        eq_4_15(g),
+        citation(g),
+        mu_440c(d),
+    ]
 }

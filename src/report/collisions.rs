@@ -67,19 +67,46 @@ fn pair(v: &Value) -> Option<PairState> {
 fn impact(v: &Value) -> Option<Impact> {
     let pre = field(v, &["pre", "before"]).and_then(pair);
     let post = field(v, &["post", "after"]).and_then(pair);
-    let speed = num(v, &["impact_speed_mps", "v_impact_mps", "relative_speed_mps", "speed_mps"])
-        .or_else(|| pre.map(|p| p.v_mps[0] - p.v_mps[1]))?
-        .abs();
-    let restitution = num(v, &["restitution", "c", "C", "cor", "coefficient_of_restitution"])
-        .or_else(|| {
-            let (a, b) = (pre?, post?);
-            let rel = a.v_mps[0] - a.v_mps[1];
-            (rel.abs() > 0.0).then(|| (b.v_mps[1] - b.v_mps[0]) / rel)
-        });
-    let dvz = num(v, &["dvz_target_mps", "target_dvz_mps", "delta_vz_target_mps", "dv_z_mps"])
-        .or_else(|| Some(post?.v_mps[1] - pre?.v_mps[1]));
-    let dva = num(v, &["dva_target_mps", "target_dva_mps", "delta_va_target_mps", "dv_a_mps"])
-        .or_else(|| Some(post?.va_mps[1]? - pre?.va_mps[1]?));
+    let speed = num(
+        v,
+        &[
+            "impact_speed_mps",
+            "v_impact_mps",
+            "relative_speed_mps",
+            "speed_mps",
+        ],
+    )
+    .or_else(|| pre.map(|p| p.v_mps[0] - p.v_mps[1]))?
+    .abs();
+    let restitution = num(
+        v,
+        &["restitution", "c", "C", "cor", "coefficient_of_restitution"],
+    )
+    .or_else(|| {
+        let (a, b) = (pre?, post?);
+        let rel = a.v_mps[0] - a.v_mps[1];
+        (rel.abs() > 0.0).then(|| (b.v_mps[1] - b.v_mps[0]) / rel)
+    });
+    let dvz = num(
+        v,
+        &[
+            "dvz_target_mps",
+            "target_dvz_mps",
+            "delta_vz_target_mps",
+            "dv_z_mps",
+        ],
+    )
+    .or_else(|| Some(post?.v_mps[1] - pre?.v_mps[1]));
+    let dva = num(
+        v,
+        &[
+            "dva_target_mps",
+            "target_dva_mps",
+            "delta_va_target_mps",
+            "dv_a_mps",
+        ],
+    )
+    .or_else(|| Some(post?.va_mps[1]? - pre?.va_mps[1]?));
     let slip = match field(v, &["slip", "regime", "kind", "contact_mode"]) {
         Some(Value::Bool(b)) => Some(*b),
         Some(Value::String(s)) if s.contains("slip") => Some(true),
@@ -127,7 +154,11 @@ pub fn from_fit_json(run: &str, material: &str, setup: Option<&str>, fit: &Value
             }
         }
     }
-    segments.sort_by(|a, b| (a.particle, a.t_start_s).partial_cmp(&(b.particle, b.t_start_s)).unwrap());
+    segments.sort_by(|a, b| {
+        (a.particle, a.t_start_s)
+            .partial_cmp(&(b.particle, b.t_start_s))
+            .unwrap()
+    });
     let setup = text(fit, &["setup"]).or(setup).unwrap_or("rolling");
     CollisionRun {
         run: text(fit, &["run"]).unwrap_or(run).to_string(),

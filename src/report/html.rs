@@ -32,12 +32,17 @@ pub fn render(page: &Page) -> Result<String, String> {
         }
     }
     let mut env = Environment::new();
-    env.set_trim_blocks(true);
-    env.set_lstrip_blocks(true);
+    let syntax = minijinja::syntax::SyntaxConfig::builder()
+        .trim_blocks(true)
+        .lstrip_blocks(true)
+        .build()
+        .map_err(|e| format!("template syntax: {e}"))?;
+    env.set_syntax(syntax);
     env.set_auto_escape_callback(|_| AutoEscape::Html);
-    env.add_template("report.html", TEMPLATE).map_err(|e| format!("html template: {e}"))?;
+    env.add_template("report.html", TEMPLATE)
+        .map_err(|e| format!("html template: {e}"))?;
     env.get_template("report.html")
-        .and_then(|t| t.render(context! { page => page, css => CSS }))
+        .and_then(|t| t.render(context! { page => minijinja::value::Serde(&page), css => CSS }))
         .map(|s| if s.ends_with('\n') { s } else { s + "\n" })
         .map_err(|e| format!("rendering report.html failed: {e}"))
 }

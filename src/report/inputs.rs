@@ -27,7 +27,7 @@ pub struct ReportData {
 }
 
 fn file<'a>(inputs: &BTreeMap<&str, &'a Artifact>, name: &str) -> Result<Option<&'a [u8]>, String> {
-    match inputs.get(name) {
+    match inputs.get(name).copied() {
         None => Ok(None),
         Some(Artifact::File(b)) => Ok(Some(b)),
         Some(Artifact::Collection(_)) => Err(format!(
@@ -40,7 +40,7 @@ fn items<'a>(
     inputs: &BTreeMap<&str, &'a Artifact>,
     name: &str,
 ) -> Result<Vec<(&'a str, &'a [u8])>, String> {
-    match inputs.get(name) {
+    match inputs.get(name).copied() {
         None => Ok(Vec::new()),
         Some(Artifact::Collection(m)) => Ok(m.iter().map(|(k, v)| (k.as_str(), v.as_slice())).collect()),
         Some(Artifact::File(_)) => Err(format!(
@@ -50,7 +50,8 @@ fn items<'a>(
 }
 
 fn json(name: &str, bytes: &[u8]) -> Result<Value, String> {
-    serde_json::from_slice(bytes).map_err(|e| format!("{name} is not valid JSON ({e}); rerun the stage that makes it"))
+    serde_json::from_slice(bytes)
+        .map_err(|e| format!("{name} is not valid JSON ({e}); rerun the stage that makes it"))
 }
 
 impl ReportData {
@@ -70,18 +71,21 @@ impl ReportData {
             let run = super::value::text(&fit, &["run"]).unwrap_or(name.trim_end_matches(".json"));
             let info = d.recordings.get(run).map(|r| &r.info);
             let material = info.map(|i| i.material.as_str()).unwrap_or("");
-            let experiment = super::value::text(&fit, &["experiment"]).map(str::to_string).or_else(|| {
-                info.map(|i| match i.experiment {
-                    Experiment::Single => "single".to_string(),
-                    Experiment::Collision => "collision".to_string(),
-                })
-            });
+            let experiment = super::value::text(&fit, &["experiment"])
+                .map(str::to_string)
+                .or_else(|| {
+                    info.map(|i| match i.experiment {
+                        Experiment::Single => "single".to_string(),
+                        Experiment::Collision => "collision".to_string(),
+                    })
+                });
             if experiment.as_deref() == Some("collision") {
                 let setup = info.and_then(|i| i.setup).map(|s| match s {
                     Setup::Rolling => "rolling",
                     Setup::Contact => "contact",
                 });
-                d.collisions.push(collisions::from_fit_json(run, material, setup, &fit));
+                d.collisions
+                    .push(collisions::from_fit_json(run, material, setup, &fit));
             } else if let Some(row) = singles::from_fit_json(run, material, &fit) {
                 single_json.insert(row.run.clone(), row);
             }
@@ -97,7 +101,9 @@ impl ReportData {
         d.collisions.sort_by(|a, b| a.run.cmp(&b.run));
         for (name, bytes) in items(inputs, "residuals")? {
             let v = json(&format!("residuals item `{name}`"), bytes)?;
-            let run = super::value::text(&v, &["run"]).unwrap_or(name.trim_end_matches(".json")).to_string();
+            let run = super::value::text(&v, &["run"])
+                .unwrap_or(name.trim_end_matches(".json"))
+                .to_string();
             d.residuals.insert(run, v);
         }
         let opt = |n: &str| -> Result<Option<Value>, String> {
@@ -110,7 +116,9 @@ impl ReportData {
         if let Some(Value::Array(list)) = opt("skipped")? {
             for s in list {
                 let run = super::value::text(&s, &["run"]).unwrap_or("?").to_string();
-                let why = super::value::text(&s, &["reason", "why"]).unwrap_or("").to_string();
+                let why = super::value::text(&s, &["reason", "why"])
+                    .unwrap_or("")
+                    .to_string();
                 d.skipped.push((run, why));
             }
         }
@@ -128,6 +136,8 @@ impl ReportData {
 
     /// Converged single fits of one material.
     pub fn singles_of<'a>(&'a self, material: &'a str) -> impl Iterator<Item = &'a SingleRow> + 'a {
-        self.singles.iter().filter(move |r| r.material == material && r.converged())
+        self.singles
+            .iter()
+            .filter(move |r| r.material == material && r.converged())
     }
 }

@@ -14,14 +14,19 @@ fn cell(s: String) -> String {
 /// Render report.md.
 pub fn render(page: &Page) -> Result<String, String> {
     let mut env = Environment::new();
-    env.set_trim_blocks(true);
-    env.set_lstrip_blocks(true);
+    let syntax = minijinja::syntax::SyntaxConfig::builder()
+        .trim_blocks(true)
+        .lstrip_blocks(true)
+        .build()
+        .map_err(|e| format!("template syntax: {e}"))?;
+    env.set_syntax(syntax);
     env.set_auto_escape_callback(|_| AutoEscape::None);
     env.add_filter("cell", cell);
-    env.add_template("report.md", TEMPLATE).map_err(|e| format!("markdown template: {e}"))?;
+    env.add_template("report.md", TEMPLATE)
+        .map_err(|e| format!("markdown template: {e}"))?;
     let out = env
         .get_template("report.md")
-        .and_then(|t| t.render(context! { page => page }))
+        .and_then(|t| t.render(context! { page => minijinja::value::Serde(page) }))
         .map_err(|e| format!("rendering report.md failed: {e}"))?;
     Ok(tidy(&out))
 }

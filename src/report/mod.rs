@@ -42,5 +42,8 @@ pub fn render_pages(
     date_epoch_s: Option<i64>,
 ) -> Result<Pages, String> {
     let page = sections::build(d, figures, title, date_epoch_s.map(date::utc_date));
-    Ok(Pages { html: html::render(&page)?, md: markdown::render(&page)? })
+    Ok(Pages {
+        html: html::render(&page)?,
+        md: markdown::render(&page)?,
+    })
 }

@@ -54,18 +54,31 @@ pub fn parse_fits_csv(csv: &str) -> Result<Vec<SingleRow>, String> {
                 .and_then(|s| s.parse::<f64>().ok())
                 .filter(|x| x.is_finite())
         };
-        let (Some(v0), Some(mu), Some(t)) = (get(Some(c_v0)), get(Some(c_mu)), get(Some(c_t))) else {
+        let (Some(v0), Some(mu), Some(t)) = (get(Some(c_v0)), get(Some(c_mu)), get(Some(c_t)))
+        else {
             continue;
         };
         rows.push(SingleRow {
             run: cells.get(c_run).unwrap_or(&"").to_string(),
             material: cells.get(c_mat).unwrap_or(&"").to_string(),
-            v0_mps: Est { value: v0, stderr: get(c_v0se) },
-            mu: Est { value: mu, stderr: get(c_muse) },
-            t_drag_s: Est { value: t, stderr: get(c_tse) },
+            v0_mps: Est {
+                value: v0,
+                stderr: get(c_v0se),
+            },
+            mu: Est {
+                value: mu,
+                stderr: get(c_muse),
+            },
+            t_drag_s: Est {
+                value: t,
+                stderr: get(c_tse),
+            },
             t1_s: get(c_t1),
             rms_m: get(c_rms),
-            status: c_status.and_then(|i| cells.get(i)).unwrap_or(&"").to_string(),
+            status: c_status
+                .and_then(|i| cells.get(i))
+                .unwrap_or(&"")
+                .to_string(),
             z0_m: None,
             t0_s: None,
         });
@@ -83,7 +96,10 @@ pub fn from_fit_json(run: &str, material: &str, fit: &Value) -> Option<SingleRow
     let t = est(params, &["T_s", "t_drag_s", "T", "t_s"])?;
     let status = text(body, &["status", "termination", "reason"])
         .map(str::to_string)
-        .or_else(|| body.get("status").map(|s| s.to_string().trim_matches('"').to_string()))
+        .or_else(|| {
+            body.get("status")
+                .map(|s| s.to_string().trim_matches('"').to_string())
+        })
         .unwrap_or_default();
     Some(SingleRow {
         run: text(fit, &["run"]).unwrap_or(run).to_string(),

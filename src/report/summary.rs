@@ -25,7 +25,10 @@ pub fn material_obj<'a>(summary: &'a Value, material: &str) -> Option<&'a Value>
                 }
             }
             Some(Value::Array(a)) => {
-                if let Some(v) = a.iter().find(|o| o.get("material").and_then(Value::as_str) == Some(material)) {
+                if let Some(v) = a
+                    .iter()
+                    .find(|o| o.get("material").and_then(Value::as_str) == Some(material))
+                {
                     return Some(v);
                 }
             }
@@ -44,7 +47,11 @@ fn agg(obj: &Value, names: &[&str]) -> Option<Agg> {
             let refs: Vec<&str> = cands.iter().map(String::as_str).collect();
             interval(obj, &refs)
         });
-    Some(Agg { est: e, interval: iv, source: "summary.json" })
+    Some(Agg {
+        est: e,
+        interval: iv,
+        source: "summary.json",
+    })
 }
 
 fn mean_se(xs: &[f64]) -> Option<Est> {
@@ -57,21 +64,41 @@ fn mean_se(xs: &[f64]) -> Option<Est> {
         let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64;
         (var / n as f64).sqrt()
     });
-    Some(Est { value: m, stderr: se })
+    Some(Est {
+        value: m,
+        stderr: se,
+    })
 }
 
 /// μ_pg mean of runs with |v0| > 0.03 m/s (the chapter's definition).
 pub fn mu_fast(d: &ReportData, material: &str) -> Option<Agg> {
-    let from_summary = d.summary.as_ref().and_then(|s| material_obj(s, material)).and_then(|o| {
-        agg(o, &["mu_fast", "mu_v0_gt_0_03", "mu_above_0_03", "mu_chapter", "mu_v0_above"])
-    });
+    let from_summary = d
+        .summary
+        .as_ref()
+        .and_then(|s| material_obj(s, material))
+        .and_then(|o| {
+            agg(
+                o,
+                &[
+                    "mu_fast",
+                    "mu_v0_gt_0_03",
+                    "mu_above_0_03",
+                    "mu_chapter",
+                    "mu_v0_above",
+                ],
+            )
+        });
     from_summary.or_else(|| {
         let xs: Vec<f64> = d
             .singles_of(material)
             .filter(|r| r.v0_mps.value.abs() > super::chapter::MU_MEAN_V0_MIN_MPS)
             .map(|r| r.mu.value)
             .collect();
-        mean_se(&xs).map(|e| Agg { est: e, interval: None, source: "per-run fits" })
+        mean_se(&xs).map(|e| Agg {
+            est: e,
+            interval: None,
+            source: "per-run fits",
+        })
     })
 }
 
@@ -84,7 +111,11 @@ pub fn mu_all(d: &ReportData, material: &str) -> Option<Agg> {
         .and_then(|o| agg(o, &["mu", "mu_weighted", "mu_pg"]));
     from_summary.or_else(|| {
         let xs: Vec<f64> = d.singles_of(material).map(|r| r.mu.value).collect();
-        mean_se(&xs).map(|e| Agg { est: e, interval: None, source: "per-run fits" })
+        mean_se(&xs).map(|e| Agg {
+            est: e,
+            interval: None,
+            source: "per-run fits",
+        })
     })
 }
 
@@ -92,12 +123,35 @@ pub fn mu_all(d: &ReportData, material: &str) -> Option<Agg> {
 pub fn t_line(d: &ReportData, material: Option<&str>) -> Option<(Agg, Agg)> {
     let obj = match material {
         Some(m) => d.summary.as_ref().and_then(|s| material_obj(s, m)),
-        None => d.summary.as_ref().and_then(|s| field(s, &["pooled", "all"])),
+        None => d
+            .summary
+            .as_ref()
+            .and_then(|s| field(s, &["pooled", "all"])),
     };
-    let line = obj.and_then(|o| field(o, &["t_line", "T_line", "t_vs_v0", "T_vs_v0", "drag_line", "T_v0"]));
+    let line = obj.and_then(|o| {
+        field(
+            o,
+            &[
+                "t_line",
+                "T_line",
+                "t_vs_v0",
+                "T_vs_v0",
+                "drag_line",
+                "T_v0",
+            ],
+        )
+    });
     if let Some(l) = line {
         let a = agg(l, &["intercept_s", "intercept", "t0_s", "T0_s"]);
-        let b = agg(l, &["slope_s_per_mps", "slope", "t_prime_s_per_mps", "Tp_s_per_mps"]);
+        let b = agg(
+            l,
+            &[
+                "slope_s_per_mps",
+                "slope",
+                "t_prime_s_per_mps",
+                "Tp_s_per_mps",
+            ],
+        );
         if let (Some(a), Some(b)) = (a, b) {
             return Some((a, b));
         }
@@ -109,7 +163,14 @@ pub fn t_line(d: &ReportData, material: Option<&str>) -> Option<(Agg, Agg)> {
         .map(|r| (r.v0_mps.value.abs(), r.t_drag_s.value))
         .collect();
     let (a, b) = ols(&pts)?;
-    let mk = |v| Agg { est: Est { value: v, stderr: None }, interval: None, source: "per-run fits" };
+    let mk = |v| Agg {
+        est: Est {
+            value: v,
+            stderr: None,
+        },
+        interval: None,
+        source: "per-run fits",
+    };
     Some((mk(a), mk(b)))
 }
 
@@ -130,7 +191,10 @@ pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
             .filter_map(|i| Some((i.dvz_target_mps?, i.dva_target_mps?)))
             .fold((0.0, 0.0), |(sxy, sxx), (x, y)| (sxy + x * y, sxx + x * x));
         (sxx > 0.0).then(|| Agg {
-            est: Est { value: (sxy / sxx).abs() / k, stderr: None },
+            est: Est {
+                value: (sxy / sxx).abs() / k,
+                stderr: None,
+            },
             interval: None,
             source: "impacts (slip)",
         })

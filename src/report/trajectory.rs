@@ -32,7 +32,8 @@ pub fn from_residuals(v: &Value) -> Option<Vec<Sample>> {
     const ZO: [&str; 3] = ["z_obs_m", "z_obs", "z_m"];
     const ZF: [&str; 5] = ["z_fit_m", "z_sim_m", "z_fit", "z_sim", "z_model_m"];
     let rolling = |p: Option<&Value>| {
-        p.and_then(Value::as_str).is_some_and(|s| s.eq_ignore_ascii_case("rolling") || s.eq_ignore_ascii_case("rest"))
+        p.and_then(Value::as_str)
+            .is_some_and(|s| s.eq_ignore_ascii_case("rolling") || s.eq_ignore_ascii_case("rest"))
     };
     if let Some(rows) = v.as_array() {
         let out: Vec<Sample> = rows
@@ -68,14 +69,23 @@ pub fn from_residuals(v: &Value) -> Option<Vec<Sample>> {
 pub fn from_fit(rec: &Recording, fit: &SingleRow, groove: Groove) -> Option<Vec<Sample>> {
     let track = rec.tracks.first()?;
     let (z0, t0) = (fit.z0_m?, fit.t0_s.unwrap_or(0.0));
-    let model = Baseline { mu: fit.mu.value, t_drag_s: fit.t_drag_s.value, groove };
+    let model = Baseline {
+        mu: fit.mu.value,
+        t_drag_s: fit.t_drag_s.value,
+        groove,
+    };
     let out = track
         .t_s
         .iter()
         .zip(&track.z_m)
         .map(|(&t, &z)| {
             let (dz, _v, phase) = model.state(fit.v0_mps.value, t + t0);
-            Sample { t_s: t, z_obs_m: z, z_fit_m: z0 + dz, rolling: !matches!(phase, Phase::Sliding) }
+            Sample {
+                t_s: t,
+                z_obs_m: z,
+                z_fit_m: z0 + dz,
+                rolling: !matches!(phase, Phase::Sliding),
+            }
         })
         .collect();
     Some(out)

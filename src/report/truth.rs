@@ -28,12 +28,18 @@ fn walk(v: &Value, path: String, out: &mut Vec<TruthRow>) {
                     path: path.clone(),
                     ours: num(v, &["recovered", "fitted", "estimate", "value", "ours"]),
                     truth: t,
-                    ok: ["ok", "within", "pass", "passed"].iter().find_map(|k| m.get(*k).and_then(Value::as_bool)),
+                    ok: ["ok", "within", "pass", "passed"]
+                        .iter()
+                        .find_map(|k| m.get(*k).and_then(Value::as_bool)),
                 });
                 return;
             }
             for (k, x) in m {
-                let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
                 walk(x, p, out);
             }
         }
@@ -63,7 +69,9 @@ pub fn lookup(rows: &[TruthRow], tokens: &[&str]) -> Option<f64> {
                 .filter(|s| !s.is_empty())
                 .map(str::to_ascii_lowercase)
                 .collect();
-            tokens.iter().all(|t| segs.iter().any(|s| s == &t.to_ascii_lowercase()))
+            tokens
+                .iter()
+                .all(|t| segs.iter().any(|s| s == &t.to_ascii_lowercase()))
         })
         .map(|r| r.truth)
 }

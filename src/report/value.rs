@@ -15,7 +15,10 @@ pub struct Est {
 /// The first of `names` present in `obj` (an object), as a raw value.
 pub fn field<'a>(obj: &'a Value, names: &[&str]) -> Option<&'a Value> {
     let map = obj.as_object()?;
-    names.iter().find_map(|n| map.get(*n)).filter(|v| !v.is_null())
+    names
+        .iter()
+        .find_map(|n| map.get(*n))
+        .filter(|v| !v.is_null())
 }
 
 /// A finite number under the first of `names`; an object with `value` (or `estimate`) counts too.
@@ -42,7 +45,10 @@ pub fn est(obj: &Value, names: &[&str]) -> Option<Est> {
     let mut stderr = num(v, &["stderr", "se", "std_err", "sigma"]);
     if stderr.is_none() {
         for n in names {
-            let base = n.trim_end_matches("_mps").trim_end_matches("_s").trim_end_matches("_m");
+            let base = n
+                .trim_end_matches("_mps")
+                .trim_end_matches("_s")
+                .trim_end_matches("_m");
             let cands = [
                 format!("{n}_se"),
                 format!("{n}_stderr"),
@@ -50,9 +56,8 @@ pub fn est(obj: &Value, names: &[&str]) -> Option<Est> {
                 format!("{base}_stderr"),
             ];
             let refs: Vec<&str> = cands.iter().map(String::as_str).collect();
-            stderr = num(obj, &refs).or_else(|| {
-                field(obj, &["stderr", "se"]).and_then(|s| num(s, &[n, base]))
-            });
+            stderr = num(obj, &refs)
+                .or_else(|| field(obj, &["stderr", "se"]).and_then(|s| num(s, &[n, base])));
             if stderr.is_some() {
                 break;
             }
@@ -129,7 +134,10 @@ mod tests {
 
     #[test]
     fn formats_with_error_digits() {
-        let e = Est { value: 0.33712, stderr: Some(0.0042) };
+        let e = Est {
+            value: 0.33712,
+            stderr: Some(0.0042),
+        };
         assert_eq!(pm(e), "0.3371 ± 0.0042");
         assert_eq!(sig(2.1834, 3), "2.18");
         assert_eq!(sig(0.0483, 2), "0.048");

@@ -1,7 +1,9 @@
 //! The `report` stage kind: report.html (self-contained) and report.md from the figures and artifacts.
 // groove:uses src/report src/physics src/recording.rs src/stages/report.rs
 
-use crate::engine::stage::{typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
 use crate::report::{render_pages, ReportData};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -37,7 +39,15 @@ impl StageKind for Report {
         &["figures", "runs", "fits"]
     }
     fn optional_inputs(&self) -> &'static [&'static str] {
-        &["fits_csv", "summary", "residuals", "diagnosis", "validation", "provenance", "skipped"]
+        &[
+            "fits_csv",
+            "summary",
+            "residuals",
+            "diagnosis",
+            "validation",
+            "provenance",
+            "skipped",
+        ]
     }
     fn outputs(&self) -> &'static [&'static str] {
         &["html", "md"]
@@ -46,7 +56,8 @@ impl StageKind for Report {
         typed_params::<ReportParams>(params).map(|(_, json)| json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
-        let (p, _) = typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let (p, _) =
+            typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
         let data = ReportData::from_artifacts(&input.inputs).map_err(StageError)?;
         let figures: BTreeMap<String, String> = match input.inputs.get("figures") {
             Some(Artifact::Collection(m)) => m
@@ -55,7 +66,8 @@ impl StageKind for Report {
                 .collect(),
             _ => return Err(StageError("input `figures` must be the figures stage's collection (figures = \"figures:figures\")".into())),
         };
-        let pages = render_pages(&data, &figures, &p.title, p.source_date_epoch).map_err(StageError)?;
+        let pages =
+            render_pages(&data, &figures, &p.title, p.source_date_epoch).map_err(StageError)?;
         Ok(StageOutputs::from([
             ("html".to_string(), Artifact::File(pages.html.into_bytes())),
             ("md".to_string(), Artifact::File(pages.md.into_bytes())),

@@ -12,7 +12,8 @@ pub type Res = Result<(), Box<dyn std::error::Error>>;
 pub fn render(draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res) -> Result<String, String> {
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         draw(&root).map_err(|e| format!("drawing a figure failed: {e}"))?;
         root.present().map_err(|e| e.to_string())?;
@@ -28,8 +29,10 @@ pub fn linear_chart<'a, 'b>(
     y: (f64, f64),
     x_desc: &str,
     y_desc: &str,
-) -> Result<ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>, Box<dyn std::error::Error>>
-{
+) -> Result<
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    Box<dyn std::error::Error>,
+> {
     let mut chart = ChartBuilder::on(root)
         .caption(caption, (style::FONT, style::CAPTION_PX))
         .margin(14)
@@ -51,8 +54,8 @@ pub fn linear_chart<'a, 'b>(
 }
 
 /// Scatter `pts` with a material's marker; `label` puts it in the legend.
-pub fn scatter<X, Y>(
-    chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+pub fn scatter<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
     pts: &[(f64, f64)],
     marker: Marker,
     colour: RGBColor,
@@ -63,14 +66,21 @@ where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
-    let st = if filled { colour.filled() } else { colour.stroke_width(2) };
+    let st = if filled {
+        colour.filled()
+    } else {
+        colour.stroke_width(2)
+    };
     let pts = pts.to_vec();
     let anno = match marker {
         Marker::Circle => chart.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, st)))?,
         Marker::Square => chart.draw_series(
-            pts.into_iter().map(move |p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], st)),
+            pts.into_iter()
+                .map(move |p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], st)),
         )?,
-        Marker::Triangle => chart.draw_series(pts.into_iter().map(move |p| TriangleMarker::new(p, 6, st)))?,
+        Marker::Triangle => {
+            chart.draw_series(pts.into_iter().map(move |p| TriangleMarker::new(p, 6, st)))?
+        }
         Marker::Diamond => chart.draw_series(pts.into_iter().map(move |p| {
             EmptyElement::at(p) + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], st)
         }))?,
@@ -88,7 +98,10 @@ fn legend_shape(marker: Marker) -> Vec<(i32, i32)> {
         Marker::Circle => (0..12)
             .map(|i| {
                 let a = i as f64 * std::f64::consts::PI / 6.0;
-                ((5.0 * a.cos()).round() as i32, (5.0 * a.sin()).round() as i32)
+                (
+                    (5.0 * a.cos()).round() as i32,
+                    (5.0 * a.sin()).round() as i32,
+                )
             })
             .collect(),
         Marker::Square => vec![(-4, -4), (4, -4), (4, 4), (-4, 4)],
@@ -98,8 +111,8 @@ fn legend_shape(marker: Marker) -> Vec<(i32, i32)> {
 }
 
 /// Vertical error bars of ±`err` at each (x, y).
-pub fn error_bars<X, Y>(
-    chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+pub fn error_bars<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
     pts: &[(f64, f64, f64)],
     colour: RGBColor,
 ) -> Res
@@ -117,8 +130,8 @@ where
 }
 
 /// A polyline; `dashed` for reference values (the chapter's), solid for ours.
-pub fn line<X, Y>(
-    chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>,
+pub fn line<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
     pts: Vec<(f64, f64)>,
     colour: RGBColor,
     width: u32,
@@ -148,7 +161,10 @@ where
 }
 
 /// Draw the legend box in the given corner.
-pub fn legend<X, Y>(chart: &mut ChartContext<SVGBackend, Cartesian2d<X, Y>>, pos: SeriesLabelPosition) -> Res
+pub fn legend<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pos: SeriesLabelPosition,
+) -> Res
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,

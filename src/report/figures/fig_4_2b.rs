@@ -13,8 +13,13 @@ pub fn choose<'a>(d: &'a ReportData, wanted: Option<&str>) -> Option<&'a SingleR
     if let Some(w) = wanted {
         return d.singles.iter().find(|r| r.run == w);
     }
-    let dist = |r: &&SingleRow| (r.v0_mps.value.abs() - crate::report::chapter::FIG_4_2B_V0_MPS).abs();
-    let ok = || d.singles.iter().filter(|r| r.converged() && d.recordings.contains_key(&r.run));
+    let dist =
+        |r: &&SingleRow| (r.v0_mps.value.abs() - crate::report::chapter::FIG_4_2B_V0_MPS).abs();
+    let ok = || {
+        d.singles
+            .iter()
+            .filter(|r| r.converged() && d.recordings.contains_key(&r.run))
+    };
     ok().filter(|r| r.v0_mps.value > 0.0)
         .min_by(|a, b| dist(a).total_cmp(&dist(b)))
         .or_else(|| ok().min_by(|a, b| dist(a).total_cmp(&dist(b))))
@@ -25,19 +30,33 @@ pub fn samples(d: &ReportData, fit: &SingleRow) -> Option<Vec<Sample>> {
     d.residuals
         .get(&fit.run)
         .and_then(trajectory::from_residuals)
-        .or_else(|| trajectory::from_fit(d.recordings.get(&fit.run)?, fit, crate::physics::Groove::CHAPTER))
+        .or_else(|| {
+            trajectory::from_fit(
+                d.recordings.get(&fit.run)?,
+                fit,
+                crate::physics::Groove::CHAPTER,
+            )
+        })
 }
 
 /// Render Fig. 4.2b, or None when no single run has a usable fit.
 pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>, String> {
-    let Some(fit) = choose(d, wanted) else { return Ok(None) };
-    let Some(s) = samples(d, fit) else { return Ok(None) };
+    let Some(fit) = choose(d, wanted) else {
+        return Ok(None);
+    };
+    let Some(s) = samples(d, fit) else {
+        return Ok(None);
+    };
     let z_ref = s[0].z_obs_m;
     let mm = |z: f64| (z - z_ref) * 1e3;
     let ms = |t: f64| t * 1e3;
     let step = (s.len() / 300).max(1);
     let pick = |rolling: bool| -> Vec<(f64, f64)> {
-        s.iter().step_by(step).filter(|p| p.rolling == rolling).map(|p| (ms(p.t_s), mm(p.z_obs_m))).collect()
+        s.iter()
+            .step_by(step)
+            .filter(|p| p.rolling == rolling)
+            .map(|p| (ms(p.t_s), mm(p.z_obs_m)))
+            .collect()
     };
     let (sliding, rolling) = (pick(false), pick(true));
     let curve: Vec<(f64, f64)> = s.iter().map(|p| (ms(p.t_s), mm(p.z_fit_m))).collect();
@@ -49,14 +68,53 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
         fit.run, fit.material, fit.v0_mps.value
     );
     let svg = render(|root| {
-        let mut c = linear_chart(root, &caption, xr, yr, "time t (ms)", "position z − z(0) (mm)")?;
-        scatter(&mut c, &sliding, Marker::Circle, style::SLIDING, true, Some("observed, sliding"))?;
-        scatter(&mut c, &rolling, Marker::Circle, style::ROLLING, true, Some("observed, rolling"))?;
-        line(&mut c, curve, style::BLACK, 2, false, Some("fitted baseline"))?;
+        let mut c = linear_chart(
+            root,
+            &caption,
+            xr,
+            yr,
+            "time t (ms)",
+            "position z − z(0) (mm)",
+        )?;
+        scatter(
+            &mut c,
+            &sliding,
+            Marker::Circle,
+            style::SLIDING,
+            true,
+            Some("observed, sliding"),
+        )?;
+        scatter(
+            &mut c,
+            &rolling,
+            Marker::Circle,
+            style::ROLLING,
+            true,
+            Some("observed, rolling"),
+        )?;
+        line(
+            &mut c,
+            curve,
+            style::BLACK,
+            2,
+            false,
+            Some("fitted baseline"),
+        )?;
         if let Some(t1) = switch {
-            line(&mut c, vec![(t1, yr.0), (t1, yr.1)], style::GREY, 1, true, Some("switch t1"))?;
+            line(
+                &mut c,
+                vec![(t1, yr.0), (t1, yr.1)],
+                style::GREY,
+                1,
+                true,
+                Some("switch t1"),
+            )?;
         }
-        let pos = if fit.v0_mps.value >= 0.0 { SeriesLabelPosition::LowerRight } else { SeriesLabelPosition::UpperRight };
+        let pos = if fit.v0_mps.value >= 0.0 {
+            SeriesLabelPosition::LowerRight
+        } else {
+            SeriesLabelPosition::UpperRight
+        };
         legend(&mut c, pos)
     })?;
     Ok(Some(svg))

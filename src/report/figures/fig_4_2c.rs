@@ -10,18 +10,41 @@ use plotters::prelude::*;
 
 /// Render Fig. 4.2c, or None without single-run fits.
 pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
-    let mats: Vec<String> = d.materials().into_iter().filter(|m| d.singles_of(m).next().is_some()).collect();
+    let mats: Vec<String> = d
+        .materials()
+        .into_iter()
+        .filter(|m| d.singles_of(m).next().is_some())
+        .collect();
     if mats.is_empty() {
         return Ok(None);
     }
-    let stokes = chapter::stokes_time_s(chapter::RADIUS_M, chapter::DENSITY_KG_M3, chapter::AIR_VISCOSITY_PA_S);
-    let all: Vec<f64> = d.singles.iter().filter(|r| r.converged()).map(|r| r.t_drag_s.value).collect();
-    let x_max = span(d.singles.iter().map(|r| r.v0_mps.value.abs()), 0.05).1.max(0.01);
-    let y_lo = all.iter().cloned().filter(|t| *t > 0.0).fold(chapter::T0_S, f64::min) * 0.7;
+    let stokes = chapter::stokes_time_s(
+        chapter::RADIUS_M,
+        chapter::DENSITY_KG_M3,
+        chapter::AIR_VISCOSITY_PA_S,
+    );
+    let all: Vec<f64> = d
+        .singles
+        .iter()
+        .filter(|r| r.converged())
+        .map(|r| r.t_drag_s.value)
+        .collect();
+    let x_max = span(d.singles.iter().map(|r| r.v0_mps.value.abs()), 0.05)
+        .1
+        .max(0.01);
+    let y_lo = all
+        .iter()
+        .cloned()
+        .filter(|t| *t > 0.0)
+        .fold(chapter::T0_S, f64::min)
+        * 0.7;
     let y_hi = stokes * 1.6;
     let svg = render(|root| {
         let mut c = ChartBuilder::on(root)
-            .caption("Fig. 4.2c: drag time T against initial speed", (style::FONT, style::CAPTION_PX))
+            .caption(
+                "Fig. 4.2c: drag time T against initial speed",
+                (style::FONT, style::CAPTION_PX),
+            )
             .margin(14)
             .x_label_area_size(56)
             .y_label_area_size(84)
@@ -37,14 +60,24 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             .draw()?;
         for (i, m) in mats.iter().enumerate() {
             let col = style::material_colour(m, i);
-            let pts: Vec<(f64, f64)> = d.singles_of(m).map(|r| (r.v0_mps.value.abs(), r.t_drag_s.value)).collect();
+            let pts: Vec<(f64, f64)> = d
+                .singles_of(m)
+                .map(|r| (r.v0_mps.value.abs(), r.t_drag_s.value))
+                .collect();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
                 .filter_map(|r| Some((r.v0_mps.value.abs(), r.t_drag_s.value, r.t_drag_s.stderr?)))
                 .filter(|(_, t, e)| t - e > 0.0)
                 .collect();
             super::common::error_bars(&mut c, &bars, col)?;
-            scatter(&mut c, &pts, style::marker(m, false), col, true, Some(&format!("{m}: fitted T")))?;
+            scatter(
+                &mut c,
+                &pts,
+                style::marker(m, false),
+                col,
+                true,
+                Some(&format!("{m}: fitted T")),
+            )?;
             if let Some((a, b)) = t_line(d, Some(m)) {
                 let (a, b) = (a.est.value, b.est.value);
                 let pts = vec![(0.0, a), (x_max, a + b * x_max)];
@@ -52,10 +85,27 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
                 line(&mut c, pts, col, 2, false, Some(&label))?;
             }
         }
-        let ch = vec![(0.0, chapter::t_line_s(0.0)), (x_max, chapter::t_line_s(x_max))];
-        line(&mut c, ch, style::BLACK, 2, true, Some("chapter: T = 0.052 + 1.10·v0"))?;
+        let ch = vec![
+            (0.0, chapter::t_line_s(0.0)),
+            (x_max, chapter::t_line_s(x_max)),
+        ];
+        line(
+            &mut c,
+            ch,
+            style::BLACK,
+            2,
+            true,
+            Some("chapter: T = 0.052 + 1.10·v0"),
+        )?;
         let label = format!("Stokes drag in free air: {stokes:.2} s");
-        line(&mut c, vec![(0.0, stokes), (x_max, stokes)], style::GREY, 2, true, Some(&label))?;
+        line(
+            &mut c,
+            vec![(0.0, stokes), (x_max, stokes)],
+            style::GREY,
+            2,
+            true,
+            Some(&label),
+        )?;
         legend(&mut c, SeriesLabelPosition::MiddleRight)
     })?;
     Ok(Some(svg))

@@ -9,12 +9,23 @@ use plotters::prelude::*;
 
 /// Render Fig. 4.2d, or None without single-run fits.
 pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
-    let mats: Vec<String> = d.materials().into_iter().filter(|m| d.singles_of(m).next().is_some()).collect();
+    let mats: Vec<String> = d
+        .materials()
+        .into_iter()
+        .filter(|m| d.singles_of(m).next().is_some())
+        .collect();
     if mats.is_empty() {
         return Ok(None);
     }
-    let x_max = span(d.singles.iter().map(|r| r.v0_mps.value.abs()), 0.05).1.max(0.01);
-    let mut ys: Vec<f64> = d.singles.iter().filter(|r| r.converged()).map(|r| r.mu.value).collect();
+    let x_max = span(d.singles.iter().map(|r| r.v0_mps.value.abs()), 0.05)
+        .1
+        .max(0.01);
+    let mut ys: Vec<f64> = d
+        .singles
+        .iter()
+        .filter(|r| r.converged())
+        .map(|r| r.mu.value)
+        .collect();
     ys.extend([chapter::MU_316, chapter::MU_440C]);
     let (lo, hi) = span(ys, 0.08);
     let yr = (lo.min(0.2), hi.max(0.4));
@@ -28,22 +39,53 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             "fitted friction coefficient μ_pg (1)",
         )?;
         let t = chapter::MU_MEAN_V0_MIN_MPS;
-        line(&mut c, vec![(t, yr.0), (t, yr.1)], style::GREY, 1, true, None)?;
+        line(
+            &mut c,
+            vec![(t, yr.0), (t, yr.1)],
+            style::GREY,
+            1,
+            true,
+            None,
+        )?;
         for (i, m) in mats.iter().enumerate() {
             let col = style::material_colour(m, i);
-            let pts: Vec<(f64, f64)> = d.singles_of(m).map(|r| (r.v0_mps.value.abs(), r.mu.value)).collect();
+            let pts: Vec<(f64, f64)> = d
+                .singles_of(m)
+                .map(|r| (r.v0_mps.value.abs(), r.mu.value))
+                .collect();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
                 .filter_map(|r| Some((r.v0_mps.value.abs(), r.mu.value, r.mu.stderr?)))
                 .collect();
             error_bars(&mut c, &bars, col)?;
-            scatter(&mut c, &pts, style::marker(m, false), col, true, Some(&format!("{m}: fitted μ_pg")))?;
+            scatter(
+                &mut c,
+                &pts,
+                style::marker(m, false),
+                col,
+                true,
+                Some(&format!("{m}: fitted μ_pg")),
+            )?;
             if let Some(a) = mu_fast(d, m) {
                 let v = a.est.value;
-                line(&mut c, vec![(t, v), (x_max, v)], col, 3, false, Some(&format!("{m}: our mean {v:.3}")))?;
+                line(
+                    &mut c,
+                    vec![(t, v), (x_max, v)],
+                    col,
+                    3,
+                    false,
+                    Some(&format!("{m}: our mean {v:.3}")),
+                )?;
             }
             if let Some(v) = chapter::mu_for(m) {
-                line(&mut c, vec![(t, v), (x_max, v)], col, 2, true, Some(&format!("{m}: chapter {v:.3}")))?;
+                line(
+                    &mut c,
+                    vec![(t, v), (x_max, v)],
+                    col,
+                    2,
+                    true,
+                    Some(&format!("{m}: chapter {v:.3}")),
+                )?;
             }
         }
         legend(&mut c, SeriesLabelPosition::LowerRight)

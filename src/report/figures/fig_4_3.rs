@@ -2,10 +2,10 @@
 //! segments (sliding and rolling, before and after the impact).
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
+use crate::recording::Track;
 use crate::report::collisions::CollisionRun;
 use crate::report::inputs::ReportData;
 use crate::report::style::{self, Marker};
-use crate::recording::Track;
 use plotters::prelude::*;
 
 const STRIKER: RGBColor = RGBColor(20, 20, 20);
@@ -14,7 +14,11 @@ const TARGET: RGBColor = RGBColor(0, 150, 150);
 /// The collision run Figs. 4.3c–d show: `wanted`, else the first rolling-setup run with an impact
 /// and two tracks, else any collision run with two tracks.
 pub fn choose<'a>(d: &'a ReportData, wanted: Option<&str>) -> Option<&'a CollisionRun> {
-    let has_tracks = |c: &&CollisionRun| d.recordings.get(&c.run).is_some_and(|r| r.tracks.len() >= 2);
+    let has_tracks = |c: &&CollisionRun| {
+        d.recordings
+            .get(&c.run)
+            .is_some_and(|r| r.tracks.len() >= 2)
+    };
     if let Some(w) = wanted {
         return d.collisions.iter().find(|c| c.run == w);
     }
@@ -37,24 +41,69 @@ fn pts(t: &Track, z_ref: f64, keep: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
 }
 
 /// Render Figs. 4.3c and 4.3d, or None without a collision run that has both tracks.
-pub fn render_figs(d: &ReportData, wanted: Option<&str>) -> Result<Option<(String, String)>, String> {
-    let Some(c) = choose(d, wanted) else { return Ok(None) };
-    let Some(rec) = d.recordings.get(&c.run) else { return Ok(None) };
-    let (Some(s), Some(t)) = (rec.track(0), rec.track(1)) else { return Ok(None) };
+pub fn render_figs(
+    d: &ReportData,
+    wanted: Option<&str>,
+) -> Result<Option<(String, String)>, String> {
+    let Some(c) = choose(d, wanted) else {
+        return Ok(None);
+    };
+    let Some(rec) = d.recordings.get(&c.run) else {
+        return Ok(None);
+    };
+    let (Some(s), Some(t)) = (rec.track(0), rec.track(1)) else {
+        return Ok(None);
+    };
     let z_ref = s.z_m.first().copied().unwrap_or(0.0);
     let all_t = s.t_s.iter().chain(&t.t_s).map(|x| x * 1e3);
     let xr = span(all_t, 0.02);
     let yr = span(s.z_m.iter().chain(&t.z_m).map(|z| (z - z_ref) * 1e3), 0.05);
-    let impacts: Vec<f64> = c.impacts.iter().filter_map(|i| i.t_s).map(|t| t * 1e3).collect();
+    let impacts: Vec<f64> = c
+        .impacts
+        .iter()
+        .filter_map(|i| i.t_s)
+        .map(|t| t * 1e3)
+        .collect();
     let setup = if c.contact { "contact" } else { "rolling" };
-    let cap_c = format!("Fig. 4.3c: collision run {} ({}, {setup})", c.run, c.material);
+    let cap_c = format!(
+        "Fig. 4.3c: collision run {} ({}, {setup})",
+        c.run, c.material
+    );
     let fig_c = render(|root| {
-        let mut ch = linear_chart(root, &cap_c, xr, yr, "time t (ms)", "position z − z_striker(0) (mm)")?;
-        scatter(&mut ch, &pts(s, z_ref, |_| true), Marker::Circle, STRIKER, true, Some("striker (particle 0)"))?;
-        scatter(&mut ch, &pts(t, z_ref, |_| true), Marker::Circle, TARGET, true, Some("target (particle 1)"))?;
+        let mut ch = linear_chart(
+            root,
+            &cap_c,
+            xr,
+            yr,
+            "time t (ms)",
+            "position z − z_striker(0) (mm)",
+        )?;
+        scatter(
+            &mut ch,
+            &pts(s, z_ref, |_| true),
+            Marker::Circle,
+            STRIKER,
+            true,
+            Some("striker (particle 0)"),
+        )?;
+        scatter(
+            &mut ch,
+            &pts(t, z_ref, |_| true),
+            Marker::Circle,
+            TARGET,
+            true,
+            Some("target (particle 1)"),
+        )?;
         for (i, ti) in impacts.iter().enumerate() {
             let label = (i == 0).then_some("impact");
-            line(&mut ch, vec![(*ti, yr.0), (*ti, yr.1)], style::GREY, 1, true, label)?;
+            line(
+                &mut ch,
+                vec![(*ti, yr.0), (*ti, yr.1)],
+                style::GREY,
+                1,
+                true,
+                label,
+            )?;
         }
         legend(&mut ch, SeriesLabelPosition::LowerRight)
     })?;
@@ -72,21 +121,61 @@ pub fn render_figs(d: &ReportData, wanted: Option<&str>) -> Result<Option<(Strin
     let sy = span(s.z_m.iter().map(|z| (z - z_ref) * 1e3), 0.05);
     let cap_d = format!("Fig. 4.3d: striker's motion segments, run {}", c.run);
     let fig_d = render(|root| {
-        let mut ch = linear_chart(root, &cap_d, sx, sy, "time t (ms)", "striker position z − z(0) (mm)")?;
+        let mut ch = linear_chart(
+            root,
+            &cap_d,
+            sx,
+            sy,
+            "time t (ms)",
+            "striker position z − z(0) (mm)",
+        )?;
         let groups = [
-            (true, false, Marker::Circle, style::SLIDING, "before impact: sliding"),
-            (true, true, Marker::Circle, style::ROLLING, "before impact: rolling"),
-            (false, false, Marker::Triangle, style::SLIDING, "after impact: sliding"),
-            (false, true, Marker::Triangle, style::ROLLING, "after impact: rolling"),
+            (
+                true,
+                false,
+                Marker::Circle,
+                style::SLIDING,
+                "before impact: sliding",
+            ),
+            (
+                true,
+                true,
+                Marker::Circle,
+                style::ROLLING,
+                "before impact: rolling",
+            ),
+            (
+                false,
+                false,
+                Marker::Triangle,
+                style::SLIDING,
+                "after impact: sliding",
+            ),
+            (
+                false,
+                true,
+                Marker::Triangle,
+                style::ROLLING,
+                "after impact: rolling",
+            ),
         ];
         for (is_before, is_rolling, mk, col, label) in groups {
-            let p = pts(s, z_ref, |t| before(t) == is_before && rolling_at(t) == is_rolling);
+            let p = pts(s, z_ref, |t| {
+                before(t) == is_before && rolling_at(t) == is_rolling
+            });
             if !p.is_empty() {
                 scatter(&mut ch, &p, mk, col, true, Some(label))?;
             }
         }
         for ti in &impacts {
-            line(&mut ch, vec![(*ti, sy.0), (*ti, sy.1)], style::GREY, 1, true, None)?;
+            line(
+                &mut ch,
+                vec![(*ti, sy.0), (*ti, sy.1)],
+                style::GREY,
+                1,
+                true,
+                None,
+            )?;
         }
         legend(&mut ch, SeriesLabelPosition::LowerRight)
     })?;

@@ -36,7 +36,11 @@ pub fn render_a(d: &ReportData, k: f64) -> Result<Option<String>, String> {
     let slope_ours = mu_pp(d, k).map(|a| a.est.value * k);
     let slope_ch = chapter::MU_PP * k;
     let ys = groups.iter().flat_map(|g| g.3.iter().map(|p| p.1));
-    let sign = if groups.iter().flat_map(|g| &g.3).map(|p| p.1).sum::<f64>() < 0.0 { -1.0 } else { 1.0 };
+    let sign = if groups.iter().flat_map(|g| &g.3).map(|p| p.1).sum::<f64>() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
     let yr = span(ys.chain([0.0, sign * slope_ch * x_hi]), 0.06);
     let svg = render(|root| {
         let mut c = linear_chart(
@@ -57,10 +61,24 @@ pub fn render_a(d: &ReportData, k: f64) -> Result<Option<String>, String> {
         }
         if let Some(sl) = slope_ours {
             let label = format!("ours: slope μ_pp·k = {sl:.2} (μ_pp = {:.2})", sl / k);
-            line(&mut c, vec![(0.0, 0.0), (x_hi, sign * sl * x_hi)], style::BLACK, 2, false, Some(&label))?;
+            line(
+                &mut c,
+                vec![(0.0, 0.0), (x_hi, sign * sl * x_hi)],
+                style::BLACK,
+                2,
+                false,
+                Some(&label),
+            )?;
         }
         let label = format!("chapter: μ_pp = 1.4, slope {slope_ch:.2}");
-        line(&mut c, vec![(0.0, 0.0), (x_hi, sign * slope_ch * x_hi)], style::GREY, 2, true, Some(&label))?;
+        line(
+            &mut c,
+            vec![(0.0, 0.0), (x_hi, sign * slope_ch * x_hi)],
+            style::GREY,
+            2,
+            true,
+            Some(&label),
+        )?;
         legend(&mut c, SeriesLabelPosition::UpperLeft)
     })?;
     Ok(Some(svg))
@@ -74,7 +92,12 @@ pub fn restitution_slope(p: &[(f64, f64)]) -> Option<f64> {
 }
 
 /// Render the restitution figure of one material, or None without its impacts.
-pub fn render_bc(d: &ReportData, material: &str, index: usize, fig: &str) -> Result<Option<String>, String> {
+pub fn render_bc(
+    d: &ReportData,
+    material: &str,
+    index: usize,
+    fig: &str,
+) -> Result<Option<String>, String> {
     let series: Vec<(bool, Vec<(f64, f64)>)> = [false, true]
         .into_iter()
         .map(|contact| {
@@ -91,23 +114,59 @@ pub fn render_bc(d: &ReportData, material: &str, index: usize, fig: &str) -> Res
     if series.iter().all(|(_, p)| p.is_empty()) {
         return Ok(None);
     }
-    let v_max = span(series.iter().flat_map(|(_, p)| p.iter().map(|q| q.0)), 0.05).1.max(0.01);
-    let (lo, hi) = span(series.iter().flat_map(|(_, p)| p.iter().map(|q| q.1)).chain([1.0]), 0.08);
+    let v_max = span(series.iter().flat_map(|(_, p)| p.iter().map(|q| q.0)), 0.05)
+        .1
+        .max(0.01);
+    let (lo, hi) = span(
+        series
+            .iter()
+            .flat_map(|(_, p)| p.iter().map(|q| q.1))
+            .chain([1.0]),
+        0.08,
+    );
     let yr = (lo.min(0.0).max(-0.2), hi.max(1.05));
     let cap = format!("Fig. {fig}: restitution against impact speed, {material}");
     let svg = render(|root| {
-        let mut c = linear_chart(root, &cap, (0.0, v_max), yr, "impact speed |v1 − v2| (m/s)", "coefficient of restitution C (1)")?;
-        line(&mut c, vec![(0.0, 1.0), (v_max, 1.0)], style::GREY, 1, true, None)?;
+        let mut c = linear_chart(
+            root,
+            &cap,
+            (0.0, v_max),
+            yr,
+            "impact speed |v1 − v2| (m/s)",
+            "coefficient of restitution C (1)",
+        )?;
+        line(
+            &mut c,
+            vec![(0.0, 1.0), (v_max, 1.0)],
+            style::GREY,
+            1,
+            true,
+            None,
+        )?;
         for (contact, p) in &series {
             if p.is_empty() {
                 continue;
             }
             let col = style::setup_colour(material, *contact, index);
             let setup = if *contact { "in contact" } else { "rolling" };
-            scatter(&mut c, p, style::marker(material, *contact), col, true, Some(&format!("{material}, {setup}")))?;
+            scatter(
+                &mut c,
+                p,
+                style::marker(material, *contact),
+                col,
+                true,
+                Some(&format!("{material}, {setup}")),
+            )?;
             if let Some(a) = restitution_slope(p) {
                 let label = format!("{setup}: C = 1 − {a:.2}·v");
-                line(&mut c, vec![(0.0, 1.0), (v_max, 1.0 - a * v_max)], col, 2, false, Some(&label))?;
+                line(
+                    &mut c,
+                    vec![(0.0, 1.0), (v_max, 1.0 - a * v_max)],
+                    col,
+                    2,
+                    false,
+                    Some(&label),
+                )?;
             }
         }
         legend(&mut c, SeriesLabelPosition::LowerLeft)

@@ -29,7 +29,10 @@ pub fn restitution_name(material: &str) -> (String, String) {
         "316" | "ss316" => ("fig_4_4b.svg".into(), "4.4b".into()),
         "440c" | "ss440c" => ("fig_4_4c.svg".into(), "4.4c".into()),
         other => {
-            let safe: String = other.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+            let safe: String = other
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect();
             (format!("fig_4_4_{safe}.svg"), format!("4.4 ({material})"))
         }
     }
@@ -37,7 +40,10 @@ pub fn restitution_name(material: &str) -> (String, String) {
 
 /// Render every figure the data allows, by file name (`fig_4_2b.svg` → SVG text). Parts without data
 /// (no collision runs, no diagnosis) are simply absent; the report says why.
-pub fn render_all(d: &ReportData, opts: &FigureOptions) -> Result<BTreeMap<String, String>, String> {
+pub fn render_all(
+    d: &ReportData,
+    opts: &FigureOptions,
+) -> Result<BTreeMap<String, String>, String> {
     let g = Groove::CHAPTER;
     let mut out = BTreeMap::new();
     let mut put = |name: &str, svg: Option<String>| {
@@ -45,7 +51,10 @@ pub fn render_all(d: &ReportData, opts: &FigureOptions) -> Result<BTreeMap<Strin
             out.insert(name.to_string(), s);
         }
     };
-    put("fig_4_2b.svg", fig_4_2b::render_fig(d, opts.trajectory_run.as_deref())?);
+    put(
+        "fig_4_2b.svg",
+        fig_4_2b::render_fig(d, opts.trajectory_run.as_deref())?,
+    );
     put("fig_4_2c.svg", fig_4_2c::render_fig(d)?);
     put("fig_4_2d.svg", fig_4_2d::render_fig(d)?);
     if let Some((c, dd)) = fig_4_3::render_figs(d, opts.collision_run.as_deref())? {

@@ -8,8 +8,7 @@ use plotters::prelude::*;
 
 /// The factor for a groove of opening angle `theta_deg` and the chapter's k.
 pub fn factor(theta_deg: f64) -> f64 {
-    let ks2 = Groove::from_angle_deg(theta_deg).ks2();
-    (1.0 - ks2) / (1.0 + ks2)
+    Groove::from_angle_deg(theta_deg).collision_factor()
 }
 
 /// The opening angle where the factor changes sign (ks² = 1): 2·asin(1/√k).
@@ -21,7 +20,10 @@ pub fn bound_deg(k: f64) -> f64 {
 pub fn render_fig(g: Groove) -> Result<String, String> {
     let theta = 2.0 * g.s.asin().to_degrees();
     let bound = bound_deg(g.k);
-    let curve: Vec<(f64, f64)> = (0..=160).map(|i| 30.0 + i as f64 * 0.5).map(|t| (t, factor(t))).collect();
+    let curve: Vec<(f64, f64)> = (0..=160)
+        .map(|i| 30.0 + i as f64 * 0.5)
+        .map(|t| (t, factor(t)))
+        .collect();
     let f_here = factor(theta);
     render(|root| {
         let mut c = linear_chart(
@@ -32,12 +34,40 @@ pub fn render_fig(g: Groove) -> Result<String, String> {
             "groove opening angle θ (degrees)",
             "(1 − ks²)/(1 + ks²) (1)",
         )?;
-        line(&mut c, vec![(30.0, 0.0), (110.0, 0.0)], style::GREY, 1, false, None)?;
-        line(&mut c, curve, style::BLACK, 2, false, Some("factor, solid sphere k = 5/2"))?;
+        line(
+            &mut c,
+            vec![(30.0, 0.0), (110.0, 0.0)],
+            style::GREY,
+            1,
+            false,
+            None,
+        )?;
+        line(
+            &mut c,
+            curve,
+            style::BLACK,
+            2,
+            false,
+            Some("factor, solid sphere k = 5/2"),
+        )?;
         let label = format!("bound θ = {bound:.1}° (ks² = 1)");
-        line(&mut c, vec![(bound, -0.3), (bound, 0.6)], style::ROLLING, 2, true, Some(&label))?;
+        line(
+            &mut c,
+            vec![(bound, -0.3), (bound, 0.6)],
+            style::ROLLING,
+            2,
+            true,
+            Some(&label),
+        )?;
         let label = format!("this groove: θ = {theta:.1}°, factor {f_here:.3}");
-        scatter(&mut c, &[(theta, f_here)], Marker::Diamond, style::SLIDING, true, Some(&label))?;
+        scatter(
+            &mut c,
+            &[(theta, f_here)],
+            Marker::Diamond,
+            style::SLIDING,
+            true,
+            Some(&label),
+        )?;
         legend(&mut c, SeriesLabelPosition::UpperRight)
     })
 }

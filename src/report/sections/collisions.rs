@@ -4,17 +4,25 @@ use super::chapter::{headers, row};
 use super::summary::agg_text;
 use super::{Block, Table};
 use crate::physics::Groove;
+use crate::report::chapter as ch;
 use crate::report::figures::{fig_4_3, fig_4_4, restitution_name, secondary};
 use crate::report::inputs::ReportData;
 use crate::report::summary::mu_pp;
-use crate::report::chapter as ch;
 use std::collections::BTreeMap;
 
 const NO_COLLISIONS: &str = "no collision runs in this dataset";
 
 fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
-    let mut b = Block::new("fig-4-3", "3.4 Figs. 4.3c–d: a collision, and the striker's four segments");
-    let Some(c) = fig_4_3::choose(d, None).filter(|_| figs.contains_key("fig_4_3c.svg")) else {
+    let mut b = Block::new(
+        "fig-4-3",
+        "3.4 Figs. 4.3c–d: a collision, and the striker's four segments",
+    );
+    let drawn = figs
+        .get("fig_4_3c.svg")
+        .and_then(|svg| super::chapter::caption_run(svg, "Fig. 4.3c: collision run "));
+    let Some(c) =
+        fig_4_3::choose(d, drawn.as_deref()).filter(|_| figs.contains_key("fig_4_3c.svg"))
+    else {
         b.missing = Some(NO_COLLISIONS.into());
         return b;
     };
@@ -26,7 +34,10 @@ fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         c.material,
         if c.contact { "contact" } else { "rolling" }
     ));
-    let mut t = Table::new("Fig. 4.3c–d: impacts of this run", &["impact", "t (ms)", "impact speed (m/s)", "C", "regime"]);
+    let mut t = Table::new(
+        "Fig. 4.3c–d: impacts of this run",
+        &["impact", "t (ms)", "impact speed (m/s)", "C", "regime"],
+    );
     for (i, im) in c.impacts.iter().enumerate() {
         t.push(vec![
             (i + 1).to_string(),
@@ -50,7 +61,10 @@ fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 }
 
 fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
-    let mut b = Block::new("fig-4-4a", "3.5 Fig. 4.4a: spin change against velocity change, μ_pp");
+    let mut b = Block::new(
+        "fig-4-4a",
+        "3.5 Fig. 4.4a: spin change against velocity change, μ_pp",
+    );
     if !b.figure(figs, "fig_4_4a.svg", "Fig. 4.4a: target's Δv_a against Δv_z; filled markers slip collisions, open markers stick; lines through the origin with slope μ_pp·k.") {
         b.missing = Some(if d.collisions.is_empty() { NO_COLLISIONS.into() } else { "no impact carries the target's velocity and spin changes".into() });
         return b;
@@ -65,15 +79,30 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     let mut t = Table::new("Fig. 4.4a: particle–particle friction", &[]);
     t.headers = headers(d, &["quantity"]);
     if let Some(a) = mu_pp(d, k) {
-        t.push(row(d, vec![format!("μ_pp ({})", a.source)], agg_text(&a), "1.4".into(), &["mu_pp"]));
-        t.push(row(d, vec!["slope μ_pp·k".into()], format!("{:.2}", a.est.value * k), format!("{:.2}", ch::MU_PP * k), &["__none__"]));
+        t.push(row(
+            d,
+            vec![format!("μ_pp ({})", a.source)],
+            agg_text(&a),
+            "1.4".into(),
+            &["mu_pp"],
+        ));
+        t.push(row(
+            d,
+            vec!["slope μ_pp·k".into()],
+            format!("{:.2}", a.est.value * k),
+            format!("{:.2}", ch::MU_PP * k),
+            &["__none__"],
+        ));
     }
     b.tables.push(t);
     b
 }
 
 fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
-    let mut b = Block::new("fig-4-4bc", "3.6 Figs. 4.4b–c: restitution against impact speed");
+    let mut b = Block::new(
+        "fig-4-4bc",
+        "3.6 Figs. 4.4b–c: restitution against impact speed",
+    );
     let mut mats: Vec<String> = d.collisions.iter().map(|c| c.material.clone()).collect();
     mats.sort();
     mats.dedup();
@@ -86,9 +115,17 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(NO_COLLISIONS.into());
         return b;
     }
-    let mut t = Table::new("Figs. 4.4b–c: restitution C = 1 − a·v per material and setup", &[
-        "material", "setup", "impacts", "mean C", "a (s/m), ours", "chapter",
-    ]);
+    let mut t = Table::new(
+        "Figs. 4.4b–c: restitution C = 1 − a·v per material and setup",
+        &[
+            "material",
+            "setup",
+            "impacts",
+            "mean C",
+            "a (s/m), ours",
+            "chapter",
+        ],
+    );
     for m in &mats {
         for contact in [false, true] {
             let p: Vec<(f64, f64)> = d
@@ -108,7 +145,12 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
                 p.len().to_string(),
                 format!("{mean:.3}"),
                 fig_4_4::restitution_slope(&p).map_or("—".into(), |a| format!("{a:.2}")),
-                (if contact { "higher than rolling; → 1 at low speed" } else { "falls with speed; → 1 at low speed" }).into(),
+                (if contact {
+                    "higher than rolling; → 1 at low speed"
+                } else {
+                    "falls with speed; → 1 at low speed"
+                })
+                .into(),
             ]);
         }
     }
@@ -119,16 +161,35 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 
 fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
     let g = Groove::CHAPTER;
-    let mut b = Block::new("secondary", "3.7 Secondary collisions: the factor (1 − ks²)/(1 + ks²) and the 78.5° bound");
+    let mut b = Block::new(
+        "secondary",
+        "3.7 Secondary collisions: the factor (1 − ks²)/(1 + ks²) and the 78.5° bound",
+    );
     b.figure(figs, "fig_secondary.svg", "The velocity difference of two rolling particles is multiplied by (1 − ks²)/(1 + ks²) per collision and re-acceleration; it stays positive (secondary collisions follow) below the bound.");
     let theta = 2.0 * g.s.asin().to_degrees();
     let f = secondary::factor(theta);
     let bound = secondary::bound_deg(g.k);
     let mut t = Table::new("Eq. 4.18, computed", &["quantity", "ours", "chapter"]);
-    t.push(vec!["opening angle θ (°)".into(), format!("{theta:.1}"), "70.6".into()]);
-    t.push(vec!["ks² = k·sin²(θ/2)".into(), format!("{:.4}", g.ks2()), "—".into()]);
-    t.push(vec!["(1 − ks²)/(1 + ks²)".into(), format!("{f:.4}"), format!("{:.2}", ch::SECONDARY_FACTOR)]);
-    t.push(vec!["bound on θ: 2·asin(1/√k) (°)".into(), format!("{bound:.2}"), format!("{:.1}", ch::THETA_BOUND_DEG)]);
+    t.push(vec![
+        "opening angle θ (°)".into(),
+        format!("{theta:.1}"),
+        "70.6".into(),
+    ]);
+    t.push(vec![
+        "ks² = k·sin²(θ/2)".into(),
+        format!("{:.4}", g.ks2()),
+        "—".into(),
+    ]);
+    t.push(vec![
+        "(1 − ks²)/(1 + ks²)".into(),
+        format!("{f:.4}"),
+        format!("{:.2}", ch::SECONDARY_FACTOR),
+    ]);
+    t.push(vec![
+        "bound on θ: 2·asin(1/√k) (°)".into(),
+        format!("{bound:.2}"),
+        format!("{:.1}", ch::THETA_BOUND_DEG),
+    ]);
     b.tables.push(t);
     b.para(format!(
         "With θ = {theta:.1}° < {bound:.1}° each collision leaves {:.0} % of the velocity difference, so the pair collides again and again (forever in the ideal model) and ends up rolling about 2R apart.",
@@ -139,5 +200,10 @@ fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
 
 /// The blocks of Figs. 4.3–4.4 and the secondary-collision factor.
 pub fn blocks(d: &ReportData, figs: &BTreeMap<String, String>) -> Vec<Block> {
-    vec![fig_4_3_block(d, figs), fig_4_4a_block(d, figs), fig_4_4bc_block(d, figs), secondary_block(figs)]
+    vec![
+        fig_4_3_block(d, figs),
+        fig_4_4a_block(d, figs),
+        fig_4_4bc_block(d, figs),
+        secondary_block(figs),
+    ]
 }

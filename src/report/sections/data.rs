@@ -13,7 +13,11 @@ fn median(mut xs: Vec<f64>) -> Option<f64> {
     }
     xs.sort_by(f64::total_cmp);
     let n = xs.len();
-    Some(if n % 2 == 1 { xs[n / 2] } else { 0.5 * (xs[n / 2 - 1] + xs[n / 2]) })
+    Some(if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    })
 }
 
 pub fn block(d: &ReportData) -> Block {
@@ -31,24 +35,46 @@ pub fn block(d: &ReportData) -> Block {
             Some(Setup::Contact) => "contact",
             None => "—",
         };
-        let g = groups.entry((exp.into(), r.info.material.clone(), setup.into())).or_default();
+        let g = groups
+            .entry((exp.into(), r.info.material.clone(), setup.into()))
+            .or_default();
         g.0 += 1;
         g.1.push(r.info.fps);
         let frames: usize = r.tracks.iter().map(|t| t.frame.len()).sum();
         g.2.push(frames as f64);
-        let dur = r.tracks.iter().filter_map(|t| Some(t.t_s.last()? - t.t_s.first()?)).fold(0.0, f64::max);
+        let dur = r
+            .tracks
+            .iter()
+            .filter_map(|t| Some(t.t_s.last()? - t.t_s.first()?))
+            .fold(0.0, f64::max);
         g.3.push(dur);
     }
     if groups.is_empty() {
-        b.missing = Some("no recordings reached the report (the ingest stage's runs are empty)".into());
+        b.missing =
+            Some("no recordings reached the report (the ingest stage's runs are empty)".into());
         return b;
     }
-    let mut t = Table::new("Runs per experiment, material and setup", &[
-        "experiment", "material", "setup", "runs", "frame rate (fps)", "samples per run (median)", "duration (ms, median)",
-    ]);
+    let mut t = Table::new(
+        "Runs per experiment, material and setup",
+        &[
+            "experiment",
+            "material",
+            "setup",
+            "runs",
+            "frame rate (fps)",
+            "samples per run (median)",
+            "duration (ms, median)",
+        ],
+    );
     for ((exp, mat, setup), (n, fps, frames, dur)) in &groups {
-        let (lo, hi) = fps.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), &x| (a.min(x), b.max(x)));
-        let fps_txt = if (hi - lo).abs() < 1e-9 { sig(lo, 5) } else { format!("{}–{}", sig(lo, 5), sig(hi, 5)) };
+        let (lo, hi) = fps
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), &x| (a.min(x), b.max(x)));
+        let fps_txt = if (hi - lo).abs() < 1e-9 {
+            sig(lo, 5)
+        } else {
+            format!("{}–{}", sig(lo, 5), sig(hi, 5))
+        };
         t.push(vec![
             exp.clone(),
             mat.clone(),
@@ -74,7 +100,12 @@ pub fn block(d: &ReportData) -> Block {
             rms * 1e6
         ));
     }
-    let failed: Vec<String> = d.singles.iter().filter(|r| !r.converged()).map(|r| format!("{} ({})", r.run, r.status)).collect();
+    let failed: Vec<String> = d
+        .singles
+        .iter()
+        .filter(|r| !r.converged())
+        .map(|r| format!("{} ({})", r.run, r.status))
+        .collect();
     if d.skipped.is_empty() && failed.is_empty() {
         b.para("Nothing was left out: every run was ingested and every single-run fit converged.");
     } else {
@@ -83,7 +114,10 @@ pub fn block(d: &ReportData) -> Block {
             s.push(vec![run.clone(), format!("skipped at ingest: {why}")]);
         }
         for f in failed {
-            s.push(vec![f, "fit did not converge; excluded from the aggregates".into()]);
+            s.push(vec![
+                f,
+                "fit did not converge; excluded from the aggregates".into(),
+            ]);
         }
         b.tables.push(s);
     }

@@ -26,11 +26,21 @@ pub fn short(v: &Value, max: usize) -> String {
 }
 
 fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
-    let name = |p: &str| if p.is_empty() { "value".to_string() } else { p.replace('_', " ") };
+    let name = |p: &str| {
+        if p.is_empty() {
+            "value".to_string()
+        } else {
+            p.replace('_', " ")
+        }
+    };
     match v {
         Value::Object(m) => {
             for (k, x) in m {
-                let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
                 flatten(x, p, out);
             }
         }
@@ -39,8 +49,16 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
             out.push(format!("{} = [{}]", name(&path), xs.join(", ")));
         }
         Value::Array(a) => out.push(format!("{}: {} entries", name(&path), a.len())),
-        Value::Number(_) => out.push(format!("{} = {}", name(&path), as_num(v).map_or("—".into(), |x| sig(x, 4)))),
-        Value::Bool(b) => out.push(format!("{} = {}", name(&path), if *b { "yes" } else { "no" })),
+        Value::Number(_) => out.push(format!(
+            "{} = {}",
+            name(&path),
+            as_num(v).map_or("—".into(), |x| sig(x, 4))
+        )),
+        Value::Bool(b) => out.push(format!(
+            "{} = {}",
+            name(&path),
+            if *b { "yes" } else { "no" }
+        )),
         Value::String(s) => out.push(format!("{} = {s}", name(&path))),
         Value::Null => {}
     }
@@ -48,7 +66,9 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
 
 /// `name = value ± stderr` for each parameter of a finding.
 pub fn params_text(f: &Value) -> String {
-    let Some(Value::Object(ps)) = f.get("parameters") else { return "—".into() };
+    let Some(Value::Object(ps)) = f.get("parameters") else {
+        return "—".into();
+    };
     let parts: Vec<String> = ps
         .iter()
         .map(|(k, p)| {
@@ -109,30 +129,60 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some("discovery did not run for this report (no diagnosis.json)".into());
         return b;
     };
-    let mismatch = diag.get("mismatch").and_then(Value::as_bool).unwrap_or(false);
-    let findings: Vec<&Value> = diag.get("findings").and_then(Value::as_array).map(|a| a.iter().collect()).unwrap_or_default();
-    let accepted: Vec<&&Value> = findings.iter().filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true)).collect();
+    let mismatch = diag
+        .get("mismatch")
+        .and_then(Value::as_bool)
+        .unwrap_or(false);
+    let findings: Vec<&Value> = diag
+        .get("findings")
+        .and_then(Value::as_array)
+        .map(|a| a.iter().collect())
+        .unwrap_or_default();
+    let accepted: Vec<&&Value> = findings
+        .iter()
+        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
+        .collect();
     b.para(if mismatch {
         "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."
     } else {
         "No systematic mismatch: the pooled residuals and the per-run parameters show no structure beyond the noise, so nothing is missing from the baseline."
     });
     for f in &findings {
-        if let Some(w) = f.get("where").filter(|w| !w.is_null() && w.as_object().is_none_or(|o| !o.is_empty())) {
+        if let Some(w) = f
+            .get("where")
+            .filter(|w| !w.is_null() && w.as_object().is_none_or(|o| !o.is_empty()))
+        {
             let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
             b.para(format!("Where ({effect}): {}.", short(w, 8)));
             break;
         }
     }
-    let mut t = Table::new("Every candidate: evidence and fitted size (accepted first)", &[
-        "effect", "form", "accepted", "parameters", "evidence", "held-out RMS (µm): baseline → extended",
-    ]);
+    let mut t = Table::new(
+        "Every candidate: evidence and fitted size (accepted first)",
+        &[
+            "effect",
+            "form",
+            "accepted",
+            "parameters",
+            "evidence",
+            "held-out RMS (µm): baseline → extended",
+        ],
+    );
     for f in &findings {
-        let cv = |k: &str| f.get(k).and_then(|x| num(x, &["cv_rms_m"])).map(|x| format!("{:.3}", x * 1e6));
+        let cv = |k: &str| {
+            f.get(k)
+                .and_then(|x| num(x, &["cv_rms_m"]))
+                .map(|x| format!("{:.3}", x * 1e6))
+        };
         t.push(vec![
             text(f, &["effect"]).unwrap_or("?").replace('_', " "),
             text(f, &["form"]).unwrap_or("—").to_string(),
-            (if f.get("accepted").and_then(Value::as_bool) == Some(true) { "yes" } else { "no" }).into(),
+            (if f.get("accepted").and_then(Value::as_bool) == Some(true) {
+                "yes"
+            } else {
+                "no"
+            })
+            .into(),
             params_text(f),
             f.get("evidence").map_or("—".into(), |e| short(e, 6)),
             match (cv("baseline"), cv("extended")) {
@@ -151,7 +201,10 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             "No candidate term was accepted."
         });
     } else {
-        let names: Vec<String> = accepted.iter().map(|f| text(f, &["effect"]).unwrap_or("?").replace('_', " ")).collect();
+        let names: Vec<String> = accepted
+            .iter()
+            .map(|f| text(f, &["effect"]).unwrap_or("?").replace('_', " "))
+            .collect();
         b.para(format!("Accepted physics: {}.", names.join(", ")));
     }
     b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");

@@ -23,7 +23,11 @@ pub struct Table {
 
 impl Table {
     pub fn new(caption: &str, headers: &[&str]) -> Table {
-        Table { caption: caption.into(), headers: headers.iter().map(|h| h.to_string()).collect(), rows: Vec::new() }
+        Table {
+            caption: caption.into(),
+            headers: headers.iter().map(|h| h.to_string()).collect(),
+            rows: Vec::new(),
+        }
     }
     pub fn push(&mut self, cells: Vec<String>) {
         self.rows.push(cells);
@@ -52,7 +56,11 @@ pub struct Block {
 
 impl Block {
     pub fn new(id: &str, heading: &str) -> Block {
-        Block { id: id.into(), heading: heading.into(), ..Block::default() }
+        Block {
+            id: id.into(),
+            heading: heading.into(),
+            ..Block::default()
+        }
     }
     pub fn para(&mut self, text: impl Into<String>) {
         self.paragraphs.push(text.into());
@@ -61,7 +69,11 @@ impl Block {
     pub fn figure(&mut self, figs: &BTreeMap<String, String>, name: &str, caption: &str) -> bool {
         match figs.get(name) {
             Some(svg) => {
-                self.figures.push(FigureRef { name: name.into(), caption: caption.into(), svg: svg.clone() });
+                self.figures.push(FigureRef {
+                    name: name.into(),
+                    caption: caption.into(),
+                    svg: svg.clone(),
+                });
                 true
             }
             None => false,
@@ -83,7 +95,12 @@ pub struct Page {
 }
 
 /// Build the page from the data and the rendered figures (by file name).
-pub fn build(d: &ReportData, figs: &BTreeMap<String, String>, title: &str, date: Option<String>) -> Page {
+pub fn build(
+    d: &ReportData,
+    figs: &BTreeMap<String, String>,
+    title: &str,
+    date: Option<String>,
+) -> Page {
     let mut chapter = chapter::blocks(d, figs);
     chapter.extend(collisions::blocks(d, figs));
     Page {

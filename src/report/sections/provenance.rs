@@ -16,7 +16,10 @@ fn scalar(v: &Value) -> String {
 pub fn block(d: &ReportData) -> Block {
     let mut b = Block::new("provenance", "6. Provenance");
     let Some(p) = &d.provenance else {
-        b.missing = Some("no provenance input (bind `provenance = \"engine:provenance\"` in pipeline.toml)".into());
+        b.missing = Some(
+            "no provenance input (bind `provenance = \"engine:provenance\"` in pipeline.toml)"
+                .into(),
+        );
         return b;
     };
     let mut t = Table::new("Code and seed", &["item", "value"]);
@@ -29,7 +32,10 @@ pub fn block(d: &ReportData) -> Block {
     if let Some(Value::Array(inputs)) = p.get("inputs") {
         let mut t = Table::new("Inputs (sha256 of the bytes read)", &["path", "sha256"]);
         for i in inputs {
-            t.push(vec![text(i, &["path"]).unwrap_or("?").into(), text(i, &["sha256"]).unwrap_or("?").into()]);
+            t.push(vec![
+                text(i, &["path"]).unwrap_or("?").into(),
+                text(i, &["sha256"]).unwrap_or("?").into(),
+            ]);
         }
         b.tables.push(t);
     }
@@ -45,7 +51,10 @@ pub fn block(d: &ReportData) -> Block {
         b.tables.push(t);
     }
     if let Some(Value::Object(fp)) = p.get("fingerprints") {
-        let mut t = Table::new("Code fingerprint of each stage kind", &["kind", "fingerprint"]);
+        let mut t = Table::new(
+            "Code fingerprint of each stage kind",
+            &["kind", "fingerprint"],
+        );
         for (k, v) in fp {
             t.push(vec![k.clone(), scalar(v)]);
         }
