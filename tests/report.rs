@@ -27,11 +27,13 @@ fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, V
                               "fps": 10000.0, "setup": null, "extra": {}},
                      "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": z}]});
     let t1 = b.switch_time_s(v0);
-    let fit = json!({"experiment": "single", "run": run,
-        "params": {"v0_mps": {"value": v0, "stderr": 1e-4}, "mu": {"value": mu, "stderr": 0.004},
-                   "T_s": {"value": t_drag, "stderr": 0.002}, "z0_m": {"value": z0, "stderr": 1e-7},
-                   "t0_s": {"value": t0, "stderr": 1e-6}},
-        "t1_s": t1, "rms_m": 1.0e-6, "status": "converged"});
+    // the fit stage's layout (fit::SingleFit inside RunFit, tagged by "experiment")
+    let fit = json!({"experiment": "single", "run": run, "material": material,
+        "groove": {"s": Groove::CHAPTER.s, "k": 2.5},
+        "v0_mps": v0, "v0_se": 1e-4, "mu": mu, "mu_se": 0.004, "t_drag_s": t_drag, "t_drag_se": 0.002,
+        "z0_m": z0, "z0_se": 1e-7, "t0_s": t0, "t0_se": 1e-6, "t1_s": t1, "rms_m": 1.0e-6, "scale_m": 1.0e-6,
+        "outlier_cut_m": 5e-6, "n_frames": 400, "n_used": 400, "n_outliers": 0, "iterations": 7,
+        "termination": "converged", "status": "converged"});
     let csv = format!("{run},{material},{v0:.6},0.0001,{mu:.6},0.004,{t_drag:.6},0.002,{t1:.6},0.000001,converged\n");
     (rec, fit, csv)
 }
@@ -70,18 +72,31 @@ fn collision(
                               "fps": 10000.0, "setup": setup, "extra": {}},
                      "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": zs},
                                 {"particle": 1, "frame": frame, "t_s": t, "z_m": zt}]});
+    let e = |v: f64| json!({"value": v, "se": 1e-3});
+    let kin = |v: f64, va: f64| json!({"v_mps": e(v), "va_mps": e(va)});
     let impacts: Vec<Value> = speeds
         .iter()
         .enumerate()
         .map(|(i, &(v1, v2p, va2p, va1))| {
-            json!({"t_s": 5e-3 + i as f64 * 1e-3, "slip": i % 2 == 0,
-                   "pre": {"v_mps": [v1, 0.0], "va_mps": [va1, 0.0]},
-                   "post": {"v_mps": [v1 - v2p * 0.95, v2p], "va_mps": [va1 - va2p, va2p]}})
+            let v1p = v1 - v2p * 0.95;
+            json!({"index": i, "t_s": e(5e-3 + i as f64 * 1e-3),
+                   "striker_before": kin(v1, va1), "striker_after": kin(v1p, va1 - va2p),
+                   "target_before": kin(0.0, 0.0), "target_after": kin(v2p, va2p),
+                   "striker_before_source": if setup == "contact" { "momentum_conservation" } else { "fitted" },
+                   "impact_speed_mps": e(v1), "restitution": e((v2p - v1p) / v1),
+                   "target_dvz_mps": e(v2p), "target_dva_mps": e(va2p), "striker_dva_mps": e(-va2p),
+                   "spin_sum_before_mps": va1, "spin_sum_after_mps": e(va1),
+                   "momentum_mismatch_mps": 0.0, "contact": if i % 2 == 0 { "slip" } else { "stick" }})
         })
         .collect();
-    let fit = json!({"experiment": "collision", "run": run, "status": "converged", "impacts": impacts,
-        "segments": [{"particle": 0, "t_start_s": 0.0, "t_end_s": 5e-3, "t_switch_s": 2e-3},
-                     {"particle": 0, "t_start_s": 5e-3, "t_end_s": 0.03, "t_switch_s": 9e-3}]});
+    let seg = |p: u32, t0: f64, t1: f64, sw: f64| {
+        json!({"particle": p, "t_start_s": t0, "t_end_s": t1, "z_start_m": 0.0, "v_start_mps": e(0.1),
+               "va_start_mps": e(0.0), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
+    };
+    let fit = json!({"experiment": "collision", "run": run, "material": material, "setup": setup,
+        "direction": 1, "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
+        "segments": [seg(0, 0.0, 5e-3, 2e-3), seg(0, 5e-3, 0.03, 9e-3), seg(1, 5e-3, 0.03, 8e-3)],
+        "impacts": impacts, "rms_m": 1e-6, "noise_m": 1e-6, "n_points": 600, "n_outliers": 0, "iterations": 9});
     (rec, fit)
 }
 
@@ -130,26 +145,71 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
     let mut files = BTreeMap::new();
     files.insert("fits_csv", csv.into_bytes());
     if with_extras {
-        let summary = json!({"materials": {
-            "316": {"mu": {"value": 0.337, "stderr": 0.002, "interval": [0.333, 0.341]},
-                    "mu_fast": {"value": 0.337, "stderr": 0.003, "interval": [0.331, 0.343]},
-                    "t_line": {"intercept_s": {"value": 0.052, "stderr": 0.003, "interval": [0.047, 0.058]},
-                               "slope_s_per_mps": {"value": 1.1, "stderr": 0.05, "interval": [1.0, 1.2]}}},
-            "440c": {"mu": {"value": 0.292, "stderr": 0.002},
-                     "mu_fast": {"value": 0.293, "stderr": 0.002, "interval": [0.289, 0.297]}}},
-            "collisions": {"mu_pp": {"value": 1.38, "stderr": 0.06, "interval": [1.27, 1.5]}}});
+        let est = |v: f64, lo: f64, hi: f64| json!({"value": v, "interval": {"lo": lo, "hi": hi}});
+        let mat = |mu: f64| {
+            json!({"n_runs": 3, "n_converged": 3, "mu_weighted": est(mu, mu - 0.004, mu + 0.004),
+                   "mu_fast": est(mu, mu - 0.006, mu + 0.006), "n_fast": 2,
+                   "t_vs_v0": {"intercept_s": est(0.052, 0.047, 0.058), "slope_s_per_mps": est(1.1, 1.0, 1.2)},
+                   "mu_vs_v0": {"intercept": est(mu, mu - 0.01, mu + 0.01), "slope_per_mps": est(0.0, -0.1, 0.1)},
+                   "speed_range_mps": [0.02, 0.09]})
+        };
+        let iv = |v: f64, lo: f64, hi: f64| json!({"value": v, "lo": lo, "hi": hi});
+        let curve = |m: &str, setup: &str, a: f64| {
+            json!({"material": m, "setup": setup, "n_impacts": 2, "n_runs": 1, "c0": iv(1.0, 0.9, 1.1),
+                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "mean_c": 0.7,
+                   "min_speed_mps": 0.05, "max_speed_mps": 0.2})
+        };
+        let summary = json!({
+            "single": {"n_runs": 6, "n_converged": 6, "fast_min_speed_mps": 0.03,
+                       "materials": {"316": mat(0.337), "440c": mat(0.293)}, "pooled": mat(0.315)},
+            "collisions": {"n_runs": 4, "n_runs_fitted": 4, "n_impacts": 5, "k": 2.5,
+                "mu_pp": {"value": iv(1.38, 1.27, 1.5), "from_slip_slope": iv(1.36, 1.2, 1.5),
+                          "from_impulse_fit": iv(1.38, 1.27, 1.5), "stick_lower_bound": 0.6,
+                          "n_slip": 4, "n_stick": 1, "n_undetermined": 0},
+                "restitution": [curve("316", "rolling", 3.1), curve("316", "contact", 1.3),
+                                curve("440c", "rolling", 3.0), curve("440c", "contact", 0.9)],
+                "spin_points": [], "restitution_points": [], "bootstrap_seed": 1, "bootstrap_resamples": 400,
+                "notes": []},
+            "notes": [], "bootstrap": {"resamples": 400, "level": 0.95, "seed": 1, "unit": "run"}});
+        let score = |cv: f64, terms: &[&str]| json!({"cv_rms_m": cv, "rms_m": cv * 0.9, "chi2": 1000.0, "n_global_params": 3, "terms": terms});
+        let evidence = |round: usize, lr: f64, p: f64, decision: &str| {
+            json!({"round": round, "lr": lr, "extra_params": 1, "bootstrap_replicates": 40, "null_mean_lr": 1.1,
+                   "p_value": p, "p_empirical": p, "p_holm": p * 2.0, "cv_paired_t": 4.2, "cv_rms_m": 1.02e-6,
+                   "decision": decision})
+        };
+        let point = |v0: f64, t: f64| json!({"run": "r", "material": "316", "v0_mps": v0, "t_s": t, "mu": 0.33, "z0_m": 0.0});
+        let bins = |r: f64| {
+            json!({"by_phase": {"rolling": {"n": 100, "rms_m": r, "mean_m": 0.0, "mean_z": 0.0, "rms_over_noise": r / 1e-6},
+                                "sliding": {"n": 50, "rms_m": 1e-6, "mean_m": 0.0, "mean_z": 0.0, "rms_over_noise": 1.0}},
+                   "by_speed": {}, "by_position": {}, "by_direction": {}, "by_material": {},
+                   "runs_test_z": -8.0 * r / 1.3e-6, "runs_test_p": 0.0, "lag1_autocorrelation": 0.4, "lag1_z": 9.0})
+        };
         let diagnosis = json!({"mismatch": true, "findings": [
             {"effect": "velocity_dependent_drag", "accepted": true, "form": "saturating",
              "parameters": {"t0_s": {"value": 0.051, "stderr": 0.002}, "tp_s_per_mps": {"value": 1.12, "stderr": 0.04}},
-             "evidence": {"lr": 85.2, "p_bootstrap": 0.001, "p_holm": 0.004, "cv_improvement": 0.21},
+             "evidence": evidence(1, 85.2, 0.001, "accepted"),
              "where": {"phase": "rolling", "speed": "all", "drift": "T rises with v0"},
-             "baseline": {"cv_rms_m": 1.31e-6}, "extended": {"cv_rms_m": 1.02e-6}},
+             "baseline": score(1.31e-6, &[]), "extended": score(1.02e-6, &["saturating_drag"])},
             {"effect": "rolling_resistance", "accepted": false, "form": "c g sign(v)",
-             "parameters": {"deceleration_mps2": {"value": 0.011, "stderr": 0.003}},
-             "evidence": {"lr": 3.1, "p_bootstrap": 0.3}, "where": {},
-             "baseline": {"cv_rms_m": 1.31e-6}, "extended": {"cv_rms_m": 1.29e-6}}],
-            "drift": {"before": [{"v0_mps": 0.02, "T_s": 0.074}, {"v0_mps": 0.06, "T_s": 0.118}, {"v0_mps": 0.09, "T_s": 0.151}],
-                      "after": [{"v0_mps": 0.02, "T_s": 0.052}, {"v0_mps": 0.06, "T_s": 0.051}, {"v0_mps": 0.09, "T_s": 0.053}]}});
+             "parameters": {"c": {"value": 0.0011, "stderr": 0.0003}},
+             "evidence": evidence(1, 3.1, 0.3, "rejected"), "where": {},
+             "baseline": score(1.31e-6, &[]), "extended": score(1.29e-6, &["rolling_resistance"])}],
+            "candidates": [
+                {"round": 1, "effect": "velocity_dependent_drag", "form": "saturating", "accepted": true,
+                 "parameters": {"tp_s_per_mps": {"value": 1.12, "stderr": 0.04}}, "evidence": evidence(1, 85.2, 0.001, "accepted")},
+                {"round": 1, "effect": "rolling_resistance", "form": "c g sign(v)", "accepted": false,
+                 "parameters": {"c": {"value": 0.0011, "stderr": 0.0003}}, "evidence": evidence(1, 3.1, 0.3, "rejected")},
+                {"round": 2, "effect": "groove_tilt", "form": "g sin(alpha)", "accepted": false,
+                 "parameters": {"alpha_deg": {"value": 0.001, "stderr": 0.002}}, "evidence": evidence(2, 0.4, 0.6, "rejected")}],
+            "model": score(1.02e-6, &["saturating_drag"]), "model_parameters": {}, "baseline_model": score(1.31e-6, &[]),
+            "residuals_before": bins(1.3e-6), "residuals_after": bins(1.0e-6),
+            "drift": {"before": [point(0.02, 0.074), point(0.06, 0.118), point(0.09, 0.151)],
+                      "after": [point(0.02, 0.052), point(0.06, 0.051), point(0.09, 0.053)],
+                      "lines_before": {"t_s vs |v0| (316)": {"n": 3, "intercept": 0.052, "slope": 1.1, "slope_se": 0.05, "t": 22.0}},
+                      "lines_after": {"t_s vs |v0| (316)": {"n": 3, "intercept": 0.052, "slope": 0.01, "slope_se": 0.05, "t": 0.2}},
+                      "note": "per-run T with the accepted terms held fixed"},
+            "runs_used": 6, "materials": ["316", "440c"],
+            "settings": {"bootstrap": 40, "alpha": 0.01, "folds": 5, "seed": 1, "candidates": []}, "note": ""});
         let validation = json!({"truth": true, "materials": {
             "316": {"mu": {"truth": 0.337, "recovered": 0.337, "ok": true}},
             "440c": {"mu": {"truth": 0.293, "recovered": 0.293, "ok": true}}},
@@ -285,11 +345,11 @@ fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
     assert!(figs["fig_4_2b.svg"].contains("time t (ms)") && figs["fig_4_2b.svg"].contains("(mm)"));
     assert!(figs["fig_4_2c.svg"].contains("|v0| (m/s)") && figs["fig_4_2c.svg"].contains("T (s"));
     assert!(figs["fig_4_2c.svg"].contains("Stokes drag in free air: 2.18 s"));
+    assert!(figs["fig_4_2d.svg"].contains("chapter: 0.337 (316), 0.293 (440c)"));
     assert!(
-        figs["fig_4_2d.svg"].contains("316: chapter 0.337")
-            && figs["fig_4_2d.svg"].contains("440c: chapter 0.293")
+        figs["fig_4_4a.svg"].contains("μ_pp = 1.38"),
+        "μ_pp line from summary.json"
     );
-    assert!(figs["fig_4_4a.svg"].contains("μ_pp = 1.38"));
     assert!(figs["fig_secondary.svg"].contains("78.5°"));
 }
 
@@ -335,7 +395,7 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
     assert!(md.contains("2026-11-22"));
     // key numbers: ours, chapter's, truth; Stokes; the factor and bound; the audit's sign change
     for needle in [
-        "0.3370 ± 0.0030 [0.3310, 0.3430]",
+        "0.3370 [0.3310, 0.3430]",
         "| 0.337 |",
         "| truth |",
         "2.18",
@@ -343,7 +403,11 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         "0.0900",
         "78.46",
         "48.1",
-        "1.380 ± 0.060",
+        "1.380 [1.270, 1.500]",
+        "> 0.60",
+        "3.100 [2.700, 3.500]",
+        "t_s vs \\|v0\\| (316)",
+        "round",
         "velocity dependent drag (saturating)",
         "0123456789abcdef0123456789abcdef01234567",
         "| data/runs.csv | c0ffee |",

@@ -24,6 +24,14 @@ pub struct Impact {
     pub slip: Option<bool>,
 }
 
+impl CollisionRun {
+    /// A fit whose impacts can be used: converged (or stopped at the iteration cap with a result).
+    pub fn usable(&self) -> bool {
+        let s = self.status.to_ascii_lowercase();
+        s.is_empty() || s == "converged" || s == "max_iterations"
+    }
+}
+
 /// One fitted motion segment of one particle, with its sliding→rolling switch if it has one.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Segment {
@@ -107,7 +115,7 @@ fn impact(v: &Value) -> Option<Impact> {
         ],
     )
     .or_else(|| Some(post?.va_mps[1]? - pre?.va_mps[1]?));
-    let slip = match field(v, &["slip", "regime", "kind", "contact_mode"]) {
+    let slip = match field(v, &["contact", "slip", "regime", "kind", "contact_mode"]) {
         Some(Value::Bool(b)) => Some(*b),
         Some(Value::String(s)) if s.contains("slip") => Some(true),
         Some(Value::String(s)) if s.contains("stick") => Some(false),

@@ -27,7 +27,7 @@ pub fn render(page: &Page) -> Result<String, String> {
         .chain(std::iter::once(&mut page.discovery))
         .chain(std::iter::once(&mut page.provenance));
     for b in all {
-        for f in &mut b.figures {
+        for f in b.figures_mut() {
             f.svg = inline_svg(&f.svg);
         }
     }

@@ -6,10 +6,10 @@ use plotters::style::RGBColor;
 pub const FIG_W: u32 = 760;
 pub const FIG_H: u32 = 500;
 pub const FONT: &str = "sans-serif";
-pub const CAPTION_PX: u32 = 22;
-pub const LABEL_PX: u32 = 19;
-pub const TICK_PX: u32 = 16;
-pub const LEGEND_PX: u32 = 16;
+pub const CAPTION_PX: u32 = 26;
+pub const LABEL_PX: u32 = 22;
+pub const TICK_PX: u32 = 19;
+pub const LEGEND_PX: u32 = 18;
 
 pub const BLACK: RGBColor = RGBColor(20, 20, 20);
 pub const GREY: RGBColor = RGBColor(120, 120, 120);

@@ -15,33 +15,61 @@ pub struct Agg {
     pub source: &'static str,
 }
 
-/// summary.json's object for one material, under `materials`/`per_material` (map or list) or top level.
+/// summary.json's object for one material: `single.materials.<m>` (the fit stage's layout), or
+/// `materials`/`per_material` (map or list), or top level.
 pub fn material_obj<'a>(summary: &'a Value, material: &str) -> Option<&'a Value> {
-    for key in ["materials", "per_material", "single", "singles"] {
-        match summary.get(key) {
-            Some(Value::Object(m)) => {
-                if let Some(v) = m.get(material) {
-                    return Some(v);
+    let roots = [
+        summary.get("single").filter(|v| v.is_object()),
+        Some(summary),
+    ];
+    for root in roots.into_iter().flatten() {
+        for key in ["materials", "per_material"] {
+            match root.get(key) {
+                Some(Value::Object(m)) => {
+                    if let Some(v) = m.get(material) {
+                        return Some(v);
+                    }
                 }
-            }
-            Some(Value::Array(a)) => {
-                if let Some(v) = a
-                    .iter()
-                    .find(|o| o.get("material").and_then(Value::as_str) == Some(material))
-                {
-                    return Some(v);
+                Some(Value::Array(a)) => {
+                    let found = a
+                        .iter()
+                        .find(|o| o.get("material").and_then(Value::as_str) == Some(material));
+                    if found.is_some() {
+                        return found;
+                    }
                 }
+                _ => {}
             }
-            _ => {}
         }
     }
     summary.get(material).filter(|v| v.is_object())
 }
 
+/// summary.json's pooled (all materials) object.
+pub fn pooled_obj(summary: &Value) -> Option<&Value> {
+    summary
+        .get("single")
+        .and_then(|s| field(s, &["pooled", "all"]))
+        .or_else(|| field(summary, &["pooled", "all"]))
+}
+
+/// `{lo, hi}` of a value object, or of its `value` when that is an object (`{value: {value, lo, hi}}`).
+fn lo_hi(v: &Value) -> Option<(f64, f64)> {
+    match (
+        num(v, &["lo", "low", "lower"]),
+        num(v, &["hi", "high", "upper"]),
+    ) {
+        (Some(lo), Some(hi)) => Some((lo, hi)),
+        _ => v.get("value").filter(|x| x.is_object()).and_then(lo_hi),
+    }
+}
+
 fn agg(obj: &Value, names: &[&str]) -> Option<Agg> {
     let e = est(obj, names)?;
     let iv = field(obj, names)
-        .and_then(|v| interval(v, &["interval", "ci", "ci95", "bootstrap_interval"]))
+        .and_then(|v| {
+            interval(v, &["interval", "ci", "ci95", "bootstrap_interval"]).or_else(|| lo_hi(v))
+        })
         .or_else(|| {
             let cands: Vec<String> = names.iter().map(|n| format!("{n}_interval")).collect();
             let refs: Vec<&str> = cands.iter().map(String::as_str).collect();
@@ -123,10 +151,7 @@ pub fn mu_all(d: &ReportData, material: &str) -> Option<Agg> {
 pub fn t_line(d: &ReportData, material: Option<&str>) -> Option<(Agg, Agg)> {
     let obj = match material {
         Some(m) => d.summary.as_ref().and_then(|s| material_obj(s, m)),
-        None => d
-            .summary
-            .as_ref()
-            .and_then(|s| field(s, &["pooled", "all"])),
+        None => d.summary.as_ref().and_then(pooled_obj),
     };
     let line = obj.and_then(|o| {
         field(
@@ -181,7 +206,12 @@ pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
         .summary
         .as_ref()
         .and_then(|s| field(s, &["collisions", "collision"]))
-        .and_then(|c| agg(c, &["mu_pp", "mu_pp_slope", "mu_pp_fit"]));
+        .and_then(|c| {
+            agg(c, &["mu_pp", "mu_pp_slope", "mu_pp_fit"]).or_else(|| {
+                let m = c.get("mu_pp")?;
+                agg(m, &["from_slip_slope", "from_impulse_fit"])
+            })
+        });
     from_summary.or_else(|| {
         let (sxy, sxx) = d
             .collisions
@@ -211,4 +241,22 @@ pub fn at(summary: Option<&Value>, path: &[&str]) -> Option<f64> {
         v = v.get(*k)?;
     }
     None
+}
+
+/// The fitted restitution curve of one material and setup from summary.json's
+/// `collisions.restitution`: (a in C = 1 − a·v, its interval, impacts).
+pub fn restitution_curve(d: &ReportData, material: &str, contact: bool) -> Option<(Agg, usize)> {
+    let list = d
+        .summary
+        .as_ref()?
+        .get("collisions")?
+        .get("restitution")?
+        .as_array()?;
+    let setup = if contact { "contact" } else { "rolling" };
+    let c = list.iter().find(|c| {
+        c.get("material").and_then(Value::as_str) == Some(material)
+            && c.get("setup").and_then(Value::as_str).unwrap_or("rolling") == setup
+    })?;
+    let a = agg(c, &["a_per_mps"])?;
+    Some((a, num(c, &["n_impacts"]).unwrap_or(0.0) as usize))
 }

@@ -66,6 +66,23 @@ where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
+    scatter_sized(chart, pts, marker, colour, filled, label, 5)
+}
+
+/// `scatter` with marker radius `r` pixels (small markers for dense trajectories).
+pub fn scatter_sized<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    marker: Marker,
+    colour: RGBColor,
+    filled: bool,
+    label: Option<&str>,
+    r: i32,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
     let st = if filled {
         colour.filled()
     } else {
@@ -73,16 +90,17 @@ where
     };
     let pts = pts.to_vec();
     let anno = match marker {
-        Marker::Circle => chart.draw_series(pts.into_iter().map(move |p| Circle::new(p, 5, st)))?,
-        Marker::Square => chart.draw_series(
+        Marker::Circle => chart.draw_series(pts.into_iter().map(move |p| Circle::new(p, r, st)))?,
+        Marker::Square => chart.draw_series(pts.into_iter().map(move |p| {
+            EmptyElement::at(p) + Rectangle::new([(1 - r, 1 - r), (r - 1, r - 1)], st)
+        }))?,
+        Marker::Triangle => chart.draw_series(
             pts.into_iter()
-                .map(move |p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], st)),
+                .map(move |p| TriangleMarker::new(p, r + 1, st)),
         )?,
-        Marker::Triangle => {
-            chart.draw_series(pts.into_iter().map(move |p| TriangleMarker::new(p, 6, st)))?
-        }
         Marker::Diamond => chart.draw_series(pts.into_iter().map(move |p| {
-            EmptyElement::at(p) + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], st)
+            EmptyElement::at(p)
+                + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
         }))?,
     };
     if let Some(label) = label {
@@ -149,12 +167,12 @@ where
         chart.draw_series(LineSeries::new(pts, st))?
     };
     if let Some(label) = label {
+        // a dashed sample is two short strokes, a solid one a single stroke
+        let gap = if dashed { (7, 12) } else { (18, 18) };
         anno.label(label).legend(move |(x, y)| {
-            if dashed {
-                PathElement::new(vec![(x, y), (x + 7, y), (x + 11, y), (x + 18, y)], st)
-            } else {
-                PathElement::new(vec![(x, y), (x + 18, y)], st)
-            }
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (gap.0, 0)], st)
+                + PathElement::new(vec![(gap.1, 0), (20, 0)], st)
         });
     }
     Ok(())

@@ -118,7 +118,7 @@ pub fn drift(diag: &Value) -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
                 points(
                     v,
                     &["v0_mps", "v0", "abs_v0_mps"],
-                    &["T_s", "t_drag_s", "T"],
+                    &["T_s", "t_drag_s", "t_s", "T"],
                 )
             })
             .unwrap_or_default()

@@ -1,6 +1,6 @@
 //! Fig. 4.2b: one single-run trajectory, sliding and rolling samples marked, with the fitted baseline.
 
-use super::common::{legend, line, linear_chart, render, scatter, span};
+use super::common::{legend, line, linear_chart, render, scatter_sized, span};
 use crate::report::inputs::ReportData;
 use crate::report::singles::SingleRow;
 use crate::report::style::{self, Marker};
@@ -50,7 +50,7 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
     let z_ref = s[0].z_obs_m;
     let mm = |z: f64| (z - z_ref) * 1e3;
     let ms = |t: f64| t * 1e3;
-    let step = (s.len() / 300).max(1);
+    let step = (s.len() / 160).max(1);
     let pick = |rolling: bool| -> Vec<(f64, f64)> {
         s.iter()
             .step_by(step)
@@ -76,21 +76,23 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
             "time t (ms)",
             "position z − z(0) (mm)",
         )?;
-        scatter(
+        scatter_sized(
             &mut c,
             &sliding,
             Marker::Circle,
             style::SLIDING,
             true,
             Some("observed, sliding"),
+            3,
         )?;
-        scatter(
+        scatter_sized(
             &mut c,
             &rolling,
             Marker::Circle,
             style::ROLLING,
             true,
             Some("observed, rolling"),
+            3,
         )?;
         line(
             &mut c,

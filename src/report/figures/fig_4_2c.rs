@@ -8,6 +8,18 @@ use crate::report::style;
 use crate::report::summary::t_line;
 use plotters::prelude::*;
 
+/// Tick label of a log axis: only 1, 2 and 5 times a power of ten are written.
+fn log_label(y: &f64) -> String {
+    let e = y.log10().floor();
+    let m = y / 10f64.powf(e);
+    if [1.0, 2.0, 5.0].iter().any(|k| (m - k).abs() < 1e-6) {
+        let decimals = (-e).max(0.0) as usize;
+        format!("{y:.decimals$}")
+    } else {
+        String::new()
+    }
+}
+
 /// Render Fig. 4.2c, or None without single-run fits.
 pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
     let mats: Vec<String> = d
@@ -54,9 +66,9 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             .y_desc("fitted drag time T (s, log scale)")
             .label_style((style::FONT, style::TICK_PX))
             .axis_desc_style((style::FONT, style::LABEL_PX))
-            .light_line_style(style::LIGHT_GREY.mix(0.6))
+            .light_line_style(WHITE.mix(0.0))
             .bold_line_style(style::LIGHT_GREY)
-            .y_label_formatter(&|y| format!("{y:.3}"))
+            .y_label_formatter(&log_label)
             .draw()?;
         for (i, m) in mats.iter().enumerate() {
             let col = style::material_colour(m, i);
@@ -106,7 +118,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             true,
             Some(&label),
         )?;
-        legend(&mut c, SeriesLabelPosition::MiddleRight)
+        legend(&mut c, SeriesLabelPosition::MiddleLeft)
     })?;
     Ok(Some(svg))
 }

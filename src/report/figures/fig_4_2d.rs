@@ -36,7 +36,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             (0.0, x_max),
             yr,
             "initial speed |v0| (m/s)",
-            "fitted friction coefficient μ_pg (1)",
+            "friction coefficient μ_pg (dimensionless)",
         )?;
         let t = chapter::MU_MEAN_V0_MIN_MPS;
         line(
@@ -77,16 +77,27 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
                     Some(&format!("{m}: our mean {v:.3}")),
                 )?;
             }
-            if let Some(v) = chapter::mu_for(m) {
-                line(
-                    &mut c,
-                    vec![(t, v), (x_max, v)],
-                    col,
-                    2,
-                    true,
-                    Some(&format!("{m}: chapter {v:.3}")),
-                )?;
-            }
+        }
+        // the chapter's means on top, dark dashed, one legend entry for both
+        let chapter_mats: Vec<(String, f64)> = mats
+            .iter()
+            .filter_map(|m| Some((m.clone(), chapter::mu_for(m)?)))
+            .collect();
+        let label = chapter_mats
+            .iter()
+            .map(|(m, v)| format!("{v:.3} ({m})"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        for (i, (_, v)) in chapter_mats.iter().enumerate() {
+            let lab = (i == 0).then(|| format!("chapter: {label}"));
+            line(
+                &mut c,
+                vec![(t, *v), (x_max, *v)],
+                style::BLACK,
+                2,
+                true,
+                lab.as_deref(),
+            )?;
         }
         legend(&mut c, SeriesLabelPosition::LowerRight)
     })?;

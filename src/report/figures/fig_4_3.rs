@@ -1,7 +1,7 @@
 //! Figs. 4.3c–d: a collision run's striker and target trajectories, and the striker's four motion
 //! segments (sliding and rolling, before and after the impact).
 
-use super::common::{legend, line, linear_chart, render, scatter, span};
+use super::common::{legend, line, linear_chart, render, scatter_sized, span};
 use crate::recording::Track;
 use crate::report::collisions::CollisionRun;
 use crate::report::inputs::ReportData;
@@ -30,7 +30,7 @@ pub fn choose<'a>(d: &'a ReportData, wanted: Option<&str>) -> Option<&'a Collisi
 }
 
 fn pts(t: &Track, z_ref: f64, keep: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
-    let step = (t.t_s.len() / 400).max(1);
+    let step = (t.t_s.len() / 200).max(1);
     t.t_s
         .iter()
         .zip(&t.z_m)
@@ -78,21 +78,23 @@ pub fn render_figs(
             "time t (ms)",
             "position z − z_striker(0) (mm)",
         )?;
-        scatter(
+        scatter_sized(
             &mut ch,
             &pts(s, z_ref, |_| true),
             Marker::Circle,
             STRIKER,
             true,
             Some("striker (particle 0)"),
+            3,
         )?;
-        scatter(
+        scatter_sized(
             &mut ch,
             &pts(t, z_ref, |_| true),
             Marker::Circle,
             TARGET,
             true,
             Some("target (particle 1)"),
+            3,
         )?;
         for (i, ti) in impacts.iter().enumerate() {
             let label = (i == 0).then_some("impact");
@@ -164,7 +166,7 @@ pub fn render_figs(
                 before(t) == is_before && rolling_at(t) == is_rolling
             });
             if !p.is_empty() {
-                scatter(&mut ch, &p, mk, col, true, Some(label))?;
+                scatter_sized(&mut ch, &p, mk, col, true, Some(label), 3)?;
             }
         }
         for ti in &impacts {

@@ -133,7 +133,7 @@ pub fn render_bc(
             (0.0, v_max),
             yr,
             "impact speed |v1 − v2| (m/s)",
-            "coefficient of restitution C (1)",
+            "coefficient of restitution C (dimensionless)",
         )?;
         line(
             &mut c,
@@ -157,7 +157,9 @@ pub fn render_bc(
                 true,
                 Some(&format!("{material}, {setup}")),
             )?;
-            if let Some(a) = restitution_slope(p) {
+            let fitted = crate::report::summary::restitution_curve(d, material, *contact)
+                .map(|(a, _)| a.est.value);
+            if let Some(a) = fitted.or_else(|| restitution_slope(p)) {
                 let label = format!("{setup}: C = 1 − {a:.2}·v");
                 line(
                     &mut c,

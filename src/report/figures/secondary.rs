@@ -21,7 +21,7 @@ pub fn render_fig(g: Groove) -> Result<String, String> {
     let theta = 2.0 * g.s.asin().to_degrees();
     let bound = bound_deg(g.k);
     let curve: Vec<(f64, f64)> = (0..=160)
-        .map(|i| 30.0 + i as f64 * 0.5)
+        .map(|i| 45.0 + i as f64 * 0.5)
         .map(|t| (t, factor(t)))
         .collect();
     let f_here = factor(theta);
@@ -29,14 +29,14 @@ pub fn render_fig(g: Groove) -> Result<String, String> {
         let mut c = linear_chart(
             root,
             "Velocity-difference factor per collision and re-acceleration",
-            (30.0, 110.0),
+            (45.0, 110.0),
             (-0.3, 0.6),
             "groove opening angle θ (degrees)",
-            "(1 − ks²)/(1 + ks²) (1)",
+            "factor (1 − ks²)/(1 + ks²) (dimensionless)",
         )?;
         line(
             &mut c,
-            vec![(30.0, 0.0), (110.0, 0.0)],
+            vec![(45.0, 0.0), (110.0, 0.0)],
             style::GREY,
             1,
             false,

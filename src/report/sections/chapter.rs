@@ -105,7 +105,7 @@ fn fig_4_2b_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         "—".into(),
         &["__none__"],
     ));
-    b.tables.push(t);
+    b.table(t);
     b
 }
 
@@ -158,7 +158,7 @@ fn fig_4_2c_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         "0.074 (wrong)".into(),
         &["__none__"],
     ));
-    b.tables.push(t);
+    b.table(t);
     b
 }
 
@@ -201,7 +201,7 @@ fn fig_4_2d_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             &["__none__"],
         ));
     }
-    b.tables.push(t);
+    b.table(t);
     b.para("The caption of Fig. 4.2 prints 0.296 for 440c where the text and Eq. 4.8 give 0.293; the table uses 0.293 (see the equation audit).");
     b
 }

@@ -52,7 +52,7 @@ fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         ]);
     }
     if !t.rows.is_empty() {
-        b.tables.push(t);
+        b.table(t);
     }
     if c.segments.iter().filter(|s| s.particle == 0).count() == 0 {
         b.para("The collision fit of this run lists no motion segments, so Fig. 4.3d separates the striker's samples only at the impact.");
@@ -78,6 +78,21 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     ));
     let mut t = Table::new("Fig. 4.4a: particle–particle friction", &[]);
     t.headers = headers(d, &["quantity"]);
+    let lower = d.summary.as_ref().and_then(|s| {
+        s.get("collisions")?
+            .get("mu_pp")?
+            .get("stick_lower_bound")?
+            .as_f64()
+    });
+    if let Some(lb) = lower {
+        t.push(row(
+            d,
+            vec!["μ_pp lower bound from stick impacts".into()],
+            format!("> {lb:.2}"),
+            "—".into(),
+            &["__none__"],
+        ));
+    }
     if let Some(a) = mu_pp(d, k) {
         t.push(row(
             d,
@@ -94,7 +109,7 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             &["__none__"],
         ));
     }
-    b.tables.push(t);
+    b.table(t);
     b
 }
 
@@ -144,7 +159,11 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
                 (if contact { "contact" } else { "rolling" }).into(),
                 p.len().to_string(),
                 format!("{mean:.3}"),
-                fig_4_4::restitution_slope(&p).map_or("—".into(), |a| format!("{a:.2}")),
+                match crate::report::summary::restitution_curve(d, m, contact) {
+                    Some((a, _)) => agg_text(&a),
+                    None => fig_4_4::restitution_slope(&p)
+                        .map_or("—".into(), |a| format!("{a:.2} (least squares here)")),
+                },
                 (if contact {
                     "higher than rolling; → 1 at low speed"
                 } else {
@@ -154,7 +173,7 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             ]);
         }
     }
-    b.tables.push(t);
+    b.table(t);
     b.para("For pairs that start in contact the striker has no track before the impact; its pre-impact speed is estimated from momentum conservation with the post-impact velocities (the chapter used the laser's momentum calibration, 15 % scatter).");
     b
 }
@@ -190,7 +209,7 @@ fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
         format!("{bound:.2}"),
         format!("{:.1}", ch::THETA_BOUND_DEG),
     ]);
-    b.tables.push(t);
+    b.table(t);
     b.para(format!(
         "With θ = {theta:.1}° < {bound:.1}° each collision leaves {:.0} % of the velocity difference, so the pair collides again and again (forever in the ideal model) and ends up rolling about 2R apart.",
         f * 100.0

@@ -20,6 +20,22 @@ fn median(mut xs: Vec<f64>) -> Option<f64> {
     })
 }
 
+/// The plain-language notes of summary.json (top level and collisions), in order.
+fn summary_notes(s: &serde_json::Value) -> Vec<String> {
+    let list = |v: Option<&serde_json::Value>| -> Vec<String> {
+        v.and_then(|n| n.as_array())
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let mut out = list(s.get("notes"));
+    out.extend(list(s.get("collisions").and_then(|c| c.get("notes"))));
+    out
+}
+
 pub fn block(d: &ReportData) -> Block {
     let mut b = Block::new("data", "2. The data");
     // (experiment, material, setup) -> (runs, fps values, frames per run, duration per run, +z runs)
@@ -85,7 +101,7 @@ pub fn block(d: &ReportData) -> Block {
             median(dur.clone()).map_or("—".into(), |x| format!("{:.1}", x * 1e3)),
         ]);
     }
-    b.tables.push(t);
+    b.table(t);
     let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
     if !d.singles.is_empty() {
         b.para(format!(
@@ -106,7 +122,21 @@ pub fn block(d: &ReportData) -> Block {
         .filter(|r| !r.converged())
         .map(|r| format!("{} ({})", r.run, r.status))
         .collect();
-    if d.skipped.is_empty() && failed.is_empty() {
+    let coll_failed: Vec<String> = d
+        .collisions
+        .iter()
+        .filter(|c| !c.usable())
+        .map(|c| format!("{} ({})", c.run, c.status))
+        .collect();
+    if let Some(notes) = d
+        .summary
+        .as_ref()
+        .map(summary_notes)
+        .filter(|n| !n.is_empty())
+    {
+        b.para(format!("Notes of the aggregate stage: {}", notes.join(" ")));
+    }
+    if d.skipped.is_empty() && failed.is_empty() && coll_failed.is_empty() {
         b.para("Nothing was left out: every run was ingested and every single-run fit converged.");
     } else {
         let mut s = Table::new("Left out", &["run", "why"]);
@@ -119,7 +149,7 @@ pub fn block(d: &ReportData) -> Block {
                 "fit did not converge; excluded from the aggregates".into(),
             ]);
         }
-        b.tables.push(s);
+        b.table(s);
     }
     b
 }

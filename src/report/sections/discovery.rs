@@ -64,6 +64,129 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
     }
 }
 
+/// The decisive statistics of a candidate's evidence (LR, p-values, CV), else a compact dump.
+pub fn evidence_text(e: &Value) -> String {
+    let keys = [
+        ("lr", "LR"),
+        ("p_value", "p"),
+        ("p_empirical", "p (empirical)"),
+        ("p_holm", "p (Holm)"),
+        ("cv_paired_t", "CV paired t"),
+        ("decision", "decision"),
+    ];
+    let parts: Vec<String> = keys
+        .iter()
+        .filter_map(|(k, label)| match e.get(*k)? {
+            Value::String(s) => Some(format!("{label}: {s}")),
+            v => as_num(v).map(|x| format!("{label} = {}", sig(x, 3))),
+        })
+        .collect();
+    if parts.is_empty() {
+        short(e, 6)
+    } else {
+        parts.join("; ")
+    }
+}
+
+/// Residual RMS before and after by phase, speed, position, direction and material
+/// (diagnosis.json `residuals_before` / `residuals_after`).
+fn structure_table(diag: &Value) -> Option<Table> {
+    let before = diag.get("residuals_before").filter(|v| v.is_object())?;
+    let after = diag.get("residuals_after").filter(|v| v.is_object());
+    let mut t = Table::new(
+        "Residuals before and after, pooled over runs (RMS in µm; RMS/noise in brackets)",
+        &["by", "bin", "samples", "before", "after"],
+    );
+    let cell = |bin: Option<&Value>| {
+        let Some(bin) = bin else {
+            return "—".to_string();
+        };
+        match (num(bin, &["rms_m"]), num(bin, &["rms_over_noise"])) {
+            (Some(r), Some(q)) => format!("{:.3} ({:.2})", r * 1e6, q),
+            (Some(r), None) => format!("{:.3}", r * 1e6),
+            _ => "—".into(),
+        }
+    };
+    for (key, label) in [
+        ("by_phase", "phase"),
+        ("by_speed", "speed"),
+        ("by_position", "position"),
+        ("by_direction", "direction"),
+        ("by_material", "material"),
+    ] {
+        let Some(Value::Object(bins)) = before.get(key) else {
+            continue;
+        };
+        for (name, bin) in bins {
+            let a = after.and_then(|a| a.get(key)).and_then(|m| m.get(name));
+            t.push(vec![
+                label.into(),
+                name.clone(),
+                num(bin, &["n"]).map_or("—".into(), |n| format!("{n:.0}")),
+                cell(Some(bin)),
+                cell(a),
+            ]);
+        }
+    }
+    for (key, label) in [
+        ("runs_test_z", "runs test z"),
+        ("lag1_autocorrelation", "lag-1 autocorrelation"),
+    ] {
+        if let Some(x) = num(before, &[key]) {
+            let y = after.and_then(|a| num(a, &[key]));
+            t.push(vec![
+                "structure".into(),
+                label.into(),
+                "—".into(),
+                sig(x, 3),
+                y.map_or("—".into(), |y| sig(y, 3)),
+            ]);
+        }
+    }
+    (!t.rows.is_empty()).then_some(t)
+}
+
+/// The drift lines (e.g. "t_s vs |v0| (316)") before and after: slope ± se and its t.
+fn drift_table(diag: &Value) -> Option<Table> {
+    let drift = diag.get("drift").filter(|v| v.is_object())?;
+    let (Some(Value::Object(before)), after) =
+        (drift.get("lines_before"), drift.get("lines_after"))
+    else {
+        return None;
+    };
+    let mut t = Table::new(
+        "Drift of per-run parameters: regression slopes before and after (t = slope/se)",
+        &["line", "slope before", "t before", "slope after", "t after"],
+    );
+    let fmt = |l: Option<&Value>| -> (String, String) {
+        let Some(l) = l else {
+            return ("—".into(), "—".into());
+        };
+        let slope = match (num(l, &["slope"]), num(l, &["slope_se"])) {
+            (Some(s), Some(se)) => format!("{} ± {}", sig(s, 3), sig(se, 2)),
+            (Some(s), None) => sig(s, 3),
+            _ => "—".into(),
+        };
+        (
+            slope,
+            num(l, &["t"]).map_or("—".into(), |x| format!("{x:.1}")),
+        )
+    };
+    for (name, l) in before {
+        let (sb, tb) = fmt(Some(l));
+        let (sa, ta) = fmt(after.and_then(|a| a.get(name)));
+        t.push(vec![name.clone(), sb, tb, sa, ta]);
+    }
+    if let Some(note) = drift
+        .get("note")
+        .and_then(Value::as_str)
+        .filter(|n| !n.is_empty())
+    {
+        t.caption.push_str(&format!(" — {note}"));
+    }
+    (!t.rows.is_empty()).then_some(t)
+}
+
 /// `name = value ± stderr` for each parameter of a finding.
 pub fn params_text(f: &Value) -> String {
     let Some(Value::Object(ps)) = f.get("parameters") else {
@@ -114,7 +237,9 @@ fn compare_with_eq_4_8(f: &Value) -> String {
         }
         "rolling_resistance" => format!(
             "A constant resistance c·g opposing motion also makes the fitted linear-drag T grow with v0, the signature the chapter read as a quadratic drag term (Eq. 4.8). Discovery tested both as candidates and the evidence selects rolling resistance (deceleration {}); Eq. 4.8's v/T0 − v²/L would in addition change sign at {v_star:.0} mm/s.",
-            param(f, &["deceleration_mps2", "c_g_mps2", "a_mps2", "decel_mps2"]).map_or("see the table".into(), |x| format!("{} m/s²", sig(x, 3)))
+            param(f, &["deceleration_mps2", "c_g_mps2", "a_mps2", "decel_mps2"])
+                .or_else(|| param(f, &["c"]).map(|c| c * crate::physics::G_MPS2))
+                .map_or("see the table".into(), |x| format!("{} m/s²", sig(x, 3)))
         ),
         _ => format!(
             "Eq. 4.8 corrects only the drag (v/T0 − v²/L); the accepted {} is a different physical effect that the chapter's model does not contain.",
@@ -157,24 +282,47 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             break;
         }
     }
+    // every candidate tested (diagnosis.candidates, by round), else the findings
+    let rows: Vec<&Value> = match diag.get("candidates").and_then(Value::as_array) {
+        Some(c) if !c.is_empty() => c.iter().collect(),
+        _ => findings.clone(),
+    };
+    let baseline_cv = diag
+        .get("baseline_model")
+        .and_then(|m| num(m, &["cv_rms_m"]))
+        .or_else(|| {
+            findings
+                .iter()
+                .find_map(|f| f.get("baseline").and_then(|m| num(m, &["cv_rms_m"])))
+        });
+    let caption = match baseline_cv {
+        Some(cv) => format!(
+            "Every candidate tested: evidence and fitted size (baseline held-out RMS {:.3} µm)",
+            cv * 1e6
+        ),
+        None => "Every candidate tested: evidence and fitted size".to_string(),
+    };
     let mut t = Table::new(
-        "Every candidate: evidence and fitted size (accepted first)",
+        &caption,
         &[
+            "round",
             "effect",
             "form",
             "accepted",
             "parameters",
             "evidence",
-            "held-out RMS (µm): baseline → extended",
+            "held-out RMS (µm)",
         ],
     );
-    for f in &findings {
-        let cv = |k: &str| {
-            f.get(k)
-                .and_then(|x| num(x, &["cv_rms_m"]))
-                .map(|x| format!("{:.3}", x * 1e6))
-        };
+    for f in &rows {
+        let cv = f
+            .get("extended")
+            .and_then(|x| num(x, &["cv_rms_m"]))
+            .or_else(|| f.get("evidence").and_then(|e| num(e, &["cv_rms_m"])));
         t.push(vec![
+            num(f, &["round"])
+                .or_else(|| f.get("evidence").and_then(|e| num(e, &["round"])))
+                .map_or("—".into(), |r| format!("{r:.0}")),
             text(f, &["effect"]).unwrap_or("?").replace('_', " "),
             text(f, &["form"]).unwrap_or("—").to_string(),
             (if f.get("accepted").and_then(Value::as_bool) == Some(true) {
@@ -184,15 +332,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             })
             .into(),
             params_text(f),
-            f.get("evidence").map_or("—".into(), |e| short(e, 6)),
-            match (cv("baseline"), cv("extended")) {
-                (Some(a), Some(e)) => format!("{a} → {e}"),
-                _ => "—".into(),
-            },
+            f.get("evidence").map_or("—".into(), evidence_text),
+            cv.map_or("—".into(), |x| format!("{:.3}", x * 1e6)),
         ]);
-    }
-    if !t.rows.is_empty() {
-        b.tables.push(t);
     }
     if accepted.is_empty() {
         b.para(if mismatch {
@@ -207,8 +349,17 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             .collect();
         b.para(format!("Accepted physics: {}.", names.join(", ")));
     }
+    if !t.rows.is_empty() {
+        b.table(t);
+    }
     b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");
+    if let Some(t) = structure_table(diag) {
+        b.table(t);
+    }
     b.figure(figs, "fig_discovery_drift.svg", "The drift that flagged the mismatch: fitted T against |v0| for the baseline (grey) and for the extended model (green), with regression lines.");
+    if let Some(t) = drift_table(diag) {
+        b.table(t);
+    }
     b.para(match accepted.first() {
         Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(f)),
         None => "Comparison with the chapter's correction (Eq. 4.8): with nothing accepted there is no extended model to compare; Eq. 4.8's v/T0 − v²/L is in any case unphysical above L/T0 ≈ 48 mm/s (see the audit).".into(),

@@ -42,14 +42,21 @@ pub struct FigureRef {
     pub svg: String,
 }
 
-/// One section or subsection.
+/// One piece of a block, in reading order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Item {
+    Para { text: String },
+    Table(Table),
+    Figure(FigureRef),
+}
+
+/// One section or subsection: paragraphs, tables and figures in the order they were added.
 #[derive(Debug, Clone, PartialEq, Serialize, Default)]
 pub struct Block {
     pub id: String,
     pub heading: String,
-    pub paragraphs: Vec<String>,
-    pub figures: Vec<FigureRef>,
-    pub tables: Vec<Table>,
+    pub items: Vec<Item>,
     /// Why this part has no figure or numbers (e.g. "no collision runs in this dataset").
     pub missing: Option<String>,
 }
@@ -63,17 +70,27 @@ impl Block {
         }
     }
     pub fn para(&mut self, text: impl Into<String>) {
-        self.paragraphs.push(text.into());
+        self.items.push(Item::Para { text: text.into() });
+    }
+    pub fn table(&mut self, t: Table) {
+        self.items.push(Item::Table(t));
+    }
+    /// The figures of this block.
+    pub fn figures_mut(&mut self) -> impl Iterator<Item = &mut FigureRef> {
+        self.items.iter_mut().filter_map(|i| match i {
+            Item::Figure(f) => Some(f),
+            _ => None,
+        })
     }
     /// Add figure `name` from the rendered set, or note that it is absent.
     pub fn figure(&mut self, figs: &BTreeMap<String, String>, name: &str, caption: &str) -> bool {
         match figs.get(name) {
             Some(svg) => {
-                self.figures.push(FigureRef {
+                self.items.push(Item::Figure(FigureRef {
                     name: name.into(),
                     caption: caption.into(),
                     svg: svg.clone(),
-                });
+                }));
                 true
             }
             None => false,
@@ -86,6 +103,8 @@ impl Block {
 pub struct Page {
     pub title: String,
     pub date: Option<String>,
+    /// Whether the comparison tables carry a truth column (a truth file was validated).
+    pub has_truth: bool,
     pub summary: Block,
     pub data: Block,
     pub chapter: Vec<Block>,
@@ -106,6 +125,7 @@ pub fn build(
     Page {
         title: title.into(),
         date,
+        has_truth: d.validation.is_some(),
         summary: summary::block(d),
         data: data::block(d),
         chapter,

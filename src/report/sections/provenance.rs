@@ -28,7 +28,7 @@ pub fn block(d: &ReportData) -> Block {
             t.push(vec![k.replace('_', " "), scalar(v)]);
         }
     }
-    b.tables.push(t);
+    b.table(t);
     if let Some(Value::Array(inputs)) = p.get("inputs") {
         let mut t = Table::new("Inputs (sha256 of the bytes read)", &["path", "sha256"]);
         for i in inputs {
@@ -37,7 +37,7 @@ pub fn block(d: &ReportData) -> Block {
                 text(i, &["sha256"]).unwrap_or("?").into(),
             ]);
         }
-        b.tables.push(t);
+        b.table(t);
     }
     if let Some(Value::Array(stages)) = p.get("stages") {
         let mut t = Table::new("Stages and their cache keys", &["stage", "kind", "key"]);
@@ -48,7 +48,7 @@ pub fn block(d: &ReportData) -> Block {
                 text(s, &["key"]).unwrap_or("?").into(),
             ]);
         }
-        b.tables.push(t);
+        b.table(t);
     }
     if let Some(Value::Object(fp)) = p.get("fingerprints") {
         let mut t = Table::new(
@@ -58,7 +58,7 @@ pub fn block(d: &ReportData) -> Block {
         for (k, v) in fp {
             t.push(vec![k.clone(), scalar(v)]);
         }
-        b.tables.push(t);
+        b.table(t);
     }
     b.para("Every value here is deterministic: the report carries no run times (they go to the console and the run log), so the same inputs and code give a byte-identical report.");
     b

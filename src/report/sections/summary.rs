@@ -84,7 +84,7 @@ pub fn block(d: &ReportData) -> Block {
         ]);
     }
     if !t.rows.is_empty() {
-        b.tables.push(t);
+        b.table(t);
     }
     match &d.diagnosis {
         None => b.para("Discovery did not run for this report (no diagnosis.json)."),
