@@ -210,10 +210,20 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
                       "note": "per-run T with the accepted terms held fixed"},
             "runs_used": 6, "materials": ["316", "440c"],
             "settings": {"bootstrap": 40, "alpha": 0.01, "folds": 5, "seed": 1, "candidates": []}, "note": ""});
-        let validation = json!({"truth": true, "materials": {
-            "316": {"mu": {"truth": 0.337, "recovered": 0.337, "ok": true}},
-            "440c": {"mu": {"truth": 0.293, "recovered": 0.293, "ok": true}}},
-            "collisions": {"mu_pp": {"truth": 1.4, "recovered": 1.38, "ok": true}}});
+        // the validate stage's layout
+        let pv = |m: &str, q: &str, truth: f64, rec: f64| {
+            json!({"material": m, "quantity": q, "truth": truth, "recovered": rec, "low": rec - 0.005,
+                   "high": rec + 0.005, "error": rec - truth, "within_interval": true})
+        };
+        let validation = json!({"truth": true,
+            "parameters": [pv("316", "mu_weighted", 0.337, 0.337), pv("316", "mu_fast", 0.337, 0.337),
+                           {"material": "316", "quantity": "restitution_rolling",
+                            "truth_law": "{\"speed_dependent\":{\"c0\":1.0,\"v_ref_mps\":0.4}}"},
+                           pv("440c", "mu_weighted", 0.293, 0.292), pv("440c", "mu_fast", 0.293, 0.293)],
+            "mu_pp": {"truth": 1.4, "recovered": 1.38},
+            "effects": {"truth": [{"effect": "velocity_dependent_drag",
+                                   "term": {"term": "saturating_drag", "t0_s": 0.05, "tp_s_per_mps": 1.1}}],
+                        "accepted": ["velocity_dependent_drag"], "missed": [], "spurious": [], "all_named": true}});
         let provenance = json!({"groove_version": "0.1.0", "code_commit": "0123456789abcdef0123456789abcdef01234567",
             "fingerprints": {"figures": "aa11", "report": "bb22"}, "seed": 20261122,
             "inputs": [{"path": "data/runs.csv", "sha256": "c0ffee"}, {"path": "data/trajectories.csv", "sha256": "beef"}],
@@ -408,6 +418,9 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         "3.100 [2.700, 3.500]",
         "t_s vs \\|v0\\| (316)",
         "round",
+        "Against the truth (this dataset is synthetic): concealed physics velocity dependent drag",
+        "| velocity dependent drag | tp_s_per_mps | 1.120 ± 0.040 | 1.100 |",
+        "c0 = 1",
         "velocity dependent drag (saturating)",
         "0123456789abcdef0123456789abcdef01234567",
         "| data/runs.csv | c0ffee |",

@@ -28,7 +28,7 @@ fn walk(v: &Value, path: String, out: &mut Vec<TruthRow>) {
                     path: path.clone(),
                     ours: num(v, &["recovered", "fitted", "estimate", "value", "ours"]),
                     truth: t,
-                    ok: ["ok", "within", "pass", "passed"]
+                    ok: ["ok", "within", "within_interval", "pass", "passed"]
                         .iter()
                         .find_map(|k| m.get(*k).and_then(Value::as_bool)),
                 });
@@ -45,12 +45,16 @@ fn walk(v: &Value, path: String, out: &mut Vec<TruthRow>) {
         }
         Value::Array(a) => {
             for (i, x) in a.iter().enumerate() {
-                let label = x
-                    .get("name")
-                    .or_else(|| x.get("material"))
-                    .or_else(|| x.get("quantity"))
-                    .and_then(Value::as_str)
-                    .map_or_else(|| i.to_string(), str::to_string);
+                // label an element by its identifying fields, e.g. `parameters[316.mu_fast]`
+                let ids: Vec<&str> = ["name", "material", "quantity", "effect"]
+                    .iter()
+                    .filter_map(|k| x.get(*k).and_then(Value::as_str))
+                    .collect();
+                let label = if ids.is_empty() {
+                    i.to_string()
+                } else {
+                    ids.join(".")
+                };
                 walk(x, format!("{path}[{label}]"), out);
             }
         }
@@ -80,6 +84,25 @@ pub fn lookup(rows: &[TruthRow], tokens: &[&str]) -> Option<f64> {
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn reads_the_validate_stage_layout() {
+        let v = json!({"truth": true,
+            "parameters": [{"material": "316", "quantity": "mu_weighted", "truth": 0.337, "recovered": 0.336,
+                            "low": 0.33, "high": 0.34, "within_interval": true},
+                           {"material": "316", "quantity": "mu_fast", "truth": 0.337, "recovered": 0.338},
+                           {"material": "316", "quantity": "restitution_rolling", "truth_law": "{}"}],
+            "mu_pp": {"truth": 1.4, "recovered": 1.37}});
+        let r = rows(&v);
+        assert_eq!(r.len(), 3);
+        let w = r
+            .iter()
+            .find(|x| x.path == "parameters[316.mu_weighted]")
+            .expect("labelled by material and quantity");
+        assert_eq!((w.ours, w.ok), (Some(0.336), Some(true)));
+        assert_eq!(lookup(&r, &["316", "mu_fast"]), Some(0.337));
+        assert_eq!(lookup(&r, &["mu_pp"]), Some(1.4));
+    }
 
     #[test]
     fn flattens_and_finds_by_tokens() {

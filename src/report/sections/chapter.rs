@@ -180,16 +180,16 @@ fn fig_4_2d_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
                 vec![m.clone(), "mean for |v0| > 0.03 m/s".into()],
                 agg_text(&a),
                 chv.clone(),
-                &[&m, "mu"],
+                &[&m, "mu_fast"],
             ));
         }
         if let Some(a) = mu_all(d, &m) {
             t.push(row(
                 d,
-                vec![m.clone(), "all runs".into()],
+                vec![m.clone(), "weighted mean, all runs".into()],
                 agg_text(&a),
                 "—".into(),
-                &["__none__"],
+                &[&m, "mu_weighted"],
             ));
         }
         let n = d.singles_of(&m).count();

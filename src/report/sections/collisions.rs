@@ -113,6 +113,19 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     b
 }
 
+/// The truth file's restitution law of a material and setup (validation.json), compactly.
+fn truth_law(d: &ReportData, material: &str, setup: &str) -> Option<String> {
+    let list = d.validation.as_ref()?.get("parameters")?.as_array()?;
+    let q = format!("restitution_{setup}");
+    let row = list.iter().find(|r| {
+        r.get("material").and_then(|x| x.as_str()) == Some(material)
+            && r.get("quantity").and_then(|x| x.as_str()) == Some(q.as_str())
+    })?;
+    let law = row.get("truth_law")?.as_str()?;
+    let parsed: serde_json::Value = serde_json::from_str(law).ok()?;
+    Some(super::discovery::short(&parsed, 4))
+}
+
 fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     let mut b = Block::new(
         "fig-4-4bc",
@@ -141,6 +154,9 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             "chapter",
         ],
     );
+    if d.validation.is_some() {
+        t.headers.push("truth law".into());
+    }
     for m in &mats {
         for contact in [false, true] {
             let p: Vec<(f64, f64)> = d
@@ -171,6 +187,13 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
                 })
                 .into(),
             ]);
+            if d.validation.is_some() {
+                let law = truth_law(d, m, if contact { "contact" } else { "rolling" });
+                t.rows
+                    .last_mut()
+                    .expect("row just pushed")
+                    .push(law.unwrap_or_else(|| "—".into()));
+            }
         }
     }
     b.table(t);

@@ -64,6 +64,90 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
     }
 }
 
+/// What the truth file of a synthetic dataset says about the concealed physics (validation.json
+/// `effects`), and each accepted parameter beside the truth term's parameter of the same name.
+fn truth_block(b: &mut Block, diag: &Value, validation: &Value) {
+    let Some(effects) = validation.get("effects") else {
+        return;
+    };
+    let names = |k: &str| -> Vec<String> {
+        effects
+            .get(k)
+            .and_then(Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(|s| s.replace('_', " ")))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let truth_terms: Vec<&Value> = effects
+        .get("truth")
+        .and_then(Value::as_array)
+        .map(|a| a.iter().collect())
+        .unwrap_or_default();
+    let truth_names: Vec<String> = truth_terms
+        .iter()
+        .map(|t| {
+            format!(
+                "{} ({})",
+                text(t, &["effect"]).unwrap_or("?").replace('_', " "),
+                t.get("term").map_or("—".into(), |x| short(x, 6))
+            )
+        })
+        .collect();
+    let list = |v: Vec<String>| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    b.para(format!(
+        "Against the truth (this dataset is synthetic): concealed physics {}; accepted {}; missed {}; spurious {}.",
+        list(truth_names),
+        list(names("accepted")),
+        list(names("missed")),
+        list(names("spurious"))
+    ));
+    let mut t = Table::new(
+        "Accepted parameters beside the truth",
+        &["effect", "parameter", "ours", "truth"],
+    );
+    let findings = diag
+        .get("findings")
+        .and_then(Value::as_array)
+        .map(|a| a.as_slice())
+        .unwrap_or(&[]);
+    for f in findings
+        .iter()
+        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
+    {
+        let effect = text(f, &["effect"]).unwrap_or("");
+        let Some(Value::Object(ps)) = f.get("parameters") else {
+            continue;
+        };
+        let term = truth_terms
+            .iter()
+            .find(|t| text(t, &["effect"]) == Some(effect))
+            .and_then(|t| t.get("term"));
+        for (name, p) in ps {
+            let ours = match (as_num(p), num(p, &["stderr", "se"])) {
+                (Some(v), Some(se)) => format!("{} ± {}", sig(v, 4), sig(se, 2)),
+                (Some(v), None) => sig(v, 4),
+                _ => "—".into(),
+            };
+            let truth = term
+                .and_then(|t| num(t, &[name]))
+                .map_or("—".into(), |x| sig(x, 4));
+            t.push(vec![effect.replace('_', " "), name.clone(), ours, truth]);
+        }
+    }
+    if !t.rows.is_empty() {
+        b.table(t);
+    }
+}
+
 /// The decisive statistics of a candidate's evidence (LR, p-values, CV), else a compact dump.
 pub fn evidence_text(e: &Value) -> String {
     let keys = [
@@ -359,6 +443,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     b.figure(figs, "fig_discovery_drift.svg", "The drift that flagged the mismatch: fitted T against |v0| for the baseline (grey) and for the extended model (green), with regression lines.");
     if let Some(t) = drift_table(diag) {
         b.table(t);
+    }
+    if let Some(v) = &d.validation {
+        truth_block(&mut b, diag, v);
     }
     b.para(match accepted.first() {
         Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(f)),
