@@ -164,7 +164,11 @@ fn integrator_matches_closed_form_both_directions() {
                     "mu {mu} T {t_drag} v0 {v0} t {tk}: z {} vs {z}",
                     tr.z_m[k]
                 );
-                assert!((tr.v_mps[k] - v).abs() < 1e-9, "v {} vs {v}", tr.v_mps[k]);
+                assert!(
+                    (tr.v_mps[k] - v).abs() < 1e-9,
+                    "mu {mu} T {t_drag} v0 {v0} va0 {va0} t {tk} ph {ph:?}: v {} vs {v}",
+                    tr.v_mps[k]
+                );
                 assert!(
                     (tr.va_mps[k] - va).abs() < 1e-8,
                     "va {} vs {va}",
@@ -193,7 +197,10 @@ fn integrator_matches_closed_form_both_directions() {
 fn integrator_without_drag_matches_eqs_4_3_and_4_4() {
     let m = model(0.293, vec![]);
     for &(v0, va0) in &[(0.06, 0.0), (-0.06, 0.0), (0.02, 0.05), (0.1, -0.04)] {
-        let (v1, dt, dz) = eq_4_3_4_4(m.groove, 0.293, v0, va0);
+        // the chapter's equations are written for v0 − s va0 > 0; the other way is their mirror
+        let sign = (v0 - m.groove.s * va0).signum();
+        let (v1, dt, dz) = eq_4_3_4_4(m.groove, 0.293, sign * v0, sign * va0);
+        let (v1, dz) = (sign * v1, sign * dz);
         let tr = simulate(&m, kick(v0, va0), &[0.0, 2.0 * dt]);
         let ev = &tr.events[0];
         assert_eq!((ev.from, ev.to), (Phase::Sliding, Phase::Rolling));
@@ -366,10 +373,12 @@ fn velocity_dependent_friction_slides_longer_and_tends_to_coulomb() {
         simulate(&m, kick(0.02, 0.0), &t)
     };
     let sharp = with(1e-7);
-    for k in 0..t.len() {
+    for (k, tk) in t.iter().enumerate() {
         assert!(
             (sharp.z_m[k] - coulomb.z_m[k]).abs() < 2e-9,
-            "v_c → 0 is Coulomb"
+            "v_c → 0 is Coulomb: t {tk} {} vs {}",
+            sharp.z_m[k],
+            coulomb.z_m[k]
         );
     }
     let soft = with(0.02);
@@ -456,10 +465,20 @@ fn rolling_pair_velocity_difference_scales_by_0_090() {
 
 #[test]
 fn secondary_collisions_below_78_5_degrees_only() {
-    for &(theta, cascade) in &[(70.6, true), (78.0, true), (79.0, false), (90.0, false)] {
+    // Eq. 4.18 is exact for the ideal model (elastic, no drag); with drag, at the chapter's angle
+    let cases = [
+        (70.6, None, true),
+        (70.6, Some(0.05), true),
+        (78.0, None, true),
+        (79.0, None, false),
+        (79.0, Some(0.05), false),
+        (90.0, None, false),
+    ];
+    for &(theta, t_drag, cascade) in &cases {
         let g = Groove::from_angle_deg(theta);
-        let (m, p, init) = rolling_pair(g, 1.4, Some(0.05), 0.05);
-        let pair = simulate_pair(&m, &p, init, &times(1001, 1e-4));
+        let (m, p, init) = rolling_pair(g, 1.4, t_drag, 0.05);
+        // without drag the second impact at 78° comes after ~0.8 s
+        let pair = simulate_pair(&m, &p, init, &times(301, 1e-2));
         let n = pair.impacts.len();
         if cascade {
             assert!(n >= 3, "θ {theta}: {n} impacts");

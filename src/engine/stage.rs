@@ -63,16 +63,37 @@ pub trait StageKind: Sync + Send {
 
 /// Deserialize a params table into a typed struct (use `#[serde(deny_unknown_fields, default)]`),
 /// returning it and its canonical JSON form. Shared by every built-in kind.
+///
+/// The error names the offending key: the one named by serde (unknown field), or else the one
+/// whose removal makes the table valid (a mistyped value).
 pub fn typed_params<P>(params: &toml::Table) -> Result<(P, serde_json::Value), ParamError>
 where
     P: serde::de::DeserializeOwned + serde::Serialize,
 {
-    let typed: P = toml::Value::Table(params.clone())
-        .try_into()
-        .map_err(|e: toml::de::Error| ParamError {
-            key: e.message().split('`').nth(1).unwrap_or("params").to_string(),
-            message: e.message().to_string(),
-        })?;
+    let parse = |t: &toml::Table| -> Result<P, toml::de::Error> {
+        toml::Value::Table(t.clone()).try_into()
+    };
+    let typed: P = parse(params).map_err(|e| {
+        let named = e
+            .message()
+            .split('`')
+            .nth(1)
+            .filter(|k| params.contains_key(*k));
+        let culprit = named.map(str::to_string).or_else(|| {
+            params
+                .keys()
+                .find(|k| {
+                    let mut without = params.clone();
+                    without.remove(*k);
+                    parse(&without).is_ok()
+                })
+                .cloned()
+        });
+        ParamError {
+            key: culprit.unwrap_or_else(|| "params".to_string()),
+            message: e.message().trim().to_string(),
+        }
+    })?;
     let json = serde_json::to_value(&typed).map_err(|e| ParamError {
         key: "params".into(),
         message: e.to_string(),

@@ -8,7 +8,7 @@ use super::hermite::interpolate;
 use super::rk::{dopri5, Tolerance};
 
 /// Largest step (s): keeps the interpolant far more accurate than any camera.
-const H_MAX_S: f64 = 2e-3;
+const H_MAX_S: f64 = 1e-3;
 
 /// Where a piece ended: at `t_s` with state `y`, because of `event` (None: end time reached).
 pub(crate) struct Stop<const N: usize> {
@@ -73,7 +73,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
                 let (mut lo, mut hi) = (0.0f64, 1.0f64);
                 for _ in 0..60 {
                     let mid = 0.5 * (lo + hi);
-                    let ym = interpolate(h_try, mid, &y, &f, &step.y, &step.f);
+                    let ym = interpolate(h_try, mid, &y, &f, &step);
                     if events(&ym)[m] >= 0.0 {
                         lo = mid;
                     } else {
@@ -91,9 +91,16 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
         if let Some((th, m)) = first {
             let h_ev = h_try * th;
             let short = dopri5(rhs, &y, &f, h_ev, tol);
+            if short.err > 1.0 && h_ev > min_h && rejects < 200 {
+                // the step to the event is itself too coarse (e.g. friction that changes fast
+                // near zero slip): approach the event with smaller steps first
+                *h = 0.5 * h_ev;
+                rejects += 1;
+                continue;
+            }
             let (ys, fs) = (y, f);
             sampler.fill_until(t + h_ev, |ts| {
-                interpolate(h_ev, (ts - t) / h_ev, &ys, &fs, &short.y, &short.f)
+                interpolate(h_ev, (ts - t) / h_ev, &ys, &fs, &short)
             });
             return Stop {
                 t_s: t + h_ev,
@@ -104,7 +111,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
         let (ys, fs) = (y, f);
         let t_new = if h_try == t_end - t { t_end } else { t + h_try };
         sampler.fill_until(t_new, |ts| {
-            interpolate(h_try, (ts - t) / h_try, &ys, &fs, &step.y, &step.f)
+            interpolate(h_try, (ts - t) / h_try, &ys, &fs, &step)
         });
         t = t_new;
         y = step.y;

@@ -70,12 +70,16 @@ impl Mode {
         match *self {
             Mode::Slide { d, dir } => {
                 let v_zero = if m.has_sign_jump() { y[1] * dir } else { 1.0 };
-                [d * (y[1] - g.s * y[2]), v_zero]
+                // rounding slack so a slide that starts at zero slip is armed
+                let slack = 1e-15 * (y[1].abs() + (g.s * y[2]).abs());
+                [d * (y[1] - g.s * y[2]) + slack, v_zero]
             }
             Mode::Roll { dir } => {
                 let a = accel(m, y[0], y[1], dir);
                 let need = (g.s * a / (1.0 + g.ks2())).abs();
-                [G_MPS2 * m.friction.static_limit() - need, y[1] * dir]
+                // the same slack as `can_roll`
+                let limit = G_MPS2 * m.friction.static_limit() * (1.0 + 1e-12);
+                [limit - need, y[1] * dir]
             }
             Mode::Rest => [1.0, 1.0],
         }

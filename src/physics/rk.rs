@@ -1,10 +1,13 @@
-//! One Dormand–Prince 5(4) step for an autonomous ODE, with its embedded error estimate.
+//! One Dormand–Prince 5(4) step for an autonomous ODE, with its embedded error estimate and the
+//! coefficients of its 4th-order continuous extension (Hairer, Nørsett & Wanner, dense output).
 
-/// Result of one step: the new state, the derivative there (FSAL), and the scaled error (≤ 1 ok).
+/// Result of one step: the new state, the derivative there (FSAL), the scaled error (≤ 1 ok),
+/// and `h · Σ dᵢ kᵢ`, the last coefficient of the dense output.
 pub(crate) struct Step<const N: usize> {
     pub y: [f64; N],
     pub f: [f64; N],
     pub err: f64,
+    pub dense: [f64; N],
 }
 
 /// Absolute and relative tolerances per component.
@@ -81,15 +84,21 @@ pub(crate) fn dopri5<const N: usize>(
         22.0 / 525.0,
         -1.0 / 40.0,
     ];
+    const D: [f64; 7] = [
+        -12715105075.0 / 11282082432.0,
+        0.0,
+        87487479700.0 / 32700410799.0,
+        -10690763975.0 / 1880347072.0,
+        701980252875.0 / 199316789632.0,
+        -1453857185.0 / 822651844.0,
+        69997945.0 / 29380423.0,
+    ];
     let mut err: f64 = 0.0;
+    let mut dense = [0.0; N];
     for i in 0..N {
-        let e = h
-            * (E[0] * k1[i]
-                + E[2] * k3[i]
-                + E[3] * k4[i]
-                + E[4] * k5[i]
-                + E[5] * k6[i]
-                + E[6] * k7[i]);
+        let ks = [k1[i], k2[i], k3[i], k4[i], k5[i], k6[i], k7[i]];
+        let e: f64 = h * E.iter().zip(&ks).map(|(c, k)| c * k).sum::<f64>();
+        dense[i] = h * D.iter().zip(&ks).map(|(c, k)| c * k).sum::<f64>();
         let scale = tol.atol[i] + tol.rtol * y[i].abs().max(y_new[i].abs());
         err = err.max(e.abs() / scale);
     }
@@ -97,5 +106,6 @@ pub(crate) fn dopri5<const N: usize>(
         y: y_new,
         f: k7,
         err,
+        dense,
     }
 }

@@ -1,9 +1,11 @@
 //! The built-in stage kinds: each adapts a pure analysis function to the engine's `StageKind` contract.
 
-pub mod figures;
-pub mod report;
-
 use crate::engine::stage::StageKind;
+
+pub mod figures;
+pub mod ingest;
+pub mod report;
+pub mod validate;
 
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
 /// engine's own kind and is not listed.
@@ -11,6 +13,8 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     #[allow(unused_mut)]
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
     // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
+    kinds.push(Box::new(ingest::Ingest));
+    kinds.push(Box::new(validate::Validate));
     kinds.push(Box::new(figures::Figures));
     kinds.push(Box::new(report::Report));
     kinds

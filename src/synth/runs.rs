@@ -44,7 +44,7 @@ pub(crate) fn synth_run(truth: &Truth, group: &RunGroup, j: usize, index: usize)
     let forward = match group.directions {
         Directions::Forward => true,
         Directions::Backward => false,
-        Directions::Both => j % 2 == 0,
+        Directions::Both => j.is_multiple_of(2),
     };
     let dir = if forward { 1.0 } else { -1.0 };
     let margin = cam.start_margin_m[0] + u_margin * (cam.start_margin_m[1] - cam.start_margin_m[0]);

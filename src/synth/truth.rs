@@ -161,7 +161,7 @@ impl Truth {
                     "runs[{i}]: v0_mps must be [min, max] with 0 < min ≤ max"
                 ));
             }
-            if !(g.duration_s > 0.0) {
+            if g.duration_s.is_nan() || g.duration_s <= 0.0 {
                 return Err(format!("runs[{i}]: duration_s must be positive"));
             }
             match (g.experiment, g.setup) {

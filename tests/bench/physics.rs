@@ -10,8 +10,9 @@ const N: usize = 10_000;
 
 fn main() {
     let t: Vec<f64> = (0..1000).map(|k| k as f64 * 1e-4).collect();
-    let v0 =
-        |i: usize| (0.005 + 0.095 * (i % 97) as f64 / 96.0) * if i % 2 == 0 { 1.0 } else { -1.0 };
+    let v0 = |i: usize| {
+        (0.005 + 0.095 * (i % 97) as f64 / 96.0) * if i.is_multiple_of(2) { 1.0 } else { -1.0 }
+    };
     let extra = Model {
         groove: Groove::CHAPTER,
         friction: Friction::Constant { mu: 0.337 },

@@ -1,0 +1,100 @@
+//! The command-line grammar (clap): verbs and their options.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Run a whole groove-experiment analysis with one command; rerun only what went stale.
+///
+/// Exit codes: 0 success; 1 ran, but a check failed (`publish` with stale stages);
+/// 2 error (bad config, bad data, IO, a stage failed).
+#[derive(Debug, Parser)]
+#[command(name = "groove", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub verb: Verb,
+}
+
+/// Which pipeline, on which dataset, writing which reports folder.
+#[derive(Debug, Args)]
+pub struct Project {
+    /// The pipeline file; relative paths inside it resolve against its folder.
+    #[arg(long, value_name = "FILE", default_value = "pipeline.toml")]
+    pub config: PathBuf,
+    /// Use this dataset folder instead of the pipeline's `[project] data`.
+    #[arg(long, value_name = "DIR")]
+    pub data: Option<PathBuf>,
+    /// Write reports here instead of the pipeline's `[project] reports`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Verb {
+    /// Run what is stale: all stages, or the named ones and what they need.
+    Run {
+        /// Stages to bring up to date (default: all).
+        #[arg(value_name = "STAGE")]
+        stages: Vec<String>,
+        #[command(flatten)]
+        project: Project,
+        /// Worker threads for independent stages and items (default: one per core).
+        #[arg(long, short, value_name = "N")]
+        jobs: Option<usize>,
+        /// Run this stage even if its result is in the store (repeatable).
+        #[arg(long, value_name = "STAGE")]
+        force: Vec<String>,
+        /// Only print what would run, and why.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// For every stage: fresh or stale, and why (which input, param or code changed).
+    Status {
+        #[command(flatten)]
+        project: Project,
+        /// Print `[{stage, state, reasons}]` as JSON (stable for scripts).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the stage graph.
+    Dag {
+        #[command(flatten)]
+        project: Project,
+        #[arg(long, value_enum, default_value_t = DagFormat::Text)]
+        format: DagFormat,
+    },
+    /// Remove the store (`.groove/`); outputs and pipeline.lock stay.
+    Clean {
+        #[command(flatten)]
+        project: Project,
+    },
+    /// Drop store entries that pipeline.lock does not reference.
+    Gc {
+        #[command(flatten)]
+        project: Project,
+    },
+    /// Write a synthetic dataset from a truth file (the virtual experiment).
+    Synth {
+        /// The truth TOML (parameters and runs to simulate).
+        #[arg(long, value_name = "FILE")]
+        truth: PathBuf,
+        /// The dataset folder to write.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Copy the report bundle with pipeline.lock and a sha256 manifest to DIR; refuses (exit 1)
+    /// while any stage is stale.
+    Publish {
+        #[command(flatten)]
+        project: Project,
+        /// The folder to write the bundle to (new, empty, or an earlier bundle).
+        #[arg(long, value_name = "DIR")]
+        to: PathBuf,
+    },
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum DagFormat {
+    Text,
+    Dot,
+    Mermaid,
+}

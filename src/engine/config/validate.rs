@@ -1,0 +1,419 @@
+//! The validation step: raw config → typed [`Pipeline`], every error located at its TOML line.
+
+use super::raw::{RawInput, RawPipeline, RawStage};
+use super::span::Source;
+use super::Overrides;
+use crate::engine::catalog::Catalog;
+use crate::engine::command;
+use crate::engine::dag;
+use crate::engine::error::{EngineError, IoContext};
+use crate::engine::pipeline::{InputSpec, Pipeline, StageSpec};
+use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
+use toml::Spanned;
+
+/// Turn the serde mirror into a validated pipeline.
+pub fn validate(
+    raw: RawPipeline,
+    file: &Source,
+    overrides: &Overrides,
+    catalog: &Catalog,
+) -> Result<Pipeline, EngineError> {
+    let root = file.path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let (seed, data, reports) = match &raw.project {
+        Some(p) => {
+            let p = p.get_ref();
+            (
+                p.seed,
+                p.data.as_ref().map(|d| d.get_ref().clone()),
+                p.reports.as_ref().map(|r| r.get_ref().clone()),
+            )
+        }
+        None => (0, None, None),
+    };
+    let from_cli = |p: &Option<PathBuf>| -> Result<Option<PathBuf>, EngineError> {
+        p.as_ref()
+            .map(|p| std::path::absolute(p).at(p).map(|a| normalize(&a)))
+            .transpose()
+    };
+    let data_dir = match from_cli(&overrides.data)? {
+        Some(d) => d,
+        None => normalize(&root.join(data.as_deref().unwrap_or("data"))),
+    };
+    let reports_dir = match from_cli(&overrides.reports)? {
+        Some(d) => d,
+        None => normalize(&root.join(reports.as_deref().unwrap_or("reports"))),
+    };
+    let mut pipeline = Pipeline {
+        config_path: file.path.clone(),
+        root: root.clone(),
+        seed,
+        data_dir,
+        reports_dir,
+        stages: BTreeMap::new(),
+    };
+    let mut lines = Lines::default();
+    for (name, stage) in raw.stages {
+        let line = file.line_of(name.span().start);
+        let name = name.into_inner();
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        {
+            return Err(file.error(
+                line,
+                format!("stage name `{name}` may use only letters, digits, `_` and `-`; rename it"),
+            ));
+        }
+        let spec = validate_stage(
+            &pipeline,
+            &name,
+            line,
+            stage.into_inner(),
+            file,
+            catalog,
+            &mut lines,
+        )?;
+        pipeline.stages.insert(name, spec);
+    }
+    check_references(&pipeline, file, &lines)?;
+    check_outputs(&pipeline, file)?;
+    if let Err(cycle) = dag::order(&pipeline) {
+        let line = pipeline.stages[&cycle[0]].line;
+        return Err(file.error(
+            line,
+            format!(
+                "the stages form a cycle: {}; remove one of these inputs",
+                cycle.join(" -> ")
+            ),
+        ));
+    }
+    Ok(pipeline)
+}
+
+/// Lines of input bindings, for errors found after all stages are read.
+#[derive(Default)]
+struct Lines {
+    inputs: BTreeMap<(String, String), usize>,
+    outputs: BTreeMap<(String, String), usize>,
+}
+
+fn validate_stage(
+    pipeline: &Pipeline,
+    name: &str,
+    line: usize,
+    raw: RawStage,
+    file: &Source,
+    catalog: &Catalog,
+    lines: &mut Lines,
+) -> Result<StageSpec, EngineError> {
+    let kind_line = file.line_of(raw.kind.span().start);
+    let kind = raw.kind.into_inner();
+    let builtin = catalog.kind(&kind);
+    if builtin.is_none() && kind != "command" {
+        return Err(file.error(kind_line, format!(
+            "stage `{name}`: unknown kind `{kind}`; known kinds: {}; fix the spelling or use `command` for your own program",
+            catalog.kind_names().join(", ")
+        )));
+    }
+    let here = |s: &Spanned<String>| file.line_of(s.span().start);
+
+    let mut inputs = BTreeMap::new();
+    for (input_name, binding) in raw.inputs {
+        let input_line = here(&input_name);
+        let input_name = input_name.into_inner();
+        let spec = parse_binding(pipeline, binding.into_inner()).map_err(|m| {
+            file.error(
+                input_line,
+                format!("stage `{name}` input `{input_name}`: {m}"),
+            )
+        })?;
+        lines
+            .inputs
+            .insert((name.to_string(), input_name.clone()), input_line);
+        inputs.insert(input_name, spec);
+    }
+
+    let mut outputs = BTreeMap::new();
+    for (output_name, path) in raw.outputs {
+        let output_line = here(&output_name);
+        let output_name = output_name.into_inner();
+        let path = substitute(pipeline, path.get_ref()).map_err(|m| {
+            file.error(
+                output_line,
+                format!("stage `{name}` output `{output_name}`: {m}"),
+            )
+        })?;
+        lines
+            .outputs
+            .insert((name.to_string(), output_name.clone()), output_line);
+        outputs.insert(output_name, Some(path));
+    }
+
+    let params_lines: BTreeMap<String, usize> = raw
+        .params
+        .keys()
+        .map(|k| (k.get_ref().clone(), here(k)))
+        .collect();
+    let params: toml::Table = raw
+        .params
+        .into_iter()
+        .map(|(k, v)| (k.into_inner(), v.into_inner()))
+        .collect();
+
+    let cmd = raw.cmd.map(|c| (here(&c), c.into_inner()));
+    let (canonical_params, cmd) = if let Some(kind_impl) = builtin {
+        if let Some((cmd_line, _)) = cmd {
+            return Err(file.error(
+                cmd_line,
+                format!("stage `{name}`: `cmd` is only for kind `command`; remove it"),
+            ));
+        }
+        for input in kind_impl.inputs() {
+            if !inputs.contains_key(*input) {
+                return Err(file.error(line, format!(
+                    "stage `{name}` (kind `{kind}`) is missing input `{input}`; add `{input} = \"<stage>:<output>\"` or a path to its inputs"
+                )));
+            }
+        }
+        for input_name in inputs.keys() {
+            let known = kind_impl.inputs().contains(&input_name.as_str())
+                || kind_impl.optional_inputs().contains(&input_name.as_str());
+            if !known {
+                let takes: Vec<&str> = kind_impl
+                    .inputs()
+                    .iter()
+                    .chain(kind_impl.optional_inputs())
+                    .copied()
+                    .collect();
+                return Err(file.error(
+                    lines.inputs[&(name.to_string(), input_name.clone())],
+                    format!(
+                        "stage `{name}`: kind `{kind}` has no input `{input_name}`; it takes: {}",
+                        takes.join(", ")
+                    ),
+                ));
+            }
+        }
+        for output_name in outputs.keys() {
+            if !kind_impl.outputs().contains(&output_name.as_str()) {
+                return Err(file.error(lines.outputs[&(name.to_string(), output_name.clone())], format!(
+                    "stage `{name}`: kind `{kind}` has no output `{output_name}`; it writes: {}", kind_impl.outputs().join(", ")
+                )));
+            }
+        }
+        for o in kind_impl.outputs() {
+            outputs.entry(o.to_string()).or_insert(None);
+        }
+        let canonical = kind_impl.canonical_params(&params).map_err(|e| {
+            let at = params_lines.get(&e.key).copied().unwrap_or(line);
+            file.error(
+                at,
+                format!("stage `{name}` (kind `{kind}`): {e}; fix or remove this param"),
+            )
+        })?;
+        (super::super::key::canonical_json(canonical), None)
+    } else {
+        let Some((cmd_line, cmd)) = cmd else {
+            return Err(file.error(line, format!("stage `{name}` (kind `command`) needs `cmd = \"...\"`, the shell command to run")));
+        };
+        if outputs.is_empty() {
+            return Err(file.error(line, format!("stage `{name}` (kind `command`) declares no outputs; add `outputs = {{ NAME = \"path\" }}`")));
+        }
+        command::check_placeholders(&cmd, &inputs, &outputs, &params)
+            .map_err(|m| file.error(cmd_line, format!("stage `{name}`: {m}")))?;
+        let json = serde_json::to_value(&params)
+            .map_err(|e| file.error(line, format!("stage `{name}`: params: {e}")))?;
+        (super::super::key::canonical_json(json), Some(cmd))
+    };
+
+    let foreach = match raw.foreach {
+        Some(f) => {
+            let f_line = here(&f);
+            let f = f.into_inner();
+            if !inputs.contains_key(&f) {
+                return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+            }
+            Some(f)
+        }
+        None => None,
+    };
+
+    Ok(StageSpec {
+        name: name.to_string(),
+        kind,
+        line,
+        foreach,
+        inputs,
+        outputs,
+        params,
+        canonical_params,
+        cmd,
+    })
+}
+
+/// `"engine:provenance"`, `"stage:output"`, a path, or `{ path, optional }`.
+fn parse_binding(pipeline: &Pipeline, raw: RawInput) -> Result<InputSpec, String> {
+    match raw {
+        RawInput::Text(text) => {
+            if text == "engine:provenance" {
+                return Ok(InputSpec::Provenance);
+            }
+            let ident = |s: &str| {
+                !s.is_empty()
+                    && s.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+            };
+            if let Some((stage, output)) = text.split_once(':') {
+                if ident(stage) && ident(output) {
+                    return Ok(InputSpec::Stage {
+                        stage: stage.to_string(),
+                        output: output.to_string(),
+                    });
+                }
+            }
+            Ok(InputSpec::Path {
+                path: substitute(pipeline, &text)?,
+                optional: false,
+            })
+        }
+        RawInput::Table(t) => Ok(InputSpec::Path {
+            path: substitute(pipeline, &t.path)?,
+            optional: t.optional,
+        }),
+    }
+}
+
+/// Expand `${data}` and `${reports}`, resolve against the project root, normalize.
+fn substitute(pipeline: &Pipeline, text: &str) -> Result<PathBuf, String> {
+    let mut out = text.to_string();
+    for (var, value) in [
+        ("${data}", &pipeline.data_dir),
+        ("${reports}", &pipeline.reports_dir),
+    ] {
+        out = out.replace(var, &value.to_string_lossy());
+    }
+    if let Some(start) = out.find("${") {
+        let var: String = out[start..].chars().take_while(|&c| c != '}').collect();
+        return Err(format!(
+            "unknown variable `{var}}}`; use `${{data}}` or `${{reports}}`"
+        ));
+    }
+    if out.is_empty() {
+        return Err("empty path; write a file or folder path".into());
+    }
+    Ok(normalize(&pipeline.root.join(out)))
+}
+
+/// Lexically remove `.` and `..` components.
+pub fn normalize(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                if !out.pop() {
+                    out.push("..");
+                }
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// Stage references exist; required paths exist; no input reads a materialized output by path.
+fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result<(), EngineError> {
+    let materialized: Vec<(&str, &str, &PathBuf)> = pipeline
+        .stages
+        .values()
+        .flat_map(|s| {
+            s.outputs
+                .iter()
+                .filter_map(move |(o, p)| p.as_ref().map(|p| (s.name.as_str(), o.as_str(), p)))
+        })
+        .collect();
+    for stage in pipeline.stages.values() {
+        for (input_name, spec) in &stage.inputs {
+            let line = lines.inputs[&(stage.name.clone(), input_name.clone())];
+            let fail = |m: String| {
+                file.error(
+                    line,
+                    format!("stage `{}` input `{input_name}`: {m}", stage.name),
+                )
+            };
+            match spec {
+                InputSpec::Stage { stage: up, output } => {
+                    let Some(up_spec) = pipeline.stages.get(up) else {
+                        return Err(fail(format!(
+                            "no stage `{up}`; stages: {}; or, for a file whose name holds `:`, write {{ path = \"{up}:{output}\" }}",
+                            pipeline.stages.keys().cloned().collect::<Vec<_>>().join(", ")
+                        )));
+                    };
+                    if !up_spec.outputs.contains_key(output) {
+                        return Err(fail(format!(
+                            "stage `{up}` has no output `{output}`; it writes: {}",
+                            up_spec
+                                .outputs
+                                .keys()
+                                .cloned()
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )));
+                    }
+                }
+                InputSpec::Path { path, optional } => {
+                    if let Some((s, o, _)) =
+                        materialized.iter().find(|(_, _, p)| path.starts_with(p))
+                    {
+                        return Err(fail(format!(
+                            "{} is written by stage `{s}`; bind it as \"{s}:{o}\" instead of a path",
+                            pipeline.show(path)
+                        )));
+                    }
+                    if !optional && !path.exists() {
+                        return Err(fail(format!(
+                            "{} does not exist; create it, fix the path, or mark it {{ path = \"...\", optional = true }}",
+                            pipeline.show(path)
+                        )));
+                    }
+                }
+                InputSpec::Provenance => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+/// No two outputs write one path, nor one inside another.
+fn check_outputs(pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> {
+    let mut seen: Vec<(&PathBuf, &str, &str, usize)> = Vec::new();
+    for stage in pipeline.stages.values() {
+        for (output, path) in &stage.outputs {
+            let Some(path) = path else { continue };
+            if path == &pipeline.root
+                || path.starts_with(pipeline.root.join(".groove"))
+                || path == &pipeline.config_path
+            {
+                return Err(file.error(stage.line, format!(
+                    "stage `{}` output `{output}` would overwrite {}; choose a path inside the reports folder",
+                    stage.name,
+                    pipeline.show(path)
+                )));
+            }
+            if let Some((_, other, other_output, other_line)) = seen
+                .iter()
+                .find(|(p, ..)| p.starts_with(path) || path.starts_with(p))
+            {
+                return Err(file.error(stage.line, format!(
+                    "stages `{other}` (line {other_line}, output `{other_output}`) and `{}` (output `{output}`) both write {}; give one of them another path",
+                    stage.name,
+                    pipeline.show(path)
+                )));
+            }
+            seen.push((path, &stage.name, output, stage.line));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,84 @@
+//! Path inputs: a file, or a directory meaning its top-level regular files (not subfolders, not dotfiles).
+
+use super::error::{EngineError, IoContext};
+use super::hashing::{sha256_hex, HashCache};
+use super::stage::Artifact;
+use super::store::Stored;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Collection item names are file-name safe: `[A-Za-z0-9._-]`, not starting with a dot.
+pub fn item_name_ok(name: &str) -> bool {
+    !name.is_empty()
+        && !name.starts_with('.')
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+}
+
+/// The top-level regular files of a directory, sorted by name (dotfiles skipped).
+pub fn dir_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, EngineError> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).at(dir)? {
+        let entry = entry.at(dir)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') || !entry.file_type().at(&entry.path())?.is_file() {
+            continue;
+        }
+        if !item_name_ok(&name) {
+            return Err(EngineError::Usage(format!(
+                "{}: file name `{name}` may use only letters, digits, `.`, `_` and `-`; rename the file",
+                dir.display()
+            )));
+        }
+        out.push((name, entry.path()));
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// Hash a path input through the cache.
+pub fn hash_path(path: &Path, cache: &HashCache) -> Result<Stored, EngineError> {
+    if path.is_dir() {
+        let items = dir_files(path)?
+            .into_iter()
+            .map(|(name, p)| Ok((name, cache.hash_file(&p)?)))
+            .collect::<Result<BTreeMap<_, _>, EngineError>>()?;
+        Ok(Stored::Collection { items })
+    } else {
+        Ok(Stored::File {
+            sha256: cache.hash_file(path)?,
+        })
+    }
+}
+
+/// Read a path input and check it still has the content its key was computed from.
+pub fn load_path(path: &Path, expected: &Stored) -> Result<Artifact, EngineError> {
+    let changed = || {
+        EngineError::Usage(format!(
+            "{} changed while groove was running; run again",
+            path.display()
+        ))
+    };
+    match expected {
+        Stored::File { sha256 } => {
+            let bytes = std::fs::read(path).at(path)?;
+            if &sha256_hex(&bytes) != sha256 {
+                return Err(changed());
+            }
+            Ok(Artifact::File(bytes))
+        }
+        Stored::Collection { items } => {
+            let mut out = BTreeMap::new();
+            for (name, sha256) in items {
+                let p = path.join(name);
+                let bytes = std::fs::read(&p).at(&p)?;
+                if &sha256_hex(&bytes) != sha256 {
+                    return Err(changed());
+                }
+                out.insert(name.clone(), bytes);
+            }
+            Ok(Artifact::Collection(out))
+        }
+    }
+}

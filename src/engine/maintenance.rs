@@ -1,0 +1,62 @@
+//! `groove clean` and `groove gc`: emptying the store, or dropping entries the lock no longer names.
+
+use super::error::{EngineError, IoContext};
+use super::evaluate::lock_path;
+use super::lockfile::PipelineLock;
+use super::pipeline::Pipeline;
+use super::project_lock;
+use super::store::Store;
+use std::collections::BTreeSet;
+
+/// Remove everything under `.groove/` (the store, hash cache, run log). Materialized outputs and
+/// `pipeline.lock` stay; the next run recomputes what it needs.
+pub fn clean(pipeline: &Pipeline) -> Result<usize, EngineError> {
+    let store = Store::at(&pipeline.root);
+    if !store.dir.exists() {
+        return Ok(0);
+    }
+    let _lock = project_lock::acquire(&store.dir, |holder| {
+        eprintln!(
+            "groove: another groove run holds this project ({holder}); waiting for it to finish"
+        )
+    })?;
+    let mut removed = 0;
+    for entry in std::fs::read_dir(&store.dir).at(&store.dir)?.flatten() {
+        let path = entry.path();
+        if entry.file_name() == "lock" {
+            continue;
+        }
+        if path.is_dir() {
+            std::fs::remove_dir_all(&path).at(&path)?;
+        } else {
+            std::fs::remove_file(&path).at(&path)?;
+        }
+        removed += 1;
+    }
+    Ok(removed)
+}
+
+/// Drop store entries that `pipeline.lock` does not reference, then unreferenced objects.
+/// Returns (entries, objects) removed.
+pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
+    let store = Store::at(&pipeline.root);
+    if !store.dir.exists() {
+        return Ok((0, 0));
+    }
+    let _lock = project_lock::acquire(&store.dir, |holder| {
+        eprintln!(
+            "groove: another groove run holds this project ({holder}); waiting for it to finish"
+        )
+    })?;
+    let lock = PipelineLock::load(&lock_path(pipeline));
+    let mut keep = BTreeSet::new();
+    for stage in lock.stages.values() {
+        if stage.items.is_empty() {
+            keep.insert(stage.key.clone());
+        } else {
+            keep.extend(stage.items.values().cloned());
+        }
+    }
+    store.sweep_tmp()?;
+    store.gc(&keep)
+}

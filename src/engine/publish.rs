@@ -1,0 +1,129 @@
+//! `groove publish --to DIR`: the report bundle, only when every stage is fresh.
+//!
+//! The bundle holds every output the pipeline materializes inside the reports folder (the
+//! report pages and figures, and the tables beside them), `pipeline.lock`, and `SHA256SUMS`
+//! listing each file's sha256. Files come from the store, not from the working copy, so what
+//! is published is exactly what the lock describes.
+
+use super::catalog::Catalog;
+use super::error::{EngineError, IoContext};
+use super::evaluate::lock_path;
+use super::hashing::sha256_hex;
+use super::lockfile::PipelineLock;
+use super::pipeline::Pipeline;
+use super::status::{status, StageStatus, State};
+use super::store::{unique_name, Store, Stored};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub const MANIFEST: &str = "SHA256SUMS";
+
+pub enum Published {
+    /// Some stages are stale: nothing was written.
+    Refused(Vec<StageStatus>),
+    /// The bundle's files (relative paths, sorted), manifest included.
+    Written { dir: PathBuf, files: Vec<String> },
+}
+
+pub fn publish(
+    catalog: &Catalog,
+    pipeline: &Pipeline,
+    to: &Path,
+) -> Result<Published, EngineError> {
+    let statuses = status(catalog, pipeline, None)?;
+    let stale: Vec<StageStatus> = statuses
+        .into_iter()
+        .filter(|s| s.state == State::Stale)
+        .collect();
+    if !stale.is_empty() {
+        return Ok(Published::Refused(stale));
+    }
+    let to = std::path::absolute(to).at(to)?;
+    if pipeline.root.starts_with(&to)
+        || to.starts_with(pipeline.root.join(".groove"))
+        || to == pipeline.reports_dir
+    {
+        return Err(EngineError::Usage(format!(
+            "cannot publish into {}; choose a folder outside the project's store and reports",
+            to.display()
+        )));
+    }
+    if to.is_dir()
+        && std::fs::read_dir(&to).at(&to)?.next().is_some()
+        && !to.join(MANIFEST).is_file()
+    {
+        return Err(EngineError::Usage(format!(
+            "{} is not empty and holds no earlier bundle ({MANIFEST}); choose a new or empty folder",
+            to.display()
+        )));
+    }
+    let lock_file = lock_path(pipeline);
+    let lock = PipelineLock::load(&lock_file);
+    let store = Store::at(&pipeline.root);
+
+    let mut files: BTreeMap<String, Vec<u8>> = BTreeMap::new();
+    for stage in pipeline.stages.values() {
+        let Some(record) = lock.stages.get(&stage.name) else {
+            continue;
+        };
+        for (output, path) in &stage.outputs {
+            let Some(path) = path else { continue };
+            let Ok(rel) = path.strip_prefix(&pipeline.reports_dir) else {
+                continue;
+            };
+            let rel = rel.to_string_lossy().replace('\\', "/");
+            match &record.outputs[output] {
+                Stored::File { sha256 } => {
+                    files.insert(rel, store.read_object(sha256)?);
+                }
+                Stored::Collection { items } => {
+                    for (item, sha256) in items {
+                        files.insert(format!("{rel}/{item}"), store.read_object(sha256)?);
+                    }
+                }
+            }
+        }
+    }
+    if files.is_empty() {
+        return Err(EngineError::Usage(format!(
+            "no stage writes into the reports folder {}; nothing to publish",
+            pipeline.show(&pipeline.reports_dir)
+        )));
+    }
+    files.insert(
+        "pipeline.lock".into(),
+        std::fs::read(&lock_file).at(&lock_file)?,
+    );
+    let manifest: String = files
+        .iter()
+        .map(|(rel, bytes)| format!("{}  {rel}\n", sha256_hex(bytes)))
+        .collect();
+    files.insert(MANIFEST.into(), manifest.into_bytes());
+
+    // build beside the target, then swap it in
+    let parent = to.parent().unwrap_or(Path::new(".")).to_path_buf();
+    std::fs::create_dir_all(&parent).at(&parent)?;
+    let name = to
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "bundle".into());
+    let fresh = parent.join(unique_name(&format!(".{name}.groove-new")));
+    for (rel, bytes) in &files {
+        let p = fresh.join(rel);
+        let dir = p.parent().expect("bundle files have a parent");
+        std::fs::create_dir_all(dir).at(dir)?;
+        std::fs::write(&p, bytes).at(&p)?;
+    }
+    if to.exists() {
+        let old = parent.join(unique_name(&format!(".{name}.groove-old")));
+        std::fs::rename(&to, &old).at(&to)?;
+        std::fs::rename(&fresh, &to).at(&to)?;
+        std::fs::remove_dir_all(&old).at(&old)?;
+    } else {
+        std::fs::rename(&fresh, &to).at(&to)?;
+    }
+    Ok(Published::Written {
+        dir: to,
+        files: files.into_keys().collect(),
+    })
+}

@@ -1,0 +1,211 @@
+//! Reads the interchange format of data-format.md: runs.csv and trajectories.csv (or `.parquet`).
+
+use super::error::Problem;
+use super::samples::{RunRow, Sample, SampleFile};
+use super::table::Table;
+use crate::recording::{Experiment, RunInfo, Setup};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// The columns of runs.csv that groove interprets; any other column is kept as text.
+const RUN_COLUMNS: [(&str, &str); 5] = [
+    ("run", "the unique id of each run"),
+    ("experiment", "single or collision"),
+    ("material", "e.g. 316"),
+    ("diameter_m", "particle diameter in metres"),
+    ("fps", "camera frame rate in frames per second"),
+];
+
+const TRAJECTORY_COLUMNS: [(&str, &str); 5] = [
+    ("run", "a run id from runs.csv"),
+    (
+        "particle",
+        "0 for a single run, 0 striker and 1 target in a collision run",
+    ),
+    ("frame", "frame index"),
+    ("t_s", "seconds since the run's first frame"),
+    ("z_m", "position along the groove in metres"),
+];
+
+/// The file holding the table `stem` (`runs` or `trajectories`): its CSV or its Parquet form.
+pub fn pick<'a>(
+    files: &'a BTreeMap<String, Vec<u8>>,
+    stem: &str,
+    what: &str,
+) -> Result<(&'a str, &'a [u8]), Problem> {
+    let csv = format!("{stem}.csv");
+    let parquet = format!("{stem}.parquet");
+    match (files.get_key_value(&csv), files.get_key_value(&parquet)) {
+        (Some((name, bytes)), None) | (None, Some((name, bytes))) => {
+            Ok((name.as_str(), bytes.as_slice()))
+        }
+        (Some(_), Some(_)) => Err(Problem::file(
+            &csv,
+            format!("both {csv} and {parquet} are in the dataset folder"),
+            format!("keep one of them"),
+        )),
+        (None, None) => Err(Problem::file(
+            &csv,
+            "is missing from the dataset folder",
+            format!("add {csv} ({what}; see data-format.md) or {parquet}"),
+        )),
+    }
+}
+
+/// Reads runs.csv. Rows with problems are left out and their problems returned (belonging to the
+/// row's run where the run id is readable).
+pub fn read_runs(table: &Table) -> Result<(Vec<RunRow>, Vec<Problem>), Problem> {
+    table.require(&RUN_COLUMNS)?;
+    let extra_columns: Vec<&String> = table
+        .names
+        .iter()
+        .filter(|n| n.as_str() != "setup" && !RUN_COLUMNS.iter().any(|(c, _)| c == n))
+        .collect();
+    let mut rows = Vec::with_capacity(table.height());
+    let mut problems = Vec::new();
+    for i in 0..table.height() {
+        let run = match table.string("run", i, "write the run's id") {
+            Ok(r) => r,
+            Err(p) => {
+                problems.push(p);
+                continue;
+            }
+        };
+        match run_info(table, i, &run, &extra_columns) {
+            Ok(info) => rows.push(RunRow {
+                info,
+                file: table.file.clone(),
+                row: table.row(i),
+            }),
+            Err(p) => problems.push(p.in_run(&run)),
+        }
+    }
+    Ok((rows, problems))
+}
+
+fn run_info(
+    table: &Table,
+    i: usize,
+    run: &str,
+    extra_columns: &[&String],
+) -> Result<RunInfo, Problem> {
+    let experiment_text = table.string("experiment", i, "write single or collision")?;
+    let experiment = match experiment_text.to_ascii_lowercase().as_str() {
+        "single" => Experiment::Single,
+        "collision" => Experiment::Collision,
+        _ => {
+            return Err(table.problem(
+                "experiment",
+                i,
+                format!("{experiment_text:?} is not a known experiment kind"),
+                "write single (one particle) or collision (striker and target)",
+            ))
+        }
+    };
+    let material = table.string("material", i, "write the particle material, e.g. 316")?;
+    let diameter_m = positive(table, "diameter_m", i, "the particle diameter in metres")?;
+    let fps = positive(
+        table,
+        "fps",
+        i,
+        "the camera frame rate in frames per second",
+    )?;
+    let setup = match table.text("setup", i) {
+        None => None,
+        Some(s) => Some(match s.to_ascii_lowercase().as_str() {
+            "rolling" => Setup::Rolling,
+            "contact" => Setup::Contact,
+            _ => {
+                return Err(table.problem(
+                    "setup",
+                    i,
+                    format!("{s:?} is not a known setup"),
+                    "write rolling (the striker rolled in), contact (the pair started touching), or leave it empty",
+                ))
+            }
+        }),
+    };
+    let extra = extra_columns
+        .iter()
+        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v)))
+        .collect();
+    Ok(RunInfo {
+        run: run.to_string(),
+        experiment,
+        material,
+        diameter_m,
+        fps,
+        setup,
+        extra,
+    })
+}
+
+/// A finite positive number; `what` says what the column holds.
+fn positive(table: &Table, column: &str, i: usize, what: &str) -> Result<f64, Problem> {
+    let fix = format!("write {what}, a positive number");
+    let x = table.float(column, i, &fix)?;
+    if x <= 0.0 {
+        return Err(table.problem(column, i, format!("{x} is not positive"), fix));
+    }
+    Ok(x)
+}
+
+/// Reads trajectories.csv. Rows with problems are left out and their problems returned.
+pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Problem> {
+    table.require(&TRAJECTORY_COLUMNS)?;
+    let mut interned: BTreeMap<String, Arc<str>> = BTreeMap::new();
+    let mut samples = Vec::with_capacity(table.height());
+    let mut problems = Vec::new();
+    for i in 0..table.height() {
+        let run = match table.string("run", i, "write a run id from runs.csv") {
+            Ok(r) => r,
+            Err(p) => {
+                problems.push(p);
+                continue;
+            }
+        };
+        let run: Arc<str> = interned
+            .entry(run)
+            .or_insert_with_key(|k| Arc::from(k.as_str()))
+            .clone();
+        match sample(table, i, run.clone()) {
+            Ok(s) => samples.push(s),
+            Err(p) => problems.push(p.in_run(&run)),
+        }
+    }
+    Ok((
+        SampleFile {
+            file: table.file.clone(),
+            key_columns: "run, particle, frame",
+            frame_column: "frame",
+            particle_column: "particle",
+            samples,
+        },
+        problems,
+    ))
+}
+
+fn sample(table: &Table, i: usize, run: Arc<str>) -> Result<Sample, Problem> {
+    let particle_fix =
+        "write 0 for a single run's particle, 0 (striker) or 1 (target) in a collision run";
+    let particle = table.int("particle", i, particle_fix)?;
+    let particle = u32::try_from(particle).map_err(|_| {
+        table.problem(
+            "particle",
+            i,
+            format!("{particle} is not a particle id"),
+            particle_fix,
+        )
+    })?;
+    let frame = table.int("frame", i, "write the frame index, a whole number")?;
+    let t_s = table.float("t_s", i, "write a finite number in seconds")?;
+    let z_m = table.float("z_m", i, "write a finite number in metres")?;
+    Ok(Sample {
+        run,
+        particle,
+        frame,
+        t_s,
+        z_m,
+        row: table.row(i),
+    })
+}

@@ -1,0 +1,298 @@
+//! A table read from CSV or Parquet bytes with polars, with typed cell access that reports bad cells
+//! by file, row (as the user sees it) and column.
+
+use super::error::Problem;
+use polars::prelude::*;
+use std::collections::BTreeMap;
+use std::io::Cursor;
+
+/// One column's cells. CSV columns are all text; Parquet columns keep their type.
+#[derive(Debug, Clone)]
+enum Cells {
+    Text(Vec<Option<String>>),
+    Float(Vec<Option<f64>>),
+    Int(Vec<Option<i64>>),
+    /// A Parquet type groove does not read; the text is the type's name.
+    Unsupported(String),
+}
+
+/// A table of one file: header names in file order, cells by column, and each data row's number
+/// as the user sees it.
+#[derive(Debug, Clone)]
+pub struct Table {
+    pub file: String,
+    pub names: Vec<String>,
+    columns: BTreeMap<String, Cells>,
+    rows: Vec<usize>,
+}
+
+impl Table {
+    /// Reads a comma-separated file with one header line. Every cell is read as text; header names
+    /// and cells are trimmed of surrounding spaces when used.
+    pub fn from_csv(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+            return Err(Problem::file(
+                file,
+                "is empty",
+                "write a header line and at least one data row",
+            ));
+        }
+        let df = CsvReadOptions::default()
+            .with_has_header(true)
+            .with_infer_schema_length(Some(0))
+            .into_reader_with_file_handle(Cursor::new(bytes))
+            .finish()
+            .map_err(|e| {
+                Problem::file(
+                    file,
+                    format!("cannot be read as CSV ({})", lowercase_first(&e.to_string())),
+                    "save it as comma-separated text with one header line and the same number of fields on every line",
+                )
+            })?;
+        let mut table = Table::from_frame(file, &df)?;
+        table.rows = csv_row_numbers(bytes, df.height());
+        Ok(table)
+    }
+
+    /// Reads a Parquet file. Rows are numbered from 1 (Parquet has no header line).
+    pub fn from_parquet(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
+        let df = ParquetReader::new(Cursor::new(bytes))
+            .finish()
+            .map_err(|e| {
+                Problem::file(
+                    file,
+                    format!(
+                        "cannot be read as Parquet ({})",
+                        lowercase_first(&e.to_string())
+                    ),
+                    "write it again as a Parquet file, or use the CSV form",
+                )
+            })?;
+        Table::from_frame(file, &df)
+    }
+
+    /// Reads a file by its extension: `.parquet` as Parquet, anything else as CSV.
+    pub fn from_bytes(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
+        if file.to_ascii_lowercase().ends_with(".parquet") {
+            Table::from_parquet(file, bytes)
+        } else {
+            Table::from_csv(file, bytes)
+        }
+    }
+
+    fn from_frame(file: &str, df: &DataFrame) -> Result<Table, Problem> {
+        let mut names = Vec::new();
+        let mut columns = BTreeMap::new();
+        for col in df.columns() {
+            let name = col.name().trim().to_string();
+            let cells = cells_of(col).map_err(|e| {
+                Problem::file(
+                    file,
+                    format!("column {name} cannot be read ({e})"),
+                    "store numbers as float64 or int64 and text as string",
+                )
+            })?;
+            if columns.insert(name.clone(), cells).is_some() {
+                return Err(Problem::file(
+                    file,
+                    format!("column {name} appears twice"),
+                    "rename or delete one of the two columns",
+                ));
+            }
+            names.push(name);
+        }
+        Ok(Table {
+            file: file.to_string(),
+            names,
+            columns,
+            rows: (1..=df.height()).collect(),
+        })
+    }
+
+    /// Number of data rows.
+    pub fn height(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The row number of data row `i` (0-based) as the user sees it in the file.
+    pub fn row(&self, i: usize) -> usize {
+        self.rows[i]
+    }
+
+    pub fn has(&self, column: &str) -> bool {
+        self.columns.contains_key(column)
+    }
+
+    /// Removes the first `n` data rows (extra header rows of TrackMate tables), keeping row numbers.
+    pub fn drop_leading_rows(&mut self, n: usize) {
+        let n = n.min(self.rows.len());
+        self.rows.drain(..n);
+        for cells in self.columns.values_mut() {
+            match cells {
+                Cells::Text(v) => drop(v.drain(..n)),
+                Cells::Float(v) => drop(v.drain(..n)),
+                Cells::Int(v) => drop(v.drain(..n)),
+                Cells::Unsupported(_) => {}
+            }
+        }
+    }
+
+    /// A problem if any of `required` is missing, naming each with what it holds.
+    pub fn require(&self, required: &[(&str, &str)]) -> Result<(), Problem> {
+        let missing: Vec<&(&str, &str)> = required.iter().filter(|(c, _)| !self.has(c)).collect();
+        if missing.is_empty() {
+            return Ok(());
+        }
+        let names: Vec<&str> = missing.iter().map(|(c, _)| *c).collect();
+        let fixes: Vec<String> = missing.iter().map(|(c, m)| format!("{c} ({m})")).collect();
+        Err(Problem {
+            file: self.file.clone(),
+            row: Some(1),
+            column: Some(names.join(", ")),
+            run: None,
+            message: format!(
+                "missing column{} (the header has: {})",
+                if names.len() > 1 { "s" } else { "" },
+                self.names.join(", ")
+            ),
+            fix: format!("add {}", fixes.join(", ")),
+        })
+    }
+
+    /// The cell's text, trimmed; `None` for an empty cell. Numbers of Parquet files are written
+    /// in their shortest round-trip form.
+    pub fn text(&self, column: &str, i: usize) -> Option<String> {
+        match self.columns.get(column)? {
+            Cells::Text(v) => v[i]
+                .as_deref()
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(str::to_string),
+            Cells::Float(v) => v[i].map(|x| x.to_string()),
+            Cells::Int(v) => v[i].map(|x| x.to_string()),
+            Cells::Unsupported(_) => None,
+        }
+    }
+
+    /// A required non-empty text cell.
+    pub fn string(&self, column: &str, i: usize, fix: &str) -> Result<String, Problem> {
+        self.check_supported(column, i)?;
+        self.text(column, i)
+            .ok_or_else(|| self.problem(column, i, "is empty", fix))
+    }
+
+    /// A finite number. `fix` says what to write, e.g. "write a finite number in metres".
+    pub fn float(&self, column: &str, i: usize, fix: &str) -> Result<f64, Problem> {
+        self.check_supported(column, i)?;
+        let x =
+            match self.columns.get(column) {
+                Some(Cells::Float(v)) => v[i],
+                Some(Cells::Int(v)) => v[i].map(|x| x as f64),
+                _ => match self.text(column, i) {
+                    None => None,
+                    Some(s) => Some(s.parse::<f64>().map_err(|_| {
+                        self.problem(column, i, format!("{s:?} is not a number"), fix)
+                    })?),
+                },
+            };
+        let x = x.ok_or_else(|| self.problem(column, i, "is empty", fix))?;
+        if !x.is_finite() {
+            return Err(self.problem(column, i, format!("{x} is not a finite number"), fix));
+        }
+        Ok(x)
+    }
+
+    /// A whole number (written as an integer, or as a number with no fractional part such as `12.0`).
+    pub fn int(&self, column: &str, i: usize, fix: &str) -> Result<i64, Problem> {
+        self.check_supported(column, i)?;
+        if let Some(Cells::Int(v)) = self.columns.get(column) {
+            return v[i].ok_or_else(|| self.problem(column, i, "is empty", fix));
+        }
+        let text = self
+            .text(column, i)
+            .ok_or_else(|| self.problem(column, i, "is empty", fix))?;
+        if let Ok(n) = text.parse::<i64>() {
+            return Ok(n);
+        }
+        match text.parse::<f64>() {
+            Ok(x) if x.is_finite() && x.fract() == 0.0 && x.abs() < 9.0e15 => Ok(x as i64),
+            _ => Err(self.problem(column, i, format!("{text:?} is not a whole number"), fix)),
+        }
+    }
+
+    /// A problem at data row `i` (0-based) and `column`.
+    pub fn problem(
+        &self,
+        column: &str,
+        i: usize,
+        message: impl Into<String>,
+        fix: impl Into<String>,
+    ) -> Problem {
+        Problem::at(&self.file, self.rows[i], column, message, fix)
+    }
+
+    fn check_supported(&self, column: &str, i: usize) -> Result<(), Problem> {
+        match self.columns.get(column) {
+            Some(Cells::Unsupported(dtype)) => Err(self.problem(
+                column,
+                i,
+                format!("has the Parquet type {dtype}, which groove does not read"),
+                "store numbers as float64 or int64 and text as string",
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// The cells of one polars column.
+fn cells_of(col: &Column) -> PolarsResult<Cells> {
+    let dtype = col.dtype().clone();
+    Ok(match dtype {
+        DataType::String => Cells::Text(col.str()?.iter().map(|s| s.map(str::to_string)).collect()),
+        DataType::Float32 | DataType::Float64 => {
+            let c = col.cast(&DataType::Float64)?;
+            Cells::Float(c.f64()?.iter().collect())
+        }
+        d if d.is_integer() => {
+            let c = col.cast(&DataType::Int64)?;
+            Cells::Int(c.i64()?.iter().collect())
+        }
+        DataType::Null => Cells::Text(vec![None; col.len()]),
+        other => Cells::Unsupported(other.to_string()),
+    })
+}
+
+/// The line number of each data row of a CSV file, counting the header line as row 1. Blank lines
+/// are not data rows; if the lines do not match polars' row count (quoted line breaks), rows are
+/// assumed to follow the header one per line.
+fn csv_row_numbers(bytes: &[u8], height: usize) -> Vec<usize> {
+    let mut lines = bytes.split(|&b| b == b'\n').enumerate();
+    // The header is the first non-blank line.
+    let header = lines.find(|(_, l)| !is_blank(l)).map_or(0, |(k, _)| k);
+    let data: Vec<usize> = bytes
+        .split(|&b| b == b'\n')
+        .enumerate()
+        .skip(header + 1)
+        .filter(|(_, l)| !is_blank(l))
+        .map(|(k, _)| k + 1)
+        .collect();
+    if data.len() == height {
+        data
+    } else {
+        (0..height).map(|i| header + 2 + i).collect()
+    }
+}
+
+fn is_blank(line: &[u8]) -> bool {
+    line.iter().all(|b| b.is_ascii_whitespace())
+}
+
+/// polars' messages start with a capital; groove's errors are lowercase.
+fn lowercase_first(s: &str) -> String {
+    let mut c = s.chars();
+    match c.next() {
+        Some(f) => f.to_lowercase().chain(c).collect(),
+        None => String::new(),
+    }
+}

@@ -1,0 +1,73 @@
+//! The `ingest` stage kind: the dataset folder's files in, checked recordings, a typed table and the list of skipped runs out.
+// groove:uses src/ingest src/recording.rs src/stages/ingest.rs
+
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
+use crate::ingest::{self, IngestParams};
+use std::collections::BTreeMap;
+
+/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → JSON
+/// `Recording`), `table` (Parquet of all samples) and `skipped` (JSON list of `{run, reason}`).
+pub struct Ingest;
+
+impl StageKind for Ingest {
+    fn kind(&self) -> &'static str {
+        "ingest"
+    }
+
+    fn inputs(&self) -> &'static [&'static str] {
+        &["dataset"]
+    }
+
+    fn outputs(&self) -> &'static [&'static str] {
+        &["runs", "table", "skipped"]
+    }
+
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
+        let (typed, json) = typed_params::<IngestParams>(params)?;
+        typed.check().map_err(|p| ParamError {
+            key: p.key,
+            message: format!("{}; {}", p.message, p.fix),
+        })?;
+        Ok(json)
+    }
+
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (params, _) =
+            typed_params::<IngestParams>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let files = match input.inputs.get("dataset") {
+            Some(Artifact::Collection(files)) => files,
+            Some(Artifact::File(_)) => {
+                return Err(StageError(
+                    "input dataset is a single file; bind it to the dataset folder (inputs = { dataset = \"${data}\" })".into(),
+                ))
+            }
+            None => {
+                return Err(StageError(
+                    "input dataset is missing; bind it to the dataset folder (inputs = { dataset = \"${data}\" })".into(),
+                ))
+            }
+        };
+        let ingested = ingest::ingest(files, &params).map_err(|e| StageError(e.to_string()))?;
+        let mut runs = BTreeMap::new();
+        for r in &ingested.recordings {
+            let json = serde_json::to_vec(r)
+                .map_err(|e| StageError(format!("cannot serialize run {:?} ({e})", r.info.run)))?;
+            runs.insert(ingest::item_name(&r.info.run), json);
+        }
+        let table = ingest::table_parquet(&ingested.recordings).map_err(|e| {
+            StageError(format!(
+                "cannot write the parquet table ({e}); report this as a bug"
+            ))
+        })?;
+        let mut out = StageOutputs::new();
+        out.insert("runs".into(), Artifact::Collection(runs));
+        out.insert("table".into(), Artifact::File(table));
+        out.insert(
+            "skipped".into(),
+            Artifact::File(ingest::skipped_json(&ingested.skipped)),
+        );
+        Ok(out)
+    }
+}

@@ -1,0 +1,661 @@
+//! The engine through the built `groove` binary: staleness, reasons, early cutoff, run-cache,
+//! kill -9 safety, concurrent runs, config errors, publish. Each test builds a project of
+//! `command` stages (sh) in a temp dir; stages append their name to `trace.txt` when they run,
+//! so a test sees exactly which stages (and items) executed.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
+
+/// A per-item pipeline: ingest copies the dataset, fit checksums each run, summary gathers the
+/// fits, plot decorates the summary; side is an independent branch.
+const PIPELINE: &str = r#"[project]
+seed = 7
+data = "data"
+reports = "reports"
+
+[stages.ingest]
+kind = "command"
+cmd = "echo ingest >> trace.txt; mkdir -p {out.runs}; cp {in.dataset}/* {out.runs}/"
+inputs = { dataset = "${data}" }
+outputs = { runs = "${reports}/runs" }
+
+[stages.fit]
+kind = "command"
+foreach = "runs"
+cmd = "echo fit {item} >> trace.txt; cksum < {in.runs} > {out.fit}"
+inputs = { runs = "ingest:runs" }
+outputs = { fit = "${reports}/fits" }
+
+[stages.summary]
+kind = "command"
+cmd = "echo summary >> trace.txt; cat {in.fits}/* | sort > {out.table}; echo scale {params.scale} >> {out.table}"
+inputs = { fits = "fit:fit" }
+outputs = { table = "${reports}/table.txt" }
+params = { scale = 1 }
+
+[stages.plot]
+kind = "command"
+cmd = "echo plot >> trace.txt; cat {in.table} > {out.plot}; echo {params.title} >> {out.plot}"
+inputs = { table = "summary:table" }
+outputs = { plot = "${reports}/plot.txt" }
+params = { title = "first" }
+
+[stages.side]
+kind = "command"
+cmd = "echo side >> trace.txt; tr a-z A-Z < {in.settings} > {out.note}"
+inputs = { settings = "settings.txt" }
+outputs = { note = "${reports}/note.txt" }
+"#;
+
+struct Project {
+    dir: tempfile::TempDir,
+}
+
+impl Project {
+    fn new(pipeline: &str) -> Project {
+        let p = Project {
+            dir: tempfile::tempdir().expect("temp dir"),
+        };
+        p.write("pipeline.toml", pipeline);
+        p
+    }
+
+    /// The standard per-item project with three recordings.
+    fn standard() -> Project {
+        let p = Project::new(PIPELINE);
+        p.write("data/run_a.csv", "t,z\n0,0.0\n1,0.5\n");
+        p.write("data/run_b.csv", "t,z\n0,0.0\n1,0.7\n");
+        p.write("data/run_c.csv", "t,z\n0,0.0\n1,0.9\n");
+        p.write("data/truth/truth.toml", "ignored = true\n");
+        p.write("settings.txt", "hello\n");
+        p
+    }
+
+    fn path(&self, rel: &str) -> PathBuf {
+        self.dir.path().join(rel)
+    }
+
+    fn write(&self, rel: &str, text: &str) {
+        let p = self.path(rel);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    }
+
+    fn read(&self, rel: &str) -> String {
+        std::fs::read_to_string(self.path(rel)).unwrap_or_else(|e| panic!("read {rel}: {e}"))
+    }
+
+    fn command(&self, args: &[&str]) -> Command {
+        let mut c = Command::new(GROOVE);
+        c.args(args).current_dir(self.dir.path());
+        c
+    }
+
+    fn groove(&self, args: &[&str]) -> Output {
+        self.command(args).output().expect("run groove")
+    }
+
+    /// Run groove, expect exit 0, return stdout.
+    fn ok(&self, args: &[&str]) -> String {
+        let out = self.groove(args);
+        assert!(
+            out.status.success(),
+            "groove {args:?} failed: {}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    }
+
+    /// The trace lines written since the last call (and clear it).
+    fn take_trace(&self) -> Vec<String> {
+        let p = self.path("trace.txt");
+        let text = std::fs::read_to_string(&p).unwrap_or_default();
+        let _ = std::fs::remove_file(&p);
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        lines.sort();
+        lines
+    }
+
+    /// `groove status --json` as (stage, state, reasons).
+    fn status(&self) -> Vec<(String, String, Vec<String>)> {
+        let v: serde_json::Value = serde_json::from_str(&self.ok(&["status", "--json"])).unwrap();
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["stage"].as_str().unwrap().to_string(),
+                    s["state"].as_str().unwrap().to_string(),
+                    s["reasons"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|r| r.as_str().unwrap().to_string())
+                        .collect(),
+                )
+            })
+            .collect()
+    }
+
+    fn stale(&self) -> Vec<String> {
+        self.status()
+            .into_iter()
+            .filter(|s| s.1 == "stale")
+            .map(|s| s.0)
+            .collect()
+    }
+
+    fn reasons(&self, stage: &str) -> String {
+        self.status()
+            .into_iter()
+            .find(|s| s.0 == stage)
+            .unwrap()
+            .2
+            .join("; ")
+    }
+
+    fn edit(&self, rel: &str, from: &str, to: &str) {
+        let text = self.read(rel);
+        assert!(text.contains(from), "{rel} has no `{from}`");
+        self.write(rel, &text.replacen(from, to, 1));
+    }
+}
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+#[test]
+fn first_run_runs_everything_then_nothing_changed_runs_nothing() {
+    let p = Project::standard();
+    let out = p.ok(&["run"]);
+    assert!(out.contains("5 stages run, 0 reused"), "{out}");
+    assert_eq!(
+        p.take_trace(),
+        strings(&[
+            "fit run_a.csv",
+            "fit run_b.csv",
+            "fit run_c.csv",
+            "ingest",
+            "plot",
+            "side",
+            "summary"
+        ])
+    );
+    // the truth folder is below the dataset: not an input of ingest
+    assert!(!p.path("reports/runs/truth").exists());
+    assert_eq!(p.read("reports/note.txt"), "HELLO\n");
+    assert!(p.read("reports/plot.txt").ends_with("scale 1\nfirst\n"));
+    let lock_before = p.read("pipeline.lock");
+
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run, 5 reused"), "{out}");
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert!(p.status().iter().all(|s| s.1 == "fresh" && s.2.is_empty()));
+    assert_eq!(
+        p.read("pipeline.lock"),
+        lock_before,
+        "the lock is deterministic"
+    );
+}
+
+#[test]
+fn one_byte_of_one_recording_reruns_that_item_and_downstream_only() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.take_trace();
+    p.edit("data/run_b.csv", "0.7", "0.8");
+
+    assert_eq!(p.stale(), strings(&["ingest", "fit", "summary", "plot"]));
+    let why = p.reasons("ingest");
+    assert!(
+        why.contains("input `dataset` changed") && why.contains("`run_b.csv`"),
+        "{why}"
+    );
+    assert!(!why.contains("run_a.csv"), "{why}");
+    assert!(p.reasons("fit").contains("waits on `ingest`"));
+
+    p.ok(&["run"]);
+    assert_eq!(
+        p.take_trace(),
+        strings(&["fit run_b.csv", "ingest", "plot", "summary"])
+    );
+    assert!(p.stale().is_empty());
+}
+
+#[test]
+fn param_change_reruns_stage_and_descendants_and_reverting_reuses_the_store() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.take_trace();
+    let table_1 = p.read("reports/table.txt");
+    p.edit("pipeline.toml", "scale = 1", "scale = 2");
+
+    assert_eq!(p.stale(), strings(&["summary", "plot"]));
+    assert!(
+        p.reasons("summary")
+            .contains("param `scale` changed: 1 → 2"),
+        "{}",
+        p.reasons("summary")
+    );
+    assert!(p.reasons("plot").contains("waits on `summary`"));
+    p.ok(&["run"]);
+    assert_eq!(p.take_trace(), strings(&["plot", "summary"]));
+    assert!(p.read("reports/table.txt").ends_with("scale 2\n"));
+
+    // back to 1: found in the store, nothing runs, the old outputs come back
+    p.edit("pipeline.toml", "scale = 2", "scale = 1");
+    let why = p.reasons("summary");
+    assert!(
+        why.contains("param `scale` changed: 2 → 1") && why.contains("already in the store"),
+        "{why}"
+    );
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert_eq!(p.read("reports/table.txt"), table_1);
+    assert!(p.stale().is_empty());
+}
+
+#[test]
+fn identical_output_after_a_rerun_leaves_downstream_fresh() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.take_trace();
+    // a new command that writes the same bytes: fit reruns, summary does not (early cutoff)
+    p.edit(
+        "pipeline.toml",
+        "cksum < {in.runs} > {out.fit}",
+        "cksum < {in.runs} > {out.fit}; true",
+    );
+    // status cannot know fit's new output without running it, so downstream waits on fit
+    assert_eq!(p.stale(), strings(&["fit", "summary", "plot"]));
+    assert!(
+        p.reasons("fit").contains("cmd changed"),
+        "{}",
+        p.reasons("fit")
+    );
+    assert!(p.reasons("summary").contains("waits on `fit`"));
+    p.ok(&["run"]);
+    assert_eq!(
+        p.take_trace(),
+        strings(&["fit run_a.csv", "fit run_b.csv", "fit run_c.csv"])
+    );
+    assert!(p.stale().is_empty());
+}
+
+#[test]
+fn touch_reruns_nothing() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.take_trace();
+    let file = std::fs::File::options()
+        .append(true)
+        .open(p.path("data/run_a.csv"))
+        .unwrap();
+    file.set_modified(std::time::SystemTime::now() + Duration::from_secs(3600))
+        .unwrap();
+    drop(file);
+    assert!(p.stale().is_empty());
+    p.ok(&["run"]);
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+}
+
+#[test]
+fn a_deleted_output_is_restored_from_the_store_without_running() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.take_trace();
+    std::fs::remove_file(p.path("reports/plot.txt")).unwrap();
+    std::fs::remove_dir_all(p.path("reports/fits")).unwrap();
+    assert!(p
+        .reasons("plot")
+        .contains("output `plot`: reports/plot.txt is missing or was modified"));
+    p.ok(&["run"]);
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert!(p.read("reports/plot.txt").ends_with("first\n"));
+    assert_eq!(
+        std::fs::read_dir(p.path("reports/fits")).unwrap().count(),
+        3
+    );
+}
+
+#[test]
+fn a_failing_command_exits_2_with_its_stderr_and_keeps_the_last_good_outputs() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    let plot = p.read("reports/plot.txt");
+    p.edit(
+        "pipeline.toml",
+        "echo plot >> trace.txt;",
+        "echo broken plot >&2; exit 3;",
+    );
+    let out = p.groove(&["run"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("stage `plot`") && err.contains("broken plot"),
+        "{err}"
+    );
+    assert_eq!(err.matches("broken plot").count(), 1, "printed once: {err}");
+    assert_eq!(p.read("reports/plot.txt"), plot);
+    assert_eq!(p.stale(), strings(&["plot"]));
+}
+
+#[test]
+fn run_named_stage_runs_only_what_it_needs() {
+    let p = Project::standard();
+    p.ok(&["run", "summary"]);
+    assert_eq!(
+        p.take_trace(),
+        strings(&[
+            "fit run_a.csv",
+            "fit run_b.csv",
+            "fit run_c.csv",
+            "ingest",
+            "summary"
+        ])
+    );
+    assert_eq!(p.stale(), strings(&["side", "plot"]));
+    // --force reruns a fresh stage; --dry-run runs nothing
+    let out = p.ok(&["run", "--dry-run"]);
+    assert!(
+        out.contains("plot") && out.contains("side") && !out.contains("summary"),
+        "{out}"
+    );
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    p.ok(&["run", "summary", "--force", "summary"]);
+    assert_eq!(p.take_trace(), strings(&["summary"]));
+}
+
+#[test]
+fn data_and_out_replace_the_project_folders() {
+    let p = Project::standard();
+    p.write("other/run_z.csv", "t,z\n0,1\n");
+    p.ok(&["run", "--data", "other", "--out", "elsewhere"]);
+    let trace = p.take_trace();
+    assert!(
+        trace.contains(&"fit run_z.csv".to_string()) && trace.len() == 5,
+        "{trace:?}"
+    );
+    assert!(p.path("elsewhere/fits/run_z.csv").is_file());
+    assert!(!p.path("reports").exists());
+}
+
+/// Wait until a file contains a line, or panic after a timeout.
+fn wait_for(path: &Path, needle: &str) {
+    let start = Instant::now();
+    while !std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .contains(needle)
+    {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "timed out waiting for {needle}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+const SLOW: &str = r#"[stages.first]
+kind = "command"
+cmd = "echo first >> trace.txt; printf 'one\n' > {out.o}"
+inputs = { x = "x.txt" }
+outputs = { o = "reports/first.txt" }
+
+[stages.slow]
+kind = "command"
+cmd = "echo slow >> trace.txt; printf 'partial' > {out.o}; sleep 2; printf ' and complete\n' >> {out.o}; cat {in.f} >> {out.o}"
+inputs = { f = "first:o" }
+outputs = { o = "reports/slow.txt" }
+"#;
+
+#[test]
+fn kill_9_mid_write_leaves_the_store_consistent_and_the_next_run_completes() {
+    let killed = Project::new(SLOW);
+    killed.write("x.txt", "x\n");
+    let mut child = killed
+        .command(&["run", "--jobs", "1"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&killed.path("trace.txt"), "slow");
+    std::thread::sleep(Duration::from_millis(200));
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    // no partial output anywhere the user looks, and only complete entries in the store
+    assert!(!killed.path("reports/slow.txt").exists());
+    let entries = std::fs::read_dir(killed.path(".groove/entries"))
+        .unwrap()
+        .count();
+    assert_eq!(entries, 1, "only `first` was committed");
+    assert_eq!(killed.stale(), strings(&["slow"]));
+
+    killed.take_trace();
+    killed.ok(&["run"]);
+    assert_eq!(killed.take_trace(), strings(&["slow"]));
+    assert!(
+        !killed.path(".groove/tmp").exists()
+            || std::fs::read_dir(killed.path(".groove/tmp"))
+                .unwrap()
+                .count()
+                == 0
+    );
+
+    let clean = Project::new(SLOW);
+    clean.write("x.txt", "x\n");
+    clean.ok(&["run"]);
+    assert_eq!(
+        killed.read("reports/slow.txt"),
+        "partial and complete\none\n"
+    );
+    assert_eq!(
+        killed.read("reports/slow.txt"),
+        clean.read("reports/slow.txt")
+    );
+    assert_eq!(killed.read("pipeline.lock"), clean.read("pipeline.lock"));
+}
+
+#[test]
+fn two_concurrent_runs_do_not_corrupt_the_project() {
+    let p = Project::new(SLOW);
+    p.write("x.txt", "x\n");
+    let a = p
+        .command(&["run"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&p.path("trace.txt"), "first");
+    let b = p
+        .command(&["run"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (a, b) = (a.wait_with_output().unwrap(), b.wait_with_output().unwrap());
+    assert!(a.status.success() && b.status.success());
+    let b_err = String::from_utf8_lossy(&b.stderr);
+    assert!(
+        b_err.contains("waiting"),
+        "the second run says it waits: {b_err}"
+    );
+    // each stage ran once; the second run found everything in the store
+    assert_eq!(p.take_trace(), strings(&["first", "slow"]));
+    assert!(String::from_utf8_lossy(&b.stdout).contains("0 stages run, 2 reused"));
+    assert_eq!(p.read("reports/slow.txt"), "partial and complete\none\n");
+    assert!(p.stale().is_empty());
+}
+
+/// (what is wrong, pipeline text, the line the error must name, a phrase it must contain)
+fn bad_configs() -> Vec<(&'static str, String, &'static str, &'static str)> {
+    let good = "[stages.a]\nkind = \"command\"\ncmd = \"cp {in.x} {out.o}\"\ninputs = { x = \"x.txt\" }\noutputs = { o = \"reports/a.txt\" }\n";
+    vec![
+        (
+            "unknown kind",
+            format!("{good}\n[stages.b]\nkind = \"fitt\"\n"),
+            "kind = \"fitt\"",
+            "unknown kind `fitt`",
+        ),
+        (
+            "unknown stage key",
+            format!("{good}\n[stages.b]\nkind = \"command\"\nparms = {{ a = 1 }}\n"),
+            "parms",
+            "unknown field `parms`",
+        ),
+        (
+            "mistyped value",
+            "[project]\nseed = \"seven\"\n".to_string(),
+            "seed",
+            "invalid type",
+        ),
+        (
+            "cycle",
+            "[stages.a]\nkind = \"command\"\ncmd = \"cp {in.x} {out.o}\"\ninputs = { x = \"b:o\" }\noutputs = { o = \"r/a\" }\n\n[stages.b]\nkind = \"command\"\ncmd = \"cp {in.x} {out.o}\"\ninputs = { x = \"a:o\" }\noutputs = { o = \"r/b\" }\n".to_string(),
+            "[stages.a]",
+            "cycle: a -> b -> a",
+        ),
+        (
+            "missing input file",
+            good.replace("x.txt", "missing.txt"),
+            "inputs = {",
+            "missing.txt does not exist",
+        ),
+        (
+            "input from an unknown stage",
+            format!("{good}\n[stages.b]\nkind = \"command\"\ncmd = \"cp {{in.x}} {{out.o}}\"\ninputs = {{ x = \"nope:o\" }}\noutputs = {{ o = \"reports/b.txt\" }}\n"),
+            "nope:o",
+            "no stage `nope`",
+        ),
+        (
+            "two stages one output",
+            format!("{good}\n[stages.b]\nkind = \"command\"\ncmd = \"cp {{in.x}} {{out.o}}\"\ninputs = {{ x = \"x.txt\" }}\noutputs = {{ o = \"reports/a.txt\" }}\n"),
+            "[stages.b]",
+            "both write reports/a.txt",
+        ),
+        (
+            "unknown placeholder",
+            good.replace("{out.o}", "{out.p}"),
+            "cmd =",
+            "`{out.p}` in cmd names no output",
+        ),
+    ]
+}
+
+#[test]
+fn bad_pipelines_exit_2_naming_the_line() {
+    for (what, text, marker, phrase) in bad_configs() {
+        let p = Project::new(&text);
+        p.write("x.txt", "x\n");
+        let line = text
+            .lines()
+            .position(|l| l.contains(marker))
+            .expect("marker in text")
+            + 1;
+        let out = p.groove(&["run"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+        assert!(
+            err.contains(&format!("pipeline.toml:{line}:")),
+            "{what}: expected line {line}: {err}"
+        );
+        assert!(err.contains(phrase), "{what}: expected `{phrase}`: {err}");
+        assert_eq!(
+            err.lines().filter(|l| l.contains("error")).count(),
+            1,
+            "{what}: printed once: {err}"
+        );
+    }
+}
+
+#[test]
+fn dag_renders_text_dot_and_mermaid() {
+    let p = Project::standard();
+    let text = p.ok(&["dag"]);
+    assert!(
+        text.contains("fit (command foreach runs)") && text.contains("<- runs = ingest:runs"),
+        "{text}"
+    );
+    let dot = p.ok(&["dag", "--format", "dot"]);
+    assert!(
+        dot.starts_with("digraph groove {") && dot.contains("\"summary\" -> \"plot\""),
+        "{dot}"
+    );
+    let mermaid = p.ok(&["dag", "--format", "mermaid"]);
+    assert!(
+        mermaid.starts_with("graph LR") && mermaid.contains("fit -->|fit → fits| summary"),
+        "{mermaid}"
+    );
+}
+
+#[test]
+fn publish_refuses_while_stale_then_writes_a_verified_bundle() {
+    let p = Project::standard();
+    let out = p.groove(&["publish", "--to", "bundle"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("stale") && err.contains("summary") && err.contains("never run"),
+        "{err}"
+    );
+    assert!(!p.path("bundle").exists());
+
+    p.ok(&["run"]);
+    p.ok(&["publish", "--to", "bundle"]);
+    let sums = p.read("bundle/SHA256SUMS");
+    let listed: Vec<&str> = sums
+        .lines()
+        .map(|l| l.split_once("  ").unwrap().1)
+        .collect();
+    assert!(
+        listed.contains(&"pipeline.lock")
+            && listed.contains(&"plot.txt")
+            && listed.contains(&"fits/run_b.csv"),
+        "{sums}"
+    );
+    for line in sums.lines() {
+        let (hash, rel) = line.split_once("  ").unwrap();
+        let bytes = std::fs::read(p.path("bundle").join(rel)).unwrap();
+        assert_eq!(hash, groove::engine::hashing::sha256_hex(&bytes), "{rel}");
+    }
+    assert_eq!(p.read("bundle/pipeline.lock"), p.read("pipeline.lock"));
+
+    // a stale stage blocks publishing again, and names why
+    p.edit("pipeline.toml", "title = \"first\"", "title = \"second\"");
+    let out = p.groove(&["publish", "--to", "bundle"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("param `title` changed"));
+}
+
+#[test]
+fn gc_drops_entries_the_lock_does_not_name() {
+    let p = Project::standard();
+    p.ok(&["run"]);
+    p.edit("pipeline.toml", "scale = 1", "scale = 2");
+    p.ok(&["run"]);
+    let out = p.ok(&["gc"]);
+    assert!(out.contains("removed 2 store entries"), "{out}");
+    p.edit("pipeline.toml", "scale = 2", "scale = 1");
+    p.take_trace();
+    p.ok(&["run"]);
+    assert_eq!(p.take_trace(), strings(&["plot", "summary"]));
+    p.ok(&["clean"]);
+    assert!(p.reasons("ingest").contains("missing from the store"));
+}
+
+#[test]
+fn every_verb_has_help() {
+    for verb in ["run", "status", "dag", "clean", "gc", "synth", "publish"] {
+        let out = Command::new(GROOVE)
+            .args([verb, "--help"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{verb} --help");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: groove"));
+    }
+}

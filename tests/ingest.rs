@@ -1,0 +1,957 @@
+//! Ingest tests: CSV and Parquet agree, row order does not matter, every bad-input class gives an
+//! error naming file, row and column, and trackpy / TrackMate exports of the same trajectories give
+//! the same recordings as the interchange format.
+
+use groove::engine::stage::{Artifact, StageInput, StageKind};
+use groove::ingest::{self, item_name, Axis, Format, IngestParams};
+use groove::recording::{Experiment, Recording, RunInfo, Setup, Track};
+use groove::stages::ingest::Ingest;
+use polars::prelude::*;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
+use std::io::Cursor;
+
+type Files = BTreeMap<String, Vec<u8>>;
+
+// ---------------------------------------------------------------- known recordings
+
+/// A track sampled at `frames`, t = frame / fps, z = f(t).
+fn track(
+    particle: u32,
+    frames: impl Iterator<Item = i64>,
+    fps: f64,
+    z: impl Fn(f64) -> f64,
+) -> Track {
+    let frame: Vec<i64> = frames.collect();
+    let t_s: Vec<f64> = frame.iter().map(|&f| f as f64 / fps).collect();
+    let z_m = t_s.iter().map(|&t| z(t)).collect();
+    Track {
+        particle,
+        frame,
+        t_s,
+        z_m,
+    }
+}
+
+fn info(run: &str, experiment: Experiment, material: &str, setup: Option<Setup>) -> RunInfo {
+    RunInfo {
+        run: run.into(),
+        experiment,
+        material: material.into(),
+        diameter_m: 0.004,
+        fps: 200.0,
+        setup,
+        extra: BTreeMap::new(),
+    }
+}
+
+/// Three runs with what real recordings hold and ingest must accept: dropped frames, motion in
+/// -z, a tracking outlier, a particle leaving the field of view.
+fn known_recordings() -> Vec<Recording> {
+    let fps = 200.0;
+    let s01 = Recording {
+        info: info("s01", Experiment::Single, "316", None),
+        tracks: vec![track(
+            0,
+            (0..80).filter(|f| ![10, 11, 30].contains(f)),
+            fps,
+            |t| {
+                0.02 + 0.3 * t - 0.8 * t * t
+                    + if (t * fps - 40.0).abs() < 1e-9 {
+                        0.005
+                    } else {
+                        0.0
+                    }
+            },
+        )],
+    };
+    let s02 = Recording {
+        info: info("s02", Experiment::Single, "440c", None),
+        tracks: vec![track(0, 0..60, fps, |t| 0.1 - 0.25 * t + 0.4 * t * t)],
+    };
+    let c01 = Recording {
+        info: info("c01", Experiment::Collision, "316", Some(Setup::Rolling)),
+        tracks: vec![
+            track(0, 0..70, fps, |t| {
+                if t < 0.15 {
+                    0.2 * t
+                } else {
+                    0.03 + 0.02 * (t - 0.15)
+                }
+            }),
+            // the target rests, is struck at t = 0.15 s and leaves the view after frame 55
+            track(1, 0..56, fps, |t| {
+                if t < 0.15 {
+                    0.034
+                } else {
+                    0.034 + 0.18 * (t - 0.15)
+                }
+            }),
+        ],
+    };
+    vec![c01, s01, s02]
+}
+
+// ---------------------------------------------------------------- writers of each format
+
+fn runs_csv(recs: &[Recording]) -> String {
+    let mut s = String::from("run,experiment,material,diameter_m,fps,setup\n");
+    for r in recs {
+        let i = &r.info;
+        let exp = match i.experiment {
+            Experiment::Single => "single",
+            Experiment::Collision => "collision",
+        };
+        let setup = match i.setup {
+            Some(Setup::Rolling) => "rolling",
+            Some(Setup::Contact) => "contact",
+            None => "",
+        };
+        s += &format!(
+            "{},{exp},{},{},{},{setup}\n",
+            i.run, i.material, i.diameter_m, i.fps
+        );
+    }
+    s
+}
+
+/// One line per sample (`run,particle,frame,t_s,z_m`), in recording order.
+fn trajectory_lines(recs: &[Recording]) -> Vec<String> {
+    let mut lines = Vec::new();
+    for r in recs {
+        for t in &r.tracks {
+            for k in 0..t.frame.len() {
+                lines.push(format!(
+                    "{},{},{},{},{}",
+                    r.info.run, t.particle, t.frame[k], t.t_s[k], t.z_m[k]
+                ));
+            }
+        }
+    }
+    lines
+}
+
+fn interchange_csv(recs: &[Recording]) -> Files {
+    let traj = format!(
+        "run,particle,frame,t_s,z_m\n{}\n",
+        trajectory_lines(recs).join("\n")
+    );
+    Files::from([
+        ("runs.csv".to_string(), runs_csv(recs).into_bytes()),
+        ("trajectories.csv".to_string(), traj.into_bytes()),
+    ])
+}
+
+fn parquet_bytes(mut df: DataFrame) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
+    bytes
+}
+
+fn interchange_parquet(recs: &[Recording]) -> Files {
+    let n = recs.len();
+    let runs = DataFrame::new(
+        n,
+        vec![
+            Column::new(
+                "run".into(),
+                recs.iter().map(|r| r.info.run.clone()).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "experiment".into(),
+                recs.iter()
+                    .map(|r| {
+                        if r.info.experiment == Experiment::Single {
+                            "single"
+                        } else {
+                            "collision"
+                        }
+                    })
+                    .collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "material".into(),
+                recs.iter()
+                    .map(|r| r.info.material.clone())
+                    .collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "diameter_m".into(),
+                recs.iter().map(|r| r.info.diameter_m).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "fps".into(),
+                recs.iter().map(|r| r.info.fps).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "setup".into(),
+                recs.iter()
+                    .map(|r| {
+                        r.info.setup.map(|s| {
+                            if s == Setup::Rolling {
+                                "rolling"
+                            } else {
+                                "contact"
+                            }
+                        })
+                    })
+                    .collect::<Vec<_>>(),
+            ),
+        ],
+    )
+    .unwrap();
+    let (mut run, mut particle, mut frame, mut t_s, mut z_m) =
+        (vec![], vec![], vec![], vec![], vec![]);
+    for r in recs {
+        for t in &r.tracks {
+            for k in 0..t.frame.len() {
+                run.push(r.info.run.clone());
+                particle.push(t.particle as i64);
+                frame.push(t.frame[k]);
+                t_s.push(t.t_s[k]);
+                z_m.push(t.z_m[k]);
+            }
+        }
+    }
+    let m = run.len();
+    let traj = DataFrame::new(
+        m,
+        vec![
+            Column::new("run".into(), run),
+            Column::new("particle".into(), particle),
+            Column::new("frame".into(), frame),
+            Column::new("t_s".into(), t_s),
+            Column::new("z_m".into(), z_m),
+        ],
+    )
+    .unwrap();
+    Files::from([
+        ("runs.parquet".to_string(), parquet_bytes(runs)),
+        ("trajectories.parquet".to_string(), parquet_bytes(traj)),
+    ])
+}
+
+/// The calibration the tracker writers below invert.
+struct Cal {
+    m_per_px: f64,
+    axis: Axis,
+    direction: f64,
+}
+
+impl Cal {
+    fn px(&self, z_m: f64) -> f64 {
+        z_m / (self.direction * self.m_per_px)
+    }
+    /// (x, y) in pixels; the other axis sits at a fixed pixel row or column.
+    fn xy(&self, z_m: f64) -> (f64, f64) {
+        match self.axis {
+            Axis::X => (self.px(z_m), 240.5),
+            Axis::Y => (320.25, self.px(z_m)),
+        }
+    }
+}
+
+/// A trackpy export of one run: index column, pixels, track ids 7 (particle 0) and 3 (particle 1).
+fn to_trackpy(rec: &Recording, cal: &Cal) -> Vec<u8> {
+    let mut s = String::from(",y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle\n");
+    let mut index = 0;
+    for t in &rec.tracks {
+        let id = if t.particle == 0 { 7 } else { 3 };
+        for k in 0..t.frame.len() {
+            let (x, y) = cal.xy(t.z_m[k]);
+            s += &format!(
+                "{index},{y},{x},812.3,2.1,0.05,41.0,9120.0,0.012,{},{id}\n",
+                t.frame[k]
+            );
+            index += 1;
+        }
+    }
+    s.into_bytes()
+}
+
+/// Java's `Double.toString`: plain between 1e-3 and 1e7, else `1.0E-4` style.
+fn java_double(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || (1e-3..1e7).contains(&a) {
+        let s = format!("{x}");
+        if s.contains('.') {
+            s
+        } else {
+            format!("{s}.0")
+        }
+    } else {
+        let s = format!("{x:E}");
+        let (mantissa, exp) = s.split_once('E').unwrap();
+        let mantissa = if mantissa.contains('.') {
+            mantissa.to_string()
+        } else {
+            format!("{mantissa}.0")
+        };
+        format!("{mantissa}E{exp}")
+    }
+}
+
+/// A TrackMate spot table of one run: four header rows, rows shuffled, two unlinked spurious spots,
+/// track ids 0 (particle 0) and 5 (particle 1), positions in pixels.
+fn to_trackmate(rec: &Recording, cal: &Cal, fps: f64, seed: u64) -> Vec<u8> {
+    let mut rows = Vec::new();
+    let mut id = 1000;
+    for t in &rec.tracks {
+        let track = if t.particle == 0 { 0 } else { 5 };
+        for k in 0..t.frame.len() {
+            let (x, y) = cal.xy(t.z_m[k]);
+            rows.push(format!(
+                "ID{id},{id},{track},42.5,{},{},0.0,{},{},3.0",
+                java_double(x),
+                java_double(y),
+                java_double(t.frame[k] as f64 / fps),
+                t.frame[k]
+            ));
+            id += 1;
+        }
+    }
+    rows.push(format!(
+        "ID{id},{id},,1.5,{},{},0.0,0.1,20,3.0",
+        java_double(12.0),
+        java_double(1.0e-4)
+    ));
+    rows.push(format!(
+        "ID{},{},,1.5,{},{},0.0,0.1,21,3.0",
+        id + 1,
+        id + 1,
+        java_double(3.0e7),
+        java_double(7.0)
+    ));
+    rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let header =
+        "LABEL,ID,TRACK_ID,QUALITY,POSITION_X,POSITION_Y,POSITION_Z,POSITION_T,FRAME,RADIUS\n\
+                  Label,Spot ID,Track ID,Quality,X,Y,Z,T,Frame,Radius\n\
+                  Label,Spot ID,Track ID,Quality,X,Y,Z,T,Frame,R\n\
+                  ,,,(quality),(pixel),(pixel),(pixel),(sec),,(pixel)\n";
+    format!("{header}{}\n", rows.join("\n")).into_bytes()
+}
+
+// ---------------------------------------------------------------- helpers
+
+fn params() -> IngestParams {
+    IngestParams::default()
+}
+
+fn run_ok(files: &Files, params: &IngestParams) -> Vec<Recording> {
+    match ingest::ingest(files, params) {
+        Ok(i) => i.recordings,
+        Err(e) => panic!("ingest failed: {e}"),
+    }
+}
+
+fn run_err(files: &Files) -> String {
+    match ingest::ingest(files, &params()) {
+        Ok(_) => panic!("ingest accepted bad input"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn assert_mentions(message: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(
+            message.contains(p),
+            "error {message:?} does not contain {p:?}"
+        );
+    }
+}
+
+/// The interchange CSV with trajectory line `k` (0-based data line) replaced by `f(line)`.
+fn edit_trajectory(recs: &[Recording], k: usize, f: impl Fn(&str) -> String) -> Files {
+    let mut lines = trajectory_lines(recs);
+    lines[k] = f(&lines[k]);
+    let mut files = interchange_csv(recs);
+    files.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    files
+}
+
+fn set_field(line: &str, field: usize, value: &str) -> String {
+    let mut cells: Vec<&str> = line.split(',').collect();
+    cells[field] = value;
+    cells.join(",")
+}
+
+fn stage_outputs(files: &Files, params: &toml::Table) -> BTreeMap<String, Artifact> {
+    let dataset = Artifact::Collection(files.clone());
+    let input = StageInput {
+        params,
+        inputs: BTreeMap::from([("dataset", &dataset)]),
+        item: None,
+        seed: 1,
+    };
+    Ingest
+        .run(&input)
+        .unwrap_or_else(|e| panic!("stage failed: {e}"))
+}
+
+/// The known recordings sorted by run, as ingest returns them.
+fn expected() -> Vec<Recording> {
+    let mut recs = known_recordings();
+    recs.sort_by(|a, b| a.info.run.cmp(&b.info.run));
+    recs
+}
+
+// ---------------------------------------------------------------- good input
+
+#[test]
+fn interchange_csv_gives_the_known_recordings_exactly() {
+    // Numbers are written in shortest round-trip form, so reading them back is exact.
+    assert_eq!(
+        run_ok(&interchange_csv(&known_recordings()), &params()),
+        expected()
+    );
+}
+
+#[test]
+fn csv_and_parquet_read_identically() {
+    let recs = known_recordings();
+    let from_csv = run_ok(&interchange_csv(&recs), &params());
+    let from_parquet = run_ok(&interchange_parquet(&recs), &params());
+    assert_eq!(from_csv, from_parquet);
+    // Mixed forms too: runs.csv with trajectories.parquet.
+    let mut mixed = interchange_csv(&recs);
+    mixed.remove("trajectories.csv");
+    mixed.insert(
+        "trajectories.parquet".into(),
+        interchange_parquet(&recs)["trajectories.parquet"].clone(),
+    );
+    assert_eq!(run_ok(&mixed, &params()), from_csv);
+}
+
+#[test]
+fn shuffled_rows_give_byte_identical_outputs() {
+    let recs = known_recordings();
+    let files = interchange_csv(&recs);
+    let reference = stage_outputs(&files, &toml::Table::new());
+    for seed in [1, 2, 3] {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut lines = trajectory_lines(&recs);
+        lines.shuffle(&mut rng);
+        let mut runs: Vec<String> = runs_csv(&recs).lines().skip(1).map(String::from).collect();
+        runs.shuffle(&mut rng);
+        let shuffled = Files::from([
+            (
+                "runs.csv".to_string(),
+                format!(
+                    "run,experiment,material,diameter_m,fps,setup\n{}\n",
+                    runs.join("\n")
+                )
+                .into_bytes(),
+            ),
+            (
+                "trajectories.csv".to_string(),
+                format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+            ),
+        ]);
+        assert_eq!(
+            stage_outputs(&shuffled, &toml::Table::new()),
+            reference,
+            "seed {seed}"
+        );
+    }
+}
+
+#[test]
+fn stage_outputs_hold_recordings_table_and_an_empty_skipped_list() {
+    let out = stage_outputs(&interchange_csv(&known_recordings()), &toml::Table::new());
+    let Artifact::Collection(runs) = &out["runs"] else {
+        panic!("runs is not a collection")
+    };
+    assert_eq!(runs.keys().collect::<Vec<_>>(), ["c01", "s01", "s02"]);
+    let c01: Recording = serde_json::from_slice(&runs["c01"]).unwrap();
+    assert_eq!(c01, expected()[0]);
+    assert_eq!(out["skipped"], Artifact::File(b"[]\n".to_vec()));
+    // The table reads back as trajectories.parquet and gives the same recordings.
+    let Artifact::File(table) = &out["table"] else {
+        panic!("table is not a file")
+    };
+    let df = ParquetReader::new(Cursor::new(table.clone()))
+        .finish()
+        .unwrap();
+    let n: usize = known_recordings()
+        .iter()
+        .flat_map(|r| &r.tracks)
+        .map(|t| t.frame.len())
+        .sum();
+    assert_eq!(df.height(), n);
+    assert_eq!(df.column("z_m").unwrap().dtype(), &DataType::Float64);
+    assert_eq!(df.column("frame").unwrap().dtype(), &DataType::Int64);
+    let mut files = interchange_csv(&known_recordings());
+    files.remove("trajectories.csv");
+    files.insert("trajectories.parquet".into(), table.clone());
+    assert_eq!(run_ok(&files, &params()), expected());
+}
+
+#[test]
+fn extra_run_columns_are_kept_as_text() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    let runs = runs_csv(&recs)
+        .lines()
+        .enumerate()
+        .map(|(k, l)| {
+            if k == 0 {
+                format!("{l},operator")
+            } else {
+                format!("{l},ana {k}")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    files.insert("runs.csv".into(), runs.into_bytes());
+    let got = run_ok(&files, &params());
+    assert_eq!(
+        got[0].info.extra,
+        BTreeMap::from([("operator".to_string(), "ana 1".to_string())])
+    );
+}
+
+#[test]
+fn item_names_are_file_name_safe_and_distinct() {
+    assert_eq!(item_name("run-01_a.b"), "run-01_a.b");
+    let odd = ["run/1", "run 1", "run:1", "..", "läuft"];
+    let names: Vec<String> = odd.iter().map(|r| item_name(r)).collect();
+    for n in &names {
+        assert!(
+            n.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c)),
+            "{n}"
+        );
+        assert!(n != "." && n != "..");
+    }
+    let mut unique = names.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(unique.len(), names.len(), "{names:?}");
+    // The true id stays in the recording.
+    let mut recs = known_recordings();
+    recs[1].info.run = "day 2/s01".into();
+    let out = stage_outputs(&interchange_csv(&recs), &toml::Table::new());
+    let Artifact::Collection(runs) = &out["runs"] else {
+        panic!()
+    };
+    let rec: Recording = serde_json::from_slice(&runs[&item_name("day 2/s01")]).unwrap();
+    assert_eq!(rec.info.run, "day 2/s01");
+}
+
+#[test]
+fn read_dataset_dir_reads_top_level_files_only() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in interchange_csv(&known_recordings()) {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    std::fs::create_dir(dir.path().join("truth")).unwrap();
+    std::fs::write(dir.path().join("truth/runs.csv"), "not,a,dataset\n").unwrap();
+    assert_eq!(
+        ingest::read_dataset_dir(dir.path(), &params()).unwrap(),
+        expected()
+    );
+}
+
+// ---------------------------------------------------------------- bad input
+
+#[test]
+fn missing_file_is_named() {
+    let mut files = interchange_csv(&known_recordings());
+    files.remove("trajectories.csv");
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv: is missing", "add trajectories.csv"],
+    );
+}
+
+#[test]
+fn missing_column_is_named_at_the_header_row() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    let runs = runs_csv(&recs).replace(",fps,", ",frame_rate,");
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 1, column fps: missing column", "add fps"],
+    );
+}
+
+#[test]
+fn run_in_one_table_only_is_named_in_both_directions() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    let runs = format!("{}ghost,single,316,0.004,200,\n", runs_csv(&recs));
+    files.insert("runs.csv".into(), runs.into_bytes());
+    // header + 3 runs, so ghost is row 5
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 5, column run: run \"ghost\" has no rows in trajectories.csv"],
+    );
+
+    // data line 7 (row 8) belongs to a run runs.csv does not list
+    let files = edit_trajectory(&recs, 6, |l| set_field(l, 0, "stray"));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 8, column run: run \"stray\" is not in runs.csv"],
+    );
+}
+
+#[test]
+fn non_numeric_and_non_finite_values_are_named() {
+    let recs = known_recordings();
+    // The known recordings are short; use a longer copy of s02 for the row-1234 example.
+    let mut long = known_recordings();
+    long[2].tracks = vec![track(0, 0..1500, 200.0, |t| 0.1 - 0.25 * t)];
+    let files = edit_trajectory(&long, 1232, |l| set_field(l, 4, "abc"));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 1234, column z_m: \"abc\" is not a number; write a finite number in metres"],
+    );
+    let files = edit_trajectory(&recs, 3, |l| set_field(l, 3, "inf"));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 5, column t_s: inf is not a finite number"],
+    );
+    let files = edit_trajectory(&recs, 3, |l| set_field(l, 2, "4.5"));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 5, column frame: \"4.5\" is not a whole number"],
+    );
+    let mut files = interchange_csv(&recs);
+    let runs = runs_csv(&recs).replace("s01,single,316,0.004,200", "s01,single,316,0.004,NaN");
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 3, column fps: NaN is not a finite number"],
+    );
+}
+
+#[test]
+fn duplicate_sample_is_named_with_both_rows() {
+    let recs = known_recordings();
+    let mut lines = trajectory_lines(&recs);
+    lines.push(lines[9].clone()); // row 11 again, at the end
+    let n = lines.len();
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    assert_mentions(
+        &run_err(&files),
+        &[&format!(
+            "trajectories.csv row {}, column run, particle, frame: duplicate of row 11: run \"c01\", particle 0, frame 9 appears twice; delete one",
+            n + 1
+        )],
+    );
+}
+
+#[test]
+fn too_few_frames_is_named() {
+    let mut recs = known_recordings();
+    recs[2].tracks = vec![track(0, 0..12, 200.0, |t| 0.1 - 0.25 * t)];
+    let files = interchange_csv(&recs);
+    // s02's first sample is data line 70 + 56 + 77 + 1 = 204, row 205
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 205, column frame: run \"s02\" has 12 frames of particle 0 (the particle), fewer than min_frames = 20"],
+    );
+    // A collision run whose target was never tracked.
+    let mut recs = known_recordings();
+    recs[0].tracks.truncate(1);
+    assert_mentions(
+        &run_err(&interchange_csv(&recs)),
+        &["trajectories.csv row 2, column frame: run \"c01\" has 0 frames of particle 1 (the target)"],
+    );
+}
+
+#[test]
+fn unknown_experiment_and_particle_are_named() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "runs.csv".into(),
+        runs_csv(&recs)
+            .replace("s02,single", "s02,triple")
+            .into_bytes(),
+    );
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 4, column experiment: \"triple\" is not a known experiment kind; write single"],
+    );
+    // particle 1 in a single run (s01 starts at 0-based data line 126, row 128)
+    let files = edit_trajectory(&recs, 126, |l| set_field(l, 1, "1"));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 128, column particle: particle 1 in run \"s01\", but a single run has only particle 0"],
+    );
+}
+
+#[test]
+fn parquet_problems_name_the_data_row() {
+    let recs = known_recordings();
+    let mut files = interchange_parquet(&recs);
+    let mut df = ParquetReader::new(Cursor::new(files["trajectories.parquet"].clone()))
+        .finish()
+        .unwrap();
+    let mut z: Vec<f64> = df
+        .column("z_m")
+        .unwrap()
+        .f64()
+        .unwrap()
+        .into_no_null_iter()
+        .collect();
+    z[41] = f64::NAN;
+    df.replace("z_m", Column::new("z_m".into(), z)).unwrap();
+    files.insert("trajectories.parquet".into(), parquet_bytes(df));
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.parquet row 42, column z_m: NaN is not a finite number"],
+    );
+}
+
+#[test]
+fn blank_lines_do_not_shift_row_numbers() {
+    let recs = known_recordings();
+    let mut lines = trajectory_lines(&recs);
+    lines[4] = set_field(&lines[4], 4, "x1");
+    lines.insert(2, String::new()); // a blank line: data line 4 is now on row 7
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    assert_mentions(
+        &run_err(&files),
+        &["trajectories.csv row 7, column z_m: \"x1\" is not a number"],
+    );
+}
+
+#[test]
+fn skip_bad_runs_drops_and_lists_the_bad_runs_only() {
+    let recs = known_recordings();
+    let files = edit_trajectory(&recs, 130, |l| set_field(l, 4, "abc")); // in s01, row 132
+    let mut p = params();
+    p.skip_bad_runs = true;
+    let got = ingest::ingest(&files, &p).unwrap();
+    let want: Vec<Recording> = expected()
+        .into_iter()
+        .filter(|r| r.info.run != "s01")
+        .collect();
+    assert_eq!(got.recordings, want);
+    assert_eq!(got.skipped.len(), 1);
+    assert_eq!(got.skipped[0].run, "s01");
+    assert_mentions(
+        &got.skipped[0].reason,
+        &["trajectories.csv row 132, column z_m"],
+    );
+    // The same through the stage: the skipped output lists it.
+    let params_toml: toml::Table = toml::from_str("skip_bad_runs = true").unwrap();
+    let out = stage_outputs(&files, &params_toml);
+    let Artifact::File(skipped) = &out["skipped"] else {
+        panic!()
+    };
+    let list: serde_json::Value = serde_json::from_slice(skipped).unwrap();
+    assert_eq!(list[0]["run"], "s01");
+    // Without the flag the error says how to leave the run out.
+    assert_mentions(&run_err(&files), &["skip_bad_runs = true"]);
+}
+
+#[test]
+fn problems_outside_any_run_are_never_skipped() {
+    let recs = known_recordings();
+    let files = edit_trajectory(&recs, 5, |l| set_field(l, 0, ""));
+    let mut p = params();
+    p.skip_bad_runs = true;
+    let e = ingest::ingest(&files, &p).unwrap_err().to_string();
+    assert_mentions(&e, &["trajectories.csv row 7, column run: is empty"]);
+}
+
+#[test]
+fn stage_params_are_typed_with_defaults() {
+    let kind = Ingest;
+    let json = kind.canonical_params(&toml::Table::new()).unwrap();
+    assert_eq!(json["format"], "auto");
+    assert_eq!(json["min_frames"], 20);
+    assert_eq!(json["skip_bad_runs"], false);
+    let unknown: toml::Table = toml::from_str("formt = \"auto\"").unwrap();
+    assert!(kind
+        .canonical_params(&unknown)
+        .unwrap_err()
+        .to_string()
+        .contains("formt"));
+    let bad: toml::Table = toml::from_str("calibration = { direction = 2 }").unwrap();
+    assert!(kind
+        .canonical_params(&bad)
+        .unwrap_err()
+        .to_string()
+        .contains("calibration.direction"));
+    let ints: toml::Table = toml::from_str(
+        "format = \"trackpy\"\ncalibration = { fps = 200, m_per_px = 1e-5, axis = \"y\" }",
+    )
+    .unwrap();
+    let json = kind.canonical_params(&ints).unwrap();
+    assert_eq!(json["calibration"]["fps"], 200.0);
+}
+
+// ---------------------------------------------------------------- other trackers
+
+/// Ingests tracker exports of `recs` (all of one experiment kind) and compares with the
+/// interchange recordings: same frames and metadata, t and z within 1e-12 (relative to 1 m / 1 s).
+fn check_tracker(format: Format, experiment: Experiment, cal: Cal) {
+    let recs: Vec<Recording> = known_recordings()
+        .into_iter()
+        .filter(|r| r.info.experiment == experiment)
+        .map(|mut r| {
+            r.info.material = "316".into();
+            r
+        })
+        .collect();
+    let mut files = Files::new();
+    for (k, r) in recs.iter().enumerate() {
+        let bytes = match format {
+            Format::Trackpy => to_trackpy(r, &cal),
+            _ => to_trackmate(r, &cal, 200.0, k as u64),
+        };
+        files.insert(format!("{}.csv", r.info.run), bytes);
+    }
+    files.insert("notes.txt".into(), b"not a table".to_vec());
+    let mut p = params();
+    p.calibration.m_per_px = Some(cal.m_per_px);
+    p.calibration.fps = Some(200.0);
+    p.calibration.axis = cal.axis;
+    p.calibration.direction = cal.direction as i8;
+    p.calibration.material = Some("316".into());
+    p.calibration.diameter_m = Some(0.004);
+    p.calibration.experiment = experiment;
+    p.calibration.setup = recs[0].info.setup;
+    let from_interchange = run_ok(&interchange_csv(&recs), &params());
+    for fmt in [Format::Auto, format] {
+        p.format = fmt;
+        let got = run_ok(&files, &p);
+        assert_eq!(got.len(), from_interchange.len());
+        for (g, w) in got.iter().zip(&from_interchange) {
+            assert_eq!(g.info, w.info);
+            assert_eq!(g.tracks.len(), w.tracks.len());
+            for (gt, wt) in g.tracks.iter().zip(&w.tracks) {
+                assert_eq!(gt.particle, wt.particle);
+                assert_eq!(gt.frame, wt.frame);
+                for k in 0..gt.frame.len() {
+                    assert!((gt.t_s[k] - wt.t_s[k]).abs() < 1e-12, "{format:?} t");
+                    assert!(
+                        (gt.z_m[k] - wt.z_m[k]).abs() < 1e-12,
+                        "{format:?} z {} vs {}",
+                        gt.z_m[k],
+                        wt.z_m[k]
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn trackpy_gives_the_interchange_recordings() {
+    let cal = Cal {
+        m_per_px: 2.5e-5,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    check_tracker(Format::Trackpy, Experiment::Single, cal);
+    let cal = Cal {
+        m_per_px: 4.0e-5,
+        axis: Axis::Y,
+        direction: -1.0,
+    };
+    check_tracker(Format::Trackpy, Experiment::Collision, cal);
+}
+
+#[test]
+fn trackmate_gives_the_interchange_recordings() {
+    let cal = Cal {
+        m_per_px: 2.5e-5,
+        axis: Axis::Y,
+        direction: -1.0,
+    };
+    check_tracker(Format::Trackmate, Experiment::Single, cal);
+    let cal = Cal {
+        m_per_px: 1.0e-4,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    check_tracker(Format::Trackmate, Experiment::Collision, cal);
+}
+
+#[test]
+fn tracker_files_need_a_calibration() {
+    let rec = &known_recordings()[1];
+    let cal = Cal {
+        m_per_px: 1e-5,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    let files = Files::from([("s01.csv".to_string(), to_trackpy(rec, &cal))]);
+    let e = run_err(&files);
+    assert_mentions(
+        &e,
+        &["calibration.m_per_px", "calibration.fps", "pipeline.toml"],
+    );
+}
+
+#[test]
+fn tracker_collision_with_a_third_track_is_named() {
+    let rec = &known_recordings()[0];
+    let cal = Cal {
+        m_per_px: 1e-4,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    let mut text = String::from_utf8(to_trackpy(rec, &cal)).unwrap();
+    text += "999,240.5,100.0,1.0,2.0,0.1,3.0,4.0,0.1,5,12\n";
+    let files = Files::from([("c01.csv".to_string(), text.into_bytes())]);
+    let mut p = params();
+    p.calibration.m_per_px = Some(1e-4);
+    p.calibration.fps = Some(200.0);
+    p.calibration.material = Some("316".into());
+    p.calibration.diameter_m = Some(0.004);
+    p.calibration.experiment = Experiment::Collision;
+    let e = ingest::ingest(&files, &p).unwrap_err().to_string();
+    assert_mentions(
+        &e,
+        &["c01.csv row 1, column particle: 3 linked tracks (ids 3, 7, 12)"],
+    );
+}
+
+#[test]
+fn trackmate_bad_value_names_the_file_row() {
+    let rec = &known_recordings()[1];
+    let cal = Cal {
+        m_per_px: 1e-5,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    let text = String::from_utf8(to_trackmate(rec, &cal, 200.0, 9)).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    lines[10] = set_field(&lines[10], 4, "1x2");
+    let files = Files::from([(
+        "s01.csv".to_string(),
+        (lines.join("\n") + "\n").into_bytes(),
+    )]);
+    let mut p = params();
+    p.format = Format::Trackmate;
+    p.calibration.m_per_px = Some(1e-5);
+    p.calibration.fps = Some(200.0);
+    p.calibration.material = Some("316".into());
+    p.calibration.diameter_m = Some(0.004);
+    let e = ingest::ingest(&files, &p).unwrap_err().to_string();
+    // line index 10 is row 11 of the file (four header rows count as rows)
+    assert_mentions(
+        &e,
+        &["s01.csv row 11, column POSITION_X: \"1x2\" is not a number"],
+    );
+}
