@@ -36,13 +36,16 @@ impl StageKind for Report {
         "report"
     }
     fn inputs(&self) -> &'static [&'static str] {
-        &["figures", "runs", "fits"]
+        &["figures"]
     }
     fn optional_inputs(&self) -> &'static [&'static str] {
         &[
+            "runs",
+            "fits",
             "fits_csv",
             "summary",
             "residuals",
+            "comparison",
             "diagnosis",
             "validation",
             "provenance",
