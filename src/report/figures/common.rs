@@ -216,6 +216,18 @@ pub fn span(values: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
+/// Like `span`, over the central part of the values (quantiles `q` and 1 − `q`), so a few wild
+/// per-run estimates (e.g. μ of the slowest runs, barely constrained) do not squash the axis.
+pub fn robust_span(values: impl IntoIterator<Item = f64>, q: f64, pad: f64) -> (f64, f64) {
+    let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+    if v.len() < 10 {
+        return span(v, pad);
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    span([at(q), at(1.0 - q)], pad)
+}
+
 /// Least-squares line y = a + b x; None with fewer than two distinct x.
 pub fn ols(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
     let n = pts.len() as f64;

@@ -79,7 +79,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
                 .filter_map(|r| Some((r.v0_mps.value.abs(), r.t_drag_s.value, r.t_drag_s.stderr?)))
-                .filter(|(_, t, e)| t - e > 0.0)
+                .filter(|(_, t, e)| t - e > y_lo && t + e < y_hi)
                 .collect();
             super::common::error_bars(&mut c, &bars, col)?;
             scatter(

@@ -1,7 +1,7 @@
 //! Fig. 4.2d: fitted μ_pg against |v0| for each material, our means for |v0| > 0.03 m/s (solid) and the
 //! chapter's means (dashed).
 
-use super::common::{error_bars, legend, line, linear_chart, render, scatter, span};
+use super::common::{error_bars, legend, line, linear_chart, render, robust_span, scatter, span};
 use crate::report::inputs::ReportData;
 use crate::report::summary::mu_fast;
 use crate::report::{chapter, style};
@@ -27,7 +27,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
         .map(|r| r.mu.value)
         .collect();
     ys.extend([chapter::MU_316, chapter::MU_440C]);
-    let (lo, hi) = span(ys, 0.08);
+    let (lo, hi) = robust_span(ys, 0.03, 0.08);
     let yr = (lo.min(0.2), hi.max(0.4));
     let svg = render(|root| {
         let mut c = linear_chart(
@@ -49,22 +49,33 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
         )?;
         for (i, m) in mats.iter().enumerate() {
             let col = style::material_colour(m, i);
-            let pts: Vec<(f64, f64)> = d
+            // runs whose μ falls off the axis are counted in the legend; error bars longer than
+            // a quarter of the axis (barely constrained μ of the slowest runs) are left out
+            let inside = |y: f64| y >= yr.0 && y <= yr.1;
+            let all: Vec<(f64, f64)> = d
                 .singles_of(m)
                 .map(|r| (r.v0_mps.value.abs(), r.mu.value))
                 .collect();
+            let pts: Vec<(f64, f64)> = all.iter().copied().filter(|p| inside(p.1)).collect();
+            let off = all.len() - pts.len();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
                 .filter_map(|r| Some((r.v0_mps.value.abs(), r.mu.value, r.mu.stderr?)))
+                .filter(|b| inside(b.1) && b.2 < 0.25 * (yr.1 - yr.0))
                 .collect();
             error_bars(&mut c, &bars, col)?;
+            let label = if off > 0 {
+                format!("{m}: fitted μ_pg ({off} off scale)")
+            } else {
+                format!("{m}: fitted μ_pg")
+            };
             scatter(
                 &mut c,
                 &pts,
                 style::marker(m, false),
                 col,
                 true,
-                Some(&format!("{m}: fitted μ_pg")),
+                Some(&label),
             )?;
             if let Some(a) = mu_fast(d, m) {
                 let v = a.est.value;
