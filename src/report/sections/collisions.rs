@@ -90,7 +90,7 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             vec!["μ_pp lower bound from stick impacts".into()],
             format!("> {lb:.2}"),
             "—".into(),
-            &["__none__"],
+            &["mu_pp"],
         ));
     }
     if let Some(a) = mu_pp(d, k) {

@@ -134,6 +134,16 @@ pub fn block(d: &ReportData) -> Block {
         .map(summary_notes)
         .filter(|n| !n.is_empty())
     {
+        let notes: Vec<String> = notes
+            .iter()
+            .map(|n| {
+                if n.ends_with('.') {
+                    n.clone()
+                } else {
+                    format!("{n}.")
+                }
+            })
+            .collect();
         b.para(format!("Notes of the aggregate stage: {}", notes.join(" ")));
     }
     if d.skipped.is_empty() && failed.is_empty() && coll_failed.is_empty() {

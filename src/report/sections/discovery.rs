@@ -66,7 +66,7 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
 
 /// What the truth file of a synthetic dataset says about the concealed physics (validation.json
 /// `effects`), and each accepted parameter beside the truth term's parameter of the same name.
-fn truth_block(b: &mut Block, diag: &Value, validation: &Value) {
+fn truth_block(b: &mut Block, d: &ReportData, diag: &Value, validation: &Value) {
     let Some(effects) = validation.get("effects") else {
         return;
     };
@@ -137,8 +137,14 @@ fn truth_block(b: &mut Block, diag: &Value, validation: &Value) {
                 (Some(v), None) => sig(v, 4),
                 _ => "—".into(),
             };
+            // per-material parameters (`t0_s_316`) compare with the truth term's `t0_s`
+            let base = d
+                .materials()
+                .iter()
+                .find_map(|m| name.strip_suffix(&format!("_{m}")).map(str::to_string))
+                .unwrap_or_else(|| name.clone());
             let truth = term
-                .and_then(|t| num(t, &[name]))
+                .and_then(|t| num(t, &[name, &base]))
                 .map_or("—".into(), |x| sig(x, 4));
             t.push(vec![effect.replace('_', " "), name.clone(), ours, truth]);
         }
@@ -202,7 +208,16 @@ fn structure_table(diag: &Value) -> Option<Table> {
             continue;
         };
         for (name, bin) in bins {
-            let a = after.and_then(|a| a.get(key)).and_then(|m| m.get(name));
+            // bins are matched by name, else by their index prefix (`2: …`), as edges may shift
+            let a = after.and_then(|a| a.get(key)).and_then(|m| {
+                m.get(name).or_else(|| {
+                    let idx = name.split(':').next()?;
+                    m.as_object()?
+                        .iter()
+                        .find(|(k, _)| k.split(':').next() == Some(idx))
+                        .map(|(_, v)| v)
+                })
+            });
             t.push(vec![
                 label.into(),
                 name.clone(),
@@ -297,26 +312,107 @@ fn param(f: &Value, names: &[&str]) -> Option<f64> {
     f.get("parameters").and_then(|p| num(p, names))
 }
 
+/// A parameter that may be fitted per material (`t0_s`, or `t0_s_316`, `t0_s_440c`), as text with
+/// `unit`, e.g. "0.0540 s (316), 0.0540 s (440c)".
+fn param_text(f: &Value, name: &str, unit: &str) -> Option<String> {
+    let Some(Value::Object(ps)) = f.get("parameters") else {
+        return None;
+    };
+    let parts: Vec<String> = ps
+        .iter()
+        .filter_map(|(k, v)| {
+            let x = as_num(v)?;
+            if k == name {
+                Some(format!("{} {unit}", sig(x, 3)))
+            } else {
+                let m = k.strip_prefix(name)?.strip_prefix('_')?;
+                Some(format!("{} {unit} ({m})", sig(x, 3)))
+            }
+        })
+        .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
+/// Where discovery located the mismatch, in words: the worst residual bins, the residual structure,
+/// and the drift probes before and after (falls back to a compact dump for other layouts).
+fn where_text(w: &Value) -> String {
+    let mut parts = Vec::new();
+    if let Some(r) = w.get("residuals_before") {
+        if let Some(bins) = r.get("largest_residuals").and_then(Value::as_array) {
+            let list: Vec<String> = bins
+                .iter()
+                .filter_map(|b| {
+                    Some(format!(
+                        "{} ({:.1}× noise)",
+                        text(b, &["bin"])?,
+                        num(b, &["rms_over_noise"])?
+                    ))
+                })
+                .collect();
+            if !list.is_empty() {
+                parts.push(format!("largest baseline residuals in {}", list.join(", ")));
+            }
+        }
+        if let (Some(z), Some(a)) = (num(r, &["runs_test_z"]), num(r, &["lag1_autocorrelation"])) {
+            parts.push(format!("residuals correlated within runs (runs test z = {z:.0}, lag-1 autocorrelation {a:.2})"));
+        }
+    }
+    for (key, when) in [
+        ("drift_probes_before", "before"),
+        ("drift_probes_after", "after"),
+    ] {
+        let Some(list) = w.get(key).and_then(Value::as_array) else {
+            continue;
+        };
+        let probes: Vec<String> = list
+            .iter()
+            .filter_map(|p| {
+                let name = text(p, &["probe"])?
+                    .trim_start_matches("probe: ")
+                    .to_string();
+                let params = params_text(p);
+                let ph = num(p, &["p_holm"])
+                    .map_or(String::new(), |x| format!(", p (Holm) = {}", sig(x, 2)));
+                Some(format!("{name} [{params}{ph}]"))
+            })
+            .collect();
+        if !probes.is_empty() {
+            parts.push(format!(
+                "drift probes {when} the accepted physics: {}",
+                probes.join("; ")
+            ));
+        }
+    }
+    if parts.is_empty() {
+        short(w, 8)
+    } else {
+        parts.join("; ")
+    }
+}
+
 /// How an accepted finding relates to the chapter's Eq. 4.8 correction, in words and numbers.
-fn compare_with_eq_4_8(f: &Value) -> String {
+fn compare_with_eq_4_8(d: &ReportData, f: &Value) -> String {
     let effect = text(f, &["effect"]).unwrap_or("");
     let form = text(f, &["form"]).unwrap_or("").to_ascii_lowercase();
     let v_star = ch::L_M / ch::T0_S * 1e3;
     match effect {
         "velocity_dependent_drag" if form.contains("satur") => {
-            let t0 = param(f, &["t0_s", "T0_s", "T0"]);
-            let tp = param(f, &["tp_s_per_mps", "t_prime_s_per_mps", "Tp_s_per_mps", "tp"]);
+            let t0 = param_text(f, "t0_s", "s");
+            let tp = param_text(f, "tp_s_per_mps", "s per m/s");
+            let per_run = crate::report::summary::t_line(d, None)
+                .map(|(_, b)| format!(" The per-run linear-drag fits average T0 + T'|v| over a run whose speed decays from v0, so their T rises with v0 with a smaller slope ({} s per m/s here, 1.10 in the chapter) than the T' of the law itself.", sig(b.est.value, 3)))
+                .unwrap_or_default();
             format!(
-                "The accepted drag v/(T0 + T'|v|) is the form the chapter's line T = T0 + T'·v0 suggests before Eq. 4.7 truncates it. Ours: T0 = {}, T' = {} (chapter 0.052 s and 1.10 s per m/s). Unlike Eq. 4.8's v/T0 − v²/L, it stays dissipative at every speed; Eq. 4.8 turns into propulsion above L/T0 = {v_star:.0} mm/s.",
-                t0.map_or("—".into(), |x| format!("{} s", sig(x, 3))),
-                tp.map_or("—".into(), |x| format!("{} s per m/s", sig(x, 3)))
+                "The accepted drag v/(T0 + T'|v|) is the form the chapter's line T = T0 + T'·v0 suggests before Eq. 4.7 truncates it. Ours: T0 = {}, T' = {} (chapter 0.052 s and 1.10 s per m/s).{per_run} Unlike Eq. 4.8's v/T0 − v²/L, it stays dissipative at every speed; Eq. 4.8 turns into propulsion above L/T0 = {v_star:.0} mm/s.",
+                t0.unwrap_or_else(|| "—".into()),
+                tp.unwrap_or_else(|| "—".into())
             )
         }
         "velocity_dependent_drag" => {
-            let c = param(f, &["c_per_m", "c"]);
+            let c = param_text(f, "c_per_m", "per m").or_else(|| param_text(f, "c", "per m"));
             format!(
                 "The accepted quadratic drag c·v|v| has c = {} (Eq. 4.8's −v²/L corresponds to c = −1/L = −400 per m). A fitted sign and size, unlike Eq. 4.8's, is what the data support; Eq. 4.8 with L = 2.5 mm changes sign at {v_star:.0} mm/s.",
-                c.map_or("—".into(), |x| format!("{} per m", sig(x, 3)))
+                c.unwrap_or_else(|| "—".into())
             )
         }
         "rolling_resistance" => format!(
@@ -362,7 +458,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             .filter(|w| !w.is_null() && w.as_object().is_none_or(|o| !o.is_empty()))
         {
             let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
-            b.para(format!("Where ({effect}): {}.", short(w, 8)));
+            b.para(format!("Where ({effect}): {}.", where_text(w)));
             break;
         }
     }
@@ -445,10 +541,10 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.table(t);
     }
     if let Some(v) = &d.validation {
-        truth_block(&mut b, diag, v);
+        truth_block(&mut b, d, diag, v);
     }
     b.para(match accepted.first() {
-        Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(f)),
+        Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(d, f)),
         None => "Comparison with the chapter's correction (Eq. 4.8): with nothing accepted there is no extended model to compare; Eq. 4.8's v/T0 − v²/L is in any case unphysical above L/T0 ≈ 48 mm/s (see the audit).".into(),
     });
     b

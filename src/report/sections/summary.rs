@@ -82,6 +82,16 @@ pub fn block(d: &ReportData) -> Block {
             "1.4".into(),
             a.source.into(),
         ]);
+    } else if let Some(lb) = crate::report::summary::at(
+        d.summary.as_ref(),
+        &["collisions", "mu_pp", "stick_lower_bound"],
+    ) {
+        t.push(vec![
+            "μ_pp (only bounded: no slip impact resolved)".into(),
+            format!("> {lb:.2}"),
+            "1.4".into(),
+            "stick impacts".into(),
+        ]);
     }
     if !t.rows.is_empty() {
         b.table(t);
