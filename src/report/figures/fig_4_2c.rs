@@ -8,6 +8,11 @@ use crate::report::style;
 use crate::report::summary::t_line;
 use plotters::prelude::*;
 
+/// A straight line T(v) sampled densely: on a log axis it is a curve, not a segment.
+fn sampled(x_max: f64, f: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
+    (0..=60).map(|i| x_max * i as f64 / 60.0).map(|v| (v, f(v))).collect()
+}
+
 /// Tick label of a log axis: only 1, 2 and 5 times a power of ten are written.
 fn log_label(y: &f64) -> String {
     let e = y.log10().floor();
@@ -92,15 +97,12 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             )?;
             if let Some((a, b)) = t_line(d, Some(m)) {
                 let (a, b) = (a.est.value, b.est.value);
-                let pts = vec![(0.0, a), (x_max, a + b * x_max)];
+                let pts = sampled(x_max, |v| a + b * v);
                 let label = format!("{m}: T = {a:.3} + {b:.2}·v0");
                 line(&mut c, pts, col, 2, false, Some(&label))?;
             }
         }
-        let ch = vec![
-            (0.0, chapter::t_line_s(0.0)),
-            (x_max, chapter::t_line_s(x_max)),
-        ];
+        let ch = sampled(x_max, chapter::t_line_s);
         line(
             &mut c,
             ch,

@@ -161,9 +161,11 @@ pub fn render_bc(
                 .map(|(a, _)| a.est.value);
             if let Some(a) = fitted.or_else(|| restitution_slope(p)) {
                 let label = format!("{setup}: C = 1 − {a:.2}·v");
+                // drawn over the measured speeds only, not extrapolated
+                let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
                 line(
                     &mut c,
-                    vec![(0.0, 1.0), (v_max, 1.0 - a * v_max)],
+                    vec![(0.0, 1.0), (v_hi, 1.0 - a * v_hi)],
                     col,
                     2,
                     false,
