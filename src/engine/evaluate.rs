@@ -69,6 +69,8 @@ pub struct Evaluated {
     pub current: Option<LockStage>,
     /// Upstream stages whose outputs are unknown.
     pub waiting_on: Vec<String>,
+    /// While waiting: the key parts known without the inputs (kind, params, cmd, code, seed).
+    pub pending: Option<LockStage>,
     /// Every key has a complete entry in the store, so `current.outputs` is known.
     pub complete: bool,
     /// Keys that had no entry when the evaluation began (item names; `None` = the whole stage).
@@ -100,12 +102,13 @@ pub fn stage_seed(seed: u64, stage: &str) -> u64 {
 
 /// Evaluate the selected stages wave by wave. Failed stages are reported and their
 /// descendants wait; independent stages still complete.
-/// `after_wave` sees the results so far after every wave (the runner saves `pipeline.lock` there).
+/// `after_wave` sees the results so far and the names in the wave just done (the runner saves
+/// `pipeline.lock` there).
 pub fn evaluate(
     ctx: &Context,
     selected: &BTreeSet<String>,
     action: impl Fn(&str) -> Action + Sync,
-    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>),
+    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>, &[String]),
 ) -> (BTreeMap<String, Evaluated>, Vec<EngineError>) {
     let waves = dag::order(ctx.pipeline).expect("validated pipelines have no cycle");
     let mut done: BTreeMap<String, Evaluated> = BTreeMap::new();
@@ -138,7 +141,7 @@ pub fn evaluate(
                 }
             }
         }
-        after_wave(&done);
+        after_wave(&done, &wave);
     }
     (done, errors)
 }
@@ -199,9 +202,24 @@ fn evaluate_stage(
             InputSpec::Provenance => {}
         }
     }
+    let code = ctx.catalog.fingerprint(&spec.kind);
+    let seed = stage_seed(pipeline.seed, &spec.name);
+    let parts = |inputs: BTreeMap<String, Stored>| LockStage {
+        kind: spec.kind.clone(),
+        key: String::new(),
+        code: code.to_string(),
+        groove_version: ctx.catalog.version.clone(),
+        seed,
+        params: spec.canonical_params.clone(),
+        cmd: spec.cmd.clone(),
+        inputs,
+        outputs: BTreeMap::new(),
+        items: BTreeMap::new(),
+    };
     if !waiting.is_empty() {
         return Ok(Evaluated {
             waiting_on: waiting.into_iter().collect(),
+            pending: Some(parts(BTreeMap::new())),
             ..Evaluated::default()
         });
     }
@@ -221,8 +239,6 @@ fn evaluate_stage(
         }
     }
 
-    let code = ctx.catalog.fingerprint(&spec.kind);
-    let seed = stage_seed(pipeline.seed, &spec.name);
     let digests: BTreeMap<String, String> = bound
         .iter()
         .map(|(n, b)| (n.clone(), b.stored.digest()))
@@ -243,26 +259,49 @@ fn evaluate_stage(
     };
     let units: Vec<(Option<String>, String)> = match &spec.foreach {
         None => vec![(None, key_of(&digests, None))],
-        Some(f) => match bound.get(f).map(|b| &b.stored) {
-            None => Vec::new(),
-            Some(Stored::File { .. }) => {
-                return Err(EngineError::StageFailed {
-                    stage: spec.name.clone(),
-                    item: None,
-                    message: format!(
-                        "foreach input `{f}` is a single file; bind it to a folder or to a per-item output"
-                    ),
-                })
+        Some(f) => {
+            // every per-item input (present) as item → hash; the first one names the items
+            let mut per_item: Vec<(&String, &BTreeMap<String, String>)> = Vec::new();
+            for name in std::iter::once(f).chain(&spec.foreach_with) {
+                match bound.get(name).map(|b| &b.stored) {
+                    None => {}
+                    Some(Stored::Collection { items }) => per_item.push((name, items)),
+                    Some(Stored::File { .. }) => {
+                        return Err(EngineError::StageFailed {
+                            stage: spec.name.clone(),
+                            item: None,
+                            message: format!(
+                                "foreach input `{name}` is a single file; bind it to a folder or to a per-item output"
+                            ),
+                        })
+                    }
+                }
             }
-            Some(Stored::Collection { items }) => items
-                .iter()
-                .map(|(item, h)| {
-                    let mut d = digests.clone();
-                    d.insert(f.clone(), h.clone());
-                    (Some(item.clone()), key_of(&d, Some(item)))
-                })
-                .collect(),
-        },
+            match per_item.first() {
+                Some((first, items)) if *first == f => {
+                    let mut units = Vec::new();
+                    for item in items.keys() {
+                        let mut d = digests.clone();
+                        for (name, items) in &per_item {
+                            let Some(h) = items.get(item) else {
+                                return Err(EngineError::StageFailed {
+                                    stage: spec.name.clone(),
+                                    item: Some(item.clone()),
+                                    message: format!(
+                                        "per-item input `{name}` has no item `{item}`; the inputs in `foreach` must have the same items"
+                                    ),
+                                });
+                            };
+                            d.insert((*name).clone(), h.clone());
+                        }
+                        units.push((Some(item.clone()), key_of(&d, Some(item))));
+                    }
+                    units
+                }
+                // the primary per-item input is an absent optional input: no items
+                _ => Vec::new(),
+            }
+        }
     };
 
     let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
@@ -280,18 +319,17 @@ fn evaluate_stage(
         if !todo.is_empty() {
             ctx.progress.started(&spec.name, todo.len());
             let shared = load_shared(ctx, spec, &bound)?;
+            let finished = std::sync::atomic::AtomicUsize::new(0);
             let results: Vec<Result<Entry, EngineError>> = todo
                 .par_iter()
                 .map(|&i| {
-                    execute(
-                        ctx,
-                        spec,
-                        &bound,
-                        &shared,
-                        units[i].0.as_deref(),
-                        &units[i].1,
-                        seed,
-                    )
+                    let (item, key) = (units[i].0.as_deref(), &units[i].1);
+                    let result = execute(ctx, spec, &bound, &shared, item, key, seed);
+                    if spec.foreach.is_some() {
+                        let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                        ctx.progress.item_done(&spec.name, n, todo.len());
+                    }
+                    result
                 })
                 .collect();
             for (&i, r) in todo.iter().zip(results) {
@@ -334,16 +372,10 @@ fn evaluate_stage(
         Some(_) => items_digest(&items),
     };
     let current = LockStage {
-        kind: spec.kind.clone(),
         key,
-        code: code.to_string(),
-        groove_version: ctx.catalog.version.clone(),
-        seed,
-        params: spec.canonical_params.clone(),
-        cmd: spec.cmd.clone(),
-        inputs: bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
         outputs,
         items,
+        ..parts(bound.into_iter().map(|(n, b)| (n, b.stored)).collect())
     };
 
     let mut stale_outputs = Vec::new();
@@ -377,6 +409,7 @@ fn evaluate_stage(
     Ok(Evaluated {
         current: Some(current),
         waiting_on: Vec::new(),
+        pending: None,
         complete,
         missing,
         executed,
@@ -393,7 +426,7 @@ fn load_shared(
 ) -> Result<BTreeMap<String, Artifact>, EngineError> {
     let mut out = BTreeMap::new();
     for (name, b) in bound {
-        if spec.foreach.as_deref() == Some(name.as_str()) {
+        if spec.is_item_input(name) {
             continue;
         }
         let artifact = match &b.source {
@@ -421,11 +454,12 @@ fn execute(
         item: item.map(str::to_string),
         message,
     };
-    let item_artifact = match (&spec.foreach, item) {
-        (Some(f), Some(item)) => {
-            let b = &bound[f];
+    let mut item_artifacts: Vec<(&str, Artifact)> = Vec::new();
+    if let Some(item) = item {
+        for name in spec.foreach.iter().chain(&spec.foreach_with) {
+            let Some(b) = bound.get(name) else { continue };
             let Stored::Collection { items } = &b.stored else {
-                unreachable!("checked above")
+                unreachable!("checked when the keys were made")
             };
             let bytes = match &b.source {
                 Source::Path(dir) => {
@@ -441,26 +475,39 @@ fn execute(
                 }
                 _ => ctx.store.read_object(&items[item])?,
             };
-            Some((f.as_str(), Artifact::File(bytes)))
+            item_artifacts.push((name.as_str(), Artifact::File(bytes)));
         }
-        _ => None,
-    };
+    }
     let mut inputs: BTreeMap<&str, &Artifact> =
         shared.iter().map(|(k, v)| (k.as_str(), v)).collect();
-    if let Some((name, artifact)) = &item_artifact {
+    for (name, artifact) in &item_artifacts {
         inputs.insert(name, artifact);
     }
     let outputs: StageOutputs = if spec.kind == "command" {
         command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
-        kind.run(&StageInput {
+        let input = StageInput {
             params: &spec.params,
             inputs,
             item,
             seed,
-        })
-        .map_err(|e| failed(e.to_string()))?
+        };
+        // a panicking kind fails its stage; the other stages and the store are unaffected
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
+            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return Err(failed(format!(
+                    "kind `{}` panicked ({what}); this is a bug in groove, please report it",
+                    spec.kind
+                )));
+            }
+        }
     };
     for name in spec.outputs.keys() {
         match outputs.get(name) {

@@ -1,0 +1,31 @@
+//! Collision runs: split both tracks at the impacts, fit each phase with the closed-form motion
+//! (nonzero initial spin), recover velocities and spins before and after every impact, and
+//! summarize μ_pp and the coefficient of restitution over a dataset.
+//!
+//! Code map: `fit` (entry) → `detect` (noise, departure from rest, contacts in the gap) →
+//! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
+//! (the joint piecewise model) → `lm` (robust solver) → `report` (the per-run record, `types`).
+//! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
+//! form, `impulse` is the impact model, `trajectory` evaluates a fitted run for figures.
+
+pub mod curves;
+pub mod detect;
+mod fit;
+pub mod impulse;
+pub mod lm;
+pub mod model;
+pub mod motion;
+pub mod mu_pp;
+mod options;
+pub mod plan;
+mod report;
+mod secondary;
+mod start;
+pub mod summary;
+mod trajectory;
+pub mod types;
+
+pub use fit::fit_collision;
+pub use options::CollisionOptions;
+pub use summary::{summarize, summarize_seeded, CollisionSummary};
+pub use types::CollisionFit;

@@ -1,0 +1,191 @@
+//! Re-simulation of a run with its fitted parameters: per-frame residuals, phase and outlier flag
+//! (the `simulate` stage's item, read by `compare` and the discovery). Single runs use the fitted
+//! baseline; collision runs each fitted piece between impacts (both particles).
+
+use super::collision::CollisionFit;
+use super::single::SingleFit;
+use super::RunFit;
+use crate::physics::{self, Baseline, Groove};
+use crate::recording::{Experiment, Recording};
+use serde::{Deserialize, Serialize};
+
+/// The motion regime of the fitted model at a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Phase {
+    Sliding,
+    Rolling,
+    Rest,
+}
+
+impl From<physics::Phase> for Phase {
+    fn from(p: physics::Phase) -> Phase {
+        match p {
+            physics::Phase::Sliding => Phase::Sliding,
+            physics::Phase::Rolling => Phase::Rolling,
+            physics::Phase::Rest => Phase::Rest,
+        }
+    }
+}
+
+/// Residuals of one run, column-wise (one entry per frame of the fitted track).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunResiduals {
+    pub run: String,
+    pub material: String,
+    pub experiment: Experiment,
+    /// +1 for motion towards +z, −1 towards −z, 0 if not fitted.
+    pub direction: i8,
+    /// `ok`, or why there are no residuals (`skipped: …`).
+    pub status: String,
+    /// The particle of each frame (0 for single runs; 0 striker, 1 target in collision runs).
+    pub particle: Vec<u32>,
+    pub t_s: Vec<f64>,
+    pub z_obs_m: Vec<f64>,
+    pub z_fit_m: Vec<f64>,
+    /// z_obs − z_fit.
+    pub residual_m: Vec<f64>,
+    /// Model velocity at the frame.
+    pub v_fit_mps: Vec<f64>,
+    pub phase: Vec<Phase>,
+    /// |residual| above the fit's outlier cut (the fit left these frames out).
+    pub outlier: Vec<bool>,
+}
+
+impl RunResiduals {
+    fn empty(rec: &Recording, status: String) -> RunResiduals {
+        RunResiduals {
+            run: rec.info.run.clone(),
+            material: rec.info.material.clone(),
+            experiment: rec.info.experiment,
+            direction: 0,
+            status,
+            particle: vec![],
+            t_s: vec![],
+            z_obs_m: vec![],
+            z_fit_m: vec![],
+            residual_m: vec![],
+            v_fit_mps: vec![],
+            phase: vec![],
+            outlier: vec![],
+        }
+    }
+}
+
+/// Re-simulate `rec` with its fit. `groove` is used for collision runs (a single-run fit records
+/// its own).
+pub fn residuals(rec: &Recording, fit: &RunFit, groove: Groove) -> RunResiduals {
+    match fit {
+        RunFit::Single(f) => single_residuals(rec, f),
+        RunFit::Collision(c) => collision_residuals(rec, c, groove),
+    }
+}
+
+/// Push one frame's residual.
+fn push(
+    out: &mut RunResiduals,
+    particle: u32,
+    t: f64,
+    z_obs: f64,
+    z_fit: f64,
+    v: f64,
+    phase: Phase,
+    cut: f64,
+) {
+    let res = z_obs - z_fit;
+    out.particle.push(particle);
+    out.t_s.push(t);
+    out.z_obs_m.push(z_obs);
+    out.z_fit_m.push(z_fit);
+    out.residual_m.push(res);
+    out.v_fit_mps.push(v);
+    out.phase.push(phase);
+    out.outlier.push(cut.is_finite() && res.abs() > cut);
+}
+
+/// Collision runs: each particle's frames re-simulated piece by piece from the fitted state at
+/// the start of each piece (between impacts), with the run's μ and the piece's drag time. Frames
+/// outside every fitted piece are left out.
+fn collision_residuals(rec: &Recording, c: &CollisionFit, groove: Groove) -> RunResiduals {
+    if c.segments.is_empty() || !c.mu_pg.value.is_finite() {
+        return RunResiduals::empty(
+            rec,
+            format!("skipped: the collision fit has no pieces ({:?})", c.status),
+        );
+    }
+    let mut out = RunResiduals::empty(rec, "ok".into());
+    out.direction = if c.direction >= 0 { 1 } else { -1 };
+    let cut = 5.0 * c.noise_m;
+    for track in &rec.tracks {
+        for i in 0..track.t_s.len() {
+            let t = track.t_s[i];
+            let Some(seg) = c
+                .segments
+                .iter()
+                .find(|s| s.particle == track.particle && s.t_start_s <= t && t <= s.t_end_s)
+            else {
+                continue;
+            };
+            let model = Baseline {
+                mu: c.mu_pg.value,
+                t_drag_s: seg.t_drag_s.value,
+                groove,
+            };
+            let (dz, v, _, phase) = model.state_from(
+                seg.v_start_mps.value,
+                seg.va_start_mps.value,
+                t - seg.t_start_s,
+            );
+            push(
+                &mut out,
+                track.particle,
+                t,
+                track.z_m[i],
+                seg.z_start_m + dz,
+                v,
+                phase.into(),
+                cut,
+            );
+        }
+    }
+    if out.t_s.is_empty() {
+        out.status = "skipped: no frame lies in a fitted piece".into();
+    }
+    out
+}
+
+fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
+    let Some(track) = rec.track(0) else {
+        return RunResiduals::empty(rec, "skipped: the run has no track of particle 0".into());
+    };
+    if f.status == "failed" {
+        return RunResiduals::empty(
+            rec,
+            format!("skipped: the fit failed ({:?})", f.termination),
+        );
+    }
+    let model = Baseline {
+        mu: f.mu,
+        t_drag_s: f.t_drag_s,
+        groove: f.groove,
+    };
+    let n = track.t_s.len();
+    let mut out = RunResiduals::empty(rec, "ok".into());
+    out.direction = if f.v0_mps >= 0.0 { 1 } else { -1 };
+    let cut = f.outlier_cut_m;
+    for i in 0..n {
+        let tau = (track.t_s[i] + f.t0_s).max(0.0);
+        let (dz, v, phase) = model.state(f.v0_mps, tau);
+        push(
+            &mut out,
+            0,
+            track.t_s[i],
+            track.z_m[i],
+            f.z0_m + dz,
+            v,
+            phase.into(),
+            cut,
+        );
+    }
+    out
+}
