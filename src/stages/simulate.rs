@@ -10,7 +10,8 @@ use crate::fit::{FitOptions, RunFit};
 use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
-/// `kind = "simulate"`, `foreach = "runs"`.
+/// `kind = "simulate"`, per run: best bound with `foreach = ["runs", "fits"]` (each item then
+/// depends on its own fit only); with `foreach = "runs"` it picks its fit from the whole `fits`.
 pub struct Simulate;
 
 /// The groove of the collision fits (keep equal to the fit stage's params; single-run fits
@@ -66,12 +67,15 @@ impl StageKind for Simulate {
             file_input(input, "runs", "simulate")?,
             "the recording",
         )?;
-        let fits = collection_input(input, "fits", "simulate")?;
-        let bytes = fits.get(item).ok_or_else(|| {
-            StageError(format!(
-                "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
-            ))
-        })?;
+        // `foreach = ["runs", "fits"]` hands this run's fit alone; `foreach = "runs"` all of them
+        let bytes = match input.inputs.get("fits") {
+            Some(Artifact::File(b)) => b,
+            _ => collection_input(input, "fits", "simulate")?.get(item).ok_or_else(|| {
+                StageError(format!(
+                    "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
+                ))
+            })?,
+        };
         let fit: RunFit = parse_item(item, bytes, "the fit")?;
         let res = residuals(&rec, &fit, params.options().groove());
         Ok([("residuals".to_string(), Artifact::File(json_bytes(&res)?))].into())
