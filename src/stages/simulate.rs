@@ -10,8 +10,7 @@ use crate::fit::{FitOptions, RunFit};
 use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
-/// `kind = "simulate"`, per run: best bound with `foreach = ["runs", "fits"]` (each item then
-/// depends on its own fit only); with `foreach = "runs"` it picks its fit from the whole `fits`.
+/// `kind = "simulate"`, `foreach = "runs"`.
 pub struct Simulate;
 
 /// The groove of the collision fits (keep equal to the fit stage's params; single-run fits
@@ -67,14 +66,17 @@ impl StageKind for Simulate {
             file_input(input, "runs", "simulate")?,
             "the recording",
         )?;
-        // `foreach = ["runs", "fits"]` hands this run's fit alone; `foreach = "runs"` all of them
+        // `foreach = ["runs", "fits"]` passes this run's fit alone (its key then depends on no
+        // other run); `foreach = "runs"` passes every fit and this run's is looked up.
         let bytes = match input.inputs.get("fits") {
-            Some(Artifact::File(b)) => b,
-            _ => collection_input(input, "fits", "simulate")?.get(item).ok_or_else(|| {
-                StageError(format!(
-                    "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
-                ))
-            })?,
+            Some(Artifact::File(bytes)) => bytes.as_slice(),
+            _ => collection_input(input, "fits", "simulate")?
+                .get(item)
+                .ok_or_else(|| {
+                    StageError(format!(
+                        "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
+                    ))
+                })?,
         };
         let fit: RunFit = parse_item(item, bytes, "the fit")?;
         let res = residuals(&rec, &fit, params.options().groove());
