@@ -36,8 +36,8 @@ impl CollisionRun {
         let seg = self
             .segments
             .iter()
-            .filter(|s| s.particle == particle && s.t_start_s <= t_s)
-            .last()
+            .rev()
+            .find(|s| s.particle == particle && s.t_start_s <= t_s)
             .filter(|s| t_s <= s.t_end_s + 1e-12)?;
         let st = seg.start?;
         if st.rest {
