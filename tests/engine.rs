@@ -699,11 +699,26 @@ fn a_stage_stepping_through_two_per_item_inputs_reruns_only_the_changed_item() {
     p.take_trace();
     p.edit("data/run_b.csv", "0.7", "0.8");
     p.ok(&["run"]);
-    let resid: Vec<String> = p.take_trace().into_iter().filter(|l| l.starts_with("resid")).collect();
+    let resid: Vec<String> = p
+        .take_trace()
+        .into_iter()
+        .filter(|l| l.starts_with("resid"))
+        .collect();
     assert_eq!(resid, strings(&["resid run_b.csv"]));
     // each item saw its own recording and its own fit, not the whole collections
     let b = p.read("reports/resid/run_b.csv");
-    assert_eq!(b, format!("{}{}", p.read("data/run_b.csv"), p.read("reports/fits/run_b.csv")));
-    assert!(p.read("reports/resid/run_a.csv").starts_with("t,z\n0,0.0\n1,0.5\n"));
-    assert!(p.ok(&["dag"]).contains("resid (command foreach runs, fits)"));
+    assert_eq!(
+        b,
+        format!(
+            "{}{}",
+            p.read("data/run_b.csv"),
+            p.read("reports/fits/run_b.csv")
+        )
+    );
+    assert!(p
+        .read("reports/resid/run_a.csv")
+        .starts_with("t,z\n0,0.0\n1,0.5\n"));
+    assert!(p
+        .ok(&["dag"])
+        .contains("resid (command foreach runs, fits)"));
 }

@@ -200,8 +200,8 @@ impl Prepared {
             grad[T0] = v1 * f;
             // ∂R/∂Te · ∂Te/∂T with R = v1 Te (1 − F)
             let dr_dte = v1 * (om - f * x);
-            for i in V0..=TD {
-                grad[i] = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
+            for (i, g) in grad.iter_mut().enumerate().take(TD + 1).skip(V0) {
+                *g = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
             }
             grad[TD] += dr_dte * te / t;
             self.p[Z0] + self.z1_m + v1 * te * om
@@ -218,7 +218,7 @@ impl Prepared {
 /// Root of the monotone switch function `g` on t > 0, with g(0) = `g0` ≠ 0. `speed_scale` bounds
 /// the size of g, `rate` its decrease per second from friction alone; together they bracket t1.
 fn switch_root(g: impl Fn(f64) -> f64, g0: f64, speed_scale: f64, rate: f64) -> Option<f64> {
-    if !(rate > 0.0) || !speed_scale.is_finite() {
+    if rate.is_nan() || rate <= 0.0 || !speed_scale.is_finite() {
         return None;
     }
     let sign = g0.signum();

@@ -81,26 +81,29 @@ pub fn residuals(rec: &Recording, fit: &RunFit, groove: Groove) -> RunResiduals 
     }
 }
 
-/// Push one frame's residual.
-fn push(
-    out: &mut RunResiduals,
+/// One re-simulated frame.
+struct Sample {
     particle: u32,
-    t: f64,
-    z_obs: f64,
-    z_fit: f64,
-    v: f64,
+    t_s: f64,
+    z_obs_m: f64,
+    z_fit_m: f64,
+    v_fit_mps: f64,
     phase: Phase,
-    cut: f64,
-) {
-    let res = z_obs - z_fit;
-    out.particle.push(particle);
-    out.t_s.push(t);
-    out.z_obs_m.push(z_obs);
-    out.z_fit_m.push(z_fit);
-    out.residual_m.push(res);
-    out.v_fit_mps.push(v);
-    out.phase.push(phase);
-    out.outlier.push(cut.is_finite() && res.abs() > cut);
+}
+
+impl RunResiduals {
+    /// Append a frame; it is an outlier if its residual exceeds `cut_m`.
+    fn push(&mut self, f: Sample, cut_m: f64) {
+        let res = f.z_obs_m - f.z_fit_m;
+        self.particle.push(f.particle);
+        self.t_s.push(f.t_s);
+        self.z_obs_m.push(f.z_obs_m);
+        self.z_fit_m.push(f.z_fit_m);
+        self.residual_m.push(res);
+        self.v_fit_mps.push(f.v_fit_mps);
+        self.phase.push(f.phase);
+        self.outlier.push(cut_m.is_finite() && res.abs() > cut_m);
+    }
 }
 
 /// Collision runs: each particle's frames re-simulated piece by piece from the fitted state at
@@ -136,16 +139,15 @@ fn collision_residuals(rec: &Recording, c: &CollisionFit, groove: Groove) -> Run
                 seg.va_start_mps.value,
                 t - seg.t_start_s,
             );
-            push(
-                &mut out,
-                track.particle,
-                t,
-                track.z_m[i],
-                seg.z_start_m + dz,
-                v,
-                phase.into(),
-                cut,
-            );
+            let sample = Sample {
+                particle: track.particle,
+                t_s: t,
+                z_obs_m: track.z_m[i],
+                z_fit_m: seg.z_start_m + dz,
+                v_fit_mps: v,
+                phase: phase.into(),
+            };
+            out.push(sample, cut);
         }
     }
     if out.t_s.is_empty() {
@@ -169,23 +171,20 @@ fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
         t_drag_s: f.t_drag_s,
         groove: f.groove,
     };
-    let n = track.t_s.len();
     let mut out = RunResiduals::empty(rec, "ok".into());
     out.direction = if f.v0_mps >= 0.0 { 1 } else { -1 };
     let cut = f.outlier_cut_m;
-    for i in 0..n {
-        let tau = (track.t_s[i] + f.t0_s).max(0.0);
-        let (dz, v, phase) = model.state(f.v0_mps, tau);
-        push(
-            &mut out,
-            0,
-            track.t_s[i],
-            track.z_m[i],
-            f.z0_m + dz,
-            v,
-            phase.into(),
-            cut,
-        );
+    for (&t, &z) in track.t_s.iter().zip(&track.z_m) {
+        let (dz, v, phase) = model.state(f.v0_mps, (t + f.t0_s).max(0.0));
+        let sample = Sample {
+            particle: 0,
+            t_s: t,
+            z_obs_m: z,
+            z_fit_m: f.z0_m + dz,
+            v_fit_mps: v,
+            phase: phase.into(),
+        };
+        out.push(sample, cut);
     }
     out
 }
