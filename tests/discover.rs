@@ -366,6 +366,10 @@ fn shipped_data_concealed_effect_is_found_and_t_stops_drifting() {
         f.form
     );
     let got = f.parameters["tp_s_per_mps"].value;
+    eprintln!(
+        "shipped: {} {} T' = {got:.3} (truth {tp}), LR {:.0}, cv_rms {:.3e} -> {:.3e} m",
+        f.effect, f.form, f.evidence.lr, f.baseline.cv_rms_m, f.extended.cv_rms_m
+    );
     assert!((got - tp).abs() < 0.15 * tp, "T' = {got}, truth {tp}");
     let drift = d.drift.as_ref().unwrap();
     for m in ["316", "440c"] {
