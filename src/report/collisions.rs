@@ -25,6 +25,33 @@ pub struct Impact {
 }
 
 impl CollisionRun {
+    /// The fitted position of `particle` at `t_s` from its segment's start state (physics closed
+    /// form with the start spin), or None outside the fitted segments.
+    pub fn fitted_z_m(
+        &self,
+        particle: u32,
+        t_s: f64,
+        groove: crate::physics::Groove,
+    ) -> Option<f64> {
+        let seg = self
+            .segments
+            .iter()
+            .rev()
+            .find(|s| s.particle == particle && s.t_start_s <= t_s)
+            .filter(|s| t_s <= s.t_end_s + 1e-12)?;
+        let st = seg.start?;
+        if st.rest {
+            return Some(st.z_m);
+        }
+        let b = crate::physics::Baseline {
+            mu: self.mu_pg?,
+            t_drag_s: st.t_drag_s,
+            groove,
+        };
+        let dz = b.state_from(st.v_mps, st.va_mps, t_s - seg.t_start_s).0;
+        Some(st.z_m + dz).filter(|z| z.is_finite())
+    }
+
     /// A fit whose impacts can be used: converged (or stopped at the iteration cap with a result).
     pub fn usable(&self) -> bool {
         let s = self.status.to_ascii_lowercase();
@@ -39,6 +66,18 @@ pub struct Segment {
     pub t_start_s: f64,
     pub t_end_s: f64,
     pub t_switch_s: Option<f64>,
+    /// The fitted start state and drag time (for drawing the fit), when the fit JSON has them.
+    pub start: Option<SegmentStart>,
+}
+
+/// A segment's fitted start: position, velocity, spin, drag time; `rest` when the particle rests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentStart {
+    pub z_m: f64,
+    pub v_mps: f64,
+    pub va_mps: f64,
+    pub t_drag_s: f64,
+    pub rest: bool,
 }
 
 /// A collision run's fit as the report shows it.
@@ -50,6 +89,8 @@ pub struct CollisionRun {
     pub impacts: Vec<Impact>,
     pub segments: Vec<Segment>,
     pub status: String,
+    /// Particle–groove friction of the run's fit (for drawing the fitted segments).
+    pub mu_pg: Option<f64>,
 }
 
 fn pair(v: &Value) -> Option<PairState> {
@@ -140,6 +181,20 @@ fn segment(v: &Value, particle: u32) -> Option<Segment> {
         t_start_s: num(v, &["t_start_s", "start_s", "from_s", "t_from_s"]).or(from_range(0))?,
         t_end_s: num(v, &["t_end_s", "end_s", "to_s", "t_to_s"]).or(from_range(1))?,
         t_switch_s: num(v, &["t_switch_s", "switch_s", "t_roll_s"]),
+        start: (|| {
+            let rest = field(v, &["phases"])
+                .and_then(Value::as_array)
+                .and_then(|p| p.first())
+                .and_then(|p| text(p, &["phase"]))
+                == Some("rest");
+            Some(SegmentStart {
+                z_m: num(v, &["z_start_m"])?,
+                v_mps: num(v, &["v_start_mps"]).unwrap_or(0.0),
+                va_mps: num(v, &["va_start_mps"]).unwrap_or(0.0),
+                t_drag_s: num(v, &["t_drag_s"]).unwrap_or(f64::INFINITY),
+                rest,
+            })
+        })(),
     })
 }
 
@@ -175,6 +230,7 @@ pub fn from_fit_json(run: &str, material: &str, setup: Option<&str>, fit: &Value
         impacts,
         segments,
         status: text(body, &["status"]).unwrap_or("").to_string(),
+        mu_pg: num(body, &["mu_pg", "mu"]),
     }
 }
 

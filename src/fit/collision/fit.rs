@@ -124,9 +124,10 @@ pub(super) struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
-    /// Largest spin (signed like `v`) friction can build up within one frame after a kick.
+    /// Largest spin (signed like `v`) friction can build up within one frame after a kick,
+    /// for a friction up to twice the starting μ.
     pub(super) fn va_max(&self, v: f64) -> f64 {
-        v.signum() * self.opts.k * super::motion::G_MPS2 * super::plan::MU_BOUNDS.1 * self.frame_s
+        v.signum() * self.opts.k * super::motion::G_MPS2 * 2.0 * self.opts.mu_start * self.frame_s
     }
 
     pub(super) fn solve(&self, plan: &Plan, tracks: &[TrackData; 2]) -> (Layout, LmResult) {

@@ -28,6 +28,9 @@ pub struct LmOptions {
     /// Lower bound of the robust residual scale (m), so a perfect fit does not divide by zero.
     pub scale_floor: f64,
     pub rel_tol: f64,
+    /// Also converged when a step lowers Σ w r² by less than this many squared noise scales
+    /// (a change of χ² that no statistic can see).
+    pub chi2_tol: f64,
 }
 
 impl Default for LmOptions {
@@ -38,6 +41,7 @@ impl Default for LmOptions {
             huber_c: 2.5,
             scale_floor: 1e-9,
             rel_tol: 1e-10,
+            chi2_tol: 1e-3,
         }
     }
 }
@@ -95,6 +99,9 @@ where
         let mut lambda = 1e-3;
         let mut cost = weighted_cost(&r, &w);
         termination = Termination::MaxIterations;
+        // costs of the last accepted steps: a plateau (χ² down by < 10·chi2_tol over 10 steps,
+        // e.g. creeping along a valley of the switch-time kinks) also counts as converged
+        let mut history: Vec<f64> = vec![cost];
         for _ in 0..opts.max_iter {
             iterations += 1;
             jacobian(&residuals, &p, specs, &r, &mut jac);
@@ -127,13 +134,21 @@ where
                 residuals(&trial, &mut r_trial);
                 let c_trial = weighted_cost(&r_trial, &w);
                 if c_trial.is_finite() && c_trial < cost {
+                    let cost_before = cost;
                     let rel = (cost - c_trial) / cost.max(1e-300);
                     p = trial;
                     r = r_trial;
                     cost = c_trial;
                     lambda = (lambda / 3.0).max(1e-12);
                     improved = true;
-                    if rel < opts.rel_tol {
+                    history.push(cost);
+                    let plateau = history.len() > 10
+                        && history[history.len() - 11] - cost
+                            < 10.0 * opts.chi2_tol * scale * scale;
+                    if rel < opts.rel_tol
+                        || rel * cost_before < opts.chi2_tol * scale * scale
+                        || plateau
+                    {
                         termination = Termination::Converged;
                     }
                     break;
@@ -238,7 +253,7 @@ where
             jac[j].iter_mut().for_each(|x| *x = 0.0);
             continue;
         }
-        // step inward when at the upper bound so the Jacobian stays inside the box
+        // forward differences, stepping inward at the upper bound so the box is respected
         let h = if p[j] + s.step > s.upper {
             -s.step
         } else {

@@ -71,6 +71,7 @@ pub struct DragPrior {
 }
 
 pub const MU: usize = 0;
+/// Index of ln T (drag times are fitted as logarithms: positive, and the prior is in ln T).
 pub const T_DRAG: usize = 1;
 
 /// Start of one piece: time, position, velocity, spin, and the impact it starts at.
@@ -108,7 +109,7 @@ impl Layout {
         let t = self.drag[particle].get(k).copied().unwrap_or(T_DRAG);
         Motion {
             mu: p[MU],
-            t_drag_s: p[t],
+            t_drag_s: p[t].exp(),
             s: self.s,
             k: self.k,
         }
@@ -196,7 +197,7 @@ impl Layout {
         let (data, prior) = out.split_at_mut(self.n_data());
         if let Some(dp) = self.drag_prior {
             for (o, i) in prior.iter_mut().zip(self.prior_params()) {
-                *o = (p[i] / p[T_DRAG]).ln() / dp.sigma_ln * dp.noise_m;
+                *o = (p[i] - p[T_DRAG]) / dp.sigma_ln * dp.noise_m;
             }
         }
         let (a, b) = data.split_at_mut(n0);

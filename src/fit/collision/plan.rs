@@ -87,9 +87,10 @@ impl Plan {
         let mut sp = Vec::new();
         let held = |x: f64, b: (f64, f64)| if self.hold_friction { (x, x) } else { b };
         let (mu_lo, mu_hi) = held(self.mu, MU_BOUNDS);
-        let (t_lo, t_hi) = held(self.t_drag_s, T_BOUNDS_S);
+        let ln = |b: (f64, f64)| (b.0.ln(), b.1.ln());
+        let (t_lo, t_hi) = held(self.t_drag_s.ln(), ln(T_BOUNDS_S));
         assert_eq!(push(&mut sp, self.mu, mu_lo, mu_hi, 1e-6), MU);
-        assert_eq!(push(&mut sp, self.t_drag_s, t_lo, t_hi, 1e-6), T_DRAG);
+        assert_eq!(push(&mut sp, self.t_drag_s.ln(), t_lo, t_hi, 1e-5), T_DRAG);
         let mut impacts = Vec::new();
         // per impact: the pieces it starts for the striker and the target
         let mut after: Vec<[Piece; 2]> = Vec::new();
@@ -155,8 +156,8 @@ impl Plan {
                         .get(k)
                         .copied()
                         .unwrap_or(self.t_drag_s);
-                    let (lo, hi) = held(t, T_BOUNDS_S);
-                    push(&mut sp, t, lo, hi, 1e-6)
+                    let (lo, hi) = held(t.ln(), ln(T_BOUNDS_S));
+                    push(&mut sp, t.ln(), lo, hi, 1e-5)
                 } else {
                     T_DRAG
                 });
@@ -185,7 +186,7 @@ impl Plan {
     pub fn from_solution(&self, layout: &Layout, p: &[f64]) -> Plan {
         let mut out = self.clone();
         out.mu = p[MU];
-        out.t_drag_s = p[T_DRAG];
+        out.t_drag_s = p[T_DRAG].exp();
         for part in 0..2 {
             out.z_start_m[part] = p[layout.z_start[part]];
             let offset = usize::from(out.first[part].is_some());
@@ -212,7 +213,8 @@ impl Plan {
         for (j, im) in out.impacts.iter_mut().enumerate() {
             im.t_s = layout.impact_time(p, j);
         }
-        out.piece_t_drag_s = [0, 1].map(|part| layout.drag[part].iter().map(|&i| p[i]).collect());
+        out.piece_t_drag_s =
+            [0, 1].map(|part| layout.drag[part].iter().map(|&i| p[i].exp()).collect());
         out
     }
 }

@@ -107,8 +107,11 @@ pub fn points(v: &Value, xs: &[&str], ys: &[&str]) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// (x, y) points of a figure.
+pub type Points = Vec<(f64, f64)>;
+
 /// The T-vs-v0 drift before and after (per-run T of the baseline and of the extended model).
-pub fn drift(diag: &Value) -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+pub fn drift(diag: &Value) -> Option<(Points, Points)> {
     let dr = field(diag, &["drift", "t_drift", "T_drift"]).or_else(|| {
         field(diag, &["details", "show"]).and_then(|d| field(d, &["drift", "t_drift"]))
     })?;

@@ -6,10 +6,50 @@ use crate::recording::Track;
 use crate::report::collisions::CollisionRun;
 use crate::report::inputs::ReportData;
 use crate::report::style::{self, Marker};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-const STRIKER: RGBColor = RGBColor(20, 20, 20);
-const TARGET: RGBColor = RGBColor(0, 150, 150);
+const STRIKER: RGBColor = RGBColor(120, 120, 120);
+const TARGET: RGBColor = RGBColor(0, 170, 170);
+const STRIKER_FIT: RGBColor = RGBColor(10, 10, 10);
+const TARGET_FIT: RGBColor = RGBColor(0, 80, 80);
+
+/// The fitted trajectory of `particle` over `track`'s times, in (ms, mm) pieces where it is defined.
+fn fitted_pieces(
+    c: &CollisionRun,
+    particle: u32,
+    track: &Track,
+    z_ref: f64,
+) -> Vec<Vec<(f64, f64)>> {
+    let g = crate::physics::Groove::CHAPTER;
+    let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    let step = (track.t_s.len() / 400).max(1);
+    for &t in track.t_s.iter().step_by(step) {
+        match c.fitted_z_m(particle, t, g) {
+            Some(z) => cur.push((t * 1e3, (z - z_ref) * 1e3)),
+            None if !cur.is_empty() => pieces.push(std::mem::take(&mut cur)),
+            None => {}
+        }
+    }
+    if !cur.is_empty() {
+        pieces.push(cur);
+    }
+    pieces
+}
+
+/// Draw the fitted pieces of one particle as lines (one legend entry).
+fn draw_fit<'a, 'b: 'a>(
+    ch: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    pieces: Vec<Vec<(f64, f64)>>,
+    colour: RGBColor,
+    label: &str,
+) -> super::common::Res {
+    for (i, p) in pieces.into_iter().enumerate() {
+        line(ch, p, colour, 2, false, (i == 0).then_some(label))?;
+    }
+    Ok(())
+}
 
 /// The collision run Figs. 4.3c–d show: `wanted`, else the first rolling-setup run with an impact
 /// and two tracks, else any collision run with two tracks.
@@ -96,6 +136,18 @@ pub fn render_figs(
             Some("target (particle 1)"),
             3,
         )?;
+        draw_fit(
+            &mut ch,
+            fitted_pieces(c, 0, s, z_ref),
+            STRIKER_FIT,
+            "striker, fitted",
+        )?;
+        draw_fit(
+            &mut ch,
+            fitted_pieces(c, 1, t, z_ref),
+            TARGET_FIT,
+            "target, fitted",
+        )?;
         for (i, ti) in impacts.iter().enumerate() {
             let label = (i == 0).then_some("impact");
             line(
@@ -169,6 +221,12 @@ pub fn render_figs(
                 scatter_sized(&mut ch, &p, mk, col, true, Some(label), 3)?;
             }
         }
+        draw_fit(
+            &mut ch,
+            fitted_pieces(c, 0, s, z_ref),
+            STRIKER_FIT,
+            "fitted segments",
+        )?;
         for ti in &impacts {
             line(
                 &mut ch,

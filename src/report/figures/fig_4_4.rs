@@ -124,7 +124,7 @@ pub fn render_bc(
             .chain([1.0]),
         0.08,
     );
-    let yr = (lo.min(0.0).max(-0.2), hi.max(1.05));
+    let yr = (lo.clamp(-0.2, 0.0), hi.max(1.05));
     let cap = format!("Fig. {fig}: restitution against impact speed, {material}");
     let svg = render(|root| {
         let mut c = linear_chart(
