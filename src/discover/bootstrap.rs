@@ -48,6 +48,7 @@ pub fn synthetic_runs(
 }
 
 /// LR replicates: `out[a][b]` for alternative `a` and replicate `b`.
+#[allow(clippy::too_many_arguments)]
 pub fn lr_replicates(
     null_spec: &Spec,
     null_params: &[ParamInfo],

@@ -268,9 +268,9 @@ fn solve_step(
         let l = cholesky_jittered(&sd, ng);
         dg = rhs;
         chol_solve(&l, ng, &mut dg);
-        for j in 0..ng {
-            if frozen.global[j] {
-                dg[j] = 0.0;
+        for (d, f) in dg.iter_mut().zip(&frozen.global) {
+            if *f {
+                *d = 0.0;
             }
         }
     }
@@ -289,14 +289,14 @@ fn solve_step(
             };
             let mut x = blk.bl;
             for (i, &gi) in blk.idx.iter().enumerate() {
-                for k in 0..3 {
-                    x[k] -= blk.b[i * 3 + k] * dg[gi];
+                for (k, xk) in x.iter_mut().enumerate() {
+                    *xk -= blk.b[i * 3 + k] * dg[gi];
                 }
             }
             chol_solve(lc, 3, &mut x);
-            for k in 0..3 {
-                if frozen.local[r][k] {
-                    x[k] = 0.0;
+            for (xk, f) in x.iter_mut().zip(&frozen.local[r]) {
+                if *f {
+                    *xk = 0.0;
                 }
             }
             x
