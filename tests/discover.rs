@@ -4,7 +4,8 @@
 //! Data: runs of 316 and 440c alternately, |v0| uniform in 5–100 mm/s, both directions, 10 kfps,
 //! kick a random fraction of a frame before the first frame, random lab offset, Gaussian noise
 //! 1 µm, optional 0.5 % outliers of ±20–50 µm. The default tests use small sets (24 runs of 40 ms)
-//! so they run in the dev profile; the 60-run, many-seed versions are `#[ignore]`d (heavy).
+//! so they run in the dev profile; the shipped data and 20 small null seeds run too; only the
+//! 20-seed null check on 60-run sets is `#[ignore]`d (about 3 min; run with `-- --ignored`).
 
 use groove::discover::candidate::Spec;
 use groove::discover::data::prepare_runs;
@@ -335,7 +336,6 @@ fn shipped_recordings() -> Vec<Recording> {
 }
 
 #[test]
-#[ignore = "heavy in the dev profile (96 runs); run with --release or --ignored"]
 fn shipped_data_concealed_effect_is_found_and_t_stops_drifting() {
     let truth: toml::Table = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -485,7 +485,6 @@ fn a_mismatch_no_candidate_explains_is_reported_unexplained() {
 }
 
 #[test]
-#[ignore = "heavy: 20 small null data sets; the false-finding rate of the decision rule"]
 fn nothing_missing_twenty_seeds_of_small_sets() {
     let shape = Shape {
         outliers: true,
