@@ -254,18 +254,35 @@ impl Cal {
 }
 
 /// A trackpy export of one run: index column, pixels, track ids 7 (particle 0) and 3 (particle 1).
+/// In a single run the track is split into fragments 7 and 8 (the tracker lost the sphere) and a
+/// spurious short track 99 sits in frames the sphere's track covers.
 fn to_trackpy(rec: &Recording, cal: &Cal) -> Vec<u8> {
     let mut s = String::from(",y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle\n");
     let mut index = 0;
+    let single = rec.info.experiment == Experiment::Single;
     for t in &rec.tracks {
-        let id = if t.particle == 0 { 7 } else { 3 };
         for k in 0..t.frame.len() {
+            let id = match (t.particle, single) {
+                (0, true) if k > t.frame.len() / 2 => 8,
+                (0, _) => 7,
+                _ => 3,
+            };
             let (x, y) = cal.xy(t.z_m[k]);
             s += &format!(
                 "{index},{y},{x},812.3,2.1,0.05,41.0,9120.0,0.012,{},{id}\n",
                 t.frame[k]
             );
             index += 1;
+        }
+        if single {
+            for k in 5..8 {
+                let (x, y) = cal.xy(t.z_m[k] + 0.01);
+                s += &format!(
+                    "{index},{y},{x},90.0,1.1,0.3,4.0,800.0,0.2,{},99\n",
+                    t.frame[k]
+                );
+                index += 1;
+            }
         }
     }
     s.into_bytes()
@@ -954,4 +971,121 @@ fn trackmate_bad_value_names_the_file_row() {
         &e,
         &["s01.csv row 11, column POSITION_X: \"1x2\" is not a number"],
     );
+}
+
+#[test]
+fn duplicate_run_and_unknown_setup_are_named() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    let runs = format!("{}s02,single,316,0.004,200,\n", runs_csv(&recs));
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 5, column run: run \"s02\" is listed twice (also row 4)"],
+    );
+    let mut files = interchange_csv(&recs);
+    let runs = runs_csv(&recs).replace(
+        "collision,316,0.004,200,rolling",
+        "collision,316,0.004,200,thrown",
+    );
+    files.insert("runs.csv".into(), runs.into_bytes());
+    assert_mentions(
+        &run_err(&files),
+        &["runs.csv row 2, column setup: \"thrown\" is not a known setup; write rolling"],
+    );
+}
+
+#[test]
+fn csv_and_parquet_of_one_table_together_are_ambiguous() {
+    let recs = known_recordings();
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "runs.parquet".into(),
+        interchange_parquet(&recs)["runs.parquet"].clone(),
+    );
+    assert_mentions(
+        &run_err(&files),
+        &["both runs.csv and runs.parquet", "keep one of them"],
+    );
+}
+
+#[test]
+fn trackmate_with_two_header_rows_reads_the_same() {
+    let rec = &known_recordings()[1];
+    let cal = Cal {
+        m_per_px: 1e-5,
+        axis: Axis::X,
+        direction: 1.0,
+    };
+    let full = String::from_utf8(to_trackmate(rec, &cal, 200.0, 4)).unwrap();
+    // keep the key line and the names line only
+    let short: String = full
+        .lines()
+        .enumerate()
+        .filter(|(k, _)| !(2..=3).contains(k))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let mut p = params();
+    p.calibration.m_per_px = Some(1e-5);
+    p.calibration.fps = Some(200.0);
+    p.calibration.material = Some("316".into());
+    p.calibration.diameter_m = Some(0.004);
+    let four = run_ok(
+        &Files::from([("s01.csv".to_string(), full.into_bytes())]),
+        &p,
+    );
+    let two = run_ok(
+        &Files::from([("s01.csv".to_string(), short.into_bytes())]),
+        &p,
+    );
+    assert_eq!(four, two);
+    assert_eq!(two[0].tracks[0].frame, rec.tracks[0].frame);
+}
+
+#[test]
+fn shipped_dataset_ingests_every_run() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let listed = std::fs::read_to_string(dir.join("runs.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    let recs = ingest::read_dataset_dir(&dir, &params()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(recs.len(), listed);
+    for r in &recs {
+        let wanted = if r.info.experiment == Experiment::Single {
+            1
+        } else {
+            2
+        };
+        assert_eq!(r.tracks.len(), wanted, "run {}", r.info.run);
+        for t in &r.tracks {
+            assert!(
+                t.frame.windows(2).all(|w| w[0] < w[1]),
+                "run {} frames unsorted",
+                r.info.run
+            );
+            assert!(t.frame.len() >= 20);
+        }
+    }
+}
+
+#[test]
+fn many_problems_are_counted_and_listed_in_file_order() {
+    let recs = known_recordings();
+    let mut lines = trajectory_lines(&recs);
+    for line in lines.iter_mut().take(25) {
+        *line = set_field(line, 4, "?");
+    }
+    let mut files = interchange_csv(&recs);
+    files.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    let e = run_err(&files);
+    assert!(e.starts_with("25 problems in the dataset:"), "{e}");
+    assert_mentions(&e, &["... and 5 more"]);
+    let first = e.find("row 2,").unwrap();
+    let second = e.find("row 3,").unwrap();
+    assert!(first < second, "{e}");
 }

@@ -69,6 +69,8 @@ pub struct Evaluated {
     pub current: Option<LockStage>,
     /// Upstream stages whose outputs are unknown.
     pub waiting_on: Vec<String>,
+    /// While waiting: the key parts known without the inputs (kind, params, cmd, code, seed).
+    pub pending: Option<LockStage>,
     /// Every key has a complete entry in the store, so `current.outputs` is known.
     pub complete: bool,
     /// Keys that had no entry when the evaluation began (item names; `None` = the whole stage).
@@ -100,12 +102,13 @@ pub fn stage_seed(seed: u64, stage: &str) -> u64 {
 
 /// Evaluate the selected stages wave by wave. Failed stages are reported and their
 /// descendants wait; independent stages still complete.
-/// `after_wave` sees the results so far after every wave (the runner saves `pipeline.lock` there).
+/// `after_wave` sees the results so far and the names in the wave just done (the runner saves
+/// `pipeline.lock` there).
 pub fn evaluate(
     ctx: &Context,
     selected: &BTreeSet<String>,
     action: impl Fn(&str) -> Action + Sync,
-    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>),
+    mut after_wave: impl FnMut(&BTreeMap<String, Evaluated>, &[String]),
 ) -> (BTreeMap<String, Evaluated>, Vec<EngineError>) {
     let waves = dag::order(ctx.pipeline).expect("validated pipelines have no cycle");
     let mut done: BTreeMap<String, Evaluated> = BTreeMap::new();
@@ -138,7 +141,7 @@ pub fn evaluate(
                 }
             }
         }
-        after_wave(&done);
+        after_wave(&done, &wave);
     }
     (done, errors)
 }
@@ -199,9 +202,24 @@ fn evaluate_stage(
             InputSpec::Provenance => {}
         }
     }
+    let code = ctx.catalog.fingerprint(&spec.kind);
+    let seed = stage_seed(pipeline.seed, &spec.name);
+    let parts = |inputs: BTreeMap<String, Stored>| LockStage {
+        kind: spec.kind.clone(),
+        key: String::new(),
+        code: code.to_string(),
+        groove_version: ctx.catalog.version.clone(),
+        seed,
+        params: spec.canonical_params.clone(),
+        cmd: spec.cmd.clone(),
+        inputs,
+        outputs: BTreeMap::new(),
+        items: BTreeMap::new(),
+    };
     if !waiting.is_empty() {
         return Ok(Evaluated {
             waiting_on: waiting.into_iter().collect(),
+            pending: Some(parts(BTreeMap::new())),
             ..Evaluated::default()
         });
     }
@@ -221,8 +239,6 @@ fn evaluate_stage(
         }
     }
 
-    let code = ctx.catalog.fingerprint(&spec.kind);
-    let seed = stage_seed(pipeline.seed, &spec.name);
     let digests: BTreeMap<String, String> = bound
         .iter()
         .map(|(n, b)| (n.clone(), b.stored.digest()))
@@ -334,16 +350,10 @@ fn evaluate_stage(
         Some(_) => items_digest(&items),
     };
     let current = LockStage {
-        kind: spec.kind.clone(),
         key,
-        code: code.to_string(),
-        groove_version: ctx.catalog.version.clone(),
-        seed,
-        params: spec.canonical_params.clone(),
-        cmd: spec.cmd.clone(),
-        inputs: bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
         outputs,
         items,
+        ..parts(bound.into_iter().map(|(n, b)| (n, b.stored)).collect())
     };
 
     let mut stale_outputs = Vec::new();
@@ -377,6 +387,7 @@ fn evaluate_stage(
     Ok(Evaluated {
         current: Some(current),
         waiting_on: Vec::new(),
+        pending: None,
         complete,
         missing,
         executed,
@@ -454,13 +465,27 @@ fn execute(
         command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
-        kind.run(&StageInput {
+        let input = StageInput {
             params: &spec.params,
             inputs,
             item,
             seed,
-        })
-        .map_err(|e| failed(e.to_string()))?
+        };
+        // a panicking kind fails its stage; the other stages and the store are unaffected
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
+            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return Err(failed(format!(
+                    "kind `{}` panicked ({what}); this is a bug in groove, please report it",
+                    spec.kind
+                )));
+            }
+        }
     };
     for name in spec.outputs.keys() {
         match outputs.get(name) {

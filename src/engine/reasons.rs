@@ -27,6 +27,13 @@ pub fn reasons(
         return out;
     }
     let Some(cur) = &ev.current else {
+        if let (Some(pending), Some(old)) = (&ev.pending, old) {
+            let without_inputs = LockStage {
+                inputs: Default::default(),
+                ..old.clone()
+            };
+            out.extend(changes(pipeline, spec, &without_inputs, pending));
+        }
         for w in &ev.waiting_on {
             out.push(format!("waits on `{w}`, which is stale"));
         }
@@ -70,6 +77,15 @@ fn differences(
     old: &LockStage,
     cur: &LockStage,
 ) -> Vec<String> {
+    let mut out = changes(pipeline, spec, old, cur);
+    if out.is_empty() {
+        out.push("the stage's definition changed (its outputs)".to_string());
+    }
+    out
+}
+
+/// Each changed part of a stage key, old → new.
+fn changes(pipeline: &Pipeline, spec: &StageSpec, old: &LockStage, cur: &LockStage) -> Vec<String> {
     let mut out = Vec::new();
     if old.kind != cur.kind {
         out.push(format!("kind changed: {} → {}", old.kind, cur.kind));
@@ -130,9 +146,6 @@ fn differences(
             }
             _ => {}
         }
-    }
-    if out.is_empty() {
-        out.push("the stage's definition changed (its outputs)".to_string());
     }
     out
 }

@@ -115,8 +115,8 @@ pub fn run(
             |s| Action::Run {
                 force: force.contains(s),
             },
-            |done| {
-                let ran = record(&mut lock, done);
+            |done, wave| {
+                let ran = record(&mut lock, done, wave.iter());
                 let due = last_save.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0);
                 if ran && due && save_error.is_none() {
                     save_error = lock.save(&lock_path(pipeline)).err();
@@ -128,7 +128,7 @@ pub fn run(
     if let Some(e) = save_error {
         return Err(e);
     }
-    record(&mut lock, &done);
+    record(&mut lock, &done, done.keys());
     lock.stages
         .retain(|name, _| pipeline.stages.contains_key(name));
     lock.save(&lock_path(pipeline))?;
@@ -166,13 +166,15 @@ pub fn run(
     Ok(summary)
 }
 
-/// Put every completed stage into the lock; true when one of them ran something.
-fn record(
+/// Put the named completed stages into the lock; true when one of them ran something.
+fn record<'a>(
     lock: &mut super::lockfile::PipelineLock,
     done: &std::collections::BTreeMap<String, super::evaluate::Evaluated>,
+    names: impl Iterator<Item = &'a String>,
 ) -> bool {
     let mut ran = false;
-    for (name, ev) in done {
+    for name in names {
+        let Some(ev) = done.get(name) else { continue };
         if let (true, Some(current)) = (ev.complete, &ev.current) {
             if lock.stages.get(name) != Some(current) {
                 lock.stages.insert(name.clone(), current.clone());

@@ -34,7 +34,7 @@ pub fn status(
     let ctx = Context::new(catalog, pipeline, Progress::new(0, true));
     let all: BTreeSet<String> = pipeline.stages.keys().cloned().collect();
     let selected = selected.unwrap_or(&all);
-    let (done, errors) = evaluate(&ctx, selected, |_| Action::Check, |_| {});
+    let (done, errors) = evaluate(&ctx, selected, |_| Action::Check, |_, _| {});
     if let Some(e) = errors.into_iter().next() {
         return Err(e);
     }

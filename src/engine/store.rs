@@ -101,12 +101,10 @@ impl Store {
         Ok(dir)
     }
 
-    /// Remove what killed runs left in `tmp/` (call while holding the project lock).
+    /// Remove what killed runs left in `tmp/` (call while holding the project lock). Best effort:
+    /// a command orphaned by a killed run may still be writing there, and names never collide.
     pub fn sweep_tmp(&self) -> Result<(), EngineError> {
-        let tmp = self.tmp_root();
-        if tmp.exists() {
-            std::fs::remove_dir_all(&tmp).at(&tmp)?;
-        }
+        let _ = std::fs::remove_dir_all(self.tmp_root());
         Ok(())
     }
 

@@ -54,11 +54,9 @@ pub fn assemble(
     }
     for (run, ss) in &samples {
         if !by_run.contains_key(run) && !known_bad.contains(*run) {
-            let (f, first) = ss
-                .iter()
-                .min_by_key(|(f, s)| (&f.file, s.row))
-                .copied()
-                .unwrap_or_else(|| unreachable!());
+            let Some(&(f, first)) = ss.iter().min_by_key(|(f, s)| (&f.file, s.row)) else {
+                continue;
+            };
             let runs_file = runs.first().map_or("runs.csv", |r| r.file.as_str());
             problems.push(
                 Problem::at(
@@ -181,11 +179,9 @@ fn tracks_of(
             }),
         }
     }
-    let (first_file, first) = ss
-        .iter()
-        .min_by_key(|(f, s)| (&f.file, s.row))
-        .copied()
-        .unwrap_or_else(|| unreachable!("a run with samples"));
+    let Some(&(first_file, first)) = ss.iter().min_by_key(|(f, s)| (&f.file, s.row)) else {
+        return tracks;
+    };
     for (particle, role) in wanted {
         let n = tracks
             .iter()

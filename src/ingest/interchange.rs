@@ -2,7 +2,7 @@
 
 use super::error::Problem;
 use super::samples::{RunRow, Sample, SampleFile};
-use super::table::Table;
+use super::table::{Col, Table};
 use crate::recording::{Experiment, RunInfo, Setup};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -42,7 +42,7 @@ pub fn pick<'a>(
         (Some(_), Some(_)) => Err(Problem::file(
             &csv,
             format!("both {csv} and {parquet} are in the dataset folder"),
-            format!("keep one of them"),
+            "keep one of them",
         )),
         (None, None) => Err(Problem::file(
             &csv,
@@ -127,7 +127,7 @@ fn run_info(
     };
     let extra = extra_columns
         .iter()
-        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v)))
+        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v.into_owned())))
         .collect();
     Ok(RunInfo {
         run: run.to_string(),
@@ -153,22 +153,33 @@ fn positive(table: &Table, column: &str, i: usize, what: &str) -> Result<f64, Pr
 /// Reads trajectories.csv. Rows with problems are left out and their problems returned.
 pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Problem> {
     table.require(&TRAJECTORY_COLUMNS)?;
+    let cols = TrajectoryColumns {
+        run: table.col("run"),
+        particle: table.col("particle"),
+        frame: table.col("frame"),
+        t_s: table.col("t_s"),
+        z_m: table.col("z_m"),
+    };
     let mut interned: BTreeMap<String, Arc<str>> = BTreeMap::new();
     let mut samples = Vec::with_capacity(table.height());
     let mut problems = Vec::new();
     for i in 0..table.height() {
-        let run = match table.string("run", i, "write a run id from runs.csv") {
-            Ok(r) => r,
-            Err(p) => {
-                problems.push(p);
-                continue;
+        let Some(name) = cols.run.text(i) else {
+            problems.push(
+                cols.run
+                    .problem(i, "is empty", "write a run id from runs.csv"),
+            );
+            continue;
+        };
+        let run: Arc<str> = match interned.get(name.as_ref()) {
+            Some(r) => r.clone(),
+            None => {
+                let r: Arc<str> = Arc::from(name.as_ref());
+                interned.insert(name.into_owned(), r.clone());
+                r
             }
         };
-        let run: Arc<str> = interned
-            .entry(run)
-            .or_insert_with_key(|k| Arc::from(k.as_str()))
-            .clone();
-        match sample(table, i, run.clone()) {
+        match sample(&cols, i, run.clone(), table.row(i)) {
             Ok(s) => samples.push(s),
             Err(p) => problems.push(p.in_run(&run)),
         }
@@ -185,27 +196,37 @@ pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Pr
     ))
 }
 
-fn sample(table: &Table, i: usize, run: Arc<str>) -> Result<Sample, Problem> {
+/// The columns of trajectories.csv, looked up once.
+struct TrajectoryColumns<'a> {
+    run: Col<'a>,
+    particle: Col<'a>,
+    frame: Col<'a>,
+    t_s: Col<'a>,
+    z_m: Col<'a>,
+}
+
+fn sample(
+    cols: &TrajectoryColumns,
+    i: usize,
+    run: Arc<str>,
+    row: usize,
+) -> Result<Sample, Problem> {
     let particle_fix =
         "write 0 for a single run's particle, 0 (striker) or 1 (target) in a collision run";
-    let particle = table.int("particle", i, particle_fix)?;
+    let particle = cols.particle.int(i, particle_fix)?;
     let particle = u32::try_from(particle).map_err(|_| {
-        table.problem(
-            "particle",
-            i,
-            format!("{particle} is not a particle id"),
-            particle_fix,
-        )
+        cols.particle
+            .problem(i, format!("{particle} is not a particle id"), particle_fix)
     })?;
-    let frame = table.int("frame", i, "write the frame index, a whole number")?;
-    let t_s = table.float("t_s", i, "write a finite number in seconds")?;
-    let z_m = table.float("z_m", i, "write a finite number in metres")?;
+    let frame = cols.frame.int(i, "write the frame index, a whole number")?;
+    let t_s = cols.t_s.float(i, "write a finite number in seconds")?;
+    let z_m = cols.z_m.float(i, "write a finite number in metres")?;
     Ok(Sample {
         run,
         particle,
         frame,
         t_s,
         z_m,
-        row: table.row(i),
+        row,
     })
 }

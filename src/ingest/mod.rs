@@ -4,6 +4,10 @@
 //! Everything here works on bytes in memory (file name → bytes), so the stage never touches the
 //! file system; `read_dataset_dir` is the one helper that reads a folder, for tests and tools.
 
+// A `Problem` carries file, row, column, run, message and fix; it is returned only for bad
+// input, so its size on the error path is not worth boxing.
+#![allow(clippy::result_large_err)]
+
 mod assemble;
 pub mod error;
 mod interchange;
@@ -131,11 +135,14 @@ pub fn read_dataset_dir(dir: &Path, params: &IngestParams) -> Result<Vec<Recordi
     Ok(ingest(&files, params)?.recordings)
 }
 
+/// The run rows and sample files of a dataset, and the row-level problems found reading them.
+type Sources = (Vec<RunRow>, Vec<SampleFile>, Vec<Problem>);
+
 /// The run rows and sample files of the dataset in its format, and the row-level problems found.
 fn read_sources(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
-) -> Result<(Vec<RunRow>, Vec<SampleFile>, Vec<Problem>), IngestError> {
+) -> Result<Sources, IngestError> {
     let interchange_present = INTERCHANGE_FILES.iter().any(|f| files.contains_key(*f));
     match params.format {
         Format::Interchange => read_interchange(files),
@@ -144,9 +151,7 @@ fn read_sources(
     }
 }
 
-fn read_interchange(
-    files: &BTreeMap<String, Vec<u8>>,
-) -> Result<(Vec<RunRow>, Vec<SampleFile>, Vec<Problem>), IngestError> {
+fn read_interchange(files: &BTreeMap<String, Vec<u8>>) -> Result<Sources, IngestError> {
     let runs_file = interchange::pick(files, "runs", "one row per run");
     let traj_file = interchange::pick(files, "trajectories", "one row per particle per frame");
     let (runs_file, traj_file) = match (runs_file, traj_file) {
@@ -178,7 +183,7 @@ fn read_trackers(
     files: &BTreeMap<String, Vec<u8>>,
     format: Format,
     params: &IngestParams,
-) -> Result<(Vec<RunRow>, Vec<SampleFile>, Vec<Problem>), IngestError> {
+) -> Result<Sources, IngestError> {
     let mut problems = Vec::new();
     let mut spot_files = Vec::new();
     for (name, bytes) in files {

@@ -161,7 +161,7 @@ impl IngestParams {
         if c.fps.is_none() {
             missing.push("calibration.fps (camera frame rate)");
         }
-        if c.material.as_deref().map_or(true, |m| m.trim().is_empty()) {
+        if c.material.as_deref().is_none_or(|m| m.trim().is_empty()) {
             missing.push("calibration.material (e.g. \"316\")");
         }
         if c.diameter_m.is_none() {

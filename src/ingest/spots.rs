@@ -4,8 +4,9 @@
 use super::error::Problem;
 use super::params::{Axis, CheckedCalibration};
 use super::samples::{RunRow, Sample, SampleFile};
+use super::table::Table;
 use crate::recording::{Experiment, RunInfo};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
 /// One detected spot: its track id (`None` if unlinked), frame, pixel position along the groove
@@ -29,6 +30,63 @@ pub struct SpotFile {
     pub spots: Vec<Spot>,
 }
 
+/// The names of a tracker table's columns.
+pub struct SpotColumns {
+    pub track: &'static str,
+    pub frame: &'static str,
+    pub x: &'static str,
+    pub y: &'static str,
+    /// The columns that identify a spot, for messages about duplicates.
+    pub key: &'static str,
+}
+
+/// Reads the spots of a tracker table holding one run (named after the file). Rows with problems
+/// are left out and returned as problems of the run. An empty track id (or `None`, `NaN`) marks an
+/// unlinked spot.
+pub fn read_spots(table: &Table, names: &SpotColumns, axis: Axis) -> (SpotFile, Vec<Problem>) {
+    let run = run_id(&table.file);
+    let track = table.col(names.track);
+    let frame = table.col(names.frame);
+    let position = table.col(match axis {
+        Axis::X => names.x,
+        Axis::Y => names.y,
+    });
+    let mut spots = Vec::with_capacity(table.height());
+    let mut problems = Vec::new();
+    for i in 0..table.height() {
+        let spot = (|| {
+            let unlinked = track
+                .text(i)
+                .is_none_or(|s| s.eq_ignore_ascii_case("none") || s.eq_ignore_ascii_case("nan"));
+            Ok::<Spot, Problem>(Spot {
+                track: match unlinked {
+                    true => None,
+                    false => Some(track.int(
+                        i,
+                        "write the track id, a whole number, or leave it empty for an unlinked spot",
+                    )?),
+                },
+                frame: frame.int(i, "write the frame index, a whole number")?,
+                p_px: position.float(i, "write a finite number in pixels")?,
+                row: table.row(i),
+            })
+        })();
+        match spot {
+            Ok(s) => spots.push(s),
+            Err(p) => problems.push(p.in_run(&run)),
+        }
+    }
+    let file = SpotFile {
+        file: table.file.clone(),
+        run,
+        key_columns: names.key,
+        frame_column: names.frame,
+        track_column: names.track,
+        spots,
+    };
+    (file, problems)
+}
+
 /// The run id of a tracker file: its name without the `.csv` extension.
 pub fn run_id(file: &str) -> String {
     file.strip_suffix(".csv")
@@ -37,18 +95,10 @@ pub fn run_id(file: &str) -> String {
         .to_string()
 }
 
-/// The pixel coordinate column for `axis` among `(x column, y column)`.
-pub fn axis_column(axis: Axis, columns: (&'static str, &'static str)) -> &'static str {
-    match axis {
-        Axis::X => columns.0,
-        Axis::Y => columns.1,
-    }
-}
-
 /// Converts a tracker file into its run row and samples. Unlinked spots are left out. In a single
-/// run every linked track is the one particle 0 (trackers often split one sphere's track); in a
-/// collision run there must be exactly two tracks, and the one starting at smaller z is the striker
-/// (particle 0), so `direction` must point from striker to target.
+/// run the tracks are merged into particle 0 (see `merge_fragments`); in a collision run there must
+/// be exactly two tracks, and the one starting at smaller z is the striker (particle 0), so
+/// `direction` must point from striker to target.
 pub fn calibrate(
     spots: &SpotFile,
     cal: &CheckedCalibration,
@@ -100,8 +150,12 @@ pub fn calibrate(
                 .collect()
         }
     };
-    let frame0 = linked.iter().map(|s| s.frame).min().unwrap_or(0);
-    let samples = linked
+    let used = match cal.experiment {
+        Experiment::Single => merge_fragments(&tracks),
+        Experiment::Collision => linked,
+    };
+    let frame0 = used.iter().map(|s| s.frame).min().unwrap_or(0);
+    let samples = used
         .iter()
         .map(|s| Sample {
             run: run.clone(),
@@ -135,4 +189,25 @@ pub fn calibrate(
             samples,
         },
     ))
+}
+
+/// The spots of a single run's one sphere from its tracks: trackers split one sphere's track into
+/// fragments when it is briefly lost, and link the odd spurious detection into a short track. The
+/// longest track is taken whole; each shorter one (longest first, then lower id) adds its spots in
+/// frames not yet covered by an earlier track, and its other spots are left out as spurious.
+fn merge_fragments<'a>(tracks: &BTreeMap<i64, Vec<&'a Spot>>) -> Vec<&'a Spot> {
+    let mut order: Vec<(i64, &Vec<&'a Spot>)> = tracks.iter().map(|(&id, ss)| (id, ss)).collect();
+    order.sort_by_key(|&(id, ss)| (std::cmp::Reverse(ss.len()), id));
+    let mut covered: BTreeSet<i64> = BTreeSet::new();
+    let mut kept = Vec::new();
+    for (_, ss) in order {
+        let fresh: Vec<&Spot> = ss
+            .iter()
+            .filter(|s| !covered.contains(&s.frame))
+            .copied()
+            .collect();
+        covered.extend(fresh.iter().map(|s| s.frame));
+        kept.extend(fresh);
+    }
+    kept
 }

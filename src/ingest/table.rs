@@ -3,13 +3,14 @@
 
 use super::error::Problem;
 use polars::prelude::*;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 
 /// One column's cells. CSV columns are all text; Parquet columns keep their type.
 #[derive(Debug, Clone)]
 enum Cells {
-    Text(Vec<Option<String>>),
+    Text(StringChunked),
     Float(Vec<Option<f64>>),
     Int(Vec<Option<i64>>),
     /// A Parquet type groove does not read; the text is the type's name.
@@ -130,7 +131,7 @@ impl Table {
         self.rows.drain(..n);
         for cells in self.columns.values_mut() {
             match cells {
-                Cells::Text(v) => drop(v.drain(..n)),
+                Cells::Text(v) => *v = v.slice(n as i64, v.len() - n),
                 Cells::Float(v) => drop(v.drain(..n)),
                 Cells::Int(v) => drop(v.drain(..n)),
                 Cells::Unsupported(_) => {}
@@ -160,65 +161,28 @@ impl Table {
         })
     }
 
-    /// The cell's text, trimmed; `None` for an empty cell. Numbers of Parquet files are written
-    /// in their shortest round-trip form.
-    pub fn text(&self, column: &str, i: usize) -> Option<String> {
-        match self.columns.get(column)? {
-            Cells::Text(v) => v[i]
-                .as_deref()
-                .map(str::trim)
-                .filter(|s| !s.is_empty())
-                .map(str::to_string),
-            Cells::Float(v) => v[i].map(|x| x.to_string()),
-            Cells::Int(v) => v[i].map(|x| x.to_string()),
-            Cells::Unsupported(_) => None,
+    /// One column, looked up once for reading many rows.
+    pub fn col<'a>(&'a self, name: &'a str) -> Col<'a> {
+        Col {
+            table: self,
+            name,
+            cells: self.columns.get(name),
         }
+    }
+
+    /// The cell's text, trimmed; `None` for an empty cell (see `Col::text`).
+    pub fn text(&self, column: &str, i: usize) -> Option<Cow<'_, str>> {
+        text_of(self.columns.get(column), i)
     }
 
     /// A required non-empty text cell.
     pub fn string(&self, column: &str, i: usize, fix: &str) -> Result<String, Problem> {
-        self.check_supported(column, i)?;
-        self.text(column, i)
-            .ok_or_else(|| self.problem(column, i, "is empty", fix))
+        self.col(column).string(i, fix)
     }
 
-    /// A finite number. `fix` says what to write, e.g. "write a finite number in metres".
+    /// A finite number (see `Col::float`).
     pub fn float(&self, column: &str, i: usize, fix: &str) -> Result<f64, Problem> {
-        self.check_supported(column, i)?;
-        let x =
-            match self.columns.get(column) {
-                Some(Cells::Float(v)) => v[i],
-                Some(Cells::Int(v)) => v[i].map(|x| x as f64),
-                _ => match self.text(column, i) {
-                    None => None,
-                    Some(s) => Some(s.parse::<f64>().map_err(|_| {
-                        self.problem(column, i, format!("{s:?} is not a number"), fix)
-                    })?),
-                },
-            };
-        let x = x.ok_or_else(|| self.problem(column, i, "is empty", fix))?;
-        if !x.is_finite() {
-            return Err(self.problem(column, i, format!("{x} is not a finite number"), fix));
-        }
-        Ok(x)
-    }
-
-    /// A whole number (written as an integer, or as a number with no fractional part such as `12.0`).
-    pub fn int(&self, column: &str, i: usize, fix: &str) -> Result<i64, Problem> {
-        self.check_supported(column, i)?;
-        if let Some(Cells::Int(v)) = self.columns.get(column) {
-            return v[i].ok_or_else(|| self.problem(column, i, "is empty", fix));
-        }
-        let text = self
-            .text(column, i)
-            .ok_or_else(|| self.problem(column, i, "is empty", fix))?;
-        if let Ok(n) = text.parse::<i64>() {
-            return Ok(n);
-        }
-        match text.parse::<f64>() {
-            Ok(x) if x.is_finite() && x.fract() == 0.0 && x.abs() < 9.0e15 => Ok(x as i64),
-            _ => Err(self.problem(column, i, format!("{text:?} is not a whole number"), fix)),
-        }
+        self.col(column).float(i, fix)
     }
 
     /// A problem at data row `i` (0-based) and `column`.
@@ -231,11 +195,78 @@ impl Table {
     ) -> Problem {
         Problem::at(&self.file, self.rows[i], column, message, fix)
     }
+}
 
-    fn check_supported(&self, column: &str, i: usize) -> Result<(), Problem> {
-        match self.columns.get(column) {
+/// One column of a table with typed access to its cells; a missing column reads as empty cells.
+#[derive(Clone, Copy)]
+pub struct Col<'a> {
+    table: &'a Table,
+    name: &'a str,
+    cells: Option<&'a Cells>,
+}
+
+impl<'a> Col<'a> {
+    /// The cell's text, trimmed; `None` for an empty cell. Numbers of Parquet files are written
+    /// in their shortest round-trip form.
+    pub fn text(&self, i: usize) -> Option<Cow<'a, str>> {
+        text_of(self.cells, i)
+    }
+
+    /// A required non-empty text cell.
+    pub fn string(&self, i: usize, fix: &str) -> Result<String, Problem> {
+        self.check_supported(i)?;
+        self.text(i)
+            .map(Cow::into_owned)
+            .ok_or_else(|| self.problem(i, "is empty", fix))
+    }
+
+    /// A finite number. `fix` says what to write, e.g. "write a finite number in metres".
+    pub fn float(&self, i: usize, fix: &str) -> Result<f64, Problem> {
+        self.check_supported(i)?;
+        let x = match self.cells {
+            Some(Cells::Float(v)) => v[i],
+            Some(Cells::Int(v)) => v[i].map(|x| x as f64),
+            _ => match self.text(i) {
+                None => None,
+                Some(s) => Some(
+                    s.parse::<f64>()
+                        .map_err(|_| self.problem(i, format!("{s:?} is not a number"), fix))?,
+                ),
+            },
+        };
+        let x = x.ok_or_else(|| self.problem(i, "is empty", fix))?;
+        if !x.is_finite() {
+            return Err(self.problem(i, format!("{x} is not a finite number"), fix));
+        }
+        Ok(x)
+    }
+
+    /// A whole number (written as an integer, or as a number with no fractional part such as `12.0`).
+    pub fn int(&self, i: usize, fix: &str) -> Result<i64, Problem> {
+        self.check_supported(i)?;
+        if let Some(Cells::Int(v)) = self.cells {
+            return v[i].ok_or_else(|| self.problem(i, "is empty", fix));
+        }
+        let text = self
+            .text(i)
+            .ok_or_else(|| self.problem(i, "is empty", fix))?;
+        if let Ok(n) = text.parse::<i64>() {
+            return Ok(n);
+        }
+        match text.parse::<f64>() {
+            Ok(x) if x.is_finite() && x.fract() == 0.0 && x.abs() < 9.0e15 => Ok(x as i64),
+            _ => Err(self.problem(i, format!("{text:?} is not a whole number"), fix)),
+        }
+    }
+
+    /// A problem at data row `i` (0-based) of this column.
+    pub fn problem(&self, i: usize, message: impl Into<String>, fix: impl Into<String>) -> Problem {
+        self.table.problem(self.name, i, message, fix)
+    }
+
+    fn check_supported(&self, i: usize) -> Result<(), Problem> {
+        match self.cells {
             Some(Cells::Unsupported(dtype)) => Err(self.problem(
-                column,
                 i,
                 format!("has the Parquet type {dtype}, which groove does not read"),
                 "store numbers as float64 or int64 and text as string",
@@ -245,11 +276,25 @@ impl Table {
     }
 }
 
+/// The text of cell `i`, trimmed; `None` if empty.
+fn text_of(cells: Option<&Cells>, i: usize) -> Option<Cow<'_, str>> {
+    match cells? {
+        Cells::Text(v) => v
+            .get(i)
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(Cow::Borrowed),
+        Cells::Float(v) => v[i].map(|x| Cow::Owned(x.to_string())),
+        Cells::Int(v) => v[i].map(|x| Cow::Owned(x.to_string())),
+        Cells::Unsupported(_) => None,
+    }
+}
+
 /// The cells of one polars column.
 fn cells_of(col: &Column) -> PolarsResult<Cells> {
     let dtype = col.dtype().clone();
     Ok(match dtype {
-        DataType::String => Cells::Text(col.str()?.iter().map(|s| s.map(str::to_string)).collect()),
+        DataType::String => Cells::Text(col.str()?.rechunk().into_owned()),
         DataType::Float32 | DataType::Float64 => {
             let c = col.cast(&DataType::Float64)?;
             Cells::Float(c.f64()?.iter().collect())
@@ -258,7 +303,10 @@ fn cells_of(col: &Column) -> PolarsResult<Cells> {
             let c = col.cast(&DataType::Int64)?;
             Cells::Int(c.i64()?.iter().collect())
         }
-        DataType::Null => Cells::Text(vec![None; col.len()]),
+        DataType::Null => {
+            let c = col.cast(&DataType::String)?;
+            Cells::Text(c.str()?.rechunk().into_owned())
+        }
         other => Cells::Unsupported(other.to_string()),
     })
 }

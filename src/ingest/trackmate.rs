@@ -3,7 +3,7 @@
 
 use super::error::Problem;
 use super::params::Axis;
-use super::spots::{axis_column, run_id, Spot, SpotFile};
+use super::spots::{read_spots, SpotColumns, SpotFile};
 use super::table::Table;
 
 const COLUMNS: [(&str, &str); 4] = [
@@ -33,44 +33,12 @@ pub fn read(mut table: Table, axis: Axis) -> Result<(SpotFile, Vec<Problem>), Pr
         })
         .count();
     table.drop_leading_rows(header_rows);
-    let run = run_id(&table.file);
-    let p_column = axis_column(axis, ("POSITION_X", "POSITION_Y"));
-    let mut spots = Vec::with_capacity(table.height());
-    let mut problems = Vec::new();
-    for i in 0..table.height() {
-        let spot = (|| {
-            let frame = table.int("FRAME", i, "write the frame index, a whole number")?;
-            let track = match table.text("TRACK_ID", i) {
-                None => None,
-                Some(s) if s.eq_ignore_ascii_case("none") => None,
-                Some(_) => Some(table.int(
-                    "TRACK_ID",
-                    i,
-                    "write the track id, a whole number, or leave it empty for an unlinked spot",
-                )?),
-            };
-            let p_px = table.float(p_column, i, "write a finite number in pixels")?;
-            Ok::<Spot, Problem>(Spot {
-                track,
-                frame,
-                p_px,
-                row: table.row(i),
-            })
-        })();
-        match spot {
-            Ok(s) => spots.push(s),
-            Err(p) => problems.push(p.in_run(&run)),
-        }
-    }
-    Ok((
-        SpotFile {
-            file: table.file.clone(),
-            run,
-            key_columns: "TRACK_ID, FRAME",
-            frame_column: "FRAME",
-            track_column: "TRACK_ID",
-            spots,
-        },
-        problems,
-    ))
+    let names = SpotColumns {
+        track: "TRACK_ID",
+        frame: "FRAME",
+        x: "POSITION_X",
+        y: "POSITION_Y",
+        key: "TRACK_ID, FRAME",
+    };
+    Ok(read_spots(&table, &names, axis))
 }

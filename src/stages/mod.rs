@@ -2,7 +2,12 @@
 
 use crate::engine::stage::StageKind;
 
+pub mod aggregate;
+pub mod compare;
+pub mod fit;
+pub mod fit_io;
 pub mod ingest;
+pub mod simulate;
 pub mod validate;
 
 /// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
@@ -12,6 +17,10 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
     // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
     kinds.push(Box::new(ingest::Ingest));
+    kinds.push(Box::new(fit::Fit));
+    kinds.push(Box::new(aggregate::Aggregate));
+    kinds.push(Box::new(simulate::Simulate));
+    kinds.push(Box::new(compare::Compare));
     kinds.push(Box::new(validate::Validate));
     kinds
 }

@@ -325,13 +325,13 @@ pub fn normalize(path: &Path) -> PathBuf {
 
 /// Stage references exist; required paths exist; no input reads a materialized output by path.
 fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result<(), EngineError> {
-    let materialized: Vec<(&str, &str, &PathBuf)> = pipeline
+    let materialized: BTreeMap<&PathBuf, (&str, &str)> = pipeline
         .stages
         .values()
         .flat_map(|s| {
             s.outputs
                 .iter()
-                .filter_map(move |(o, p)| p.as_ref().map(|p| (s.name.as_str(), o.as_str(), p)))
+                .filter_map(move |(o, p)| p.as_ref().map(|p| (p, (s.name.as_str(), o.as_str()))))
         })
         .collect();
     for stage in pipeline.stages.values() {
@@ -364,8 +364,9 @@ fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result
                     }
                 }
                 InputSpec::Path { path, optional } => {
-                    if let Some((s, o, _)) =
-                        materialized.iter().find(|(_, _, p)| path.starts_with(p))
+                    if let Some((s, o)) = path
+                        .ancestors()
+                        .find_map(|a| materialized.get(&a.to_path_buf()))
                     {
                         return Err(fail(format!(
                             "{} is written by stage `{s}`; bind it as \"{s}:{o}\" instead of a path",
@@ -388,31 +389,43 @@ fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result
 
 /// No two outputs write one path, nor one inside another.
 fn check_outputs(pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> {
-    let mut seen: Vec<(&PathBuf, &str, &str, usize)> = Vec::new();
+    let mut all: Vec<(&PathBuf, &str, &str, usize)> = Vec::new();
     for stage in pipeline.stages.values() {
         for (output, path) in &stage.outputs {
             let Some(path) = path else { continue };
-            if path == &pipeline.root
-                || path.starts_with(pipeline.root.join(".groove"))
-                || path == &pipeline.config_path
-            {
+            if pipeline.root.starts_with(path) || path.starts_with(pipeline.root.join(".groove")) {
                 return Err(file.error(stage.line, format!(
                     "stage `{}` output `{output}` would overwrite {}; choose a path inside the reports folder",
                     stage.name,
                     pipeline.show(path)
                 )));
             }
-            if let Some((_, other, other_output, other_line)) = seen
-                .iter()
-                .find(|(p, ..)| p.starts_with(path) || path.starts_with(p))
-            {
-                return Err(file.error(stage.line, format!(
-                    "stages `{other}` (line {other_line}, output `{other_output}`) and `{}` (output `{output}`) both write {}; give one of them another path",
-                    stage.name,
-                    pipeline.show(path)
-                )));
-            }
-            seen.push((path, &stage.name, output, stage.line));
+            all.push((path, &stage.name, output, stage.line));
+        }
+    }
+    // sorted by components, a path and everything inside it are neighbours
+    all.sort();
+    for pair in all.windows(2) {
+        let ((a, a_stage, a_output, a_line), (b, b_stage, b_output, b_line)) = (pair[0], pair[1]);
+        if b.starts_with(a) {
+            let (first, second) = if a_line <= b_line {
+                ((a_stage, a_output, a_line), (b_stage, b_output, b_line))
+            } else {
+                ((b_stage, b_output, b_line), (a_stage, a_output, a_line))
+            };
+            let what = if a == b {
+                format!("both write {}", pipeline.show(a))
+            } else {
+                format!(
+                    "write {} and {} inside it",
+                    pipeline.show(a),
+                    pipeline.show(b)
+                )
+            };
+            return Err(file.error(second.2, format!(
+                "stages `{}` (line {}, output `{}`) and `{}` (output `{}`) {what}; give one of them another path",
+                first.0, first.2, first.1, second.0, second.1
+            )));
         }
     }
     Ok(())

@@ -1,0 +1,133 @@
+//! Per-material aggregates of single-run fits: μ (weighted, and the chapter's mean over fast runs),
+//! the T-vs-v0 and μ-vs-v0 lines, each with a seeded bootstrap interval over whole runs.
+
+use super::bootstrap::percentile_intervals;
+use super::regression::{line_fit, mean_where, weighted_mean};
+use super::single::SingleFit;
+use super::summary::{DragLine, Estimate, FrictionLine, MaterialSummary, SingleSummary};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Params of the `aggregate` stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AggregateOptions {
+    pub bootstrap_resamples: usize,
+    pub level: f64,
+    /// The chapter averages μ over runs faster than this.
+    pub fast_min_speed_mps: f64,
+}
+
+impl Default for AggregateOptions {
+    fn default() -> Self {
+        AggregateOptions {
+            bootstrap_resamples: 2000,
+            level: 0.95,
+            fast_min_speed_mps: 0.03,
+        }
+    }
+}
+
+impl AggregateOptions {
+    /// Check ranges; the error names the key and a valid range.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        if !(100..=1_000_000).contains(&self.bootstrap_resamples) {
+            return Err((
+                "bootstrap_resamples".into(),
+                "must be between 100 and 1000000, e.g. 2000".into(),
+            ));
+        }
+        if !(self.level > 0.5 && self.level < 1.0) {
+            return Err((
+                "level".into(),
+                "must be between 0.5 and 1, e.g. 0.95".into(),
+            ));
+        }
+        if !(self.fast_min_speed_mps >= 0.0 && self.fast_min_speed_mps.is_finite()) {
+            return Err((
+                "fast_min_speed_mps".into(),
+                "must be a speed ≥ 0 in m/s, e.g. 0.03".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Aggregate the single-run fits (any order) per material and pooled. `seed` drives the bootstrap.
+pub fn aggregate_single(fits: &[SingleFit], opts: &AggregateOptions, seed: u64) -> SingleSummary {
+    let mut by_material: BTreeMap<&str, Vec<&SingleFit>> = BTreeMap::new();
+    let mut sorted: Vec<&SingleFit> = fits.iter().collect();
+    sorted.sort_by(|a, b| a.run.cmp(&b.run));
+    for f in &sorted {
+        by_material.entry(f.material.as_str()).or_default().push(f);
+    }
+    let materials = by_material
+        .iter()
+        .map(|(m, fs)| (m.to_string(), material_summary(fs, opts, seed ^ fnv1a(m))))
+        .collect();
+    let pooled = material_summary(&sorted, opts, seed ^ fnv1a("\0pooled"));
+    SingleSummary {
+        n_runs: fits.len(),
+        n_converged: pooled.n_converged,
+        fast_min_speed_mps: opts.fast_min_speed_mps,
+        materials,
+        pooled,
+    }
+}
+
+fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> MaterialSummary {
+    let ok: Vec<&&SingleFit> = fits.iter().filter(|f| f.status == "converged").collect();
+    let speed: Vec<f64> = ok.iter().map(|f| f.v0_mps.abs()).collect();
+    let mu: Vec<f64> = ok.iter().map(|f| f.mu).collect();
+    let mu_se: Vec<f64> = ok.iter().map(|f| f.mu_se.unwrap_or(f64::NAN)).collect();
+    let t: Vec<f64> = ok.iter().map(|f| f.t_drag_s).collect();
+    let fast = |i: usize| speed[i] > opts.fast_min_speed_mps;
+    let stats = |idx: &[usize]| {
+        let (ta, tb) = line_fit(&speed, &t, idx);
+        let (ma, mb) = line_fit(&speed, &mu, idx);
+        [
+            weighted_mean(&mu, &mu_se, idx),
+            mean_where(&mu, idx, fast),
+            ta,
+            tb,
+            ma,
+            mb,
+        ]
+    };
+    let all: Vec<usize> = (0..ok.len()).collect();
+    let point = stats(&all);
+    let ci = percentile_intervals(ok.len(), opts.bootstrap_resamples, seed, opts.level, stats);
+    let est = |k: usize| Estimate {
+        value: point[k],
+        interval: if point[k].is_finite() { ci[k] } else { None },
+    };
+    let speed_range_mps = (!speed.is_empty()).then(|| {
+        [
+            speed.iter().copied().fold(f64::INFINITY, f64::min),
+            speed.iter().copied().fold(0.0, f64::max),
+        ]
+    });
+    MaterialSummary {
+        n_runs: fits.len(),
+        n_converged: ok.len(),
+        mu_weighted: est(0),
+        mu_fast: est(1),
+        n_fast: (0..ok.len()).filter(|&i| fast(i)).count(),
+        t_vs_v0: DragLine {
+            intercept_s: est(2),
+            slope_s_per_mps: est(3),
+        },
+        mu_vs_v0: FrictionLine {
+            intercept: est(4),
+            slope_per_mps: est(5),
+        },
+        speed_range_mps,
+    }
+}
+
+/// FNV-1a of a name: a fixed, platform-independent way to give each material its own stream.
+fn fnv1a(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    })
+}

@@ -1,0 +1,74 @@
+//! Options of every fit (the `params` of the `fit` stage): groove geometry, loss, outlier cut.
+
+use super::loss::Loss;
+use crate::physics::Groove;
+use serde::{Deserialize, Serialize};
+
+/// How runs are fitted. Defaults are the chapter's groove and a Huber loss.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitOptions {
+    /// Opening angle θ of the v-groove, degrees.
+    pub groove_angle_deg: f64,
+    /// k = m R² / I (5/2 for a solid sphere).
+    pub k: f64,
+    pub loss: Loss,
+    /// Frames with |residual| above this many robust scales are flagged and left out.
+    pub outlier_sigma: f64,
+    pub max_iterations: u32,
+    /// A track with fewer frames is not fitted (status `failed`, reason `too_few_points`).
+    pub min_frames: usize,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            groove_angle_deg: 70.6,
+            k: 2.5,
+            loss: Loss::Huber,
+            outlier_sigma: 5.0,
+            max_iterations: 200,
+            min_frames: 10,
+        }
+    }
+}
+
+impl FitOptions {
+    /// The groove these options describe.
+    pub fn groove(&self) -> Groove {
+        Groove {
+            k: self.k,
+            ..Groove::from_angle_deg(self.groove_angle_deg)
+        }
+    }
+
+    /// Check ranges; the error names the key and a valid range.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let bad = |key: &str, msg: &str| Err((key.to_string(), msg.to_string()));
+        if !(self.groove_angle_deg > 0.0 && self.groove_angle_deg < 180.0) {
+            return bad(
+                "groove_angle_deg",
+                "must be between 0 and 180 degrees, e.g. 70.6",
+            );
+        }
+        if !(self.k > 0.0 && self.k.is_finite()) {
+            return bad("k", "must be positive (2.5 for a solid sphere)");
+        }
+        if !(self.outlier_sigma >= 2.0 && self.outlier_sigma.is_finite()) {
+            return bad(
+                "outlier_sigma",
+                "must be at least 2 (robust scales), e.g. 5",
+            );
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations", "must be at least 1, e.g. 200");
+        }
+        if self.min_frames < 8 {
+            return bad(
+                "min_frames",
+                "must be at least 8 (the model has 5 free parameters)",
+            );
+        }
+        Ok(())
+    }
+}

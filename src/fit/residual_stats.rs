@@ -1,0 +1,298 @@
+//! Pooled statistics of re-simulation residuals, grouped by phase, speed, position, direction,
+//! material and run: what is left for the discovery to explain. Outlier frames are left out.
+//!
+//! Per group: count, mean, RMS, lag-1 autocorrelation (about zero, over consecutive frames of the
+//! same run in the same group) and the Wald–Wolfowitz runs test of the residual signs (runs summed
+//! over the runs' stretches, z = (R − E[R])/sd[R]; strongly negative z = long same-sign stretches,
+//! i.e. structure the model misses).
+
+use super::residuals::{Phase, RunResiduals};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Upper edges (m/s) of the speed bins of |v_fit|; the last bin is open.
+pub const SPEED_EDGES_MPS: [f64; 7] = [0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2];
+/// Number of equal-width position bins over the pooled range of z_obs.
+pub const POSITION_BINS: usize = 10;
+
+/// Statistics of one group of residuals.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GroupStats {
+    pub n: usize,
+    pub mean_m: f64,
+    pub rms_m: f64,
+    /// Σ r_i r_{i+1} / Σ r_i² over consecutive pairs; null if no pairs.
+    pub lag1_autocorr: Option<f64>,
+    /// Runs-test z of the residual signs; null if too few frames of both signs.
+    pub runs_test_z: Option<f64>,
+}
+
+/// A group with its bin edges (speed in m/s, position in m).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bin {
+    pub lo: f64,
+    /// Null for the open last speed bin.
+    pub hi: Option<f64>,
+    pub stats: GroupStats,
+}
+
+/// The `comparison` artifact of the `compare` stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Comparison {
+    pub n_runs: usize,
+    /// Runs without residuals (failed fits, collision runs), by run id, with the reason.
+    pub skipped: BTreeMap<String, String>,
+    pub n_frames: usize,
+    pub n_outliers: usize,
+    pub overall: GroupStats,
+    pub by_phase: BTreeMap<Phase, GroupStats>,
+    pub by_speed: Vec<Bin>,
+    pub by_position: Vec<Bin>,
+    /// "+z" and "-z".
+    pub by_direction: BTreeMap<String, GroupStats>,
+    pub by_material: BTreeMap<String, GroupStats>,
+    pub by_run: BTreeMap<String, GroupStats>,
+}
+
+/// Running sums of one group; `last` marks where the current stretch of a run stopped.
+#[derive(Default, Clone)]
+struct Acc {
+    n: usize,
+    sum: f64,
+    sum_sq: f64,
+    lag_num: f64,
+    lag_den: f64,
+    runs: f64,
+    runs_mean: f64,
+    runs_var: f64,
+}
+
+impl Acc {
+    fn stats(&self) -> GroupStats {
+        if self.n == 0 {
+            return GroupStats::default();
+        }
+        let n = self.n as f64;
+        GroupStats {
+            n: self.n,
+            mean_m: self.sum / n,
+            rms_m: (self.sum_sq / n).sqrt(),
+            lag1_autocorr: (self.lag_den > 0.0).then(|| self.lag_num / self.lag_den),
+            runs_test_z: (self.runs_var > 0.0)
+                .then(|| (self.runs - self.runs_mean) / self.runs_var.sqrt()),
+        }
+    }
+
+    /// Add one stretch: consecutive included frames of one run in this group.
+    fn add_stretch(&mut self, r: &[f64]) {
+        let (mut plus, mut minus, mut runs, mut prev) = (0.0, 0.0, 0.0, 0.0f64);
+        for (i, &x) in r.iter().enumerate() {
+            self.n += 1;
+            self.sum += x;
+            self.sum_sq += x * x;
+            if i + 1 < r.len() {
+                self.lag_num += x * r[i + 1];
+                self.lag_den += x * x;
+            }
+            if x != 0.0 {
+                if x > 0.0 {
+                    plus += 1.0
+                } else {
+                    minus += 1.0
+                }
+                if prev == 0.0 || x.signum() != prev.signum() {
+                    runs += 1.0;
+                }
+                prev = x;
+            }
+        }
+        let m = plus + minus;
+        if plus > 0.0 && minus > 0.0 && m > 1.0 {
+            self.runs += runs;
+            self.runs_mean += 1.0 + 2.0 * plus * minus / m;
+            self.runs_var += 2.0 * plus * minus * (2.0 * plus * minus - m) / (m * m * (m - 1.0));
+        }
+    }
+}
+
+/// Feed a run's frames into the accumulator of each frame's group (`key` gives it; None skips the
+/// frame), cutting stretches where the group changes or an outlier intervenes.
+fn feed<K: Ord + Clone>(
+    accs: &mut BTreeMap<K, Acc>,
+    res: &RunResiduals,
+    key: impl Fn(usize) -> Option<K>,
+    buf: &mut Vec<f64>,
+) {
+    let mut cur: Option<K> = None;
+    buf.clear();
+    for i in 0..res.residual_m.len() {
+        let k = if res.outlier[i] { None } else { key(i) };
+        if k != cur {
+            if let Some(c) = cur.take() {
+                accs.entry(c).or_default().add_stretch(buf);
+            }
+            buf.clear();
+            cur = k;
+        }
+        if cur.is_some() {
+            buf.push(res.residual_m[i]);
+        }
+    }
+    if let Some(c) = cur {
+        accs.entry(c).or_default().add_stretch(buf);
+    }
+}
+
+fn finish<K: Ord>(m: BTreeMap<K, Acc>) -> BTreeMap<K, GroupStats> {
+    m.into_iter().map(|(k, a)| (k, a.stats())).collect()
+}
+
+fn speed_bin(v: f64) -> usize {
+    SPEED_EDGES_MPS
+        .iter()
+        .position(|&e| v.abs() < e)
+        .unwrap_or(SPEED_EDGES_MPS.len())
+}
+
+/// Pool the residuals of many runs (any order; runs are taken sorted by id).
+pub fn compare(all: &[RunResiduals]) -> Comparison {
+    let mut runs: Vec<&RunResiduals> = all.iter().collect();
+    runs.sort_by(|a, b| a.run.cmp(&b.run));
+    let mut skipped = BTreeMap::new();
+    let used: Vec<&RunResiduals> = runs
+        .iter()
+        .copied()
+        .filter(|r| {
+            let ok = r.status == "ok";
+            if !ok {
+                skipped.insert(r.run.clone(), r.status.clone());
+            }
+            ok
+        })
+        .collect();
+    let (mut z_lo, mut z_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in &used {
+        for (i, &z) in r.z_obs_m.iter().enumerate() {
+            if !r.outlier[i] {
+                z_lo = z_lo.min(z);
+                z_hi = z_hi.max(z);
+            }
+        }
+    }
+    let width = (z_hi - z_lo) / POSITION_BINS as f64;
+    let pos_bin = |z: f64| {
+        ((z - z_lo) / width)
+            .floor()
+            .clamp(0.0, (POSITION_BINS - 1) as f64) as usize
+    };
+
+    let mut overall = BTreeMap::new();
+    let mut by_phase = BTreeMap::new();
+    let mut by_speed = BTreeMap::new();
+    let mut by_position = BTreeMap::new();
+    let mut by_direction = BTreeMap::new();
+    let mut by_material = BTreeMap::new();
+    let mut by_run = BTreeMap::new();
+    let mut buf = Vec::new();
+    let (mut n_frames, mut n_outliers) = (0, 0);
+    for r in &used {
+        n_frames += r.residual_m.len();
+        n_outliers += r.outlier.iter().filter(|&&o| o).count();
+        let dir = if r.direction >= 0 { "+z" } else { "-z" };
+        feed(&mut overall, r, |_| Some(()), &mut buf);
+        feed(&mut by_phase, r, |i| Some(r.phase[i]), &mut buf);
+        feed(
+            &mut by_speed,
+            r,
+            |i| Some(speed_bin(r.v_fit_mps[i])),
+            &mut buf,
+        );
+        if width > 0.0 {
+            feed(
+                &mut by_position,
+                r,
+                |i| Some(pos_bin(r.z_obs_m[i])),
+                &mut buf,
+            );
+        }
+        feed(&mut by_direction, r, |_| Some(dir.to_string()), &mut buf);
+        feed(&mut by_material, r, |_| Some(r.material.clone()), &mut buf);
+        feed(&mut by_run, r, |_| Some(r.run.clone()), &mut buf);
+    }
+    Comparison {
+        n_runs: used.len(),
+        skipped,
+        n_frames,
+        n_outliers,
+        overall: overall.get(&()).map(Acc::stats).unwrap_or_default(),
+        by_phase: finish(by_phase),
+        by_speed: by_speed
+            .into_iter()
+            .map(|(b, a)| Bin {
+                lo: if b == 0 { 0.0 } else { SPEED_EDGES_MPS[b - 1] },
+                hi: SPEED_EDGES_MPS.get(b).copied(),
+                stats: a.stats(),
+            })
+            .collect(),
+        by_position: by_position
+            .into_iter()
+            .map(|(b, a)| Bin {
+                lo: z_lo + b as f64 * width,
+                hi: Some(z_lo + (b + 1) as f64 * width),
+                stats: a.stats(),
+            })
+            .collect(),
+        by_direction: finish(by_direction),
+        by_material: finish(by_material),
+        by_run: finish(by_run),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::Experiment;
+
+    fn run(id: &str, r: Vec<f64>) -> RunResiduals {
+        let n = r.len();
+        RunResiduals {
+            run: id.into(),
+            material: "316".into(),
+            experiment: Experiment::Single,
+            direction: 1,
+            status: "ok".into(),
+            t_s: (0..n).map(|i| i as f64 * 1e-4).collect(),
+            z_obs_m: (0..n).map(|i| i as f64 * 1e-6).collect(),
+            z_fit_m: vec![0.0; n],
+            residual_m: r,
+            v_fit_mps: vec![0.01; n],
+            phase: vec![Phase::Rolling; n],
+            outlier: vec![false; n],
+        }
+    }
+
+    #[test]
+    fn alternating_signs_give_negative_autocorrelation_and_many_runs() {
+        let alt: Vec<f64> = (0..200)
+            .map(|i| if i % 2 == 0 { 1e-6 } else { -1e-6 })
+            .collect();
+        let c = compare(&[run("a", alt)]);
+        let s = c.overall;
+        assert_eq!(s.n, 200);
+        assert!((s.rms_m - 1e-6).abs() < 1e-15 && s.mean_m.abs() < 1e-15);
+        assert!((s.lag1_autocorr.unwrap() + 1.0).abs() < 0.01);
+        // 200 runs where ~101 are expected: z ≈ +14
+        assert!(s.runs_test_z.unwrap() > 10.0);
+    }
+
+    #[test]
+    fn a_smooth_bump_gives_positive_autocorrelation_and_few_runs() {
+        let bump: Vec<f64> = (0..200).map(|i| 1e-6 * (i as f64 * 0.05).sin()).collect();
+        let c = compare(&[run("b", bump)]);
+        assert!(c.overall.lag1_autocorr.unwrap() > 0.95);
+        assert!(c.overall.runs_test_z.unwrap() < -10.0);
+        assert_eq!(c.by_position.len(), POSITION_BINS);
+        assert_eq!(c.by_speed.len(), 1);
+        assert_eq!(c.by_speed[0].lo, 0.01);
+    }
+}

@@ -1,0 +1,160 @@
+//! Fit of a single run: the closed-form baseline (μ, T) with nuisance offset z0, kick time t0
+//! (within the first frame) and initial velocity v0 (its sign is the direction), robustly.
+
+use super::lm::Workspace;
+use super::model::{Prepared, MU, T0, TD, V0, Z0};
+use super::options::FitOptions;
+use super::robust::fit_robust;
+use super::segment::{model_bounds, settings};
+use super::start::single_start;
+use super::status::Termination;
+use super::track_problem::TrackProblem;
+use crate::physics::Groove;
+use crate::recording::Recording;
+use serde::{Deserialize, Serialize};
+
+/// The fit of one single run (JSON item of the `fit` stage, and a row of fits.csv).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SingleFit {
+    pub run: String,
+    pub material: String,
+    /// The groove the fit assumed (re-simulation uses the same).
+    pub groove: Groove,
+    /// Velocity at the kick, m/s; negative for motion towards −z.
+    pub v0_mps: f64,
+    pub v0_se: Option<f64>,
+    pub mu: f64,
+    pub mu_se: Option<f64>,
+    /// Linear-drag time constant T.
+    pub t_drag_s: f64,
+    pub t_drag_se: Option<f64>,
+    /// Position at the kick.
+    pub z0_m: f64,
+    pub z0_se: Option<f64>,
+    /// Time from the kick to the first frame (t_s = 0), within one frame.
+    pub t0_s: f64,
+    pub t0_se: Option<f64>,
+    /// Switch from sliding to rolling, seconds after the kick (computed from v0, μ, T).
+    #[serde(with = "super::nan_null")]
+    pub t1_s: f64,
+    /// RMS of the residuals of the frames used, and the robust scale (1.4826·MAD).
+    #[serde(with = "super::nan_null")]
+    pub rms_m: f64,
+    #[serde(with = "super::nan_null")]
+    pub scale_m: f64,
+    /// Frames with |residual| above this were flagged as outliers and left out.
+    #[serde(with = "super::nan_null")]
+    pub outlier_cut_m: f64,
+    pub n_frames: usize,
+    pub n_used: usize,
+    pub n_outliers: usize,
+    pub iterations: u32,
+    pub termination: Termination,
+    /// `converged`, `max_iterations` or `failed` (the status column of fits.csv).
+    pub status: String,
+}
+
+/// Fit particle 0 of a single run.
+pub fn fit_single(rec: &Recording, opts: &FitOptions) -> SingleFit {
+    fit_single_with(rec, opts, &mut Workspace::default())
+}
+
+/// [`fit_single`] with caller-owned buffers.
+pub fn fit_single_with(rec: &Recording, opts: &FitOptions, ws: &mut Workspace) -> SingleFit {
+    let empty = (Vec::new(), Vec::new());
+    let (t, z) = rec
+        .track(0)
+        .map_or((&empty.0, &empty.1), |tr| (&tr.t_s, &tr.z_m));
+    let mut fit = fit_track(t, z, rec.info.fps, opts, ws);
+    fit.run = rec.info.run.clone();
+    fit.material = rec.info.material.clone();
+    fit
+}
+
+/// Fit the frames of one single-particle track recorded at `fps`; `run` and `material` are left empty.
+pub fn fit_track(
+    t_s: &[f64],
+    z_m: &[f64],
+    fps: f64,
+    opts: &FitOptions,
+    ws: &mut Workspace,
+) -> SingleFit {
+    let n = t_s.len().min(z_m.len());
+    let groove = opts.groove();
+    if n < opts.min_frames.max(8) || !(fps > 0.0) {
+        return failed(n, groove, Termination::TooFewPoints);
+    }
+    let (t_s, z_m) = (&t_s[..n], &z_m[..n]);
+    let x0 = single_start(t_s, z_m, fps, groove, &mut ws.scratch);
+    let mut bounds = model_bounds();
+    bounds.free = [true, true, true, false, true, true];
+    bounds.hi[T0] = 1.0 / fps;
+    if x0[V0] > 0.0 {
+        bounds.lo[V0] = 1e-7;
+    } else {
+        bounds.hi[V0] = -1e-7;
+    }
+    let prob = TrackProblem {
+        t_s,
+        z_m,
+        t_ref_s: 0.0,
+        groove,
+    };
+    let r = fit_robust(&prob, x0, &bounds, &settings(opts), ws);
+    let x = r.x;
+    let t1_s = Prepared::new(&x, groove).map_or(f64::NAN, |m| m.t1_s);
+    SingleFit {
+        run: String::new(),
+        material: String::new(),
+        groove,
+        v0_mps: x[V0],
+        v0_se: r.se[V0],
+        mu: x[MU],
+        mu_se: r.se[MU],
+        t_drag_s: x[TD],
+        t_drag_se: r.se[TD],
+        z0_m: x[Z0],
+        z0_se: r.se[Z0],
+        t0_s: x[T0],
+        t0_se: r.se[T0],
+        t1_s,
+        rms_m: r.rms,
+        scale_m: r.scale,
+        outlier_cut_m: opts.outlier_sigma * r.scale,
+        n_frames: n,
+        n_used: r.n_used,
+        n_outliers: r.n_outliers,
+        iterations: r.iterations,
+        termination: r.termination,
+        status: r.termination.status_word().to_string(),
+    }
+}
+
+fn failed(n: usize, groove: Groove, why: Termination) -> SingleFit {
+    let nan = f64::NAN;
+    SingleFit {
+        run: String::new(),
+        material: String::new(),
+        groove,
+        v0_mps: 0.0,
+        v0_se: None,
+        mu: 0.0,
+        mu_se: None,
+        t_drag_s: 0.0,
+        t_drag_se: None,
+        z0_m: 0.0,
+        z0_se: None,
+        t0_s: 0.0,
+        t0_se: None,
+        t1_s: nan,
+        rms_m: nan,
+        scale_m: nan,
+        outlier_cut_m: nan,
+        n_frames: n,
+        n_used: 0,
+        n_outliers: 0,
+        iterations: 0,
+        termination: why,
+        status: why.status_word().to_string(),
+    }
+}

@@ -1,0 +1,42 @@
+//! The least-squares problem of one track: observed positions against the closed-form model.
+
+use super::lm::Problem;
+use super::model::{Prepared, NP};
+use crate::physics::Groove;
+
+/// Frames (t, z) of one track, the model's time origin and the groove.
+pub struct TrackProblem<'a> {
+    pub t_s: &'a [f64],
+    pub z_m: &'a [f64],
+    pub t_ref_s: f64,
+    pub groove: Groove,
+}
+
+impl Problem for TrackProblem<'_> {
+    fn n_obs(&self) -> usize {
+        self.t_s.len()
+    }
+
+    fn residuals(&self, x: &[f64; NP], r: &mut [f64], jac: Option<&mut [[f64; NP]]>) -> bool {
+        let Some(m) = Prepared::new(x, self.groove) else {
+            return false;
+        };
+        let mut finite = true;
+        match jac {
+            Some(jac) => {
+                for i in 0..self.t_s.len() {
+                    let zi = m.eval_grad(self.t_s[i], self.t_ref_s, &mut jac[i]);
+                    r[i] = zi - self.z_m[i];
+                    finite &= r[i].is_finite();
+                }
+            }
+            None => {
+                for i in 0..self.t_s.len() {
+                    r[i] = m.eval(self.t_s[i], self.t_ref_s) - self.z_m[i];
+                    finite &= r[i].is_finite();
+                }
+            }
+        }
+        finite
+    }
+}

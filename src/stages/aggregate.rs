@@ -1,0 +1,90 @@
+//! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out.
+// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/aggregate.rs src/stages/fit_io.rs
+
+use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_info};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
+use crate::fit::aggregate::{aggregate_single, AggregateOptions};
+use crate::fit::summary::{BootstrapInfo, Summary};
+use crate::fit::{collision, fits_csv, RunFit};
+
+/// `kind = "aggregate"`: per-material aggregates of the fits.
+pub struct Aggregate;
+
+impl StageKind for Aggregate {
+    fn kind(&self) -> &'static str {
+        "aggregate"
+    }
+    fn inputs(&self) -> &'static [&'static str] {
+        &["fits", "runs"]
+    }
+    fn outputs(&self) -> &'static [&'static str] {
+        &["summary", "fits_csv"]
+    }
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
+        let (opts, json) = typed_params::<AggregateOptions>(params)?;
+        opts.validate().map_err(param_error)?;
+        Ok(json)
+    }
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (opts, _) = typed_params::<AggregateOptions>(input.params)
+            .map_err(|e| StageError(e.to_string()))?;
+        let fits = collection_input(input, "fits", "aggregate")?;
+        let runs = collection_input(input, "runs", "aggregate")?;
+        let mut singles = Vec::new();
+        let mut collisions = Vec::new();
+        for (item, bytes) in fits {
+            match parse_item::<RunFit>(item, bytes, "the fit")? {
+                RunFit::Single(f) => singles.push(f),
+                RunFit::Collision(c) => {
+                    let rec = runs.get(item).ok_or_else(|| {
+                        StageError(format!(
+                            "the fit of `{item}` has no run in `runs`; bind `runs` to the same ingest output the fit stage read"
+                        ))
+                    })?;
+                    collisions.push((run_info(item, rec)?, c));
+                }
+            }
+        }
+        let mut notes = Vec::new();
+        let single = if singles.is_empty() {
+            notes.push(
+                "no single runs in this dataset: μ_pg and the T-vs-v0 line are skipped".to_string(),
+            );
+            None
+        } else {
+            Some(aggregate_single(&singles, &opts, input.seed))
+        };
+        let collisions = if collisions.is_empty() {
+            notes.push(
+                "no collision runs in this dataset: μ_pp and restitution are skipped".to_string(),
+            );
+            None
+        } else {
+            Some(collision::summarize(&collisions))
+        };
+        let summary = Summary {
+            single,
+            collisions,
+            notes,
+            bootstrap: BootstrapInfo {
+                resamples: opts.bootstrap_resamples,
+                level: opts.level,
+                seed: input.seed,
+                unit: "whole runs, resampled with replacement within each material".into(),
+            },
+        };
+        Ok([
+            (
+                "summary".to_string(),
+                Artifact::File(json_pretty(&summary)?),
+            ),
+            (
+                "fits_csv".to_string(),
+                Artifact::File(fits_csv::render(&singles).into_bytes()),
+            ),
+        ]
+        .into())
+    }
+}

@@ -1,0 +1,45 @@
+//! The `fit` stage kind (per run): a Recording in, its `fit::RunFit` JSON out.
+// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/fit.rs src/stages/fit_io.rs
+
+use super::fit_io::{file_input, json_bytes, param_error};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
+use crate::fit::{collision, single, FitOptions, RunFit};
+use crate::recording::{Experiment, Recording};
+
+/// `kind = "fit"`, `foreach = "runs"`: fit one run.
+pub struct Fit;
+
+impl StageKind for Fit {
+    fn kind(&self) -> &'static str {
+        "fit"
+    }
+    fn inputs(&self) -> &'static [&'static str] {
+        &["runs"]
+    }
+    fn outputs(&self) -> &'static [&'static str] {
+        &["fits"]
+    }
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
+        let (opts, json) = typed_params::<FitOptions>(params)?;
+        opts.validate().map_err(param_error)?;
+        Ok(json)
+    }
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (opts, _) =
+            typed_params::<FitOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let bytes = file_input(input, "runs", "fit")?;
+        let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
+            StageError(format!(
+                "run {}: the recording is not valid JSON ({e}); rerun the ingest stage",
+                input.item.unwrap_or("?")
+            ))
+        })?;
+        let fit = match rec.info.experiment {
+            Experiment::Single => RunFit::Single(single::fit_single(&rec, &opts)),
+            Experiment::Collision => RunFit::Collision(collision::fit_collision(&rec, &opts)),
+        };
+        Ok([("fits".to_string(), Artifact::File(json_bytes(&fit)?))].into())
+    }
+}
