@@ -1,37 +1,30 @@
-//! PLACEHOLDER for the collision fits (owned by the collision helper, branch `collision`): only the
-//! contract's names, so that `fit::RunFit` and the aggregate stage compile before that branch is
-//! merged. Every function here says plainly that collision fitting is not built.
+//! Collision runs: split both tracks at the impacts, fit each phase with the closed-form motion
+//! (nonzero initial spin), recover velocities and spins before and after every impact, and
+//! summarize μ_pp and the coefficient of restitution over a dataset.
+//!
+//! Code map: `fit` (entry) → `detect` (noise, departure from rest, contacts in the gap) →
+//! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
+//! (the joint piecewise model) → `lm` (robust solver) → `report` (the per-run record, `types`).
+//! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
+//! form, `impulse` is the impact model.
 
-use super::FitOptions;
-use crate::recording::{Recording, RunInfo};
-use serde::{Deserialize, Serialize};
+pub mod curves;
+pub mod detect;
+mod fit;
+pub mod impulse;
+pub mod lm;
+pub mod model;
+pub mod motion;
+pub mod mu_pp;
+mod options;
+pub mod plan;
+mod report;
+mod secondary;
+mod start;
+pub mod summary;
+pub mod types;
 
-/// The fit of one collision run (placeholder: carries only a status).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CollisionFit {
-    pub run: String,
-    pub status: String,
-}
-
-/// Collision aggregates (placeholder).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CollisionSummary {
-    pub status: String,
-}
-
-const NOT_BUILT: &str = "not_built: collision fitting is not merged into this build";
-
-/// Fit a collision run (placeholder: returns the status `not_built`).
-pub fn fit_collision(rec: &Recording, _opts: &FitOptions) -> CollisionFit {
-    CollisionFit {
-        run: rec.info.run.clone(),
-        status: NOT_BUILT.to_string(),
-    }
-}
-
-/// Aggregate collision fits (placeholder: returns the status `not_built`).
-pub fn summarize(_fits: &[(RunInfo, CollisionFit)]) -> CollisionSummary {
-    CollisionSummary {
-        status: NOT_BUILT.to_string(),
-    }
-}
+pub use fit::fit_collision;
+pub use options::CollisionOptions;
+pub use summary::{summarize, summarize_seeded, CollisionSummary};
+pub use types::CollisionFit;

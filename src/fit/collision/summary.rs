@@ -1,0 +1,323 @@
+//! `summarize`: the collision results of a dataset — μ_pp (slope of Δv_a against Δv_z of the
+//! target over slip impacts, and a fit of the whole impulse model), and the coefficient of
+//! restitution against impact speed per material and setup, with seeded bootstrap intervals
+//! over whole runs. Also the points behind Figs. 4.4a–c.
+
+use super::curves::{exp_fit, line_fit, one_minus_av};
+use super::mu_pp::{impulse_fit, slip_slope};
+use super::types::{CollisionFit, CollisionStatus, Contact, ImpactFit, PreImpactSource};
+use crate::recording::{RunInfo, Setup};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A point estimate with a 95 % percentile bootstrap interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Interval {
+    pub value: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// μ_pp estimates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MuPp {
+    /// The headline value: the impulse-model fit when there are slip impacts, else None.
+    pub value: Option<Interval>,
+    /// Slope of −sign(S)·Δv_a against Δv_z of the target over slip impacts, divided by k.
+    pub from_slip_slope: Option<Interval>,
+    /// μ_pp minimizing the misfit of the measured spin changes of both particles to the
+    /// impulse model, stick and slip impacts together.
+    pub from_impulse_fit: Option<Interval>,
+    /// Stick impacts need μ_pp > |S| / (2 k J); the largest such bound.
+    pub stick_lower_bound: Option<f64>,
+    pub n_slip: usize,
+    pub n_stick: usize,
+    pub n_undetermined: usize,
+}
+
+/// C against impact speed for one material and setup, over the first impact of each run
+/// (secondary impacts are slow and short-lived; they are listed in `restitution_points`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RestitutionCurve {
+    pub material: String,
+    pub setup: Option<Setup>,
+    pub n_impacts: usize,
+    pub n_runs: usize,
+    /// C = c0 − slope · v (weighted least squares).
+    pub c0: Interval,
+    pub slope_per_mps: Interval,
+    /// C = 1 − a · v, the chapter's "C → 1 at low speed" form.
+    pub a_per_mps: Interval,
+    /// C = c_inf + (1 − c_inf) e^{−v/v_ref}: 1 for a gentle touch, falling to c_inf
+    /// (the form `physics::Restitution::SpeedDependent` simulates).
+    pub c_inf: Interval,
+    pub v_ref_mps: Interval,
+    pub mean_c: f64,
+    pub min_speed_mps: f64,
+    pub max_speed_mps: f64,
+}
+
+/// One impact in Fig. 4.4a (target, striker-forward frame).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpinPoint {
+    pub run: String,
+    pub material: String,
+    pub impact: usize,
+    pub dvz_mps: f64,
+    pub dvz_se_mps: Option<f64>,
+    pub dva_mps: f64,
+    pub dva_se_mps: Option<f64>,
+    pub contact: Contact,
+}
+
+/// One impact in Figs. 4.4b–c.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RestitutionPoint {
+    pub run: String,
+    pub material: String,
+    pub setup: Option<Setup>,
+    pub impact: usize,
+    pub impact_speed_mps: f64,
+    pub restitution: f64,
+    pub restitution_se: Option<f64>,
+    pub striker_before_source: PreImpactSource,
+}
+
+/// `summary.json` → "collisions".
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CollisionSummary {
+    pub n_runs: usize,
+    pub n_runs_fitted: usize,
+    pub n_impacts: usize,
+    pub k: f64,
+    pub mu_pp: MuPp,
+    pub restitution: Vec<RestitutionCurve>,
+    pub spin_points: Vec<SpinPoint>,
+    pub restitution_points: Vec<RestitutionPoint>,
+    pub bootstrap_seed: u64,
+    pub bootstrap_resamples: usize,
+    pub notes: Vec<String>,
+}
+
+/// Default bootstrap seed when the caller has none (the aggregate stage passes its own).
+pub const DEFAULT_SEED: u64 = 20261122;
+const RESAMPLES: usize = 400;
+/// Impacts whose C has a larger standard error are left out of the curves.
+const MAX_C_SE: f64 = 0.1;
+
+/// Summarize with the default seed and k = 5/2.
+pub fn summarize(fits: &[(RunInfo, CollisionFit)]) -> CollisionSummary {
+    summarize_seeded(fits, 2.5, DEFAULT_SEED)
+}
+
+fn usable(f: &CollisionFit) -> bool {
+    matches!(
+        f.status,
+        CollisionStatus::Converged | CollisionStatus::MaxIterations
+    )
+}
+
+fn setup_of(info: &RunInfo, f: &CollisionFit) -> Option<Setup> {
+    f.setup.or(info.setup)
+}
+
+/// Summarize collision fits; `k` = m R²/I; bootstrap seeded with `seed`.
+pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> CollisionSummary {
+    let runs: Vec<&(RunInfo, CollisionFit)> = fits.iter().filter(|(_, f)| usable(f)).collect();
+    let mut notes = Vec::new();
+    let mut spin_points = Vec::new();
+    let mut restitution_points = Vec::new();
+    for (info, f) in &runs {
+        for im in &f.impacts {
+            spin_points.push(SpinPoint {
+                run: f.run.clone(),
+                material: info.material.clone(),
+                impact: im.index,
+                dvz_mps: im.target_dvz_mps.value,
+                dvz_se_mps: im.target_dvz_mps.se,
+                dva_mps: im.target_dva_mps.value,
+                dva_se_mps: im.target_dva_mps.se,
+                contact: im.contact,
+            });
+            restitution_points.push(RestitutionPoint {
+                run: f.run.clone(),
+                material: info.material.clone(),
+                setup: setup_of(info, f),
+                impact: im.index,
+                impact_speed_mps: im.impact_speed_mps.value,
+                restitution: im.restitution.value,
+                restitution_se: im.restitution.se,
+                striker_before_source: im.striker_before_source,
+            });
+        }
+    }
+    let impacts_of = |sel: &[usize]| -> Vec<&ImpactFit> {
+        sel.iter().flat_map(|&i| runs[i].1.impacts.iter()).collect()
+    };
+    let all: Vec<usize> = (0..runs.len()).collect();
+    let count = |c: Contact| impacts_of(&all).iter().filter(|im| im.contact == c).count();
+    let (n_slip, n_stick, n_undetermined) = (
+        count(Contact::Slip),
+        count(Contact::Stick),
+        count(Contact::Undetermined),
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let resamples: Vec<Vec<usize>> = (0..RESAMPLES)
+        .map(|_| {
+            (0..runs.len())
+                .map(|_| rng.random_range(0..runs.len().max(1)))
+                .collect()
+        })
+        .collect();
+    let interval = |est: &dyn Fn(&[usize]) -> Option<f64>| -> Option<Interval> {
+        let value = est(&all)?;
+        let mut boots: Vec<f64> = resamples
+            .iter()
+            .filter_map(|s| est(s))
+            .filter(|x| x.is_finite())
+            .collect();
+        if boots.len() < RESAMPLES / 2 {
+            return Some(Interval {
+                value,
+                lo: f64::NAN,
+                hi: f64::NAN,
+            });
+        }
+        boots.sort_by(|a, b| a.total_cmp(b));
+        let q =
+            |p: f64| boots[((p * (boots.len() - 1) as f64).round() as usize).min(boots.len() - 1)];
+        Some(Interval {
+            value,
+            lo: q(0.025),
+            hi: q(0.975),
+        })
+    };
+    let slope = |sel: &[usize]| slip_slope(&impacts_of(sel), k);
+    let impulse = |sel: &[usize]| impulse_fit(&impacts_of(sel), k);
+    let from_slip_slope = if n_slip > 0 { interval(&slope) } else { None };
+    let from_impulse_fit = if n_slip > 0 { interval(&impulse) } else { None };
+    let stick_lower_bound = impacts_of(&all)
+        .iter()
+        .filter(|im| im.contact == Contact::Stick && im.target_dvz_mps.value > 0.0)
+        .map(|im| im.spin_sum_before_mps.abs() / (2.0 * k * im.target_dvz_mps.value))
+        .reduce(f64::max);
+    if n_slip == 0 {
+        notes.push(
+            "no slip impact was resolved: μ_pp is only bounded from below by the stick impacts"
+                .into(),
+        );
+    }
+    if runs.len() < fits.len() {
+        notes.push(format!(
+            "{} collision run(s) left out: fit failed or no impact",
+            fits.len() - runs.len()
+        ));
+    }
+    // restitution curves per (material, setup)
+    let mut groups: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
+    for (i, (info, f)) in runs.iter().enumerate() {
+        let setup = setup_of(info, f)
+            .map(|s| format!("{s:?}"))
+            .unwrap_or_default();
+        groups
+            .entry((info.material.clone(), setup))
+            .or_default()
+            .push(i);
+    }
+    let mut restitution = Vec::new();
+    for idx in groups.values() {
+        let pts = |sel: &[usize]| -> Vec<(f64, f64, f64)> {
+            sel.iter()
+                .flat_map(|&i| runs[idx[i]].1.impacts.first())
+                .filter_map(|im| {
+                    let se = im.restitution.se?;
+                    (se <= MAX_C_SE
+                        && im.restitution.value.is_finite()
+                        && im.impact_speed_mps.value > 0.0)
+                        .then_some((
+                            im.impact_speed_mps.value,
+                            im.restitution.value,
+                            se.max(0.01),
+                        ))
+                })
+                .collect()
+        };
+        let local: Vec<usize> = (0..idx.len()).collect();
+        let all_pts = pts(&local);
+        if all_pts.len() < 2 {
+            continue;
+        }
+        let mut local_rng =
+            ChaCha8Rng::seed_from_u64(seed ^ (idx[0] as u64).wrapping_mul(0x9E37_79B9));
+        let local_samples: Vec<Vec<usize>> = (0..RESAMPLES)
+            .map(|_| {
+                (0..idx.len())
+                    .map(|_| local_rng.random_range(0..idx.len()))
+                    .collect()
+            })
+            .collect();
+        let iv = |f: &dyn Fn(&[(f64, f64, f64)]) -> Option<f64>| -> Interval {
+            let value = f(&all_pts).unwrap_or(f64::NAN);
+            let mut boots: Vec<f64> = local_samples
+                .iter()
+                .filter_map(|s| f(&pts(s)))
+                .filter(|x| x.is_finite())
+                .collect();
+            boots.sort_by(|a, b| a.total_cmp(b));
+            if boots.len() < RESAMPLES / 2 {
+                return Interval {
+                    value,
+                    lo: f64::NAN,
+                    hi: f64::NAN,
+                };
+            }
+            let q = |p: f64| {
+                boots[((p * (boots.len() - 1) as f64).round() as usize).min(boots.len() - 1)]
+            };
+            Interval {
+                value,
+                lo: q(0.025),
+                hi: q(0.975),
+            }
+        };
+        let (info, f) = runs[idx[0]];
+        let speeds = all_pts.iter().map(|p| p.0);
+        restitution.push(RestitutionCurve {
+            material: info.material.clone(),
+            setup: setup_of(info, f),
+            n_impacts: all_pts.len(),
+            n_runs: idx.len(),
+            c0: iv(&|p| line_fit(p).map(|l| l.0)),
+            slope_per_mps: iv(&|p| line_fit(p).map(|l| -l.1)),
+            a_per_mps: iv(&one_minus_av),
+            c_inf: iv(&|p| exp_fit(p).map(|f| f.0)),
+            v_ref_mps: iv(&|p| exp_fit(p).map(|f| f.1)),
+            mean_c: all_pts.iter().map(|p| p.1).sum::<f64>() / all_pts.len() as f64,
+            min_speed_mps: speeds.clone().fold(f64::INFINITY, f64::min),
+            max_speed_mps: speeds.fold(0.0, f64::max),
+        });
+    }
+    CollisionSummary {
+        n_runs: fits.len(),
+        n_runs_fitted: runs.len(),
+        n_impacts: spin_points.len(),
+        k,
+        mu_pp: MuPp {
+            value: from_impulse_fit.or(from_slip_slope),
+            from_slip_slope,
+            from_impulse_fit,
+            stick_lower_bound,
+            n_slip,
+            n_stick,
+            n_undetermined,
+        },
+        restitution,
+        spin_points,
+        restitution_points,
+        bootstrap_seed: seed,
+        bootstrap_resamples: RESAMPLES,
+        notes,
+    }
+}
