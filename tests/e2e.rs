@@ -373,9 +373,17 @@ fn diagnosis_json_has_the_contract_keys() {
             );
         }
         assert!(f["evidence"].is_object() && f["where"].is_object(), "{f}");
+        // cross-validated error before and after: numbers for an accepted term (and the term
+        // must lower it); a rejected candidate may carry null where it was never cross-validated
         if effect != "unexplained" {
-            assert!(f["baseline"]["cv_rms_m"].is_number(), "{f}");
-            assert!(f["extended"]["cv_rms_m"].is_number(), "{f}");
+            let (before, after) = (&f["baseline"]["cv_rms_m"], &f["extended"]["cv_rms_m"]);
+            assert!(before.is_number(), "{f}");
+            if accepted {
+                assert!(after.as_f64().expect("extended.cv_rms_m") < before.as_f64().unwrap());
+            } else {
+                let present = f["extended"].get("cv_rms_m").is_some();
+                assert!(present && (after.is_number() || after.is_null()), "{f}");
+            }
         }
     }
 }
