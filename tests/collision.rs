@@ -4,12 +4,16 @@
 
 use groove::fit::collision::types::{CollisionStatus, Contact, PreImpactSource};
 use groove::fit::collision::{fit_collision, summarize_seeded, CollisionFit, CollisionOptions};
-use groove::physics::{simulate_pair, Impact, Model, PairParams, Restitution, State};
+use groove::ingest::{read_dataset_dir, IngestParams};
+use groove::physics::{
+    simulate_pair, Friction, Groove, Impact, Model, PairParams, Restitution, State, Term,
+};
 use groove::recording::{Experiment, Recording, RunInfo, Setup, Track};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::collections::BTreeMap;
+use std::path::Path;
 
 const R_M: f64 = 150e-6;
 const FPS: f64 = 10_000.0;
@@ -175,6 +179,22 @@ fn rolling_setup_first_impact_both_directions() {
                 im.target_dva_mps.value
             );
             assert_eq!(im.contact, Contact::Stick);
+            // the fitted trajectory (Fig. 4.3c–d) follows the striker's samples within 5 µm
+            let (rec, _) = record(&case);
+            let st = rec.track(0).unwrap();
+            let off: Vec<f64> = st
+                .t_s
+                .iter()
+                .zip(&st.z_m)
+                .filter_map(|(&t, &z)| Some(fit.position_m(0, t, Groove::CHAPTER)? - z))
+                .collect();
+            let mut dev: Vec<f64> = off.iter().map(|d| d.abs()).collect();
+            dev.sort_by(|a, b| a.total_cmp(b));
+            assert!(
+                off.len() > 100 && dev[dev.len() / 2] < 2e-6 && dev[dev.len() * 9 / 10] < 5e-6,
+                "median {}",
+                dev[dev.len() / 2]
+            );
             assert!(!tr.slip);
             // lab-frame velocities carry the direction
             assert!(im.striker_before.v_mps.value * direction > 0.0);
@@ -186,7 +206,10 @@ fn rolling_setup_first_impact_both_directions() {
             // drag: every segment's T within 3 standard errors (short runs constrain it weakly)
             for seg in &fit.segments {
                 let (t, se) = (seg.t_drag_s.value, seg.t_drag_s.se.unwrap());
-                assert!((t - T_DRAG_S).abs() < 3.0 * se && se < 0.5 * T_DRAG_S, "T {t} ± {se}");
+                assert!(
+                    (t - T_DRAG_S).abs() < 3.0 * se && se < 0.5 * T_DRAG_S,
+                    "T {t} ± {se}"
+                );
             }
         }
     }
@@ -251,7 +274,18 @@ fn mu_pp_from_slip_impacts_within_ten_percent() {
             };
             let (fit, truth, info) = fit(&case);
             assert!(truth[0].slip, "the test needs slip impacts");
-            let im = &fit.impacts[0]; assert_eq!(im.contact, Contact::Slip, "seed {seed}: sums {} -> {:?}, before {:?} after {:?} / {:?} {:?}", im.spin_sum_before_mps, im.spin_sum_after_mps, im.striker_before, im.striker_after, im.target_before, im.target_after);
+            let im = &fit.impacts[0];
+            assert_eq!(
+                im.contact,
+                Contact::Slip,
+                "seed {seed}: sums {} -> {:?}, before {:?} after {:?} / {:?} {:?}",
+                im.spin_sum_before_mps,
+                im.spin_sum_after_mps,
+                im.striker_before,
+                im.striker_after,
+                im.target_before,
+                im.target_after
+            );
             fits.push((info, fit));
         }
         let summary = summarize_seeded(&fits, 2.5, 7);
@@ -362,84 +396,146 @@ fn run_without_impact_or_target_is_reported_not_fatal() {
     assert_eq!(back.status, fit.status);
 }
 
-#[test]
-fn scratch_debug() {
-    let case = Case {
-        setup: Setup::Contact,
-        v0_mps: 0.08,
-        mu_pp: 1.4,
-        direction: -1.0,
-        seed: 11,
-    };
-    let (rec, truth) = record(&case);
-    let fit = fit_collision(&rec, &CollisionOptions::default());
-    for s in &fit.segments {
-        eprintln!(
-            "seg p{} {:.5}-{:.5} v {:.4} va {:.4} sw {:?} n {}",
-            s.particle,
-            s.t_start_s,
-            s.t_end_s,
-            s.v_start_mps.value,
-            s.va_start_mps.value,
-            s.t_switch_s,
-            s.n_points
-        );
-    }
-    for im in &fit.impacts {
-        eprintln!(
-            "fit t {:.6} speed {:.4} C {:.3} dvz {:.4} dva {:.4} {:?}",
-            im.t_s.value,
-            im.impact_speed_mps.value,
-            im.restitution.value,
-            im.target_dvz_mps.value,
-            im.target_dva_mps.value,
-            im.contact
-        );
-    }
-    for im in truth.iter().take(4) {
-        eprintln!(
-            "true t {:.6} speed {:.4} C {:.3} slip {} pre {:?} post {:?}",
-            im.t_s, im.v_impact_mps, im.restitution, im.slip, im.pre, im.post
-        );
-    }
-    eprintln!(
-        "mu {:?} T {:?} status {:?} noise {}",
-        fit.mu_pg, fit.t_drag_s, fit.status, fit.noise_m
-    );
+fn truth_toml() -> toml::Value {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/truth/truth.toml");
+    let table: toml::Table = toml::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    toml::Value::Table(table)
 }
 
-#[test]
-fn scratch_debug2() {
-    use groove::fit::collision::detect::*;
-    use groove::fit::collision::model::TrackData;
-    let case = Case {
-        setup: Setup::Rolling,
-        v0_mps: 0.21,
-        mu_pp: 1.4,
-        direction: -1.0,
-        seed: 4,
+/// The restitution law of a material and setup in the shipped truth.
+fn shipped_law(material: &str, setup: Setup) -> Restitution {
+    let truth = truth_toml();
+    let mat = truth["materials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"].as_str() == Some(material))
+        .unwrap();
+    let key = if setup == Setup::Rolling {
+        "restitution_rolling"
+    } else {
+        "restitution_contact"
     };
-    let (rec, truth) = record(&case);
-    let tr = |p: u32| {
-        let t = rec.track(p).unwrap();
-        TrackData {
-            t_s: t.t_s.clone(),
-            z_m: t.z_m.iter().map(|z| -z).collect(),
+    mat[key].clone().try_into().unwrap()
+}
+
+/// The truth of the shipped dataset's collision runs: re-simulate each run from its initial
+/// state in `data/truth/runs_truth.csv` with the physics of `data/truth/truth.toml`.
+fn shipped_truth(run: &str, material: &str, setup: Setup) -> Vec<Impact> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/truth");
+    let truth = truth_toml();
+    let terms: Vec<Term> = truth["physics"]["terms"].clone().try_into().unwrap();
+    let groove = Groove {
+        k: truth["groove"]["k"].as_float().unwrap(),
+        ..Groove::from_angle_deg(truth["groove"]["theta_deg"].as_float().unwrap())
+    };
+    let mat = truth["materials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"].as_str() == Some(material))
+        .unwrap();
+    let friction: Friction = mat["friction"].clone().try_into().unwrap();
+    let restitution = shipped_law(material, setup);
+    let radius_m = 0.5 * mat["diameter_m"].as_float().unwrap();
+    let mu_pp = truth["pair"]["mu_pp"].as_float().unwrap();
+    let rows = std::fs::read_to_string(root.join("runs_truth.csv")).unwrap();
+    let mut init = [State {
+        z_m: 0.0,
+        v_mps: 0.0,
+        va_mps: 0.0,
+    }; 2];
+    let mut delay_s = 0.0;
+    for row in rows.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        if f[0] == run {
+            let x: Vec<f64> = f[2..].iter().map(|v| v.parse().unwrap()).collect();
+            init[f[1].parse::<usize>().unwrap()] = State {
+                z_m: x[0],
+                v_mps: x[1],
+                va_mps: x[2],
+            };
+            delay_s = x[3];
         }
-    };
-    let tracks = [tr(0), tr(1)];
-    let sg = noise_scale_m(&tracks[1]);
-    let dep = departure_time_s(&tracks[1], sg).unwrap();
-    eprintln!("dep {dep} true {}", truth[0].t_s);
-    let gap = gap_series(&tracks);
-    let sgap = noise_scale_m(&gap);
-    let i0 = index_at(&gap, dep);
-    eprintln!("contact {:?}", robust_line(&gap, i0 - 8, i0, dep));
-    for k in i0 - 3..i0 + 5 {
-        eprintln!("{:.5} {:.4e}", gap.t_s[k], gap.z_m[k]);
     }
-    eprintln!(
-        "{:?}",
-        gap_contacts(&gap, sgap, 3e-4, 10.0 * sgap + 3e-6, dep + 4e-4, 20, 6.0)
-    );
+    let model = Model {
+        groove,
+        friction,
+        terms,
+    };
+    let t: Vec<f64> = (0..1000).map(|i| i as f64 * 1e-4).collect();
+    let pair = PairParams {
+        restitution,
+        mu_pp,
+        radius_m,
+    };
+    let mut impacts = simulate_pair(&model, &pair, init, &t).impacts;
+    impacts.iter_mut().for_each(|im| im.t_s -= delay_s);
+    impacts
+}
+
+/// The collision runs of the shipped dataset (with its concealed non-linear drag) against their
+/// truth: every first impact's C within 0.03, impact speed within 2 %, time within half a frame
+/// (rolling setup); the contact-setup curves of both materials within 0.02 of their laws.
+#[test]
+fn shipped_dataset_impacts_match_their_truth() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let recs = read_dataset_dir(&data, &IngestParams::default()).unwrap();
+    let mut fits = Vec::new();
+    for rec in recs
+        .iter()
+        .filter(|r| r.info.experiment == Experiment::Collision)
+    {
+        let (run, setup) = (&rec.info.run, rec.info.setup.unwrap());
+        let fit = fit_collision(rec, &CollisionOptions::default());
+        let truth = shipped_truth(run, &rec.info.material, setup);
+        let (im, tr) = (&fit.impacts[0], &truth[0]);
+        assert!(
+            (im.restitution.value - tr.restitution).abs() < 0.03,
+            "{run}: C {} vs {}",
+            im.restitution.value,
+            tr.restitution
+        );
+        assert!(
+            (im.impact_speed_mps.value - tr.v_impact_mps).abs() < 0.02 * tr.v_impact_mps,
+            "{run}: v {} vs {}",
+            im.impact_speed_mps.value,
+            tr.v_impact_mps
+        );
+        if setup == Setup::Rolling {
+            assert!(
+                (im.t_s.value - tr.t_s).abs() < 0.5 / rec.info.fps,
+                "{run}: t {} vs {}",
+                im.t_s.value,
+                tr.t_s
+            );
+        }
+        fits.push((rec.info.clone(), fit));
+    }
+    assert_eq!(fits.len(), 48);
+    let summary = summarize_seeded(&fits, 2.5, 1);
+    for material in ["316", "440c"] {
+        let curve = summary
+            .restitution
+            .iter()
+            .find(|c| c.material == material && c.setup == Some(Setup::Contact))
+            .unwrap();
+        let truth = shipped_law(material, Setup::Contact);
+        let fitted = |v: f64| {
+            curve.c_inf.value + (1.0 - curve.c_inf.value) * (-v / curve.v_ref_mps.value).exp()
+        };
+        for v in [0.05f64, 0.1, 0.2, 0.3] {
+            assert!(
+                (fitted(v) - truth.at(v)).abs() < 0.02,
+                "{material}: C({v}) = {} vs {}",
+                fitted(v),
+                truth.at(v)
+            );
+        }
+    }
+    // μ_pp = 1.4: every resolved impact sticks, so only a lower bound below the truth is reported
+    assert!(summary.mu_pp.value.is_none() || summary.mu_pp.n_slip > 0);
+    if let Some(bound) = summary.mu_pp.stick_lower_bound {
+        assert!(bound < 1.4 * 1.05, "bound {bound}");
+    }
 }

@@ -65,7 +65,12 @@ impl Project {
 
     /// The standard per-item project with three recordings.
     fn standard() -> Project {
-        let p = Project::new(PIPELINE);
+        Project::with_data(PIPELINE)
+    }
+
+    /// A pipeline with the standard dataset and settings.
+    fn with_data(pipeline: &str) -> Project {
+        let p = Project::new(pipeline);
         p.write("data/run_a.csv", "t,z\n0,0.0\n1,0.5\n");
         p.write("data/run_b.csv", "t,z\n0,0.0\n1,0.7\n");
         p.write("data/run_c.csv", "t,z\n0,0.0\n1,0.9\n");
@@ -509,6 +514,12 @@ fn bad_configs() -> Vec<(&'static str, String, &'static str, &'static str)> {
             "unknown field `parms`",
         ),
         (
+            "unknown param of a built-in kind",
+            format!("{good}\n[stages.b]\nkind = \"ingest\"\ninputs = {{ dataset = \"x.txt\" }}\nparams = {{ formt = \"auto\" }}\n"),
+            "formt",
+            "param `formt`",
+        ),
+        (
             "mistyped value",
             "[project]\nseed = \"seven\"\n".to_string(),
             "seed",
@@ -658,4 +669,56 @@ fn every_verb_has_help() {
         assert!(out.status.success(), "{verb} --help");
         assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: groove"));
     }
+}
+
+#[test]
+fn independent_stages_run_at_the_same_time() {
+    // each stage waits (up to 20 s) for the other's flag: only a parallel run finishes quickly
+    let wait = |me: &str, other: &str| {
+        format!(
+            "touch {me}.flag; i=0; while [ ! -e {other}.flag ]; do sleep 0.05; i=$((i+1)); if [ $i -gt 400 ]; then exit 1; fi; done; echo {me} > {{out.o}}"
+        )
+    };
+    let p = Project::new(&format!(
+        "[stages.a]\nkind = \"command\"\ncmd = \"{}\"\ninputs = {{ x = \"x.txt\" }}\noutputs = {{ o = \"reports/a.txt\" }}\n\n[stages.b]\nkind = \"command\"\ncmd = \"{}\"\ninputs = {{ x = \"x.txt\" }}\noutputs = {{ o = \"reports/b.txt\" }}\n",
+        wait("a", "b"),
+        wait("b", "a")
+    ));
+    p.write("x.txt", "x\n");
+    p.ok(&["run", "--jobs", "2"]);
+    assert_eq!(p.read("reports/a.txt"), "a\n");
+    assert_eq!(p.read("reports/b.txt"), "b\n");
+}
+
+#[test]
+fn a_stage_stepping_through_two_per_item_inputs_reruns_only_the_changed_item() {
+    let p = Project::with_data(&format!(
+        "{PIPELINE}\n[stages.resid]\nkind = \"command\"\nforeach = [\"runs\", \"fits\"]\ncmd = \"echo resid {{item}} >> trace.txt; cat {{in.runs}} {{in.fits}} > {{out.r}}\"\ninputs = {{ runs = \"ingest:runs\", fits = \"fit:fit\" }}\noutputs = {{ r = \"${{reports}}/resid\" }}\n"
+    ));
+    p.ok(&["run"]);
+    p.take_trace();
+    p.edit("data/run_b.csv", "0.7", "0.8");
+    p.ok(&["run"]);
+    let resid: Vec<String> = p
+        .take_trace()
+        .into_iter()
+        .filter(|l| l.starts_with("resid"))
+        .collect();
+    assert_eq!(resid, strings(&["resid run_b.csv"]));
+    // each item saw its own recording and its own fit, not the whole collections
+    let b = p.read("reports/resid/run_b.csv");
+    assert_eq!(
+        b,
+        format!(
+            "{}{}",
+            p.read("data/run_b.csv"),
+            p.read("reports/fits/run_b.csv")
+        )
+    );
+    assert!(p
+        .read("reports/resid/run_a.csv")
+        .starts_with("t,z\n0,0.0\n1,0.5\n"));
+    assert!(p
+        .ok(&["dag"])
+        .contains("resid (command foreach runs, fits)"));
 }

@@ -339,7 +339,7 @@ fn residuals_of_a_good_fit_are_the_noise_and_flag_the_outliers() {
     let run = &runs(13, 1, (0.05, 0.06), 0.3, Camera::CHAPTER)[0];
     let rec = recording("r1", "316", run);
     let fit = RunFit::Single(groove::fit::fit_single(&rec, &FitOptions::default()));
-    let res = residuals(&rec, &fit);
+    let res = residuals(&rec, &fit, Groove::CHAPTER);
     assert_eq!(res.status, "ok");
     assert_eq!(
         res.outlier, run.outlier,
@@ -501,4 +501,107 @@ fn too_short_a_track_is_a_failed_fit_not_a_panic() {
     let back: RunFit = serde_json::from_str(&json).unwrap();
     let RunFit::Single(b) = back else { panic!() };
     assert!(b.rms_m.is_nan() && b.termination == f.termination);
+}
+
+#[test]
+fn shipped_dataset_gives_its_truth_and_the_chapter_line() {
+    // The shipped dataset (data/, made from data/truth/truth.toml with a concealed saturating
+    // drag tuned so that linear-drag fits give the chapter's T = 0.052 + 1.10·v0): μ per material
+    // within 0.01 of the truth, v0 of every single run within 2.5 % of runs_truth.csv (not 1 %:
+    // the baseline's drag law is not the data's), and the pooled T-vs-v0 line within 10 % of the
+    // chapter's.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let recs = groove::ingest::read_dataset_dir(&root.join("data"), &Default::default())
+        .expect("the shipped dataset ingests");
+    let truth_csv = std::fs::read_to_string(root.join("data/truth/runs_truth.csv")).unwrap();
+    let true_v0: BTreeMap<String, f64> = truth_csv
+        .lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[1] == "0").then(|| (f[0].to_string(), f[3].parse().unwrap()))
+        })
+        .collect();
+    let truth: toml::Table = std::fs::read_to_string(root.join("data/truth/truth.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let mut fits = Vec::new();
+    for rec in recs
+        .iter()
+        .filter(|r| r.info.experiment == Experiment::Single)
+    {
+        let f = groove::fit::fit_single(rec, &FitOptions::default());
+        assert_eq!(f.status, "converged", "{}", f.run);
+        let v0 = true_v0[&f.run];
+        // linear drag is the wrong law for this data: extrapolated to the kick, v0 comes out
+        // up to ~1.7 % high at 0.1 m/s (the bias the discovery stage is there to explain)
+        assert!(
+            (f.v0_mps / v0 - 1.0).abs() < 0.025,
+            "{}: v0 {} vs {v0}",
+            f.run,
+            f.v0_mps
+        );
+        fits.push(f);
+    }
+    assert!(fits.len() >= 80, "{} single runs", fits.len());
+    let s = aggregate_single(&fits, &AggregateOptions::default(), 1);
+    for m in truth["materials"].as_array().unwrap() {
+        let name = m["name"].as_str().unwrap();
+        let mu = m["friction"]["mu"].as_float().unwrap();
+        let got = &s.materials[name];
+        assert!(
+            (got.mu_fast.value - mu).abs() < 0.01,
+            "{name}: {:?} vs {mu}",
+            got.mu_fast
+        );
+        assert!(
+            (got.mu_weighted.value - mu).abs() < 0.01,
+            "{name}: {:?}",
+            got.mu_weighted
+        );
+    }
+    let line = s.pooled.t_vs_v0;
+    assert!(
+        (line.intercept_s.value / 0.052 - 1.0).abs() < 0.1,
+        "{line:?}"
+    );
+    assert!(
+        (line.slope_s_per_mps.value / 1.10 - 1.0).abs() < 0.1,
+        "{line:?}"
+    );
+}
+
+#[test]
+fn stage_params_are_checked_and_defaults_filled_in() {
+    use groove::stages::{aggregate::Aggregate, fit::Fit};
+    let table = |k: &str, v: toml::Value| toml::Table::from_iter([(k.to_string(), v)]);
+    let e = Fit
+        .canonical_params(&table("outlier_sigma", toml::Value::Float(1.0)))
+        .unwrap_err();
+    assert_eq!(e.key, "outlier_sigma");
+    assert!(e.message.contains("at least 2"), "{}", e.message);
+    let e = Fit
+        .canonical_params(&table("loss", toml::Value::String("cauchy".into())))
+        .unwrap_err();
+    assert!(e.message.contains("cauchy"), "{}", e.message);
+    let e = Fit
+        .canonical_params(&table("outlier_sigmaa", toml::Value::Float(5.0)))
+        .unwrap_err();
+    assert!(e.message.contains("outlier_sigmaa"), "{}", e.message);
+    let v = Fit.canonical_params(&toml::Table::new()).unwrap();
+    assert_eq!(v["groove_angle_deg"], 70.6);
+    assert_eq!(v["loss"], "huber");
+    let e = Aggregate
+        .canonical_params(&table("level", toml::Value::Float(1.5)))
+        .unwrap_err();
+    assert_eq!(e.key, "level");
+    // a per-run stage bound without `foreach` says how to fix it
+    let coll = Artifact::Collection(BTreeMap::new());
+    let params = toml::Table::new();
+    let e = Fit
+        .run(&stage_input(&params, [("runs", &coll)].into(), None))
+        .err()
+        .unwrap();
+    assert!(e.0.contains("foreach = \"runs\""), "{}", e.0);
 }

@@ -101,7 +101,7 @@ fn input_file_name(
     input: &str,
     item: Option<&str>,
 ) -> String {
-    if spec.foreach.as_deref() == Some(input) {
+    if spec.is_item_input(input) {
         if let Some(item) = item {
             return item.to_string();
         }

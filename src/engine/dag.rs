@@ -125,9 +125,16 @@ pub fn render(pipeline: &Pipeline, format: Format) -> String {
                 let spec = &pipeline.stages[stage];
                 let each = spec
                     .foreach
-                    .as_deref()
-                    .map(|f| format!(" foreach {f}"))
-                    .unwrap_or_default();
+                    .iter()
+                    .chain(&spec.foreach_with)
+                    .map(String::as_str)
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                let each = if each.is_empty() {
+                    each
+                } else {
+                    format!(" foreach {each}")
+                };
                 s.push_str(&format!("{stage} ({}{each})\n", spec.kind));
                 for (input, bound) in &spec.inputs {
                     let from = match bound {

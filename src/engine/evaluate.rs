@@ -6,18 +6,17 @@
 //! (early cutoff), and a key seen before is found in the store without running (run-cache).
 
 use super::catalog::Catalog;
-use super::command;
 use super::dag;
 use super::error::EngineError;
+use super::execute::{execute, load_shared, Bound, Source};
 use super::hashing::{sha256_hex, HashCache};
-use super::inputs::{hash_path, load_path};
+use super::inputs::hash_path;
 use super::key::{items_digest, StageKey};
 use super::lockfile::{LockStage, PipelineLock};
 use super::materialize::{is_current, materialize};
 use super::pipeline::{InputSpec, Pipeline, StageSpec};
 use super::progress::Progress;
 use super::provenance;
-use super::stage::{Artifact, StageInput, StageOutputs};
 use super::store::{Entry, Store, Stored};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, BTreeSet};
@@ -80,18 +79,6 @@ pub struct Evaluated {
     /// Outputs whose materialized path does not hold the stored content.
     pub stale_outputs: Vec<String>,
     pub failed: bool,
-}
-
-/// Where an input's bytes come from.
-enum Source {
-    Path(std::path::PathBuf),
-    Store,
-    Memory(Vec<u8>),
-}
-
-struct Bound {
-    stored: Stored,
-    source: Source,
 }
 
 /// The seed a stage receives: the pipeline seed mixed with the stage name.
@@ -259,26 +246,49 @@ fn evaluate_stage(
     };
     let units: Vec<(Option<String>, String)> = match &spec.foreach {
         None => vec![(None, key_of(&digests, None))],
-        Some(f) => match bound.get(f).map(|b| &b.stored) {
-            None => Vec::new(),
-            Some(Stored::File { .. }) => {
-                return Err(EngineError::StageFailed {
-                    stage: spec.name.clone(),
-                    item: None,
-                    message: format!(
-                        "foreach input `{f}` is a single file; bind it to a folder or to a per-item output"
-                    ),
-                })
+        Some(f) => {
+            // every per-item input (present) as item → hash; the first one names the items
+            let mut per_item: Vec<(&String, &BTreeMap<String, String>)> = Vec::new();
+            for name in std::iter::once(f).chain(&spec.foreach_with) {
+                match bound.get(name).map(|b| &b.stored) {
+                    None => {}
+                    Some(Stored::Collection { items }) => per_item.push((name, items)),
+                    Some(Stored::File { .. }) => {
+                        return Err(EngineError::StageFailed {
+                            stage: spec.name.clone(),
+                            item: None,
+                            message: format!(
+                                "foreach input `{name}` is a single file; bind it to a folder or to a per-item output"
+                            ),
+                        })
+                    }
+                }
             }
-            Some(Stored::Collection { items }) => items
-                .iter()
-                .map(|(item, h)| {
-                    let mut d = digests.clone();
-                    d.insert(f.clone(), h.clone());
-                    (Some(item.clone()), key_of(&d, Some(item)))
-                })
-                .collect(),
-        },
+            match per_item.first() {
+                Some((first, items)) if *first == f => {
+                    let mut units = Vec::new();
+                    for item in items.keys() {
+                        let mut d = digests.clone();
+                        for (name, items) in &per_item {
+                            let Some(h) = items.get(item) else {
+                                return Err(EngineError::StageFailed {
+                                    stage: spec.name.clone(),
+                                    item: Some(item.clone()),
+                                    message: format!(
+                                        "per-item input `{name}` has no item `{item}`; the inputs in `foreach` must have the same items"
+                                    ),
+                                });
+                            };
+                            d.insert((*name).clone(), h.clone());
+                        }
+                        units.push((Some(item.clone()), key_of(&d, Some(item))));
+                    }
+                    units
+                }
+                // the primary per-item input is an absent optional input: no items
+                _ => Vec::new(),
+            }
+        }
     };
 
     let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
@@ -296,18 +306,17 @@ fn evaluate_stage(
         if !todo.is_empty() {
             ctx.progress.started(&spec.name, todo.len());
             let shared = load_shared(ctx, spec, &bound)?;
+            let finished = std::sync::atomic::AtomicUsize::new(0);
             let results: Vec<Result<Entry, EngineError>> = todo
                 .par_iter()
                 .map(|&i| {
-                    execute(
-                        ctx,
-                        spec,
-                        &bound,
-                        &shared,
-                        units[i].0.as_deref(),
-                        &units[i].1,
-                        seed,
-                    )
+                    let (item, key) = (units[i].0.as_deref(), &units[i].1);
+                    let result = execute(ctx, spec, &bound, &shared, item, key, seed);
+                    if spec.foreach.is_some() {
+                        let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                        ctx.progress.item_done(&spec.name, n, todo.len());
+                    }
+                    result
                 })
                 .collect();
             for (&i, r) in todo.iter().zip(results) {
@@ -394,129 +403,4 @@ fn evaluate_stage(
         stale_outputs,
         failed: false,
     })
-}
-
-/// Load every input except the per-item one.
-fn load_shared(
-    ctx: &Context,
-    spec: &StageSpec,
-    bound: &BTreeMap<String, Bound>,
-) -> Result<BTreeMap<String, Artifact>, EngineError> {
-    let mut out = BTreeMap::new();
-    for (name, b) in bound {
-        if spec.foreach.as_deref() == Some(name.as_str()) {
-            continue;
-        }
-        let artifact = match &b.source {
-            Source::Path(p) => load_path(p, &b.stored)?,
-            Source::Store => ctx.store.load(&b.stored)?,
-            Source::Memory(bytes) => Artifact::File(bytes.clone()),
-        };
-        out.insert(name.clone(), artifact);
-    }
-    Ok(out)
-}
-
-/// Run one key (the whole stage or one item), check its outputs, store them, commit the entry.
-fn execute(
-    ctx: &Context,
-    spec: &StageSpec,
-    bound: &BTreeMap<String, Bound>,
-    shared: &BTreeMap<String, Artifact>,
-    item: Option<&str>,
-    key: &str,
-    seed: u64,
-) -> Result<Entry, EngineError> {
-    let failed = |message: String| EngineError::StageFailed {
-        stage: spec.name.clone(),
-        item: item.map(str::to_string),
-        message,
-    };
-    let item_artifact = match (&spec.foreach, item) {
-        (Some(f), Some(item)) => {
-            let b = &bound[f];
-            let Stored::Collection { items } = &b.stored else {
-                unreachable!("checked above")
-            };
-            let bytes = match &b.source {
-                Source::Path(dir) => {
-                    let p = dir.join(item);
-                    let bytes = std::fs::read(&p).map_err(|e| EngineError::io(&p, e))?;
-                    if sha256_hex(&bytes) != items[item] {
-                        return Err(EngineError::Usage(format!(
-                            "{} changed while groove was running; run again",
-                            p.display()
-                        )));
-                    }
-                    bytes
-                }
-                _ => ctx.store.read_object(&items[item])?,
-            };
-            Some((f.as_str(), Artifact::File(bytes)))
-        }
-        _ => None,
-    };
-    let mut inputs: BTreeMap<&str, &Artifact> =
-        shared.iter().map(|(k, v)| (k.as_str(), v)).collect();
-    if let Some((name, artifact)) = &item_artifact {
-        inputs.insert(name, artifact);
-    }
-    let outputs: StageOutputs = if spec.kind == "command" {
-        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
-    } else {
-        let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
-        let input = StageInput {
-            params: &spec.params,
-            inputs,
-            item,
-            seed,
-        };
-        // a panicking kind fails its stage; the other stages and the store are unaffected
-        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
-            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
-            Err(panic) => {
-                let what = panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_default();
-                return Err(failed(format!(
-                    "kind `{}` panicked ({what}); this is a bug in groove, please report it",
-                    spec.kind
-                )));
-            }
-        }
-    };
-    for name in spec.outputs.keys() {
-        match outputs.get(name) {
-            None => {
-                return Err(failed(format!(
-                    "produced no output `{name}` (a bug in kind `{}`)",
-                    spec.kind
-                )))
-            }
-            Some(Artifact::Collection(_)) if spec.foreach.is_some() => {
-                return Err(failed(format!(
-                    "output `{name}` of a per-item stage must be one file per item, not a folder"
-                )))
-            }
-            Some(Artifact::Collection(items)) => {
-                if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {
-                    return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));
-                }
-            }
-            Some(Artifact::File(_)) => {}
-        }
-    }
-    if let Some(extra) = outputs.keys().find(|n| !spec.outputs.contains_key(*n)) {
-        return Err(failed(format!(
-            "produced undeclared output `{extra}` (a bug in kind `{}`)",
-            spec.kind
-        )));
-    }
-    let mut stored = BTreeMap::new();
-    for (name, artifact) in &outputs {
-        stored.insert(name.clone(), ctx.store.put(artifact)?);
-    }
-    ctx.store.commit(key, stored)
 }

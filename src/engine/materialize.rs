@@ -87,7 +87,7 @@ fn remove_any(path: &Path) -> Result<(), EngineError> {
 }
 
 /// Remove temp siblings a killed run left behind (`.NAME.groove-new-*`, `.NAME.groove-old-*`).
-fn sweep_leftovers(parent: &Path, name: &str) -> Result<(), EngineError> {
+pub fn sweep_leftovers(parent: &Path, name: &str) -> Result<(), EngineError> {
     let prefixes = [
         format!(".{name}.groove-new-"),
         format!(".{name}.groove-old-"),

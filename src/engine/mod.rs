@@ -10,6 +10,7 @@ pub mod config;
 pub mod dag;
 pub mod error;
 pub mod evaluate;
+pub mod execute;
 pub mod hashing;
 pub mod identity;
 pub mod inputs;

@@ -25,6 +25,8 @@ pub struct StageSpec {
     pub line: usize,
     /// Per-item stage: the name of the Collection input it maps over.
     pub foreach: Option<String>,
+    /// More Collection inputs stepped through with `foreach`, item by item (same item names).
+    pub foreach_with: Vec<String>,
     pub inputs: BTreeMap<String, InputSpec>,
     /// Every output the stage produces, with the path it is materialized to, if any.
     pub outputs: BTreeMap<String, Option<PathBuf>>,
@@ -44,6 +46,13 @@ pub enum InputSpec {
     Stage { stage: String, output: String },
     /// `"engine:provenance"`: the engine's provenance record.
     Provenance,
+}
+
+impl StageSpec {
+    /// Is this input passed one item at a time?
+    pub fn is_item_input(&self, input: &str) -> bool {
+        self.foreach.as_deref() == Some(input) || self.foreach_with.iter().any(|f| f == input)
+    }
 }
 
 impl Pipeline {

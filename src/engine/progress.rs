@@ -49,6 +49,13 @@ impl Progress {
         }
     }
 
+    /// One item of a per-item stage is done: the bar shows `stage: done/total items`.
+    pub fn item_done(&self, stage: &str, done: usize, total: usize) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!("{stage}: {done}/{total} items"));
+        }
+    }
+
     /// A stage is done (ran or reused); `what` says how, with its time.
     pub fn finished(&self, stage: &str, what: &str) {
         let line = format!("{stage}: {what}");

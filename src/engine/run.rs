@@ -87,6 +87,9 @@ pub fn run(
     // read pipeline.lock only now that no other run can be writing it
     let ctx = Context::new(catalog, pipeline, progress);
     ctx.store.sweep_tmp()?;
+    // temp files of a killed run's atomic writes
+    super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
+    super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
     let jobs = opts
         .jobs
         .unwrap_or_else(|| {

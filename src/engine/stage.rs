@@ -18,7 +18,7 @@ pub enum Artifact {
 pub struct StageInput<'a> {
     /// The stage's params, already checked by `StageKind::canonical_params`.
     pub params: &'a toml::Table,
-    /// Input artifacts by the input names the kind declares. For a per-item stage the
+    /// Input artifacts by the input names the kind declares. For a per-item stage each
     /// `foreach` input holds only the current item, as `Artifact::File`.
     pub inputs: BTreeMap<&'a str, &'a Artifact>,
     /// For a per-item stage: the current item's name.

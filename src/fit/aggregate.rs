@@ -16,6 +16,9 @@ pub struct AggregateOptions {
     pub level: f64,
     /// The chapter averages μ over runs faster than this.
     pub fast_min_speed_mps: f64,
+    /// k = m R² / I of the particles (for μ_pp from the collisions); keep it equal to the fit
+    /// stage's `k`.
+    pub k: f64,
 }
 
 impl Default for AggregateOptions {
@@ -24,6 +27,7 @@ impl Default for AggregateOptions {
             bootstrap_resamples: 2000,
             level: 0.95,
             fast_min_speed_mps: 0.03,
+            k: 2.5,
         }
     }
 }
@@ -47,6 +51,12 @@ impl AggregateOptions {
             return Err((
                 "fast_min_speed_mps".into(),
                 "must be a speed ≥ 0 in m/s, e.g. 0.03".into(),
+            ));
+        }
+        if !(self.k > 0.0 && self.k.is_finite()) {
+            return Err((
+                "k".into(),
+                "must be positive (2.5 for a solid sphere)".into(),
             ));
         }
         Ok(())

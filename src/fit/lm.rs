@@ -8,6 +8,9 @@
 //! [`Termination`] says why, never a panic. The caller owns the buffers ([`Workspace`]), so the
 //! iterations allocate nothing.
 
+// Small dense linear algebra on fixed 6×6 arrays reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 use super::loss::Loss;
 use super::model::NP;
 use super::status::Termination;
@@ -30,7 +33,8 @@ pub struct Bounds {
 }
 
 impl Bounds {
-    fn clamp(&self, x: &mut [f64; NP]) {
+    /// Move the free parameters of `x` into the box.
+    pub fn clamp(&self, x: &mut [f64; NP]) {
         for i in 0..NP {
             if self.free[i] {
                 x[i] = x[i].clamp(self.lo[i], self.hi[i]);
@@ -173,7 +177,7 @@ pub fn solve_spd(a: &[[f64; NP]; NP], b: &[f64; NP], on: &[bool; NP]) -> Option<
     let mut d = [0.0; NP];
     for p in 0..m {
         let aii = a[idx[p]][idx[p]];
-        if !(aii > 0.0) || !aii.is_finite() {
+        if aii.is_nan() || aii <= 0.0 || aii.is_infinite() {
             return None;
         }
         d[p] = aii.sqrt();
@@ -186,7 +190,7 @@ pub fn solve_spd(a: &[[f64; NP]; NP], b: &[f64; NP], on: &[bool; NP]) -> Option<
                 sum -= l[p][k] * l[q][k];
             }
             if p == q {
-                if !(sum > 1e-14) {
+                if sum.is_nan() || sum <= 1e-14 {
                     return None;
                 }
                 l[p][p] = sum.sqrt();

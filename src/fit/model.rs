@@ -5,7 +5,9 @@
 //! sliding with direction d = sign(v0 − s·va0), a switch at t1 where v = s·va, then constrained
 //! rolling decaying with Te = T(1 + ks²)/ks². The observation model adds an offset and a time shift:
 //!
-//!     z(t) = z0 + Δz(t − t_ref + t0; v0, va0, μ, T)
+//! ```text
+//! z(t) = z0 + Δz(t − t_ref + t0; v0, va0, μ, T)
+//! ```
 //!
 //! where t_ref is a fixed origin (the first frame, or a segment start) and t0 the time elapsed
 //! between the kick and t_ref. Before the kick (τ < 0) the particle rests at z0.
@@ -198,8 +200,8 @@ impl Prepared {
             grad[T0] = v1 * f;
             // ∂R/∂Te · ∂Te/∂T with R = v1 Te (1 − F)
             let dr_dte = v1 * (om - f * x);
-            for i in V0..=TD {
-                grad[i] = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
+            for (i, g) in grad.iter_mut().enumerate().take(TD + 1).skip(V0) {
+                *g = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
             }
             grad[TD] += dr_dte * te / t;
             self.p[Z0] + self.z1_m + v1 * te * om
@@ -216,7 +218,7 @@ impl Prepared {
 /// Root of the monotone switch function `g` on t > 0, with g(0) = `g0` ≠ 0. `speed_scale` bounds
 /// the size of g, `rate` its decrease per second from friction alone; together they bracket t1.
 fn switch_root(g: impl Fn(f64) -> f64, g0: f64, speed_scale: f64, rate: f64) -> Option<f64> {
-    if !(rate > 0.0) || !speed_scale.is_finite() {
+    if rate.is_nan() || rate <= 0.0 || !speed_scale.is_finite() {
         return None;
     }
     let sign = g0.signum();

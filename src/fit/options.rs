@@ -1,5 +1,6 @@
 //! Options of every fit (the `params` of the `fit` stage): groove geometry, loss, outlier cut.
 
+use super::collision::CollisionOptions;
 use super::loss::Loss;
 use crate::physics::Groove;
 use serde::{Deserialize, Serialize};
@@ -39,6 +40,15 @@ impl FitOptions {
         Groove {
             k: self.k,
             ..Groove::from_angle_deg(self.groove_angle_deg)
+        }
+    }
+
+    /// The collision fit's options on the same groove (its other settings at their defaults).
+    pub fn collision_options(&self) -> CollisionOptions {
+        CollisionOptions {
+            s: self.groove().s,
+            k: self.k,
+            ..CollisionOptions::default()
         }
     }
 

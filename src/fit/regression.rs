@@ -14,7 +14,7 @@ pub fn line_fit(x: &[f64], y: &[f64], idx: &[usize]) -> (f64, f64) {
         sxy += (x[i] - xm) * (y[i] - ym);
         sxx += (x[i] - xm) * (x[i] - xm);
     }
-    if !(sxx > 1e-300) {
+    if sxx.is_nan() || sxx <= 1e-300 {
         return (f64::NAN, f64::NAN);
     }
     let b = sxy / sxx;

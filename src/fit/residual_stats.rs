@@ -1,5 +1,5 @@
 //! Pooled statistics of re-simulation residuals, grouped by phase, speed, position, direction,
-//! material and run: what is left for the discovery to explain. Outlier frames are left out.
+//! material, experiment and run: what is left for the discovery to explain. Outlier frames are left out.
 //!
 //! Per group: count, mean, RMS, lag-1 autocorrelation (about zero, over consecutive frames of the
 //! same run in the same group) and the Wald–Wolfowitz runs test of the residual signs (runs summed
@@ -7,6 +7,7 @@
 //! i.e. structure the model misses).
 
 use super::residuals::{Phase, RunResiduals};
+use crate::recording::Experiment;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -51,6 +52,8 @@ pub struct Comparison {
     /// "+z" and "-z".
     pub by_direction: BTreeMap<String, GroupStats>,
     pub by_material: BTreeMap<String, GroupStats>,
+    /// "single" and "collision" (collision runs: both particles, piece by piece).
+    pub by_experiment: BTreeMap<String, GroupStats>,
     pub by_run: BTreeMap<String, GroupStats>,
 }
 
@@ -116,7 +119,7 @@ impl Acc {
 }
 
 /// Feed a run's frames into the accumulator of each frame's group (`key` gives it; None skips the
-/// frame), cutting stretches where the group changes or an outlier intervenes.
+/// frame), cutting stretches where the group or the particle changes or an outlier intervenes.
 fn feed<K: Ord + Clone>(
     accs: &mut BTreeMap<K, Acc>,
     res: &RunResiduals,
@@ -127,7 +130,8 @@ fn feed<K: Ord + Clone>(
     buf.clear();
     for i in 0..res.residual_m.len() {
         let k = if res.outlier[i] { None } else { key(i) };
-        if k != cur {
+        let new_particle = i > 0 && res.particle[i] != res.particle[i - 1];
+        if k != cur || new_particle {
             if let Some(c) = cur.take() {
                 accs.entry(c).or_default().add_stretch(buf);
             }
@@ -192,6 +196,7 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
     let mut by_position = BTreeMap::new();
     let mut by_direction = BTreeMap::new();
     let mut by_material = BTreeMap::new();
+    let mut by_experiment = BTreeMap::new();
     let mut by_run = BTreeMap::new();
     let mut buf = Vec::new();
     let (mut n_frames, mut n_outliers) = (0, 0);
@@ -217,6 +222,16 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
         }
         feed(&mut by_direction, r, |_| Some(dir.to_string()), &mut buf);
         feed(&mut by_material, r, |_| Some(r.material.clone()), &mut buf);
+        let experiment = match r.experiment {
+            Experiment::Single => "single",
+            Experiment::Collision => "collision",
+        };
+        feed(
+            &mut by_experiment,
+            r,
+            |_| Some(experiment.to_string()),
+            &mut buf,
+        );
         feed(&mut by_run, r, |_| Some(r.run.clone()), &mut buf);
     }
     Comparison {
@@ -244,6 +259,7 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
             .collect(),
         by_direction: finish(by_direction),
         by_material: finish(by_material),
+        by_experiment: finish(by_experiment),
         by_run: finish(by_run),
     }
 }
@@ -251,7 +267,6 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recording::Experiment;
 
     fn run(id: &str, r: Vec<f64>) -> RunResiduals {
         let n = r.len();
@@ -261,6 +276,7 @@ mod tests {
             experiment: Experiment::Single,
             direction: 1,
             status: "ok".into(),
+            particle: vec![0; n],
             t_s: (0..n).map(|i| i as f64 * 1e-4).collect(),
             z_obs_m: (0..n).map(|i| i as f64 * 1e-6).collect(),
             z_fit_m: vec![0.0; n],

@@ -1,9 +1,11 @@
 //! Re-simulation of a run with its fitted parameters: per-frame residuals, phase and outlier flag
-//! (the `simulate` stage's item, read by `compare` and the discovery).
+//! (the `simulate` stage's item, read by `compare` and the discovery). Single runs use the fitted
+//! baseline; collision runs each fitted piece between impacts (both particles).
 
+use super::collision::CollisionFit;
 use super::single::SingleFit;
 use super::RunFit;
-use crate::physics::{self, Baseline};
+use crate::physics::{self, Baseline, Groove};
 use crate::recording::{Experiment, Recording};
 use serde::{Deserialize, Serialize};
 
@@ -36,6 +38,8 @@ pub struct RunResiduals {
     pub direction: i8,
     /// `ok`, or why there are no residuals (`skipped: …`).
     pub status: String,
+    /// The particle of each frame (0 for single runs; 0 striker, 1 target in collision runs).
+    pub particle: Vec<u32>,
     pub t_s: Vec<f64>,
     pub z_obs_m: Vec<f64>,
     pub z_fit_m: Vec<f64>,
@@ -56,6 +60,7 @@ impl RunResiduals {
             experiment: rec.info.experiment,
             direction: 0,
             status,
+            particle: vec![],
             t_s: vec![],
             z_obs_m: vec![],
             z_fit_m: vec![],
@@ -67,16 +72,88 @@ impl RunResiduals {
     }
 }
 
-/// Re-simulate `rec` with its fit.
-pub fn residuals(rec: &Recording, fit: &RunFit) -> RunResiduals {
+/// Re-simulate `rec` with its fit. `groove` is used for collision runs (a single-run fit records
+/// its own).
+pub fn residuals(rec: &Recording, fit: &RunFit, groove: Groove) -> RunResiduals {
     match fit {
         RunFit::Single(f) => single_residuals(rec, f),
-        RunFit::Collision(_) => RunResiduals::empty(
-            rec,
-            "skipped: residuals of collision runs are not computed by the baseline re-simulation"
-                .into(),
-        ),
+        RunFit::Collision(c) => collision_residuals(rec, c, groove),
     }
+}
+
+/// One re-simulated frame.
+struct Sample {
+    particle: u32,
+    t_s: f64,
+    z_obs_m: f64,
+    z_fit_m: f64,
+    v_fit_mps: f64,
+    phase: Phase,
+}
+
+impl RunResiduals {
+    /// Append a frame; it is an outlier if its residual exceeds `cut_m`.
+    fn push(&mut self, f: Sample, cut_m: f64) {
+        let res = f.z_obs_m - f.z_fit_m;
+        self.particle.push(f.particle);
+        self.t_s.push(f.t_s);
+        self.z_obs_m.push(f.z_obs_m);
+        self.z_fit_m.push(f.z_fit_m);
+        self.residual_m.push(res);
+        self.v_fit_mps.push(f.v_fit_mps);
+        self.phase.push(f.phase);
+        self.outlier.push(cut_m.is_finite() && res.abs() > cut_m);
+    }
+}
+
+/// Collision runs: each particle's frames re-simulated piece by piece from the fitted state at
+/// the start of each piece (between impacts), with the run's μ and the piece's drag time. Frames
+/// outside every fitted piece are left out.
+fn collision_residuals(rec: &Recording, c: &CollisionFit, groove: Groove) -> RunResiduals {
+    if c.segments.is_empty() || !c.mu_pg.value.is_finite() {
+        return RunResiduals::empty(
+            rec,
+            format!("skipped: the collision fit has no pieces ({:?})", c.status),
+        );
+    }
+    let mut out = RunResiduals::empty(rec, "ok".into());
+    out.direction = if c.direction >= 0 { 1 } else { -1 };
+    let cut = 5.0 * c.noise_m;
+    for track in &rec.tracks {
+        for i in 0..track.t_s.len() {
+            let t = track.t_s[i];
+            let Some(seg) = c
+                .segments
+                .iter()
+                .find(|s| s.particle == track.particle && s.t_start_s <= t && t <= s.t_end_s)
+            else {
+                continue;
+            };
+            let model = Baseline {
+                mu: c.mu_pg.value,
+                t_drag_s: seg.t_drag_s.value,
+                groove,
+            };
+            let (dz, v, _, phase) = model.state_from(
+                seg.v_start_mps.value,
+                seg.va_start_mps.value,
+                t - seg.t_start_s,
+            );
+            let sample = Sample {
+                particle: track.particle,
+                t_s: t,
+                z_obs_m: track.z_m[i],
+                z_fit_m: seg.z_start_m + dz,
+                v_fit_mps: v,
+                phase: phase.into(),
+            };
+            out.push(sample, cut);
+        }
+    }
+    if out.t_s.is_empty() {
+        out.status = "skipped: no frame lies in a fitted piece".into();
+    }
+    out
 }
 
 fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
@@ -94,22 +171,20 @@ fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
         t_drag_s: f.t_drag_s,
         groove: f.groove,
     };
-    let n = track.t_s.len();
     let mut out = RunResiduals::empty(rec, "ok".into());
     out.direction = if f.v0_mps >= 0.0 { 1 } else { -1 };
     let cut = f.outlier_cut_m;
-    for i in 0..n {
-        let tau = (track.t_s[i] + f.t0_s).max(0.0);
-        let (dz, v, phase) = model.state(f.v0_mps, tau);
-        let z_fit = f.z0_m + dz;
-        let res = track.z_m[i] - z_fit;
-        out.t_s.push(track.t_s[i]);
-        out.z_obs_m.push(track.z_m[i]);
-        out.z_fit_m.push(z_fit);
-        out.residual_m.push(res);
-        out.v_fit_mps.push(v);
-        out.phase.push(phase.into());
-        out.outlier.push(cut.is_finite() && res.abs() > cut);
+    for (&t, &z) in track.t_s.iter().zip(&track.z_m) {
+        let (dz, v, phase) = model.state(f.v0_mps, (t + f.t0_s).max(0.0));
+        let sample = Sample {
+            particle: 0,
+            t_s: t,
+            z_obs_m: z,
+            z_fit_m: f.z0_m + dz,
+            v_fit_mps: v,
+            phase: phase.into(),
+        };
+        out.push(sample, cut);
     }
     out
 }

@@ -61,11 +61,7 @@ pub fn fit_robust<P: Problem>(
         return fit;
     }
     let mut x = x0;
-    for i in 0..NP {
-        if bounds.free[i] {
-            x[i] = x[i].clamp(bounds.lo[i], bounds.hi[i]);
-        }
-    }
+    bounds.clamp(&mut x);
     if !prob.residuals(&x, &mut ws.r, None) {
         fit.termination = Termination::NonFinite;
         return fit;

@@ -81,7 +81,7 @@ pub fn fit_track(
 ) -> SingleFit {
     let n = t_s.len().min(z_m.len());
     let groove = opts.groove();
-    if n < opts.min_frames.max(8) || !(fps > 0.0) {
+    if n < opts.min_frames.max(8) || fps.is_nan() || fps <= 0.0 {
         return failed(n, groove, Termination::TooFewPoints);
     }
     let (t_s, z_m) = (&t_s[..n], &z_m[..n]);

@@ -27,7 +27,7 @@ pub fn single_start(
     let mut late: [(f64, f64); 16] = [(0.0, 0.0); 16];
     let mut n_late = 0;
     let mut v_all = [0.0; 16];
-    for b in 0..nb {
+    for (b, v_block) in v_all.iter_mut().enumerate().take(nb) {
         let (lo, hi) = (b * n / nb, (b + 1) * n / nb);
         let q = ((hi - lo) / 3).max(1);
         let tf = median_of(&t_s[lo..lo + q], scratch);
@@ -35,7 +35,7 @@ pub fn single_start(
         let yf = dir * median_of(&z_m[lo..lo + q], scratch);
         let yl = dir * median_of(&z_m[hi - q..hi], scratch);
         let v = if tl > tf { (yl - yf) / (tl - tf) } else { 0.0 };
-        v_all[b] = v;
+        *v_block = v;
         let tb = 0.5 * (tf + tl);
         if tb >= 0.4 * t_end && v > 0.0 {
             late[n_late] = (tb, v.ln());

@@ -31,9 +31,9 @@ impl Problem for TrackProblem<'_> {
                 }
             }
             None => {
-                for i in 0..self.t_s.len() {
-                    r[i] = m.eval(self.t_s[i], self.t_ref_s) - self.z_m[i];
-                    finite &= r[i].is_finite();
+                for ((ri, &t), &z) in r.iter_mut().zip(self.t_s).zip(self.z_m) {
+                    *ri = m.eval(t, self.t_ref_s) - z;
+                    finite &= ri.is_finite();
                 }
             }
         }

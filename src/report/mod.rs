@@ -1,1 +1,49 @@
-//! report (being built)
+//! The report: figures (plotters SVG) and pages (Markdown, self-contained HTML) rendered to strings
+//! from the upstream artifacts; the engine writes them.
+//!
+//! Upstream artifacts are read as `serde_json::Value` with the output contracts' field names
+//! (fits.csv, per-run fit JSON, summary.json, diagnosis.json, validation, provenance), so the report
+//! stays decoupled from the other modules' types and degrades gracefully when a part is absent.
+
+pub mod audit;
+pub mod chapter;
+pub mod collisions;
+pub mod date;
+pub mod figures;
+pub mod html;
+pub mod inputs;
+pub mod markdown;
+pub mod sections;
+pub mod singles;
+pub mod style;
+pub mod summary;
+pub mod trajectory;
+pub mod truth;
+pub mod value;
+
+pub use figures::{render_all as render_figures, FigureOptions};
+pub use inputs::ReportData;
+
+use std::collections::BTreeMap;
+
+/// The two pages of a report.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Pages {
+    pub html: String,
+    pub md: String,
+}
+
+/// Render report.html and report.md from the data and the figures (file name → SVG).
+/// `date_epoch_s`, when given (from `SOURCE_DATE_EPOCH`), prints that UTC date under the title.
+pub fn render_pages(
+    d: &ReportData,
+    figures: &BTreeMap<String, String>,
+    title: &str,
+    date_epoch_s: Option<i64>,
+) -> Result<Pages, String> {
+    let page = sections::build(d, figures, title, date_epoch_s.map(date::utc_date));
+    Ok(Pages {
+        html: html::render(&page)?,
+        md: markdown::render(&page)?,
+    })
+}

@@ -62,7 +62,7 @@ impl StageKind for Aggregate {
             );
             None
         } else {
-            Some(collision::summarize(&collisions))
+            Some(collision::summarize_seeded(&collisions, opts.k, input.seed))
         };
         let summary = Summary {
             single,

@@ -39,12 +39,7 @@ impl StageKind for Fit {
         let fit = match rec.info.experiment {
             Experiment::Single => RunFit::Single(single::fit_single(&rec, &opts)),
             Experiment::Collision => {
-                let collision_opts = collision::CollisionOptions {
-                    s: (opts.groove_angle_deg.to_radians() / 2.0).sin(),
-                    k: opts.k,
-                    ..Default::default()
-                };
-                RunFit::Collision(collision::fit_collision(&rec, &collision_opts))
+                RunFit::Collision(collision::fit_collision(&rec, &opts.collision_options()))
             }
         };
         Ok([("fits".to_string(), Artifact::File(json_bytes(&fit)?))].into())

@@ -4,9 +4,12 @@ use crate::engine::stage::StageKind;
 
 pub mod aggregate;
 pub mod compare;
+pub mod discover;
+pub mod figures;
 pub mod fit;
 pub mod fit_io;
 pub mod ingest;
+pub mod report;
 pub mod simulate;
 pub mod validate;
 
@@ -21,6 +24,9 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
     kinds.push(Box::new(aggregate::Aggregate));
     kinds.push(Box::new(simulate::Simulate));
     kinds.push(Box::new(compare::Compare));
+    kinds.push(Box::new(discover::Discover));
     kinds.push(Box::new(validate::Validate));
+    kinds.push(Box::new(figures::Figures));
+    kinds.push(Box::new(report::Report));
     kinds
 }

@@ -1,22 +1,46 @@
 //! The `simulate` stage kind (per run): re-simulate the run with its fitted parameters, residuals out.
 // groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/simulate.rs src/stages/fit_io.rs
 
-use super::fit_io::{collection_input, file_input, json_bytes, parse_item};
+use super::fit_io::{collection_input, file_input, json_bytes, param_error, parse_item};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::residuals::residuals;
-use crate::fit::RunFit;
+use crate::fit::{FitOptions, RunFit};
 use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
 /// `kind = "simulate"`, `foreach = "runs"`.
 pub struct Simulate;
 
-/// No params yet (the groove and outlier cut come from each fit).
-#[derive(Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct NoParams {}
+/// The groove of the collision fits (keep equal to the fit stage's params; single-run fits
+/// record their own).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct SimulateParams {
+    groove_angle_deg: f64,
+    k: f64,
+}
+
+impl Default for SimulateParams {
+    fn default() -> Self {
+        let fit = FitOptions::default();
+        SimulateParams {
+            groove_angle_deg: fit.groove_angle_deg,
+            k: fit.k,
+        }
+    }
+}
+
+impl SimulateParams {
+    fn options(&self) -> FitOptions {
+        FitOptions {
+            groove_angle_deg: self.groove_angle_deg,
+            k: self.k,
+            ..FitOptions::default()
+        }
+    }
+}
 
 impl StageKind for Simulate {
     fn kind(&self) -> &'static str {
@@ -29,9 +53,13 @@ impl StageKind for Simulate {
         &["residuals"]
     }
     fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
-        Ok(typed_params::<NoParams>(params)?.1)
+        let (p, json) = typed_params::<SimulateParams>(params)?;
+        p.options().validate().map_err(param_error)?;
+        Ok(json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (params, _) =
+            typed_params::<SimulateParams>(input.params).map_err(|e| StageError(e.to_string()))?;
         let item = input.item.unwrap_or("?");
         let rec: Recording = parse_item(
             item,
@@ -45,7 +73,7 @@ impl StageKind for Simulate {
             ))
         })?;
         let fit: RunFit = parse_item(item, bytes, "the fit")?;
-        let res = residuals(&rec, &fit);
+        let res = residuals(&rec, &fit, params.options().groove());
         Ok([("residuals".to_string(), Artifact::File(json_bytes(&res)?))].into())
     }
 }

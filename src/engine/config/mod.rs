@@ -28,7 +28,7 @@ pub fn load(
             path.display()
         ))
     })?;
-    let abs = std::path::absolute(path).at(path)?;
+    let abs = validate::normalize(&std::path::absolute(path).at(path)?);
     let file = span::Source::new(&abs, &text);
     let raw: raw::RawPipeline = toml::from_str(&text).map_err(|e| {
         let line = e.span().map(|s| file.line_of(s.start)).unwrap_or(1);

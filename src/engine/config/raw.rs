@@ -25,7 +25,7 @@ pub struct RawProject {
 #[serde(deny_unknown_fields)]
 pub struct RawStage {
     pub kind: Spanned<String>,
-    pub foreach: Option<Spanned<String>>,
+    pub foreach: Option<Spanned<Foreach>>,
     #[serde(default)]
     pub inputs: BTreeMap<Spanned<String>, Spanned<RawInput>>,
     #[serde(default)]
@@ -49,4 +49,13 @@ pub struct RawPathInput {
     pub path: String,
     #[serde(default)]
     pub optional: bool,
+}
+
+/// `foreach = "runs"`, or `foreach = ["runs", "fits"]` to step through several per-item inputs
+/// with the same item names together.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum Foreach {
+    One(String),
+    Many(Vec<String>),
 }

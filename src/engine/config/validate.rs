@@ -1,6 +1,6 @@
 //! The validation step: raw config → typed [`Pipeline`], every error located at its TOML line.
 
-use super::raw::{RawInput, RawPipeline, RawStage};
+use super::raw::{Foreach, RawInput, RawPipeline, RawStage};
 use super::span::Source;
 use super::Overrides;
 use crate::engine::catalog::Catalog;
@@ -53,7 +53,10 @@ pub fn validate(
         stages: BTreeMap::new(),
     };
     let mut lines = Lines::default();
-    for (name, stage) in raw.stages {
+    // in file order, so the first error reported is the first in the file
+    let mut stages: Vec<_> = raw.stages.into_iter().collect();
+    stages.sort_by_key(|(name, _)| name.span().start);
+    for (name, stage) in stages {
         let line = file.line_of(name.span().start);
         let name = name.into_inner();
         if name.is_empty()
@@ -228,16 +231,28 @@ fn validate_stage(
         (super::super::key::canonical_json(json), Some(cmd))
     };
 
-    let foreach = match raw.foreach {
+    let (foreach, foreach_with) = match raw.foreach {
         Some(f) => {
-            let f_line = here(&f);
-            let f = f.into_inner();
-            if !inputs.contains_key(&f) {
-                return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+            let f_line = file.line_of(f.span().start);
+            let mut names = match f.into_inner() {
+                Foreach::One(one) => vec![one],
+                Foreach::Many(many) => many,
+            };
+            if names.is_empty() {
+                return Err(file.error(f_line, format!("stage `{name}`: foreach = [] names no input; name the collection input to map over")));
             }
-            Some(f)
+            for f in &names {
+                if !inputs.contains_key(f) {
+                    return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+                }
+                if matches!(inputs[f], InputSpec::Provenance) {
+                    return Err(file.error(f_line, format!("stage `{name}`: foreach cannot step through `{f}`, the provenance record; name a collection input")));
+                }
+            }
+            let first = names.remove(0);
+            (Some(first), names)
         }
-        None => None,
+        None => (None, Vec::new()),
     };
 
     Ok(StageSpec {
@@ -245,6 +260,7 @@ fn validate_stage(
         kind,
         line,
         foreach,
+        foreach_with,
         inputs,
         outputs,
         params,

@@ -72,3 +72,35 @@ pub fn exp_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
     let v_ref = (0.5 * (lo + hi)).exp();
     Some((solve(v_ref).0, v_ref))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on C = 0.6 + 0.4 e^{−v/0.1} with small alternating errors.
+    fn points() -> Vec<(f64, f64, f64)> {
+        (1..=12)
+            .map(|i| {
+                let v = 0.025 * i as f64;
+                let c = 0.6 + 0.4 * (-v / 0.1f64).exp() + if i % 2 == 0 { 0.002 } else { -0.002 };
+                (v, c, 0.01)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn exponential_law_is_recovered() {
+        let (c_inf, v_ref) = exp_fit(&points()).unwrap();
+        assert!((c_inf - 0.6).abs() < 0.01, "{c_inf}");
+        assert!((v_ref - 0.1).abs() < 0.01, "{v_ref}");
+    }
+
+    #[test]
+    fn straight_lines_fall_with_speed() {
+        let (c0, slope) = line_fit(&points()).unwrap();
+        assert!(slope < 0.0 && c0 > 0.8 && c0 < 1.0, "{c0} {slope}");
+        let a = one_minus_av(&[(0.1, 0.9, 0.01), (0.2, 0.8, 0.01)]).unwrap();
+        assert!((a - 1.0).abs() < 1e-12);
+        assert!(line_fit(&[(0.1, 0.9, 0.01)]).is_none());
+    }
+}

@@ -1,8 +1,9 @@
 //! Finding impacts in noisy tracks: the noise level, the target's departure from rest, local
-//! velocities, and the kink scan that proposes a missed (secondary) impact from fit residuals.
+//! velocities, and contacts in the gap between the particles (secondary collisions).
 //!
-//! An impact is a jump in velocity (a kink in z), equal and opposite in the two tracks; a switch
-//! from sliding to rolling only changes the acceleration. All detectors use robust statistics so
+//! An impact is a jump in velocity (a kink in z), equal and opposite in the two tracks, and it
+//! happens only where the gap is back at the contact distance; a switch from sliding to rolling
+//! only changes the acceleration. All detectors use robust statistics so
 //! that rare tracking outliers and dropped frames do not create or hide impacts.
 
 use super::model::TrackData;

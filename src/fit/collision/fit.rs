@@ -104,6 +104,13 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
     }
     let mut fit = summarize_fit(info, direction, &layout, &res);
     fit.setup = Some(setup);
+    if t_stop.is_finite() {
+        fit.fit_end_s = Some(t_stop);
+        fit.message = format!(
+            "fitted up to t = {t_stop:.5} s: there the pair touches again without an impact the \
+             data resolve, and the closed-form pieces no longer describe the motion"
+        );
+    }
     fit
 }
 

@@ -6,7 +6,7 @@
 //! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
 //! (the joint piecewise model) → `lm` (robust solver) → `report` (the per-run record, `types`).
 //! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
-//! form, `impulse` is the impact model.
+//! form, `impulse` is the impact model, `trajectory` evaluates a fitted run for figures.
 
 pub mod curves;
 pub mod detect;
@@ -22,6 +22,7 @@ mod report;
 mod secondary;
 mod start;
 pub mod summary;
+mod trajectory;
 pub mod types;
 
 pub use fit::fit_collision;

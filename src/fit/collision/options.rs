@@ -14,7 +14,7 @@ pub struct CollisionOptions {
     pub max_impacts: usize,
     /// A secondary contact is fitted as an impact when the jump of the gap rate exceeds this
     /// many standard errors; otherwise the fit stops where the pair touches again.
-    pub kink_z: f64,
+    pub contact_z: f64,
     /// Starting values of μ_pg, T and μ_pp (the latter only seeds the spins after an impact).
     pub mu_start: f64,
     pub t_drag_start_s: f64,
@@ -30,7 +30,7 @@ impl Default for CollisionOptions {
             s: (70.6f64.to_radians() / 2.0).sin(),
             k: 2.5,
             max_impacts: 6,
-            kink_z: 6.0,
+            contact_z: 6.0,
             mu_start: 0.3,
             t_drag_start_s: 0.06,
             mu_pp_start: 1.0,

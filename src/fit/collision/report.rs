@@ -32,6 +32,7 @@ pub fn failed_fit(info: &RunInfo, status: CollisionStatus, message: &str) -> Col
         n_points: 0,
         n_outliers: 0,
         iterations: 0,
+        fit_end_s: None,
     }
 }
 
@@ -149,6 +150,7 @@ pub fn summarize_fit(
         n_points: data.len(),
         n_outliers: data.iter().filter(|r| r.abs() > 5.0 * res.scale).count(),
         iterations: res.iterations,
+        fit_end_s: None,
     }
 }
 

@@ -37,7 +37,7 @@ impl Fitter<'_> {
             tol,
             first + 0.5 * window as f64 * self.frame_s,
             window,
-            self.opts.kink_z,
+            self.opts.contact_z,
         );
         let s = self.opts.s;
         let mut last = first;

@@ -176,4 +176,7 @@ pub struct CollisionFit {
     /// Samples with |residual| > 5 noise scales (down-weighted by the robust loss).
     pub n_outliers: usize,
     pub iterations: usize,
+    /// The fit stops here (s) when the pair touches again without a resolvable impact; later
+    /// samples are left out (see `message`). None: the whole tracks were fitted.
+    pub fit_end_s: Option<f64>,
 }

@@ -1,0 +1,162 @@
+//! Per-run fits: each run alone with its own μ and T (extra terms held at given values), which
+//! measure the run's noise, flag its tracking outliers and give the drift of fitted T and μ.
+
+use super::candidate::{ParamInfo, Spec, N_LOCAL};
+use super::data::RunData;
+use super::joint::{fit_joint, predict, FitControl};
+use super::residual_structure::lag1_autocorrelation;
+use rayon::prelude::*;
+
+/// One run's own fit.
+#[derive(Clone, Debug)]
+pub struct PerRunFit {
+    pub mu: f64,
+    pub t_s: f64,
+    pub local: [f64; N_LOCAL],
+    pub rms_m: f64,
+    pub converged: bool,
+}
+
+/// Starting values of z0, t0, v0 from the first frames: a parabola through the first ~20 samples.
+pub fn local_start(run: &RunData) -> [f64; N_LOCAL] {
+    let n = run.t_s.len().min(20);
+    let t = &run.t_s[..n];
+    let z = &run.z_m[..n];
+    // least squares z = a + b t + c t² (normal equations, centred for conditioning)
+    let tm = t.iter().sum::<f64>() / n as f64;
+    let mut m = [0.0; 9];
+    let mut rhs = [0.0; 3];
+    for (ti, zi) in t.iter().zip(z) {
+        let u = ti - tm;
+        let phi = [1.0, u, u * u];
+        for a in 0..3 {
+            for b in 0..3 {
+                m[a * 3 + b] += phi[a] * phi[b];
+            }
+            rhs[a] += phi[a] * zi;
+        }
+    }
+    let l = super::linalg::cholesky_jittered(&m, 3);
+    super::linalg::chol_solve(&l, 3, &mut rhs);
+    let t0 = 0.5 / run.fps.max(1.0);
+    // value and slope at t = −t0 (the kick)
+    let u = -t0 - tm;
+    let v0 = rhs[1] + 2.0 * rhs[2] * u;
+    let z0 = rhs[0] + rhs[1] * u + rhs[2] * u * u;
+    [z0, t0, if v0.abs() > 1e-6 { v0 } else { 1e-6 }]
+}
+
+/// A one-material spec holding `base`'s extra terms fixed at `extra_values`.
+fn single_spec(
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+) -> (Spec, Vec<ParamInfo>) {
+    let spec = Spec {
+        n_materials: 1,
+        ..base.clone()
+    };
+    let mut params = vec![
+        base_params[0].clone(),
+        base_params[base.n_materials].clone(),
+    ];
+    let off = 2 * base.n_materials;
+    for (i, p) in base_params[off..].iter().enumerate() {
+        let mut p = p.clone();
+        p.start = extra_values[i];
+        p.lo = extra_values[i];
+        p.hi = extra_values[i];
+        params.push(p);
+    }
+    (spec, params)
+}
+
+/// Fit every run alone (μ and T free, extras fixed), from `starts` (μ, T, locals) when given.
+pub fn fit_each_run(
+    runs: &[RunData],
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+    starts: Option<&[PerRunFit]>,
+) -> Vec<PerRunFit> {
+    let (spec, params) = single_spec(base, base_params, extra_values);
+    runs.par_iter()
+        .enumerate()
+        .map(|(i, run)| {
+            let mut r = run.clone();
+            r.material = 0;
+            let (mu, t, l) = match starts {
+                Some(s) => (s[i].mu, s[i].t_s, s[i].local),
+                None => (0.3, 0.08, local_start(run)),
+            };
+            let mut g = vec![mu, t];
+            g.extend_from_slice(extra_values);
+            let ctl = FitControl {
+                max_iter: 60,
+                free_global: true,
+            };
+            let f = fit_joint(&spec, &params, std::slice::from_ref(&r), &g, &[l], ctl);
+            let n = r.n_used().max(1) as f64;
+            PerRunFit {
+                mu: f.global[0],
+                t_s: f.global[1],
+                local: f.local[0],
+                rms_m: (f.chi2 / n).sqrt() * r.sigma_m,
+                converged: f.converged,
+            }
+        })
+        .collect()
+}
+
+/// Residuals (observed − fitted) of a per-run fit at every sample.
+pub fn residuals(
+    run: &RunData,
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+    fit: &PerRunFit,
+) -> Vec<f64> {
+    let (spec, _) = single_spec(base, base_params, extra_values);
+    let mut r = run.clone();
+    r.material = 0;
+    let mut g = vec![fit.mu, fit.t_s];
+    g.extend_from_slice(extra_values);
+    let mut z = vec![0.0; run.t_s.len()];
+    predict(&spec, &g, &fit.local, &r, &mut z);
+    run.z_m.iter().zip(&z).map(|(a, b)| a - b).collect()
+}
+
+/// Measure each run's noise from its baseline fit and flag outliers (|r| > 5 robust σ), twice.
+pub fn measure_noise(
+    runs: &mut [RunData],
+    base: &Spec,
+    base_params: &[ParamInfo],
+) -> Vec<PerRunFit> {
+    let mut fits = fit_each_run(runs, base, base_params, &[], None);
+    for pass in 0..2 {
+        for (run, fit) in runs.iter_mut().zip(&fits) {
+            let res = residuals(run, base, base_params, &[], fit);
+            let mut abs: Vec<f64> = res.iter().map(|r| r.abs()).collect();
+            abs.sort_by(f64::total_cmp);
+            let mad_sigma = (1.4826 * abs[abs.len() / 2]).max(1e-12);
+            for (k, r) in run.keep.iter_mut().zip(&res) {
+                *k = r.abs() <= 5.0 * mad_sigma;
+            }
+            let kept: Vec<f64> = res
+                .iter()
+                .zip(&run.keep)
+                .filter(|(_, k)| **k)
+                .map(|(r, _)| *r)
+                .collect();
+            let dof = (kept.len() as f64 - 5.0).max(1.0);
+            run.sigma_m = (kept.iter().map(|r| r * r).sum::<f64>() / dof)
+                .sqrt()
+                .max(1e-12);
+            run.rho1 = lag1_autocorrelation(&kept).clamp(0.0, 0.95);
+        }
+        if pass == 0 {
+            fits = fit_each_run(runs, base, base_params, &[], Some(&fits));
+        }
+    }
+    fits
+}

@@ -1,0 +1,149 @@
+//! Running one key of a stage: load its inputs, call the kind (or the command), check that every
+//! declared output was produced, store the outputs and commit the entry.
+
+use super::command;
+use super::error::EngineError;
+use super::evaluate::Context;
+use super::hashing::sha256_hex;
+use super::inputs::load_path;
+use super::pipeline::StageSpec;
+use super::stage::{Artifact, StageInput, StageOutputs};
+use super::store::{Entry, Stored};
+use std::collections::BTreeMap;
+
+/// Where an input's bytes come from.
+pub enum Source {
+    Path(std::path::PathBuf),
+    Store,
+    Memory(Vec<u8>),
+}
+
+pub struct Bound {
+    pub stored: Stored,
+    pub source: Source,
+}
+
+/// Load every input except the per-item one.
+pub fn load_shared(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+) -> Result<BTreeMap<String, Artifact>, EngineError> {
+    let mut out = BTreeMap::new();
+    for (name, b) in bound {
+        if spec.is_item_input(name) {
+            continue;
+        }
+        let artifact = match &b.source {
+            Source::Path(p) => load_path(p, &b.stored)?,
+            Source::Store => ctx.store.load(&b.stored)?,
+            Source::Memory(bytes) => Artifact::File(bytes.clone()),
+        };
+        out.insert(name.clone(), artifact);
+    }
+    Ok(out)
+}
+
+/// Run one key (the whole stage or one item), check its outputs, store them, commit the entry.
+pub fn execute(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    shared: &BTreeMap<String, Artifact>,
+    item: Option<&str>,
+    key: &str,
+    seed: u64,
+) -> Result<Entry, EngineError> {
+    let failed = |message: String| EngineError::StageFailed {
+        stage: spec.name.clone(),
+        item: item.map(str::to_string),
+        message,
+    };
+    let mut item_artifacts: Vec<(&str, Artifact)> = Vec::new();
+    if let Some(item) = item {
+        for name in spec.foreach.iter().chain(&spec.foreach_with) {
+            let Some(b) = bound.get(name) else { continue };
+            let Stored::Collection { items } = &b.stored else {
+                unreachable!("checked when the keys were made")
+            };
+            let bytes = match &b.source {
+                Source::Path(dir) => {
+                    let p = dir.join(item);
+                    let bytes = std::fs::read(&p).map_err(|e| EngineError::io(&p, e))?;
+                    if sha256_hex(&bytes) != items[item] {
+                        return Err(EngineError::Usage(format!(
+                            "{} changed while groove was running; run again",
+                            p.display()
+                        )));
+                    }
+                    bytes
+                }
+                _ => ctx.store.read_object(&items[item])?,
+            };
+            item_artifacts.push((name.as_str(), Artifact::File(bytes)));
+        }
+    }
+    let mut inputs: BTreeMap<&str, &Artifact> =
+        shared.iter().map(|(k, v)| (k.as_str(), v)).collect();
+    for (name, artifact) in &item_artifacts {
+        inputs.insert(name, artifact);
+    }
+    let outputs: StageOutputs = if spec.kind == "command" {
+        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
+    } else {
+        let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
+        let input = StageInput {
+            params: &spec.params,
+            inputs,
+            item,
+            seed,
+        };
+        // a panicking kind fails its stage; the other stages and the store are unaffected
+        match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
+            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return Err(failed(format!(
+                    "kind `{}` panicked ({what}); this is a bug in groove, please report it",
+                    spec.kind
+                )));
+            }
+        }
+    };
+    for name in spec.outputs.keys() {
+        match outputs.get(name) {
+            None => {
+                return Err(failed(format!(
+                    "produced no output `{name}` (a bug in kind `{}`)",
+                    spec.kind
+                )))
+            }
+            Some(Artifact::Collection(_)) if spec.foreach.is_some() => {
+                return Err(failed(format!(
+                    "output `{name}` of a per-item stage must be one file per item, not a folder"
+                )))
+            }
+            Some(Artifact::Collection(items)) => {
+                if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {
+                    return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));
+                }
+            }
+            Some(Artifact::File(_)) => {}
+        }
+    }
+    if let Some(extra) = outputs.keys().find(|n| !spec.outputs.contains_key(*n)) {
+        return Err(failed(format!(
+            "produced undeclared output `{extra}` (a bug in kind `{}`)",
+            spec.kind
+        )));
+    }
+    let mut stored = BTreeMap::new();
+    for (name, artifact) in &outputs {
+        stored.insert(name.clone(), ctx.store.put(artifact)?);
+    }
+    ctx.store.commit(key, stored)
+}

@@ -1,0 +1,255 @@
+//! Drawing helpers shared by the figures: an SVG canvas rendered to a String, markers, error bars, lines.
+
+use crate::report::style::{self, Marker};
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// What every drawing step returns.
+pub type Res = Result<(), Box<dyn std::error::Error>>;
+
+/// Render one figure into an SVG string of the standard size.
+pub fn render(draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res) -> Result<String, String> {
+    let mut out = String::new();
+    {
+        let root =
+            SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        draw(&root).map_err(|e| format!("drawing a figure failed: {e}"))?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(out)
+}
+
+/// A linear chart with caption, axis descriptions (with units) and a light grid.
+pub fn linear_chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, Shift>,
+    caption: &str,
+    x: (f64, f64),
+    y: (f64, f64),
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<
+    ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    Box<dyn std::error::Error>,
+> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, (style::FONT, style::CAPTION_PX))
+        .margin(14)
+        .x_label_area_size(56)
+        .y_label_area_size(84)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style((style::FONT, style::TICK_PX))
+        .axis_desc_style((style::FONT, style::LABEL_PX))
+        .light_line_style(style::LIGHT_GREY.mix(0.6))
+        .bold_line_style(style::LIGHT_GREY)
+        .x_labels(8)
+        .y_labels(8)
+        .draw()?;
+    Ok(chart)
+}
+
+/// Scatter `pts` with a material's marker; `label` puts it in the legend.
+pub fn scatter<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    marker: Marker,
+    colour: RGBColor,
+    filled: bool,
+    label: Option<&str>,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    scatter_sized(chart, pts, marker, colour, filled, label, 5)
+}
+
+/// `scatter` with marker radius `r` pixels (small markers for dense trajectories).
+pub fn scatter_sized<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    marker: Marker,
+    colour: RGBColor,
+    filled: bool,
+    label: Option<&str>,
+    r: i32,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let st = if filled {
+        colour.filled()
+    } else {
+        colour.stroke_width(2)
+    };
+    let pts = pts.to_vec();
+    let anno = match marker {
+        Marker::Circle => chart.draw_series(pts.into_iter().map(move |p| Circle::new(p, r, st)))?,
+        Marker::Square => chart.draw_series(pts.into_iter().map(move |p| {
+            EmptyElement::at(p) + Rectangle::new([(1 - r, 1 - r), (r - 1, r - 1)], st)
+        }))?,
+        Marker::Triangle => chart.draw_series(
+            pts.into_iter()
+                .map(move |p| TriangleMarker::new(p, r + 1, st)),
+        )?,
+        Marker::Diamond => chart.draw_series(pts.into_iter().map(move |p| {
+            EmptyElement::at(p)
+                + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
+        }))?,
+    };
+    if let Some(label) = label {
+        anno.label(label).legend(move |(x, y)| {
+            EmptyElement::at((x + 8, y)) + Polygon::new(legend_shape(marker), st)
+        });
+    }
+    Ok(())
+}
+
+fn legend_shape(marker: Marker) -> Vec<(i32, i32)> {
+    match marker {
+        Marker::Circle => (0..12)
+            .map(|i| {
+                let a = i as f64 * std::f64::consts::PI / 6.0;
+                (
+                    (5.0 * a.cos()).round() as i32,
+                    (5.0 * a.sin()).round() as i32,
+                )
+            })
+            .collect(),
+        Marker::Square => vec![(-4, -4), (4, -4), (4, 4), (-4, 4)],
+        Marker::Triangle => vec![(0, -6), (5, 3), (-5, 3)],
+        Marker::Diamond => vec![(0, -6), (6, 0), (0, 6), (-6, 0)],
+    }
+}
+
+/// Vertical error bars of ±`err` at each (x, y).
+pub fn error_bars<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64, f64)],
+    colour: RGBColor,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let st = colour.mix(0.5).stroke_width(1);
+    chart.draw_series(
+        pts.iter()
+            .filter(|(_, _, e)| e.is_finite() && *e > 0.0)
+            .map(move |&(x, y, e)| PathElement::new(vec![(x, y - e), (x, y + e)], st)),
+    )?;
+    Ok(())
+}
+
+/// A polyline; `dashed` for reference values (the chapter's), solid for ours.
+pub fn line<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: Vec<(f64, f64)>,
+    colour: RGBColor,
+    width: u32,
+    dashed: bool,
+    label: Option<&str>,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let st = colour.stroke_width(width);
+    let anno = if dashed {
+        chart.draw_series(DashedLineSeries::new(pts, 9, 6, st))?
+    } else {
+        chart.draw_series(LineSeries::new(pts, st))?
+    };
+    if let Some(label) = label {
+        // a dashed sample is two short strokes, a solid one a single stroke
+        let gap = if dashed { (7, 12) } else { (18, 18) };
+        anno.label(label).legend(move |(x, y)| {
+            EmptyElement::at((x, y))
+                + PathElement::new(vec![(0, 0), (gap.0, 0)], st)
+                + PathElement::new(vec![(gap.1, 0), (20, 0)], st)
+        });
+    }
+    Ok(())
+}
+
+/// Draw the legend box in the given corner.
+pub fn legend<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pos: SeriesLabelPosition,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart
+        .configure_series_labels()
+        .position(pos)
+        .label_font((style::FONT, style::LEGEND_PX))
+        .background_style(WHITE.mix(0.85))
+        .border_style(style::GREY)
+        .margin(10)
+        .draw()?;
+    Ok(())
+}
+
+/// A padded range covering `values` (and `extra`); a sensible unit range when empty or flat.
+pub fn span(values: impl IntoIterator<Item = f64>, pad: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.into_iter().filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 * (1.0 + hi.abs()) {
+        let d = if hi.abs() > 0.0 { hi.abs() * 0.1 } else { 1.0 };
+        return (lo - d, hi + d);
+    }
+    let d = (hi - lo) * pad;
+    (lo - d, hi + d)
+}
+
+/// Like `span`, over the central part of the values (quantiles `q` and 1 − `q`), so a few wild
+/// per-run estimates (e.g. μ of the slowest runs, barely constrained) do not squash the axis.
+pub fn robust_span(values: impl IntoIterator<Item = f64>, q: f64, pad: f64) -> (f64, f64) {
+    let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+    if v.len() < 10 {
+        return span(v, pad);
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    span([at(q), at(1.0 - q)], pad)
+}
+
+/// Least-squares line y = a + b x; None with fewer than two distinct x.
+pub fn ols(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return None;
+    }
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| (my - sxy / sxx * mx, sxy / sxx))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ols_recovers_a_line() {
+        let pts: Vec<(f64, f64)> = (0..5).map(|i| (i as f64, 0.052 + 1.1 * i as f64)).collect();
+        let (a, b) = ols(&pts).unwrap();
+        assert!((a - 0.052).abs() < 1e-12 && (b - 1.1).abs() < 1e-12);
+        assert_eq!(span([], 0.1), (0.0, 1.0));
+    }
+}

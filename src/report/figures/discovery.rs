@@ -1,0 +1,179 @@
+//! Discovery figures: held-out error of the baseline and of each candidate's extended model, and the
+//! drift (fitted T against |v0|) before and after the accepted physics, when diagnosis.json has it.
+
+use super::common::{legend, line, linear_chart, render, scatter, span};
+use crate::report::style::{self, Marker};
+use crate::report::value::{as_num, field, num, text};
+use plotters::prelude::*;
+use serde_json::Value;
+
+/// (effect, accepted, baseline cv rms, extended cv rms) of every finding that has both.
+pub fn cv_rows(diag: &Value) -> Vec<(String, bool, f64, f64)> {
+    let Some(list) = field(diag, &["findings"]).and_then(Value::as_array) else {
+        return Vec::new();
+    };
+    list.iter()
+        .filter_map(|f| {
+            let b = f.get("baseline").and_then(|b| num(b, &["cv_rms_m"]))?;
+            let e = f.get("extended").and_then(|e| num(e, &["cv_rms_m"]))?;
+            let name = text(f, &["effect"]).unwrap_or("?").to_string();
+            let acc = f.get("accepted").and_then(Value::as_bool).unwrap_or(false);
+            Some((name, acc, b, e))
+        })
+        .collect()
+}
+
+/// Render the held-out error chart, or None when no finding carries cv_rms_m.
+pub fn render_cv(diag: &Value) -> Result<Option<String>, String> {
+    let rows = cv_rows(diag);
+    if rows.is_empty() {
+        return Ok(None);
+    }
+    let n = rows.len() as f64;
+    let y_hi = rows.iter().flat_map(|r| [r.2, r.3]).fold(0.0, f64::max) * 1e6 * 1.25;
+    let names: Vec<String> = rows.iter().map(|r| r.0.replace('_', " ")).collect();
+    let svg = render(|root| {
+        let mut c = ChartBuilder::on(root)
+            .caption(
+                "Held-out error: baseline against each extended model",
+                (style::FONT, style::CAPTION_PX),
+            )
+            .margin(14)
+            .x_label_area_size(64)
+            .y_label_area_size(84)
+            .build_cartesian_2d(-0.5..n - 0.5, 0.0..y_hi.max(1e-3))?;
+        c.configure_mesh()
+            .disable_x_mesh()
+            .x_labels(rows.len())
+            .x_label_formatter(&|x| {
+                let i = x.round();
+                if (x - i).abs() < 0.01 && i >= 0.0 && (i as usize) < names.len() {
+                    names[i as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .y_desc("cross-validated RMS of z (µm)")
+            .x_desc("candidate physics")
+            .label_style((style::FONT, style::TICK_PX - 2))
+            .axis_desc_style((style::FONT, style::LABEL_PX))
+            .light_line_style(style::LIGHT_GREY.mix(0.6))
+            .draw()?;
+        let bar = |i: usize, off: f64, v: f64| {
+            [
+                (i as f64 + off - 0.17, 0.0),
+                (i as f64 + off + 0.17, v * 1e6),
+            ]
+        };
+        c.draw_series(
+            rows.iter()
+                .enumerate()
+                .map(|(i, r)| Rectangle::new(bar(i, -0.18, r.2), style::BEFORE.filled())),
+        )?
+        .label("baseline")
+        .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], style::BEFORE.filled()));
+        c.draw_series(rows.iter().enumerate().map(|(i, r)| {
+            let col = if r.1 {
+                style::AFTER.mix(1.0)
+            } else {
+                style::AFTER.mix(0.35)
+            };
+            Rectangle::new(bar(i, 0.18, r.3), col.filled())
+        }))?
+        .label("extended (pale: not accepted)")
+        .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], style::AFTER.filled()));
+        legend(&mut c, SeriesLabelPosition::UpperRight)
+    })?;
+    Ok(Some(svg))
+}
+
+/// Points (x, y) from a list of objects or an object of columns, by field names.
+pub fn points(v: &Value, xs: &[&str], ys: &[&str]) -> Vec<(f64, f64)> {
+    if let Some(rows) = v.as_array() {
+        return rows
+            .iter()
+            .filter_map(|r| Some((num(r, xs)?, num(r, ys)?)))
+            .collect();
+    }
+    let (Some(x), Some(y)) = (
+        field(v, xs).and_then(Value::as_array),
+        field(v, ys).and_then(Value::as_array),
+    ) else {
+        return Vec::new();
+    };
+    x.iter()
+        .zip(y)
+        .filter_map(|(a, b)| Some((as_num(a)?, as_num(b)?)))
+        .collect()
+}
+
+/// The T-vs-v0 drift before and after (per-run T of the baseline and of the extended model).
+pub fn drift(diag: &Value) -> Option<(Vec<(f64, f64)>, Vec<(f64, f64)>)> {
+    let dr = field(diag, &["drift", "t_drift", "T_drift"]).or_else(|| {
+        field(diag, &["details", "show"]).and_then(|d| field(d, &["drift", "t_drift"]))
+    })?;
+    let get = |k: &[&str]| {
+        field(dr, k)
+            .map(|v| {
+                points(
+                    v,
+                    &["v0_mps", "v0", "abs_v0_mps"],
+                    &["T_s", "t_drag_s", "t_s", "T"],
+                )
+            })
+            .unwrap_or_default()
+    };
+    let (b, a) = (get(&["before", "baseline"]), get(&["after", "extended"]));
+    (!b.is_empty() && !a.is_empty()).then_some((b, a))
+}
+
+/// Render the drift before/after figure, or None when diagnosis.json has no drift data.
+pub fn render_drift(diag: &Value) -> Result<Option<String>, String> {
+    let Some((before, after)) = drift(diag) else {
+        return Ok(None);
+    };
+    let abs = |p: &[(f64, f64)]| p.iter().map(|(x, y)| (x.abs(), *y)).collect::<Vec<_>>();
+    let (before, after) = (abs(&before), abs(&after));
+    let xr = (0.0, span(before.iter().chain(&after).map(|p| p.0), 0.05).1);
+    let yr = span(before.iter().chain(&after).map(|p| p.1).chain([0.0]), 0.08);
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            "Drift of the fitted drag time, before and after",
+            xr,
+            yr,
+            "initial speed |v0| (m/s)",
+            "drag time T (s)",
+        )?;
+        scatter(
+            &mut c,
+            &before,
+            Marker::Circle,
+            style::BEFORE,
+            false,
+            Some("baseline fit: T per run"),
+        )?;
+        scatter(
+            &mut c,
+            &after,
+            Marker::Circle,
+            style::AFTER,
+            true,
+            Some("extended model: T per run"),
+        )?;
+        for (p, col) in [(&before, style::BEFORE), (&after, style::AFTER)] {
+            if let Some((a, b)) = super::common::ols(p) {
+                line(
+                    &mut c,
+                    vec![(xr.0, a + b * xr.0), (xr.1, a + b * xr.1)],
+                    col,
+                    2,
+                    false,
+                    None,
+                )?;
+            }
+        }
+        legend(&mut c, SeriesLabelPosition::UpperLeft)
+    })?;
+    Ok(Some(svg))
+}

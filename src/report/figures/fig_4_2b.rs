@@ -1,0 +1,123 @@
+//! Fig. 4.2b: one single-run trajectory, sliding and rolling samples marked, with the fitted baseline.
+
+use super::common::{legend, line, linear_chart, render, scatter_sized, span};
+use crate::report::inputs::ReportData;
+use crate::report::singles::SingleRow;
+use crate::report::style::{self, Marker};
+use crate::report::trajectory::{self, Sample};
+use plotters::prelude::*;
+
+/// The run Fig. 4.2b shows: `wanted` if given and fitted, else the converged fit with v0 > 0 closest
+/// to the chapter's 0.025 m/s (any direction if none moves in +z).
+pub fn choose<'a>(d: &'a ReportData, wanted: Option<&str>) -> Option<&'a SingleRow> {
+    if let Some(w) = wanted {
+        return d.singles.iter().find(|r| r.run == w);
+    }
+    let dist =
+        |r: &&SingleRow| (r.v0_mps.value.abs() - crate::report::chapter::FIG_4_2B_V0_MPS).abs();
+    let ok = || {
+        d.singles
+            .iter()
+            .filter(|r| r.converged() && d.recordings.contains_key(&r.run))
+    };
+    ok().filter(|r| r.v0_mps.value > 0.0)
+        .min_by(|a, b| dist(a).total_cmp(&dist(b)))
+        .or_else(|| ok().min_by(|a, b| dist(a).total_cmp(&dist(b))))
+}
+
+/// The samples of the chosen run: residuals if the simulate stage ran, else the fit evaluated here.
+pub fn samples(d: &ReportData, fit: &SingleRow) -> Option<Vec<Sample>> {
+    d.residuals
+        .get(&fit.run)
+        .and_then(trajectory::from_residuals)
+        .or_else(|| {
+            trajectory::from_fit(
+                d.recordings.get(&fit.run)?,
+                fit,
+                crate::physics::Groove::CHAPTER,
+            )
+        })
+}
+
+/// Render Fig. 4.2b, or None when no single run has a usable fit.
+pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>, String> {
+    let Some(fit) = choose(d, wanted) else {
+        return Ok(None);
+    };
+    let Some(s) = samples(d, fit) else {
+        return Ok(None);
+    };
+    let z_ref = s[0].z_obs_m;
+    let mm = |z: f64| (z - z_ref) * 1e3;
+    let ms = |t: f64| t * 1e3;
+    let step = (s.len() / 160).max(1);
+    let pick = |rolling: bool| -> Vec<(f64, f64)> {
+        s.iter()
+            .step_by(step)
+            .filter(|p| p.rolling == rolling)
+            .map(|p| (ms(p.t_s), mm(p.z_obs_m)))
+            .collect()
+    };
+    let (sliding, rolling) = (pick(false), pick(true));
+    let curve: Vec<(f64, f64)> = s.iter().map(|p| (ms(p.t_s), mm(p.z_fit_m))).collect();
+    let switch = s.iter().find(|p| p.rolling).map(|p| ms(p.t_s));
+    let xr = span(s.iter().map(|p| ms(p.t_s)), 0.03);
+    let yr = span(s.iter().flat_map(|p| [mm(p.z_obs_m), mm(p.z_fit_m)]), 0.06);
+    let caption = format!(
+        "Fig. 4.2b: run {} ({}), v0 = {:.4} m/s",
+        fit.run, fit.material, fit.v0_mps.value
+    );
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            &caption,
+            xr,
+            yr,
+            "time t (ms)",
+            "position z − z(0) (mm)",
+        )?;
+        scatter_sized(
+            &mut c,
+            &sliding,
+            Marker::Circle,
+            style::SLIDING,
+            true,
+            Some("observed, sliding"),
+            3,
+        )?;
+        scatter_sized(
+            &mut c,
+            &rolling,
+            Marker::Circle,
+            style::ROLLING,
+            true,
+            Some("observed, rolling"),
+            3,
+        )?;
+        line(
+            &mut c,
+            curve,
+            style::BLACK,
+            2,
+            false,
+            Some("fitted baseline"),
+        )?;
+        if let Some(t1) = switch {
+            line(
+                &mut c,
+                vec![(t1, yr.0), (t1, yr.1)],
+                style::GREY,
+                1,
+                true,
+                Some("switch t1"),
+            )?;
+        }
+        let pos = if fit.v0_mps.value >= 0.0 {
+            SeriesLabelPosition::LowerRight
+        } else {
+            SeriesLabelPosition::UpperRight
+        };
+        legend(&mut c, pos)
+    })?;
+    Ok(Some(svg))
+}

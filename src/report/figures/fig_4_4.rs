@@ -1,0 +1,179 @@
+//! Figs. 4.4a–c: the target's spin change against its velocity change (slope μ_pp·k), and the
+//! coefficient of restitution against impact speed per material, rolling and contact setups.
+
+use super::common::{legend, line, linear_chart, render, scatter, span};
+use crate::report::chapter;
+use crate::report::inputs::ReportData;
+use crate::report::style;
+use crate::report::summary::mu_pp;
+use plotters::prelude::*;
+
+/// Render Fig. 4.4a, or None without impacts that carry Δv_z and Δv_a of the target.
+pub fn render_a(d: &ReportData, k: f64) -> Result<Option<String>, String> {
+    let mats = d.materials();
+    let mut any = false;
+    let mut groups = Vec::new();
+    for (i, m) in mats.iter().enumerate() {
+        for slip in [true, false] {
+            let p: Vec<(f64, f64)> = d
+                .collisions
+                .iter()
+                .filter(|c| &c.material == m)
+                .flat_map(|c| &c.impacts)
+                .filter(|im| im.slip.unwrap_or(true) == slip)
+                .filter_map(|im| Some((im.dvz_target_mps? * 1e3, im.dva_target_mps? * 1e3)))
+                .collect();
+            any |= !p.is_empty();
+            groups.push((m.clone(), i, slip, p));
+        }
+    }
+    if !any {
+        return Ok(None);
+    }
+    let xs = groups.iter().flat_map(|g| g.3.iter().map(|p| p.0));
+    let (_, x_hi) = span(xs.chain([0.0]), 0.08);
+    let xr = (0.0_f64.min(-x_hi * 0.05), x_hi);
+    let slope_ours = mu_pp(d, k).map(|a| a.est.value * k);
+    let slope_ch = chapter::MU_PP * k;
+    let ys = groups.iter().flat_map(|g| g.3.iter().map(|p| p.1));
+    let sign = if groups.iter().flat_map(|g| &g.3).map(|p| p.1).sum::<f64>() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let yr = span(ys.chain([0.0, sign * slope_ch * x_hi]), 0.06);
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            "Fig. 4.4a: target's spin change against velocity change",
+            xr,
+            yr,
+            "target velocity change Δv_z (mm/s)",
+            "target spin change Δv_a (mm/s)",
+        )?;
+        for (m, i, slip, p) in &groups {
+            if p.is_empty() {
+                continue;
+            }
+            let col = style::material_colour(m, *i);
+            let label = format!("{m}, {}", if *slip { "slip" } else { "stick" });
+            scatter(&mut c, p, style::marker(m, false), col, *slip, Some(&label))?;
+        }
+        if let Some(sl) = slope_ours {
+            let label = format!("ours: slope μ_pp·k = {sl:.2} (μ_pp = {:.2})", sl / k);
+            line(
+                &mut c,
+                vec![(0.0, 0.0), (x_hi, sign * sl * x_hi)],
+                style::BLACK,
+                2,
+                false,
+                Some(&label),
+            )?;
+        }
+        let label = format!("chapter: μ_pp = 1.4, slope {slope_ch:.2}");
+        line(
+            &mut c,
+            vec![(0.0, 0.0), (x_hi, sign * slope_ch * x_hi)],
+            style::GREY,
+            2,
+            true,
+            Some(&label),
+        )?;
+        legend(&mut c, SeriesLabelPosition::UpperLeft)
+    })?;
+    Ok(Some(svg))
+}
+
+/// C = 1 − a·v through (0, 1), fitted by least squares to (v, C) points.
+pub fn restitution_slope(p: &[(f64, f64)]) -> Option<f64> {
+    let sxx: f64 = p.iter().map(|(v, _)| v * v).sum();
+    let sxy: f64 = p.iter().map(|(v, c)| v * (1.0 - c)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// Render the restitution figure of one material, or None without its impacts.
+pub fn render_bc(
+    d: &ReportData,
+    material: &str,
+    index: usize,
+    fig: &str,
+) -> Result<Option<String>, String> {
+    let series: Vec<(bool, Vec<(f64, f64)>)> = [false, true]
+        .into_iter()
+        .map(|contact| {
+            let p = d
+                .collisions
+                .iter()
+                .filter(|c| c.material == material && c.contact == contact)
+                .flat_map(|c| &c.impacts)
+                .filter_map(|i| Some((i.speed_mps, i.restitution?)))
+                .collect();
+            (contact, p)
+        })
+        .collect();
+    if series.iter().all(|(_, p)| p.is_empty()) {
+        return Ok(None);
+    }
+    let v_max = span(series.iter().flat_map(|(_, p)| p.iter().map(|q| q.0)), 0.05)
+        .1
+        .max(0.01);
+    let (lo, hi) = span(
+        series
+            .iter()
+            .flat_map(|(_, p)| p.iter().map(|q| q.1))
+            .chain([1.0]),
+        0.08,
+    );
+    let yr = (lo.min(0.0).max(-0.2), hi.max(1.05));
+    let cap = format!("Fig. {fig}: restitution against impact speed, {material}");
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            &cap,
+            (0.0, v_max),
+            yr,
+            "impact speed |v1 − v2| (m/s)",
+            "coefficient of restitution C (dimensionless)",
+        )?;
+        line(
+            &mut c,
+            vec![(0.0, 1.0), (v_max, 1.0)],
+            style::GREY,
+            1,
+            true,
+            None,
+        )?;
+        for (contact, p) in &series {
+            if p.is_empty() {
+                continue;
+            }
+            let col = style::setup_colour(material, *contact, index);
+            let setup = if *contact { "in contact" } else { "rolling" };
+            scatter(
+                &mut c,
+                p,
+                style::marker(material, *contact),
+                col,
+                true,
+                Some(&format!("{material}, {setup}")),
+            )?;
+            let fitted = crate::report::summary::restitution_curve(d, material, *contact)
+                .map(|(a, _)| a.est.value);
+            if let Some(a) = fitted.or_else(|| restitution_slope(p)) {
+                let label = format!("{setup}: C = 1 − {a:.2}·v");
+                // drawn over the measured speeds only, not extrapolated
+                let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
+                line(
+                    &mut c,
+                    vec![(0.0, 1.0), (v_hi, 1.0 - a * v_hi)],
+                    col,
+                    2,
+                    false,
+                    Some(&label),
+                )?;
+            }
+        }
+        legend(&mut c, SeriesLabelPosition::LowerLeft)
+    })?;
+    Ok(Some(svg))
+}

@@ -1,0 +1,81 @@
+//! Every figure of the report, each rendered to an SVG string by its own file; `render_all` names them.
+
+pub mod common;
+pub mod discovery;
+pub mod fig_4_2b;
+pub mod fig_4_2c;
+pub mod fig_4_2d;
+pub mod fig_4_3;
+pub mod fig_4_4;
+pub mod secondary;
+
+use super::inputs::ReportData;
+use crate::physics::Groove;
+use std::collections::BTreeMap;
+
+/// Which runs the single-trajectory figures show (None: chosen as documented in each figure).
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FigureOptions {
+    /// Run for Fig. 4.2b (default: the single run with v0 closest to 0.025 m/s).
+    pub trajectory_run: Option<String>,
+    /// Run for Figs. 4.3c–d (default: the first rolling-setup collision run with an impact).
+    pub collision_run: Option<String>,
+}
+
+/// File name of the restitution figure of a material: 4.4b for 316, 4.4c for 440c, else by name.
+pub fn restitution_name(material: &str) -> (String, String) {
+    match material.to_ascii_lowercase().as_str() {
+        "316" | "ss316" => ("fig_4_4b.svg".into(), "4.4b".into()),
+        "440c" | "ss440c" => ("fig_4_4c.svg".into(), "4.4c".into()),
+        other => {
+            let safe: String = other
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                .collect();
+            (format!("fig_4_4_{safe}.svg"), format!("4.4 ({material})"))
+        }
+    }
+}
+
+/// Render every figure the data allows, by file name (`fig_4_2b.svg` → SVG text). Parts without data
+/// (no collision runs, no diagnosis) are simply absent; the report says why.
+pub fn render_all(
+    d: &ReportData,
+    opts: &FigureOptions,
+) -> Result<BTreeMap<String, String>, String> {
+    let g = Groove::CHAPTER;
+    let mut out = BTreeMap::new();
+    let mut put = |name: &str, svg: Option<String>| {
+        if let Some(s) = svg {
+            out.insert(name.to_string(), s);
+        }
+    };
+    put(
+        "fig_4_2b.svg",
+        fig_4_2b::render_fig(d, opts.trajectory_run.as_deref())?,
+    );
+    put("fig_4_2c.svg", fig_4_2c::render_fig(d)?);
+    put("fig_4_2d.svg", fig_4_2d::render_fig(d)?);
+    if let Some((c, dd)) = fig_4_3::render_figs(d, opts.collision_run.as_deref())? {
+        put("fig_4_3c.svg", Some(c));
+        put("fig_4_3d.svg", Some(dd));
+    }
+    put("fig_4_4a.svg", fig_4_4::render_a(d, g.k)?);
+    let coll_mats: Vec<String> = {
+        let mut m: Vec<String> = d.collisions.iter().map(|c| c.material.clone()).collect();
+        m.sort();
+        m.dedup();
+        m
+    };
+    for (i, m) in coll_mats.iter().enumerate() {
+        let (name, fig) = restitution_name(m);
+        put(&name, fig_4_4::render_bc(d, m, i, &fig)?);
+    }
+    put("fig_secondary.svg", Some(secondary::render_fig(g)?));
+    if let Some(diag) = &d.diagnosis {
+        put("fig_discovery_cv.svg", discovery::render_cv(diag)?);
+        put("fig_discovery_drift.svg", discovery::render_drift(diag)?);
+    }
+    Ok(out)
+}

@@ -1,0 +1,165 @@
+//! Section 2: the data — runs per material and setup, frame rates, noise, what was left out and why.
+
+use super::{Block, Table};
+use crate::recording::{Experiment, Setup};
+use crate::report::inputs::ReportData;
+use crate::report::value::sig;
+use std::collections::BTreeMap;
+
+fn median(mut xs: Vec<f64>) -> Option<f64> {
+    xs.retain(|x| x.is_finite());
+    if xs.is_empty() {
+        return None;
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    Some(if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    })
+}
+
+/// The plain-language notes of summary.json (top level and collisions), in order.
+fn summary_notes(s: &serde_json::Value) -> Vec<String> {
+    let list = |v: Option<&serde_json::Value>| -> Vec<String> {
+        v.and_then(|n| n.as_array())
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let mut out = list(s.get("notes"));
+    out.extend(list(s.get("collisions").and_then(|c| c.get("notes"))));
+    out
+}
+
+pub fn block(d: &ReportData) -> Block {
+    let mut b = Block::new("data", "2. The data");
+    // (experiment, material, setup) -> (runs, fps values, frames per run, duration per run, +z runs)
+    type Group = (usize, Vec<f64>, Vec<f64>, Vec<f64>);
+    let mut groups: BTreeMap<(String, String, String), Group> = BTreeMap::new();
+    for r in d.recordings.values() {
+        let exp = match r.info.experiment {
+            Experiment::Single => "single",
+            Experiment::Collision => "collision",
+        };
+        let setup = match r.info.setup {
+            Some(Setup::Rolling) => "rolling",
+            Some(Setup::Contact) => "contact",
+            None => "—",
+        };
+        let g = groups
+            .entry((exp.into(), r.info.material.clone(), setup.into()))
+            .or_default();
+        g.0 += 1;
+        g.1.push(r.info.fps);
+        let frames: usize = r.tracks.iter().map(|t| t.frame.len()).sum();
+        g.2.push(frames as f64);
+        let dur = r
+            .tracks
+            .iter()
+            .filter_map(|t| Some(t.t_s.last()? - t.t_s.first()?))
+            .fold(0.0, f64::max);
+        g.3.push(dur);
+    }
+    if groups.is_empty() {
+        b.missing =
+            Some("no recordings reached the report (the ingest stage's runs are empty)".into());
+        return b;
+    }
+    let mut t = Table::new(
+        "Runs per experiment, material and setup",
+        &[
+            "experiment",
+            "material",
+            "setup",
+            "runs",
+            "frame rate (fps)",
+            "samples per run (median)",
+            "duration (ms, median)",
+        ],
+    );
+    for ((exp, mat, setup), (n, fps, frames, dur)) in &groups {
+        let (lo, hi) = fps
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), &x| (a.min(x), b.max(x)));
+        let fps_txt = if (hi - lo).abs() < 1e-9 {
+            sig(lo, 5)
+        } else {
+            format!("{}–{}", sig(lo, 5), sig(hi, 5))
+        };
+        t.push(vec![
+            exp.clone(),
+            mat.clone(),
+            setup.clone(),
+            n.to_string(),
+            fps_txt,
+            median(frames.clone()).map_or("—".into(), |x| format!("{x:.0}")),
+            median(dur.clone()).map_or("—".into(), |x| format!("{:.1}", x * 1e3)),
+        ]);
+    }
+    b.table(t);
+    let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
+    if !d.singles.is_empty() {
+        b.para(format!(
+            "{} of {} single runs move in −z; the fits handle both directions.",
+            n_neg,
+            d.singles.len()
+        ));
+    }
+    if let Some(rms) = median(d.singles.iter().filter_map(|r| r.rms_m).collect()) {
+        b.para(format!(
+            "Noise estimate: the median residual RMS of the single-run baseline fits is {:.2} µm (robust fits; a few tracking outliers per run are down-weighted, not removed).",
+            rms * 1e6
+        ));
+    }
+    let failed: Vec<String> = d
+        .singles
+        .iter()
+        .filter(|r| !r.converged())
+        .map(|r| format!("{} ({})", r.run, r.status))
+        .collect();
+    let coll_failed: Vec<String> = d
+        .collisions
+        .iter()
+        .filter(|c| !c.usable())
+        .map(|c| format!("{} ({})", c.run, c.status))
+        .collect();
+    if let Some(notes) = d
+        .summary
+        .as_ref()
+        .map(summary_notes)
+        .filter(|n| !n.is_empty())
+    {
+        let notes: Vec<String> = notes
+            .iter()
+            .map(|n| {
+                if n.ends_with('.') {
+                    n.clone()
+                } else {
+                    format!("{n}.")
+                }
+            })
+            .collect();
+        b.para(format!("Notes of the aggregate stage: {}", notes.join(" ")));
+    }
+    if d.skipped.is_empty() && failed.is_empty() && coll_failed.is_empty() {
+        b.para("Nothing was left out: every run was ingested and every single-run fit converged.");
+    } else {
+        let mut s = Table::new("Left out", &["run", "why"]);
+        for (run, why) in &d.skipped {
+            s.push(vec![run.clone(), format!("skipped at ingest: {why}")]);
+        }
+        for f in failed {
+            s.push(vec![
+                f,
+                "fit did not converge; excluded from the aggregates".into(),
+            ]);
+        }
+        b.table(s);
+    }
+    b
+}

@@ -1,0 +1,136 @@
+//! The report's content as plain data (blocks of paragraphs, tables and figures), built once and
+//! rendered by both the Markdown and the HTML template.
+
+pub mod chapter;
+pub mod collisions;
+pub mod data;
+pub mod discovery;
+pub mod provenance;
+pub mod summary;
+
+use super::audit::{audit, AuditItem};
+use super::inputs::ReportData;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A table with a caption; every cell is already formatted text.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Table {
+    pub caption: String,
+    pub headers: Vec<String>,
+    pub rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    pub fn new(caption: &str, headers: &[&str]) -> Table {
+        Table {
+            caption: caption.into(),
+            headers: headers.iter().map(|h| h.to_string()).collect(),
+            rows: Vec::new(),
+        }
+    }
+    pub fn push(&mut self, cells: Vec<String>) {
+        self.rows.push(cells);
+    }
+}
+
+/// A figure the page shows: its file name (`figures/<name>` in Markdown), caption and SVG text.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FigureRef {
+    pub name: String,
+    pub caption: String,
+    pub svg: String,
+}
+
+/// One piece of a block, in reading order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Item {
+    Para { text: String },
+    Table(Table),
+    Figure(FigureRef),
+}
+
+/// One section or subsection: paragraphs, tables and figures in the order they were added.
+#[derive(Debug, Clone, PartialEq, Serialize, Default)]
+pub struct Block {
+    pub id: String,
+    pub heading: String,
+    pub items: Vec<Item>,
+    /// Why this part has no figure or numbers (e.g. "no collision runs in this dataset").
+    pub missing: Option<String>,
+}
+
+impl Block {
+    pub fn new(id: &str, heading: &str) -> Block {
+        Block {
+            id: id.into(),
+            heading: heading.into(),
+            ..Block::default()
+        }
+    }
+    pub fn para(&mut self, text: impl Into<String>) {
+        self.items.push(Item::Para { text: text.into() });
+    }
+    pub fn table(&mut self, t: Table) {
+        self.items.push(Item::Table(t));
+    }
+    /// The figures of this block.
+    pub fn figures_mut(&mut self) -> impl Iterator<Item = &mut FigureRef> {
+        self.items.iter_mut().filter_map(|i| match i {
+            Item::Figure(f) => Some(f),
+            _ => None,
+        })
+    }
+    /// Add figure `name` from the rendered set, or note that it is absent.
+    pub fn figure(&mut self, figs: &BTreeMap<String, String>, name: &str, caption: &str) -> bool {
+        match figs.get(name) {
+            Some(svg) => {
+                self.items.push(Item::Figure(FigureRef {
+                    name: name.into(),
+                    caption: caption.into(),
+                    svg: svg.clone(),
+                }));
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// The whole page.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Page {
+    pub title: String,
+    pub date: Option<String>,
+    /// Whether the comparison tables carry a truth column (a truth file was validated).
+    pub has_truth: bool,
+    pub summary: Block,
+    pub data: Block,
+    pub chapter: Vec<Block>,
+    pub discovery: Block,
+    pub audit: Vec<AuditItem>,
+    pub provenance: Block,
+}
+
+/// Build the page from the data and the rendered figures (by file name).
+pub fn build(
+    d: &ReportData,
+    figs: &BTreeMap<String, String>,
+    title: &str,
+    date: Option<String>,
+) -> Page {
+    let mut chapter = chapter::blocks(d, figs);
+    chapter.extend(collisions::blocks(d, figs));
+    Page {
+        title: title.into(),
+        date,
+        has_truth: d.validation.is_some(),
+        summary: summary::block(d),
+        data: data::block(d),
+        chapter,
+        discovery: discovery::block(d, figs),
+        audit: audit(d),
+        provenance: provenance::block(d),
+    }
+}

@@ -1,0 +1,122 @@
+//! Section 1: what was analysed, the key parameters with uncertainties, and what discovery found.
+
+use super::{Block, Table};
+use crate::physics::Groove;
+use crate::report::inputs::ReportData;
+use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
+use crate::report::value::{pm, text};
+use serde_json::Value;
+
+/// `value ± se [lo, hi]` of an aggregate.
+pub fn agg_text(a: &Agg) -> String {
+    match a.interval {
+        Some((lo, hi)) => format!(
+            "{} [{}, {}]",
+            pm(a.est),
+            crate::report::value::sig(lo, 4),
+            crate::report::value::sig(hi, 4)
+        ),
+        None => pm(a.est),
+    }
+}
+
+/// One line per accepted finding of diagnosis.json, e.g. "velocity_dependent_drag (saturating): T0 = …".
+pub fn accepted_findings(diag: &Value) -> Vec<String> {
+    let Some(list) = diag.get("findings").and_then(Value::as_array) else {
+        return Vec::new();
+    };
+    list.iter()
+        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
+        .map(|f| {
+            let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
+            let form = text(f, &["form"])
+                .map(|s| format!(" ({s})"))
+                .unwrap_or_default();
+            format!("{effect}{form}: {}", super::discovery::params_text(f))
+        })
+        .collect()
+}
+
+pub fn block(d: &ReportData) -> Block {
+    let mut b = Block::new("summary", "1. Summary");
+    let n_single = d.singles.len();
+    let n_coll = d.collisions.len();
+    let mats = d.materials();
+    b.para(format!(
+        "Analysed {} recorded runs: {n_single} single-particle runs with a baseline fit and {n_coll} collision runs, materials {}.",
+        d.recordings.len().max(n_single + n_coll),
+        if mats.is_empty() { "none".to_string() } else { mats.join(", ") }
+    ));
+    let mut t = Table::new("Key parameters (± standard error, [bootstrap interval] where the aggregate stage gives one)", &[
+        "quantity", "ours", "chapter", "source",
+    ]);
+    for m in &mats {
+        if let Some(a) = mu_fast(d, m) {
+            let ch = crate::report::chapter::mu_for(m).map_or("—".into(), |v| format!("{v:.3}"));
+            t.push(vec![
+                format!("μ_pg of {m} (|v0| > 0.03 m/s)"),
+                agg_text(&a),
+                ch,
+                a.source.into(),
+            ]);
+        }
+    }
+    if let Some((a, s)) = t_line(d, None) {
+        t.push(vec![
+            "T(v0) intercept T0, all runs (s)".into(),
+            agg_text(&a),
+            "0.052".into(),
+            a.source.into(),
+        ]);
+        t.push(vec![
+            "T(v0) slope T', all runs (s per m/s)".into(),
+            agg_text(&s),
+            "1.10".into(),
+            s.source.into(),
+        ]);
+    }
+    if let Some(a) = mu_pp(d, Groove::CHAPTER.k) {
+        t.push(vec![
+            "μ_pp (particle–particle friction)".into(),
+            agg_text(&a),
+            "1.4".into(),
+            a.source.into(),
+        ]);
+    } else if let Some(lb) = crate::report::summary::at(
+        d.summary.as_ref(),
+        &["collisions", "mu_pp", "stick_lower_bound"],
+    ) {
+        t.push(vec![
+            "μ_pp (only bounded: no slip impact resolved)".into(),
+            format!("> {lb:.2}"),
+            "1.4".into(),
+            "stick impacts".into(),
+        ]);
+    }
+    if !t.rows.is_empty() {
+        b.table(t);
+    }
+    match &d.diagnosis {
+        None => b.para("Discovery did not run for this report (no diagnosis.json)."),
+        Some(diag) => {
+            let acc = accepted_findings(diag);
+            if acc.is_empty() {
+                let mismatch = diag
+                    .get("mismatch")
+                    .and_then(Value::as_bool)
+                    .unwrap_or(false);
+                b.para(if mismatch {
+                    "Discovery located a mismatch between the baseline and the recordings but accepted no candidate physics; see section 4."
+                } else {
+                    "Discovery found nothing missing: the baseline (Coulomb friction plus linear drag) explains the recordings within their noise."
+                });
+            } else {
+                b.para(format!(
+                    "Discovery found missing physics and accepted: {}.",
+                    acc.join("; ")
+                ));
+            }
+        }
+    }
+    b
+}

@@ -1,0 +1,60 @@
+//! The `discover` stage kind: recordings and per-run fits in, diagnosis.json out.
+// groove:uses src/discover src/physics src/fit src/recording.rs src/stages/discover.rs
+
+use crate::discover::{discover, Options};
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
+use crate::recording::Recording;
+
+/// Finds missing physics over all single runs (issue 5).
+pub struct Discover;
+
+fn options(params: &toml::Table) -> Result<(Options, serde_json::Value), ParamError> {
+    let (opts, json): (Options, _) = typed_params(params)?;
+    opts.validate()
+        .map_err(|(key, message)| ParamError { key, message })?;
+    Ok((opts, json))
+}
+
+impl StageKind for Discover {
+    fn kind(&self) -> &'static str {
+        "discover"
+    }
+    fn inputs(&self) -> &'static [&'static str] {
+        &["runs", "fits"]
+    }
+    fn outputs(&self) -> &'static [&'static str] {
+        &["diagnosis"]
+    }
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
+        options(params).map(|(_, json)| json)
+    }
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (mut opts, _) = options(input.params).map_err(|e| StageError(e.to_string()))?;
+        opts.seed = input.seed;
+        let Some(Artifact::Collection(items)) = input.inputs.get("runs") else {
+            return Err(StageError(
+                "input `runs` must be the collection of recordings from ingest; bind it as `runs = \"ingest:runs\"`".into(),
+            ));
+        };
+        let mut recordings = Vec::with_capacity(items.len());
+        for (name, bytes) in items {
+            let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
+                StageError(format!(
+                    "run `{name}`: not a recording ({e}); re-run ingest"
+                ))
+            })?;
+            recordings.push(rec);
+        }
+        // the per-run fits are not re-read: discovery refits every run with its own integrator to
+        // measure noise and flag outliers consistently; `fits` only orders the stage after `fit`
+        let diagnosis = discover(&recordings, &opts);
+        let mut bytes = serde_json::to_vec_pretty(&diagnosis)
+            .map_err(|e| StageError(format!("diagnosis could not be serialized: {e}")))?;
+        bytes.push(b'\n');
+        let mut out = StageOutputs::new();
+        out.insert("diagnosis".into(), Artifact::File(bytes));
+        Ok(out)
+    }
+}

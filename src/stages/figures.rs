@@ -1,0 +1,39 @@
+//! The `figures` stage kind: every report figure rendered to SVG, as a Collection by file name.
+// groove:uses src/report src/physics src/recording.rs src/stages/figures.rs
+
+use crate::engine::stage::{
+    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+};
+use crate::report::{render_figures, FigureOptions, ReportData};
+
+/// Renders `fig_4_2b.svg`, `fig_4_2c.svg`, … from the runs, the fits and the aggregates.
+pub struct Figures;
+
+impl StageKind for Figures {
+    fn kind(&self) -> &'static str {
+        "figures"
+    }
+    fn inputs(&self) -> &'static [&'static str] {
+        &["runs", "fits"]
+    }
+    fn optional_inputs(&self) -> &'static [&'static str] {
+        &["fits_csv", "summary", "residuals", "comparison", "diagnosis", "validation"]
+    }
+    fn outputs(&self) -> &'static [&'static str] {
+        &["figures"]
+    }
+    fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
+        typed_params::<FigureOptions>(params).map(|(_, json)| json)
+    }
+    fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
+        let (opts, _) =
+            typed_params::<FigureOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
+        let data = ReportData::from_artifacts(&input.inputs).map_err(StageError)?;
+        let figs = render_figures(&data, &opts).map_err(StageError)?;
+        let items = figs.into_iter().map(|(k, v)| (k, v.into_bytes())).collect();
+        Ok(StageOutputs::from([(
+            "figures".to_string(),
+            Artifact::Collection(items),
+        )]))
+    }
+}

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Render a report.html in headless Chromium (Debian's `chromium`, installed with apt-get when absent):
+# fail on any console error, and write a screenshot as a test artifact.
+#
+#   tests/browser.sh [REPORT.html] [SCREENSHOT.png]
+#
+# Defaults: the fixture report written by `cargo test --test report` and target/report-screenshot.png.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+target="${CARGO_TARGET_DIR:-target}"
+html="${1:-$target/tmp/report-fixture/report.html}"
+shot="${2:-$target/report-screenshot.png}"
+[ -f "$html" ] || { echo "error: $html not found; run \`cargo test --test report\` or pass a report.html" >&2; exit 2; }
+
+browser="$(command -v chromium || command -v chromium-browser || true)"
+if [ -z "$browser" ]; then
+  echo "chromium not found; installing Debian's chromium" >&2
+  sudo_cmd=""
+  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq chromium >/dev/null
+  browser="$(command -v chromium)"
+fi
+
+profile="$(mktemp -d)"
+log="$(mktemp)"
+trap 'rm -rf "$profile" "$log"' EXIT
+mkdir -p "$(dirname "$shot")"
+url="file://$(realpath "$html")"
+flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run
+       --disable-background-networking --disable-component-update --disable-sync
+       --user-data-dir="$profile" --enable-logging=stderr --v=0 --hide-scrollbars)
+
+# the page's DOM after load: proves it parsed and rendered its figures
+dom="$("$browser" "${flags[@]}" --dump-dom "$url" 2>>"$log")"
+n_svg="$(grep -o '<svg' <<<"$dom" | wc -l)"
+"$browser" "${flags[@]}" --window-size=1280,2400 --screenshot="$shot" "$url" 2>>"$log" >/dev/null
+
+if grep -E "Uncaught|ERROR:CONSOLE" "$log" >&2; then
+  echo "FAIL: console errors while rendering $html" >&2
+  exit 1
+fi
+[ -s "$shot" ] || { echo "FAIL: no screenshot written to $shot" >&2; exit 1; }
+[ "$n_svg" -gt 0 ] || { echo "FAIL: the rendered page has no inline SVG figure" >&2; exit 1; }
+echo "ok: $html rendered with no console errors, $n_svg inline figures; screenshot $shot"

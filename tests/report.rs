@@ -1,0 +1,550 @@
+//! Report tests: figures and pages rendered from small hand-made artifacts; content, self-containment,
+//! well-formedness and byte-identical re-rendering.
+
+use groove::engine::stage::{Artifact, StageInput};
+use groove::physics::{Baseline, Groove};
+use groove::report::{render_figures, render_pages, FigureOptions, ReportData};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+// ---------------------------------------------------------------- fixtures
+
+/// A single run with known parameters, sampled at 10 kHz for 40 ms from the closed form.
+fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, Value, String) {
+    let b = Baseline {
+        mu,
+        t_drag_s: t_drag,
+        groove: Groove::CHAPTER,
+    };
+    let (z0, t0) = (1.0e-3, 4.0e-5);
+    let t: Vec<f64> = (0..400).map(|i| i as f64 * 1e-4).collect();
+    let z: Vec<f64> = t
+        .iter()
+        .map(|&ti| z0 + b.state(v0, ti + t0).0 + 1e-6 * (ti * 7919.0).sin())
+        .collect();
+    let frame: Vec<i64> = (0..400).collect();
+    let rec = json!({"info": {"run": run, "experiment": "single", "material": material, "diameter_m": 3.0e-4,
+                              "fps": 10000.0, "setup": null, "extra": {}},
+                     "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": z}]});
+    let t1 = b.switch_time_s(v0);
+    // the fit stage's layout (fit::SingleFit inside RunFit, tagged by "experiment")
+    let fit = json!({"experiment": "single", "run": run, "material": material,
+        "groove": {"s": Groove::CHAPTER.s, "k": 2.5},
+        "v0_mps": v0, "v0_se": 1e-4, "mu": mu, "mu_se": 0.004, "t_drag_s": t_drag, "t_drag_se": 0.002,
+        "z0_m": z0, "z0_se": 1e-7, "t0_s": t0, "t0_se": 1e-6, "t1_s": t1, "rms_m": 1.0e-6, "scale_m": 1.0e-6,
+        "outlier_cut_m": 5e-6, "n_frames": 400, "n_used": 400, "n_outliers": 0, "iterations": 7,
+        "termination": "converged", "status": "converged"});
+    let csv = format!("{run},{material},{v0:.6},0.0001,{mu:.6},0.004,{t_drag:.6},0.002,{t1:.6},0.000001,converged\n");
+    (rec, fit, csv)
+}
+
+fn collision(
+    run: &str,
+    material: &str,
+    setup: &str,
+    speeds: &[(f64, f64, f64, f64)],
+) -> (Value, Value) {
+    // striker rolls at 0.1 m/s into a target resting 1 mm ahead; after the impact at 5 ms it slows to
+    // 0.01 m/s and the target moves at 0.08 m/s (shapes only matter for the drawing)
+    let t: Vec<f64> = (0..300).map(|i| i as f64 * 1e-4).collect();
+    let zs: Vec<f64> = t
+        .iter()
+        .map(|&ti| {
+            if ti < 5e-3 {
+                0.1 * ti
+            } else {
+                5e-4 + 0.01 * (ti - 5e-3) + 0.0004 * (ti - 5e-3).sqrt()
+            }
+        })
+        .collect();
+    let zt: Vec<f64> = t
+        .iter()
+        .map(|&ti| {
+            if ti < 5e-3 {
+                8e-4
+            } else {
+                8e-4 + 0.08 * (ti - 5e-3) * (1.0 - (ti - 5e-3) * 10.0)
+            }
+        })
+        .collect();
+    let frame: Vec<i64> = (0..300).collect();
+    let rec = json!({"info": {"run": run, "experiment": "collision", "material": material, "diameter_m": 3.0e-4,
+                              "fps": 10000.0, "setup": setup, "extra": {}},
+                     "tracks": [{"particle": 0, "frame": frame, "t_s": t, "z_m": zs},
+                                {"particle": 1, "frame": frame, "t_s": t, "z_m": zt}]});
+    let e = |v: f64| json!({"value": v, "se": 1e-3});
+    let kin = |v: f64, va: f64| json!({"v_mps": e(v), "va_mps": e(va)});
+    let impacts: Vec<Value> = speeds
+        .iter()
+        .enumerate()
+        .map(|(i, &(v1, v2p, va2p, va1))| {
+            let v1p = v1 - v2p * 0.95;
+            json!({"index": i, "t_s": e(5e-3 + i as f64 * 1e-3),
+                   "striker_before": kin(v1, va1), "striker_after": kin(v1p, va1 - va2p),
+                   "target_before": kin(0.0, 0.0), "target_after": kin(v2p, va2p),
+                   "striker_before_source": if setup == "contact" { "momentum_conservation" } else { "fitted" },
+                   "impact_speed_mps": e(v1), "restitution": e((v2p - v1p) / v1),
+                   "target_dvz_mps": e(v2p), "target_dva_mps": e(va2p), "striker_dva_mps": e(-va2p),
+                   "spin_sum_before_mps": va1, "spin_sum_after_mps": e(va1),
+                   "momentum_mismatch_mps": 0.0, "contact": if i % 2 == 0 { "slip" } else { "stick" }})
+        })
+        .collect();
+    let seg = |p: u32, t0: f64, t1: f64, sw: f64| {
+        json!({"particle": p, "t_start_s": t0, "t_end_s": t1, "z_start_m": 0.0, "v_start_mps": e(0.1),
+               "va_start_mps": e(0.0), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
+    };
+    let fit = json!({"experiment": "collision", "run": run, "material": material, "setup": setup,
+        "direction": 1, "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
+        "segments": [seg(0, 0.0, 5e-3, 2e-3), seg(0, 5e-3, 0.03, 9e-3), seg(1, 5e-3, 0.03, 8e-3)],
+        "impacts": impacts, "rms_m": 1e-6, "noise_m": 1e-6, "n_points": 600, "n_outliers": 0, "iterations": 9});
+    (rec, fit)
+}
+
+struct Fixture {
+    runs: BTreeMap<String, Vec<u8>>,
+    fits: BTreeMap<String, Vec<u8>>,
+    files: BTreeMap<&'static str, Vec<u8>>,
+}
+
+fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
+    let mut runs = BTreeMap::new();
+    let mut fits = BTreeMap::new();
+    let mut csv = String::from("run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status\n");
+    let singles = [
+        ("s316_a", "316", 0.025, 0.337, 0.0795),
+        ("s316_b", "316", 0.05, 0.340, 0.107),
+        ("s316_c", "316", -0.08, 0.334, 0.14),
+        ("s440_a", "440c", 0.02, 0.29, 0.074),
+        ("s440_b", "440c", 0.06, 0.294, 0.118),
+        ("s440_c", "440c", -0.09, 0.292, 0.151),
+    ];
+    for (run, m, v0, mu, t) in singles {
+        let (rec, fit, line) = single(run, m, v0, mu, t);
+        runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+        fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
+        csv.push_str(&line);
+    }
+    if with_collisions {
+        let sets = [
+            (
+                "c316_r",
+                "316",
+                "rolling",
+                vec![(0.1, 0.08, -0.25, 0.17), (0.2, 0.15, -0.5, 0.35)],
+            ),
+            ("c316_c", "316", "contact", vec![(0.15, 0.14, -0.2, 0.0)]),
+            ("c440_r", "440c", "rolling", vec![(0.12, 0.1, -0.33, 0.2)]),
+            ("c440_c", "440c", "contact", vec![(0.05, 0.05, -0.1, 0.0)]),
+        ];
+        for (run, m, setup, sp) in sets {
+            let (rec, fit) = collision(run, m, setup, &sp);
+            runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+            fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
+        }
+    }
+    let mut files = BTreeMap::new();
+    files.insert("fits_csv", csv.into_bytes());
+    if with_extras {
+        let est = |v: f64, lo: f64, hi: f64| json!({"value": v, "interval": {"lo": lo, "hi": hi}});
+        let mat = |mu: f64| {
+            json!({"n_runs": 3, "n_converged": 3, "mu_weighted": est(mu, mu - 0.004, mu + 0.004),
+                   "mu_fast": est(mu, mu - 0.006, mu + 0.006), "n_fast": 2,
+                   "t_vs_v0": {"intercept_s": est(0.052, 0.047, 0.058), "slope_s_per_mps": est(1.1, 1.0, 1.2)},
+                   "mu_vs_v0": {"intercept": est(mu, mu - 0.01, mu + 0.01), "slope_per_mps": est(0.0, -0.1, 0.1)},
+                   "speed_range_mps": [0.02, 0.09]})
+        };
+        let iv = |v: f64, lo: f64, hi: f64| json!({"value": v, "lo": lo, "hi": hi});
+        let curve = |m: &str, setup: &str, a: f64| {
+            json!({"material": m, "setup": setup, "n_impacts": 2, "n_runs": 1, "c0": iv(1.0, 0.9, 1.1),
+                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "mean_c": 0.7,
+                   "min_speed_mps": 0.05, "max_speed_mps": 0.2})
+        };
+        let summary = json!({
+            "single": {"n_runs": 6, "n_converged": 6, "fast_min_speed_mps": 0.03,
+                       "materials": {"316": mat(0.337), "440c": mat(0.293)}, "pooled": mat(0.315)},
+            "collisions": {"n_runs": 4, "n_runs_fitted": 4, "n_impacts": 5, "k": 2.5,
+                "mu_pp": {"value": iv(1.38, 1.27, 1.5), "from_slip_slope": iv(1.36, 1.2, 1.5),
+                          "from_impulse_fit": iv(1.38, 1.27, 1.5), "stick_lower_bound": 0.6,
+                          "n_slip": 4, "n_stick": 1, "n_undetermined": 0},
+                "restitution": [curve("316", "rolling", 3.1), curve("316", "contact", 1.3),
+                                curve("440c", "rolling", 3.0), curve("440c", "contact", 0.9)],
+                "spin_points": [], "restitution_points": [], "bootstrap_seed": 1, "bootstrap_resamples": 400,
+                "notes": []},
+            "notes": [], "bootstrap": {"resamples": 400, "level": 0.95, "seed": 1, "unit": "run"}});
+        let score = |cv: f64, terms: &[&str]| json!({"cv_rms_m": cv, "rms_m": cv * 0.9, "chi2": 1000.0, "n_global_params": 3, "terms": terms});
+        let evidence = |round: usize, lr: f64, p: f64, decision: &str| {
+            json!({"round": round, "lr": lr, "extra_params": 1, "bootstrap_replicates": 40, "null_mean_lr": 1.1,
+                   "p_value": p, "p_empirical": p, "p_holm": p * 2.0, "cv_paired_t": 4.2, "cv_rms_m": 1.02e-6,
+                   "decision": decision})
+        };
+        let point = |v0: f64, t: f64| json!({"run": "r", "material": "316", "v0_mps": v0, "t_s": t, "mu": 0.33, "z0_m": 0.0});
+        let bins = |r: f64| {
+            json!({"by_phase": {"rolling": {"n": 100, "rms_m": r, "mean_m": 0.0, "mean_z": 0.0, "rms_over_noise": r / 1e-6},
+                                "sliding": {"n": 50, "rms_m": 1e-6, "mean_m": 0.0, "mean_z": 0.0, "rms_over_noise": 1.0}},
+                   "by_speed": {}, "by_position": {}, "by_direction": {}, "by_material": {},
+                   "runs_test_z": -8.0 * r / 1.3e-6, "runs_test_p": 0.0, "lag1_autocorrelation": 0.4, "lag1_z": 9.0})
+        };
+        let diagnosis = json!({"mismatch": true, "findings": [
+            {"effect": "velocity_dependent_drag", "accepted": true, "form": "saturating",
+             "parameters": {"t0_s": {"value": 0.051, "stderr": 0.002}, "tp_s_per_mps": {"value": 1.12, "stderr": 0.04}},
+             "evidence": evidence(1, 85.2, 0.001, "accepted"),
+             "where": {"phase": "rolling", "speed": "all", "drift": "T rises with v0"},
+             "baseline": score(1.31e-6, &[]), "extended": score(1.02e-6, &["saturating_drag"])},
+            {"effect": "rolling_resistance", "accepted": false, "form": "c g sign(v)",
+             "parameters": {"c": {"value": 0.0011, "stderr": 0.0003}},
+             "evidence": evidence(1, 3.1, 0.3, "rejected"), "where": {},
+             "baseline": score(1.31e-6, &[]), "extended": score(1.29e-6, &["rolling_resistance"])}],
+            "candidates": [
+                {"round": 1, "effect": "velocity_dependent_drag", "form": "saturating", "accepted": true,
+                 "parameters": {"tp_s_per_mps": {"value": 1.12, "stderr": 0.04}}, "evidence": evidence(1, 85.2, 0.001, "accepted")},
+                {"round": 1, "effect": "rolling_resistance", "form": "c g sign(v)", "accepted": false,
+                 "parameters": {"c": {"value": 0.0011, "stderr": 0.0003}}, "evidence": evidence(1, 3.1, 0.3, "rejected")},
+                {"round": 2, "effect": "groove_tilt", "form": "g sin(alpha)", "accepted": false,
+                 "parameters": {"alpha_deg": {"value": 0.001, "stderr": 0.002}}, "evidence": evidence(2, 0.4, 0.6, "rejected")}],
+            "model": score(1.02e-6, &["saturating_drag"]), "model_parameters": {}, "baseline_model": score(1.31e-6, &[]),
+            "residuals_before": bins(1.3e-6), "residuals_after": bins(1.0e-6),
+            "drift": {"before": [point(0.02, 0.074), point(0.06, 0.118), point(0.09, 0.151)],
+                      "after": [point(0.02, 0.052), point(0.06, 0.051), point(0.09, 0.053)],
+                      "lines_before": {"t_s vs |v0| (316)": {"n": 3, "intercept": 0.052, "slope": 1.1, "slope_se": 0.05, "t": 22.0}},
+                      "lines_after": {"t_s vs |v0| (316)": {"n": 3, "intercept": 0.052, "slope": 0.01, "slope_se": 0.05, "t": 0.2}},
+                      "note": "per-run T with the accepted terms held fixed"},
+            "runs_used": 6, "materials": ["316", "440c"],
+            "settings": {"bootstrap": 40, "alpha": 0.01, "folds": 5, "seed": 1, "candidates": []}, "note": ""});
+        // the validate stage's layout
+        let pv = |m: &str, q: &str, truth: f64, rec: f64| {
+            json!({"material": m, "quantity": q, "truth": truth, "recovered": rec, "low": rec - 0.005,
+                   "high": rec + 0.005, "error": rec - truth, "within_interval": true})
+        };
+        let validation = json!({"truth": true,
+            "parameters": [pv("316", "mu_weighted", 0.337, 0.337), pv("316", "mu_fast", 0.337, 0.337),
+                           {"material": "316", "quantity": "restitution_rolling",
+                            "truth_law": "{\"speed_dependent\":{\"c0\":1.0,\"v_ref_mps\":0.4}}"},
+                           pv("440c", "mu_weighted", 0.293, 0.292), pv("440c", "mu_fast", 0.293, 0.293)],
+            "mu_pp": {"truth": 1.4, "recovered": 1.38},
+            "effects": {"truth": [{"effect": "velocity_dependent_drag",
+                                   "term": {"term": "saturating_drag", "t0_s": 0.05, "tp_s_per_mps": 1.1}}],
+                        "accepted": ["velocity_dependent_drag"], "missed": [], "spurious": [], "all_named": true}});
+        let provenance = json!({"groove_version": "0.1.0", "code_commit": "0123456789abcdef0123456789abcdef01234567",
+            "fingerprints": {"figures": "aa11", "report": "bb22"}, "seed": 20261122,
+            "inputs": [{"path": "data/runs.csv", "sha256": "c0ffee"}, {"path": "data/trajectories.csv", "sha256": "beef"}],
+            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}]});
+        files.insert("summary", serde_json::to_vec(&summary).unwrap());
+        files.insert("diagnosis", serde_json::to_vec(&diagnosis).unwrap());
+        files.insert("validation", serde_json::to_vec(&validation).unwrap());
+        files.insert("provenance", serde_json::to_vec(&provenance).unwrap());
+    } else {
+        files.insert("validation", br#"{"truth": false}"#.to_vec());
+    }
+    Fixture { runs, fits, files }
+}
+
+fn artifacts(f: &Fixture) -> BTreeMap<String, Artifact> {
+    let mut a = BTreeMap::new();
+    a.insert("runs".to_string(), Artifact::Collection(f.runs.clone()));
+    a.insert("fits".to_string(), Artifact::Collection(f.fits.clone()));
+    for (k, v) in &f.files {
+        a.insert(k.to_string(), Artifact::File(v.clone()));
+    }
+    a
+}
+
+fn data(a: &BTreeMap<String, Artifact>) -> ReportData {
+    let refs: BTreeMap<&str, &Artifact> = a.iter().map(|(k, v)| (k.as_str(), v)).collect();
+    ReportData::from_artifacts(&refs).expect("fixture artifacts read")
+}
+
+/// figures, html, md of a fixture.
+fn render(f: &Fixture, date: Option<i64>) -> (BTreeMap<String, String>, String, String) {
+    let a = artifacts(f);
+    let d = data(&a);
+    let figs = render_figures(&d, &FigureOptions::default()).expect("figures render");
+    let pages = render_pages(&d, &figs, "groove report", date).expect("pages render");
+    (figs, pages.html, pages.md)
+}
+
+// ---------------------------------------------------------------- a tiny well-formedness check
+
+const VOID: [&str; 6] = ["meta", "link", "br", "hr", "img", "input"];
+
+/// Check that every element is closed in order (HTML void elements excepted); returns the number of
+/// elements seen, or where the nesting breaks.
+fn well_formed(doc: &str) -> Result<usize, String> {
+    let mut stack: Vec<String> = Vec::new();
+    let mut n = 0;
+    let mut rest = doc;
+    while let Some(i) = rest.find('<') {
+        rest = &rest[i..];
+        if rest.starts_with("<!--") {
+            let end = rest.find("-->").ok_or("unclosed comment")?;
+            rest = &rest[end + 3..];
+            continue;
+        }
+        if rest.starts_with("<!") || rest.starts_with("<?") {
+            let end = rest.find('>').ok_or("unclosed declaration")?;
+            rest = &rest[end + 1..];
+            continue;
+        }
+        let end = rest
+            .find('>')
+            .ok_or_else(|| format!("unclosed tag near {:?}", &rest[..rest.len().min(40)]))?;
+        let tag = &rest[1..end];
+        rest = &rest[end + 1..];
+        if let Some(name) = tag.strip_prefix('/') {
+            let name = name.trim().to_ascii_lowercase();
+            match stack.pop() {
+                Some(open) if open == name => {}
+                other => return Err(format!("</{name}> closes {other:?}")),
+            }
+            continue;
+        }
+        let name = tag
+            .split(|c: char| c.is_whitespace() || c == '/')
+            .next()
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        if name.is_empty() || !name.chars().next().unwrap().is_ascii_alphabetic() {
+            return Err(format!("bad tag <{tag}>"));
+        }
+        n += 1;
+        if tag.ends_with('/') || VOID.contains(&name.as_str()) {
+            continue;
+        }
+        if name == "style" || name == "script" {
+            let close = format!("</{name}>");
+            let e = rest.find(&close).ok_or("unclosed style")?;
+            rest = &rest[e + close.len()..];
+            continue;
+        }
+        stack.push(name);
+    }
+    if stack.is_empty() {
+        Ok(n)
+    } else {
+        Err(format!("unclosed elements {stack:?}"))
+    }
+}
+
+// ---------------------------------------------------------------- tests
+
+const ALL_FIGURES: [&str; 11] = [
+    "fig_4_2b.svg",
+    "fig_4_2c.svg",
+    "fig_4_2d.svg",
+    "fig_4_3c.svg",
+    "fig_4_3d.svg",
+    "fig_4_4a.svg",
+    "fig_4_4b.svg",
+    "fig_4_4c.svg",
+    "fig_secondary.svg",
+    "fig_discovery_cv.svg",
+    "fig_discovery_drift.svg",
+];
+
+#[test]
+fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
+    let (figs, _, _) = render(&fixture(true, true), None);
+    let names: Vec<&str> = figs.keys().map(String::as_str).collect();
+    let mut want = ALL_FIGURES.to_vec();
+    want.sort();
+    assert_eq!(names, want);
+    for (name, svg) in &figs {
+        assert!(svg.contains("<svg"), "{name}");
+        well_formed(svg).unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    // units on the axes
+    assert!(figs["fig_4_2b.svg"].contains("time t (ms)") && figs["fig_4_2b.svg"].contains("(mm)"));
+    assert!(figs["fig_4_2c.svg"].contains("|v0| (m/s)") && figs["fig_4_2c.svg"].contains("T (s"));
+    assert!(figs["fig_4_2c.svg"].contains("Stokes drag in free air: 2.18 s"));
+    assert!(figs["fig_4_2d.svg"].contains("chapter: 0.337 (316), 0.293 (440c)"));
+    assert!(
+        figs["fig_4_4a.svg"].contains("μ_pp = 1.38"),
+        "μ_pp line from summary.json"
+    );
+    assert!(figs["fig_secondary.svg"].contains("78.5°"));
+}
+
+#[test]
+fn markdown_has_every_section_in_order_and_the_numbers() {
+    let (figs, _, md) = render(&fixture(true, true), Some(1_795_305_600));
+    let heads = [
+        "## 1. Summary",
+        "## 2. The data",
+        "## 3. The chapter reproduced",
+        "## 4. Discovery",
+        "## 5. Equation audit",
+        "## 6. Provenance",
+    ];
+    let pos: Vec<usize> = heads
+        .iter()
+        .map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}")))
+        .collect();
+    assert!(pos.windows(2).all(|w| w[0] < w[1]), "sections out of order");
+    let sub = [
+        "### 3.1 Fig. 4.2b",
+        "### 3.2 Fig. 4.2c",
+        "### 3.3 Fig. 4.2d",
+        "### 3.4 Figs. 4.3c–d",
+        "### 3.5 Fig. 4.4a",
+        "### 3.6 Figs. 4.4b–c",
+        "### 3.7 Secondary collisions",
+    ];
+    let pos: Vec<usize> = sub
+        .iter()
+        .map(|h| md.find(h).unwrap_or_else(|| panic!("missing {h}")))
+        .collect();
+    assert!(
+        pos.windows(2).all(|w| w[0] < w[1]),
+        "chapter figures out of order"
+    );
+    for name in figs.keys() {
+        assert!(
+            md.contains(&format!("](figures/{name})")),
+            "report.md does not reference {name}"
+        );
+    }
+    assert!(md.contains("2026-11-22"));
+    // key numbers: ours, chapter's, truth; Stokes; the factor and bound; the audit's sign change
+    for needle in [
+        "0.3370 [0.3310, 0.3430]",
+        "| 0.337 |",
+        "| truth |",
+        "2.18",
+        "0.074 (wrong)",
+        "0.0900",
+        "78.46",
+        "48.1",
+        "1.380 [1.270, 1.500]",
+        "> 0.60",
+        "3.100 [2.700, 3.500]",
+        "t_s vs \\|v0\\| (316)",
+        "round",
+        "Against the truth (this dataset is synthetic): concealed physics velocity dependent drag",
+        "| velocity dependent drag | tp_s_per_mps | 1.120 ± 0.040 | 1.100 |",
+        "c0 = 1",
+        "velocity dependent drag (saturating)",
+        "0123456789abcdef0123456789abcdef01234567",
+        "| data/runs.csv | c0ffee |",
+    ] {
+        assert!(md.contains(needle), "report.md lacks {needle:?}");
+    }
+    // table cells with |v0| are escaped so the table stays a table
+    assert!(md.contains("\\|v0\\|"));
+    assert!(!md.contains("\n\n\n"));
+}
+
+#[test]
+fn html_is_self_contained_well_formed_and_has_every_figure() {
+    let (figs, html, _) = render(&fixture(true, true), None);
+    let n = well_formed(&html).unwrap_or_else(|e| panic!("report.html: {e}"));
+    assert!(n > 500, "suspiciously few elements: {n}");
+    for bad in [
+        "http://", "https://", " src=", "<script", "<link", "@import", "url(",
+    ] {
+        assert!(!html.contains(bad), "report.html contains {bad:?}");
+    }
+    assert_eq!(html.matches("<svg").count(), figs.len());
+    for name in figs.keys() {
+        assert!(
+            html.contains(&format!(
+                "<figure id=\"{}\">",
+                name.trim_end_matches(".svg")
+            )),
+            "{name}"
+        );
+    }
+    assert!(html.contains("<style>") && html.starts_with("<!DOCTYPE html>"));
+    assert!(html.contains("|v0| &gt; 0.03"), "text is HTML-escaped");
+}
+
+#[test]
+fn two_renders_are_byte_identical() {
+    let f = fixture(true, true);
+    let a = render(&f, Some(0));
+    let b = render(&f, Some(0));
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1, b.1);
+    assert_eq!(a.2, b.2);
+}
+
+#[test]
+fn missing_parts_are_said_not_fatal() {
+    let (figs, html, md) = render(&fixture(false, false), None);
+    assert!(!figs.contains_key("fig_4_3c.svg") && !figs.contains_key("fig_discovery_cv.svg"));
+    assert!(figs.contains_key("fig_4_2b.svg") && figs.contains_key("fig_secondary.svg"));
+    assert!(md.contains("no collision runs in this dataset"));
+    assert!(md.contains("no diagnosis.json"));
+    assert!(md.contains("no provenance input"));
+    assert!(
+        !md.contains("| truth |"),
+        "no truth column without a truth file"
+    );
+    well_formed(&html).unwrap();
+}
+
+#[test]
+fn stage_kinds_run_through_the_contract() {
+    let reg = groove::stages::registry();
+    let figures = reg
+        .iter()
+        .find(|k| k.kind() == "figures")
+        .expect("figures registered");
+    let report = reg
+        .iter()
+        .find(|k| k.kind() == "report")
+        .expect("report registered");
+    let f = fixture(true, true);
+    let a = artifacts(&f);
+    let params = toml::Table::new();
+    let input = StageInput {
+        params: &params,
+        inputs: a.iter().map(|(k, v)| (k.as_str(), v)).collect(),
+        item: None,
+        seed: 1,
+    };
+    let out = figures.run(&input).expect("figures stage runs");
+    let Artifact::Collection(items) = &out["figures"] else {
+        panic!("figures is a collection")
+    };
+    assert_eq!(items.len(), ALL_FIGURES.len());
+    let mut a2 = a.clone();
+    a2.insert("figures".into(), out["figures"].clone());
+    let p: toml::Table = toml::from_str("source_date_epoch = 86400").unwrap();
+    let input = StageInput {
+        params: &p,
+        inputs: a2.iter().map(|(k, v)| (k.as_str(), v)).collect(),
+        item: None,
+        seed: 1,
+    };
+    let pages = report.run(&input).expect("report stage runs");
+    let Artifact::File(md) = &pages["md"] else {
+        panic!()
+    };
+    assert!(String::from_utf8_lossy(md).contains("1970-01-02"));
+    let bad: toml::Table = toml::from_str("colour = 1").unwrap();
+    let err = report.canonical_params(&bad).unwrap_err().to_string();
+    assert!(err.contains("colour"), "{err}");
+}
+
+#[test]
+fn fixture_report_is_written_for_the_browser_check() {
+    // tests/browser.sh renders this file in headless Chromium
+    let (figs, html, md) = render(&fixture(true, true), Some(1_795_305_600));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-fixture");
+    std::fs::create_dir_all(dir.join("figures")).unwrap();
+    std::fs::write(dir.join("report.html"), &html).unwrap();
+    std::fs::write(dir.join("report.md"), &md).unwrap();
+    for (k, v) in &figs {
+        std::fs::write(dir.join("figures").join(k), v).unwrap();
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("report.html")).unwrap(),
+        html
+    );
+}
+
+#[test]
+fn the_checker_catches_broken_nesting() {
+    assert!(well_formed("<div><p>x</div></p>").is_err());
+    assert!(well_formed("<div><br></div>").is_ok());
+    assert!(well_formed("<div>").is_err());
+}
