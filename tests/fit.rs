@@ -443,6 +443,16 @@ fn stages_fit_aggregate_simulate_compare_run_end_to_end() {
         let Artifact::File(b) = &out["residuals"] else {
             panic!()
         };
+        // foreach = ["runs", "fits"]: the run's own fit as a File gives the same bytes
+        let own = fits_item(&fits, id);
+        let alone = groove::stages::simulate::Simulate
+            .run(&stage_input(
+                &params,
+                [("runs", rec), ("fits", &own)].into(),
+                Some(id),
+            ))
+            .unwrap();
+        assert_eq!(alone["residuals"], out["residuals"]);
         res_items.insert(id.clone(), b.clone());
     }
     let res = Artifact::Collection(res_items);

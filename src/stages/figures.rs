@@ -17,7 +17,14 @@ impl StageKind for Figures {
         &["runs", "fits"]
     }
     fn optional_inputs(&self) -> &'static [&'static str] {
-        &["fits_csv", "summary", "residuals", "comparison", "diagnosis", "validation"]
+        &[
+            "fits_csv",
+            "summary",
+            "residuals",
+            "comparison",
+            "diagnosis",
+            "validation",
+        ]
     }
     fn outputs(&self) -> &'static [&'static str] {
         &["figures"]

@@ -66,12 +66,18 @@ impl StageKind for Simulate {
             file_input(input, "runs", "simulate")?,
             "the recording",
         )?;
-        let fits = collection_input(input, "fits", "simulate")?;
-        let bytes = fits.get(item).ok_or_else(|| {
-            StageError(format!(
-                "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
-            ))
-        })?;
+        // `foreach = ["runs", "fits"]` passes this run's fit alone (its key then depends on no
+        // other run); `foreach = "runs"` passes every fit and this run's is looked up.
+        let bytes = match input.inputs.get("fits") {
+            Some(Artifact::File(bytes)) => bytes.as_slice(),
+            _ => collection_input(input, "fits", "simulate")?
+                .get(item)
+                .ok_or_else(|| {
+                    StageError(format!(
+                        "run `{item}` has no fit; bind `fits` to the fit stage that read the same runs (fits = \"fit:fits\")"
+                    ))
+                })?,
+        };
         let fit: RunFit = parse_item(item, bytes, "the fit")?;
         let res = residuals(&rec, &fit, params.options().groove());
         Ok([("residuals".to_string(), Artifact::File(json_bytes(&res)?))].into())

@@ -10,7 +10,10 @@ use plotters::prelude::*;
 
 /// A straight line T(v) sampled densely: on a log axis it is a curve, not a segment.
 fn sampled(x_max: f64, f: impl Fn(f64) -> f64) -> Vec<(f64, f64)> {
-    (0..=60).map(|i| x_max * i as f64 / 60.0).map(|v| (v, f(v))).collect()
+    (0..=60)
+        .map(|i| x_max * i as f64 / 60.0)
+        .map(|v| (v, f(v)))
+        .collect()
 }
 
 /// Tick label of a log axis: only 1, 2 and 5 times a power of ten are written.
