@@ -71,6 +71,16 @@ impl Pipeline {
         deps
     }
 
+    /// A path as provenance records it: `${data}/…` inside the dataset folder (so the same data
+    /// gives the same record wherever it lives, and with `--data`), else as [`Pipeline::show`].
+    pub fn show_portable(&self, path: &std::path::Path) -> String {
+        match path.strip_prefix(&self.data_dir) {
+            Ok(rel) if rel.as_os_str().is_empty() => "${data}".to_string(),
+            Ok(rel) => format!("${{data}}/{}", rel.to_string_lossy().replace('\\', "/")),
+            Err(_) => self.show(path),
+        }
+    }
+
     /// A path shown relative to the project root when it lies inside it.
     pub fn show(&self, path: &std::path::Path) -> String {
         path.strip_prefix(&self.root)

@@ -47,7 +47,7 @@ pub fn record(ctx: &Context, spec: &StageSpec, done: &BTreeMap<String, Evaluated
             let Ok(stored) = hash_path(path, &ctx.hashes) else {
                 continue;
             };
-            let shown = pipeline.show(path);
+            let shown = pipeline.show_portable(path);
             match stored {
                 Stored::File { sha256 } => {
                     inputs.insert(InputHash {

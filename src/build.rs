@@ -17,7 +17,7 @@ fn main() {
         PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     println!("cargo:rerun-if-changed=src");
     println!("cargo:rerun-if-changed=Cargo.toml");
-    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/build.rs");
 
     let mut fingerprints: BTreeMap<String, String> = BTreeMap::new();
     let stages_dir = root.join("src/stages");
@@ -53,7 +53,7 @@ fn main() {
         out.push_str(&format!("    ({kind:?}, {hex:?}),\n"));
     }
     out.push_str(
-        "];\n/// The last commit that touched the code (src, Cargo.toml, Cargo.lock, build.rs).\n",
+        "];\n/// The last commit that touched the code (src, Cargo.toml, Cargo.lock).\n",
     );
     out.push_str(&format!("pub const CODE_COMMIT: &str = {commit:?};\n"));
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
@@ -106,7 +106,7 @@ fn collect_rs(p: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// `git log -1 --format=%H -- src Cargo.toml Cargo.lock build.rs`, or "unknown" without git.
+/// `git log -1 --format=%H -- src Cargo.toml Cargo.lock`, or "unknown" without git.
 fn code_commit(root: &Path) -> String {
     let git = |args: &[&str]| -> Option<String> {
         let out = Command::new("git")
@@ -144,7 +144,6 @@ fn code_commit(root: &Path) -> String {
         "src",
         "Cargo.toml",
         "Cargo.lock",
-        "build.rs",
     ])
     .unwrap_or_else(|| "unknown".to_string())
 }
