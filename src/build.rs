@@ -52,9 +52,7 @@ fn main() {
     for (kind, hex) in &fingerprints {
         out.push_str(&format!("    ({kind:?}, {hex:?}),\n"));
     }
-    out.push_str(
-        "];\n/// The last commit that touched the code (src, Cargo.toml, Cargo.lock).\n",
-    );
+    out.push_str("];\n/// The last commit that touched the code (src, Cargo.toml, Cargo.lock).\n");
     out.push_str(&format!("pub const CODE_COMMIT: &str = {commit:?};\n"));
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     fs::write(out_dir.join("code_identity.rs"), out).expect("write code_identity.rs");

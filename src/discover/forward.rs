@@ -1,5 +1,5 @@
 //! Forward selection: test every candidate term against the current model, accept the strongest
-//! one that passes both the bootstrap likelihood-ratio test (Holm-corrected) and leave-runs-out
+//! (likelihood ratio less ln(n) per extra parameter) one that passes both the bootstrap likelihood-ratio test (Holm-corrected) and leave-runs-out
 //! cross-validation, refit, repeat; then ask the drift probes whether a mismatch is left unexplained.
 
 use super::bootstrap::{lr_replicates, Alternative};
@@ -258,8 +258,20 @@ pub fn run_round(
     let z_cv = normal_upper_quantile(CV_LEVEL);
     // cross-validate the significant candidates strongest first; the first that also predicts
     // held-out runs better is the one accepted, so weaker ones need no cross-validation
+    // "Strongest" is the LR less a Schwarz penalty of ln(n) per extra parameter: when a
+    // one-parameter term explains as much as a six-parameter series (rolling resistance against a
+    // position force when each direction of motion covers its own stretch of the groove), the
+    // simpler physics is named.
+    let n_obs: usize = runs
+        .iter()
+        .map(|r| r.keep.iter().filter(|k| **k).count())
+        .sum();
+    let penalty = (n_obs.max(2) as f64).ln();
+    let strength: Vec<f64> = (0..ne)
+        .map(|i| lr[i] - penalty * all[i].params().len() as f64)
+        .collect();
     let mut order: Vec<usize> = (0..ne).filter(|i| p_holm_e[*i] < opts.alpha).collect();
-    order.sort_by(|a, b| lr[*b].total_cmp(&lr[*a]).then(a.cmp(b)));
+    order.sort_by(|a, b| strength[*b].total_cmp(&strength[*a]).then(a.cmp(b)));
     let mut cv_of: Vec<Option<(CvResult, f64)>> = vec![None; ne];
     let mut best: Option<(usize, CvResult)> = None;
     for &i in &order {
