@@ -7,14 +7,14 @@
 
 /// Velocities after an impact and whether the contact slipped.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Kick {
+pub struct Kick {
     pub v: [f64; 2],
     pub va: [f64; 2],
     pub slip: bool,
 }
 
 /// Apply the impulse to (v, va) of the lower-z particle `l` and the upper-z particle `r`.
-pub(crate) fn collide(v: [f64; 2], va: [f64; 2], c: f64, mu_pp: f64, k: f64) -> Kick {
+pub fn collide(v: [f64; 2], va: [f64; 2], c: f64, mu_pp: f64, k: f64) -> Kick {
     let j = 0.5 * (1.0 + c) * (v[0] - v[1]);
     let sum = va[0] + va[1];
     let dva = mu_pp * k * j;

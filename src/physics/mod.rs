@@ -11,7 +11,7 @@ mod constants;
 mod friction;
 mod groove;
 mod hermite;
-mod impulse;
+pub mod impulse;
 mod mode;
 mod model;
 mod pair;

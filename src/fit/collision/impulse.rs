@@ -4,7 +4,10 @@
 //!
 //! Both cases in one line: Δv_a1 = Δv_a2 = −sign(S)·min(μ_pp k J, |S|/2), S = v_a1 + v_a2.
 
-/// Velocity and spin (v, v_a) of both particles after an impact, and whether it slipped.
+use crate::physics::impulse::collide;
+
+/// Velocity and spin (v, v_a) of both particles after an impact, and whether it slipped: the
+/// physics' own impulse rule ([`crate::physics::impulse::collide`]) in the fit's (v, v_a) pairs.
 pub fn after_impact(
     pre: [(f64, f64); 2],
     restitution: f64,
@@ -12,12 +15,16 @@ pub fn after_impact(
     k: f64,
 ) -> ([(f64, f64); 2], bool) {
     let [(v1, va1), (v2, va2)] = pre;
-    let j = 0.5 * (1.0 + restitution) * (v1 - v2);
-    let (dva, slip) = spin_change(va1 + va2, j, mu_pp, k);
-    ([(v1 - j, va1 + dva), (v2 + j, va2 + dva)], slip)
+    let kick = collide([v1, v2], [va1, va2], restitution, mu_pp, k);
+    (
+        [(kick.v[0], kick.va[0]), (kick.v[1], kick.va[1])],
+        kick.slip,
+    )
 }
 
-/// Change of each spin for spin sum `s_mps` and normal impulse (per mass) `j_mps` ≥ 0.
+/// The spin change alone, for fitting μ_pp to measured spin changes (the slip rule of
+/// [`crate::physics::impulse::collide`] as a function of the spin sum and the impulse).
+/// Each spin changes by this for spin sum `s_mps` and normal impulse (per mass) `j_mps` ≥ 0.
 pub fn spin_change(s_mps: f64, j_mps: f64, mu_pp: f64, k: f64) -> (f64, bool) {
     let slip_limit = mu_pp * k * j_mps.abs();
     if s_mps.abs() >= 2.0 * slip_limit {
