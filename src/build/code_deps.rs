@@ -15,34 +15,121 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Every file the module in `entry` uses, itself included, sorted.
+/// Every file the module in `entry` uses, itself included, sorted. A file that defines a type
+/// brings the files beside it with an `impl` block for a type of that name (methods can live
+/// in a sibling file that no path names).
 pub fn files_used(src: &Path, entry: &Path) -> BTreeSet<PathBuf> {
+    let impls = impl_index(src);
     let mut seen = BTreeSet::new();
     let mut todo = vec![entry.to_path_buf()];
     while let Some(file) = todo.pop() {
-        if !seen.insert(file.clone()) {
-            continue;
-        }
-        if file.extension().is_none_or(|e| e != "rs") {
-            continue;
-        }
-        let text = without_tests(&fs::read_to_string(&file).unwrap_or_default());
-        let dir = children_dir(&file);
-        for child in mod_decls(&text) {
-            if let Some(f) = module_file(&dir, &child) {
-                todo.push(f);
-            }
-        }
-        for rel in includes(&text) {
-            todo.push(file.parent().unwrap_or(src).join(rel));
-        }
-        for path in paths(&text) {
-            if let Some(f) = resolve(src, &dir, &path) {
-                todo.push(f);
+        if seen.insert(file.clone()) {
+            let uses = direct_uses(src, &file);
+            todo.extend(uses.children);
+            todo.extend(uses.named);
+            if file.extension().is_some_and(|e| e == "rs") {
+                let text = without_tests(&fs::read_to_string(&file).unwrap_or_default());
+                for ty in defined_types(&text) {
+                    let siblings = impls.get(&ty).into_iter().flatten();
+                    todo.extend(siblings.filter(|f| f.parent() == file.parent()).cloned());
+                }
             }
         }
     }
     seen
+}
+
+/// Type name → the files holding an `impl` block for a type of that name, over all of `src`.
+fn impl_index(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
+    let mut files = Vec::new();
+    collect_files(src, &mut files);
+    let mut index: BTreeMap<String, Vec<PathBuf>> = BTreeMap::new();
+    for f in files.into_iter().filter(|f| f.extension().is_some_and(|e| e == "rs")) {
+        let text = without_tests(&fs::read_to_string(&f).unwrap_or_default());
+        for line in text.lines() {
+            if let Some(ty) = impl_target(line.trim_start()) {
+                index.entry(ty).or_default().push(f.clone());
+            }
+        }
+    }
+    index
+}
+
+/// The type an `impl` line is for: `impl<T> Trait for a::Name<T> {` → `Name`.
+fn impl_target(line: &str) -> Option<String> {
+    let mut rest = line.strip_prefix("impl")?;
+    if rest.starts_with('<') {
+        let mut depth = 0;
+        let end = rest.char_indices().find_map(|(i, c)| {
+            match c {
+                '<' => depth += 1,
+                '>' => depth -= 1,
+                _ => {}
+            }
+            (depth == 0).then_some(i + 1)
+        })?;
+        rest = &rest[end..];
+    } else if !rest.starts_with(' ') {
+        return None;
+    }
+    if let Some(at) = rest.rfind(" for ") {
+        rest = &rest[at + 5..];
+    }
+    let path: String = rest
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
+        .collect();
+    path.rsplit("::").next().filter(|n| !n.is_empty()).map(str::to_string)
+}
+
+/// The names of the structs, enums, unions, traits and type aliases a file defines.
+fn defined_types(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace().skip_while(|w| w.starts_with("pub"));
+        if let (Some("struct" | "enum" | "union" | "trait" | "type"), Some(name)) =
+            (words.next(), words.next())
+        {
+            let name: String = name
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            out.push(name);
+        }
+    }
+    out
+}
+
+/// What one file brings in directly.
+#[derive(Debug, Default)]
+pub struct Uses {
+    /// The files of its `mod x;` children.
+    pub children: Vec<PathBuf>,
+    /// The module files its paths name and the files it includes.
+    pub named: Vec<PathBuf>,
+}
+
+/// The files `file` brings in by itself (not transitively); none for a file that is not Rust.
+pub fn direct_uses(src: &Path, file: &Path) -> Uses {
+    let mut uses = Uses::default();
+    if file.extension().is_none_or(|e| e != "rs") {
+        return uses;
+    }
+    let text = without_tests(&fs::read_to_string(file).unwrap_or_default());
+    let dir = children_dir(file);
+    for child in mod_decls(&text) {
+        uses.children.extend(module_file(&dir, &child));
+    }
+    for rel in includes(&text) {
+        uses.named.push(file.parent().unwrap_or(src).join(rel));
+    }
+    for path in paths(&text) {
+        uses.named.extend(resolve(src, &dir, &path));
+    }
+    uses.named.sort();
+    uses.named.dedup();
+    uses
 }
 
 /// Fingerprint of every file in `src/stages/` except `mod.rs`: stem → sha256 of the files it uses.

@@ -36,6 +36,7 @@ impl<'a> Context<'a> {
     }
 }
 
+/// `pipeline.lock`, beside `pipeline.toml`.
 pub fn lock_path(pipeline: &Pipeline) -> std::path::PathBuf {
     pipeline.root.join("pipeline.lock")
 }

@@ -408,12 +408,13 @@ fn write_or_check_outputs(
         let Some(path) = path else { continue };
         let stored = &current.outputs[name];
         match action {
-            Action::Run { .. } => materialize(&ctx.store, path, stored, &ctx.hashes)?,
-            Action::Check => {
-                if !is_current(path, stored, &ctx.hashes) {
-                    stale_outputs.push(name.clone());
-                }
+            Action::Run { .. } => {
+                materialize(&ctx.store, path, stored, &ctx.hashes)?;
             }
+            Action::Check if !is_current(path, stored, &ctx.hashes) => {
+                stale_outputs.push(name.clone())
+            }
+            Action::Check => {}
         }
     }
     Ok(stale_outputs)

@@ -6,7 +6,7 @@
 //! way: the entry appears (one rename) only after all its blobs exist, so a kill at any moment
 //! leaves either no entry or a complete one. Leftovers in `tmp/` are removed by the next run.
 
-use super::atomic::{unique_name, write_atomic};
+use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
 use super::hashing::sha256_hex;
 use super::stage::Artifact;
