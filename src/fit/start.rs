@@ -3,7 +3,7 @@
 //! extrapolated to the kick, and μ from how far the early (sliding) frames run ahead of that
 //! rolling motion. Medians throughout, so outliers do not matter.
 
-use super::loss::median_in_place;
+use crate::stats::median_in_place;
 use super::model::{MU, NP, T0, TD, V0, Z0};
 use crate::physics::{Groove, G_MPS2};
 
