@@ -4,7 +4,7 @@
 //! particle. A reference the tests hold `physics::simulate` to (they agree within 1 nm for every
 //! candidate term); no analysis uses it.
 
-use groove::discover::sim::{Motion, SimModel};
+use groove::discover::sim::{Drag, Motion, SimModel};
 use groove::discover::G_MPS2;
 
 #[derive(Clone, Copy, Debug)]
@@ -255,7 +255,6 @@ impl Reference<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use groove::discover::sim::Drag;
 
     fn chapter(mu: f64, t_s: f64) -> SimModel {
         SimModel {
@@ -292,7 +291,8 @@ mod tests {
         if t <= t1 {
             return slide_z(t);
         }
-        let te = tt * (1.0 + m.ks2()) / m.ks2();
+        let ks2 = Reference(m).ks2();
+        let te = tt * (1.0 + ks2) / ks2;
         slide_z(t1) + slide_v(t1) * te * (1.0 - (-(t - t1) / te).exp())
     }
 
