@@ -8,6 +8,6 @@ pub mod lsq;
 pub mod physics;
 pub mod recording;
 pub mod report;
-pub mod stats;
 pub mod stages;
+pub mod stats;
 pub mod synth;

@@ -1,6 +1,5 @@
 //! Drift of per-run fitted parameters with run covariates: least-squares slopes with their t values.
 
-
 pub use crate::stats::Line;
 
 #[cfg(test)]

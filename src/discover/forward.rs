@@ -10,8 +10,8 @@ use super::diagnosis::{CandidateRow, Estimate, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::null_distribution::{empirical_p, NullFit};
-use crate::stats::dist::t_upper_quantile;
 use super::{Options, G_MPS2};
+use crate::stats::dist::t_upper_quantile;
 use std::collections::BTreeMap;
 
 /// Level of the one-sided paired test that held-out runs improve.

@@ -389,8 +389,7 @@ pub fn fit_joint(
                 if !changed {
                     break;
                 }
-                let Some((dg2, dl2, _)) =
-                    solve_step(&blocks, ng, lambda, ctl.free_global, &frozen)
+                let Some((dg2, dl2, _)) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen)
                 else {
                     break;
                 };

@@ -6,13 +6,13 @@ use super::data::{prepare_runs, RunData};
 use super::diagnosis::{
     CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ModelScore, Settings,
 };
-use crate::stats::ols_line as line;
 use super::forward::{finding, fold_of, median_speed, run_round, Model};
 use super::locate::locate;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::residual_structure::Structure;
 use super::Options;
 use crate::recording::Recording;
+use crate::stats::ols_line as line;
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -193,7 +193,9 @@ fn global_start(runs: &[RunData], per_run: &[PerRunFit], n_materials: usize) -> 
             .map(|(_, f)| pick(f))
             .collect()
     };
-    let mut g0: Vec<f64> = (0..n_materials).map(|m| median(of_material(m, |f| f.mu))).collect();
+    let mut g0: Vec<f64> = (0..n_materials)
+        .map(|m| median(of_material(m, |f| f.mu)))
+        .collect();
     g0.extend((0..n_materials).map(|m| median(of_material(m, |f| f.t_s))));
     g0
 }

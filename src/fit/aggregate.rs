@@ -3,9 +3,9 @@
 
 use super::bootstrap::percentile_intervals;
 use super::regression::{mean_where, weighted_mean};
-use crate::stats::ols_indexed as line_fit;
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, MaterialSummary, SingleSummary};
+use crate::stats::ols_indexed as line_fit;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

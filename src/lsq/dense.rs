@@ -79,13 +79,17 @@ pub fn invert_spd_scaled(a: &[f64], n: usize, ridge: f64) -> Option<Vec<f64>> {
 }
 
 /// Cholesky of a matrix that may be only semi-definite: with a diagonal jitter growing from
-/// 1e-12 of the largest diagonal entry by tens until it factors; None if even a jitter of 1e3
-/// does not (a zero or indefinite matrix: the caller must treat the system as singular).
+/// 1e-12 of the largest diagonal entry by tens until it factors; None for a zero diagonal or if
+/// even a jitter of 1e3 does not factor it (the caller must treat the system as singular).
 pub fn cholesky_jittered(a: &[f64], n: usize) -> Option<Vec<f64>> {
     if let Some(l) = cholesky(a, n) {
         return Some(l);
     }
-    let scale = (0..n).map(|i| a[i * n + i].abs()).fold(1e-300, f64::max);
+    let scale = (0..n).map(|i| a[i * n + i].abs()).fold(0.0, f64::max);
+    if !(scale > 1e-300) || !scale.is_finite() {
+        // a zero (or non-finite) diagonal: any jitter would only invent the answer
+        return None;
+    }
     let mut eps = 1e-12;
     while eps <= 1e3 {
         let mut b = a.to_vec();

@@ -56,7 +56,15 @@ mod tests {
         let mut r0 = [0.0; 2];
         f(&p, &mut r0);
         let mut jac = vec![vec![0.0; 2]; 2];
-        jacobian_columns(&f, &p, &[1e-7, 1e-7], &[-9.0, -9.0], &[9.0, 3.0], &r0, &mut jac);
+        jacobian_columns(
+            &f,
+            &p,
+            &[1e-7, 1e-7],
+            &[-9.0, -9.0],
+            &[9.0, 3.0],
+            &r0,
+            &mut jac,
+        );
         assert!((jac[0][0] - 4.0).abs() < 1e-5 && (jac[0][1] - 3.0).abs() < 1e-6);
         assert!(jac[1][0].abs() < 1e-12 && (jac[1][1] - 2.0).abs() < 1e-6);
         assert_eq!(inward_step(3.0, 1e-7, 3.0), -1e-7);

@@ -162,7 +162,11 @@ pub fn normal_equations<const N: usize>(
 
 /// Solve A δ = b for the parameters in `on` (others get δ = 0) by Cholesky on the matrix scaled
 /// to unit diagonal. Returns `None` if A restricted to `on` is not positive definite.
-pub fn solve_spd<const N: usize>(a: &[[f64; N]; N], b: &[f64; N], on: &[bool; N]) -> Option<[f64; N]> {
+pub fn solve_spd<const N: usize>(
+    a: &[[f64; N]; N],
+    b: &[f64; N],
+    on: &[bool; N],
+) -> Option<[f64; N]> {
     let idx: [usize; N] = {
         let mut idx = [0; N];
         let mut m = 0;

@@ -28,7 +28,10 @@ impl Loss {
                 if a <= HUBER_K {
                     (0.5 * u * u, 1.0)
                 } else {
-                    (HUBER_K * a - 0.5 * HUBER_K * HUBER_K, huber_weight(a, HUBER_K))
+                    (
+                        HUBER_K * a - 0.5 * HUBER_K * HUBER_K,
+                        huber_weight(a, HUBER_K),
+                    )
                 }
             }
             Loss::SoftL1 => {

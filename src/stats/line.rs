@@ -90,7 +90,6 @@ pub fn weighted_line(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
     Some(((sy - b * sx) / sw, b))
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

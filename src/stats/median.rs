@@ -70,7 +70,10 @@ mod tests {
         assert_eq!(upper_median(&mut [4.0, 1.0, 3.0, 2.0]), 3.0);
         assert!(upper_median(&mut []).is_nan());
         // |r| = 1, 1, 2, 2, 100 → rank 2 is 2; the NaN is left out
-        assert_eq!(abs_scale(&[1.0, -1.0, 2.0, -2.0, 100.0, f64::NAN]), 1.4826 * 2.0);
+        assert_eq!(
+            abs_scale(&[1.0, -1.0, 2.0, -2.0, 100.0, f64::NAN]),
+            1.4826 * 2.0
+        );
     }
 
     #[test]

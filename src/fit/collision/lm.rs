@@ -6,10 +6,10 @@
 //! own robust loop on the shared dense back-end ([`crate::lsq::dense`]) with forward-difference
 //! Jacobians ([`crate::lsq::fd`]). Problems are small (≤ ~40 parameters, a few thousand residuals).
 
-pub use crate::lsq::Termination;
 use crate::lsq::dense;
 use crate::lsq::fd::jacobian_columns;
 use crate::lsq::loss::huber_weight;
+pub use crate::lsq::Termination;
 // 1.4826 · median |r|: the residuals of a good fit have median ≈ 0
 use crate::stats::abs_scale as robust_scale;
 

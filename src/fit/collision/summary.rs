@@ -4,10 +4,10 @@
 //! over whole runs. Also the points behind Figs. 4.4a–c.
 
 use super::curves::{exp_fit, one_minus_av};
-use crate::stats::{quantile_nearest, weighted_line as line_fit};
 use super::mu_pp::{impulse_fit, slip_slope};
 use super::types::{CollisionFit, CollisionStatus, Contact, ImpactFit, PreImpactSource};
 use crate::recording::{RunInfo, Setup};
+use crate::stats::{quantile_nearest, weighted_line as line_fit};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -282,8 +282,14 @@ fn restitution_curve(runs: &Runs, idx: &[usize], seed: u64) -> Option<Restitutio
             .flat_map(|&i| runs[idx[i]].1.impacts.first())
             .filter_map(|im| {
                 let se = im.restitution.se?;
-                (se <= MAX_C_SE && im.restitution.value.is_finite() && im.impact_speed_mps.value > 0.0)
-                    .then_some((im.impact_speed_mps.value, im.restitution.value, se.max(0.01)))
+                (se <= MAX_C_SE
+                    && im.restitution.value.is_finite()
+                    && im.impact_speed_mps.value > 0.0)
+                    .then_some((
+                        im.impact_speed_mps.value,
+                        im.restitution.value,
+                        se.max(0.01),
+                    ))
             })
             .collect()
     };
