@@ -33,7 +33,7 @@ fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, V
         "v0_mps": v0, "v0_se": 1e-4, "mu": mu, "mu_se": 0.004, "t_drag_s": t_drag, "t_drag_se": 0.002,
         "z0_m": z0, "z0_se": 1e-7, "t0_s": t0, "t0_se": 1e-6, "t1_s": t1, "rms_m": 1.0e-6, "scale_m": 1.0e-6,
         "outlier_cut_m": 5e-6, "n_frames": 400, "n_used": 400, "n_outliers": 0, "iterations": 7,
-        "termination": "converged", "status": "converged"});
+        "termination": "small_step", "status": "converged"});
     let csv = format!("{run},{material},{v0:.6},0.0001,{mu:.6},0.004,{t_drag:.6},0.002,{t1:.6},0.000001,converged\n");
     (rec, fit, csv)
 }
@@ -91,7 +91,7 @@ fn collision(
         .collect();
     let seg = |p: u32, t0: f64, t1: f64, sw: f64| {
         json!({"particle": p, "t_start_s": t0, "t_end_s": t1, "z_start_m": 0.0, "v_start_mps": e(0.1),
-               "va_start_mps": e(0.0), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
+               "va_start_mps": e(0.0), "t_drag_s": e(0.06), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
     };
     let fit = json!({"experiment": "collision", "run": run, "material": material, "setup": setup,
         "direction": 1, "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
@@ -250,7 +250,7 @@ fn artifacts(f: &Fixture) -> BTreeMap<String, Artifact> {
 
 fn data(a: &BTreeMap<String, Artifact>) -> ReportData {
     let refs: BTreeMap<&str, &Artifact> = a.iter().map(|(k, v)| (k.as_str(), v)).collect();
-    ReportData::from_artifacts(&refs).expect("fixture artifacts read")
+    ReportData::from_inputs(&groove::stages::report::unpack(&refs)).expect("fixture artifacts read")
 }
 
 /// figures, html, md of a fixture.

@@ -1,17 +1,6 @@
 //! Drift of per-run fitted parameters with run covariates: least-squares slopes with their t values.
 
-use serde::Serialize;
-
-/// A straight-line fit y = intercept + slope·x with ordinary least-squares standard errors.
-#[derive(Clone, Debug, Serialize)]
-pub struct Line {
-    pub n: usize,
-    pub intercept: f64,
-    pub slope: f64,
-    pub slope_se: f64,
-    /// slope / slope_se.
-    pub t: f64,
-}
+pub use crate::artifacts::diagnosis::Line;
 
 /// Ordinary least-squares line; None with fewer than 3 points or no spread in x.
 pub fn line(x: &[f64], y: &[f64]) -> Option<Line> {

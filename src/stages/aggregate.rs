@@ -1,5 +1,5 @@
 //! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out.
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/aggregate.rs src/stages/fit_io.rs
+// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/aggregate.rs src/stages/fit_io.rs src/artifacts
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_info};
 use crate::engine::stage::{

@@ -1,12 +1,12 @@
 //! The `compare` stage kind: every run's residuals in, pooled residual statistics out (for discovery).
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/compare.rs src/stages/fit_io.rs
+// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/compare.rs src/stages/fit_io.rs src/artifacts
 
 use super::fit_io::{collection_input, json_pretty, parse_item};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::residual_stats::compare;
-use crate::fit::residuals::RunResiduals;
+use crate::artifacts::RunResiduals;
 use serde::{Deserialize, Serialize};
 
 /// `kind = "compare"`.

@@ -1,5 +1,5 @@
 //! The `discover` stage kind: recordings and per-run fits in, diagnosis.json out.
-// groove:uses src/discover src/physics src/fit src/recording.rs src/stages/discover.rs
+// groove:uses src/discover src/physics src/fit src/recording.rs src/stages/discover.rs src/artifacts
 
 use crate::discover::{discover, Options};
 use crate::engine::stage::{
