@@ -156,7 +156,8 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
         let iv = |v: f64, lo: f64, hi: f64| json!({"value": v, "lo": lo, "hi": hi});
         let curve = |m: &str, setup: &str, a: f64| {
             json!({"material": m, "setup": setup, "n_impacts": 2, "n_runs": 1, "c0": iv(1.0, 0.9, 1.1),
-                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "mean_c": 0.7,
+                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "c_inf": iv(0.5, 0.4, 0.6),
+                   "v_ref_mps": iv(0.2, 0.1, 0.3), "mean_c": 0.7,
                    "min_speed_mps": 0.05, "max_speed_mps": 0.2})
         };
         let summary = json!({

@@ -2,7 +2,7 @@
 //! generated from the artifact types: the field names are read from the serde derives, so the
 //! README block (`markdown`, checked by `tests/contracts.rs`) cannot drift from the code.
 
-use super::{collision_fit, diagnosis, fits_table, summary};
+use super::{diagnosis, fits_table, summary};
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use std::fmt;
 
@@ -126,6 +126,7 @@ pub fn markdown() -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::super::collision_fit;
     use super::*;
 
     #[test]

@@ -40,7 +40,7 @@ pub type Inputs<'a> = BTreeMap<&'a str, Input<'a>>;
 fn file<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Option<&'a [u8]>, String> {
     match inputs.get(name) {
         None => Ok(None),
-        Some(Input::File(b)) => Ok(Some(b)),
+        Some(Input::File(b)) => Ok(Some(*b)),
         Some(Input::Items(_)) => Err(format!(
             "input `{name}` is a collection but a single file is expected; bind it to a file output"
         )),

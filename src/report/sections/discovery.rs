@@ -120,7 +120,11 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
                 .find_map(|m| name.strip_suffix(&format!("_{m}")).map(str::to_string))
                 .unwrap_or_else(|| name.clone());
             let truth = term
-                .and_then(|t| [name, &base].into_iter().find_map(|k| t.get(k.as_str())))
+                .and_then(|t| {
+                    [name, &base]
+                        .into_iter()
+                        .find_map(|k| t.get(k.as_str()).filter(|v| !v.is_null()))
+                })
                 .and_then(as_num)
                 .map_or("—".into(), |x| sig(x, 4));
             t.push(vec![f.effect.replace('_', " "), name.clone(), ours, truth]);
