@@ -181,3 +181,63 @@ pub struct Line {
     #[serde(with = "super::nan_null")]
     pub t: f64,
 }
+
+/// An effect id of diagnosis.json: the physics a finding names. Variants are in the order of their
+/// ids, so sorting effects sorts their names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    GrooveTilt,
+    PositionDependentForce,
+    RollingResistance,
+    Unexplained,
+    VelocityDependentDrag,
+    VelocityDependentFriction,
+}
+
+impl Effect {
+    /// Every effect, in id order.
+    pub const ALL: [Effect; 6] = [
+        Effect::GrooveTilt,
+        Effect::PositionDependentForce,
+        Effect::RollingResistance,
+        Effect::Unexplained,
+        Effect::VelocityDependentDrag,
+        Effect::VelocityDependentFriction,
+    ];
+
+    /// The id as written in diagnosis.json.
+    pub fn id(self) -> &'static str {
+        match self {
+            Effect::GrooveTilt => "groove_tilt",
+            Effect::PositionDependentForce => "position_dependent_force",
+            Effect::RollingResistance => "rolling_resistance",
+            Effect::Unexplained => "unexplained",
+            Effect::VelocityDependentDrag => "velocity_dependent_drag",
+            Effect::VelocityDependentFriction => "velocity_dependent_friction",
+        }
+    }
+
+    /// The effect of an id, if it is one.
+    pub fn from_id(id: &str) -> Option<Effect> {
+        Effect::ALL.into_iter().find(|e| e.id() == id)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn effect_ids_are_the_serialized_names_in_sorted_order() {
+        for e in Effect::ALL {
+            assert_eq!(serde_json::to_string(&e).unwrap(), format!("\"{}\"", e.id()));
+            assert_eq!(Effect::from_id(e.id()), Some(e));
+        }
+        assert!(Effect::ALL.windows(2).all(|w| w[0].id() < w[1].id()));
+        for id in crate::discover::EFFECTS {
+            assert!(Effect::from_id(id).is_some(), "{id} has no Effect");
+        }
+        assert_eq!(Effect::from_id("probe"), None);
+    }
+}

@@ -2,6 +2,7 @@
 //! (`{"truth": false}` when the dataset has no truth file). Fields are in the order they are
 //! written (alphabetical, as the file has always been).
 
+use super::diagnosis::Effect;
 use serde::{Deserialize, Serialize};
 
 /// validation.json.
@@ -62,17 +63,17 @@ pub struct MuPpCheck {
 /// The concealed physics: which effects the truth has, which discovery accepted.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EffectCheck {
-    pub accepted: Vec<String>,
+    pub accepted: Vec<Effect>,
     pub all_named: bool,
-    pub missed: Vec<String>,
-    pub spurious: Vec<String>,
+    pub missed: Vec<Effect>,
+    pub spurious: Vec<Effect>,
     pub truth: Vec<TruthEffect>,
 }
 
 /// One effect of the truth: its diagnosis.json effect id and the truth term.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TruthEffect {
-    pub effect: String,
+    pub effect: Effect,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
     /// The truth term as the truth file states it.

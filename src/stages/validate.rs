@@ -1,7 +1,7 @@
 //! The `validate` stage kind: recovered values beside the truth of a synthesized dataset.
 // groove:uses src/stages/validate.rs src/synth/truth.rs src/physics src/recording.rs src/artifacts src/fit/status.rs src/fit/bootstrap.rs src/fit/collision/summary.rs src/ingest/output.rs
 
-use crate::artifacts::diagnosis::Diagnosis;
+use crate::artifacts::diagnosis::{Diagnosis, Effect};
 use crate::artifacts::summary::Summary;
 use crate::artifacts::validation::{EffectCheck, MuPpCheck, ParameterCheck, TruthEffect, Validation};
 use crate::engine::stage::{
@@ -89,14 +89,16 @@ fn json_input<T: serde::de::DeserializeOwned>(
     crate::artifacts::from_json(&format!("input `{name}`"), file(artifact, name)?).map_err(StageError)
 }
 
-/// The effect ID of `diagnosis.json` that a truth term belongs to (`None`: the baseline's own drag).
-pub fn effect_id(term: &Term) -> Option<&'static str> {
+/// The effect of `diagnosis.json` that a truth term belongs to (`None`: the baseline's own drag).
+pub fn effect_id(term: &Term) -> Option<Effect> {
     match term {
         Term::LinearDrag { .. } => None,
-        Term::QuadraticDrag { .. } | Term::SaturatingDrag { .. } => Some("velocity_dependent_drag"),
-        Term::RollingResistance { .. } => Some("rolling_resistance"),
-        Term::GrooveTilt { .. } => Some("groove_tilt"),
-        Term::PositionForce { .. } => Some("position_dependent_force"),
+        Term::QuadraticDrag { .. } | Term::SaturatingDrag { .. } => {
+            Some(Effect::VelocityDependentDrag)
+        }
+        Term::RollingResistance { .. } => Some(Effect::RollingResistance),
+        Term::GrooveTilt { .. } => Some(Effect::GrooveTilt),
+        Term::PositionForce { .. } => Some(Effect::PositionDependentForce),
     }
 }
 
@@ -180,8 +182,8 @@ fn effect_check(truth: &Truth, diagnosis: &Diagnosis) -> EffectCheck {
         .terms
         .iter()
         .filter_map(|term| {
-            effect_id(term).map(|id| TruthEffect {
-                effect: id.to_string(),
+            effect_id(term).map(|effect| TruthEffect {
+                effect,
                 material: None,
                 term: serde_json::to_value(term).unwrap_or(serde_json::Value::Null),
             })
@@ -190,22 +192,23 @@ fn effect_check(truth: &Truth, diagnosis: &Diagnosis) -> EffectCheck {
     for material in &truth.materials {
         if let Friction::VelocityDependent { .. } = material.friction {
             truth_effects.push(TruthEffect {
-                effect: "velocity_dependent_friction".into(),
+                effect: Effect::VelocityDependentFriction,
                 material: Some(material.name.clone()),
                 term: serde_json::to_value(material.friction).unwrap_or(serde_json::Value::Null),
             });
         }
     }
-    let truth_ids: BTreeSet<String> = truth_effects.iter().map(|e| e.effect.clone()).collect();
-    let accepted: BTreeSet<String> = diagnosis
+    let truth_ids: BTreeSet<Effect> = truth_effects.iter().map(|e| e.effect).collect();
+    // an accepted finding names one of the effects (`unexplained` is never accepted)
+    let accepted: BTreeSet<Effect> = diagnosis
         .findings
         .iter()
         .filter(|f| f.accepted)
-        .map(|f| f.effect.clone())
+        .filter_map(|f| Effect::from_id(&f.effect))
         .collect();
     EffectCheck {
-        missed: truth_ids.difference(&accepted).cloned().collect(),
-        spurious: accepted.difference(&truth_ids).cloned().collect(),
+        missed: truth_ids.difference(&accepted).copied().collect(),
+        spurious: accepted.difference(&truth_ids).copied().collect(),
         all_named: truth_ids == accepted,
         accepted: accepted.into_iter().collect(),
         truth: truth_effects,

@@ -4,7 +4,9 @@
 use super::{Block, Table};
 use crate::report::chapter as ch;
 use crate::report::inputs::ReportData;
-use crate::artifacts::diagnosis::{CandidateRow, Diagnosis, Estimate, Evidence, Finding, Structure};
+use crate::artifacts::diagnosis::{
+    CandidateRow, Diagnosis, Effect, Estimate, Evidence, Finding, Structure,
+};
 use crate::artifacts::validation::Validation;
 use crate::report::value::{as_num, sig};
 use serde::Deserialize;
@@ -77,11 +79,13 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
     let Some(effects) = &validation.effects else {
         return;
     };
-    let names = |list: &[String]| -> Vec<String> { list.iter().map(|s| s.replace('_', " ")).collect() };
+    let names = |list: &[Effect]| -> Vec<String> {
+        list.iter().map(|e| e.id().replace('_', " ")).collect()
+    };
     let truth_names: Vec<String> = effects
         .truth
         .iter()
-        .map(|t| format!("{} ({})", t.effect.replace('_', " "), short(&t.term, 6)))
+        .map(|t| format!("{} ({})", t.effect.id().replace('_', " "), short(&t.term, 6)))
         .collect();
     let list = |v: Vec<String>| {
         if v.is_empty() {
@@ -105,7 +109,7 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
         let term = effects
             .truth
             .iter()
-            .find(|t| t.effect == f.effect)
+            .find(|t| t.effect.id() == f.effect)
             .map(|t| &t.term);
         for (name, p) in &f.parameters {
             let ours = match (finite(p.value), finite(p.stderr)) {
