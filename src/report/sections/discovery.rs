@@ -97,9 +97,9 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
     b.para(format!(
         "Against the truth (this dataset is synthetic): concealed physics {}; accepted {}; missed {}; spurious {}.",
         list(truth_names),
-        list(names(&effects.accepted)),
-        list(names(&effects.missed)),
-        list(names(&effects.spurious))
+        list(names(effects.accepted.as_slice())),
+        list(names(effects.missed.as_slice())),
+        list(names(effects.spurious.as_slice()))
     ));
     let mut t = Table::new(
         "Accepted parameters beside the truth",
