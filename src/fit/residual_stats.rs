@@ -6,7 +6,7 @@
 //! over the runs' stretches, z = (R − E[R])/sd[R]; strongly negative z = long same-sign stretches,
 //! i.e. structure the model misses).
 
-use super::residuals::{Phase, RunResiduals};
+use super::residuals::RunResiduals;
 use crate::recording::Experiment;
 use std::collections::BTreeMap;
 

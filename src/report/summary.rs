@@ -45,7 +45,7 @@ fn agg_bounded(e: &BootstrapValue) -> Option<Agg> {
 }
 
 /// summary.json's aggregates of one material's single runs.
-pub fn material(summary: &Summary, material: &str) -> Option<&MaterialSummary> {
+pub fn material<'a>(summary: &'a Summary, material: &str) -> Option<&'a MaterialSummary> {
     summary.single.as_ref()?.materials.get(material)
 }
 
