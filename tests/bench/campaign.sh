@@ -38,7 +38,7 @@ while [ $# -gt 0 ]; do
         --100k) sizes="$sizes 100000" ;;
         --sizes) sizes="$2"; shift ;;
         --no-scipy) scipy=0 ;;
-        -h|--help) sed -n '2,30p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
         *) echo "campaign.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
     shift
@@ -91,10 +91,11 @@ PY
     return 0
 }
 
-# Change one z value of one recording (the middle run's 100th row) by 1 µm, in place.
+# Change one z value of one recording (the middle run's 100th row) by 1 µm, in place; the
+# original line is kept in DIR/.edit-undo.json for restore_edit.
 edit_one() { # dataset_dir
     python3 - "$1" <<'PY'
-import sys
+import json, sys
 d = sys.argv[1]
 runs = [l.split(",")[0] for l in open(f"{d}/runs.csv").read().splitlines()[1:]]
 target = runs[len(runs) // 2]
@@ -108,17 +109,35 @@ for _ in range(100):  # the 100th row of that run (rows of a run are contiguous 
         break
     at = nxt
 end = data.index(b"\n", at + 1)
-fields = data[at + 1:end].decode().split(",")
+old = data[at + 1:end].decode()
+fields = old.split(",")
 fields[-1] = f"{float(fields[-1]) + 1e-6:.9f}"
-data = data[:at + 1] + ",".join(fields).encode() + data[end:]
+new = ",".join(fields)
+json.dump({"offset": at + 1, "old": old, "new": new}, open(f"{d}/.edit-undo.json", "w"))
+data = data[:at + 1] + new.encode() + data[end:]
 open(path, "wb").write(data)
 print(f"  edited run {target}: z_m of frame {fields[2]} += 1 µm")
 PY
 }
 
+# Undo edit_one, so the dataset is the synthesized one again and can be reused.
+restore_edit() { # dataset_dir
+    python3 - "$1" <<'PY'
+import json, os, sys
+d = sys.argv[1]
+u = json.load(open(f"{d}/.edit-undo.json"))
+path = f"{d}/trajectories.csv"
+data = open(path, "rb").read()
+at, old, new = u["offset"], u["old"].encode(), u["new"].encode()
+assert data[at:at + len(new)] == new, "the edited line moved; delete the dataset folder"
+open(path, "wb").write(data[:at] + old + data[at + len(new):])
+os.remove(f"{d}/.edit-undo.json")
+PY
+}
+
 for n in $sizes; do
     data=$work/data-$n
-    if [ ! -f "$data/runs.csv" ] || [ "$(($(wc -l < "$data/runs.csv") - 1))" != "$n" ] || [ -f "$data/.edited" ]; then
+    if [ ! -f "$data/runs.csv" ] || [ "$(($(wc -l < "$data/runs.csv") - 1))" != "$n" ] || [ -f "$data/.edit-undo.json" ] || [ -f "$data/.edited" ]; then
         rm -rf "$data"
         truth=$work/truth-$n.toml
         python3 - "$root/data/truth/truth.toml" "$truth" "$n" <<'PY'
@@ -154,9 +173,9 @@ PY
     echo "  store after cold run: $store bytes ($((store / n)) per run; objects $((objects / n)) per run), $files files"
     printf '%s\tstore\t%s\t%s\t%s\n' "$n" "$((store / n))" "$((objects / n))" "$files" >> "$table"
     edit_one "$data"
-    touch "$data/.edited"  # the next invocation re-synthesizes a clean dataset
     measure "$n edit" "$proj/.groove" "${run[@]}"
     measure "$n no-op" "$proj/.groove" "${run[@]}"
+    restore_edit "$data"
 done
 
 scipy_s=
@@ -177,6 +196,10 @@ import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
 scipy_s = float(sys.argv[2]) if sys.argv[2] else None
 print()
+import os
+load = os.getloadavg()[0]
+if load > os.cpu_count():
+    print(f"note: load average {load:.1f} on {os.cpu_count()} cores: wall times are inflated by waiting for a core; compare CPU times")
 print("| campaign | wall s | cpu s (user+sys) | peak RSS MB | load 1-min (before/after) |")
 print("| --- | --- | --- | --- | --- |")
 for r in rows:
