@@ -1,0 +1,217 @@
+#!/usr/bin/env bash
+# Campaign benchmark for issue 13: how `groove run aggregate` (ingest → fit → aggregate) scales
+# with the number of recordings. Prints, never asserts.
+#
+# Usage: tests/bench/campaign.sh [--100k] [--sizes "1000 10000"] [--no-scipy]
+#   --sizes "N …"  campaign sizes in runs (default "1000 10000"); each is half 316, half 440c
+#   --100k         also the 100,000-run campaign (≈ 2.6 GB of CSV, minutes, several GB of disk)
+#   --no-scipy     skip the SciPy least_squares comparison (needs python3 with numpy + scipy)
+# Environment:
+#   GROOVE_BIN            the binary (default target/release/groove if built, else target/debug/groove)
+#   GROOVE_CAMPAIGN_DIR   scratch folder (default target/campaign); datasets are kept and reused
+#   GROOVE_SCIPY_RUNS     how many runs SciPy fits for its per-core rate (default 200)
+#   GROOVE_BENCH_CARGO_ARGS  passed to `cargo bench --bench fit` for the SciPy dump, e.g.
+#                         "--profile dev" where a release build of polars is too costly
+#
+# For each size N:
+#   1. `groove synth` writes an N-run single-sphere dataset in the interchange format from a truth
+#      file made of `data/truth/truth.toml` (same physics, camera: 10 kHz, 0.06 s = 600 frames per
+#      run) with `count = N/2` per material. Kept under $GROOVE_CAMPAIGN_DIR/data-N.
+#   2. A fresh project (a copy of pipeline.toml, empty store) and three measured runs of
+#      `groove run aggregate`: cold; after editing one z value of one recording; and a no-op.
+#      Wall, CPU (user+sys) and peak RSS come from the kernel's rusage of that one child
+#      (os.wait4, the same numbers `/usr/bin/time -v` prints); the per-stage times are the lines
+#      groove appends to .groove/run.log. The 1-minute load average is printed beside each row
+#      (the machine may be shared).
+#   3. Bytes stored per run: size of .groove/ (and of .groove/objects) after the cold run / N.
+# Then, on 1,000 runs, the SciPy ratio: tests/bench/fit_vs_scipy.sh's approach, reused rather
+# than copied — `cargo bench --bench fit -- --runs 1000 --dump …` writes the runs and groove's
+# start values, and the SciPy program embedded in fit_vs_scipy.sh (its `<<'PY'` block, extracted
+# at run time) fits them with least_squares on the same closed-form model. SciPy seconds for
+# 1,000 runs (per core) / groove's cold wall time on the 1,000-run campaign = the issue's "× SciPy".
+set -euo pipefail
+root=$(cd "$(dirname "$0")/../.." && pwd)
+sizes="1000 10000"
+scipy=1
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --100k) sizes="$sizes 100000" ;;
+        --sizes) sizes="$2"; shift ;;
+        --no-scipy) scipy=0 ;;
+        -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
+        *) echo "campaign.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+    esac
+    shift
+done
+if [ -z "${GROOVE_BIN:-}" ]; then
+    if [ -x "$root/target/release/groove" ]; then GROOVE_BIN=$root/target/release/groove
+    else GROOVE_BIN=$root/target/debug/groove; fi
+fi
+[ -x "$GROOVE_BIN" ] || { echo "campaign.sh: no binary at $GROOVE_BIN; build it (cargo build --locked --tests) or set GROOVE_BIN" >&2; exit 2; }
+work=${GROOVE_CAMPAIGN_DIR:-$root/target/campaign}
+scipy_runs=${GROOVE_SCIPY_RUNS:-200}
+mkdir -p "$work"
+table=$work/table.tsv
+: > "$table"
+export GROOVE_CAMPAIGN_LOG=$work/groove.log  # groove's own output
+: > "$GROOVE_CAMPAIGN_LOG"
+echo "binary: $GROOVE_BIN ($(stat -c %y "$GROOVE_BIN" | cut -d. -f1))"
+echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.1f GiB", $2/1048576}' /proc/meminfo), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+
+# Run one command as a child; append "label wall cpu rss_mb load" to the table; print its stages.
+measure() { # label store_dir cmd...
+    local label=$1 store=$2; shift 2
+    local before=0
+    [ -f "$store/run.log" ] && before=$(wc -l < "$store/run.log")
+    python3 - "$label" "$table" "$@" <<'PY'
+import os, sys, time
+label, table, cmd = sys.argv[1], sys.argv[2], sys.argv[3:]
+load0 = open("/proc/loadavg").read().split()[0]
+t0 = time.perf_counter()
+log = os.open(os.environ["GROOVE_CAMPAIGN_LOG"], os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+pid = os.fork()
+if pid == 0:  # the child: groove, its chatter to the log
+    os.dup2(log, 1)
+    os.dup2(log, 2)
+    os.execvp(cmd[0], cmd)
+_, status, ru = os.wait4(pid, 0)
+wall = time.perf_counter() - t0
+load1 = open("/proc/loadavg").read().split()[0]
+code = os.waitstatus_to_exitcode(status)
+if code != 0:
+    sys.exit(f"campaign.sh: {label}: groove exited with {code}; see {os.environ['GROOVE_CAMPAIGN_LOG']}")
+cpu = ru.ru_utime + ru.ru_stime
+rss_mb = ru.ru_maxrss / 1024  # KiB on Linux
+with open(table, "a") as f:
+    f.write(f"{label}\t{wall:.3f}\t{cpu:.3f}\t{ru.ru_utime:.3f}\t{ru.ru_stime:.3f}\t{rss_mb:.0f}\t{load0}/{load1}\n")
+print(f"  {label}: wall {wall:.2f} s, cpu {cpu:.2f} s (user {ru.ru_utime:.2f} + sys {ru.ru_stime:.2f}), "
+      f"peak rss {rss_mb:.0f} MB, load {load0} → {load1}")
+PY
+    [ -f "$store/run.log" ] && tail -n +$((before + 1)) "$store/run.log" | sed 's/^/    /'
+    return 0
+}
+
+# Change one z value of one recording (the middle run's 100th row) by 1 µm, in place; the
+# original line is kept in DIR/.edit-undo.json for restore_edit.
+edit_one() { # dataset_dir
+    python3 - "$1" <<'PY'
+import json, sys
+d = sys.argv[1]
+runs = [l.split(",")[0] for l in open(f"{d}/runs.csv").read().splitlines()[1:]]
+target = runs[len(runs) // 2]
+path = f"{d}/trajectories.csv"
+data = open(path, "rb").read()
+key = ("\n" + target + ",").encode()
+at = data.index(key)
+for _ in range(100):  # the 100th row of that run (rows of a run are contiguous in synth output)
+    nxt = data.index(b"\n", at + 1)
+    if not data.startswith(key, nxt):
+        break
+    at = nxt
+end = data.index(b"\n", at + 1)
+old = data[at + 1:end].decode()
+fields = old.split(",")
+fields[-1] = f"{float(fields[-1]) + 1e-6:.9f}"
+new = ",".join(fields)
+json.dump({"offset": at + 1, "old": old, "new": new}, open(f"{d}/.edit-undo.json", "w"))
+data = data[:at + 1] + new.encode() + data[end:]
+open(path, "wb").write(data)
+print(f"  edited run {target}: z_m of frame {fields[2]} += 1 µm")
+PY
+}
+
+# Undo edit_one, so the dataset is the synthesized one again and can be reused.
+restore_edit() { # dataset_dir
+    python3 - "$1" <<'PY'
+import json, os, sys
+d = sys.argv[1]
+u = json.load(open(f"{d}/.edit-undo.json"))
+path = f"{d}/trajectories.csv"
+data = open(path, "rb").read()
+at, old, new = u["offset"], u["old"].encode(), u["new"].encode()
+assert data[at:at + len(new)] == new, "the edited line moved; delete the dataset folder"
+open(path, "wb").write(data[:at] + old + data[at + len(new):])
+os.remove(f"{d}/.edit-undo.json")
+PY
+}
+
+for n in $sizes; do
+    data=$work/data-$n
+    if [ ! -f "$data/runs.csv" ] || [ "$(($(wc -l < "$data/runs.csv") - 1))" != "$n" ] || [ -f "$data/.edit-undo.json" ] || [ -f "$data/.edited" ]; then
+        rm -rf "$data"
+        truth=$work/truth-$n.toml
+        python3 - "$root/data/truth/truth.toml" "$truth" "$n" <<'PY'
+import sys
+src, out, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+head = open(src).read().split("[[runs]]")[0]
+runs = "".join(f'''
+[[runs]]
+experiment = "single"
+material = "{m}"
+count = {c}
+v0_mps = [0.005, 0.1]
+directions = "both"
+duration_s = 0.06
+''' for m, c in (("316", n // 2), ("440c", n - n // 2)))
+open(out, "w").write(head + runs)
+PY
+        t0=$(date +%s.%N)
+        "$GROOVE_BIN" synth --truth "$truth" --out "$data" > /dev/null
+        echo "campaign $n: synthesized in $(python3 -c "print(f'{$(date +%s.%N) - $t0:.1f}')") s"
+    fi
+    rows=$(($(wc -l < "$data/trajectories.csv") - 1))
+    echo "campaign $n: $rows rows, $(du -b "$data/trajectories.csv" | cut -f1) bytes of trajectories.csv"
+    proj=$work/proj-$n
+    rm -rf "$proj"
+    mkdir -p "$proj"
+    cp "$root/pipeline.toml" "$proj/"
+    run=("$GROOVE_BIN" run aggregate --config "$proj/pipeline.toml" --data "$data" --out "$proj/reports")
+    measure "$n cold" "$proj/.groove" "${run[@]}"
+    store=$(du -sb "$proj/.groove" | cut -f1)
+    objects=$(du -sb "$proj/.groove/objects" | cut -f1)
+    files=$(find "$proj/.groove" -type f | wc -l)
+    echo "  store after cold run: $store bytes ($((store / n)) per run; objects $((objects / n)) per run), $files files"
+    printf '%s\tstore\t%s\t%s\t%s\n' "$n" "$((store / n))" "$((objects / n))" "$files" >> "$table"
+    edit_one "$data"
+    measure "$n edit" "$proj/.groove" "${run[@]}"
+    measure "$n no-op" "$proj/.groove" "${run[@]}"
+    restore_edit "$data"
+done
+
+scipy_s=
+if [ "$scipy" = 1 ]; then
+    dump=$work/scipy
+    mkdir -p "$dump"
+    echo "scipy: groove's fit bench dumps 1000 runs and its start values (cargo bench ${GROOVE_BENCH_CARGO_ARGS:-} --bench fit)"
+    (cd "$root" && cargo bench --locked ${GROOVE_BENCH_CARGO_ARGS:-} --bench fit -- --runs 1000 --dump "$dump" --dump-count "$scipy_runs") | sed 's/^/  /'
+    # The SciPy program of fit_vs_scipy.sh, taken from that file so the model lives in one place.
+    sed -n "/<<'PY'$/,/^PY$/p" "$root/tests/bench/fit_vs_scipy.sh" | sed '1d;$d' > "$dump/scipy_fit.py"
+    python3 "$dump/scipy_fit.py" "$dump" "$scipy_runs" | tee "$dump/scipy.txt" | sed 's/^/  /'
+    rate=$(sed -n 's/.* = \([0-9.]*\) runs\/s per core.*/\1/p' "$dump/scipy.txt")
+    scipy_s=$(python3 -c "print(1000 / $rate)")
+fi
+
+python3 - "$table" "${scipy_s:-}" <<'PY'
+import sys
+rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1])]
+scipy_s = float(sys.argv[2]) if sys.argv[2] else None
+print()
+import os
+load = os.getloadavg()[0]
+if load > os.cpu_count():
+    print(f"note: load average {load:.1f} on {os.cpu_count()} cores: wall times are inflated by waiting for a core; compare CPU times")
+print("| campaign | wall s | cpu s (user+sys) | peak RSS MB | load 1-min (before/after) |")
+print("| --- | --- | --- | --- | --- |")
+for r in rows:
+    if r[1] != "store":
+        print(f"| {r[0]} | {float(r[1]):.2f} | {float(r[2]):.2f} ({float(r[3]):.2f}+{float(r[4]):.2f}) | {r[5]} | {r[6]} |")
+print()
+for r in rows:
+    if r[1] == "store":
+        print(f"{r[0]} runs: {r[2]} bytes stored per run (.groove/), {r[3]} in objects/, {r[4]} files")
+cold = [r for r in rows if r[0] == "1000 cold"]
+if scipy_s and cold:
+    wall, cpu = float(cold[0][1]), float(cold[0][2])
+    print(f"scipy least_squares, 1000 runs on one core: {scipy_s:.1f} s → groove 1000-run cold run is "
+          f"{scipy_s / wall:.1f}x SciPy by wall time ({scipy_s / cpu:.1f}x by CPU time); target >= 50x")
+PY
