@@ -51,10 +51,13 @@ pub fn materialize(
         .unwrap_or_default();
     match stored {
         Stored::File { sha256 } => {
-            let bytes = store.read_object(sha256)?;
-            if path.is_dir() {
-                std::fs::remove_dir_all(path).at(path)?;
+            if path.is_dir() && !path.is_symlink() {
+                return Err(EngineError::Usage(format!(
+                    "{} is a folder; a file output never replaces a folder: move the folder away or give the output another path",
+                    path.display()
+                )));
             }
+            let bytes = store.read_object(sha256)?;
             write_atomic(path, &bytes)?;
         }
         Stored::Collection { items } => {
@@ -76,6 +79,27 @@ pub fn materialize(
     }
     sweep_leftovers(parent, &name)?;
     Ok(true)
+}
+
+/// Refuses a path whose folders below `base` include a symbolic link: writing through it could
+/// land outside the project. `base` itself may be a link (a reports folder kept elsewhere).
+pub fn check_no_symlink_below(base: &Path, path: &Path) -> Result<(), EngineError> {
+    let Ok(rel) = path.strip_prefix(base) else {
+        return Ok(());
+    };
+    let mut at = base.to_path_buf();
+    let parts: Vec<_> = rel.components().collect();
+    for part in parts.iter().take(parts.len().saturating_sub(1)) {
+        at.push(part);
+        if at.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink()) {
+            return Err(EngineError::Usage(format!(
+                "{} is a symbolic link; groove does not write through links inside the project (the output {} could land outside it): replace the link with a folder",
+                at.display(),
+                path.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn remove_any(path: &Path) -> Result<(), EngineError> {
