@@ -1,5 +1,6 @@
 //! groove: one-command analysis of spheres in a v-groove — engine, physics, fitting, discovery, report.
 
+pub mod artifacts;
 pub mod discover;
 pub mod engine;
 pub mod fit;

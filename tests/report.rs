@@ -33,7 +33,7 @@ fn single(run: &str, material: &str, v0: f64, mu: f64, t_drag: f64) -> (Value, V
         "v0_mps": v0, "v0_se": 1e-4, "mu": mu, "mu_se": 0.004, "t_drag_s": t_drag, "t_drag_se": 0.002,
         "z0_m": z0, "z0_se": 1e-7, "t0_s": t0, "t0_se": 1e-6, "t1_s": t1, "rms_m": 1.0e-6, "scale_m": 1.0e-6,
         "outlier_cut_m": 5e-6, "n_frames": 400, "n_used": 400, "n_outliers": 0, "iterations": 7,
-        "termination": "converged", "status": "converged"});
+        "termination": "small_step", "status": "converged"});
     let csv = format!("{run},{material},{v0:.6},0.0001,{mu:.6},0.004,{t_drag:.6},0.002,{t1:.6},0.000001,converged\n");
     (rec, fit, csv)
 }
@@ -91,7 +91,7 @@ fn collision(
         .collect();
     let seg = |p: u32, t0: f64, t1: f64, sw: f64| {
         json!({"particle": p, "t_start_s": t0, "t_end_s": t1, "z_start_m": 0.0, "v_start_mps": e(0.1),
-               "va_start_mps": e(0.0), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
+               "va_start_mps": e(0.0), "t_drag_s": e(0.06), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
     };
     let fit = json!({"experiment": "collision", "run": run, "material": material, "setup": setup,
         "direction": 1, "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
@@ -156,7 +156,8 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
         let iv = |v: f64, lo: f64, hi: f64| json!({"value": v, "lo": lo, "hi": hi});
         let curve = |m: &str, setup: &str, a: f64| {
             json!({"material": m, "setup": setup, "n_impacts": 2, "n_runs": 1, "c0": iv(1.0, 0.9, 1.1),
-                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "mean_c": 0.7,
+                   "slope_per_mps": iv(a, a - 0.5, a + 0.5), "a_per_mps": iv(a, a - 0.4, a + 0.4), "c_inf": iv(0.5, 0.4, 0.6),
+                   "v_ref_mps": iv(0.2, 0.1, 0.3), "mean_c": 0.7,
                    "min_speed_mps": 0.05, "max_speed_mps": 0.2})
         };
         let summary = json!({
@@ -250,7 +251,7 @@ fn artifacts(f: &Fixture) -> BTreeMap<String, Artifact> {
 
 fn data(a: &BTreeMap<String, Artifact>) -> ReportData {
     let refs: BTreeMap<&str, &Artifact> = a.iter().map(|(k, v)| (k.as_str(), v)).collect();
-    ReportData::from_artifacts(&refs).expect("fixture artifacts read")
+    ReportData::from_inputs(&groove::stages::report::unpack(&refs)).expect("fixture artifacts read")
 }
 
 /// figures, html, md of a fixture.

@@ -1,6 +1,17 @@
 //! Drift of per-run fitted parameters with run covariates: least-squares slopes with their t values.
 
-pub use crate::stats::Line;
+pub use crate::artifacts::diagnosis::Line;
+
+/// Ordinary least-squares line (the one fit of `stats`), in the diagnosis's serialized shape.
+pub fn line(x: &[f64], y: &[f64]) -> Option<Line> {
+    crate::stats::ols_line(x, y).map(|l| Line {
+        n: l.n,
+        intercept: l.intercept,
+        slope: l.slope,
+        slope_se: l.slope_se,
+        t: l.t,
+    })
+}
 
 #[cfg(test)]
 mod tests {

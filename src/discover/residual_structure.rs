@@ -3,7 +3,6 @@
 
 use super::sim::Motion;
 use crate::stats::dist::normal_sf;
-use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// Residuals of one run with what the model says at each kept sample.
@@ -18,33 +17,7 @@ pub struct RunResiduals {
     pub phase: Vec<Motion>,
 }
 
-/// Pooled statistics of one bin.
-#[derive(Clone, Debug, Serialize)]
-pub struct Bin {
-    pub n: usize,
-    pub rms_m: f64,
-    pub mean_m: f64,
-    /// Mean residual over its standard error (runs as independent units).
-    pub mean_z: f64,
-    /// RMS of residual/σ_run: 1 where the model fits within noise.
-    pub rms_over_noise: f64,
-}
-
-/// Residual structure of a fitted model.
-#[derive(Clone, Debug, Serialize)]
-pub struct Structure {
-    pub by_phase: BTreeMap<String, Bin>,
-    pub by_speed: BTreeMap<String, Bin>,
-    pub by_position: BTreeMap<String, Bin>,
-    pub by_direction: BTreeMap<String, Bin>,
-    pub by_material: BTreeMap<String, Bin>,
-    /// Stouffer combination of per-run Wald–Wolfowitz runs tests (negative: too few sign changes).
-    pub runs_test_z: f64,
-    pub runs_test_p: f64,
-    /// Mean lag-1 autocorrelation of residuals, and its combined z (√n-weighted).
-    pub lag1_autocorrelation: f64,
-    pub lag1_z: f64,
-}
+pub use crate::artifacts::diagnosis::{Bin, Structure};
 
 #[derive(Default)]
 struct Acc {

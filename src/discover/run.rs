@@ -12,7 +12,7 @@ use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::residual_structure::Structure;
 use super::Options;
 use crate::recording::Recording;
-use crate::stats::ols_line as line;
+use super::drift::line;
 use serde_json::json;
 use std::collections::BTreeMap;
 

@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 /// A percentile interval of a bootstrap distribution.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Interval {
+    #[serde(with = "crate::artifacts::nan_null")]
     pub lo: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub hi: f64,
 }
 

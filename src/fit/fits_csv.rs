@@ -3,8 +3,7 @@
 use super::single::SingleFit;
 use std::fmt::Write;
 
-/// The header of fits.csv.
-pub const HEADER: &str = "run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status";
+pub use crate::artifacts::fits_table::HEADER;
 
 /// Render fits.csv. Numbers are written as `{:.6e}`; an unknown standard error is an empty field.
 pub fn render(fits: &[SingleFit]) -> String {

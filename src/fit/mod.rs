@@ -34,12 +34,5 @@ pub use segment::{fit_segment, FreeParams, SegmentFit, SegmentInit};
 pub use single::{fit_single, SingleFit};
 pub use status::Termination;
 
-use serde::{Deserialize, Serialize};
+pub use crate::artifacts::run_fit::RunFit;
 
-/// The fit of one run: the JSON item the `fit` stage emits per run.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(tag = "experiment", rename_all = "lowercase")]
-pub enum RunFit {
-    Single(SingleFit),
-    Collision(collision::CollisionFit),
-}

@@ -6,9 +6,8 @@
 //! over the runs' stretches, z = (R − E[R])/sd[R]; strongly negative z = long same-sign stretches,
 //! i.e. structure the model misses).
 
-use super::residuals::{Phase, RunResiduals};
+use super::residuals::RunResiduals;
 use crate::recording::Experiment;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// Upper edges (m/s) of the speed bins of |v_fit|; the last bin is open.
@@ -16,46 +15,8 @@ pub const SPEED_EDGES_MPS: [f64; 7] = [0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2]
 /// Number of equal-width position bins over the pooled range of z_obs.
 pub const POSITION_BINS: usize = 10;
 
-/// Statistics of one group of residuals.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct GroupStats {
-    pub n: usize,
-    pub mean_m: f64,
-    pub rms_m: f64,
-    /// Σ r_i r_{i+1} / Σ r_i² over consecutive pairs; null if no pairs.
-    pub lag1_autocorr: Option<f64>,
-    /// Runs-test z of the residual signs; null if too few frames of both signs.
-    pub runs_test_z: Option<f64>,
-}
+pub use crate::artifacts::comparison::{Bin, Comparison, GroupStats};
 
-/// A group with its bin edges (speed in m/s, position in m).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Bin {
-    pub lo: f64,
-    /// Null for the open last speed bin.
-    pub hi: Option<f64>,
-    pub stats: GroupStats,
-}
-
-/// The `comparison` artifact of the `compare` stage.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Comparison {
-    pub n_runs: usize,
-    /// Runs without residuals (failed fits, collision runs), by run id, with the reason.
-    pub skipped: BTreeMap<String, String>,
-    pub n_frames: usize,
-    pub n_outliers: usize,
-    pub overall: GroupStats,
-    pub by_phase: BTreeMap<Phase, GroupStats>,
-    pub by_speed: Vec<Bin>,
-    pub by_position: Vec<Bin>,
-    /// "+z" and "-z".
-    pub by_direction: BTreeMap<String, GroupStats>,
-    pub by_material: BTreeMap<String, GroupStats>,
-    /// "single" and "collision" (collision runs: both particles, piece by piece).
-    pub by_experiment: BTreeMap<String, GroupStats>,
-    pub by_run: BTreeMap<String, GroupStats>,
-}
 
 /// Running sums of one group; `last` marks where the current stretch of a run stopped.
 #[derive(Default, Clone)]
@@ -267,6 +228,7 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::artifacts::residuals::Phase;
 
     fn run(id: &str, r: Vec<f64>) -> RunResiduals {
         let n = r.len();

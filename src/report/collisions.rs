@@ -1,15 +1,8 @@
 //! Collision-run fits read from the per-run fit JSON: impacts (pre/post velocities and spins) and the
 //! fitted motion segments of each particle.
 
-use super::value::{as_num, field, num, text};
-use serde_json::Value;
-
-/// Velocities of both particles at one instant: (v_z, v_a) of striker (0) and target (1), m/s.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairState {
-    pub v_mps: [f64; 2],
-    pub va_mps: [Option<f64>; 2],
-}
+use crate::artifacts::collision_fit::{CollisionFit, Contact, Estimate, ImpactFit, PhaseKind, SegmentFit};
+use crate::recording::Setup;
 
 /// One impact of a collision run.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,163 +86,121 @@ pub struct CollisionRun {
     pub mu_pg: Option<f64>,
 }
 
-fn pair(v: &Value) -> Option<PairState> {
-    // {"v_mps": [v1, v2], "va_mps": [..]} or {"striker": {v_mps, va_mps}, "target": {...}}
-    if let Some(a) = field(v, &["v_mps", "vz_mps", "v"]).and_then(Value::as_array) {
-        let va = field(v, &["va_mps", "v_a_mps", "va"]).and_then(Value::as_array);
-        let vai = |i: usize| va.and_then(|a| a.get(i)).and_then(as_num);
-        return Some(PairState {
-            v_mps: [as_num(a.first()?)?, as_num(a.get(1)?)?],
-            va_mps: [vai(0), vai(1)],
-        });
-    }
-    let s = field(v, &["striker", "p0", "0"])?;
-    let t = field(v, &["target", "p1", "1"])?;
-    let vs = ["v_mps", "vz_mps", "v"];
-    let vas = ["va_mps", "v_a_mps", "va"];
-    Some(PairState {
-        v_mps: [num(s, &vs)?, num(t, &vs)?],
-        va_mps: [num(s, &vas), num(t, &vas)],
-    })
+fn value(e: &Estimate) -> Option<f64> {
+    e.value.is_finite().then_some(e.value)
 }
 
-fn impact(v: &Value) -> Option<Impact> {
-    let pre = field(v, &["pre", "before"]).and_then(pair);
-    let post = field(v, &["post", "after"]).and_then(pair);
-    let speed = num(
-        v,
-        &[
-            "impact_speed_mps",
-            "v_impact_mps",
-            "relative_speed_mps",
-            "speed_mps",
-        ],
-    )
-    .or_else(|| pre.map(|p| p.v_mps[0] - p.v_mps[1]))?
-    .abs();
-    let restitution = num(
-        v,
-        &["restitution", "c", "C", "cor", "coefficient_of_restitution"],
-    )
-    .or_else(|| {
-        let (a, b) = (pre?, post?);
-        let rel = a.v_mps[0] - a.v_mps[1];
-        (rel.abs() > 0.0).then(|| (b.v_mps[1] - b.v_mps[0]) / rel)
-    });
-    let dvz = num(
-        v,
-        &[
-            "dvz_target_mps",
-            "target_dvz_mps",
-            "delta_vz_target_mps",
-            "dv_z_mps",
-        ],
-    )
-    .or_else(|| Some(post?.v_mps[1] - pre?.v_mps[1]));
-    let dva = num(
-        v,
-        &[
-            "dva_target_mps",
-            "target_dva_mps",
-            "delta_va_target_mps",
-            "dv_a_mps",
-        ],
-    )
-    .or_else(|| Some(post?.va_mps[1]? - pre?.va_mps[1]?));
-    let slip = match field(v, &["contact", "slip", "regime", "kind", "contact_mode"]) {
-        Some(Value::Bool(b)) => Some(*b),
-        Some(Value::String(s)) if s.contains("slip") => Some(true),
-        Some(Value::String(s)) if s.contains("stick") => Some(false),
-        _ => None,
-    };
+fn impact(i: &ImpactFit) -> Option<Impact> {
     Some(Impact {
-        t_s: num(v, &["t_s", "time_s", "t_impact_s", "t"]),
-        speed_mps: speed,
-        restitution,
-        dvz_target_mps: dvz,
-        dva_target_mps: dva,
-        slip,
+        t_s: value(&i.t_s),
+        speed_mps: value(&i.impact_speed_mps)?.abs(),
+        restitution: value(&i.restitution),
+        dvz_target_mps: value(&i.target_dvz_mps),
+        dva_target_mps: value(&i.target_dva_mps),
+        slip: match i.contact {
+            Contact::Slip => Some(true),
+            Contact::Stick => Some(false),
+            Contact::Undetermined => None,
+        },
     })
 }
 
-fn segment(v: &Value, particle: u32) -> Option<Segment> {
-    let particle = num(v, &["particle"]).map(|p| p as u32).unwrap_or(particle);
-    let range = field(v, &["t_range_s", "range_s"]).and_then(Value::as_array);
-    let from_range = |i: usize| range.and_then(|r| r.get(i)).and_then(as_num);
+fn segment(s: &SegmentFit) -> Option<Segment> {
+    let finite = |x: f64| x.is_finite().then_some(x);
     Some(Segment {
-        particle,
-        t_start_s: num(v, &["t_start_s", "start_s", "from_s", "t_from_s"]).or(from_range(0))?,
-        t_end_s: num(v, &["t_end_s", "end_s", "to_s", "t_to_s"]).or(from_range(1))?,
-        t_switch_s: num(v, &["t_switch_s", "switch_s", "t_roll_s"]),
-        start: (|| {
-            let rest = field(v, &["phases"])
-                .and_then(Value::as_array)
-                .and_then(|p| p.first())
-                .and_then(|p| text(p, &["phase"]))
-                == Some("rest");
-            Some(SegmentStart {
-                z_m: num(v, &["z_start_m"])?,
-                v_mps: num(v, &["v_start_mps"]).unwrap_or(0.0),
-                va_mps: num(v, &["va_start_mps"]).unwrap_or(0.0),
-                t_drag_s: num(v, &["t_drag_s"]).unwrap_or(f64::INFINITY),
-                rest,
-            })
-        })(),
+        particle: s.particle,
+        t_start_s: finite(s.t_start_s)?,
+        t_end_s: finite(s.t_end_s)?,
+        t_switch_s: s.t_switch_s.and_then(finite),
+        start: finite(s.z_start_m).map(|z_m| SegmentStart {
+            z_m,
+            v_mps: value(&s.v_start_mps).unwrap_or(0.0),
+            va_mps: value(&s.va_start_mps).unwrap_or(0.0),
+            t_drag_s: value(&s.t_drag_s).unwrap_or(f64::INFINITY),
+            rest: s.phases.first().map(|p| p.phase) == Some(PhaseKind::Rest),
+        }),
     })
 }
 
-/// Read one collision fit JSON (`{"experiment": "collision", ...}`).
-pub fn from_fit_json(run: &str, material: &str, setup: Option<&str>, fit: &Value) -> CollisionRun {
-    let body = fit.get("fit").filter(|b| b.is_object()).unwrap_or(fit);
-    let impacts = field(body, &["impacts", "collisions"])
-        .and_then(Value::as_array)
-        .map(|a| a.iter().filter_map(impact).collect())
-        .unwrap_or_default();
-    let mut segments: Vec<Segment> = field(body, &["segments", "phases"])
-        .and_then(Value::as_array)
-        .map(|a| a.iter().filter_map(|s| segment(s, 0)).collect())
-        .unwrap_or_default();
-    if let Some(parts) = field(body, &["particles", "tracks"]).and_then(Value::as_array) {
-        for (i, p) in parts.iter().enumerate() {
-            let id = num(p, &["particle"]).map(|x| x as u32).unwrap_or(i as u32);
-            if let Some(segs) = field(p, &["segments", "phases"]).and_then(Value::as_array) {
-                segments.extend(segs.iter().filter_map(|s| segment(s, id)));
-            }
-        }
-    }
+/// One collision run's fit (the `fit` stage's item); `setup` from the recording when the fit has none.
+pub fn from_fit(fit: &CollisionFit, setup: Option<Setup>) -> CollisionRun {
+    let mut segments: Vec<Segment> = fit.segments.iter().filter_map(segment).collect();
     segments.sort_by(|a, b| {
         (a.particle, a.t_start_s)
             .partial_cmp(&(b.particle, b.t_start_s))
             .unwrap()
     });
-    let setup = text(fit, &["setup"]).or(setup).unwrap_or("rolling");
+    let status = serde_json::to_value(fit.status)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default();
     CollisionRun {
-        run: text(fit, &["run"]).unwrap_or(run).to_string(),
-        material: text(fit, &["material"]).unwrap_or(material).to_string(),
-        contact: setup.eq_ignore_ascii_case("contact"),
-        impacts,
+        run: fit.run.clone(),
+        material: fit.material.clone(),
+        contact: fit.setup.or(setup) == Some(Setup::Contact),
+        impacts: fit.impacts.iter().filter_map(impact).collect(),
         segments,
-        status: text(body, &["status"]).unwrap_or("").to_string(),
-        mu_pg: num(body, &["mu_pg", "mu"]),
+        status,
+        mu_pg: value(&fit.mu_pg),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::artifacts::collision_fit::{CollisionStatus, Kin, PreImpactSource};
+
+    fn est(value: f64) -> Estimate {
+        Estimate::new(value, 0.001)
+    }
 
     #[test]
-    fn derives_restitution_and_target_changes_from_pre_post() {
-        let fit = json!({"experiment": "collision", "impacts": [
-            {"t_s": 0.01, "pre": {"v_mps": [0.1, 0.0], "va_mps": [0.17, 0.0]},
-                          "post": {"v_mps": [0.01, 0.08], "va_mps": [0.1, -0.2]}}]});
-        let c = from_fit_json("r1", "316", Some("rolling"), &fit);
+    fn reads_impacts_and_status_from_the_typed_fit() {
+        let kin = Kin {
+            v_mps: est(0.1),
+            va_mps: est(0.0),
+        };
+        let impact = ImpactFit {
+            index: 0,
+            t_s: est(0.005),
+            striker_before: kin,
+            striker_after: kin,
+            target_before: kin,
+            target_after: kin,
+            striker_before_source: PreImpactSource::Fitted,
+            impact_speed_mps: est(-0.1),
+            restitution: est(0.7),
+            target_dvz_mps: est(0.08),
+            target_dva_mps: Estimate::new(f64::NAN, f64::NAN),
+            striker_dva_mps: est(0.0),
+            spin_sum_before_mps: 0.0,
+            spin_sum_after_mps: est(0.0),
+            momentum_mismatch_mps: 0.0,
+            contact: Contact::Slip,
+        };
+        let fit = CollisionFit {
+            run: "c1".into(),
+            material: "316".into(),
+            setup: None,
+            direction: 1,
+            status: CollisionStatus::MaxIterations,
+            message: String::new(),
+            mu_pg: est(0.3),
+            t_drag_s: est(0.05),
+            segments: Vec::new(),
+            impacts: vec![impact],
+            rms_m: 1e-6,
+            noise_m: 1e-6,
+            n_points: 10,
+            n_outliers: 0,
+            iterations: 3,
+            fit_end_s: None,
+        };
+        let c = from_fit(&fit, Some(Setup::Contact));
+        assert!(c.contact && c.usable());
+        assert_eq!(c.status, "max_iterations");
         let i = &c.impacts[0];
-        assert!((i.speed_mps - 0.1).abs() < 1e-12);
-        assert!((i.restitution.unwrap() - 0.7).abs() < 1e-12);
-        assert!((i.dvz_target_mps.unwrap() - 0.08).abs() < 1e-12);
-        assert!((i.dva_target_mps.unwrap() + 0.2).abs() < 1e-12);
-        assert!(!c.contact);
+        assert_eq!((i.speed_mps, i.restitution, i.slip), (0.1, Some(0.7), Some(true)));
+        assert_eq!(i.dva_target_mps, None);
     }
 }

@@ -2,9 +2,8 @@
 
 use super::collisions::{self, CollisionRun};
 use super::singles::{self, SingleRow};
-use crate::engine::stage::Artifact;
-use crate::recording::{Experiment, Recording, Setup};
-use serde_json::Value;
+use crate::artifacts::{self, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation};
+use crate::recording::Recording;
 use std::collections::BTreeMap;
 
 /// The report's view of one pipeline run.
@@ -17,47 +16,51 @@ pub struct ReportData {
     /// Collision-run fits, sorted by run.
     pub collisions: Vec<CollisionRun>,
     /// Per-run simulate residuals (`simulate:residuals`), by run id.
-    pub residuals: BTreeMap<String, Value>,
-    pub summary: Option<Value>,
-    pub diagnosis: Option<Value>,
-    pub validation: Option<Value>,
-    pub provenance: Option<Value>,
+    pub residuals: BTreeMap<String, RunResiduals>,
+    pub summary: Option<Summary>,
+    pub diagnosis: Option<Diagnosis>,
+    /// Absent when the dataset has no truth file (`{"truth": false}`).
+    pub validation: Option<Validation>,
+    pub provenance: Option<Provenance>,
     /// Runs ingest left out, with the reason.
     pub skipped: Vec<(String, String)>,
 }
 
-fn file<'a>(inputs: &BTreeMap<&str, &'a Artifact>, name: &str) -> Result<Option<&'a [u8]>, String> {
-    match inputs.get(name).copied() {
+/// One input of a `figures` or `report` stage, unpacked by the stage adapter: a single file, or
+/// the items of a collection by item name.
+#[derive(Debug, Clone)]
+pub enum Input<'a> {
+    File(&'a [u8]),
+    Items(Vec<(&'a str, &'a [u8])>),
+}
+
+/// The inputs by name.
+pub type Inputs<'a> = BTreeMap<&'a str, Input<'a>>;
+
+fn file<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Option<&'a [u8]>, String> {
+    match inputs.get(name) {
         None => Ok(None),
-        Some(Artifact::File(b)) => Ok(Some(b)),
-        Some(Artifact::Collection(_)) => Err(format!(
+        Some(Input::File(b)) => Ok(Some(*b)),
+        Some(Input::Items(_)) => Err(format!(
             "input `{name}` is a collection but a single file is expected; bind it to a file output"
         )),
     }
 }
 
-fn items<'a>(
-    inputs: &BTreeMap<&str, &'a Artifact>,
-    name: &str,
-) -> Result<Vec<(&'a str, &'a [u8])>, String> {
-    match inputs.get(name).copied() {
+fn items<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Vec<(&'a str, &'a [u8])>, String> {
+    match inputs.get(name) {
         None => Ok(Vec::new()),
-        Some(Artifact::Collection(m)) => Ok(m.iter().map(|(k, v)| (k.as_str(), v.as_slice())).collect()),
-        Some(Artifact::File(_)) => Err(format!(
+        Some(Input::Items(m)) => Ok(m.clone()),
+        Some(Input::File(_)) => Err(format!(
             "input `{name}` is a single file but a collection is expected; bind it to a per-run output"
         )),
     }
 }
 
-fn json(name: &str, bytes: &[u8]) -> Result<Value, String> {
-    serde_json::from_slice(bytes)
-        .map_err(|e| format!("{name} is not valid JSON ({e}); rerun the stage that makes it"))
-}
-
 impl ReportData {
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,
     /// `fits_csv`, `residuals`, `summary`, `diagnosis`, `validation`, `provenance`, `skipped`.
-    pub fn from_artifacts(inputs: &BTreeMap<&str, &Artifact>) -> Result<ReportData, String> {
+    pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {
         let mut d = ReportData::default();
         for (name, bytes) in items(inputs, "runs")? {
             let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
@@ -67,27 +70,16 @@ impl ReportData {
         }
         let mut single_json = BTreeMap::new();
         for (name, bytes) in items(inputs, "fits")? {
-            let fit = json(&format!("fits item `{name}`"), bytes)?;
-            let run = super::value::text(&fit, &["run"]).unwrap_or(name.trim_end_matches(".json"));
-            let info = d.recordings.get(run).map(|r| &r.info);
-            let material = info.map(|i| i.material.as_str()).unwrap_or("");
-            let experiment = super::value::text(&fit, &["experiment"])
-                .map(str::to_string)
-                .or_else(|| {
-                    info.map(|i| match i.experiment {
-                        Experiment::Single => "single".to_string(),
-                        Experiment::Collision => "collision".to_string(),
-                    })
-                });
-            if experiment.as_deref() == Some("collision") {
-                let setup = info.and_then(|i| i.setup).map(|s| match s {
-                    Setup::Rolling => "rolling",
-                    Setup::Contact => "contact",
-                });
-                d.collisions
-                    .push(collisions::from_fit_json(run, material, setup, &fit));
-            } else if let Some(row) = singles::from_fit_json(run, material, &fit) {
-                single_json.insert(row.run.clone(), row);
+            match artifacts::from_json::<RunFit>(&format!("fits item `{name}`"), bytes)? {
+                RunFit::Collision(fit) => {
+                    let setup = d.recordings.get(&fit.run).and_then(|r| r.info.setup);
+                    d.collisions.push(collisions::from_fit(&fit, setup));
+                }
+                RunFit::Single(fit) => {
+                    if let Some(row) = singles::from_fit(&fit) {
+                        single_json.insert(row.run.clone(), row);
+                    }
+                }
             }
         }
         d.singles = match file(inputs, "fits_csv")? {
@@ -100,27 +92,25 @@ impl ReportData {
         };
         d.collisions.sort_by(|a, b| a.run.cmp(&b.run));
         for (name, bytes) in items(inputs, "residuals")? {
-            let v = json(&format!("residuals item `{name}`"), bytes)?;
-            let run = super::value::text(&v, &["run"])
-                .unwrap_or(name.trim_end_matches(".json"))
-                .to_string();
-            d.residuals.insert(run, v);
+            let r: RunResiduals = artifacts::from_json(&format!("residuals item `{name}`"), bytes)?;
+            d.residuals.insert(r.run.clone(), r);
         }
-        let opt = |n: &str| -> Result<Option<Value>, String> {
-            file(inputs, n)?.map(|b| json(n, b)).transpose()
-        };
-        d.summary = opt("summary")?;
-        d.diagnosis = opt("diagnosis")?;
-        d.validation = opt("validation")?.filter(|v| v.get("truth") != Some(&Value::Bool(false)));
-        d.provenance = opt("provenance")?;
-        if let Some(Value::Array(list)) = opt("skipped")? {
-            for s in list {
-                let run = super::value::text(&s, &["run"]).unwrap_or("?").to_string();
-                let why = super::value::text(&s, &["reason", "why"])
-                    .unwrap_or("")
-                    .to_string();
-                d.skipped.push((run, why));
-            }
+        d.summary = file(inputs, "summary")?
+            .map(|b| artifacts::from_json::<Summary>("summary", b))
+            .transpose()?;
+        d.diagnosis = file(inputs, "diagnosis")?
+            .map(|b| artifacts::from_json::<Diagnosis>("diagnosis", b))
+            .transpose()?;
+        d.validation = file(inputs, "validation")?
+            .map(|b| artifacts::from_json::<Validation>("validation", b))
+            .transpose()?
+            .filter(|v| v.truth);
+        d.provenance = file(inputs, "provenance")?
+            .map(|b| artifacts::from_json::<Provenance>("provenance", b))
+            .transpose()?;
+        if let Some(b) = file(inputs, "skipped")? {
+            let list: Vec<Skipped> = artifacts::from_json("skipped", b)?;
+            d.skipped = list.into_iter().map(|s| (s.run, s.reason)).collect();
         }
         Ok(d)
     }

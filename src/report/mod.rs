@@ -1,9 +1,10 @@
 //! The report: figures (plotters SVG) and pages (Markdown, self-contained HTML) rendered to strings
 //! from the upstream artifacts; the engine writes them.
 //!
-//! Upstream artifacts are read as `serde_json::Value` with the output contracts' field names
-//! (fits.csv, per-run fit JSON, summary.json, diagnosis.json, validation, provenance), so the report
-//! stays decoupled from the other modules' types and degrades gracefully when a part is absent.
+//! Upstream artifacts are read as their contract types (`crate::artifacts`): per-run fits, fits.csv,
+//! summary.json, residuals, diagnosis.json, validation, provenance; an absent part stays empty and
+//! the report says so. The report imports nothing from the engine: the stage adapters
+//! (`stages::report`, `stages::figures`) unpack the engine's artifacts into `inputs::Input`.
 
 pub mod audit;
 pub mod chapter;

@@ -3,8 +3,9 @@
 
 use super::figures::common::ols;
 use super::inputs::ReportData;
-use super::value::{est, field, interval, num, Est};
-use serde_json::Value;
+use super::value::Est;
+use crate::artifacts::summary::{BootstrapValue, Estimate, MaterialSummary, Summary};
+use crate::recording::Setup;
 
 /// An aggregate value, its interval if known, and where it came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -15,71 +16,37 @@ pub struct Agg {
     pub source: &'static str,
 }
 
-/// summary.json's object for one material: `single.materials.<m>` (the fit stage's layout), or
-/// `materials`/`per_material` (map or list), or top level.
-pub fn material_obj<'a>(summary: &'a Value, material: &str) -> Option<&'a Value> {
-    let roots = [
-        summary.get("single").filter(|v| v.is_object()),
-        Some(summary),
-    ];
-    for root in roots.into_iter().flatten() {
-        for key in ["materials", "per_material"] {
-            match root.get(key) {
-                Some(Value::Object(m)) => {
-                    if let Some(v) = m.get(material) {
-                        return Some(v);
-                    }
-                }
-                Some(Value::Array(a)) => {
-                    let found = a
-                        .iter()
-                        .find(|o| o.get("material").and_then(Value::as_str) == Some(material));
-                    if found.is_some() {
-                        return found;
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
-    summary.get(material).filter(|v| v.is_object())
+fn finite_pair(lo: f64, hi: f64) -> Option<(f64, f64)> {
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
 }
 
-/// summary.json's pooled (all materials) object.
-pub fn pooled_obj(summary: &Value) -> Option<&Value> {
-    summary
-        .get("single")
-        .and_then(|s| field(s, &["pooled", "all"]))
-        .or_else(|| field(summary, &["pooled", "all"]))
-}
-
-/// `{lo, hi}` of a value object, or of its `value` when that is an object (`{value: {value, lo, hi}}`).
-fn lo_hi(v: &Value) -> Option<(f64, f64)> {
-    match (
-        num(v, &["lo", "low", "lower"]),
-        num(v, &["hi", "high", "upper"]),
-    ) {
-        (Some(lo), Some(hi)) => Some((lo, hi)),
-        _ => v.get("value").filter(|x| x.is_object()).and_then(lo_hi),
-    }
-}
-
-fn agg(obj: &Value, names: &[&str]) -> Option<Agg> {
-    let e = est(obj, names)?;
-    let iv = field(obj, names)
-        .and_then(|v| {
-            interval(v, &["interval", "ci", "ci95", "bootstrap_interval"]).or_else(|| lo_hi(v))
-        })
-        .or_else(|| {
-            let cands: Vec<String> = names.iter().map(|n| format!("{n}_interval")).collect();
-            let refs: Vec<&str> = cands.iter().map(String::as_str).collect();
-            interval(obj, &refs)
-        });
-    Some(Agg {
-        est: e,
-        interval: iv,
+/// An estimate of summary.json (value and bootstrap interval); None when it could not be computed.
+fn agg(e: &Estimate) -> Option<Agg> {
+    e.value.is_finite().then(|| Agg {
+        est: Est {
+            value: e.value,
+            stderr: None,
+        },
+        interval: e.interval.and_then(|i| finite_pair(i.lo, i.hi)),
         source: "summary.json",
     })
+}
+
+/// A value with its bootstrap interval of summary.json's collision part.
+fn agg_bounded(e: &BootstrapValue) -> Option<Agg> {
+    e.value.is_finite().then(|| Agg {
+        est: Est {
+            value: e.value,
+            stderr: None,
+        },
+        interval: finite_pair(e.lo, e.hi),
+        source: "summary.json",
+    })
+}
+
+/// summary.json's aggregates of one material's single runs.
+pub fn material<'a>(summary: &'a Summary, material: &str) -> Option<&'a MaterialSummary> {
+    summary.single.as_ref()?.materials.get(material)
 }
 
 fn mean_se(xs: &[f64]) -> Option<Est> {
@@ -99,26 +66,15 @@ fn mean_se(xs: &[f64]) -> Option<Est> {
 }
 
 /// μ_pg mean of runs with |v0| > 0.03 m/s (the chapter's definition).
-pub fn mu_fast(d: &ReportData, material: &str) -> Option<Agg> {
+pub fn mu_fast(d: &ReportData, m: &str) -> Option<Agg> {
     let from_summary = d
         .summary
         .as_ref()
-        .and_then(|s| material_obj(s, material))
-        .and_then(|o| {
-            agg(
-                o,
-                &[
-                    "mu_fast",
-                    "mu_v0_gt_0_03",
-                    "mu_above_0_03",
-                    "mu_chapter",
-                    "mu_v0_above",
-                ],
-            )
-        });
+        .and_then(|s| material(s, m))
+        .and_then(|o| agg(&o.mu_fast));
     from_summary.or_else(|| {
         let xs: Vec<f64> = d
-            .singles_of(material)
+            .singles_of(m)
             .filter(|r| r.v0_mps.value.abs() > super::chapter::MU_MEAN_V0_MIN_MPS)
             .map(|r| r.mu.value)
             .collect();
@@ -131,14 +87,14 @@ pub fn mu_fast(d: &ReportData, material: &str) -> Option<Agg> {
 }
 
 /// μ_pg over all runs (weighted mean in summary.json; plain mean of the fits otherwise).
-pub fn mu_all(d: &ReportData, material: &str) -> Option<Agg> {
+pub fn mu_all(d: &ReportData, m: &str) -> Option<Agg> {
     let from_summary = d
         .summary
         .as_ref()
-        .and_then(|s| material_obj(s, material))
-        .and_then(|o| agg(o, &["mu", "mu_weighted", "mu_pg"]));
+        .and_then(|s| material(s, m))
+        .and_then(|o| agg(&o.mu_weighted));
     from_summary.or_else(|| {
-        let xs: Vec<f64> = d.singles_of(material).map(|r| r.mu.value).collect();
+        let xs: Vec<f64> = d.singles_of(m).map(|r| r.mu.value).collect();
         mean_se(&xs).map(|e| Agg {
             est: e,
             interval: None,
@@ -148,43 +104,20 @@ pub fn mu_all(d: &ReportData, material: &str) -> Option<Agg> {
 }
 
 /// The T-vs-v0 line of one material (or of all runs when `material` is None): (intercept, slope).
-pub fn t_line(d: &ReportData, material: Option<&str>) -> Option<(Agg, Agg)> {
-    let obj = match material {
-        Some(m) => d.summary.as_ref().and_then(|s| material_obj(s, m)),
-        None => d.summary.as_ref().and_then(pooled_obj),
-    };
-    let line = obj.and_then(|o| {
-        field(
-            o,
-            &[
-                "t_line",
-                "T_line",
-                "t_vs_v0",
-                "T_vs_v0",
-                "drag_line",
-                "T_v0",
-            ],
-        )
+pub fn t_line(d: &ReportData, m: Option<&str>) -> Option<(Agg, Agg)> {
+    let obj = d.summary.as_ref().and_then(|s| match m {
+        Some(m) => material(s, m),
+        None => s.single.as_ref().map(|s| &s.pooled),
     });
-    if let Some(l) = line {
-        let a = agg(l, &["intercept_s", "intercept", "t0_s", "T0_s"]);
-        let b = agg(
-            l,
-            &[
-                "slope_s_per_mps",
-                "slope",
-                "t_prime_s_per_mps",
-                "Tp_s_per_mps",
-            ],
-        );
-        if let (Some(a), Some(b)) = (a, b) {
+    if let Some(l) = obj.map(|o| &o.t_vs_v0) {
+        if let (Some(a), Some(b)) = (agg(&l.intercept_s), agg(&l.slope_s_per_mps)) {
             return Some((a, b));
         }
     }
     let pts: Vec<(f64, f64)> = d
         .singles
         .iter()
-        .filter(|r| r.converged() && material.is_none_or(|m| r.material == m))
+        .filter(|r| r.converged() && m.is_none_or(|m| r.material == m))
         .map(|r| (r.v0_mps.value.abs(), r.t_drag_s.value))
         .collect();
     let (a, b) = ols(&pts)?;
@@ -199,17 +132,20 @@ pub fn t_line(d: &ReportData, material: Option<&str>) -> Option<(Agg, Agg)> {
     Some((mk(a), mk(b)))
 }
 
-/// μ_pp of the collision runs: summary.json's `collisions.mu_pp`, or the slope of Δv_a vs Δv_z of the
-/// target over slip impacts (through the origin) divided by k.
+/// μ_pp of the collision runs: summary.json's `collisions.mu_pp` (the headline value, else the
+/// slip slope, else the impulse fit), or the slope of Δv_a vs Δv_z of the target over slip
+/// impacts (through the origin) divided by k.
 pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
     let from_summary = d
         .summary
         .as_ref()
-        .and_then(|s| field(s, &["collisions", "collision"]))
+        .and_then(|s| s.collisions.as_ref())
         .and_then(|c| {
-            agg(c, &["mu_pp", "mu_pp_slope", "mu_pp_fit"]).or_else(|| {
-                let m = c.get("mu_pp")?;
-                agg(m, &["from_slip_slope", "from_impulse_fit"])
+            let m = &c.mu_pp;
+            m.value.and_then(|v| agg_bounded(&v)).or_else(|| {
+                m.from_slip_slope
+                    .or(m.from_impulse_fit)
+                    .and_then(|v| agg_bounded(&v))
             })
         });
     from_summary.or_else(|| {
@@ -231,32 +167,24 @@ pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
     })
 }
 
-/// A number from summary.json at a path of keys, for the tables (e.g. `["collisions", "n_runs"]`).
-pub fn at(summary: Option<&Value>, path: &[&str]) -> Option<f64> {
-    let mut v = summary?;
-    for (i, k) in path.iter().enumerate() {
-        if i + 1 == path.len() {
-            return num(v, &[k]);
-        }
-        v = v.get(*k)?;
-    }
-    None
+/// summary.json's lower bound on μ_pp from stick impacts, when there is one.
+pub fn mu_pp_stick_lower_bound(d: &ReportData) -> Option<f64> {
+    d.summary
+        .as_ref()?
+        .collisions
+        .as_ref()?
+        .mu_pp
+        .stick_lower_bound
+        .filter(|x| x.is_finite())
 }
 
 /// The fitted restitution curve of one material and setup from summary.json's
 /// `collisions.restitution`: (a in C = 1 − a·v, its interval, impacts).
 pub fn restitution_curve(d: &ReportData, material: &str, contact: bool) -> Option<(Agg, usize)> {
-    let list = d
-        .summary
-        .as_ref()?
-        .get("collisions")?
-        .get("restitution")?
-        .as_array()?;
-    let setup = if contact { "contact" } else { "rolling" };
-    let c = list.iter().find(|c| {
-        c.get("material").and_then(Value::as_str) == Some(material)
-            && c.get("setup").and_then(Value::as_str).unwrap_or("rolling") == setup
-    })?;
-    let a = agg(c, &["a_per_mps"])?;
-    Some((a, num(c, &["n_impacts"]).unwrap_or(0.0) as usize))
+    let list = &d.summary.as_ref()?.collisions.as_ref()?.restitution;
+    let setup = if contact { Setup::Contact } else { Setup::Rolling };
+    let c = list
+        .iter()
+        .find(|c| c.material == material && c.setup.unwrap_or(Setup::Rolling) == setup)?;
+    Some((agg_bounded(&c.a_per_mps)?, c.n_impacts))
 }

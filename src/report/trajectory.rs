@@ -6,10 +6,9 @@
 //! to the first frame.
 
 use super::singles::SingleRow;
-use super::value::{as_num, field};
-use crate::physics::{Baseline, Groove, Phase};
+use crate::artifacts::residuals::{Phase, RunResiduals};
+use crate::physics::{Baseline, Groove};
 use crate::recording::Recording;
-use serde_json::Value;
 
 /// One sample: time (s), observed z (m), fitted z (m), whether the fit is rolling there.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,46 +19,20 @@ pub struct Sample {
     pub rolling: bool,
 }
 
-/// The samples of a run from its residuals JSON (columns `{t_s: [..], ..}` or rows `[{t_s, ..}]`).
-pub fn from_residuals(v: &Value) -> Option<Vec<Sample>> {
-    let v = match field(v, &["samples", "rows", "residuals", "particles", "tracks"]) {
-        // a list of particles, each with its own samples: particle 0 (the single particle)
-        Some(Value::Array(a)) if a.first().is_some_and(|p| p.get("particle").is_some()) => &a[0],
-        Some(inner) => inner,
-        None => v,
-    };
-    const T: [&str; 2] = ["t_s", "t"];
-    const ZO: [&str; 3] = ["z_obs_m", "z_obs", "z_m"];
-    const ZF: [&str; 5] = ["z_fit_m", "z_sim_m", "z_fit", "z_sim", "z_model_m"];
-    let rolling = |p: Option<&Value>| {
-        p.and_then(Value::as_str)
-            .is_some_and(|s| s.eq_ignore_ascii_case("rolling") || s.eq_ignore_ascii_case("rest"))
-    };
-    if let Some(rows) = v.as_array() {
-        let out: Vec<Sample> = rows
-            .iter()
-            .filter_map(|r| {
-                Some(Sample {
-                    t_s: super::value::num(r, &T)?,
-                    z_obs_m: super::value::num(r, &ZO)?,
-                    z_fit_m: super::value::num(r, &ZF)?,
-                    rolling: rolling(r.get("phase")),
-                })
-            })
-            .collect();
-        return (!out.is_empty()).then_some(out);
-    }
-    let col = |names: &[&str]| field(v, names).and_then(Value::as_array);
-    let (t, zo, zf) = (col(&T)?, col(&ZO)?, col(&ZF)?);
-    let ph = col(&["phase"]);
-    let out: Vec<Sample> = (0..t.len().min(zo.len()).min(zf.len()))
-        .filter_map(|i| {
-            Some(Sample {
-                t_s: as_num(&t[i])?,
-                z_obs_m: as_num(&zo[i])?,
-                z_fit_m: as_num(&zf[i])?,
-                rolling: rolling(ph.and_then(|p| p.get(i))),
-            })
+/// The samples of particle 0 of a run from its re-simulation residuals (frames with a number).
+pub fn from_residuals(r: &RunResiduals) -> Option<Vec<Sample>> {
+    let n = r.t_s.len().min(r.z_obs_m.len()).min(r.z_fit_m.len());
+    let out: Vec<Sample> = (0..n)
+        .filter(|&i| r.particle.get(i).is_none_or(|&p| p == 0))
+        .filter(|&i| r.t_s[i].is_finite() && r.z_obs_m[i].is_finite() && r.z_fit_m[i].is_finite())
+        .map(|i| Sample {
+            t_s: r.t_s[i],
+            z_obs_m: r.z_obs_m[i],
+            z_fit_m: r.z_fit_m[i],
+            rolling: r
+                .phase
+                .get(i)
+                .is_some_and(|p| matches!(p, Phase::Rolling | Phase::Rest)),
         })
         .collect();
     (!out.is_empty()).then_some(out)
@@ -84,7 +57,7 @@ pub fn from_fit(rec: &Recording, fit: &SingleRow, groove: Groove) -> Option<Vec<
                 t_s: t,
                 z_obs_m: z,
                 z_fit_m: z0 + dz,
-                rolling: !matches!(phase, Phase::Sliding),
+                rolling: !matches!(phase, crate::physics::Phase::Sliding),
             }
         })
         .collect();

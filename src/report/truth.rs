@@ -1,7 +1,6 @@
-//! Truth values from the validate stage's JSON, flattened to (path, ours, truth) rows the tables use.
+//! Truth values from the validate stage's `validation`, flattened to (path, ours, truth) rows the tables use.
 
-use super::value::{as_num, num};
-use serde_json::Value;
+use crate::artifacts::validation::{ParameterCheck, Validation};
 
 /// One checked quantity: where it sits in validation.json, the recovered value, the truth.
 #[derive(Debug, Clone, PartialEq)]
@@ -12,54 +11,37 @@ pub struct TruthRow {
     pub ok: Option<bool>,
 }
 
-/// Every object in `validation` that carries a numeric `truth` (with `recovered`/`fitted`/`value`
-/// beside it, and `ok`/`within`/`pass` when the validator judged it).
-pub fn rows(validation: &Value) -> Vec<TruthRow> {
+/// Every quantity with a numeric truth: `mu_pp`, then `parameters[<material>.<quantity>]` in order.
+pub fn rows(validation: &Validation) -> Vec<TruthRow> {
+    let finite = |x: f64| x.is_finite().then_some(x);
     let mut out = Vec::new();
-    walk(validation, String::new(), &mut out);
-    out
-}
-
-fn walk(v: &Value, path: String, out: &mut Vec<TruthRow>) {
-    match v {
-        Value::Object(m) => {
-            if let Some(t) = m.get("truth").and_then(as_num) {
-                out.push(TruthRow {
-                    path: path.clone(),
-                    ours: num(v, &["recovered", "fitted", "estimate", "value", "ours"]),
-                    truth: t,
-                    ok: ["ok", "within", "within_interval", "pass", "passed"]
-                        .iter()
-                        .find_map(|k| m.get(*k).and_then(Value::as_bool)),
-                });
-                return;
-            }
-            for (k, x) in m {
-                let p = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                walk(x, p, out);
-            }
-        }
-        Value::Array(a) => {
-            for (i, x) in a.iter().enumerate() {
-                // label an element by its identifying fields, e.g. `parameters[316.mu_fast]`
-                let ids: Vec<&str> = ["name", "material", "quantity", "effect"]
-                    .iter()
-                    .filter_map(|k| x.get(*k).and_then(Value::as_str))
-                    .collect();
-                let label = if ids.is_empty() {
-                    i.to_string()
-                } else {
-                    ids.join(".")
-                };
-                walk(x, format!("{path}[{label}]"), out);
-            }
-        }
-        _ => {}
+    if let Some(m) = &validation.mu_pp {
+        out.push(TruthRow {
+            path: "mu_pp".into(),
+            ours: m.recovered.and_then(finite),
+            truth: m.truth,
+            ok: None,
+        });
     }
+    for p in validation.parameters.iter().flatten() {
+        if let ParameterCheck::Value {
+            material,
+            quantity,
+            recovered,
+            truth,
+            within_interval,
+            ..
+        } = p
+        {
+            out.push(TruthRow {
+                path: format!("parameters[{material}.{quantity}]"),
+                ours: finite(*recovered),
+                truth: *truth,
+                ok: *within_interval,
+            });
+        }
+    }
+    out
 }
 
 /// The truth of the first row whose path contains every token (case-insensitive, as whole path
@@ -83,16 +65,18 @@ pub fn lookup(rows: &[TruthRow], tokens: &[&str]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use crate::artifacts::validation::MuPpCheck;
 
     #[test]
     fn reads_the_validate_stage_layout() {
-        let v = json!({"truth": true,
+        let v: Validation = serde_json::from_value(serde_json::json!({"truth": true,
             "parameters": [{"material": "316", "quantity": "mu_weighted", "truth": 0.337, "recovered": 0.336,
-                            "low": 0.33, "high": 0.34, "within_interval": true},
-                           {"material": "316", "quantity": "mu_fast", "truth": 0.337, "recovered": 0.338},
+                            "error": -0.001, "low": 0.33, "high": 0.34, "within_interval": true},
+                           {"material": "316", "quantity": "mu_fast", "truth": 0.337, "recovered": 0.338,
+                            "error": 0.001, "low": null, "high": null, "within_interval": null},
                            {"material": "316", "quantity": "restitution_rolling", "truth_law": "{}"}],
-            "mu_pp": {"truth": 1.4, "recovered": 1.37}});
+            "mu_pp": {"truth": 1.4, "recovered": 1.37}}))
+        .unwrap();
         let r = rows(&v);
         assert_eq!(r.len(), 3);
         let w = r
@@ -102,16 +86,17 @@ mod tests {
         assert_eq!((w.ours, w.ok), (Some(0.336), Some(true)));
         assert_eq!(lookup(&r, &["316", "mu_fast"]), Some(0.337));
         assert_eq!(lookup(&r, &["mu_pp"]), Some(1.4));
+        assert_eq!(lookup(&r, &["440c", "mu_fast"]), None);
     }
 
     #[test]
-    fn flattens_and_finds_by_tokens() {
-        let v = json!({"truth": true, "materials": {"316": {"mu": {"truth": 0.337, "recovered": 0.335, "ok": true}},
-                                                    "440c": {"mu": {"truth": 0.293, "recovered": 0.31, "ok": false}}}});
-        let r = rows(&v);
-        assert_eq!(r.len(), 2);
-        assert_eq!(lookup(&r, &["440c", "mu"]), Some(0.293));
-        assert_eq!(r[1].ok, Some(false));
-        assert_eq!(lookup(&r, &["mu_pp"]), None);
+    fn no_truth_has_no_rows() {
+        let mut v = Validation::no_truth();
+        assert!(rows(&v).is_empty());
+        v.mu_pp = Some(MuPpCheck {
+            recovered: None,
+            truth: 1.4,
+        });
+        assert_eq!(rows(&v)[0].ours, None);
     }
 }

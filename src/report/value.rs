@@ -1,7 +1,5 @@
-//! Tolerant readers for upstream JSON: numbers by any of several field names, plain or `{value, stderr}`.
-//!
-//! The report reads other stages' artifacts as `serde_json::Value` so that it stays decoupled from
-//! their Rust types; these helpers keep that reading short and forgiving of small naming choices.
+//! Numbers as the report prints them: a value with its standard error, significant digits, and a
+//! number read from free-form JSON (the truth file's terms, discovery's `where`).
 
 use serde_json::Value;
 
@@ -12,76 +10,14 @@ pub struct Est {
     pub stderr: Option<f64>,
 }
 
-/// The first of `names` present in `obj` (an object), as a raw value.
-pub fn field<'a>(obj: &'a Value, names: &[&str]) -> Option<&'a Value> {
-    let map = obj.as_object()?;
-    names
-        .iter()
-        .find_map(|n| map.get(*n))
-        .filter(|v| !v.is_null())
-}
-
-/// A finite number under the first of `names`; an object with `value` (or `estimate`) counts too.
-pub fn num(obj: &Value, names: &[&str]) -> Option<f64> {
-    field(obj, names).and_then(as_num)
-}
-
-/// A value read as a finite number (plain, numeric string, or `{value: ..}`).
+/// A JSON value read as a finite number (a number, or a numeric string).
 pub fn as_num(v: &Value) -> Option<f64> {
     let x = match v {
         Value::Number(n) => n.as_f64(),
         Value::String(s) => s.trim().parse().ok(),
-        Value::Object(_) => num(v, &["value", "estimate", "mean", "fitted"]),
         _ => None,
     }?;
     x.is_finite().then_some(x)
-}
-
-/// A number with its standard error: `{name: {value, stderr}}`, or `name` plus `name_se` /
-/// `name_stderr` siblings, or `stderr: {name: ..}`.
-pub fn est(obj: &Value, names: &[&str]) -> Option<Est> {
-    let v = field(obj, names)?;
-    let value = as_num(v)?;
-    let mut stderr = num(v, &["stderr", "se", "std_err", "sigma"]);
-    if stderr.is_none() {
-        for n in names {
-            let base = n
-                .trim_end_matches("_mps")
-                .trim_end_matches("_s")
-                .trim_end_matches("_m");
-            let cands = [
-                format!("{n}_se"),
-                format!("{n}_stderr"),
-                format!("{base}_se"),
-                format!("{base}_stderr"),
-            ];
-            let refs: Vec<&str> = cands.iter().map(String::as_str).collect();
-            stderr = num(obj, &refs)
-                .or_else(|| field(obj, &["stderr", "se"]).and_then(|s| num(s, &[n, base])));
-            if stderr.is_some() {
-                break;
-            }
-        }
-    }
-    Some(Est { value, stderr })
-}
-
-/// A string under the first of `names`.
-pub fn text<'a>(obj: &'a Value, names: &[&str]) -> Option<&'a str> {
-    field(obj, names).and_then(Value::as_str)
-}
-
-/// An interval `[lo, hi]` under the first of `names`: a two-element array or `{lo, hi}` / `{low, high}`.
-pub fn interval(obj: &Value, names: &[&str]) -> Option<(f64, f64)> {
-    let v = field(obj, names)?;
-    if let Some(a) = v.as_array() {
-        if a.len() == 2 {
-            return Some((as_num(&a[0])?, as_num(&a[1])?));
-        }
-    }
-    let lo = num(v, &["lo", "low", "lower", "min"])?;
-    let hi = num(v, &["hi", "high", "upper", "max"])?;
-    Some((lo, hi))
 }
 
 /// Format a number with `digits` significant digits, plain notation where readable.
@@ -122,14 +58,11 @@ mod tests {
     use serde_json::json;
 
     #[test]
-    fn reads_plain_nested_and_sibling_errors() {
-        let v = json!({"mu": 0.3, "mu_se": 0.01, "T_s": {"value": 0.05, "stderr": 0.002},
-                       "v0_mps": "0.02", "stderr": {"v0": 1e-4}});
-        assert_eq!(est(&v, &["mu"]).unwrap().stderr, Some(0.01));
-        assert_eq!(est(&v, &["T_s"]).unwrap().stderr, Some(0.002));
-        let v0 = est(&v, &["v0_mps"]).unwrap();
-        assert_eq!((v0.value, v0.stderr), (0.02, Some(1e-4)));
-        assert_eq!(num(&v, &["nope", "mu"]), Some(0.3));
+    fn reads_numbers_only() {
+        assert_eq!(as_num(&json!(0.3)), Some(0.3));
+        assert_eq!(as_num(&json!("0.02")), Some(0.02));
+        assert_eq!(as_num(&json!({"value": 1.0})), None);
+        assert_eq!(as_num(&json!(null)), None);
     }
 
     #[test]

@@ -5,7 +5,7 @@ use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::residual_stats::compare;
-use crate::fit::residuals::RunResiduals;
+use crate::artifacts::RunResiduals;
 use serde::{Deserialize, Serialize};
 
 /// `kind = "compare"`.

@@ -3,6 +3,7 @@
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
+use super::report::unpack;
 use crate::report::{render_figures, FigureOptions, ReportData};
 
 /// Renders `fig_4_2b.svg`, `fig_4_2c.svg`, … from the runs, the fits and the aggregates.
@@ -34,7 +35,7 @@ impl StageKind for Figures {
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let (opts, _) =
             typed_params::<FigureOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
-        let data = ReportData::from_artifacts(&input.inputs).map_err(StageError)?;
+        let data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
         let figs = render_figures(&data, &opts).map_err(StageError)?;
         let items = figs.into_iter().map(|(k, v)| (k, v.into_bytes())).collect();
         Ok(StageOutputs::from([(

@@ -3,6 +3,7 @@
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
+use crate::report::inputs::{Input, Inputs};
 use crate::report::{render_pages, ReportData};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -60,7 +61,7 @@ impl StageKind for Report {
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let (p, _) =
             typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
-        let data = ReportData::from_artifacts(&input.inputs).map_err(StageError)?;
+        let data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
         let figures: BTreeMap<String, String> = match input.inputs.get("figures") {
             Some(Artifact::Collection(m)) => m
                 .iter()
@@ -75,4 +76,20 @@ impl StageKind for Report {
             ("md".to_string(), Artifact::File(pages.md.into_bytes())),
         ]))
     }
+}
+
+/// The engine's artifacts as the report reads them: files as bytes, collections as their items.
+pub fn unpack<'a>(inputs: &BTreeMap<&'a str, &'a Artifact>) -> Inputs<'a> {
+    inputs
+        .iter()
+        .map(|(name, artifact)| {
+            let input = match artifact {
+                Artifact::File(b) => Input::File(b),
+                Artifact::Collection(m) => {
+                    Input::Items(m.iter().map(|(k, v)| (k.as_str(), v.as_slice())).collect())
+                }
+            };
+            (*name, input)
+        })
+        .collect()
 }

@@ -1,13 +1,15 @@
 //! The `validate` stage kind: recovered values beside the truth of a synthesized dataset.
 
+use crate::artifacts::diagnosis::{Diagnosis, Effect};
+use crate::artifacts::summary::Summary;
+use crate::artifacts::validation::{EffectCheck, MuPpCheck, ParameterCheck, TruthEffect, Validation};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::physics::{Friction, Restitution, Term};
 use crate::synth::Truth;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// `kind = "validate"`: inputs `truth` (optional: the truth TOML), `summary` (summary.json) and
 /// `diagnosis` (diagnosis.json); output `validation`. Without a truth file it writes
@@ -35,16 +37,11 @@ impl StageKind for Validate {
         typed_params::<ValidateParams>(params).map(|(_, json)| json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
-        let validation = match input.inputs.get("truth") {
-            None => json!({ "truth": false }),
+        let validation = match read_truth(input)? {
+            None => Validation::no_truth(),
             Some(truth) => {
-                let text = std::str::from_utf8(file(truth, "truth")?).map_err(|_| {
-                    StageError("truth file is not UTF-8 text; save it as UTF-8".into())
-                })?;
-                let truth =
-                    Truth::parse(text).map_err(|e| StageError(format!("truth file: {e}")))?;
-                let summary = json_input(input, "summary")?;
-                let diagnosis = json_input(input, "diagnosis")?;
+                let summary: Summary = json_input(input, "summary")?;
+                let diagnosis: Diagnosis = json_input(input, "diagnosis")?;
                 validate(&truth, &summary, &diagnosis)
             }
         };
@@ -58,6 +55,18 @@ impl StageKind for Validate {
     }
 }
 
+/// The truth file, when the dataset has one.
+fn read_truth(input: &StageInput) -> Result<Option<Truth>, StageError> {
+    let Some(truth) = input.inputs.get("truth") else {
+        return Ok(None);
+    };
+    let text = std::str::from_utf8(file(truth, "truth")?)
+        .map_err(|_| StageError("truth file is not UTF-8 text; save it as UTF-8".into()))?;
+    Truth::parse(text)
+        .map(Some)
+        .map_err(|e| StageError(format!("truth file: {e}")))
+}
+
 fn file<'a>(artifact: &'a Artifact, name: &str) -> Result<&'a [u8], StageError> {
     match artifact {
         Artifact::File(bytes) => Ok(bytes),
@@ -67,117 +76,142 @@ fn file<'a>(artifact: &'a Artifact, name: &str) -> Result<&'a [u8], StageError> 
     }
 }
 
-fn json_input(input: &StageInput, name: &str) -> Result<Value, StageError> {
+fn json_input<T: serde::de::DeserializeOwned>(
+    input: &StageInput,
+    name: &str,
+) -> Result<T, StageError> {
     let artifact = input.inputs.get(name).ok_or_else(|| {
         StageError(format!(
             "input `{name}` is missing; bind it in pipeline.toml"
         ))
     })?;
-    serde_json::from_slice(file(artifact, name)?).map_err(|e| {
-        StageError(format!(
-            "input `{name}` is not valid JSON ({e}); rerun its stage"
-        ))
-    })
+    crate::artifacts::from_json(&format!("input `{name}`"), file(artifact, name)?).map_err(StageError)
 }
 
-/// The effect ID of `diagnosis.json` that a truth term belongs to (`None`: the baseline's own drag).
-pub fn effect_id(term: &Term) -> Option<&'static str> {
+/// The effect of `diagnosis.json` that a truth term belongs to (`None`: the baseline's own drag).
+pub fn effect_id(term: &Term) -> Option<Effect> {
     match term {
         Term::LinearDrag { .. } => None,
-        Term::QuadraticDrag { .. } | Term::SaturatingDrag { .. } => Some("velocity_dependent_drag"),
-        Term::RollingResistance { .. } => Some("rolling_resistance"),
-        Term::GrooveTilt { .. } => Some("groove_tilt"),
-        Term::PositionForce { .. } => Some("position_dependent_force"),
+        Term::QuadraticDrag { .. } | Term::SaturatingDrag { .. } => {
+            Some(Effect::VelocityDependentDrag)
+        }
+        Term::RollingResistance { .. } => Some(Effect::RollingResistance),
+        Term::GrooveTilt { .. } => Some(Effect::GrooveTilt),
+        Term::PositionForce { .. } => Some(Effect::PositionDependentForce),
     }
 }
 
 /// Compare what the analysis recovered with the truth: friction per material, μ_pp, and the
 /// concealed physics (which effects are in the truth, which discovery accepted).
-pub fn validate(truth: &Truth, summary: &Value, diagnosis: &Value) -> Value {
-    let mut materials = Vec::new();
+pub fn validate(truth: &Truth, summary: &Summary, diagnosis: &Diagnosis) -> Validation {
+    let mu_pp_recovered = summary
+        .collisions
+        .as_ref()
+        .and_then(|c| c.mu_pp.value)
+        .map(|v| v.value)
+        .filter(|v| v.is_finite());
+    Validation {
+        effects: Some(effect_check(truth, diagnosis)),
+        mu_pp: Some(MuPpCheck {
+            recovered: mu_pp_recovered,
+            truth: truth.pair.mu_pp,
+        }),
+        parameters: Some(parameter_checks(truth, summary)),
+        truth: true,
+    }
+}
+
+/// μ per material (weighted and fast means) against the truth's μ (μ∞ for a speed-dependent law),
+/// and the truth's restitution laws as text.
+fn parameter_checks(truth: &Truth, summary: &Summary) -> Vec<ParameterCheck> {
+    let mut checks = Vec::new();
     for material in &truth.materials {
-        let recovered = &summary["single"]["materials"][&material.name];
+        let recovered = summary
+            .single
+            .as_ref()
+            .and_then(|s| s.materials.get(&material.name));
         let mu_truth = match material.friction {
-            Friction::Constant { mu } => Some(mu),
-            Friction::VelocityDependent { mu_inf, .. } => Some(mu_inf),
+            Friction::Constant { mu } => mu,
+            Friction::VelocityDependent { mu_inf, .. } => mu_inf,
         };
-        for (quantity, key) in [("mu_weighted", "mu_weighted"), ("mu_fast", "mu_fast")] {
-            let estimate = &recovered[key];
-            let (Some(value), Some(truth_value)) = (estimate["value"].as_f64(), mu_truth) else {
+        for quantity in ["mu_weighted", "mu_fast"] {
+            let Some(m) = recovered else { continue };
+            let estimate = if quantity == "mu_weighted" {
+                m.mu_weighted
+            } else {
+                m.mu_fast
+            };
+            if !estimate.value.is_finite() {
                 continue;
+            }
+            let (low, high) = match estimate.interval {
+                Some(iv) => (Some(iv.lo), Some(iv.hi)),
+                None => (None, None),
             };
-            let low = estimate["interval"]["lo"].as_f64();
-            let high = estimate["interval"]["hi"].as_f64();
-            let within = match (low, high) {
-                (Some(l), Some(h)) => Some(l <= truth_value && truth_value <= h),
-                _ => None,
-            };
-            materials.push(json!({
-                "material": material.name,
-                "quantity": quantity,
-                "truth": truth_value,
-                "recovered": value,
-                "low": low,
-                "high": high,
-                "error": value - truth_value,
-                "within_interval": within,
-            }));
+            checks.push(ParameterCheck::Value {
+                error: estimate.value - mu_truth,
+                high,
+                low,
+                material: material.name.clone(),
+                quantity: quantity.to_string(),
+                recovered: estimate.value,
+                truth: mu_truth,
+                within_interval: estimate.interval.map(|iv| iv.contains(mu_truth)),
+            });
         }
         for (setup, law) in [
             ("rolling", &material.restitution_rolling),
             ("contact", &material.restitution_contact),
         ] {
-            materials.push(json!({
-                "material": material.name,
-                "quantity": format!("restitution_{setup}"),
-                "truth_law": restitution_text(law),
-            }));
+            checks.push(ParameterCheck::Law {
+                material: material.name.clone(),
+                quantity: format!("restitution_{setup}"),
+                truth_law: restitution_text(law),
+            });
         }
     }
-    let mu_pp_recovered = summary["collisions"]["mu_pp"]["value"]["value"].as_f64();
-    let mut truth_effects: Vec<Value> = truth
+    checks
+}
+
+/// The truth's effects (physics terms beyond the baseline, and speed-dependent friction per
+/// material) against the effects discovery accepted.
+fn effect_check(truth: &Truth, diagnosis: &Diagnosis) -> EffectCheck {
+    let mut truth_effects: Vec<TruthEffect> = truth
         .physics
         .terms
         .iter()
         .filter_map(|term| {
-            effect_id(term).map(|id| json!({ "effect": id, "term": serde_json::to_value(term).unwrap_or(Value::Null) }))
+            effect_id(term).map(|effect| TruthEffect {
+                effect,
+                material: None,
+                term: serde_json::to_value(term).unwrap_or(serde_json::Value::Null),
+            })
         })
         .collect();
     for material in &truth.materials {
         if let Friction::VelocityDependent { .. } = material.friction {
-            truth_effects.push(json!({
-                "effect": "velocity_dependent_friction",
-                "material": material.name,
-                "term": serde_json::to_value(material.friction).unwrap_or(Value::Null),
-            }));
+            truth_effects.push(TruthEffect {
+                effect: Effect::VelocityDependentFriction,
+                material: Some(material.name.clone()),
+                term: serde_json::to_value(material.friction).unwrap_or(serde_json::Value::Null),
+            });
         }
     }
-    let truth_ids: std::collections::BTreeSet<String> = truth_effects
+    let truth_ids: BTreeSet<Effect> = truth_effects.iter().map(|e| e.effect).collect();
+    // an accepted finding names one of the effects (`unexplained` is never accepted)
+    let accepted: BTreeSet<Effect> = diagnosis
+        .findings
         .iter()
-        .filter_map(|e| e["effect"].as_str().map(str::to_string))
+        .filter(|f| f.accepted)
+        .filter_map(|f| Effect::from_id(&f.effect))
         .collect();
-    let accepted: std::collections::BTreeSet<String> = diagnosis["findings"]
-        .as_array()
-        .map(|findings| {
-            findings
-                .iter()
-                .filter(|f| f["accepted"].as_bool() == Some(true))
-                .filter_map(|f| f["effect"].as_str().map(str::to_string))
-                .collect()
-        })
-        .unwrap_or_default();
-    json!({
-        "truth": true,
-        "parameters": materials,
-        "mu_pp": { "truth": truth.pair.mu_pp, "recovered": mu_pp_recovered },
-        "effects": {
-            "truth": truth_effects,
-            "accepted": accepted,
-            "missed": truth_ids.difference(&accepted).collect::<Vec<_>>(),
-            "spurious": accepted.difference(&truth_ids).collect::<Vec<_>>(),
-            "all_named": truth_ids == accepted,
-        },
-    })
+    EffectCheck {
+        missed: truth_ids.difference(&accepted).copied().collect(),
+        spurious: accepted.difference(&truth_ids).copied().collect(),
+        all_named: truth_ids == accepted,
+        accepted: accepted.into_iter().collect(),
+        truth: truth_effects,
+    }
 }
 
 fn restitution_text(law: &Restitution) -> String {

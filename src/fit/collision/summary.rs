@@ -16,8 +16,11 @@ use std::collections::BTreeMap;
 /// A point estimate with a 95 % percentile bootstrap interval.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Interval {
+    #[serde(with = "crate::artifacts::nan_null")]
     pub value: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub lo: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub hi: f64,
 }
 
@@ -55,8 +58,11 @@ pub struct RestitutionCurve {
     /// (the form `physics::Restitution::SpeedDependent` simulates).
     pub c_inf: Interval,
     pub v_ref_mps: Interval,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub mean_c: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub min_speed_mps: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub max_speed_mps: f64,
 }
 
@@ -66,8 +72,10 @@ pub struct SpinPoint {
     pub run: String,
     pub material: String,
     pub impact: usize,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub dvz_mps: f64,
     pub dvz_se_mps: Option<f64>,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub dva_mps: f64,
     pub dva_se_mps: Option<f64>,
     pub contact: Contact,
@@ -80,7 +88,9 @@ pub struct RestitutionPoint {
     pub material: String,
     pub setup: Option<Setup>,
     pub impact: usize,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub impact_speed_mps: f64,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub restitution: f64,
     pub restitution_se: Option<f64>,
     pub striker_before_source: PreImpactSource,
@@ -92,6 +102,7 @@ pub struct CollisionSummary {
     pub n_runs: usize,
     pub n_runs_fitted: usize,
     pub n_impacts: usize,
+    #[serde(with = "crate::artifacts::nan_null")]
     pub k: f64,
     pub mu_pp: MuPp,
     pub restitution: Vec<RestitutionCurve>,

@@ -3,28 +3,27 @@
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
 use crate::report::style::{self, Marker};
-use crate::report::value::{as_num, field, num, text};
+use crate::artifacts::diagnosis::{Diagnosis, DriftPoint};
 use plotters::prelude::*;
-use serde_json::Value;
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
 
 /// (effect, accepted, baseline cv rms, extended cv rms) of every finding that has both.
-pub fn cv_rows(diag: &Value) -> Vec<(String, bool, f64, f64)> {
-    let Some(list) = field(diag, &["findings"]).and_then(Value::as_array) else {
-        return Vec::new();
-    };
-    list.iter()
+pub fn cv_rows(diag: &Diagnosis) -> Vec<(String, bool, f64, f64)> {
+    diag.findings
+        .iter()
         .filter_map(|f| {
-            let b = f.get("baseline").and_then(|b| num(b, &["cv_rms_m"]))?;
-            let e = f.get("extended").and_then(|e| num(e, &["cv_rms_m"]))?;
-            let name = text(f, &["effect"]).unwrap_or("?").to_string();
-            let acc = f.get("accepted").and_then(Value::as_bool).unwrap_or(false);
-            Some((name, acc, b, e))
+            let b = finite(f.baseline.cv_rms_m)?;
+            let e = finite(f.extended.cv_rms_m)?;
+            Some((f.effect.clone(), f.accepted, b, e))
         })
         .collect()
 }
 
 /// Render the held-out error chart, or None when no finding carries cv_rms_m.
-pub fn render_cv(diag: &Value) -> Result<Option<String>, String> {
+pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
     let rows = cv_rows(diag);
     if rows.is_empty() {
         return Ok(None);
@@ -87,51 +86,25 @@ pub fn render_cv(diag: &Value) -> Result<Option<String>, String> {
     Ok(Some(svg))
 }
 
-/// Points (x, y) from a list of objects or an object of columns, by field names.
-pub fn points(v: &Value, xs: &[&str], ys: &[&str]) -> Vec<(f64, f64)> {
-    if let Some(rows) = v.as_array() {
-        return rows
-            .iter()
-            .filter_map(|r| Some((num(r, xs)?, num(r, ys)?)))
-            .collect();
-    }
-    let (Some(x), Some(y)) = (
-        field(v, xs).and_then(Value::as_array),
-        field(v, ys).and_then(Value::as_array),
-    ) else {
-        return Vec::new();
-    };
-    x.iter()
-        .zip(y)
-        .filter_map(|(a, b)| Some((as_num(a)?, as_num(b)?)))
-        .collect()
-}
-
 /// (x, y) points of a figure.
 pub type Points = Vec<(f64, f64)>;
 
+/// (v0, T) of the per-run points with both numbers.
+fn points(list: &[DriftPoint]) -> Points {
+    list.iter()
+        .filter_map(|p| Some((finite(p.v0_mps)?, finite(p.t_s)?)))
+        .collect()
+}
+
 /// The T-vs-v0 drift before and after (per-run T of the baseline and of the extended model).
-pub fn drift(diag: &Value) -> Option<(Points, Points)> {
-    let dr = field(diag, &["drift", "t_drift", "T_drift"]).or_else(|| {
-        field(diag, &["details", "show"]).and_then(|d| field(d, &["drift", "t_drift"]))
-    })?;
-    let get = |k: &[&str]| {
-        field(dr, k)
-            .map(|v| {
-                points(
-                    v,
-                    &["v0_mps", "v0", "abs_v0_mps"],
-                    &["T_s", "t_drag_s", "t_s", "T"],
-                )
-            })
-            .unwrap_or_default()
-    };
-    let (b, a) = (get(&["before", "baseline"]), get(&["after", "extended"]));
+pub fn drift(diag: &Diagnosis) -> Option<(Points, Points)> {
+    let dr = diag.drift.as_ref()?;
+    let (b, a) = (points(&dr.before), points(&dr.after));
     (!b.is_empty() && !a.is_empty()).then_some((b, a))
 }
 
 /// Render the drift before/after figure, or None when diagnosis.json has no drift data.
-pub fn render_drift(diag: &Value) -> Result<Option<String>, String> {
+pub fn render_drift(diag: &Diagnosis) -> Result<Option<String>, String> {
     let Some((before, after)) = drift(diag) else {
         return Ok(None);
     };

@@ -78,12 +78,7 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     ));
     let mut t = Table::new("Fig. 4.4a: particle–particle friction", &[]);
     t.headers = headers(d, &["quantity"]);
-    let lower = d.summary.as_ref().and_then(|s| {
-        s.get("collisions")?
-            .get("mu_pp")?
-            .get("stick_lower_bound")?
-            .as_f64()
-    });
+    let lower = crate::report::summary::mu_pp_stick_lower_bound(d);
     if let Some(lb) = lower {
         t.push(row(
             d,
@@ -115,13 +110,16 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 
 /// The truth file's restitution law of a material and setup (validation.json), compactly.
 fn truth_law(d: &ReportData, material: &str, setup: &str) -> Option<String> {
-    let list = d.validation.as_ref()?.get("parameters")?.as_array()?;
+    let list = d.validation.as_ref()?.parameters.as_ref()?;
     let q = format!("restitution_{setup}");
-    let row = list.iter().find(|r| {
-        r.get("material").and_then(|x| x.as_str()) == Some(material)
-            && r.get("quantity").and_then(|x| x.as_str()) == Some(q.as_str())
+    let law = list.iter().find_map(|r| match r {
+        crate::artifacts::validation::ParameterCheck::Law {
+            material: m,
+            quantity,
+            truth_law,
+        } if m == material && *quantity == q => Some(truth_law),
+        _ => None,
     })?;
-    let law = row.get("truth_law")?.as_str()?;
     let parsed: serde_json::Value = serde_json::from_str(law).ok()?;
     Some(super::discovery::short(&parsed, 4))
 }

@@ -1,6 +1,7 @@
 //! Section 2: the data — runs per material and setup, frame rates, noise, what was left out and why.
 
 use super::{Block, Table};
+use crate::artifacts::Summary;
 use crate::recording::{Experiment, Setup};
 use crate::report::inputs::ReportData;
 use crate::report::value::sig;
@@ -21,18 +22,11 @@ fn median(mut xs: Vec<f64>) -> Option<f64> {
 }
 
 /// The plain-language notes of summary.json (top level and collisions), in order.
-fn summary_notes(s: &serde_json::Value) -> Vec<String> {
-    let list = |v: Option<&serde_json::Value>| -> Vec<String> {
-        v.and_then(|n| n.as_array())
-            .map(|a| {
-                a.iter()
-                    .filter_map(|x| x.as_str().map(str::to_string))
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
-    let mut out = list(s.get("notes"));
-    out.extend(list(s.get("collisions").and_then(|c| c.get("notes"))));
+fn summary_notes(s: &Summary) -> Vec<String> {
+    let mut out = s.notes.clone();
+    if let Some(c) = &s.collisions {
+        out.extend(c.notes.iter().cloned());
+    }
     out
 }
 

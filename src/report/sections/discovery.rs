@@ -4,9 +4,18 @@
 use super::{Block, Table};
 use crate::report::chapter as ch;
 use crate::report::inputs::ReportData;
-use crate::report::value::{as_num, num, sig, text};
+use crate::artifacts::diagnosis::{
+    CandidateRow, Diagnosis, Effect, Estimate, Evidence, Finding, Structure,
+};
+use crate::artifacts::validation::Validation;
+use crate::report::value::{as_num, sig};
+use serde::Deserialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
 
 /// A compact one-line rendering of a JSON value: `a = 1.2; b.c = yes` (at most `max` entries).
 pub fn short(v: &Value, max: usize) -> String {
@@ -66,35 +75,17 @@ fn flatten(v: &Value, path: String, out: &mut Vec<String>) {
 
 /// What the truth file of a synthetic dataset says about the concealed physics (validation.json
 /// `effects`), and each accepted parameter beside the truth term's parameter of the same name.
-fn truth_block(b: &mut Block, d: &ReportData, diag: &Value, validation: &Value) {
-    let Some(effects) = validation.get("effects") else {
+fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Validation) {
+    let Some(effects) = &validation.effects else {
         return;
     };
-    let names = |k: &str| -> Vec<String> {
-        effects
-            .get(k)
-            .and_then(Value::as_array)
-            .map(|a| {
-                a.iter()
-                    .filter_map(|x| x.as_str().map(|s| s.replace('_', " ")))
-                    .collect()
-            })
-            .unwrap_or_default()
+    let names = |list: &[Effect]| -> Vec<String> {
+        list.iter().map(|e| e.id().replace('_', " ")).collect()
     };
-    let truth_terms: Vec<&Value> = effects
-        .get("truth")
-        .and_then(Value::as_array)
-        .map(|a| a.iter().collect())
-        .unwrap_or_default();
-    let truth_names: Vec<String> = truth_terms
+    let truth_names: Vec<String> = effects
+        .truth
         .iter()
-        .map(|t| {
-            format!(
-                "{} ({})",
-                text(t, &["effect"]).unwrap_or("?").replace('_', " "),
-                t.get("term").map_or("—".into(), |x| short(x, 6))
-            )
-        })
+        .map(|t| format!("{} ({})", t.effect.id().replace('_', " "), short(&t.term, 6)))
         .collect();
     let list = |v: Vec<String>| {
         if v.is_empty() {
@@ -106,33 +97,22 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Value, validation: &Value) 
     b.para(format!(
         "Against the truth (this dataset is synthetic): concealed physics {}; accepted {}; missed {}; spurious {}.",
         list(truth_names),
-        list(names("accepted")),
-        list(names("missed")),
-        list(names("spurious"))
+        list(names(effects.accepted.as_slice())),
+        list(names(effects.missed.as_slice())),
+        list(names(effects.spurious.as_slice()))
     ));
     let mut t = Table::new(
         "Accepted parameters beside the truth",
         &["effect", "parameter", "ours", "truth"],
     );
-    let findings = diag
-        .get("findings")
-        .and_then(Value::as_array)
-        .map(|a| a.as_slice())
-        .unwrap_or(&[]);
-    for f in findings
-        .iter()
-        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
-    {
-        let effect = text(f, &["effect"]).unwrap_or("");
-        let Some(Value::Object(ps)) = f.get("parameters") else {
-            continue;
-        };
-        let term = truth_terms
+    for f in diag.findings.iter().filter(|f| f.accepted) {
+        let term = effects
+            .truth
             .iter()
-            .find(|t| text(t, &["effect"]) == Some(effect))
-            .and_then(|t| t.get("term"));
-        for (name, p) in ps {
-            let ours = match (as_num(p), num(p, &["stderr", "se"])) {
+            .find(|t| t.effect.id() == f.effect)
+            .map(|t| &t.term);
+        for (name, p) in &f.parameters {
+            let ours = match (finite(p.value), finite(p.stderr)) {
                 (Some(v), Some(se)) => format!("{} ± {}", sig(v, 4), sig(se, 2)),
                 (Some(v), None) => sig(v, 4),
                 _ => "—".into(),
@@ -144,9 +124,14 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Value, validation: &Value) 
                 .find_map(|m| name.strip_suffix(&format!("_{m}")).map(str::to_string))
                 .unwrap_or_else(|| name.clone());
             let truth = term
-                .and_then(|t| num(t, &[name, &base]))
+                .and_then(|t| {
+                    [name, &base]
+                        .into_iter()
+                        .find_map(|k| t.get(k.as_str()).filter(|v| !v.is_null()))
+                })
+                .and_then(as_num)
                 .map_or("—".into(), |x| sig(x, 4));
-            t.push(vec![effect.replace('_', " "), name.clone(), ours, truth]);
+            t.push(vec![f.effect.replace('_', " "), name.clone(), ours, truth]);
         }
     }
     if !t.rows.is_empty() {
@@ -154,66 +139,56 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Value, validation: &Value) 
     }
 }
 
-/// The decisive statistics of a candidate's evidence (LR, p-values, CV), else a compact dump.
-pub fn evidence_text(e: &Value) -> String {
-    let keys = [
-        ("lr", "LR"),
-        ("p_value", "p"),
-        ("p_empirical", "p (empirical)"),
-        ("p_holm", "p (Holm)"),
-        ("cv_paired_t", "CV paired t"),
-        ("decision", "decision"),
-    ];
-    let parts: Vec<String> = keys
-        .iter()
-        .filter_map(|(k, label)| match e.get(*k)? {
-            Value::String(s) => Some(format!("{label}: {s}")),
-            v => as_num(v).map(|x| format!("{label} = {}", sig(x, 3))),
-        })
-        .collect();
-    if parts.is_empty() {
-        short(e, 6)
-    } else {
-        parts.join("; ")
-    }
+/// The decisive statistics of a candidate's evidence: LR, p-values, CV, decision.
+pub fn evidence_text(e: &Evidence) -> String {
+    let mut parts: Vec<String> = [
+        (Some(e.lr), "LR"),
+        (Some(e.p_value), "p"),
+        (Some(e.p_empirical), "p (empirical)"),
+        (Some(e.p_holm), "p (Holm)"),
+        (e.cv_paired_t, "CV paired t"),
+    ]
+    .into_iter()
+    .filter_map(|(x, label)| Some(format!("{label} = {}", sig(finite(x?)?, 3))))
+    .collect();
+    parts.push(format!("decision: {}", e.decision));
+    parts.join("; ")
 }
 
 /// Residual RMS before and after by phase, speed, position, direction and material
 /// (diagnosis.json `residuals_before` / `residuals_after`).
-fn structure_table(diag: &Value) -> Option<Table> {
-    let before = diag.get("residuals_before").filter(|v| v.is_object())?;
-    let after = diag.get("residuals_after").filter(|v| v.is_object());
+fn structure_table(diag: &Diagnosis) -> Option<Table> {
+    let before = diag.residuals_before.as_ref()?;
+    let after = diag.residuals_after.as_ref();
     let mut t = Table::new(
         "Residuals before and after, pooled over runs (RMS in µm; RMS/noise in brackets)",
         &["by", "bin", "samples", "before", "after"],
     );
-    let cell = |bin: Option<&Value>| {
+    let cell = |bin: Option<&crate::artifacts::diagnosis::Bin>| {
         let Some(bin) = bin else {
             return "—".to_string();
         };
-        match (num(bin, &["rms_m"]), num(bin, &["rms_over_noise"])) {
+        match (finite(bin.rms_m), finite(bin.rms_over_noise)) {
             (Some(r), Some(q)) => format!("{:.3} ({:.2})", r * 1e6, q),
             (Some(r), None) => format!("{:.3}", r * 1e6),
             _ => "—".into(),
         }
     };
-    for (key, label) in [
-        ("by_phase", "phase"),
-        ("by_speed", "speed"),
-        ("by_position", "position"),
-        ("by_direction", "direction"),
-        ("by_material", "material"),
-    ] {
-        let Some(Value::Object(bins)) = before.get(key) else {
-            continue;
-        };
-        for (name, bin) in bins {
+    type Bins = BTreeMap<String, crate::artifacts::diagnosis::Bin>;
+    let groups: [(fn(&Structure) -> &Bins, &str); 5] = [
+        (|s| &s.by_phase, "phase"),
+        (|s| &s.by_speed, "speed"),
+        (|s| &s.by_position, "position"),
+        (|s| &s.by_direction, "direction"),
+        (|s| &s.by_material, "material"),
+    ];
+    for (get, label) in groups {
+        for (name, bin) in get(before) {
             // bins are matched by name, else by their index prefix (`2: …`), as edges may shift
-            let a = after.and_then(|a| a.get(key)).and_then(|m| {
+            let a = after.map(get).and_then(|m| {
                 m.get(name).or_else(|| {
                     let idx = name.split(':').next()?;
-                    m.as_object()?
-                        .iter()
+                    m.iter()
                         .find(|(k, _)| k.split(':').next() == Some(idx))
                         .map(|(_, v)| v)
                 })
@@ -221,18 +196,19 @@ fn structure_table(diag: &Value) -> Option<Table> {
             t.push(vec![
                 label.into(),
                 name.clone(),
-                num(bin, &["n"]).map_or("—".into(), |n| format!("{n:.0}")),
+                bin.n.to_string(),
                 cell(Some(bin)),
                 cell(a),
             ]);
         }
     }
-    for (key, label) in [
-        ("runs_test_z", "runs test z"),
-        ("lag1_autocorrelation", "lag-1 autocorrelation"),
-    ] {
-        if let Some(x) = num(before, &[key]) {
-            let y = after.and_then(|a| num(a, &[key]));
+    let scalars: [(fn(&Structure) -> f64, &str); 2] = [
+        (|s| s.runs_test_z, "runs test z"),
+        (|s| s.lag1_autocorrelation, "lag-1 autocorrelation"),
+    ];
+    for (get, label) in scalars {
+        if let Some(x) = finite(get(before)) {
+            let y = after.map(get).and_then(finite);
             t.push(vec![
                 "structure".into(),
                 label.into(),
@@ -246,56 +222,41 @@ fn structure_table(diag: &Value) -> Option<Table> {
 }
 
 /// The drift lines (e.g. "t_s vs |v0| (316)") before and after: slope ± se and its t.
-fn drift_table(diag: &Value) -> Option<Table> {
-    let drift = diag.get("drift").filter(|v| v.is_object())?;
-    let (Some(Value::Object(before)), after) =
-        (drift.get("lines_before"), drift.get("lines_after"))
-    else {
-        return None;
-    };
+fn drift_table(diag: &Diagnosis) -> Option<Table> {
+    let drift = diag.drift.as_ref()?;
     let mut t = Table::new(
         "Drift of per-run parameters: regression slopes before and after (t = slope/se)",
         &["line", "slope before", "t before", "slope after", "t after"],
     );
-    let fmt = |l: Option<&Value>| -> (String, String) {
+    let fmt = |l: Option<&crate::artifacts::diagnosis::Line>| -> (String, String) {
         let Some(l) = l else {
             return ("—".into(), "—".into());
         };
-        let slope = match (num(l, &["slope"]), num(l, &["slope_se"])) {
+        let slope = match (finite(l.slope), finite(l.slope_se)) {
             (Some(s), Some(se)) => format!("{} ± {}", sig(s, 3), sig(se, 2)),
             (Some(s), None) => sig(s, 3),
             _ => "—".into(),
         };
-        (
-            slope,
-            num(l, &["t"]).map_or("—".into(), |x| format!("{x:.1}")),
-        )
+        (slope, finite(l.t).map_or("—".into(), |x| format!("{x:.1}")))
     };
-    for (name, l) in before {
+    for (name, l) in &drift.lines_before {
         let (sb, tb) = fmt(Some(l));
-        let (sa, ta) = fmt(after.and_then(|a| a.get(name)));
+        let (sa, ta) = fmt(drift.lines_after.get(name));
         t.push(vec![name.clone(), sb, tb, sa, ta]);
     }
-    if let Some(note) = drift
-        .get("note")
-        .and_then(Value::as_str)
-        .filter(|n| !n.is_empty())
-    {
-        t.caption.push_str(&format!(" — {note}"));
+    if !drift.note.is_empty() {
+        t.caption.push_str(&format!(" — {}", drift.note));
     }
     (!t.rows.is_empty()).then_some(t)
 }
 
 /// `name = value ± stderr` for each parameter of a finding.
-pub fn params_text(f: &Value) -> String {
-    let Some(Value::Object(ps)) = f.get("parameters") else {
-        return "—".into();
-    };
+pub fn params_text(ps: &BTreeMap<String, Estimate>) -> String {
     let parts: Vec<String> = ps
         .iter()
         .map(|(k, p)| {
-            let v = as_num(p).map_or("—".into(), |x| sig(x, 4));
-            match num(p, &["stderr", "se"]) {
+            let v = finite(p.value).map_or("—".into(), |x| sig(x, 4));
+            match finite(p.stderr) {
                 Some(se) => format!("{k} = {v} ± {}", sig(se, 2)),
                 None => format!("{k} = {v}"),
             }
@@ -308,20 +269,18 @@ pub fn params_text(f: &Value) -> String {
     }
 }
 
-fn param(f: &Value, names: &[&str]) -> Option<f64> {
-    f.get("parameters").and_then(|p| num(p, names))
+fn param(f: &Finding, name: &str) -> Option<f64> {
+    f.parameters.get(name).and_then(|p| finite(p.value))
 }
 
 /// A parameter that may be fitted per material (`t0_s`, or `t0_s_316`, `t0_s_440c`), as text with
 /// `unit`, e.g. "0.0540 s (316), 0.0540 s (440c)".
-fn param_text(f: &Value, name: &str, unit: &str) -> Option<String> {
-    let Some(Value::Object(ps)) = f.get("parameters") else {
-        return None;
-    };
-    let parts: Vec<String> = ps
+fn param_text(f: &Finding, name: &str, unit: &str) -> Option<String> {
+    let parts: Vec<String> = f
+        .parameters
         .iter()
         .filter_map(|(k, v)| {
-            let x = as_num(v)?;
+            let x = finite(v.value)?;
             if k == name {
                 Some(format!("{} {unit}", sig(x, 3)))
             } else {
@@ -333,27 +292,56 @@ fn param_text(f: &Value, name: &str, unit: &str) -> Option<String> {
     (!parts.is_empty()).then(|| parts.join(", "))
 }
 
+/// `where.residuals_before` of a finding: the worst bins and the structure of the baseline residuals.
+#[derive(Deserialize)]
+struct WhereResiduals {
+    #[serde(default)]
+    largest_residuals: Vec<LargeBin>,
+    runs_test_z: Option<f64>,
+    lag1_autocorrelation: Option<f64>,
+}
+
+#[derive(Deserialize)]
+struct LargeBin {
+    bin: String,
+    rms_over_noise: Option<f64>,
+}
+
+/// One drift probe of `where.drift_probes_before` / `_after`.
+#[derive(Deserialize)]
+struct Probe {
+    probe: String,
+    #[serde(default)]
+    parameters: BTreeMap<String, Estimate>,
+    p_holm: Option<f64>,
+}
+
 /// Where discovery located the mismatch, in words: the worst residual bins, the residual structure,
-/// and the drift probes before and after (falls back to a compact dump for other layouts).
-fn where_text(w: &Value) -> String {
+/// and the drift probes before and after (a compact dump of `where` when it has none of them).
+fn where_text(w: &BTreeMap<String, Value>) -> String {
     let mut parts = Vec::new();
-    if let Some(r) = w.get("residuals_before") {
-        if let Some(bins) = r.get("largest_residuals").and_then(Value::as_array) {
-            let list: Vec<String> = bins
-                .iter()
-                .filter_map(|b| {
-                    Some(format!(
-                        "{} ({:.1}× noise)",
-                        text(b, &["bin"])?,
-                        num(b, &["rms_over_noise"])?
-                    ))
-                })
-                .collect();
-            if !list.is_empty() {
-                parts.push(format!("largest baseline residuals in {}", list.join(", ")));
-            }
+    let residuals = w
+        .get("residuals_before")
+        .and_then(|r| WhereResiduals::deserialize(r).ok());
+    if let Some(r) = residuals {
+        let list: Vec<String> = r
+            .largest_residuals
+            .iter()
+            .filter_map(|b| {
+                Some(format!(
+                    "{} ({:.1}× noise)",
+                    b.bin,
+                    b.rms_over_noise.and_then(finite)?
+                ))
+            })
+            .collect();
+        if !list.is_empty() {
+            parts.push(format!("largest baseline residuals in {}", list.join(", ")));
         }
-        if let (Some(z), Some(a)) = (num(r, &["runs_test_z"]), num(r, &["lag1_autocorrelation"])) {
+        if let (Some(z), Some(a)) = (
+            r.runs_test_z.and_then(finite),
+            r.lag1_autocorrelation.and_then(finite),
+        ) {
             parts.push(format!("residuals correlated within runs (runs test z = {z:.0}, lag-1 autocorrelation {a:.2})"));
         }
     }
@@ -361,19 +349,22 @@ fn where_text(w: &Value) -> String {
         ("drift_probes_before", "before"),
         ("drift_probes_after", "after"),
     ] {
-        let Some(list) = w.get(key).and_then(Value::as_array) else {
+        let Some(list) = w
+            .get(key)
+            .and_then(|l| Vec::<Probe>::deserialize(l).ok())
+        else {
             continue;
         };
         let probes: Vec<String> = list
             .iter()
-            .filter_map(|p| {
-                let name = text(p, &["probe"])?
-                    .trim_start_matches("probe: ")
-                    .to_string();
-                let params = params_text(p);
-                let ph = num(p, &["p_holm"])
+            .map(|p| {
+                let name = p.probe.trim_start_matches("probe: ");
+                let params = params_text(&p.parameters);
+                let ph = p
+                    .p_holm
+                    .and_then(finite)
                     .map_or(String::new(), |x| format!(", p (Holm) = {}", sig(x, 2)));
-                Some(format!("{name} [{params}{ph}]"))
+                format!("{name} [{params}{ph}]")
             })
             .collect();
         if !probes.is_empty() {
@@ -384,18 +375,17 @@ fn where_text(w: &Value) -> String {
         }
     }
     if parts.is_empty() {
-        short(w, 8)
+        short(&serde_json::to_value(w).unwrap_or(Value::Null), 8)
     } else {
         parts.join("; ")
     }
 }
 
 /// How an accepted finding relates to the chapter's Eq. 4.8 correction, in words and numbers.
-fn compare_with_eq_4_8(d: &ReportData, f: &Value) -> String {
-    let effect = text(f, &["effect"]).unwrap_or("");
-    let form = text(f, &["form"]).unwrap_or("").to_ascii_lowercase();
+fn compare_with_eq_4_8(d: &ReportData, f: &Finding) -> String {
+    let form = f.form.to_ascii_lowercase();
     let v_star = ch::L_M / ch::T0_S * 1e3;
-    match effect {
+    match f.effect.as_str() {
         "velocity_dependent_drag" if form.contains("satur") => {
             let t0 = param_text(f, "t0_s", "s");
             let tp = param_text(f, "tp_s_per_mps", "s per m/s");
@@ -409,7 +399,7 @@ fn compare_with_eq_4_8(d: &ReportData, f: &Value) -> String {
             )
         }
         "velocity_dependent_drag" => {
-            let c = param_text(f, "c_per_m", "per m").or_else(|| param_text(f, "c", "per m"));
+            let c = param_text(f, "c_per_m", "per m");
             format!(
                 "The accepted quadratic drag c·v|v| has c = {} (Eq. 4.8's −v²/L corresponds to c = −1/L = −400 per m). A fitted sign and size, unlike Eq. 4.8's, is what the data support; Eq. 4.8 with L = 2.5 mm changes sign at {v_star:.0} mm/s.",
                 c.unwrap_or_else(|| "—".into())
@@ -417,14 +407,53 @@ fn compare_with_eq_4_8(d: &ReportData, f: &Value) -> String {
         }
         "rolling_resistance" => format!(
             "A constant resistance c·g opposing motion also makes the fitted linear-drag T grow with v0, the signature the chapter read as a quadratic drag term (Eq. 4.8). Discovery tested both as candidates and the evidence selects rolling resistance (deceleration {}); Eq. 4.8's v/T0 − v²/L would in addition change sign at {v_star:.0} mm/s.",
-            param(f, &["deceleration_mps2", "c_g_mps2", "a_mps2", "decel_mps2"])
-                .or_else(|| param(f, &["c"]).map(|c| c * crate::physics::G_MPS2))
+            param(f, "deceleration_mps2")
                 .map_or("see the table".into(), |x| format!("{} m/s²", sig(x, 3)))
         ),
-        _ => format!(
+        effect => format!(
             "Eq. 4.8 corrects only the drag (v/T0 − v²/L); the accepted {} is a different physical effect that the chapter's model does not contain.",
             effect.replace('_', " ")
         ),
+    }
+}
+
+/// One row of the table of candidates: a candidate of diagnosis.json, or a finding when there
+/// is no candidate list.
+struct CandidateView<'a> {
+    round: usize,
+    effect: &'a str,
+    form: &'a str,
+    accepted: bool,
+    parameters: &'a BTreeMap<String, Estimate>,
+    evidence: &'a Evidence,
+    extended_cv_m: Option<f64>,
+}
+
+impl<'a> From<&'a CandidateRow> for CandidateView<'a> {
+    fn from(c: &'a CandidateRow) -> Self {
+        CandidateView {
+            round: c.round,
+            effect: &c.effect,
+            form: &c.form,
+            accepted: c.accepted,
+            parameters: &c.parameters,
+            evidence: &c.evidence,
+            extended_cv_m: None,
+        }
+    }
+}
+
+impl<'a> From<&'a Finding> for CandidateView<'a> {
+    fn from(f: &'a Finding) -> Self {
+        CandidateView {
+            round: f.evidence.round,
+            effect: &f.effect,
+            form: &f.form,
+            accepted: f.accepted,
+            parameters: &f.parameters,
+            evidence: &f.evidence,
+            extended_cv_m: finite(f.extended.cv_rms_m),
+        }
     }
 }
 
@@ -434,47 +463,25 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some("discovery did not run for this report (no diagnosis.json)".into());
         return b;
     };
-    let mismatch = diag
-        .get("mismatch")
-        .and_then(Value::as_bool)
-        .unwrap_or(false);
-    let findings: Vec<&Value> = diag
-        .get("findings")
-        .and_then(Value::as_array)
-        .map(|a| a.iter().collect())
-        .unwrap_or_default();
-    let accepted: Vec<&&Value> = findings
-        .iter()
-        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
-        .collect();
+    let mismatch = diag.mismatch;
+    let accepted: Vec<&Finding> = diag.findings.iter().filter(|f| f.accepted).collect();
     b.para(if mismatch {
         "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."
     } else {
         "No systematic mismatch: the pooled residuals and the per-run parameters show no structure beyond the noise, so nothing is missing from the baseline."
     });
-    for f in &findings {
-        if let Some(w) = f
-            .get("where")
-            .filter(|w| !w.is_null() && w.as_object().is_none_or(|o| !o.is_empty()))
-        {
-            let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
-            b.para(format!("Where ({effect}): {}.", where_text(w)));
-            break;
-        }
+    if let Some(f) = diag.findings.iter().find(|f| !f.where_.is_empty()) {
+        let effect = f.effect.replace('_', " ");
+        b.para(format!("Where ({effect}): {}.", where_text(&f.where_)));
     }
     // every candidate tested (diagnosis.candidates, by round), else the findings
-    let rows: Vec<&Value> = match diag.get("candidates").and_then(Value::as_array) {
-        Some(c) if !c.is_empty() => c.iter().collect(),
-        _ => findings.clone(),
+    let rows: Vec<CandidateView> = if diag.candidates.is_empty() {
+        diag.findings.iter().map(CandidateView::from).collect()
+    } else {
+        diag.candidates.iter().map(CandidateView::from).collect()
     };
-    let baseline_cv = diag
-        .get("baseline_model")
-        .and_then(|m| num(m, &["cv_rms_m"]))
-        .or_else(|| {
-            findings
-                .iter()
-                .find_map(|f| f.get("baseline").and_then(|m| num(m, &["cv_rms_m"])))
-        });
+    let baseline_cv = finite(diag.baseline_model.cv_rms_m)
+        .or_else(|| diag.findings.iter().find_map(|f| finite(f.baseline.cv_rms_m)));
     let caption = match baseline_cv {
         Some(cv) => format!(
             "Every candidate tested: evidence and fitted size (baseline held-out RMS {:.3} µm)",
@@ -496,23 +503,15 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     );
     for f in &rows {
         let cv = f
-            .get("extended")
-            .and_then(|x| num(x, &["cv_rms_m"]))
-            .or_else(|| f.get("evidence").and_then(|e| num(e, &["cv_rms_m"])));
+            .extended_cv_m
+            .or_else(|| f.evidence.cv_rms_m.and_then(finite));
         t.push(vec![
-            num(f, &["round"])
-                .or_else(|| f.get("evidence").and_then(|e| num(e, &["round"])))
-                .map_or("—".into(), |r| format!("{r:.0}")),
-            text(f, &["effect"]).unwrap_or("?").replace('_', " "),
-            text(f, &["form"]).unwrap_or("—").to_string(),
-            (if f.get("accepted").and_then(Value::as_bool) == Some(true) {
-                "yes"
-            } else {
-                "no"
-            })
-            .into(),
-            params_text(f),
-            f.get("evidence").map_or("—".into(), evidence_text),
+            f.round.to_string(),
+            f.effect.replace('_', " "),
+            f.form.to_string(),
+            (if f.accepted { "yes" } else { "no" }).into(),
+            params_text(f.parameters),
+            evidence_text(f.evidence),
             cv.map_or("—".into(), |x| format!("{:.3}", x * 1e6)),
         ]);
     }
@@ -523,10 +522,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             "No candidate term was accepted."
         });
     } else {
-        let names: Vec<String> = accepted
-            .iter()
-            .map(|f| text(f, &["effect"]).unwrap_or("?").replace('_', " "))
-            .collect();
+        let names: Vec<String> = accepted.iter().map(|f| f.effect.replace('_', " ")).collect();
         b.para(format!("Accepted physics: {}.", names.join(", ")));
     }
     if !t.rows.is_empty() {

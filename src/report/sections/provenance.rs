@@ -2,16 +2,6 @@
 
 use super::{Block, Table};
 use crate::report::inputs::ReportData;
-use crate::report::value::text;
-use serde_json::Value;
-
-fn scalar(v: &Value) -> String {
-    match v {
-        Value::String(s) => s.clone(),
-        Value::Null => "—".into(),
-        other => other.to_string(),
-    }
-}
 
 pub fn block(d: &ReportData) -> Block {
     let mut b = Block::new("provenance", "6. Provenance");
@@ -23,43 +13,28 @@ pub fn block(d: &ReportData) -> Block {
         return b;
     };
     let mut t = Table::new("Code and seed", &["item", "value"]);
-    for k in ["groove_version", "code_commit", "seed"] {
-        if let Some(v) = p.get(k) {
-            t.push(vec![k.replace('_', " "), scalar(v)]);
-        }
+    t.push(vec!["groove version".into(), p.groove_version.clone()]);
+    t.push(vec!["code commit".into(), p.code_commit.clone()]);
+    t.push(vec!["seed".into(), p.seed.to_string()]);
+    b.table(t);
+    let mut t = Table::new("Inputs (sha256 of the bytes read)", &["path", "sha256"]);
+    for i in &p.inputs {
+        t.push(vec![i.path.clone(), i.sha256.clone()]);
     }
     b.table(t);
-    if let Some(Value::Array(inputs)) = p.get("inputs") {
-        let mut t = Table::new("Inputs (sha256 of the bytes read)", &["path", "sha256"]);
-        for i in inputs {
-            t.push(vec![
-                text(i, &["path"]).unwrap_or("?").into(),
-                text(i, &["sha256"]).unwrap_or("?").into(),
-            ]);
-        }
-        b.table(t);
+    let mut t = Table::new("Stages and their cache keys", &["stage", "kind", "key"]);
+    for s in &p.stages {
+        t.push(vec![s.stage.clone(), s.kind.clone(), s.key.clone()]);
     }
-    if let Some(Value::Array(stages)) = p.get("stages") {
-        let mut t = Table::new("Stages and their cache keys", &["stage", "kind", "key"]);
-        for s in stages {
-            t.push(vec![
-                text(s, &["stage"]).unwrap_or("?").into(),
-                text(s, &["kind"]).unwrap_or("?").into(),
-                text(s, &["key"]).unwrap_or("?").into(),
-            ]);
-        }
-        b.table(t);
+    b.table(t);
+    let mut t = Table::new(
+        "Code fingerprint of each stage kind",
+        &["kind", "fingerprint"],
+    );
+    for (k, v) in &p.fingerprints {
+        t.push(vec![k.clone(), v.clone()]);
     }
-    if let Some(Value::Object(fp)) = p.get("fingerprints") {
-        let mut t = Table::new(
-            "Code fingerprint of each stage kind",
-            &["kind", "fingerprint"],
-        );
-        for (k, v) in fp {
-            t.push(vec![k.clone(), scalar(v)]);
-        }
-        b.table(t);
-    }
+    b.table(t);
     b.para("Every value here is deterministic: the report carries no run times (they go to the console and the run log), so the same inputs and code give a byte-identical report.");
     b
 }

@@ -4,8 +4,8 @@ use super::{Block, Table};
 use crate::physics::Groove;
 use crate::report::inputs::ReportData;
 use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
-use crate::report::value::{pm, text};
-use serde_json::Value;
+use crate::artifacts::Diagnosis;
+use crate::report::value::pm;
 
 /// `value ± se [lo, hi]` of an aggregate.
 pub fn agg_text(a: &Agg) -> String {
@@ -21,18 +21,17 @@ pub fn agg_text(a: &Agg) -> String {
 }
 
 /// One line per accepted finding of diagnosis.json, e.g. "velocity_dependent_drag (saturating): T0 = …".
-pub fn accepted_findings(diag: &Value) -> Vec<String> {
-    let Some(list) = diag.get("findings").and_then(Value::as_array) else {
-        return Vec::new();
-    };
-    list.iter()
-        .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
+pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
+    diag.findings
+        .iter()
+        .filter(|f| f.accepted)
         .map(|f| {
-            let effect = text(f, &["effect"]).unwrap_or("?").replace('_', " ");
-            let form = text(f, &["form"])
-                .map(|s| format!(" ({s})"))
-                .unwrap_or_default();
-            format!("{effect}{form}: {}", super::discovery::params_text(f))
+            format!(
+                "{} ({}): {}",
+                f.effect.replace('_', " "),
+                f.form,
+                super::discovery::params_text(&f.parameters)
+            )
         })
         .collect()
 }
@@ -82,10 +81,7 @@ pub fn block(d: &ReportData) -> Block {
             "1.4".into(),
             a.source.into(),
         ]);
-    } else if let Some(lb) = crate::report::summary::at(
-        d.summary.as_ref(),
-        &["collisions", "mu_pp", "stick_lower_bound"],
-    ) {
+    } else if let Some(lb) = crate::report::summary::mu_pp_stick_lower_bound(d) {
         t.push(vec![
             "μ_pp (only bounded: no slip impact resolved)".into(),
             format!("> {lb:.2}"),
@@ -101,11 +97,7 @@ pub fn block(d: &ReportData) -> Block {
         Some(diag) => {
             let acc = accepted_findings(diag);
             if acc.is_empty() {
-                let mismatch = diag
-                    .get("mismatch")
-                    .and_then(Value::as_bool)
-                    .unwrap_or(false);
-                b.para(if mismatch {
+                b.para(if diag.mismatch {
                     "Discovery located a mismatch between the baseline and the recordings but accepted no candidate physics; see section 4."
                 } else {
                     "Discovery found nothing missing: the baseline (Coulomb friction plus linear drag) explains the recordings within their noise."

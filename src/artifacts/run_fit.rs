@@ -1,0 +1,56 @@
+//! The `fit` stage's item per run (per-run fit): a single run's baseline fit or a collision fit,
+//! tagged by `experiment`.
+
+pub use super::collision_fit::CollisionFit;
+pub use crate::fit::status::Termination;
+use crate::physics::Groove;
+use serde::{Deserialize, Serialize};
+
+/// The fit of one run: the JSON item the `fit` stage emits per run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "experiment", rename_all = "lowercase")]
+pub enum RunFit {
+    Single(SingleFit),
+    Collision(CollisionFit),
+}
+
+/// The fit of one single run (JSON item of the `fit` stage, and a row of fits.csv).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SingleFit {
+    pub run: String,
+    pub material: String,
+    /// The groove the fit assumed (re-simulation uses the same).
+    pub groove: Groove,
+    /// Velocity at the kick, m/s; negative for motion towards −z.
+    pub v0_mps: f64,
+    pub v0_se: Option<f64>,
+    pub mu: f64,
+    pub mu_se: Option<f64>,
+    /// Linear-drag time constant T.
+    pub t_drag_s: f64,
+    pub t_drag_se: Option<f64>,
+    /// Position at the kick.
+    pub z0_m: f64,
+    pub z0_se: Option<f64>,
+    /// Time from the kick to the first frame (t_s = 0), within one frame.
+    pub t0_s: f64,
+    pub t0_se: Option<f64>,
+    /// Switch from sliding to rolling, seconds after the kick (computed from v0, μ, T).
+    #[serde(with = "super::nan_null")]
+    pub t1_s: f64,
+    /// RMS of the residuals of the frames used, and the robust scale (1.4826·MAD).
+    #[serde(with = "super::nan_null")]
+    pub rms_m: f64,
+    #[serde(with = "super::nan_null")]
+    pub scale_m: f64,
+    /// Frames with |residual| above this were flagged as outliers and left out.
+    #[serde(with = "super::nan_null")]
+    pub outlier_cut_m: f64,
+    pub n_frames: usize,
+    pub n_used: usize,
+    pub n_outliers: usize,
+    pub iterations: u32,
+    pub termination: Termination,
+    /// `converged`, `max_iterations` or `failed` (the status column of fits.csv).
+    pub status: String,
+}

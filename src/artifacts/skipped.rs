@@ -1,0 +1,3 @@
+//! `ingest:skipped`: the runs ingest left out (`skip_bad_runs`), each with the reason.
+
+pub use crate::ingest::Skipped;

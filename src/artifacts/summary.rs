@@ -1,0 +1,83 @@
+//! The types of summary.json (the output contract of the fits): per-material estimates with
+//! bootstrap intervals, the T-vs-v0 line, and the collision aggregates when there are collision runs.
+
+pub use crate::fit::bootstrap::Interval;
+pub use crate::fit::collision::summary::{
+    CollisionSummary, Interval as BootstrapValue, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
+};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A value (null if it cannot be computed from the data) and its bootstrap percentile interval (level in `BootstrapInfo`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Estimate {
+    #[serde(with = "super::nan_null")]
+    pub value: f64,
+    pub interval: Option<Interval>,
+}
+
+/// T = intercept + slope·|v0| fitted over runs (Fig. 4.2c).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DragLine {
+    pub intercept_s: Estimate,
+    pub slope_s_per_mps: Estimate,
+}
+
+/// μ = intercept + slope·|v0| fitted over runs (Fig. 4.2d).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FrictionLine {
+    pub intercept: Estimate,
+    pub slope_per_mps: Estimate,
+}
+
+/// The aggregates of the single runs of one material (or of all materials pooled).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialSummary {
+    /// Single runs of this material, and how many of their fits converged (only those are used).
+    pub n_runs: usize,
+    pub n_converged: usize,
+    /// Inverse-variance weighted mean of μ over the converged runs.
+    pub mu_weighted: Estimate,
+    /// Plain mean of μ over the runs with |v0| above `fast_min_speed_mps` (the chapter's value).
+    pub mu_fast: Estimate,
+    pub n_fast: usize,
+    pub t_vs_v0: DragLine,
+    pub mu_vs_v0: FrictionLine,
+    /// Smallest and largest |v0| of the converged runs.
+    pub speed_range_mps: Option<[f64; 2]>,
+}
+
+/// Everything about the single runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SingleSummary {
+    pub n_runs: usize,
+    pub n_converged: usize,
+    /// |v0| above which a run counts in `mu_fast`.
+    pub fast_min_speed_mps: f64,
+    /// Per material, sorted by name.
+    pub materials: BTreeMap<String, MaterialSummary>,
+    /// All materials pooled (the chapter fits one T-vs-v0 line to both).
+    pub pooled: MaterialSummary,
+}
+
+/// How the intervals were made.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BootstrapInfo {
+    pub resamples: usize,
+    pub level: f64,
+    pub seed: u64,
+    /// What is resampled.
+    pub unit: String,
+}
+
+/// summary.json.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Null when the dataset has no single runs (see `notes`).
+    pub single: Option<SingleSummary>,
+    /// Null when the dataset has no collision runs (see `notes`).
+    pub collisions: Option<CollisionSummary>,
+    /// Plain-language notes: parts skipped and why.
+    pub notes: Vec<String>,
+    pub bootstrap: BootstrapInfo,
+}
