@@ -262,7 +262,7 @@ proptest! {
         let path = dir.path().join("pipeline.toml");
         std::fs::write(&path, apply(text, &toml_edits)).unwrap();
         let started = Instant::now();
-        let result = config::load(&path, &Overrides::default(), &Catalog::builtin());
+        let result = config::load(&path, &Overrides::default(), &Catalog::with_kinds(groove::stages::registry()));
         prop_assert!(started.elapsed() < LIMIT);
         if let Err(e) = result {
             let message = e.to_string();
@@ -304,6 +304,6 @@ fn the_seed_inputs_are_valid() {
         dir.path().join("pipeline.toml"),
     )
     .unwrap();
-    config::load(&dir.path().join("pipeline.toml"), &Overrides::default(), &Catalog::builtin())
+    config::load(&dir.path().join("pipeline.toml"), &Overrides::default(), &Catalog::with_kinds(groove::stages::registry()))
         .unwrap_or_else(|e| panic!("{e}"));
 }

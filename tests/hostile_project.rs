@@ -351,3 +351,211 @@ fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
     assert!(text(&out.stderr).contains("notes (copy).txt is not read"), "{}", text(&out.stderr));
     assert_eq!(tree_hashes(&project.join("reports")), reports);
 }
+
+// ------------------------------------------------------------------------ the engine's part
+
+/// Runs `args` in a copy of the base project after `setup`, expecting `code`; returns the
+/// output and checks that no file outside `may_change` (relative paths) changed.
+fn engine_case(name: &str, setup: impl FnOnce(&Path), args: &[&str], code: i32, may_change: &[&str]) -> (PathBuf, Output) {
+    let project = copy_of_base(name);
+    setup(&project);
+    let before = tree_hashes(&project);
+    let out = groove_within(&project, args, Duration::from_secs(60));
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "{name}: exit code; stderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let after = tree_hashes(&project);
+    let changed: Vec<&String> = before
+        .keys()
+        .chain(after.keys())
+        .filter(|k| before.get(*k) != after.get(*k))
+        .filter(|k| !may_change.iter().any(|m| k.starts_with(m)))
+        .collect();
+    assert!(changed.is_empty(), "{name}: files changed: {changed:?}");
+    (project, out)
+}
+
+fn append_config(project: &Path, extra: &str) {
+    let mut toml = std::fs::read_to_string(project.join("pipeline.toml")).unwrap();
+    toml += extra;
+    std::fs::write(project.join("pipeline.toml"), toml).unwrap();
+}
+
+#[test]
+fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
+    // a new seed reruns every stage with new numbers; a command stage after aggregate fails
+    let (_, out) = engine_case(
+        "half_updated",
+        |p| {
+            let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+            std::fs::write(p.join("pipeline.toml"), toml.replace("seed = 20261122", "seed = 7")).unwrap();
+            append_config(p, "\n[stages.boom]\nkind = \"command\"\ncmd = \"cat {in.s} > {out.o}; exit 3\"\ninputs = { s = \"aggregate:summary\" }\noutputs = { o = \"${reports}/boom.txt\" }\n");
+        },
+        &["run"],
+        2,
+        &[".groove/"],
+    );
+    assert!(text(&out.stderr).contains("boom"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
+    for (name, target, says) in [
+        ("escape", "../../outside.txt", "outside the project folder"),
+        ("absolute", "/tmp/groove-hostile-absolute.txt", "outside the project folder"),
+        ("onto_data", "${data}/runs.csv", "dataset folder"),
+        ("onto_lock", "pipeline.lock", "pipeline.lock"),
+        ("onto_config", "pipeline.toml", "pipeline config"),
+        ("onto_store", ".groove/x", "the store"),
+    ] {
+        let (_, out) = engine_case(
+            &format!("out_{name}"),
+            |p| {
+                let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+                let toml = toml.replace("summary = \"${reports}/summary.json\"", &format!("summary = \"{target}\""));
+                std::fs::write(p.join("pipeline.toml"), toml).unwrap();
+            },
+            &["run"],
+            2,
+            &["pipeline.toml"],
+        );
+        let err = text(&out.stderr);
+        assert!(err.contains("pipeline.toml:") && err.contains(says), "{name}: {err}");
+    }
+    assert!(!Path::new("/tmp/groove-hostile-absolute.txt").exists());
+}
+
+#[test]
+fn reports_in_the_data_folder_are_refused() {
+    let (_, out) = engine_case("out_is_data", |_| {}, &["run", "--out", "data"], 2, &[]);
+    assert!(text(&out.stderr).contains("dataset folder"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_file_output_never_replaces_a_folder() {
+    let (project, out) = engine_case(
+        "folder_kept",
+        |p| {
+            std::fs::create_dir_all(p.join("reports/keep")).unwrap();
+            std::fs::write(p.join("reports/keep/mine.txt"), "mine").unwrap();
+            let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+            let toml = toml.replace("summary = \"${reports}/summary.json\"", "summary = \"${reports}/keep\"");
+            std::fs::write(p.join("pipeline.toml"), toml).unwrap();
+        },
+        &["run"],
+        2,
+        &[".groove/"],
+    );
+    assert!(text(&out.stderr).contains("never replaces a folder"), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(), "mine");
+}
+
+#[test]
+fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
+    let (project, out) = engine_case(
+        "publish_file",
+        |p| std::fs::write(p.join("../publish_file-target"), "precious").unwrap(),
+        &["publish", "--to", "../publish_file-target"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("is a file"), "{}", text(&out.stderr));
+    let parent = project.parent().unwrap();
+    assert_eq!(std::fs::read_to_string(parent.join("publish_file-target")).unwrap(), "precious");
+    // a kill during an earlier publish left a half-built bundle beside the target
+    let leftover = parent.join(".publish_file-bundle.groove-new-1-1");
+    std::fs::create_dir_all(&leftover).unwrap();
+    let out = groove_within(&project, &["publish", "--to", "../publish_file-bundle"], LIMIT);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(!leftover.exists(), "the leftover of a killed publish stays");
+    assert!(parent.join("publish_file-bundle/SHA256SUMS").is_file());
+}
+
+/// The store object holding `rel` (a file of the project).
+fn object_of(project: &Path, rel: &str) -> PathBuf {
+    let h = sha256_hex(&std::fs::read(project.join(rel)).unwrap());
+    project.join(".groove/objects").join(&h[..2]).join(&h[2..])
+}
+
+#[test]
+fn a_damaged_object_is_a_miss_and_the_stage_reruns() {
+    let project = copy_of_base("damaged_object");
+    let good = std::fs::read(project.join("reports/fits.csv")).unwrap();
+    let object = object_of(&project, "reports/fits.csv");
+    let mut bytes = std::fs::read(&object).unwrap();
+    bytes[10] ^= 0x20;
+    std::fs::write(&object, bytes).unwrap();
+    std::fs::remove_file(project.join("reports/fits.csv")).unwrap();
+    let out = groove_within(&project, &["run"], Duration::from_secs(60));
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read(project.join("reports/fits.csv")).unwrap(), good);
+    assert_eq!(sha256_hex(&std::fs::read(&object).unwrap()), sha256_hex(&good), "the object is repaired");
+    let status = groove_within(&project, &["status", "--json"], LIMIT);
+    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+}
+
+#[test]
+fn verify_drops_damaged_objects_and_says_so() {
+    let project = copy_of_base("verify");
+    let clean = groove_within(&project, &["verify"], Duration::from_secs(60));
+    assert!(clean.status.success(), "{}", text(&clean.stdout));
+    assert!(text(&clean.stdout).contains("the store is sound"));
+    let object = object_of(&project, "reports/summary.json");
+    let mut bytes = std::fs::read(&object).unwrap();
+    bytes[3] ^= 0x01;
+    std::fs::write(&object, bytes).unwrap();
+    let out = groove_within(&project, &["verify"], Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    let name = object.parent().unwrap().file_name().unwrap().to_string_lossy().into_owned()
+        + &object.file_name().unwrap().to_string_lossy();
+    assert!(text(&out.stdout).contains(&format!("dropped damaged object {name}")), "{}", text(&out.stdout));
+    assert!(!object.exists());
+    let rerun = groove_within(&project, &["run"], Duration::from_secs(60));
+    assert!(rerun.status.success(), "{}", text(&rerun.stderr));
+    let status = groove_within(&project, &["status", "--json"], LIMIT);
+    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+}
+
+#[test]
+fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
+    let (project, out) = engine_case(
+        "empty_config",
+        |p| std::fs::write(p.join("pipeline.toml"), "").unwrap(),
+        &["run"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("pipeline.toml:1: defines no stages"), "{}", text(&out.stderr));
+    let before = tree_hashes(&project);
+    let gc = groove_within(&project, &["gc"], LIMIT);
+    assert_eq!(gc.status.code(), Some(2));
+    assert_eq!(tree_hashes(&project), before);
+
+    // a valid config with the lock gone: gc refuses rather than dropping every entry
+    let (_, out) = engine_case(
+        "gc_without_lock",
+        |p| std::fs::remove_file(p.join("pipeline.lock")).unwrap(),
+        &["gc"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("nothing was removed"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn invalid_utf8_in_the_config_names_its_line() {
+    let (_, out) = engine_case(
+        "config_utf8",
+        |p| {
+            let mut bytes = std::fs::read(p.join("pipeline.toml")).unwrap();
+            let at = bytes.windows(6).position(|w| w == b"ingest").unwrap();
+            bytes[at] = 0xff;
+            std::fs::write(p.join("pipeline.toml"), bytes).unwrap();
+        },
+        &["run"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("is not UTF-8"), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("pipeline.toml:"), "{}", text(&out.stderr));
+}
