@@ -1,10 +1,20 @@
 //! One recorded run, as the analysis stages see it after ingest: run metadata plus one track per particle.
 //!
 //! This is the per-run item that `ingest` emits (serialized as JSON) and that `fit`, `simulate`,
-//! `compare` and `discover` read. Units are SI and in the field names.
+//! `compare` and `discover` read. Units are SI and in the field names. Ingest guarantees every
+//! number is finite, |z_m| ≤ `Z_MAX_M`, |t_s| ≤ `T_MAX_S`, and t_s strictly increases along a
+//! track and agrees with frame/fps (see `ingest::sanity`).
 
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+
+/// Largest |z_m| of a sample, metres. Ingest refuses a position farther out (a groove on a lab
+/// bench is far shorter; such a value is pixels, micrometres or a broken export), so stages may
+/// rely on it.
+pub const Z_MAX_M: f64 = 10.0;
+/// Largest |t_s| of a sample, seconds. A run lasts a fraction of a second and a camera's memory
+/// holds seconds; ingest refuses anything beyond a minute, so loops over time stay bounded.
+pub const T_MAX_S: f64 = 60.0;
 
 /// The kind of run, column `experiment` of runs.csv.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

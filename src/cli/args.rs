@@ -72,6 +72,12 @@ pub enum Verb {
         #[command(flatten)]
         project: Project,
     },
+    /// Check every object of the store against its hash; drop damaged objects and the entries
+    /// that name them (their stages run again). Exit 1 if anything was dropped.
+    Verify {
+        #[command(flatten)]
+        project: Project,
+    },
     /// Write a synthetic dataset from a truth file (the virtual experiment).
     Synth {
         /// The truth TOML (parameters and runs to simulate).

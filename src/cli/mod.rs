@@ -100,6 +100,29 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             println!("groove: removed {entries} store entr{} and {objects} object(s) not in pipeline.lock", if entries == 1 { "y" } else { "ies" });
             Ok(ExitCode::SUCCESS)
         }
+        Verb::Verify { project } => {
+            let pipeline = load(&project, &catalog)?;
+            let v = maintenance::verify(&pipeline)?;
+            println!(
+                "groove: checked {} object(s) and {} store entr{}",
+                v.objects,
+                v.entries,
+                if v.entries == 1 { "y" } else { "ies" }
+            );
+            for o in &v.dropped_objects {
+                println!("dropped damaged object {o}");
+            }
+            for e in &v.dropped_entries {
+                println!("dropped entry {e} (it named a damaged or missing object; its stage runs again)");
+            }
+            if v.dropped_objects.is_empty() && v.dropped_entries.is_empty() {
+                println!("groove: the store is sound");
+                Ok(ExitCode::SUCCESS)
+            } else {
+                println!("groove: run `groove run` to recompute what was dropped");
+                Ok(ExitCode::from(1))
+            }
+        }
         Verb::Synth { truth, out } => {
             groove::synth::run_synth(&truth, &out)
                 .map_err(|e| EngineError::Usage(format!("synth: {e}")))?;

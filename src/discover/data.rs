@@ -1,6 +1,6 @@
 //! The runs discovery works on: single-particle tracks, sorted, with the run's material and noise weight.
 
-use crate::recording::{Experiment, Recording};
+use crate::recording::{Experiment, Recording, T_MAX_S, Z_MAX_M};
 
 /// One single-particle run prepared for joint fitting.
 #[derive(Clone, Debug)]
@@ -50,7 +50,8 @@ pub fn prepare_runs(recordings: &[Recording], min_frames: usize) -> (Vec<RunData
             .t_s
             .iter()
             .zip(&track.z_m)
-            .filter(|(t, z)| t.is_finite() && z.is_finite())
+            // only what ingest lets through: finite, and within its plausible range
+            .filter(|(t, z)| t.abs() <= T_MAX_S && z.abs() <= Z_MAX_M)
             .map(|(t, z)| (*t, *z))
             .collect();
         if rows.len() < min_frames {

@@ -13,7 +13,7 @@ use super::hashing::sha256_hex;
 use super::inputs::hash_path;
 use super::key::{items_digest, StageKey};
 use super::lockfile::LockStage;
-use super::materialize::{is_current, materialize};
+use super::materialize::is_current;
 use super::pipeline::{InputSpec, StageSpec};
 use super::provenance;
 use super::store::{Entry, Stored};
@@ -102,7 +102,10 @@ fn evaluate_stage(
     }
     bind_provenance(ctx, spec, done, &mut bound);
     let units = unit_keys(ctx, spec, &bound, seed)?;
-    let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
+    let mut entries: Vec<Option<Entry>> = units
+        .iter()
+        .map(|(_, k)| ctx.store.entry_checked(k, &ctx.hashes))
+        .collect();
     let missing: Vec<Option<String>> = units
         .iter()
         .zip(&entries)
@@ -395,8 +398,8 @@ fn gather_outputs(
     Ok(outputs)
 }
 
-/// Materialize the outputs that have a path (`Run`), or name those whose path does not hold
-/// the stored content (`Check`).
+/// Name the outputs whose path does not hold the stored content (`Check`). A `Run` writes
+/// nothing here: the runner materializes every output together once the whole run succeeded.
 fn write_or_check_outputs(
     ctx: &Context,
     spec: &StageSpec,
@@ -408,9 +411,7 @@ fn write_or_check_outputs(
         let Some(path) = path else { continue };
         let stored = &current.outputs[name];
         match action {
-            Action::Run { .. } => {
-                materialize(&ctx.store, path, stored, &ctx.hashes)?;
-            }
+            Action::Run { .. } => {}
             Action::Check if !is_current(path, stored, &ctx.hashes) => {
                 stale_outputs.push(name.clone())
             }

@@ -16,25 +16,41 @@ pub fn item_name_ok(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
 }
 
-/// The top-level regular files of a directory, sorted by name (dotfiles skipped).
+/// The top-level regular files of a directory, sorted by name. Dotfiles are skipped; a symlink
+/// counts as the regular file it points to (a dangling one is skipped). A file whose name is not
+/// an item name (`notes (copy).txt`) is no part of the input: it is skipped, and named once per
+/// process on stderr so a user who meant it as data learns why it is not read.
 pub fn dir_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, EngineError> {
     let mut out = Vec::new();
     for entry in std::fs::read_dir(dir).at(dir)? {
         let entry = entry.at(dir)?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if name.starts_with('.') || !entry.file_type().at(&entry.path())?.is_file() {
+        // `metadata` follows a symlink; one that cannot be followed is not a file.
+        if name.starts_with('.') || !std::fs::metadata(entry.path()).is_ok_and(|m| m.is_file()) {
             continue;
         }
         if !item_name_ok(&name) {
-            return Err(EngineError::Usage(format!(
-                "{}: file name `{name}` may use only letters, digits, `.`, `_` and `-`; rename the file",
-                dir.display()
-            )));
+            note_skipped(dir, &name);
+            continue;
         }
         out.push((name, entry.path()));
     }
     out.sort();
     Ok(out)
+}
+
+/// Says once per process that `dir/name` is left out of a folder input, and why.
+fn note_skipped(dir: &Path, name: &str) {
+    static SAID: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
+        std::sync::Mutex::new(std::collections::BTreeSet::new());
+    let path = dir.join(name);
+    let fresh = SAID.lock().map(|mut s| s.insert(path.clone())).unwrap_or(false);
+    if fresh {
+        eprintln!(
+            "groove: note: {} is not read (file names in an input folder may use only letters, digits, `.`, `_` and `-`; rename it to use it)",
+            path.display()
+        );
+    }
 }
 
 /// Hash a path input through the cache.

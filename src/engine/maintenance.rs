@@ -36,6 +36,21 @@ pub fn clean(pipeline: &Pipeline) -> Result<usize, EngineError> {
     Ok(removed)
 }
 
+/// Check the store: drop damaged objects and entries that name a missing object (the stages
+/// they belong to run again). Takes the project lock.
+pub fn verify(pipeline: &Pipeline) -> Result<super::store::Verified, EngineError> {
+    let store = Store::at(&pipeline.root);
+    if !store.dir.exists() {
+        return Ok(super::store::Verified::default());
+    }
+    let _lock = project_lock::acquire(&store.dir, |holder| {
+        eprintln!(
+            "groove: another groove run holds this project ({holder}); waiting for it to finish"
+        )
+    })?;
+    store.verify()
+}
+
 /// Drop store entries that `pipeline.lock` does not reference, then unreferenced objects.
 /// Returns (entries, objects) removed.
 pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
@@ -48,7 +63,16 @@ pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
             "groove: another groove run holds this project ({holder}); waiting for it to finish"
         )
     })?;
-    let lock = PipelineLock::load(&lock_path(pipeline));
+    let lock_file = lock_path(pipeline);
+    let lock = PipelineLock::load(&lock_file);
+    if lock.stages.is_empty() {
+        // a missing, unreadable or empty lock names nothing to keep: removing everything would
+        // throw away every result, so refuse
+        return Err(EngineError::Usage(format!(
+            "{} is missing, unreadable or names no stage, so gc cannot tell what to keep; nothing was removed (run `groove run` first)",
+            pipeline.show(&lock_file)
+        )));
+    }
     let mut keep = BTreeSet::new();
     for stage in lock.stages.values() {
         if stage.items.is_empty() {

@@ -1,13 +1,13 @@
 //! Writing stored outputs to their paths in the project (only the engine writes files).
 //!
-//! A file is replaced by rename. A collection becomes a folder built beside the target and
-//! swapped in with two renames, so the last good copy stays until the new one is complete; a
-//! stage that fails never reaches this step, so its old outputs stay as they were.
+//! Every output of a run is first staged beside its path (a hidden sibling file or folder), and
+//! only when all are staged are they swapped in, a file by one rename, a collection by two; a run
+//! with a failed stage stages nothing, so the last good outputs stay whole.
 
 use super::error::{EngineError, IoContext};
 use super::hashing::HashCache;
 use super::inputs::dir_files;
-use super::atomic::{unique_name, write_atomic};
+use super::atomic::unique_name;
 use super::store::{Store, Stored};
 use std::path::Path;
 
@@ -34,15 +34,23 @@ pub fn is_current(path: &Path, stored: &Stored, cache: &HashCache) -> bool {
     }
 }
 
-/// Write an artifact to its path unless it is already there. Returns whether it wrote.
-pub fn materialize(
+/// One output staged beside its path, ready to be swapped in by [`Staged::commit`].
+pub struct Staged {
+    path: std::path::PathBuf,
+    fresh: std::path::PathBuf,
+}
+
+/// Write an artifact next to its path (a hidden `.NAME.groove-new-*` sibling: a file, or a
+/// folder for a Collection) without touching the path itself; `None` if the path already holds
+/// it. A file output never replaces a folder.
+pub fn stage(
     store: &Store,
     path: &Path,
     stored: &Stored,
     cache: &HashCache,
-) -> Result<bool, EngineError> {
+) -> Result<Option<Staged>, EngineError> {
     if is_current(path, stored, cache) {
-        return Ok(false);
+        return Ok(None);
     }
     let parent = path.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).at(parent)?;
@@ -50,33 +58,91 @@ pub fn materialize(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let fresh = parent.join(unique_name(&format!(".{name}.groove-new")));
     match stored {
         Stored::File { sha256 } => {
-            let bytes = store.read_object(sha256)?;
-            if path.is_dir() {
-                std::fs::remove_dir_all(path).at(path)?;
+            if path.is_dir() && !path.is_symlink() {
+                return Err(EngineError::Usage(format!(
+                    "{} is a folder; a file output never replaces a folder: move the folder away or give the output another path",
+                    path.display()
+                )));
             }
-            write_atomic(path, &bytes)?;
+            let bytes = store.read_object(sha256)?;
+            std::fs::write(&fresh, bytes).at(&fresh)?;
         }
         Stored::Collection { items } => {
-            let fresh = parent.join(unique_name(&format!(".{name}.groove-new")));
             std::fs::create_dir_all(&fresh).at(&fresh)?;
             for (item, sha256) in items {
                 let bytes = store.read_object(sha256)?;
                 std::fs::write(fresh.join(item), bytes).at(&fresh.join(item))?;
             }
-            if path.exists() || path.is_symlink() {
-                let old = parent.join(unique_name(&format!(".{name}.groove-old")));
-                std::fs::rename(path, &old).at(path)?;
-                std::fs::rename(&fresh, path).at(path)?;
-                remove_any(&old)?;
-            } else {
-                std::fs::rename(&fresh, path).at(path)?;
-            }
         }
     }
-    sweep_leftovers(parent, &name)?;
-    Ok(true)
+    Ok(Some(Staged {
+        path: path.to_path_buf(),
+        fresh,
+    }))
+}
+
+impl Staged {
+    /// Swap the staged copy in: a file by one rename; a folder by moving the old one aside,
+    /// renaming the new one in, and removing the old one.
+    pub fn commit(self) -> Result<(), EngineError> {
+        let parent = self.path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let name = self
+            .path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if self.fresh.is_dir() && (self.path.exists() || self.path.is_symlink()) {
+            let old = parent.join(unique_name(&format!(".{name}.groove-old")));
+            std::fs::rename(&self.path, &old).at(&self.path)?;
+            std::fs::rename(&self.fresh, &self.path).at(&self.path)?;
+            remove_any(&old)?;
+        } else {
+            std::fs::rename(&self.fresh, &self.path).at(&self.path)?;
+        }
+        sweep_leftovers(&parent, &name)
+    }
+
+    /// Remove the staged copy (the path keeps what it held).
+    pub fn discard(self) {
+        let _ = remove_any(&self.fresh);
+    }
+}
+
+/// Write an artifact to its path unless it is already there. Returns whether it wrote.
+pub fn materialize(
+    store: &Store,
+    path: &Path,
+    stored: &Stored,
+    cache: &HashCache,
+) -> Result<bool, EngineError> {
+    match stage(store, path, stored, cache)? {
+        Some(staged) => staged.commit().map(|()| true),
+        None => Ok(false),
+    }
+}
+
+/// Refuses a path whose folders below `base` include a symbolic link: writing through it could
+/// land outside the project. `base` itself may be a link (a reports folder kept elsewhere).
+pub fn check_no_symlink_below(base: &Path, path: &Path) -> Result<(), EngineError> {
+    let Ok(rel) = path.strip_prefix(base) else {
+        return Ok(());
+    };
+    let mut at = base.to_path_buf();
+    let parts: Vec<_> = rel.components().collect();
+    for part in parts.iter().take(parts.len().saturating_sub(1)) {
+        at.push(part);
+        if at.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink()) {
+            return Err(EngineError::Usage(format!(
+                "{} is a symbolic link; groove does not write through links inside the project (the output {} could land outside it): replace the link with a folder",
+                at.display(),
+                path.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 fn remove_any(path: &Path) -> Result<(), EngineError> {

@@ -39,15 +39,29 @@ pub fn publish(
     if !stale.is_empty() {
         return Ok(Published::Refused(stale));
     }
-    let to = std::path::absolute(to).at(to)?;
+    let to = super::config::validate::normalize(&std::path::absolute(to).at(to)?);
     if pipeline.root.starts_with(&to)
         || to.starts_with(pipeline.root.join(".groove"))
-        || to == pipeline.reports_dir
+        || to.starts_with(&pipeline.reports_dir)
+        || to.starts_with(&pipeline.data_dir)
     {
         return Err(EngineError::Usage(format!(
-            "cannot publish into {}; choose a folder outside the project's store and reports",
+            "cannot publish into {}; choose a folder outside the project's store, reports and data",
             to.display()
         )));
+    }
+    if to.is_symlink() || (to.exists() && !to.is_dir()) {
+        return Err(EngineError::Usage(format!(
+            "{} is {}, not a folder; publish only writes a new or empty folder or an earlier bundle, so choose another path",
+            to.display(),
+            if to.is_symlink() { "a symbolic link" } else { "a file" }
+        )));
+    }
+    // folders a killed publish left beside the target
+    if let (Some(parent), Some(name)) = (to.parent(), to.file_name()) {
+        if parent.is_dir() {
+            super::materialize::sweep_leftovers(parent, &name.to_string_lossy())?;
+        }
     }
     if to.is_dir()
         && std::fs::read_dir(&to).at(&to)?.next().is_some()

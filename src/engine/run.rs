@@ -107,11 +107,10 @@ pub fn run(
                 "cannot start {jobs} worker threads: {e}; try a smaller --jobs"
             ))
         })?;
-    // the lock is saved after waves that ran something (at most once a second after the first
-    // time) and at the end, so a killed run loses little bookkeeping and never corrupts it
+    // results go to the store as stages finish; the project's outputs and pipeline.lock change
+    // only once every selected stage succeeded (all outputs together, then the lock), so a failed
+    // or killed run leaves the last good report whole and the lock as it was
     let mut lock = ctx.lock.clone();
-    let mut last_save: Option<std::time::Instant> = None;
-    let mut save_error = None;
     let (done, errors) = pool.install(|| {
         evaluate(
             &ctx,
@@ -119,23 +118,21 @@ pub fn run(
             |s| Action::Run {
                 force: force.contains(s),
             },
-            |done, wave| {
-                let ran = record(&mut lock, done, wave.iter());
-                let due = last_save.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0);
-                if ran && due && save_error.is_none() {
-                    save_error = lock.save(&lock_path(pipeline)).err();
-                    last_save = Some(std::time::Instant::now());
-                }
-            },
+            |_, _| {},
         )
     });
-    if let Some(e) = save_error {
-        return Err(e);
+    let mut errors = errors;
+    if errors.is_empty() {
+        match materialize_all(&ctx, &done) {
+            Ok(()) => {
+                record(&mut lock, &done, done.keys());
+                lock.stages
+                    .retain(|name, _| pipeline.stages.contains_key(name));
+                lock.save(&lock_path(pipeline))?;
+            }
+            Err(e) => errors.push(e),
+        }
     }
-    record(&mut lock, &done, done.keys());
-    lock.stages
-        .retain(|name, _| pipeline.stages.contains_key(name));
-    lock.save(&lock_path(pipeline))?;
     let mut summary = RunSummary::default();
     for (name, ev) in &done {
         if ev.complete && ev.current.is_some() {
@@ -168,6 +165,51 @@ pub fn run(
         return Err(first);
     }
     Ok(summary)
+}
+
+/// Write every output of the completed stages to its path: all are staged beside their paths
+/// first (nothing in the project changes if one cannot be), then swapped in one after another.
+fn materialize_all(
+    ctx: &Context,
+    done: &std::collections::BTreeMap<String, super::context::Evaluated>,
+) -> Result<(), EngineError> {
+    let pipeline = ctx.pipeline;
+    let mut staged = Vec::new();
+    let mut result = Ok(());
+    'stages: for (name, ev) in done {
+        let (true, Some(current)) = (ev.complete, &ev.current) else {
+            continue;
+        };
+        for (output, path) in &pipeline.stages[name].outputs {
+            let Some(path) = path else { continue };
+            let base = if path.starts_with(&pipeline.reports_dir) {
+                &pipeline.reports_dir
+            } else {
+                &pipeline.root
+            };
+            let step = super::materialize::check_no_symlink_below(base, path).and_then(|()| {
+                super::materialize::stage(&ctx.store, path, &current.outputs[output], &ctx.hashes)
+            });
+            match step {
+                Ok(Some(s)) => staged.push(s),
+                Ok(None) => {}
+                Err(e) => {
+                    result = Err(e);
+                    break 'stages;
+                }
+            }
+        }
+    }
+    if let Err(e) = result {
+        for s in staged {
+            s.discard();
+        }
+        return Err(e);
+    }
+    for s in staged {
+        s.commit()?;
+    }
+    Ok(())
 }
 
 /// Put the named completed stages into the lock; true when one of them ran something.

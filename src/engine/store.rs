@@ -8,7 +8,7 @@
 
 use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
-use super::hashing::sha256_hex;
+use super::hashing::{sha256_hex, HashCache};
 use super::stage::Artifact;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -42,6 +42,25 @@ pub struct Entry {
 
 pub struct Store {
     pub dir: PathBuf,
+}
+
+/// What `Store::verify` checked and dropped.
+#[derive(Debug, Default)]
+pub struct Verified {
+    pub objects: usize,
+    pub entries: usize,
+    /// Objects whose bytes did not match their name (removed).
+    pub dropped_objects: Vec<String>,
+    /// Entries that could not be read or named a missing object (removed).
+    pub dropped_entries: Vec<String>,
+}
+
+fn remove_any(path: &Path) -> Result<(), EngineError> {
+    if path.is_dir() {
+        std::fs::remove_dir_all(path).at(path)
+    } else {
+        std::fs::remove_file(path).at(path)
+    }
 }
 
 impl Store {
@@ -87,13 +106,34 @@ impl Store {
         serde_json::from_slice(&bytes).ok()
     }
 
+    /// An object's bytes, checked against its name: a damaged object is an error, never data.
     pub fn read_object(&self, sha256: &str) -> Result<Vec<u8>, EngineError> {
         let path = self.object_path(sha256);
-        std::fs::read(&path).map_err(|e| {
+        let bytes = std::fs::read(&path).map_err(|e| {
             EngineError::Usage(format!(
-                "the store is missing object {sha256} ({e}); run `groove clean` and `groove run` again"
+                "the store is missing object {sha256} ({e}); run `groove verify`, then `groove run` again"
             ))
-        })
+        })?;
+        if sha256_hex(&bytes) != sha256 {
+            return Err(EngineError::Usage(format!(
+                "the store's object {sha256} is damaged (its bytes have another hash); run `groove verify` to drop it, then `groove run` again"
+            )));
+        }
+        Ok(bytes)
+    }
+
+    /// The entry of a key if it is complete and every object it names exists with the right
+    /// hash (checked through `hashes`, so an unchanged object costs one `stat`). A damaged or
+    /// missing object makes the entry a miss: the stage runs again and stores the object anew.
+    pub fn entry_checked(&self, key: &str, hashes: &HashCache) -> Option<Entry> {
+        let entry = self.entry(key)?;
+        let sound = entry.outputs.values().all(|stored| {
+            stored_objects(stored).all(|h| {
+                let path = self.object_path(h);
+                path.is_file() && hashes.hash_file(&path).is_ok_and(|got| &got == h)
+            })
+        });
+        sound.then_some(entry)
     }
 
     /// Load a stored artifact's bytes.
@@ -113,7 +153,9 @@ impl Store {
     pub fn put_object(&self, bytes: &[u8]) -> Result<String, EngineError> {
         let sha256 = sha256_hex(bytes);
         let path = self.object_path(&sha256);
-        if !path.exists() {
+        // an object already there is reused only if it is sound (a damaged one is replaced)
+        let sound = std::fs::read(&path).is_ok_and(|b| sha256_hex(&b) == sha256);
+        if !sound {
             let tmp = self.tmp_root();
             std::fs::create_dir_all(&tmp).at(&tmp)?;
             let staged = tmp.join(unique_name("object"));
@@ -157,6 +199,50 @@ impl Store {
         std::fs::create_dir_all(parent).at(parent)?;
         std::fs::rename(&staged, &path).at(&path)?;
         Ok(entry)
+    }
+
+    /// Check every object against its name and every entry against its objects; remove damaged
+    /// objects, unreadable entries and entries naming a missing object (call while holding the
+    /// project lock). Returns what was checked and what was dropped.
+    pub fn verify(&self) -> Result<Verified, EngineError> {
+        let mut report = Verified::default();
+        for sub in read_dir_sorted(&self.dir.join("objects"))? {
+            let prefix = sub
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            for obj in read_dir_sorted(&sub)? {
+                let rest = obj
+                    .file_name()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                report.objects += 1;
+                let name = format!("{prefix}{rest}");
+                let sound = std::fs::read(&obj).is_ok_and(|b| sha256_hex(&b) == name);
+                if !sound {
+                    remove_any(&obj)?;
+                    report.dropped_objects.push(name);
+                }
+            }
+        }
+        for e in read_dir_sorted(&self.dir.join("entries"))? {
+            let key = e
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            report.entries += 1;
+            let sound = self.entry(&key).is_some_and(|entry| {
+                entry
+                    .outputs
+                    .values()
+                    .all(|s| stored_objects(s).all(|h| self.object_path(h).is_file()))
+            });
+            if !sound {
+                remove_any(&e)?;
+                report.dropped_entries.push(key);
+            }
+        }
+        Ok(report)
     }
 
     /// Keep only the given keys and the objects they reference. Returns (entries, objects) removed.
@@ -206,6 +292,14 @@ impl Store {
             }
         }
         Ok((removed_entries, removed_objects))
+    }
+}
+
+/// The object hashes an artifact record names.
+pub fn stored_objects(stored: &Stored) -> Box<dyn Iterator<Item = &String> + '_> {
+    match stored {
+        Stored::File { sha256 } => Box::new(std::iter::once(sha256)),
+        Stored::Collection { items } => Box::new(items.values()),
     }
 }
 

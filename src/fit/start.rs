@@ -77,7 +77,8 @@ pub fn single_start(
     };
     let v0 = v1 * (1.0 + ks2) / ks2;
     // sliding runs ahead of the extrapolated rolling by (v0 − v1)·t1/2
-    let t1 = (2.0 * lead / (v0 - v1)).clamp(1.0 / fps, 0.5 * t_end);
+    // (the upper end is kept above the lower: a run shorter than two frames must not panic)
+    let t1 = (2.0 * lead / (v0 - v1)).clamp(1.0 / fps, (0.5 * t_end).max(1.0 / fps));
     let mu = (v1 / (groove.s * groove.k * G_MPS2 * t1)).clamp(0.1, 1.0);
     let mut x = [0.0; NP];
     x[Z0] = head;

@@ -2,6 +2,7 @@
 //! assembly of checked samples into one `Recording` per run, sorted by run, particle and frame.
 
 use super::error::Problem;
+use super::sanity;
 use super::samples::{RunRow, Sample, SampleFile};
 use crate::recording::{Experiment, Recording, Track};
 use std::collections::{BTreeMap, BTreeSet};
@@ -122,9 +123,17 @@ fn tracks_of(
         (a.particle, a.frame, &fa.file, a.row).cmp(&(b.particle, b.frame, &fb.file, b.row))
     });
     let wanted = particles(r.info.experiment);
+    let before = problems.len();
     let mut tracks: Vec<Track> = Vec::new();
     for pair in ss.iter() {
         let (f, s) = *pair;
+        let range = sanity::time(s.t_s)
+            .map_err(|c| (f.time_column, c))
+            .and_then(|()| sanity::position(s.z_m).map_err(|c| (f.position_column, c)));
+        if let Err((column, (message, fix))) = range {
+            problems.push(Problem::at(&f.file, s.row, column, message, fix).in_run(run));
+            continue;
+        }
         if !wanted.iter().any(|(p, _)| *p == s.particle) {
             let kind = match r.info.experiment {
                 Experiment::Single => "a single run has only particle 0",
@@ -201,6 +210,9 @@ fn tracks_of(
                 .in_run(run),
             );
         }
+    }
+    if problems.len() == before {
+        problems.extend(sanity::clock(r, ss));
     }
     tracks
 }

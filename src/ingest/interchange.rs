@@ -1,6 +1,7 @@
 //! Reads the interchange format of data-format.md: runs.csv and trajectories.csv (or `.parquet`).
 
 use super::error::Problem;
+use super::sanity;
 use super::samples::{RunRow, Sample, SampleFile};
 use super::table::{Col, Table};
 use crate::recording::{Experiment, RunInfo, Setup};
@@ -56,6 +57,7 @@ pub fn pick<'a>(
 /// row's run where the run id is readable).
 pub fn read_runs(table: &Table) -> Result<(Vec<RunRow>, Vec<Problem>), Problem> {
     table.require(&RUN_COLUMNS)?;
+    table.require_numeric(&["diameter_m", "fps"])?;
     let extra_columns: Vec<&String> = table
         .names
         .iter()
@@ -104,12 +106,14 @@ fn run_info(
     };
     let material = table.string("material", i, "write the particle material, e.g. 316")?;
     let diameter_m = positive(table, "diameter_m", i, "the particle diameter in metres")?;
+    sanity::diameter(diameter_m).map_err(|(m, fix)| table.problem("diameter_m", i, m, fix))?;
     let fps = positive(
         table,
         "fps",
         i,
         "the camera frame rate in frames per second",
     )?;
+    sanity::fps(fps).map_err(|(m, fix)| table.problem("fps", i, m, fix))?;
     let setup = match table.text("setup", i) {
         None => None,
         Some(s) => Some(match s.to_ascii_lowercase().as_str() {
@@ -153,6 +157,7 @@ fn positive(table: &Table, column: &str, i: usize, what: &str) -> Result<f64, Pr
 /// Reads trajectories.csv. Rows with problems are left out and their problems returned.
 pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Problem> {
     table.require(&TRAJECTORY_COLUMNS)?;
+    table.require_numeric(&["particle", "frame", "t_s", "z_m"])?;
     let cols = TrajectoryColumns {
         run: table.col("run"),
         particle: table.col("particle"),
@@ -190,6 +195,8 @@ pub fn read_trajectories(table: &Table) -> Result<(SampleFile, Vec<Problem>), Pr
             key_columns: "run, particle, frame",
             frame_column: "frame",
             particle_column: "particle",
+            time_column: "t_s",
+            position_column: "z_m",
             samples,
         },
         problems,

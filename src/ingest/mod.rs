@@ -9,11 +9,13 @@
 #![allow(clippy::result_large_err)]
 
 mod assemble;
+mod csv_check;
 pub mod error;
 mod interchange;
 pub mod output;
 pub mod params;
 mod samples;
+pub mod sanity;
 mod spots;
 mod table;
 mod trackmate;

@@ -33,5 +33,9 @@ pub struct SampleFile {
     pub frame_column: &'static str,
     /// The particle column, e.g. `particle` or `TRACK_ID`.
     pub particle_column: &'static str,
+    /// The column the time comes from, e.g. `t_s` (or `FRAME` for tracker files).
+    pub time_column: &'static str,
+    /// The column the position comes from, e.g. `z_m` or `POSITION_X`.
+    pub position_column: &'static str,
     pub samples: Vec<Sample>,
 }

@@ -27,6 +27,8 @@ pub struct SpotFile {
     pub key_columns: &'static str,
     pub frame_column: &'static str,
     pub track_column: &'static str,
+    /// The position column read (by the calibration's axis).
+    pub position_column: &'static str,
     pub spots: Vec<Spot>,
 }
 
@@ -47,10 +49,11 @@ pub fn read_spots(table: &Table, names: &SpotColumns, axis: Axis) -> (SpotFile, 
     let run = run_id(&table.file);
     let track = table.col(names.track);
     let frame = table.col(names.frame);
-    let position = table.col(match axis {
+    let position_column = match axis {
         Axis::X => names.x,
         Axis::Y => names.y,
-    });
+    };
+    let position = table.col(position_column);
     let mut spots = Vec::with_capacity(table.height());
     let mut problems = Vec::new();
     for i in 0..table.height() {
@@ -82,6 +85,7 @@ pub fn read_spots(table: &Table, names: &SpotColumns, axis: Axis) -> (SpotFile, 
         key_columns: names.key,
         frame_column: names.frame,
         track_column: names.track,
+        position_column,
         spots,
     };
     (file, problems)
@@ -186,6 +190,8 @@ pub fn calibrate(
             key_columns: spots.key_columns,
             frame_column: spots.frame_column,
             particle_column: spots.track_column,
+            time_column: spots.frame_column,
+            position_column: spots.position_column,
             samples,
         },
     ))

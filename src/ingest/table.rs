@@ -1,6 +1,7 @@
 //! A table read from CSV or Parquet bytes with polars, with typed cell access that reports bad cells
 //! by file, row (as the user sees it) and column.
 
+use super::csv_check;
 use super::error::Problem;
 use polars::prelude::*;
 use std::borrow::Cow;
@@ -25,6 +26,8 @@ pub struct Table {
     pub names: Vec<String>,
     columns: BTreeMap<String, Cells>,
     rows: Vec<usize>,
+    /// Read from Parquet, whose columns carry types (numbers must not be stored as text).
+    parquet: bool,
 }
 
 impl Table {
@@ -39,15 +42,19 @@ impl Table {
                 "write a header line and at least one data row",
             ));
         }
-        let df = CsvReadOptions::default()
-            .with_has_header(true)
-            .with_infer_schema_length(Some(0))
-            .into_reader_with_file_handle(Cursor::new(bytes))
-            .finish()
+        csv_check::check(file, bytes)?;
+        let read = || {
+            CsvReadOptions::default()
+                .with_has_header(true)
+                .with_infer_schema_length(Some(0))
+                .into_reader_with_file_handle(Cursor::new(bytes))
+                .finish()
+        };
+        let df = guarded(read)
             .map_err(|e| {
                 Problem::file(
                     file,
-                    format!("cannot be read as CSV ({})", lowercase_first(&e.to_string())),
+                    format!("cannot be read as CSV ({})", parser_words(&e)),
                     "save it as comma-separated text with one header line and the same number of fields on every line",
                 )
             })?;
@@ -58,19 +65,19 @@ impl Table {
 
     /// Reads a Parquet file. Rows are numbered from 1 (Parquet has no header line).
     pub fn from_parquet(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
-        let df = ParquetReader::new(Cursor::new(bytes))
-            .finish()
-            .map_err(|e| {
-                Problem::file(
-                    file,
-                    format!(
-                        "cannot be read as Parquet ({})",
-                        lowercase_first(&e.to_string())
-                    ),
-                    "write it again as a Parquet file, or use the CSV form",
-                )
-            })?;
-        Table::from_frame(file, &df)
+        let df = guarded(|| ParquetReader::new(Cursor::new(bytes)).finish()).map_err(|e| {
+            Problem::file(
+                file,
+                format!(
+                    "cannot be read as Parquet: it is damaged or not Parquet ({})",
+                    parser_words(&e)
+                ),
+                "write it again as a Parquet file, or use the CSV form",
+            )
+        })?;
+        let mut table = Table::from_frame(file, &df)?;
+        table.parquet = true;
+        Ok(table)
     }
 
     /// Reads a file by its extension: `.parquet` as Parquet, anything else as CSV.
@@ -108,7 +115,34 @@ impl Table {
             names,
             columns,
             rows: (1..=df.height()).collect(),
+            parquet: false,
         })
+    }
+
+    /// In a Parquet file, a problem if any of `numeric` is stored as text: numbers as strings are
+    /// not read (a spreadsheet export that quoted them would otherwise pass unnoticed).
+    pub fn require_numeric(&self, numeric: &[&str]) -> Result<(), Problem> {
+        if !self.parquet {
+            return Ok(());
+        }
+        for name in numeric {
+            let Some(Cells::Text(v)) = self.columns.get(*name) else {
+                continue;
+            };
+            if v.iter().all(|c| c.is_none()) {
+                continue;
+            }
+            return Err(Problem {
+                file: self.file.clone(),
+                row: None,
+                column: Some(name.to_string()),
+                run: None,
+                message: "holds numbers stored as text (Parquet type string)".into(),
+                fix: "store the column as float64 or int64 (e.g. pandas: df[col].astype(float))"
+                    .into(),
+            });
+        }
+        Ok(())
     }
 
     /// Number of data rows.
@@ -336,11 +370,52 @@ fn is_blank(line: &[u8]) -> bool {
     line.iter().all(|b| b.is_ascii_whitespace())
 }
 
-/// polars' messages start with a capital; groove's errors are lowercase.
-fn lowercase_first(s: &str) -> String {
-    let mut c = s.chars();
-    match c.next() {
-        Some(f) => f.to_lowercase().chain(c).collect(),
-        None => String::new(),
+/// Runs a polars reader, turning a panic inside it (seen on damaged files) into an error, so bad
+/// bytes never crash groove.
+fn guarded<T>(read: impl FnOnce() -> PolarsResult<T>) -> Result<T, String> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)) {
+        Ok(Ok(t)) => Ok(t),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(_) => Err("the reader stopped on malformed bytes".into()),
+    }
+}
+
+/// polars' reason in groove's words: known parser phrases translated; anything else (thrift
+/// structures, internal names) is left out rather than shown untranslated.
+fn parser_words(reason: &str) -> String {
+    const WORDS: [(&str, &str); 9] = [
+        ("found more fields than defined", "a row has more fields than the header"),
+        ("invalid utf-8", "the text is not UTF-8"),
+        ("csv malformed", "the quoting or the field count is malformed"),
+        ("out of spec", "the file does not follow the Parquet format"),
+        ("thrift", "the file's metadata is damaged"),
+        ("invalidoffset", "the file's metadata is damaged"),
+        ("error_kind", "the file's metadata is damaged"),
+        ("unexpected end", "the file ends too early (cut short?)"),
+        ("eof", "the file ends too early (cut short?)"),
+    ];
+    let lower = reason.to_ascii_lowercase();
+    WORDS
+        .iter()
+        .find(|(phrase, _)| lower.contains(phrase))
+        .map_or("the reader could not make sense of it", |(_, words)| words)
+        .to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parser_wording_is_translated() {
+        assert_eq!(parser_words("CSV malformed: quote"), "the quoting or the field count is malformed");
+        assert_eq!(
+            parser_words("parquet error: Error { error_kind: InvalidOffset }"),
+            "the file's metadata is damaged"
+        );
+        assert_eq!(
+            parser_words("CSV malformed: found more fields than defined in 'Schema'"),
+            "a row has more fields than the header"
+        );
     }
 }

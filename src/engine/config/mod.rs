@@ -22,13 +22,29 @@ pub fn load(
     overrides: &Overrides,
     catalog: &Catalog,
 ) -> Result<Pipeline, EngineError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let bytes = std::fs::read(path).map_err(|e| {
         EngineError::Usage(format!(
             "cannot read {}: {e}; pass --config FILE or run in the folder of pipeline.toml",
             path.display()
         ))
     })?;
     let abs = validate::normalize(&std::path::absolute(path).at(path)?);
+    let text = match String::from_utf8(bytes) {
+        Ok(text) => text,
+        Err(e) => {
+            let at = e.utf8_error().valid_up_to();
+            let bytes = e.as_bytes();
+            let line = 1 + bytes[..at].iter().filter(|&&b| b == b'\n').count();
+            let file = span::Source::new(&abs, "");
+            return Err(file.error(
+                line,
+                format!(
+                    "is not UTF-8 text (byte 0x{:02x}); save the file as UTF-8",
+                    bytes[at]
+                ),
+            ));
+        }
+    };
     let file = span::Source::new(&abs, &text);
     let raw: raw::RawPipeline = toml::from_str(&text).map_err(|e| {
         let line = e.span().map(|s| file.line_of(s.start)).unwrap_or(1);

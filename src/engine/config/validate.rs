@@ -80,6 +80,12 @@ pub fn validate(
         )?;
         pipeline.stages.insert(name, spec);
     }
+    if pipeline.stages.is_empty() {
+        return Err(file.error(
+            1,
+            "defines no stages (is the file empty?); add [stages.NAME] tables, see README.md",
+        ));
+    }
     check_references(&pipeline, file, &lines)?;
     check_outputs(&pipeline, file)?;
     if let Err(cycle) = dag::order(&pipeline) {
@@ -403,15 +409,54 @@ fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result
     Ok(())
 }
 
+/// Why an output may not be written at `path`, if it may not: outputs stay inside the project
+/// folder or the reports folder, and never land on (or in, or around) the config, the lock, the
+/// store, the dataset or any path input.
+fn forbidden_output(pipeline: &Pipeline, path: &Path) -> Option<String> {
+    let inside = |base: &Path| path.starts_with(base) && path != base;
+    if !inside(&pipeline.root) && !inside(&pipeline.reports_dir) {
+        return Some("outside the project folder and the reports folder".into());
+    }
+    let protected = [
+        (pipeline.config_path.clone(), "the pipeline config"),
+        (pipeline.root.join("pipeline.lock"), "pipeline.lock"),
+        (pipeline.root.join(".groove"), "the store"),
+    ];
+    for (p, what) in &protected {
+        if path.starts_with(p) || p.starts_with(path) {
+            return Some(format!("which would replace {what}"));
+        }
+    }
+    if path.starts_with(&pipeline.data_dir) || pipeline.data_dir.starts_with(path) {
+        return Some(format!(
+            "inside or around the dataset folder {} (is the reports folder the dataset folder?)",
+            pipeline.show(&pipeline.data_dir)
+        ));
+    }
+    for stage in pipeline.stages.values() {
+        for (name, input) in &stage.inputs {
+            if let InputSpec::Path { path: input, .. } = input {
+                if path.starts_with(input) {
+                    return Some(format!(
+                        "onto or inside input `{name}` of stage `{}`",
+                        stage.name
+                    ));
+                }
+            }
+        }
+    }
+    None
+}
+
 /// No two outputs write one path, nor one inside another.
 fn check_outputs(pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> {
     let mut all: Vec<(&PathBuf, &str, &str, usize)> = Vec::new();
     for stage in pipeline.stages.values() {
         for (output, path) in &stage.outputs {
             let Some(path) = path else { continue };
-            if pipeline.root.starts_with(path) || path.starts_with(pipeline.root.join(".groove")) {
+            if let Some(why) = forbidden_output(pipeline, path) {
                 return Err(file.error(stage.line, format!(
-                    "stage `{}` output `{output}` would overwrite {}; choose a path inside the reports folder",
+                    "stage `{}` output `{output}` would write {}, {why}; choose a path inside the reports folder",
                     stage.name,
                     pipeline.show(path)
                 )));

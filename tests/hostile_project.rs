@@ -1,0 +1,561 @@
+//! Hostile input through the `groove` binary (issue 16): each reproducer of the issue, applied to a
+//! copy of a project that has run once, ends within `LIMIT` with exit 2 and a message naming the
+//! place — never a panic, never a hang — and leaves every file of the project (reports, lock,
+//! config, data, store) byte-identical. A stray file or symlinked tables in the data folder are
+//! not errors.
+//!
+//! The dataset is synthesized once from tests/fixtures/truths/hostile_small.toml and one project
+//! runs the whole pipeline on it once; every test works on its own copy.
+
+use groove::engine::hashing::sha256_hex;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
+/// The longest a reproducer may take (the issue's bound).
+const LIMIT: Duration = Duration::from_secs(10);
+
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scratch() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hostile");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    })
+}
+
+/// Runs the binary in `cwd`, killing it (and failing) if it takes longer than `limit`.
+fn groove_within(cwd: &Path, args: &[&str], limit: Duration) -> Output {
+    let mut child = Command::new(GROOVE)
+        .args(args)
+        .current_dir(cwd)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the groove binary starts");
+    let started = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if started.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "groove {args:?} ran longer than {limit:?}; stderr:\n{}",
+                text(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The project after one successful run of the whole pipeline.
+fn base() -> &'static Path {
+    static BASE: OnceLock<PathBuf> = OnceLock::new();
+    BASE.get_or_init(|| {
+        let dataset = scratch().join("dataset");
+        let truth = repo().join("tests/fixtures/truths/hostile_small.toml");
+        let out = groove_within(
+            scratch(),
+            &["synth", "--truth", truth.to_str().unwrap(), "--out", dataset.to_str().unwrap()],
+            Duration::from_secs(600),
+        );
+        assert!(out.status.success(), "synth: {}", text(&out.stderr));
+        let project = scratch().join("base");
+        std::fs::create_dir_all(project.join("data")).unwrap();
+        std::fs::copy(repo().join("pipeline.toml"), project.join("pipeline.toml")).unwrap();
+        for name in ["runs.csv", "trajectories.csv"] {
+            std::fs::copy(dataset.join(name), project.join("data").join(name)).unwrap();
+        }
+        let out = groove_within(&project, &["run"], Duration::from_secs(1800));
+        assert!(out.status.success(), "the base run: {}", text(&out.stderr));
+        project
+    })
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let target = to.join(path.file_name().unwrap());
+        if path.is_dir() {
+            copy_tree(&path, &target);
+        } else {
+            std::fs::copy(&path, &target).unwrap();
+        }
+    }
+}
+
+fn copy_of_base(name: &str) -> PathBuf {
+    let to = scratch().join(name);
+    let _ = std::fs::remove_dir_all(&to);
+    copy_tree(base(), &to);
+    to
+}
+
+/// sha256 of every file under `dir` by relative path, except the store's caches and log (which
+/// a run may touch without changing anything the user sees).
+fn tree_hashes(dir: &Path) -> BTreeMap<String, String> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        for entry in entries {
+            let path = entry.unwrap().path();
+            let rel = path.strip_prefix(root).unwrap().to_string_lossy().into_owned();
+            if [".groove/hashes.json", ".groove/run.log", ".groove/lock"].contains(&rel.as_str()) {
+                continue;
+            }
+            if path.is_dir() {
+                walk(root, &path, out);
+            } else {
+                out.insert(rel, sha256_hex(&std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+/// Rewrites a file's lines: `edit(line_number, line)` returns the new lines for it (none to
+/// delete it). Line 1 is the header.
+fn edit_lines(path: &Path, mut edit: impl FnMut(usize, &str) -> Vec<String>) {
+    let content = std::fs::read_to_string(path).unwrap();
+    let mut out = String::new();
+    for (k, line) in content.lines().enumerate() {
+        for l in edit(k + 1, line) {
+            out += &l;
+            out.push('\n');
+        }
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+/// The line with field `field` replaced.
+fn set_field(line: &str, field: usize, value: &str) -> String {
+    let mut cells: Vec<&str> = line.split(',').collect();
+    cells[field] = value;
+    cells.join(",")
+}
+
+/// Spoils a copy of the base project, runs it, and checks the issue's acceptance: exit 2 within
+/// `LIMIT`, no panic, and every file of the project as it was before the run. Returns stderr.
+fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
+    let project = copy_of_base(name);
+    spoil(&project);
+    let before = tree_hashes(&project);
+    assert!(before.contains_key("reports/report.html") && before.contains_key("pipeline.lock"));
+    let out = groove_within(&project, &["run"], LIMIT);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{name}: exit code; stderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let after = tree_hashes(&project);
+    let changed: Vec<&String> = before
+        .keys()
+        .chain(after.keys())
+        .filter(|k| before.get(*k) != after.get(*k))
+        .collect();
+    assert!(changed.is_empty(), "{name}: files changed: {changed:?}");
+    stderr
+}
+
+fn assert_names(stderr: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(stderr.contains(p), "the error does not name `{p}`:\n{stderr}");
+    }
+}
+
+/// The first run id of `experiment` in runs.csv.
+fn first_run(project: &Path, experiment: &str) -> String {
+    let runs = std::fs::read_to_string(project.join("data/runs.csv")).unwrap();
+    runs.lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .find(|f| f[1] == experiment)
+        .map(|f| f[0].to_string())
+        .unwrap()
+}
+
+// ------------------------------------------------------------------------ the reproducers
+
+#[test]
+fn a_position_of_1e308_exits_2_at_its_cell() {
+    let err = refused("z_1e308", |p| {
+        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
+            vec![if k == 101 { set_field(l, 4, "1e308") } else { l.into() }]
+        })
+    });
+    assert_names(&err, &["trajectories.csv row 101, column z_m"]);
+}
+
+#[test]
+fn huge_times_exit_2_at_their_cell() {
+    for value in ["1e308", "-1e308", "9.2e18", "-9.2e18", "1e20"] {
+        let err = refused(&format!("t_{value}"), |p| {
+            edit_lines(&p.join("data/trajectories.csv"), |k, l| {
+                vec![if k == 101 { set_field(l, 3, value) } else { l.into() }]
+            })
+        });
+        assert_names(&err, &["trajectories.csv row 101, column t_s"]);
+    }
+}
+
+#[test]
+fn a_far_frame_at_a_matching_time_exits_2() {
+    let err = refused("far_frame", |p| {
+        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
+            vec![if k == 101 { set_field(&set_field(l, 2, "100000000"), 3, "10000") } else { l.into() }]
+        })
+    });
+    assert_names(&err, &["trajectories.csv row 101, column t_s"]);
+}
+
+#[test]
+fn a_frame_rate_typed_in_khz_exits_2_saying_so() {
+    let err = refused("fps_khz", |p| {
+        edit_lines(&p.join("data/runs.csv"), |k, l| {
+            vec![if k == 2 { set_field(l, 4, "10") } else { l.into() }]
+        })
+    });
+    assert_names(&err, &["runs.csv row 2, column fps", "kHz", "10000"]);
+}
+
+#[test]
+fn a_run_whose_times_are_all_zero_exits_2() {
+    let err = refused("t_zero", |p| {
+        let run = first_run(p, "single");
+        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
+            vec![if k > 1 && l.starts_with(&format!("{run},")) { set_field(l, 3, "0") } else { l.into() }]
+        })
+    });
+    assert_names(&err, &["trajectories.csv row 3, column t_s", "not after"]);
+}
+
+#[test]
+fn time_going_backwards_exits_2() {
+    let err = refused("t_backwards", |p| {
+        let path = p.join("data/trajectories.csv");
+        let lines: Vec<String> = std::fs::read_to_string(&path).unwrap().lines().map(String::from).collect();
+        let t = |k: usize| lines[k - 1].split(',').nth(3).unwrap().to_string();
+        let (t101, t102) = (t(101), t(102));
+        edit_lines(&path, |k, l| {
+            vec![match k {
+                101 => set_field(l, 3, &t102),
+                102 => set_field(l, 3, &t101),
+                _ => l.into(),
+            }]
+        })
+    });
+    assert_names(&err, &["trajectories.csv row 102, column t_s", "time goes backwards"]);
+}
+
+#[test]
+fn a_collision_run_without_its_target_exits_2() {
+    let err = refused("no_target", |p| {
+        let run = first_run(p, "collision");
+        edit_lines(&p.join("data/trajectories.csv"), |_, l| {
+            if l.starts_with(&format!("{run},1,")) { vec![] } else { vec![l.into()] }
+        })
+    });
+    assert_names(&err, &["trajectories.csv", "column frame", "has 0 frames of particle 1 (the target)"]);
+}
+
+#[test]
+fn a_row_with_an_extra_field_exits_2_in_groove_words() {
+    let err = refused("extra_field", |p| {
+        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
+            vec![if k == 50 { format!("{l},7") } else { l.into() }]
+        })
+    });
+    assert_names(&err, &["trajectories.csv row 50", "6 fields but the header names 5 columns"]);
+    assert!(!err.contains("Schema") && !err.contains("cSV"), "{err}");
+}
+
+#[test]
+fn invalid_utf8_in_the_header_exits_2_naming_row_and_column() {
+    let err = refused("utf8", |p| {
+        let path = p.join("data/runs.csv");
+        let mut bytes = std::fs::read(&path).unwrap();
+        let at = bytes.windows(8).position(|w| w == b"material").unwrap();
+        bytes[at + 3] = 0xe9; // "mat\xe9rial", Latin-1
+        std::fs::write(&path, bytes).unwrap();
+    });
+    assert_names(&err, &["runs.csv row 1, column", "not UTF-8", "save the file as UTF-8"]);
+}
+
+#[test]
+fn numbers_stored_as_text_in_parquet_exit_2() {
+    use polars::prelude::*;
+    let err = refused("parquet_text", |p| {
+        let csv = std::fs::read_to_string(p.join("data/trajectories.csv")).unwrap();
+        let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+        let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
+        let int = |k: usize| rows.iter().map(|r| r[k].parse::<i64>().unwrap()).collect::<Vec<_>>();
+        let mut df = DataFrame::new(
+            rows.len(),
+            vec![
+                Column::new("run".into(), col(0)),
+                Column::new("particle".into(), int(1)),
+                Column::new("frame".into(), int(2)),
+                Column::new("t_s".into(), col(3)),
+                Column::new("z_m".into(), col(4)),
+            ],
+        )
+        .unwrap();
+        let mut bytes = Vec::new();
+        ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
+        std::fs::remove_file(p.join("data/trajectories.csv")).unwrap();
+        std::fs::write(p.join("data/trajectories.parquet"), bytes).unwrap();
+    });
+    assert_names(&err, &["trajectories.parquet, column t_s", "stored as text"]);
+}
+
+// ------------------------------------------------------------------------ a hostile world
+
+#[test]
+fn symlinked_tables_are_followed() {
+    let project = copy_of_base("symlinks");
+    let elsewhere = scratch().join("symlinks-elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let reports = tree_hashes(&project.join("reports"));
+    for name in ["runs.csv", "trajectories.csv"] {
+        std::fs::rename(project.join("data").join(name), elsewhere.join(name)).unwrap();
+        std::os::unix::fs::symlink(elsewhere.join(name), project.join("data").join(name)).unwrap();
+    }
+    let out = groove_within(&project, &["run"], LIMIT);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("0 stages run"), "{}", text(&out.stdout));
+    assert_eq!(tree_hashes(&project.join("reports")), reports);
+}
+
+#[test]
+fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
+    let project = copy_of_base("stray");
+    let reports = tree_hashes(&project.join("reports"));
+    std::fs::write(project.join("data/notes (copy).txt"), "kick 3 was odd").unwrap();
+    let out = groove_within(&project, &["run"], LIMIT);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("0 stages run"), "{}", text(&out.stdout));
+    assert!(text(&out.stderr).contains("notes (copy).txt is not read"), "{}", text(&out.stderr));
+    assert_eq!(tree_hashes(&project.join("reports")), reports);
+}
+
+// ------------------------------------------------------------------------ the engine's part
+
+/// Runs `args` in a copy of the base project after `setup`, expecting `code`; returns the
+/// output and checks that no file outside `may_change` (relative paths) changed.
+fn engine_case(name: &str, setup: impl FnOnce(&Path), args: &[&str], code: i32, may_change: &[&str]) -> (PathBuf, Output) {
+    let project = copy_of_base(name);
+    setup(&project);
+    let before = tree_hashes(&project);
+    let out = groove_within(&project, args, Duration::from_secs(60));
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(code), "{name}: exit code; stderr:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let after = tree_hashes(&project);
+    let changed: Vec<&String> = before
+        .keys()
+        .chain(after.keys())
+        .filter(|k| before.get(*k) != after.get(*k))
+        .filter(|k| !may_change.iter().any(|m| k.starts_with(m)))
+        .collect();
+    assert!(changed.is_empty(), "{name}: files changed: {changed:?}");
+    (project, out)
+}
+
+fn append_config(project: &Path, extra: &str) {
+    let mut toml = std::fs::read_to_string(project.join("pipeline.toml")).unwrap();
+    toml += extra;
+    std::fs::write(project.join("pipeline.toml"), toml).unwrap();
+}
+
+#[test]
+fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
+    // a new seed reruns every stage with new numbers; a command stage after aggregate fails
+    let (_, out) = engine_case(
+        "half_updated",
+        |p| {
+            let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+            std::fs::write(p.join("pipeline.toml"), toml.replace("seed = 20261122", "seed = 7")).unwrap();
+            append_config(p, "\n[stages.boom]\nkind = \"command\"\ncmd = \"cat {in.s} > {out.o}; exit 3\"\ninputs = { s = \"aggregate:summary\" }\noutputs = { o = \"${reports}/boom.txt\" }\n");
+        },
+        &["run"],
+        2,
+        &[".groove/"],
+    );
+    assert!(text(&out.stderr).contains("boom"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
+    for (name, target, says) in [
+        ("escape", "../../outside.txt", "outside the project folder"),
+        ("absolute", "/tmp/groove-hostile-absolute.txt", "outside the project folder"),
+        ("onto_data", "${data}/runs.csv", "dataset folder"),
+        ("onto_lock", "pipeline.lock", "pipeline.lock"),
+        ("onto_config", "pipeline.toml", "pipeline config"),
+        ("onto_store", ".groove/x", "the store"),
+    ] {
+        let (_, out) = engine_case(
+            &format!("out_{name}"),
+            |p| {
+                let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+                let toml = toml.replace("summary = \"${reports}/summary.json\"", &format!("summary = \"{target}\""));
+                std::fs::write(p.join("pipeline.toml"), toml).unwrap();
+            },
+            &["run"],
+            2,
+            &["pipeline.toml"],
+        );
+        let err = text(&out.stderr);
+        assert!(err.contains("pipeline.toml:") && err.contains(says), "{name}: {err}");
+    }
+    assert!(!Path::new("/tmp/groove-hostile-absolute.txt").exists());
+}
+
+#[test]
+fn reports_in_the_data_folder_are_refused() {
+    let (_, out) = engine_case("out_is_data", |_| {}, &["run", "--out", "data"], 2, &[]);
+    assert!(text(&out.stderr).contains("dataset folder"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_file_output_never_replaces_a_folder() {
+    let (project, out) = engine_case(
+        "folder_kept",
+        |p| {
+            std::fs::create_dir_all(p.join("reports/keep")).unwrap();
+            std::fs::write(p.join("reports/keep/mine.txt"), "mine").unwrap();
+            let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
+            let toml = toml.replace("summary = \"${reports}/summary.json\"", "summary = \"${reports}/keep\"");
+            std::fs::write(p.join("pipeline.toml"), toml).unwrap();
+        },
+        &["run"],
+        2,
+        &[".groove/"],
+    );
+    assert!(text(&out.stderr).contains("never replaces a folder"), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(), "mine");
+}
+
+#[test]
+fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
+    let (project, out) = engine_case(
+        "publish_file",
+        |p| std::fs::write(p.join("../publish_file-target"), "precious").unwrap(),
+        &["publish", "--to", "../publish_file-target"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("is a file"), "{}", text(&out.stderr));
+    let parent = project.parent().unwrap();
+    assert_eq!(std::fs::read_to_string(parent.join("publish_file-target")).unwrap(), "precious");
+    // a kill during an earlier publish left a half-built bundle beside the target
+    let leftover = parent.join(".publish_file-bundle.groove-new-1-1");
+    std::fs::create_dir_all(&leftover).unwrap();
+    let out = groove_within(&project, &["publish", "--to", "../publish_file-bundle"], LIMIT);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(!leftover.exists(), "the leftover of a killed publish stays");
+    assert!(parent.join("publish_file-bundle/SHA256SUMS").is_file());
+}
+
+/// The store object holding `rel` (a file of the project).
+fn object_of(project: &Path, rel: &str) -> PathBuf {
+    let h = sha256_hex(&std::fs::read(project.join(rel)).unwrap());
+    project.join(".groove/objects").join(&h[..2]).join(&h[2..])
+}
+
+#[test]
+fn a_damaged_object_is_a_miss_and_the_stage_reruns() {
+    let project = copy_of_base("damaged_object");
+    let good = std::fs::read(project.join("reports/fits.csv")).unwrap();
+    let object = object_of(&project, "reports/fits.csv");
+    let mut bytes = std::fs::read(&object).unwrap();
+    bytes[10] ^= 0x20;
+    std::fs::write(&object, bytes).unwrap();
+    std::fs::remove_file(project.join("reports/fits.csv")).unwrap();
+    let out = groove_within(&project, &["run"], Duration::from_secs(60));
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read(project.join("reports/fits.csv")).unwrap(), good);
+    assert_eq!(sha256_hex(&std::fs::read(&object).unwrap()), sha256_hex(&good), "the object is repaired");
+    let status = groove_within(&project, &["status", "--json"], LIMIT);
+    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+}
+
+#[test]
+fn verify_drops_damaged_objects_and_says_so() {
+    let project = copy_of_base("verify");
+    let clean = groove_within(&project, &["verify"], Duration::from_secs(60));
+    assert!(clean.status.success(), "{}", text(&clean.stdout));
+    assert!(text(&clean.stdout).contains("the store is sound"));
+    let object = object_of(&project, "reports/summary.json");
+    let mut bytes = std::fs::read(&object).unwrap();
+    bytes[3] ^= 0x01;
+    std::fs::write(&object, bytes).unwrap();
+    let out = groove_within(&project, &["verify"], Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
+    let name = object.parent().unwrap().file_name().unwrap().to_string_lossy().into_owned()
+        + &object.file_name().unwrap().to_string_lossy();
+    assert!(text(&out.stdout).contains(&format!("dropped damaged object {name}")), "{}", text(&out.stdout));
+    assert!(!object.exists());
+    let rerun = groove_within(&project, &["run"], Duration::from_secs(60));
+    assert!(rerun.status.success(), "{}", text(&rerun.stderr));
+    let status = groove_within(&project, &["status", "--json"], LIMIT);
+    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+}
+
+#[test]
+fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
+    let (project, out) = engine_case(
+        "empty_config",
+        |p| std::fs::write(p.join("pipeline.toml"), "").unwrap(),
+        &["run"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("pipeline.toml:1: defines no stages"), "{}", text(&out.stderr));
+    let before = tree_hashes(&project);
+    let gc = groove_within(&project, &["gc"], LIMIT);
+    assert_eq!(gc.status.code(), Some(2));
+    assert_eq!(tree_hashes(&project), before);
+
+    // a valid config with the lock gone: gc refuses rather than dropping every entry
+    let (_, out) = engine_case(
+        "gc_without_lock",
+        |p| std::fs::remove_file(p.join("pipeline.lock")).unwrap(),
+        &["gc"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("nothing was removed"), "{}", text(&out.stderr));
+}
+
+#[test]
+fn invalid_utf8_in_the_config_names_its_line() {
+    let (_, out) = engine_case(
+        "config_utf8",
+        |p| {
+            let mut bytes = std::fs::read(p.join("pipeline.toml")).unwrap();
+            let at = bytes.windows(6).position(|w| w == b"ingest").unwrap();
+            bytes[at] = 0xff;
+            std::fs::write(p.join("pipeline.toml"), bytes).unwrap();
+        },
+        &["run"],
+        2,
+        &[],
+    );
+    assert!(text(&out.stderr).contains("is not UTF-8"), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("pipeline.toml:"), "{}", text(&out.stderr));
+}

@@ -1,0 +1,116 @@
+#!/usr/bin/env bash
+# kill -9 soak (issue 16): groove is killed at random moments during `run`, `gc` and `publish`;
+# after each kill the store, the reports folder and the bundle are checked, then the project
+# must recover with one ordinary command. Runnable by hand, not part of CI:
+#
+#     bash tests/soak.sh [KILLS_PER_VERB] [GROOVE_BINARY]
+#
+# (default 20 kills per verb, target/debug/groove — build it first with `cargo build`). It prints
+# one line per kill and, at the end, the counts that must be 0:
+#   corrupt entries  – store entries that do not parse or name a missing or damaged object
+#   partial outputs  – files in reports/ that are neither the old nor the new content, temp
+#                      leftovers (.NAME.groove-*) still there after the next run or publish, and
+#                      bundles that fail `sha256sum -c`
+#   failed recoveries – a next `groove run` (or publish) that does not exit 0 with every stage fresh
+set -u
+KILLS=${1:-20}
+REPO=$(cd "$(dirname "$0")/.." && pwd)
+GROOVE=${2:-$REPO/target/debug/groove}
+[ -x "$GROOVE" ] || { echo "soak: no groove binary at $GROOVE; run cargo build first" >&2; exit 2; }
+WORK=$(mktemp -d /tmp/groove-soak.XXXXXX)
+trap 'rm -rf "$WORK"' EXIT
+cd "$WORK" || exit 2
+
+"$GROOVE" synth --truth "$REPO/tests/fixtures/truths/e2e_small.toml" --out dataset >/dev/null || exit 2
+mkdir -p project/data
+cp dataset/*.csv project/data/
+cp "$REPO/pipeline.toml" project/
+cd project || exit 2
+echo "soak: reference run (this takes a while)"
+"$GROOVE" run >/dev/null 2>&1 || { echo "soak: the reference run failed" >&2; exit 2; }
+
+# sha256 of every file under reports/ (relative path, hash), as the reference
+snapshot() { (cd reports && find . -type f ! -name '.*' -print0 | sort -z | xargs -0 sha256sum); }
+snapshot > ../reference.sums
+
+corrupt=0 partial=0 failed=0
+
+# entries that do not parse or reference a missing or damaged object
+check_store() {
+  python3 - "$PWD/.groove" <<'EOF'
+import hashlib, json, os, sys
+store = sys.argv[1]
+bad = 0
+entries = os.path.join(store, "entries")
+for name in sorted(os.listdir(entries)) if os.path.isdir(entries) else []:
+    try:
+        entry = json.load(open(os.path.join(entries, name)))
+        hashes = []
+        for out in entry["outputs"].values():
+            hashes += [out["sha256"]] if out["type"] == "file" else list(out["items"].values())
+        for h in hashes:
+            data = open(os.path.join(store, "objects", h[:2], h[2:]), "rb").read()
+            if hashlib.sha256(data).hexdigest() != h:
+                raise ValueError("damaged object " + h)
+    except Exception as e:
+        print("  corrupt entry", name, e, file=sys.stderr)
+        bad += 1
+print(bad)
+EOF
+}
+
+# files in reports/ that differ from the reference (torn or mixed), and temp leftovers
+check_reports() {
+  local torn leftovers
+  torn=$( (cd reports && sha256sum --quiet -c ../../reference.sums 2>/dev/null) | wc -l)
+  leftovers=$(find reports -name '.*.groove-*' | wc -l)
+  echo $((torn + leftovers))
+}
+
+recover() {
+  if ! "$GROOVE" run >/dev/null 2>&1; then echo "  recovery run failed" >&2; return 1; fi
+  if "$GROOVE" status --json | grep -q '"stale"'; then echo "  stale after recovery" >&2; return 1; fi
+  return 0
+}
+
+kill_at_random() { # $@: the command; kills it after 0–1.5 s (or lets it finish)
+  "$@" >/dev/null 2>&1 &
+  local pid=$!
+  sleep "$(python3 -c 'import random; print(round(random.uniform(0, 1.5), 3))')"
+  kill -9 "$pid" 2>/dev/null
+  wait "$pid" 2>/dev/null
+}
+
+for verb in run gc publish; do
+  for i in $(seq 1 "$KILLS"); do
+    case $verb in
+      run)
+        stage=$(python3 -c 'import random; print(random.choice(["ingest","fit","aggregate","simulate","figures","report"]))')
+        kill_at_random "$GROOVE" run --force "$stage" ;;
+      gc)
+        # leave something for gc to drop: a run with another seed
+        sed -i 's/^seed = .*/seed = '"$RANDOM"'/' pipeline.toml
+        "$GROOVE" run --force ingest >/dev/null 2>&1
+        cp "$REPO/pipeline.toml" pipeline.toml
+        "$GROOVE" run >/dev/null 2>&1
+        kill_at_random "$GROOVE" gc ;;
+      publish)
+        kill_at_random "$GROOVE" publish --to ../bundle ;;
+    esac
+    c=$(check_store); p=0
+    # right after the kill the reports may lack nothing and hold no torn file
+    t=$( (cd reports && sha256sum --quiet -c ../../reference.sums 2>/dev/null) | wc -l)
+    p=$((p + t))
+    if ! recover; then failed=$((failed + 1)); fi
+    p=$((p + $(check_reports)))
+    if [ "$verb" = publish ]; then
+      if ! "$GROOVE" publish --to ../bundle >/dev/null 2>&1; then failed=$((failed + 1)); echo "  publish after kill failed" >&2; fi
+      (cd ../bundle && sha256sum --quiet -c SHA256SUMS >/dev/null 2>&1) || p=$((p + 1))
+      p=$((p + $(find .. -maxdepth 1 -name '.bundle.groove-*' | wc -l)))
+    fi
+    corrupt=$((corrupt + c)); partial=$((partial + p))
+    echo "soak: $verb kill $i: corrupt entries $c, partial outputs $p"
+  done
+done
+echo "soak: $((3 * KILLS)) kills: corrupt entries $corrupt, partial outputs $partial, failed recoveries $failed"
+[ "$corrupt" -eq 0 ] && [ "$partial" -eq 0 ] && [ "$failed" -eq 0 ]
