@@ -31,6 +31,12 @@ pub struct Context<'a> {
     /// `pipeline.lock` as it was before this evaluation.
     pub lock: PipelineLock,
     pub progress: Progress,
+    /// The shared remote cache, looked up after the local store (`None`: local only).
+    pub remote: Option<std::sync::Arc<super::remote::RemoteCache>>,
+    /// Uploads each local commit to the remote (`None`: no remote, or read-only).
+    pub pusher: Option<super::remote::push::Pusher>,
+    /// Runs the keys that must run as Slurm job steps (`None`: on this machine).
+    pub slurm: Option<super::slurm::SlurmExecutor>,
 }
 
 impl<'a> Context<'a> {
@@ -44,6 +50,9 @@ impl<'a> Context<'a> {
             hashes,
             lock: PipelineLock::load(&lock_path(pipeline)),
             progress,
+            remote: None,
+            pusher: None,
+            slurm: None,
         }
     }
 }
@@ -291,7 +300,10 @@ fn evaluate_stage(
         }
     };
 
-    let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
+    let mut entries: Vec<Option<Entry>> = units
+        .par_iter()
+        .map(|(_, k)| super::remote::lookup(&ctx.store, ctx.remote.as_deref(), k))
+        .collect();
     let missing: Vec<Option<String>> = units
         .iter()
         .zip(&entries)
@@ -305,9 +317,14 @@ fn evaluate_stage(
             .collect();
         if !todo.is_empty() {
             ctx.progress.started(&spec.name, todo.len());
+            let results: Vec<Result<Entry, EngineError>> = if let Some(slurm) = &ctx.slurm {
+                let units: Vec<(Option<String>, String)> =
+                    todo.iter().map(|&i| units[i].clone()).collect();
+                slurm.run_units(ctx, spec, &bound, &units, seed)
+            } else {
             let shared = load_shared(ctx, spec, &bound)?;
             let finished = std::sync::atomic::AtomicUsize::new(0);
-            let results: Vec<Result<Entry, EngineError>> = todo
+            todo
                 .par_iter()
                 .map(|&i| {
                     let (item, key) = (units[i].0.as_deref(), &units[i].1);
@@ -318,10 +335,26 @@ fn evaluate_stage(
                     }
                     result
                 })
-                .collect();
+                .collect()
+            };
+            // every committed key is pushed, even when another key of the stage failed
+            let mut first_error = None;
             for (&i, r) in todo.iter().zip(results) {
-                entries[i] = Some(r?);
-                executed += 1;
+                match r {
+                    Ok(entry) => {
+                        if let Some(p) = &ctx.pusher {
+                            p.submit(&units[i].1, &entry);
+                        }
+                        entries[i] = Some(entry);
+                        executed += 1;
+                    }
+                    Err(e) => {
+                        first_error.get_or_insert(e);
+                    }
+                }
+            }
+            if let Some(e) = first_error {
+                return Err(e);
             }
         }
     }

@@ -23,6 +23,10 @@ pub struct RunOptions {
     pub dry_run: bool,
     /// Print no progress (library use, tests).
     pub quiet: bool,
+    /// The shared remote cache to use, if any.
+    pub remote: Option<super::remote::Settings>,
+    /// Run the stages that must run as Slurm job steps inside one allocation.
+    pub slurm: bool,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -34,6 +38,11 @@ pub struct RunSummary {
     /// For `--dry-run`: the stale stages and why.
     pub would_run: Vec<StageStatus>,
     pub elapsed_s: f64,
+    /// The remote's closing line (hits, misses, errors, requests), when a remote was used.
+    pub remote_line: Option<String>,
+    pub remote: Option<super::remote::Tally>,
+    /// Slurm allocations taken and job steps run, when the Slurm executor was used.
+    pub slurm_line: Option<String>,
 }
 
 fn check_names(pipeline: &Pipeline, names: &[String]) -> Result<(), EngineError> {
@@ -85,8 +94,23 @@ pub fn run(
         ))
     })?;
     // read pipeline.lock only now that no other run can be writing it
-    let ctx = Context::new(catalog, pipeline, progress);
+    let mut ctx = Context::new(catalog, pipeline, progress);
     ctx.store.sweep_tmp()?;
+    if let Some(settings) = &opts.remote {
+        let cache = std::sync::Arc::new(super::remote::open(settings, &pipeline.root)?);
+        if !settings.read_only {
+            ctx.pusher = Some(super::remote::push::Pusher::start(
+                std::sync::Arc::clone(&cache),
+                &ctx.store,
+                settings.jobs,
+            ));
+        }
+        ctx.remote = Some(cache);
+    }
+    if opts.slurm {
+        let config = super::slurm::config::load(&pipeline.config_path)?;
+        ctx.slurm = Some(super::slurm::SlurmExecutor::new(config)?);
+    }
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
     super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
@@ -146,9 +170,20 @@ pub fn run(
         }
     }
     ctx.hashes.save()?;
+    if let Some(p) = ctx.pusher.take() {
+        p.finish();
+    }
+    if let Some(slurm) = ctx.slurm.take() {
+        slurm.allocations.release();
+        summary.slurm_line = Some(slurm.line());
+    }
     ctx.progress.finish();
     summary.elapsed_s = ctx.progress.start.elapsed().as_secs_f64();
 
+    if let Some(cache) = &ctx.remote {
+        summary.remote_line = Some(cache.closing_line());
+        summary.remote = Some(cache.tally());
+    }
     let mut log = ctx.progress.lines();
     log.push(format!(
         "run: {} ran, {} reused, {} failed, {:.3} s",
@@ -159,6 +194,16 @@ pub fn run(
     ));
     append_log(&store_dir.join("run.log"), &log)?;
 
+    if let (Some(cache), Some(settings)) = (&ctx.remote, &opts.remote) {
+        if settings.required {
+            if let Some(first) = cache.first_error() {
+                return Err(EngineError::Usage(format!(
+                    "the remote {} is required (--remote-required) but failed: {first}; fix it or drop --remote-required",
+                    cache.describe()
+                )));
+            }
+        }
+    }
     let mut errors = errors.into_iter();
     if let Some(first) = errors.next() {
         for e in errors {
