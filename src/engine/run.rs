@@ -117,9 +117,14 @@ pub fn run(
     let jobs = opts
         .jobs
         .unwrap_or_else(|| {
-            std::thread::available_parallelism()
+            let cores = std::thread::available_parallelism()
                 .map(|n| n.get())
-                .unwrap_or(1)
+                .unwrap_or(1);
+            // with Slurm, as many stages at once as the allocation has CPUs
+            match &ctx.slurm {
+                Some(s) => cores.max(s.config.allocation.cpus as usize),
+                None => cores,
+            }
         })
         .max(1);
     let pool = rayon::ThreadPoolBuilder::new()
