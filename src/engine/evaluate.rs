@@ -35,8 +35,8 @@ pub struct Context<'a> {
     pub remote: Option<std::sync::Arc<super::remote::RemoteCache>>,
     /// Uploads each local commit to the remote (`None`: no remote, or read-only).
     pub pusher: Option<super::remote::push::Pusher>,
-    /// Runs the keys that must run as Slurm job steps (`None`: on this machine).
-    pub slurm: Option<super::slurm::SlurmExecutor>,
+    /// Runs the keys that must run elsewhere, as Slurm job steps (`None`: on this machine).
+    pub steps: Option<Box<dyn super::slurm::job::StepRunner>>,
 }
 
 impl<'a> Context<'a> {
@@ -52,7 +52,7 @@ impl<'a> Context<'a> {
             progress,
             remote: None,
             pusher: None,
-            slurm: None,
+            steps: None,
         }
     }
 }
@@ -317,10 +317,11 @@ fn evaluate_stage(
             .collect();
         if !todo.is_empty() {
             ctx.progress.started(&spec.name, todo.len());
-            let results: Vec<Result<Entry, EngineError>> = if let Some(slurm) = &ctx.slurm {
+            let results: Vec<Result<Entry, EngineError>> = if let Some(runner) = &ctx.steps {
                 let units: Vec<(Option<String>, String)> =
                     todo.iter().map(|&i| units[i].clone()).collect();
-                slurm.run_units(ctx, spec, &bound, &units, seed)
+                let job = step_job(ctx, spec, &bound, &units, seed)?;
+                runner.run_units(&ctx.store, &job, spec.foreach.is_some())
             } else {
             let shared = load_shared(ctx, spec, &bound)?;
             let finished = std::sync::atomic::AtomicUsize::new(0);
@@ -435,5 +436,52 @@ fn evaluate_stage(
         executed,
         stale_outputs,
         failed: false,
+    })
+}
+
+/// What a job step elsewhere needs to run `units` of a stage: the pipeline and overrides, the
+/// inputs (project paths, or store blobs; engine-made bytes are put in the store first).
+fn step_job(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, super::execute::Bound>,
+    units: &[(Option<String>, String)],
+    seed: u64,
+) -> Result<super::slurm::job::StepJob, EngineError> {
+    use super::execute::Source;
+    use super::slurm::job::{StepInput, StepJob, StepUnit};
+    let mut inputs = BTreeMap::new();
+    for (name, b) in bound {
+        let path = match &b.source {
+            Source::Path(p) => Some(p.clone()),
+            Source::Store => None,
+            Source::Memory(bytes) => {
+                ctx.store.put_object(bytes)?;
+                None
+            }
+        };
+        inputs.insert(
+            name.clone(),
+            StepInput {
+                stored: b.stored.clone(),
+                path,
+            },
+        );
+    }
+    Ok(StepJob {
+        config: ctx.pipeline.config_path.clone(),
+        data: Some(ctx.pipeline.data_dir.clone()),
+        reports: Some(ctx.pipeline.reports_dir.clone()),
+        stage: spec.name.clone(),
+        code: ctx.catalog.fingerprint(&spec.kind).to_string(),
+        seed,
+        inputs,
+        units: units
+            .iter()
+            .map(|(item, key)| StepUnit {
+                item: item.clone(),
+                key: key.clone(),
+            })
+            .collect(),
     })
 }

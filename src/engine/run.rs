@@ -109,7 +109,7 @@ pub fn run(
     }
     if opts.slurm {
         let config = super::slurm::config::load(&pipeline.config_path)?;
-        ctx.slurm = Some(super::slurm::SlurmExecutor::new(config)?);
+        ctx.steps = Some(Box::new(super::slurm::SlurmExecutor::new(config)?));
     }
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
@@ -121,8 +121,8 @@ pub fn run(
                 .map(|n| n.get())
                 .unwrap_or(1);
             // with Slurm, as many stages at once as the allocation has CPUs
-            match &ctx.slurm {
-                Some(s) => cores.max(s.config.allocation.cpus as usize),
+            match &ctx.steps {
+                Some(s) => cores.max(s.slots()),
                 None => cores,
             }
         })
@@ -178,9 +178,8 @@ pub fn run(
     if let Some(p) = ctx.pusher.take() {
         p.finish();
     }
-    if let Some(slurm) = ctx.slurm.take() {
-        slurm.allocations.release();
-        summary.slurm_line = Some(slurm.line());
+    if let Some(steps) = ctx.steps.take() {
+        summary.slurm_line = Some(steps.finish());
     }
     ctx.progress.finish();
     summary.elapsed_s = ctx.progress.start.elapsed().as_secs_f64();

@@ -2,7 +2,7 @@
 //! and `groove slurm-step FILE` reads on the compute node.
 
 use crate::engine::error::{EngineError, IoContext};
-use crate::engine::store::{write_atomic, Stored};
+use crate::engine::store::{write_atomic, Entry, Store, Stored};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -49,4 +49,16 @@ impl StepJob {
             ))
         })
     }
+}
+
+/// Runs a stage's keys outside this process (the Slurm executor). The evaluation holds one as a
+/// trait object, so the walk does not depend on how steps are launched.
+pub trait StepRunner: Send + Sync {
+    /// Run every unit of `job` (which names the stage, its inputs and its keys), committing into
+    /// `store`; one result per unit, in order. `per_item`: the units are items of one stage.
+    fn run_units(&self, store: &Store, job: &StepJob, per_item: bool) -> Vec<Result<Entry, EngineError>>;
+    /// How many stages may run at once.
+    fn slots(&self) -> usize;
+    /// Give back what was taken (allocations) and say what was used.
+    fn finish(&self) -> String;
 }
