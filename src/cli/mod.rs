@@ -48,7 +48,7 @@ fn remote_closing(
 
 /// Run one verb. `Ok` carries the exit code of a verb that ran (0, or 1 for a failed check).
 pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
-    let catalog = Catalog::builtin();
+    let catalog = Catalog::with_kinds(groove::stages::registry());
     match cli.verb {
         Verb::Run {
             stages,
@@ -111,7 +111,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             }
             let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
             let store = groove::engine::store::Store::at(&pipeline.root);
-            let lock = groove::engine::lockfile::PipelineLock::load(&groove::engine::evaluate::lock_path(&pipeline));
+            let lock = groove::engine::lockfile::PipelineLock::load(&groove::engine::context::lock_path(&pipeline));
             let keys = groove::engine::remote::sync::lock_keys(&lock);
             let synced = groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
             println!(

@@ -5,7 +5,7 @@
 //! a killed writer leaves at most a stray temp file (under `tmp/`, never read).
 
 use super::backend::{Backend, RemoteError};
-use crate::engine::store::unique_name;
+use crate::engine::atomic::unique_name;
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 

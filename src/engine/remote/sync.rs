@@ -73,7 +73,8 @@ pub fn pull(
     pipeline: &crate::engine::pipeline::Pipeline,
     cache: &Arc<RemoteCache>,
 ) -> Result<usize, crate::engine::error::EngineError> {
-    use crate::engine::evaluate::{evaluate, Action, Context};
+    use crate::engine::context::Context;
+    use crate::engine::evaluate::{evaluate, Action};
     use crate::engine::progress::Progress;
     let store_dir = pipeline.root.join(".groove");
     let progress = Progress::new(pipeline.stages.len() as u64, true);

@@ -2,7 +2,8 @@
 //! and `groove slurm-step FILE` reads on the compute node.
 
 use crate::engine::error::{EngineError, IoContext};
-use crate::engine::store::{write_atomic, Entry, Store, Stored};
+use crate::engine::atomic::write_atomic;
+use crate::engine::store::{Entry, Store, Stored};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

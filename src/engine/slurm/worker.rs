@@ -6,7 +6,7 @@ use super::job::StepJob;
 use crate::engine::catalog::Catalog;
 use crate::engine::config::{self, Overrides};
 use crate::engine::error::EngineError;
-use crate::engine::evaluate::Context;
+use crate::engine::context::Context;
 use crate::engine::execute::{execute, load_shared, Bound, Source};
 use crate::engine::progress::Progress;
 use rayon::prelude::*;
