@@ -231,3 +231,25 @@ fn the_shipped_analysis_on_slurm_makes_the_committed_reports() {
         );
     }
 }
+
+#[test]
+fn a_bad_slurm_table_is_exit_2_naming_its_line_before_any_allocation() {
+    for (table, needle) in [
+        ("[slurm]\ncpus = 0\n", "cpus must be at least 1"),
+        ("[slurm]\ncpu = 2\n", "unknown field `cpu`"),
+        ("[slurm.kinds.command]\nmemory = \"2G\"\n", "unknown field `memory`"),
+    ] {
+        let p = Project::new(&format!(
+            "[project]\nseed = 1\n\n[stages.a]\nkind = \"command\"\ncmd = \"echo 1 > {{out.o}}\"\noutputs = {{ o = \"a.txt\" }}\n\n{table}"
+        ));
+        let out = p.groove(&["run", "--executor", "slurm"]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{table}: {stderr}");
+        assert!(stderr.contains("pipeline.toml:") && stderr.contains(needle), "{table}: {stderr}");
+        assert!(!p.path("a.txt").exists());
+        // the table is valid pipeline.toml for everything else
+        if needle.contains("at least") {
+            p.ok(&["status"]);
+        }
+    }
+}
