@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Local S3 server for tests: `moto.sh start STATE PORT BUCKET` installs moto[server] into a venv
-# under STATE when absent, starts moto_server on 127.0.0.1:PORT with authentication on (so wrong
-# credentials are refused, as on real S3), creates a user allowed s3:* and BUCKET, and writes
-# STATE/env (`export AWS_...` lines to source); `moto.sh stop STATE` stops that server by its PID.
+# under STATE when absent, starts moto_server on 127.0.0.1:PORT, creates a user with an access
+# key and BUCKET, and writes STATE/env (`export AWS_...` lines to source); `moto.sh stop STATE`
+# stops that server by its PID. moto's optional IAM check (INITIAL_NO_AUTH_ACTION_COUNT) reads
+# only the Authorization header, not presigned (query-string) signatures as groove sends, so it
+# stays off: moto accepts any credentials.
 set -euo pipefail
 cmd=${1:?usage: moto.sh start STATE PORT BUCKET | stop STATE}
 state=$(mkdir -p "${2:?state folder}" && cd "$2" && pwd)
@@ -13,8 +15,7 @@ start)
     python3 -m venv "$state/venv"
     "$state/venv/bin/pip" install -q "moto[server]"
   fi
-  # the first 4 requests (user, key, policy, bucket) need no credentials; every later one does
-  INITIAL_NO_AUTH_ACTION_COUNT=4 "$state/venv/bin/moto_server" -H 127.0.0.1 -p "$port" >"$state/moto.log" 2>&1 &
+  "$state/venv/bin/moto_server" -H 127.0.0.1 -p "$port" >"$state/moto.log" 2>&1 &
   echo $! > "$state/moto.pid"
   for _ in $(seq 100); do
     if "$state/venv/bin/python" - "$port" "$bucket" "$state/env" <<'PY' 2>/dev/null
