@@ -12,7 +12,13 @@ case $cmd in
 start)
   port=${3:?port}; bucket=${4:?bucket}
   if [ ! -x "$state/venv/bin/moto_server" ]; then
-    python3 -m venv "$state/venv"
+    if ! python3 -m venv "$state/venv" 2>/dev/null; then
+      # Debian's python3 keeps venv (ensurepip) in a package of its own
+      rm -rf "$state/venv"
+      export DEBIAN_FRONTEND=noninteractive
+      apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null
+      python3 -m venv "$state/venv"
+    fi
     "$state/venv/bin/pip" install -q "moto[server]"
   fi
   "$state/venv/bin/moto_server" -H 127.0.0.1 -p "$port" >"$state/moto.log" 2>&1 &
