@@ -28,6 +28,32 @@ pub struct Project {
     pub out: Option<PathBuf>,
 }
 
+/// The shared remote cache (see README, "Remote cache and Slurm").
+#[derive(Debug, Args, Clone)]
+pub struct RemoteArgs {
+    /// Use this remote cache: file:///shared/path or s3://bucket/prefix (else GROOVE_REMOTE,
+    /// else `[remote] url` in pipeline.toml).
+    #[arg(long, value_name = "URL")]
+    pub remote: Option<String>,
+    /// Use no remote, whatever the environment and pipeline.toml say.
+    #[arg(long, conflicts_with = "remote")]
+    pub no_remote: bool,
+    /// Look results up on the remote but never write to it.
+    #[arg(long)]
+    pub remote_read_only: bool,
+    /// Exit 2 when the remote fails instead of warning and going on locally.
+    #[arg(long)]
+    pub remote_required: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum Executor {
+    /// Run stages on this machine.
+    Local,
+    /// Run stages as job steps in one Slurm allocation (`[slurm]` in pipeline.toml).
+    Slurm,
+}
+
 #[derive(Debug, Subcommand)]
 pub enum Verb {
     /// Run what is stale: all stages, or the named ones and what they need.
@@ -46,6 +72,33 @@ pub enum Verb {
         /// Only print what would run, and why.
         #[arg(long)]
         dry_run: bool,
+        /// Where stages run: here, or as job steps of one Slurm allocation.
+        #[arg(long, value_enum, default_value_t = Executor::Local)]
+        executor: Executor,
+        #[command(flatten)]
+        remote: RemoteArgs,
+    },
+    /// Upload every result pipeline.lock names from the local store to the remote cache
+    /// (blobs first, then entries; what the remote has is not sent again).
+    Push {
+        #[command(flatten)]
+        project: Project,
+        #[command(flatten)]
+        remote: RemoteArgs,
+    },
+    /// Fill the local store from the remote cache with every result the pipeline can reuse
+    /// (each blob verified by sha256); runs nothing.
+    Pull {
+        #[command(flatten)]
+        project: Project,
+        #[command(flatten)]
+        remote: RemoteArgs,
+    },
+    /// Run one Slurm job step (started by `groove run --executor slurm`, not by hand).
+    #[command(hide = true)]
+    SlurmStep {
+        /// The step file the controller wrote.
+        file: PathBuf,
     },
     /// For every stage: fresh or stale, and why (which input, param or code changed).
     Status {

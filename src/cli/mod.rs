@@ -2,7 +2,7 @@
 
 pub mod args;
 
-use args::{Cli, DagFormat, Project, Verb};
+use args::{Cli, DagFormat, Executor, Project, RemoteArgs, Verb};
 use groove::engine::config::{self, Overrides};
 use groove::engine::publish::{publish, Published};
 use groove::engine::run::{run, RunOptions};
@@ -17,6 +17,35 @@ fn load(project: &Project, catalog: &Catalog) -> Result<Pipeline, EngineError> {
     config::load(&project.config, &overrides, catalog)
 }
 
+/// The remote settings from the flags, GROOVE_REMOTE and `[remote]`.
+fn remote_settings(
+    project: &Project,
+    args: &RemoteArgs,
+) -> Result<Option<groove::engine::remote::Settings>, EngineError> {
+    let flags = groove::engine::remote::settings::Flags {
+        url: args.remote.clone(),
+        no_remote: args.no_remote,
+        read_only: args.remote_read_only,
+        required: args.remote_required,
+    };
+    groove::engine::remote::settings::resolve(&project.config, &flags)
+}
+
+/// Print the remote's closing line; with `--remote-required`, a remote error is exit 2.
+fn remote_closing(
+    cache: &groove::engine::remote::RemoteCache,
+    required: bool,
+) -> Result<ExitCode, EngineError> {
+    println!("groove: {}", cache.closing_line());
+    match (required, cache.first_error()) {
+        (true, Some(e)) => Err(EngineError::Usage(format!(
+            "the remote {} is required (--remote-required) but failed: {e}; fix it or drop --remote-required",
+            cache.describe()
+        ))),
+        _ => Ok(ExitCode::SUCCESS),
+    }
+}
+
 /// Run one verb. `Ok` carries the exit code of a verb that ran (0, or 1 for a failed check).
 pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
     let catalog = Catalog::with_kinds(groove::stages::registry());
@@ -27,6 +56,8 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             jobs,
             force,
             dry_run,
+            executor,
+            remote,
         } => {
             let pipeline = load(&project, &catalog)?;
             let opts = RunOptions {
@@ -35,6 +66,8 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                 jobs,
                 dry_run,
                 quiet: false,
+                remote: remote_settings(&project, &remote)?,
+                slurm: executor == Executor::Slurm,
             };
             let summary = run(&catalog, &pipeline, &opts)?;
             if dry_run {
@@ -60,6 +93,56 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                 summary.elapsed_s,
                 pipeline.show(&shown)
             );
+            if let Some(line) = &summary.slurm_line {
+                println!("groove: {line}");
+            }
+            if let Some(line) = &summary.remote_line {
+                println!("groove: {line}");
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Verb::Push { project, remote } => {
+            let pipeline = load(&project, &catalog)?;
+            let Some(settings) = remote_settings(&project, &remote)? else {
+                return Err(EngineError::Usage("no remote to push to; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
+            };
+            if settings.read_only {
+                return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
+            }
+            let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+            let store = groove::engine::store::Store::at(&pipeline.root);
+            let lock = groove::engine::lockfile::PipelineLock::load(&groove::engine::context::lock_path(&pipeline));
+            let keys = groove::engine::remote::sync::lock_keys(&lock);
+            let synced = groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
+            println!(
+                "groove: push: {} keys in pipeline.lock, {} not in the local store",
+                synced.keys, synced.skipped
+            );
+            remote_closing(&cache, settings.required)
+        }
+        Verb::Pull { project, remote } => {
+            let pipeline = load(&project, &catalog)?;
+            let Some(settings) = remote_settings(&project, &remote)? else {
+                return Err(EngineError::Usage("no remote to pull from; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
+            };
+            let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+            let fresh = groove::engine::remote::sync::pull(&catalog, &pipeline, &cache)?;
+            println!(
+                "groove: pull: {fresh} of {} stages now have every result in the local store",
+                pipeline.stages.len()
+            );
+            remote_closing(&cache, settings.required)
+        }
+        Verb::SlurmStep { file } => {
+            let threads = std::env::var("SLURM_CPUS_PER_TASK")
+                .ok()
+                .and_then(|v| v.parse::<usize>().ok())
+                .unwrap_or(1);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.max(1))
+                .build()
+                .map_err(|e| EngineError::Usage(format!("cannot start worker threads: {e}")))?;
+            pool.install(|| groove::engine::slurm::worker::run_step(&catalog, &file))?;
             Ok(ExitCode::SUCCESS)
         }
         Verb::Status { project, json } => {

@@ -19,6 +19,12 @@ pub struct Context<'a> {
     /// `pipeline.lock` as it was before this evaluation.
     pub lock: PipelineLock,
     pub progress: Progress,
+    /// The shared remote cache, looked up after the local store (`None`: local only).
+    pub remote: Option<std::sync::Arc<super::remote::RemoteCache>>,
+    /// Uploads each local commit to the remote (`None`: no remote, or read-only).
+    pub pusher: Option<super::remote::push::Pusher>,
+    /// Runs the keys that must run elsewhere, as Slurm job steps (`None`: on this machine).
+    pub steps: Option<Box<dyn super::slurm::job::StepRunner>>,
 }
 
 impl<'a> Context<'a> {
@@ -32,6 +38,9 @@ impl<'a> Context<'a> {
             hashes,
             lock: PipelineLock::load(&lock_path(pipeline)),
             progress,
+            remote: None,
+            pusher: None,
+            steps: None,
         }
     }
 }

@@ -103,8 +103,8 @@ fn evaluate_stage(
     bind_provenance(ctx, spec, done, &mut bound);
     let units = unit_keys(ctx, spec, &bound, seed)?;
     let mut entries: Vec<Option<Entry>> = units
-        .iter()
-        .map(|(_, k)| ctx.store.entry_checked(k, &ctx.hashes))
+        .par_iter()
+        .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
         .collect();
     let missing: Vec<Option<String>> = units
         .iter()
@@ -344,9 +344,51 @@ fn run_units(
         return Ok(0);
     }
     ctx.progress.started(&spec.name, todo.len());
+    let results: Vec<Result<Entry, EngineError>> = match &ctx.steps {
+        // elsewhere: job steps of a Slurm allocation
+        Some(runner) => {
+            let units: Vec<(Option<String>, String)> =
+                todo.iter().map(|&i| units[i].clone()).collect();
+            let job = step_job(ctx, spec, bound, &units, seed)?;
+            runner.run_units(&ctx.store, &job, spec.foreach.is_some())
+        }
+        None => run_here(ctx, spec, bound, units, &todo, seed)?,
+    };
+    // every committed key is pushed, even when another key of the stage failed
+    let mut executed = 0;
+    let mut first_error = None;
+    for (&i, r) in todo.iter().zip(results) {
+        match r {
+            Ok(entry) => {
+                if let Some(p) = &ctx.pusher {
+                    p.submit(&units[i].1, &entry);
+                }
+                entries[i] = Some(entry);
+                executed += 1;
+            }
+            Err(e) => {
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    match first_error {
+        Some(e) => Err(e),
+        None => Ok(executed),
+    }
+}
+
+/// Run keys in this process, items in parallel on the rayon pool.
+fn run_here(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    units: &[(Option<String>, String)],
+    todo: &[usize],
+    seed: u64,
+) -> Result<Vec<Result<Entry, EngineError>>, EngineError> {
     let shared = load_shared(ctx, spec, bound)?;
     let finished = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<Result<Entry, EngineError>> = todo
+    Ok(todo
         .par_iter()
         .map(|&i| {
             let (item, key) = (units[i].0.as_deref(), &units[i].1);
@@ -357,13 +399,7 @@ fn run_units(
             }
             result
         })
-        .collect();
-    let mut executed = 0;
-    for (&i, r) in todo.iter().zip(results) {
-        entries[i] = Some(r?);
-        executed += 1;
-    }
-    Ok(executed)
+        .collect())
 }
 
 /// The stage's outputs from its complete entries: a per-item stage's files gathered into
@@ -430,4 +466,51 @@ fn report_finished(ctx: &Context, spec: &StageSpec, started: Instant, executed: 
         _ => format!("ran in {secs:.2} s"),
     };
     ctx.progress.finished(&spec.name, &what);
+}
+
+/// What a job step elsewhere needs to run `units` of a stage: the pipeline and overrides, the
+/// inputs (project paths, or store blobs; engine-made bytes are put in the store first).
+fn step_job(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, super::execute::Bound>,
+    units: &[(Option<String>, String)],
+    seed: u64,
+) -> Result<super::slurm::job::StepJob, EngineError> {
+    use super::execute::Source;
+    use super::slurm::job::{StepInput, StepJob, StepUnit};
+    let mut inputs = BTreeMap::new();
+    for (name, b) in bound {
+        let path = match &b.source {
+            Source::Path(p) => Some(p.clone()),
+            Source::Store => None,
+            Source::Memory(bytes) => {
+                ctx.store.put_object(bytes)?;
+                None
+            }
+        };
+        inputs.insert(
+            name.clone(),
+            StepInput {
+                stored: b.stored.clone(),
+                path,
+            },
+        );
+    }
+    Ok(StepJob {
+        config: ctx.pipeline.config_path.clone(),
+        data: Some(ctx.pipeline.data_dir.clone()),
+        reports: Some(ctx.pipeline.reports_dir.clone()),
+        stage: spec.name.clone(),
+        code: ctx.catalog.fingerprint(&spec.kind).to_string(),
+        seed,
+        inputs,
+        units: units
+            .iter()
+            .map(|(item, key)| StepUnit {
+                item: item.clone(),
+                key: key.clone(),
+            })
+            .collect(),
+    })
 }

@@ -24,6 +24,10 @@ pub struct RunOptions {
     pub dry_run: bool,
     /// Print no progress (library use, tests).
     pub quiet: bool,
+    /// The shared remote cache to use, if any.
+    pub remote: Option<super::remote::Settings>,
+    /// Run the stages that must run as Slurm job steps inside one allocation.
+    pub slurm: bool,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -35,6 +39,11 @@ pub struct RunSummary {
     /// For `--dry-run`: the stale stages and why.
     pub would_run: Vec<StageStatus>,
     pub elapsed_s: f64,
+    /// The remote's closing line (hits, misses, errors, requests), when a remote was used.
+    pub remote_line: Option<String>,
+    pub remote: Option<super::remote::Tally>,
+    /// Slurm allocations taken and job steps run, when the Slurm executor was used.
+    pub slurm_line: Option<String>,
 }
 
 fn check_names(pipeline: &Pipeline, names: &[String]) -> Result<(), EngineError> {
@@ -86,17 +95,37 @@ pub fn run(
         ))
     })?;
     // read pipeline.lock only now that no other run can be writing it
-    let ctx = Context::new(catalog, pipeline, progress);
+    let mut ctx = Context::new(catalog, pipeline, progress);
     ctx.store.sweep_tmp()?;
+    if let Some(settings) = &opts.remote {
+        let cache = std::sync::Arc::new(super::remote::open(settings, &pipeline.root)?);
+        if !settings.read_only {
+            ctx.pusher = Some(super::remote::push::Pusher::start(
+                std::sync::Arc::clone(&cache),
+                &ctx.store,
+                settings.jobs,
+            ));
+        }
+        ctx.remote = Some(cache);
+    }
+    if opts.slurm {
+        let config = super::slurm::config::load(&pipeline.config_path)?;
+        ctx.steps = Some(Box::new(super::slurm::SlurmExecutor::new(config)?));
+    }
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
     super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
     let jobs = opts
         .jobs
         .unwrap_or_else(|| {
-            std::thread::available_parallelism()
+            let cores = std::thread::available_parallelism()
                 .map(|n| n.get())
-                .unwrap_or(1)
+                .unwrap_or(1);
+            // with Slurm, as many stages at once as the allocation has CPUs
+            match &ctx.steps {
+                Some(s) => cores.max(s.slots()),
+                None => cores,
+            }
         })
         .max(1);
     let pool = rayon::ThreadPoolBuilder::new()
@@ -144,9 +173,19 @@ pub fn run(
         }
     }
     ctx.hashes.save()?;
+    if let Some(p) = ctx.pusher.take() {
+        p.finish();
+    }
+    if let Some(steps) = ctx.steps.take() {
+        summary.slurm_line = Some(steps.finish());
+    }
     ctx.progress.finish();
     summary.elapsed_s = ctx.progress.start.elapsed().as_secs_f64();
 
+    if let Some(cache) = &ctx.remote {
+        summary.remote_line = Some(cache.closing_line());
+        summary.remote = Some(cache.tally());
+    }
     let mut log = ctx.progress.lines();
     log.push(format!(
         "run: {} ran, {} reused, {} failed, {:.3} s",
@@ -157,6 +196,16 @@ pub fn run(
     ));
     append_log(&store_dir.join("run.log"), &log)?;
 
+    if let (Some(cache), Some(settings)) = (&ctx.remote, &opts.remote) {
+        if settings.required {
+            if let Some(first) = cache.first_error() {
+                return Err(EngineError::Usage(format!(
+                    "the remote {} is required (--remote-required) but failed: {first}; fix it or drop --remote-required",
+                    cache.describe()
+                )));
+            }
+        }
+    }
     let mut errors = errors.into_iter();
     if let Some(first) = errors.next() {
         for e in errors {

@@ -10,6 +10,10 @@ pub struct RawPipeline {
     pub project: Option<Spanned<RawProject>>,
     #[serde(default)]
     pub stages: BTreeMap<Spanned<String>, Spanned<RawStage>>,
+    /// `[remote]`: read by `engine::remote::settings`.
+    pub remote: Option<toml::Value>,
+    /// `[slurm]`: read by `engine::slurm::config`.
+    pub slurm: Option<toml::Value>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -33,6 +37,8 @@ pub struct RawStage {
     #[serde(default)]
     pub params: BTreeMap<Spanned<String>, Spanned<toml::Value>>,
     pub cmd: Option<Spanned<String>>,
+    /// `[stages.NAME.slurm]`: read by `engine::slurm::config`.
+    pub slurm: Option<toml::Value>,
 }
 
 /// An input binding: `"path"`, `"stage:output"`, `"engine:provenance"`, or `{ path, optional }`.

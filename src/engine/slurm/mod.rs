@@ -1,0 +1,15 @@
+//! The Slurm executor: `groove run --executor slurm` takes one allocation and runs the stages
+//! that must run (and batches of per-item work) as job steps (`srun --exact`) inside it.
+//!
+//! [`config`] reads `[slurm]` and per-stage resources, [`alloc`] holds the allocation and runs
+//! steps, [`job`] is the file a step reads. A step runs `groove slurm-step FILE` on a compute
+//! node: it executes its keys and commits each into the project's store (which must be on a
+//! filesystem the nodes share), then exits; the controller then opens the committed entries.
+
+pub mod alloc;
+pub mod config;
+pub mod job;
+pub mod executor;
+pub mod worker;
+
+pub use executor::SlurmExecutor;
