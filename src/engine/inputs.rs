@@ -16,6 +16,11 @@ pub fn item_name_ok(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
 }
 
+/// A dataset file's name may also hold inner spaces (TrackMate's `Spots in tracks statistics.csv`).
+fn input_name_ok(name: &str) -> bool {
+    name.trim() == name && item_name_ok(&name.replace(' ', "_"))
+}
+
 /// The top-level regular files of a directory, sorted by name (dotfiles skipped).
 pub fn dir_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, EngineError> {
     let mut out = Vec::new();
@@ -25,9 +30,9 @@ pub fn dir_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, EngineError> {
         if name.starts_with('.') || !entry.file_type().at(&entry.path())?.is_file() {
             continue;
         }
-        if !item_name_ok(&name) {
+        if !input_name_ok(&name) {
             return Err(EngineError::Usage(format!(
-                "{}: file name `{name}` may use only letters, digits, `.`, `_` and `-`; rename the file",
+                "{}: file name `{name}` may use only letters, digits, spaces, `.`, `_` and `-`; rename the file",
                 dir.display()
             )));
         }
