@@ -362,3 +362,31 @@ fn a_dropped_track_and_a_file_name_with_spaces_reach_the_report() {
     let md = std::fs::read_to_string(p.path().join("reports/report.md")).unwrap();
     assert!(md.contains("Nothing was left out"), "{md}");
 }
+
+#[test]
+fn pixel_locked_trackpy_runs_give_mu_per_material_and_flag_what_cannot_be_fitted() {
+    use groove::fit::aggregate::{aggregate_single, AggregateOptions};
+    let files = folder("trackpy_locked");
+    let got = ingest_ok(&files, &params());
+    let fs = fits(&got.recordings);
+    let (v0, mu) = truth();
+    let summary = aggregate_single(&fs, &AggregateOptions::default(), 7);
+    let recovered = fs.iter().filter(|f| f.restarted).count();
+    eprintln!("pixel-locked runs recovered by restarts: {recovered} of {}", fs.len());
+    for f in &fs {
+        let listed = summary.materials[&f.material].left_out.iter().any(|l| l.run == f.run);
+        // A fit far from the truth is never averaged in: it is flagged and listed.
+        let mu_se = f.mu_se.unwrap_or(f64::INFINITY);
+        let wrong = (f.mu - mu[&f.material]).abs() > 0.05 + 3.0 * mu_se
+            || (f.v0_mps - v0[&f.run]).abs() > 0.05 * v0[&f.run].abs();
+        if wrong {
+            assert_ne!(f.status, "converged", "{f:?}");
+        }
+        assert_eq!(listed, f.status != "converged", "{}", f.run);
+    }
+    for (m, s) in &summary.materials {
+        let w = s.mu_weighted.value;
+        assert!((w - mu[m]).abs() < 0.01, "material {m}: weighted mu {w}, truth {}", mu[m]);
+    }
+}
+

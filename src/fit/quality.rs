@@ -46,15 +46,20 @@ pub fn suspect_reasons(
             m.t1_s
         ));
     }
-    if let Some(v_early) = early_speed(t_s, z_m) {
-        if (x[V0] - v_early).abs() > V0_TOLERANCE * v_early.abs() {
+    let r: Vec<f64> = (0..n).map(|i| z_m[i] - m.eval(t_s[i], 0.0)).collect();
+    // The first frames' speed against the fitted model's over the same frames: the slope of the
+    // residuals there, which a fit in the right basin keeps within its error.
+    let w = (n / 10).clamp(10, 40).min(n);
+    if let Some((slope, se)) = line_slope(&t_s[..w], &r[..w]) {
+        let model_speed = (m.eval(t_s[w - 1], 0.0) - m.eval(t_s[0], 0.0)) / (t_s[w - 1] - t_s[0]);
+        if slope.abs() > V0_TOLERANCE * model_speed.abs() + 3.0 * se {
             why.push(format!(
-                "v0 = {:.4} m/s is far from the first frames' speed {v_early:.4} m/s",
-                x[V0]
+                "v0 = {:.4} m/s is far from the first frames' speed: the model runs at {model_speed:.4} m/s over the first {w} frames, the data at {:.4} ± {se:.4} m/s",
+                x[V0],
+                model_speed + slope
             ));
         }
     }
-    let r: Vec<f64> = (0..n).map(|i| z_m[i] - m.eval(t_s[i], 0.0)).collect();
     if let Some(ratio) = structure(&r) {
         if ratio > STRUCTURE_FACTOR {
             why.push(format!(
@@ -68,6 +73,11 @@ pub fn suspect_reasons(
 /// The speed at the first frame from a quadratic through the first frames (a tenth of the run,
 /// 10 to 40 frames), fitted by least squares; `None` if too few frames.
 pub fn early_speed(t_s: &[f64], z_m: &[f64]) -> Option<f64> {
+    early_speed_se(t_s, z_m).map(|(v, _)| v)
+}
+
+/// [`early_speed`] and its standard error from the quadratic's residuals.
+pub fn early_speed_se(t_s: &[f64], z_m: &[f64]) -> Option<(f64, f64)> {
     let n = (t_s.len() / 10).clamp(10, 40).min(t_s.len());
     if n < 6 {
         return None;
@@ -87,7 +97,32 @@ pub fn early_speed(t_s: &[f64], z_m: &[f64]) -> Option<f64> {
         }
     }
     let sol = solve3(s, y)?;
-    sol[1].is_finite().then_some(sol[1])
+    let rss: f64 = (0..n)
+        .map(|i| {
+            let tau = t_s[i] - t0;
+            (z_m[i] - sol[0] - sol[1] * tau - sol[2] * tau * tau).powi(2)
+        })
+        .sum();
+    let inv_bb = solve3(s, [0.0, 1.0, 0.0])?[1];
+    let se = (rss / (n - 3) as f64 * inv_bb.max(0.0)).sqrt();
+    (sol[1].is_finite() && se.is_finite()).then_some((sol[1], se))
+}
+
+/// Least-squares slope of y on t and its standard error; `None` for fewer than 4 points.
+fn line_slope(t: &[f64], y: &[f64]) -> Option<(f64, f64)> {
+    let n = t.len().min(y.len());
+    if n < 4 {
+        return None;
+    }
+    let tm = t[..n].iter().sum::<f64>() / n as f64;
+    let ym = y[..n].iter().sum::<f64>() / n as f64;
+    let sxx: f64 = t[..n].iter().map(|v| (v - tm).powi(2)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let b = (0..n).map(|i| (t[i] - tm) * (y[i] - ym)).sum::<f64>() / sxx;
+    let rss: f64 = (0..n).map(|i| (y[i] - ym - b * (t[i] - tm)).powi(2)).sum();
+    Some((b, (rss / (n - 2) as f64 / sxx).sqrt()))
 }
 
 fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
