@@ -51,6 +51,15 @@ pub struct SingleFit {
     pub n_outliers: usize,
     pub iterations: u32,
     pub termination: Termination,
-    /// `converged`, `max_iterations` or `failed` (the status column of fits.csv).
+    /// `converged`, `suspect` (converged, but see `suspect`), `max_iterations` or `failed` (the
+    /// status column of fits.csv). Only `converged` fits enter the aggregates.
     pub status: String,
+    /// Why a converged fit is suspect (a parameter at a bound, the switch to rolling outside the
+    /// recording, v0 far from the first frames' speed, structured residuals); empty if it is not.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub suspect: Vec<String>,
+    /// True if the fit from the data's start values was suspect and a restart from other start
+    /// values gave a fit that is not.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub restarted: bool,
 }

@@ -45,6 +45,17 @@ pub struct MaterialSummary {
     pub mu_vs_v0: FrictionLine,
     /// Smallest and largest |v0| of the converged runs.
     pub speed_range_mps: Option<[f64; 2]>,
+    /// Runs left out of every aggregate (fit suspect, failed or unfinished), with the reason.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left_out: Vec<LeftOut>,
+}
+
+/// A run the aggregates leave out, and why.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LeftOut {
+    pub run: String,
+    pub status: String,
+    pub why: String,
 }
 
 /// Everything about the single runs.

@@ -16,6 +16,11 @@ pub fn item_name_ok(name: &str) -> bool {
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
 }
 
+/// A dataset file's name may also hold inner spaces (TrackMate's `Spots in tracks statistics.csv`).
+fn input_name_ok(name: &str) -> bool {
+    name.trim() == name && item_name_ok(&name.replace(' ', "_"))
+}
+
 /// The top-level regular files of a directory, sorted by name. Dotfiles are skipped; a symlink
 /// counts as the regular file it points to (a dangling one is skipped). A file whose name is not
 /// an item name (`notes (copy).txt`) is no part of the input: it is skipped, and named once per
@@ -29,7 +34,7 @@ pub fn dir_files(dir: &Path) -> Result<Vec<(String, PathBuf)>, EngineError> {
         if name.starts_with('.') || !std::fs::metadata(entry.path()).is_ok_and(|m| m.is_file()) {
             continue;
         }
-        if !item_name_ok(&name) {
+        if !input_name_ok(&name) {
             note_skipped(dir, &name);
             continue;
         }

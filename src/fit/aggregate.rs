@@ -2,9 +2,9 @@
 //! the T-vs-v0 and μ-vs-v0 lines, each with a seeded bootstrap interval over whole runs.
 
 use super::bootstrap::percentile_intervals;
-use super::regression::{mean_where, weighted_mean};
+use super::regression::{mean_where, robust_weighted_mean};
 use super::single::SingleFit;
-use super::summary::{DragLine, Estimate, FrictionLine, MaterialSummary, SingleSummary};
+use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
 use crate::stats::ols_indexed as line_fit;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -97,7 +97,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         let (ta, tb) = line_fit(&speed, &t, idx);
         let (ma, mb) = line_fit(&speed, &mu, idx);
         [
-            weighted_mean(&mu, &mu_se, idx),
+            robust_weighted_mean(&mu, &mu_se, idx),
             mean_where(&mu, idx, fast),
             ta,
             tb,
@@ -133,6 +133,18 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
             slope_per_mps: est(5),
         },
         speed_range_mps,
+        left_out: fits
+            .iter()
+            .filter(|f| f.status != "converged")
+            .map(|f| LeftOut {
+                run: f.run.clone(),
+                status: f.status.clone(),
+                why: match f.suspect.is_empty() {
+                    true => format!("the fit ended with {:?}", f.termination),
+                    false => f.suspect.join("; "),
+                },
+            })
+            .collect(),
     }
 }
 

@@ -18,6 +18,7 @@ pub mod loss;
 pub mod model;
 mod nan_null;
 pub mod options;
+pub mod quality;
 pub mod regression;
 pub mod residual_stats;
 pub mod residuals;

@@ -2,7 +2,8 @@
 //! (within the first frame) and initial velocity v0 (its sign is the direction), robustly.
 
 use super::lm::Workspace;
-use super::model::{Prepared, MU, T0, TD, V0, Z0};
+use super::model::{Prepared, MU, NP, T0, TD, V0, Z0};
+use super::quality::{early_speed, suspect_reasons};
 use super::options::FitOptions;
 use super::robust::fit_robust;
 use super::segment::{model_bounds, settings};
@@ -61,9 +62,37 @@ pub fn fit_track(
         t_ref_s: 0.0,
         groove,
     };
-    let r = fit_robust(&prob, x0, &bounds, &settings(opts), ws);
+    let first = fit_robust(&prob, x0, &bounds, &settings(opts), ws);
+    let reasons = |x: &[f64; NP]| suspect_reasons(t_s, z_m, x, &bounds.lo, &bounds.hi, groove);
+    let mut why = reasons(&first.x);
+    let mut r = first;
+    let mut restarted = false;
+    if r.termination.is_converged() && !why.is_empty() {
+        // Restarts: v0 from the first frames' speed (a local quadratic), μ spread over its
+        // physical range, T from the data's start. The clean fit with the smallest RMS wins.
+        let mut best: Option<(super::robust::RobustFit, Vec<String>)> = None;
+        for x in restarts(x0, early_speed(t_s, z_m), &bounds) {
+            let f = fit_robust(&prob, x, &bounds, &settings(opts), ws);
+            if !f.termination.is_converged() {
+                continue;
+            }
+            let w = reasons(&f.x);
+            if w.is_empty() && best.as_ref().is_none_or(|(b, _)| f.rms < b.rms) {
+                best = Some((f, w));
+            }
+        }
+        if let Some((f, w)) = best {
+            r = f;
+            why = w;
+            restarted = true;
+        }
+    }
     let x = r.x;
     let t1_s = Prepared::new(&x, groove).map_or(f64::NAN, |m| m.t1_s);
+    let status = match (r.termination.is_converged(), why.is_empty()) {
+        (true, false) => "suspect".to_string(),
+        _ => r.termination.status_word().to_string(),
+    };
     SingleFit {
         run: String::new(),
         material: String::new(),
@@ -87,8 +116,33 @@ pub fn fit_track(
         n_outliers: r.n_outliers,
         iterations: r.iterations,
         termination: r.termination,
-        status: r.termination.status_word().to_string(),
+        status,
+        suspect: if r.termination.is_converged() { why } else { Vec::new() },
+        restarted,
     }
+}
+
+/// Start values for restarting a suspect fit: v0 from the early speed (if the data give one of
+/// the right sign) or the data's start, each with μ at 0.1, 0.3 and 0.6 and T at the data's start
+/// and ten times it.
+fn restarts(x0: [f64; NP], v_early: Option<f64>, bounds: &super::lm::Bounds) -> Vec<[f64; NP]> {
+    let mut v0s = vec![x0[V0]];
+    if let Some(v) = v_early.filter(|v| v.signum() == x0[V0].signum() && v.abs() > 1e-6) {
+        v0s.insert(0, v);
+    }
+    let mut out = Vec::new();
+    for &v0 in &v0s {
+        for mu in [0.1, 0.3, 0.6] {
+            for td in [x0[TD], 10.0 * x0[TD]] {
+                let mut x = x0;
+                x[V0] = v0.clamp(bounds.lo[V0], bounds.hi[V0]);
+                x[MU] = mu;
+                x[TD] = td.clamp(bounds.lo[TD], bounds.hi[TD]);
+                out.push(x);
+            }
+        }
+    }
+    out
 }
 
 fn failed(n: usize, groove: Groove, why: Termination) -> SingleFit {
@@ -117,5 +171,7 @@ fn failed(n: usize, groove: Groove, why: Termination) -> SingleFit {
         iterations: 0,
         termination: why,
         status: why.status_word().to_string(),
+        suspect: Vec::new(),
+        restarted: false,
     }
 }

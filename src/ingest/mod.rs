@@ -9,9 +9,11 @@
 #![allow(clippy::result_large_err)]
 
 mod assemble;
+mod axis;
 mod csv_check;
 pub mod error;
 mod interchange;
+mod manifest;
 pub mod output;
 pub mod params;
 mod samples;
@@ -19,11 +21,12 @@ pub mod sanity;
 mod spots;
 mod table;
 mod trackmate;
+mod trackmate_xml;
 mod trackpy;
 
 pub use error::{IngestError, Problem};
 pub use output::{item_name, skipped_json, table_parquet, Skipped};
-pub use params::{Axis, Calibration, Format, IngestParams};
+pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
 use crate::recording::Recording;
 use samples::{RunRow, SampleFile};
@@ -31,7 +34,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use table::Table;
 
-/// The result of ingesting a dataset: the usable runs sorted by id, and the runs left out.
+/// The result of ingesting a dataset: the usable runs sorted by id, and what was left out: runs
+/// (with `skip_bad_runs`), and tracks or spots of tracker exports (the run itself is kept; its
+/// reason starts with `track` or a count of spots).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ingested {
     pub recordings: Vec<Recording>,
@@ -58,7 +63,7 @@ pub fn ingest(
             p.fix,
         )
     })?;
-    let (runs, sample_files, mut problems) = read_sources(files, params)?;
+    let (runs, sample_files, mut problems, notes) = read_sources(files, params)?;
     let mut recordings = assemble::assemble(&runs, &sample_files, params.min_frames, &mut problems);
     if recordings.is_empty() && problems.is_empty() {
         problems.push(Problem::file(
@@ -71,7 +76,7 @@ pub fn ingest(
     if problems.is_empty() {
         return Ok(Ingested {
             recordings,
-            skipped: Vec::new(),
+            skipped: notes,
         });
     }
     if !params.skip_bad_runs || problems.iter().any(|p| p.run.is_none()) {
@@ -95,7 +100,11 @@ pub fn ingest(
         ));
         return Err(IngestError::new(all));
     }
-    let skipped = by_run
+    let mut skipped: Vec<Skipped> = notes
+        .into_iter()
+        .filter(|n| !by_run.contains_key(&n.run))
+        .collect();
+    skipped.extend(by_run
         .into_iter()
         .map(|(run, mut ps)| {
             ps.sort();
@@ -107,8 +116,8 @@ pub fn ingest(
                 run,
                 reason: format!("{}{more}", ps[0]),
             }
-        })
-        .collect();
+        }));
+    skipped.sort();
     Ok(Ingested {
         recordings,
         skipped,
@@ -137,20 +146,42 @@ pub fn read_dataset_dir(dir: &Path, params: &IngestParams) -> Result<Vec<Recordi
     Ok(ingest(&files, params)?.recordings)
 }
 
-/// The run rows and sample files of a dataset, and the row-level problems found reading them.
-type Sources = (Vec<RunRow>, Vec<SampleFile>, Vec<Problem>);
+/// The run rows and sample files of a dataset, the row-level problems found reading them, and the
+/// tracks or spots left out of runs that are kept.
+type Sources = (Vec<RunRow>, Vec<SampleFile>, Vec<Problem>, Vec<Skipped>);
 
 /// The run rows and sample files of the dataset in its format, and the row-level problems found.
+/// In `auto` mode a folder with `trajectories.*` is the interchange format; otherwise tracker
+/// exports (with `runs.csv` as their manifest) if there are any, else the interchange format.
 fn read_sources(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
 ) -> Result<Sources, IngestError> {
+    let trajectories = ["trajectories.csv", "trajectories.parquet"]
+        .iter()
+        .any(|f| files.contains_key(*f));
     let interchange_present = INTERCHANGE_FILES.iter().any(|f| files.contains_key(*f));
     match params.format {
         Format::Interchange => read_interchange(files),
-        Format::Auto if interchange_present => read_interchange(files),
-        format => read_trackers(files, format, params),
+        Format::Auto if trajectories => read_interchange(files),
+        format => match read_trackers(files, format, params)? {
+            Some(sources) => Ok(sources),
+            None if interchange_present => read_interchange(files),
+            None => Err(no_dataset_files(files).into()),
+        },
     }
+}
+
+fn no_dataset_files(files: &BTreeMap<String, Vec<u8>>) -> Problem {
+    let names: Vec<&str> = files.keys().map(String::as_str).collect();
+    Problem::file(
+        "the dataset folder",
+        format!(
+            "holds no dataset files (it has: {})",
+            if names.is_empty() { "nothing".to_string() } else { names.join(", ") }
+        ),
+        "add runs.csv and trajectories.csv (see data-format.md), or trackpy or TrackMate exports (CSV or TrackMate XML) with a calibration in the ingest params (see README, Tracker exports)",
+    )
 }
 
 fn read_interchange(files: &BTreeMap<String, Vec<u8>>) -> Result<Sources, IngestError> {
@@ -171,7 +202,7 @@ fn read_interchange(files: &BTreeMap<String, Vec<u8>>) -> Result<Sources, Ingest
     match (read_runs, read_traj) {
         (Ok((runs, mut problems)), Ok((samples, more))) => {
             problems.extend(more);
-            Ok((runs, vec![samples], problems))
+            Ok((runs, vec![samples], problems, Vec::new()))
         }
         (r, t) => Err(IngestError::new(
             [r.err(), t.err()].into_iter().flatten().collect(),
@@ -179,17 +210,34 @@ fn read_interchange(files: &BTreeMap<String, Vec<u8>>) -> Result<Sources, Ingest
     }
 }
 
-/// Tracker exports, one run per CSV file. In `auto` mode each CSV file is recognised by its header
-/// and others are ignored; with an explicit format every CSV file must be of that kind.
+/// Reads the tracker files of the folder: trackpy CSV (one run per file, or a `run` column),
+/// TrackMate CSV spot tables and TrackMate XML (one run per file). In `auto` mode each file is
+/// recognised by its header (or root element) and others are ignored; with an explicit format
+/// every CSV file but the manifest must be of that kind. `None` if `auto` found no tracker file.
 fn read_trackers(
     files: &BTreeMap<String, Vec<u8>>,
     format: Format,
     params: &IngestParams,
-) -> Result<Sources, IngestError> {
+) -> Result<Option<Sources>, IngestError> {
+    let axis = params.calibration.axis;
     let mut problems = Vec::new();
     let mut spot_files = Vec::new();
     for (name, bytes) in files {
-        if !name.to_ascii_lowercase().ends_with(".csv") {
+        let lower = name.to_ascii_lowercase();
+        if lower.ends_with(".xml") && format != Format::Trackpy {
+            if format == Format::Auto && !trackmate_xml::looks_like(bytes) {
+                continue;
+            }
+            match trackmate_xml::read(name, bytes, axis, &spots::run_id(name)) {
+                Ok((spots, more)) => {
+                    problems.extend(more);
+                    spot_files.push(spots);
+                }
+                Err(p) => problems.push(p),
+            }
+            continue;
+        }
+        if !lower.ends_with(".csv") || name == manifest::FILE {
             continue;
         }
         let table = match Table::from_csv(name, bytes) {
@@ -206,7 +254,6 @@ fn read_trackers(
             Format::Auto => continue,
             f => f,
         };
-        let axis = params.calibration.axis;
         let read = match kind {
             Format::Trackmate => trackmate::read(table, axis),
             _ => trackpy::read(&table, axis),
@@ -220,36 +267,89 @@ fn read_trackers(
         }
     }
     if spot_files.is_empty() && problems.is_empty() {
-        let names: Vec<&str> = files.keys().map(String::as_str).collect();
-        return Err(Problem::file(
-            "the dataset folder",
-            format!(
-                "holds no dataset files (it has: {})",
-                if names.is_empty() { "nothing".to_string() } else { names.join(", ") }
-            ),
-            "add runs.csv and trajectories.csv (see data-format.md), or trackpy or TrackMate CSV exports with a calibration in the ingest params",
-        )
-        .into());
+        return match format {
+            Format::Auto => Ok(None),
+            _ => Err(no_dataset_files(files).into()),
+        };
     }
-    let cal = params.checked_calibration().map_err(|message| {
-        Problem::file(
-            "pipeline.toml",
-            message,
-            "set it in the ingest params of pipeline.toml",
-        )
-    })?;
+    let (manifest, more) = manifest::load(files, params)?;
+    problems.extend(more);
+    // A file of one run may be renamed by the manifest's `file` column.
+    if let Some(m) = &manifest {
+        for f in &mut spot_files {
+            for rs in &mut f.runs {
+                if rs.named_by_file {
+                    rs.run = m.run_of_file(&f.file, &rs.run);
+                }
+            }
+        }
+        check_manifest_files(m, &spot_files, &mut problems);
+    }
+    if let Some(p) = axis::check(&spot_files, axis) {
+        problems.extend(p);
+    }
     let mut runs = Vec::new();
     let mut sample_files = Vec::new();
-    for spots in &spot_files {
-        match spots::calibrate(spots, &cal) {
-            Ok((run, samples)) => {
-                runs.push(run);
-                sample_files.push(samples);
+    let mut notes = Vec::new();
+    for f in &spot_files {
+        for rs in &f.runs {
+            let calibrated = manifest::resolve(
+                &rs.run,
+                &f.file,
+                manifest.as_ref(),
+                &params.calibration,
+                &f.units,
+            )
+            .and_then(|meta| spots::calibrate(f, rs, &meta));
+            match calibrated {
+                Ok((run, samples, said)) => {
+                    runs.push(run);
+                    sample_files.push(samples);
+                    notes.extend(said.into_iter().map(|reason| Skipped {
+                        run: rs.run.clone(),
+                        reason: format!("{reason} ({})", f.file),
+                    }));
+                }
+                Err(p) => problems.push(p),
             }
-            Err(p) => problems.push(p),
         }
     }
-    Ok((runs, sample_files, problems))
+    Ok(Some((runs, sample_files, problems, notes)))
+}
+
+/// Every manifest row names a run some file holds, and every file it names is in the folder.
+fn check_manifest_files(
+    m: &manifest::Manifest,
+    spot_files: &[spots::SpotFile],
+    problems: &mut Vec<Problem>,
+) {
+    let held: BTreeMap<&str, &str> = spot_files
+        .iter()
+        .flat_map(|f| f.runs.iter().map(move |r| (r.run.as_str(), f.file.as_str())))
+        .collect();
+    for e in &m.entries {
+        if held.contains_key(e.values.run.as_str()) {
+            continue;
+        }
+        let at = |message: String, fix: String| Problem {
+            file: m.source.clone(),
+            row: (m.source == manifest::FILE).then_some(e.row),
+            column: Some("run".into()),
+            run: Some(e.values.run.clone()),
+            message,
+            fix,
+        };
+        problems.push(match &e.values.file {
+            Some(file) if !spot_files.iter().any(|f| &f.file == file) => at(
+                format!("run {:?} is in {file}, which is not a tracker export in the dataset folder", e.values.run),
+                format!("add {file} to the folder, correct the file name, or delete the row"),
+            ),
+            _ => at(
+                format!("run {:?} is in no tracker file of the dataset folder", e.values.run),
+                "add its export (a file named after the run, rows with this run id in a `run` column, or name the file in the row's `file` column), or delete the row".into(),
+            ),
+        });
+    }
 }
 
 /// Two runs whose item names coincide would overwrite each other in the `runs` collection.

@@ -15,6 +15,32 @@ pub struct IngestParams {
     pub min_frames: usize,
     /// How to turn tracker pixels and frames into metres and seconds (trackpy and TrackMate only).
     pub calibration: Calibration,
+    /// Per-run metadata of tracker exports, as the rows of a `runs.csv` manifest would give it
+    /// (`runs = [{ run = "a", material = "316" }, ...]`); empty: none, or `runs.csv` beside them.
+    pub runs: Vec<RunEntry>,
+}
+
+/// One run of tracker exports: which run (and file) it is, and the metadata trackers do not record.
+/// An absent value is taken from the calibration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunEntry {
+    /// The run id (the value of a trackpy `run` column, or the name a one-run file gets).
+    pub run: String,
+    /// The tracker file holding the run, when its name is not the run id (e.g. TrackMate's
+    /// `Spots in tracks statistics.csv`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diameter_m: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub experiment: Option<Experiment>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub setup: Option<Setup>,
 }
 
 impl Default for IngestParams {
@@ -24,6 +50,7 @@ impl Default for IngestParams {
             skip_bad_runs: false,
             min_frames: 20,
             calibration: Calibration::default(),
+            runs: Vec::new(),
         }
     }
 }
@@ -36,9 +63,11 @@ pub enum Format {
     Auto,
     /// runs.csv + trajectories.csv (or .parquet), see data-format.md.
     Interchange,
-    /// trackpy CSV exports, one file per run (run id = file name without `.csv`).
+    /// trackpy CSV exports: one file per run (run id = file name without `.csv`), or files with a
+    /// `run` column naming each row's run.
     Trackpy,
-    /// Fiji TrackMate spot tables, one file per run (run id = file name without `.csv`).
+    /// Fiji TrackMate XML files or spot tables, one file per run (run id = file name without
+    /// `.xml` / `.csv`, or as the manifest maps it).
     Trackmate,
 }
 
@@ -56,7 +85,8 @@ pub enum Axis {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Calibration {
-    /// Metres per pixel (for a TrackMate image calibrated in microns: metres per micron, 1e-6).
+    /// Metres per pixel. Not needed for TrackMate files that state their spatial unit (XML
+    /// `spatialunits`, CSV units row such as `(micron)`): their own unit is used.
     pub m_per_px: Option<f64>,
     /// Camera frame rate, frames per second.
     pub fps: Option<f64>,
@@ -64,7 +94,7 @@ pub struct Calibration {
     pub axis: Axis,
     /// +1 if z grows with the pixel coordinate along `axis`, -1 if it shrinks.
     pub direction: i8,
-    /// Material label of every run from tracker files.
+    /// Material label of every run from tracker files (a manifest's value wins).
     pub material: Option<String>,
     /// Particle diameter in metres.
     pub diameter_m: Option<f64>,
@@ -95,19 +125,6 @@ pub struct ParamProblem {
     pub key: String,
     pub message: String,
     pub fix: String,
-}
-
-/// A calibration with every value needed to convert tracker files present and in range.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CheckedCalibration {
-    pub m_per_px: f64,
-    pub fps: f64,
-    pub axis: Axis,
-    pub direction: f64,
-    pub material: String,
-    pub diameter_m: f64,
-    pub experiment: Experiment,
-    pub setup: Option<Setup>,
 }
 
 impl IngestParams {
@@ -157,40 +174,34 @@ impl IngestParams {
                 return Err(problem(key, message, &fix));
             }
         }
+        for (k, r) in self.runs.iter().enumerate() {
+            if r.run.trim().is_empty() {
+                return Err(problem(
+                    &format!("runs[{k}].run"),
+                    "is empty".into(),
+                    "give the run's id",
+                ));
+            }
+            for (key, value) in [("diameter_m", r.diameter_m), ("fps", r.fps)] {
+                if let Some(v) = value {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(problem(
+                            &format!("runs[{k}].{key}"),
+                            format!("{v} is not positive"),
+                            "use a positive number",
+                        ));
+                    }
+                    let verdict = if key == "fps" {
+                        super::sanity::fps(v)
+                    } else {
+                        super::sanity::diameter(v)
+                    };
+                    if let Err((message, fix)) = verdict {
+                        return Err(problem(&format!("runs[{k}].{key}"), message, &fix));
+                    }
+                }
+            }
+        }
         Ok(())
-    }
-
-    /// The calibration for converting tracker files, or which keys are missing and what they mean.
-    pub fn checked_calibration(&self) -> Result<CheckedCalibration, String> {
-        let c = &self.calibration;
-        let mut missing = Vec::new();
-        if c.m_per_px.is_none() {
-            missing.push("calibration.m_per_px (metres per pixel)");
-        }
-        if c.fps.is_none() {
-            missing.push("calibration.fps (camera frame rate)");
-        }
-        if c.material.as_deref().is_none_or(|m| m.trim().is_empty()) {
-            missing.push("calibration.material (e.g. \"316\")");
-        }
-        if c.diameter_m.is_none() {
-            missing.push("calibration.diameter_m (particle diameter in metres)");
-        }
-        if !missing.is_empty() {
-            return Err(format!(
-                "tracker files need a calibration, and {} is missing",
-                missing.join(", ")
-            ));
-        }
-        Ok(CheckedCalibration {
-            m_per_px: c.m_per_px.unwrap_or_default(),
-            fps: c.fps.unwrap_or_default(),
-            axis: c.axis,
-            direction: f64::from(c.direction),
-            material: c.material.clone().unwrap_or_default(),
-            diameter_m: c.diameter_m.unwrap_or_default(),
-            experiment: c.experiment,
-            setup: c.setup,
-        })
     }
 }

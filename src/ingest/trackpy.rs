@@ -1,4 +1,6 @@
-//! Reads trackpy CSV exports (`,y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle`, pixels, y down).
+//! Reads trackpy CSV exports (`,y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle`, pixels, y
+//! down): one file per run (the run named by the file), or one file of many runs with a `run`
+//! column naming each row's run.
 
 use super::error::Problem;
 use super::params::Axis;
@@ -17,8 +19,8 @@ pub fn looks_like(names: &[String]) -> bool {
     COLUMNS.iter().all(|(c, _)| names.iter().any(|n| n == c))
 }
 
-/// Reads one trackpy table (one run). Rows with problems are left out and returned as problems of
-/// the run. An empty `particle` cell is an unlinked spot.
+/// Reads one trackpy table. Rows with problems are left out and returned as problems of their run.
+/// An empty `particle` cell is an unlinked spot.
 pub fn read(table: &Table, axis: Axis) -> Result<(SpotFile, Vec<Problem>), Problem> {
     table.require(&COLUMNS)?;
     let names = SpotColumns {
@@ -27,6 +29,7 @@ pub fn read(table: &Table, axis: Axis) -> Result<(SpotFile, Vec<Problem>), Probl
         x: "x",
         y: "y",
         key: "particle, frame",
+        run: Some("run"),
     };
     Ok(read_spots(table, &names, axis))
 }

@@ -22,10 +22,14 @@ pub struct SingleRow {
 }
 
 impl SingleRow {
-    /// A fit counts as usable unless its status says it failed.
+    /// A fit counts as usable unless its status says it failed or is suspect.
     pub fn converged(&self) -> bool {
         let s = self.status.to_ascii_lowercase();
-        !(s.contains("fail") || s.contains("diverge") || s.contains("error") || s.contains("nan"))
+        !(s.contains("fail")
+            || s.contains("diverge")
+            || s.contains("error")
+            || s.contains("nan")
+            || s.contains("suspect"))
     }
 }
 

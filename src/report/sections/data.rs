@@ -110,11 +110,28 @@ pub fn block(d: &ReportData) -> Block {
             rms * 1e6
         ));
     }
-    let failed: Vec<String> = d
+    // The aggregate stage lists the runs it left out with the reason (`left_out` per material).
+    let left_out_why = |run: &str| -> Option<String> {
+        let single = d.summary.as_ref()?.single.as_ref()?;
+        single
+            .materials
+            .values()
+            .flat_map(|m| &m.left_out)
+            .find(|l| l.run == run)
+            .map(|l| l.why.clone())
+    };
+    let failed: Vec<(String, String)> = d
         .singles
         .iter()
         .filter(|r| !r.converged())
-        .map(|r| format!("{} ({})", r.run, r.status))
+        .map(|r| {
+            let why = match (r.status.as_str(), left_out_why(&r.run)) {
+                ("suspect", Some(w)) => format!("fit suspect: {w}; excluded from the aggregates"),
+                ("suspect", None) => "fit suspect; excluded from the aggregates".into(),
+                _ => "fit did not converge; excluded from the aggregates".into(),
+            };
+            (format!("{} ({})", r.run, r.status), why)
+        })
         .collect();
     let coll_failed: Vec<String> = d
         .collisions
@@ -145,13 +162,15 @@ pub fn block(d: &ReportData) -> Block {
     } else {
         let mut s = Table::new("Left out", &["run", "why"]);
         for (run, why) in &d.skipped {
-            s.push(vec![run.clone(), format!("skipped at ingest: {why}")]);
+            let at = if why.starts_with("track ") || why.contains(" spots ") {
+                "left out at ingest (the run is kept)"
+            } else {
+                "skipped at ingest"
+            };
+            s.push(vec![run.clone(), format!("{at}: {why}")]);
         }
-        for f in failed {
-            s.push(vec![
-                f,
-                "fit did not converge; excluded from the aggregates".into(),
-            ]);
+        for (f, why) in failed {
+            s.push(vec![f, why]);
         }
         b.table(s);
     }

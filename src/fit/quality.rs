@@ -1,0 +1,167 @@
+//! Fit quality as data: a converged single-run fit whose parameters sit at a bound, whose switch
+//! to rolling falls outside the recording, whose v0 is far from the speed of the first frames, or
+//! whose residuals carry structure far above the run's noise is `suspect`, with the reasons.
+
+use super::model::{Prepared, MU, NP, T0, TD, V0};
+use crate::physics::Groove;
+
+/// v0 further than this fraction from the first frames' speed is suspect.
+const V0_TOLERANCE: f64 = 0.3;
+/// Frames averaged to look for structure in the residuals.
+const WINDOW: usize = 15;
+/// Structure: the windowed mean residual's RMS this many times what white noise of the run's
+/// frame-to-frame scatter would give. A missing physical term (what discovery looks for) gives
+/// a few; a fit in the wrong basin gives far more.
+const STRUCTURE_FACTOR: f64 = 25.0;
+
+/// The reasons a fit of frames `t_s`, `z_m` with parameters `x` is suspect (empty: none).
+/// `lo`, `hi` are the bounds the fit had.
+pub fn suspect_reasons(
+    t_s: &[f64],
+    z_m: &[f64],
+    x: &[f64; NP],
+    lo: &[f64; NP],
+    hi: &[f64; NP],
+    groove: Groove,
+) -> Vec<String> {
+    let mut why = Vec::new();
+    let near = |v: f64, b: f64| b.is_finite() && (v - b).abs() <= 1e-3 * b.abs().max(1e-6);
+    for (i, name) in [(MU, "μ"), (TD, "T"), (V0, "v0")] {
+        if near(x[i], lo[i]) || near(x[i], hi[i]) {
+            why.push(format!("{name} = {:.4e} is at its bound", x[i]));
+        }
+    }
+    let Some(m) = Prepared::new(x, groove) else {
+        why.push("the fitted model cannot be evaluated".into());
+        return why;
+    };
+    let n = t_s.len().min(z_m.len());
+    if n < 3 {
+        return why;
+    }
+    let t_end = t_s[n - 1] + x[T0];
+    if !(m.t1_s.is_finite() && m.t1_s <= t_end) {
+        why.push(format!(
+            "the switch to rolling at {:.4} s falls after the recording ends ({t_end:.4} s)",
+            m.t1_s
+        ));
+    }
+    let r: Vec<f64> = (0..n).map(|i| z_m[i] - m.eval(t_s[i], 0.0)).collect();
+    // The first frames' speed against the fitted model's over the same frames: the slope of the
+    // residuals there, which a fit in the right basin keeps within its error.
+    let w = (n / 10).clamp(10, 40).min(n);
+    if let Some((slope, se)) = line_slope(&t_s[..w], &r[..w]) {
+        let model_speed = (m.eval(t_s[w - 1], 0.0) - m.eval(t_s[0], 0.0)) / (t_s[w - 1] - t_s[0]);
+        if slope.abs() > V0_TOLERANCE * model_speed.abs() + 3.0 * se {
+            why.push(format!(
+                "v0 = {:.4} m/s is far from the first frames' speed: the model runs at {model_speed:.4} m/s over the first {w} frames, the data at {:.4} ± {se:.4} m/s",
+                x[V0],
+                model_speed + slope
+            ));
+        }
+    }
+    if let Some(ratio) = structure(&r) {
+        if ratio > STRUCTURE_FACTOR {
+            why.push(format!(
+                "the residuals carry structure {ratio:.0} times the run's frame-to-frame noise"
+            ));
+        }
+    }
+    why
+}
+
+/// The speed at the first frame from a quadratic through the first frames (a tenth of the run,
+/// 10 to 40 frames), fitted by least squares; `None` if too few frames.
+pub fn early_speed(t_s: &[f64], z_m: &[f64]) -> Option<f64> {
+    early_speed_se(t_s, z_m).map(|(v, _)| v)
+}
+
+/// [`early_speed`] and its standard error from the quadratic's residuals.
+pub fn early_speed_se(t_s: &[f64], z_m: &[f64]) -> Option<(f64, f64)> {
+    let n = (t_s.len() / 10).clamp(10, 40).min(t_s.len());
+    if n < 6 {
+        return None;
+    }
+    let t0 = t_s[0];
+    // normal equations of z = a + b τ + c τ²
+    let mut s = [[0.0; 3]; 3];
+    let mut y = [0.0; 3];
+    for i in 0..n {
+        let tau = t_s[i] - t0;
+        let f = [1.0, tau, tau * tau];
+        for a in 0..3 {
+            y[a] += f[a] * z_m[i];
+            for b in 0..3 {
+                s[a][b] += f[a] * f[b];
+            }
+        }
+    }
+    let sol = solve3(s, y)?;
+    let rss: f64 = (0..n)
+        .map(|i| {
+            let tau = t_s[i] - t0;
+            (z_m[i] - sol[0] - sol[1] * tau - sol[2] * tau * tau).powi(2)
+        })
+        .sum();
+    let inv_bb = solve3(s, [0.0, 1.0, 0.0])?[1];
+    let se = (rss / (n - 3) as f64 * inv_bb.max(0.0)).sqrt();
+    (sol[1].is_finite() && se.is_finite()).then_some((sol[1], se))
+}
+
+/// Least-squares slope of y on t and its standard error; `None` for fewer than 4 points.
+fn line_slope(t: &[f64], y: &[f64]) -> Option<(f64, f64)> {
+    let n = t.len().min(y.len());
+    if n < 4 {
+        return None;
+    }
+    let tm = t[..n].iter().sum::<f64>() / n as f64;
+    let ym = y[..n].iter().sum::<f64>() / n as f64;
+    let sxx: f64 = t[..n].iter().map(|v| (v - tm).powi(2)).sum();
+    if sxx <= 0.0 {
+        return None;
+    }
+    let b = (0..n).map(|i| (t[i] - tm) * (y[i] - ym)).sum::<f64>() / sxx;
+    let rss: f64 = (0..n).map(|i| (y[i] - ym - b * (t[i] - tm)).powi(2)).sum();
+    Some((b, (rss / (n - 2) as f64 / sxx).sqrt()))
+}
+
+fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+    for c in 0..3 {
+        let p = (c..3).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
+        a.swap(c, p);
+        b.swap(c, p);
+        if a[c][c].abs() < 1e-300 {
+            return None;
+        }
+        for r in c + 1..3 {
+            let f = a[r][c] / a[c][c];
+            for k in c..3 {
+                a[r][k] -= f * a[c][k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = [0.0; 3];
+    for c in (0..3).rev() {
+        let s: f64 = (c + 1..3).map(|k| a[c][k] * x[k]).sum();
+        x[c] = (b[c] - s) / a[c][c];
+    }
+    Some(x)
+}
+
+/// RMS of the residuals' windowed means over what white noise with the residuals' frame-to-frame
+/// scatter (1.4826·MAD of first differences / √2) would give; `None` for short runs or no scatter.
+fn structure(r: &[f64]) -> Option<f64> {
+    if r.len() < 3 * WINDOW {
+        return None;
+    }
+    let mut d: Vec<f64> = r.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    d.sort_by(f64::total_cmp);
+    let sigma = 1.4826 * d[d.len() / 2] / 2f64.sqrt();
+    let means: Vec<f64> = r
+        .chunks_exact(WINDOW)
+        .map(|c| c.iter().sum::<f64>() / WINDOW as f64)
+        .collect();
+    let rms = (means.iter().map(|m| m * m).sum::<f64>() / means.len() as f64).sqrt();
+    (sigma > 0.0).then(|| rms / (sigma / (WINDOW as f64).sqrt()))
+}
