@@ -51,7 +51,15 @@ fn fit_rms(model: &Model, v0_mps: f64, noise: &[f64]) -> f64 {
         &FitOptions::default(),
         &mut Workspace::default(),
     );
-    assert_eq!(fit.status, "converged", "v0 {v0_mps}");
+    // A slow run can fit to a bound (μ or T) and is then flagged `suspect` by the fit-quality
+    // checks; its RMS still says how well the baseline mimics the data, which is what concealment
+    // is about, so both finished states count here (a failed or unfinished fit does not).
+    assert!(
+        matches!(fit.status.as_str(), "converged" | "suspect"),
+        "v0 {v0_mps}: {} {:?}",
+        fit.status,
+        fit.suspect
+    );
     fit.rms_m
 }
 
