@@ -20,6 +20,7 @@ pub mod joint;
 pub mod linalg;
 pub mod locate;
 pub mod null_distribution;
+pub mod pairs;
 pub mod perrun;
 pub mod residual_structure;
 pub mod run;
