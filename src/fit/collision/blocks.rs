@@ -26,7 +26,8 @@ pub struct BlockOptions {
     pub irls_rounds: usize,
     /// Huber threshold in whitened units.
     pub huber_c: f64,
-    /// Converged when a step lowers the cost by less than this (χ² units).
+    /// Converged when a step lowers the cost by less than this (χ² units) plus a millionth of
+    /// the cost (a change no statistic can see).
     pub cost_tol: f64,
 }
 
@@ -251,7 +252,7 @@ pub fn minimize_blocks<P: BlockProblem>(
                     cost = c_trial;
                     lambda = (lambda / 3.0).max(1e-12);
                     improved = true;
-                    if drop < opts.cost_tol {
+                    if drop < opts.cost_tol + 1e-6 * cost {
                         termination = Termination::Converged;
                     }
                     break;

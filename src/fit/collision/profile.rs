@@ -79,16 +79,38 @@ pub fn profile_mu_pp(
         let from = fits[i - 1].clone().unwrap();
         fits[i] = Some(solve(grid[i], &from));
     }
-    let fits: Vec<GroupFit> = fits.into_iter().flatten().collect();
+    let mut fits: Vec<(f64, GroupFit)> = grid
+        .iter()
+        .copied()
+        .zip(fits.into_iter().flatten())
+        .collect();
+    // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
+    // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
+    let se_ln = best.result.shared_se(MU_PP) / mu_best;
+    if se_ln.is_finite() && se_ln > 0.0 {
+        let h = (1.96 * se_ln).max(1e-4);
+        for k in [-2.0, -1.0, 1.0, 2.0] {
+            let mu = mu_best * (k * h).exp();
+            let from = if k.abs() > 1.5 {
+                fits.iter()
+                    .min_by(|a, b| (a.0.ln() - mu.ln()).abs().total_cmp(&(b.0.ln() - mu.ln()).abs()))
+                    .map(|f| f.1.clone())
+                    .unwrap_or_else(|| best.clone())
+            } else {
+                best.clone()
+            };
+            fits.push((mu, solve(mu, &from)));
+        }
+    }
+    fits.sort_by(|a, b| a.0.total_cmp(&b.0));
     let c_min = fits
         .iter()
-        .map(GroupFit::cost)
+        .map(|f| f.1.cost())
         .fold(best.cost(), f64::min);
-    let points: Vec<ProfilePoint> = grid
+    let points: Vec<ProfilePoint> = fits
         .iter()
-        .zip(&fits)
-        .map(|(&mu_pp, f)| ProfilePoint {
-            mu_pp,
+        .map(|(mu_pp, f)| ProfilePoint {
+            mu_pp: *mu_pp,
             deviance: (f.cost() - c_min).max(0.0),
             converged: f.converged(),
         })
@@ -109,8 +131,8 @@ pub fn profile_mu_pp(
     }
 }
 
-/// Where the deviance crosses `delta` on either side of the estimate (log-linear
-/// interpolation between grid values), or a one-sided bound when it never does on one side.
+/// Where the deviance crosses `delta` on either side of the estimate (its square root
+/// interpolated linearly in ln μ_pp between profile values), or a one-sided bound when it never does on one side.
 pub fn verdict(points: &[ProfilePoint], estimate: f64, delta: f64) -> ProfileVerdict {
     // the estimate itself is the profile's minimum (deviance 0)
     let mut all: Vec<(f64, f64)> = points
@@ -124,8 +146,10 @@ pub fn verdict(points: &[ProfilePoint], estimate: f64, delta: f64) -> ProfileVer
         .iter()
         .position(|p| p.0 == estimate.ln())
         .unwrap_or(0);
+    // the signed root of the deviance is linear in the parameter near a quadratic minimum
     let cross = |a: (f64, f64), b: (f64, f64)| {
-        let f = (delta - a.1) / (b.1 - a.1);
+        let (ra, rb) = (a.1.max(0.0).sqrt(), b.1.max(0.0).sqrt());
+        let f = (delta.sqrt() - ra) / (rb - ra);
         (a.0 + f * (b.0 - a.0)).exp()
     };
     let lo = (0..c)
