@@ -49,7 +49,7 @@ fn mu_pp_from_slipping_impacts_within_ten_percent() {
     let runs = pair_runs(&recs, "440c");
     assert_eq!(runs.len(), 8);
     let best = fit_group(&runs, &FitSpec::new(Groove::CHAPTER), None, 80);
-    assert_eq!(best.result.termination, Termination::Converged);
+    assert!(best.result.termination.is_converged(), "{:?}", best.result.termination);
     let mu = best.result.shared[MU_PP];
     assert!((mu - 0.3).abs() < 0.03, "μ_pp {mu} vs 0.3");
     let profile = profile_mu_pp(&runs, &best, &default_grid(), 25);

@@ -268,7 +268,8 @@ fn reference_integrator_agrees_with_physics_simulate() {
         for (material, v0) in [(0, 0.08), (1, -0.03), (0, 0.006)] {
             let m = truth.model(material);
             let mut z = vec![0.0; t.len()];
-            m.simulate_reference(1e-3, v0, &t, &mut z, None, None);
+            discover_data::reference::Reference(&m)
+                .simulate_reference(1e-3, v0, &t, &mut z, None, None);
             let traj = simulate(
                 &m.to_physics(),
                 State {

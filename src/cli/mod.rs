@@ -19,7 +19,7 @@ fn load(project: &Project, catalog: &Catalog) -> Result<Pipeline, EngineError> {
 
 /// Run one verb. `Ok` carries the exit code of a verb that ran (0, or 1 for a failed check).
 pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
-    let catalog = Catalog::builtin();
+    let catalog = Catalog::with_kinds(groove::stages::registry());
     match cli.verb {
         Verb::Run {
             stages,

@@ -10,8 +10,8 @@ use super::diagnosis::{CandidateRow, Estimate, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::null_distribution::{empirical_p, NullFit};
-use super::special::normal_sf;
 use super::{Options, G_MPS2};
+use crate::stats::dist::t_upper_quantile;
 use std::collections::BTreeMap;
 
 /// Level of the one-sided paired test that held-out runs improve.
@@ -255,7 +255,8 @@ pub fn run_round(
     let p_holm_e = holm(&p[..ne]);
     let p_holm_p = holm(&p[ne..]);
     // the held-out check confirms a term the LR test already found; one-sided 5 % on the paired t
-    let z_cv = normal_upper_quantile(CV_LEVEL);
+    // over the runs: Student's t with (runs − 1) degrees of freedom
+    let t_cv = t_upper_quantile(CV_LEVEL, runs.len().saturating_sub(1) as f64);
     // cross-validate the significant candidates strongest first; the first that also predicts
     // held-out runs better is the one accepted, so weaker ones need no cross-validation
     // "Strongest" is the LR less a Schwarz penalty of ln(n) per extra parameter: when a
@@ -284,7 +285,7 @@ pub fn run_round(
             opts.folds,
         );
         let t = paired_t(current_cv, &cv);
-        let passes = cv.cv_rms_m < current_cv.cv_rms_m && t > z_cv;
+        let passes = cv.cv_rms_m < current_cv.cv_rms_m && t > t_cv;
         cv_of[i] = Some((cv.clone(), t));
         if passes {
             best = Some((i, cv));
@@ -354,20 +355,6 @@ pub fn run_round(
     }
 }
 
-/// z with P(N(0,1) > z) = p, by bisection on the tail.
-pub fn normal_upper_quantile(p: f64) -> f64 {
-    let (mut lo, mut hi) = (-40.0, 40.0);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if normal_sf(mid) > p {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
 /// Build a finding from an accepted row.
 pub fn finding(
     row: &CandidateRow,
@@ -390,8 +377,10 @@ pub fn finding(
 /// Speed reference of the probes: the median |v0| of the runs.
 pub fn median_speed(local: &[[f64; N_LOCAL]]) -> f64 {
     let mut v: Vec<f64> = local.iter().map(|l| l[2].abs()).collect();
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
+    if v.is_empty() {
+        return 0.0;
+    }
+    crate::stats::upper_median(&mut v)
 }
 
 /// Fold assignment for `runs` given per-run starting values.

@@ -6,7 +6,8 @@
 
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::linalg::{chol_inverse, chol_solve, cholesky_jittered};
+use crate::lsq::dense::{chol_inverse, chol_solve, cholesky_jittered};
+use crate::lsq::fd::inward_step;
 use rayon::prelude::*;
 
 /// A fitted joint model.
@@ -113,10 +114,7 @@ fn block(
     };
     for &j in &idx {
         let mut gp = g.to_vec();
-        let mut h = params[j].step;
-        if gp[j] + h > params[j].hi {
-            h = -h;
-        }
+        let h = inward_step(gp[j], params[j].step, params[j].hi);
         gp[j] += h;
         predict(spec, &gp, l, run, &mut buf);
         cols.push(column(&buf, h));
@@ -129,10 +127,7 @@ fn block(
             continue;
         }
         let mut lp = *l;
-        let mut h = steps[k];
-        if lp[k] + h > lb[k].1 {
-            h = -h;
-        }
+        let h = inward_step(lp[k], steps[k], lb[k].1);
         lp[k] += h;
         predict(spec, g, &lp, run, &mut buf);
         cols.push(column(&buf, h));
@@ -166,20 +161,24 @@ fn block(
     blk
 }
 
-/// The LM step for damping λ: (δg, δl per run), and the undamped Schur matrix when λ = 0.
 /// Parameters held at a bound for one step (active set), globals and per-run locals.
 struct Frozen {
     global: Vec<bool>,
     local: Vec<[bool; N_LOCAL]>,
 }
 
+/// The step and the Schur matrix of one LM iteration: (δg, δl per run, Schur matrix).
+type Step = (Vec<f64>, Vec<[f64; 3]>, Vec<f64>);
+
+/// The LM step for damping λ (with the undamped Schur matrix when λ = 0); None when a run's block
+/// or the reduced system is singular even with jitter (the step is then rejected, never faked).
 fn solve_step(
     blocks: &[Block],
     ng: usize,
     lambda: f64,
     free_global: bool,
     frozen: &Frozen,
-) -> (Vec<f64>, Vec<[f64; 3]>, Vec<f64>) {
+) -> Option<Step> {
     let mut s = vec![0.0; ng * ng];
     let mut rhs = vec![0.0; ng];
     let mut cfac = Vec::with_capacity(blocks.len());
@@ -232,7 +231,7 @@ fn solve_step(
             c[k * 4] *= 1.0 + lambda;
             c[k * 4] += 1e-30;
         }
-        let lc = cholesky_jittered(&c, 3);
+        let lc = cholesky_jittered(&c, 3)?;
         let na = blk.idx.len();
         // B C⁻¹ (na×3) via solving C x = B_rowᵀ
         let mut bci = vec![0.0; na * 3];
@@ -265,7 +264,7 @@ fn solve_step(
         for i in 0..ng {
             sd[i * ng + i] *= 1.0 + lambda;
         }
-        let l = cholesky_jittered(&sd, ng);
+        let l = cholesky_jittered(&sd, ng)?;
         dg = rhs;
         chol_solve(&l, ng, &mut dg);
         for (d, f) in dg.iter_mut().zip(&frozen.global) {
@@ -302,7 +301,7 @@ fn solve_step(
             x
         })
         .collect();
-    (dg, dl, schur)
+    Some((dg, dl, schur))
 }
 
 /// Fit `spec` to `runs` from the given start, with box bounds on every parameter.
@@ -346,14 +345,23 @@ pub fn fit_joint(
             global: vec![false; ng],
             local: vec![[false; N_LOCAL]; runs.len()],
         };
-        schur = solve_step(&blocks, ng, 0.0, false, &none).2;
+        // a singular undamped system leaves NaN standard errors (said as such), not made-up ones
+        schur = solve_step(&blocks, ng, 0.0, false, &none).map_or(vec![f64::NAN; ng * ng], |s| s.2);
         loop {
             // active set: a parameter on a bound whose step points outward is held this step
             let mut frozen = Frozen {
                 global: vec![false; ng],
                 local: vec![[false; N_LOCAL]; runs.len()],
             };
-            let (mut dg, mut dl, _) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen);
+            let Some((mut dg, mut dl, _)) =
+                solve_step(&blocks, ng, lambda, ctl.free_global, &frozen)
+            else {
+                lambda *= 8.0;
+                if lambda > 1e9 {
+                    break 'outer;
+                }
+                continue;
+            };
             for _ in 0..4 {
                 let mut changed = false;
                 for j in 0..ng {
@@ -381,7 +389,11 @@ pub fn fit_joint(
                 if !changed {
                     break;
                 }
-                (dg, dl, _) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen);
+                let Some((dg2, dl2, _)) = solve_step(&blocks, ng, lambda, ctl.free_global, &frozen)
+                else {
+                    break;
+                };
+                (dg, dl) = (dg2, dl2);
             }
             let mut g2: Vec<f64> = g.iter().zip(&dg).map(|(a, b)| a + b).collect();
             clamp_g(&mut g2);
@@ -424,11 +436,16 @@ pub fn fit_joint(
         - (ng * usize::from(ctl.free_global) + N_LOCAL * runs.len()) as f64;
     let scale = (chi2 / dof.max(1.0)).max(1.0);
     let global_se = if ng > 0 && ctl.free_global {
-        let lf = cholesky_jittered(&schur, ng);
-        let inv = chol_inverse(&lf, ng);
-        (0..ng)
-            .map(|i| (inv[i * ng + i].max(0.0) * scale).sqrt())
-            .collect()
+        match cholesky_jittered(&schur, ng) {
+            Some(lf) => {
+                let inv = chol_inverse(&lf, ng);
+                (0..ng)
+                    .map(|i| (inv[i * ng + i].max(0.0) * scale).sqrt())
+                    .collect()
+            }
+            // singular: no standard errors rather than the ~1 an identity factor would give
+            None => vec![f64::NAN; ng],
+        }
     } else {
         vec![0.0; ng]
     };

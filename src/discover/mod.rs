@@ -17,7 +17,6 @@ pub mod drift;
 pub mod forward;
 pub mod holm;
 pub mod joint;
-pub mod linalg;
 pub mod locate;
 pub mod null_distribution;
 pub mod pairs;
@@ -25,7 +24,6 @@ pub mod perrun;
 pub mod residual_structure;
 pub mod run;
 pub mod sim;
-pub mod special;
 
 pub use diagnosis::Diagnosis;
 pub use run::discover;

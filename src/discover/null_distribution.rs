@@ -5,7 +5,7 @@
 //! (moment matched: the χ² family stretched by the dependence of frames within a run), whose tail
 //! gives the p-value used for decisions; the empirical one is reported beside it.
 
-use super::special::gamma_q;
+use crate::stats::dist::gamma_q;
 use serde::Serialize;
 
 /// The null distribution of one statistic.

@@ -12,7 +12,7 @@ use crate::fit::collision::wholerun::{
     fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, TP, T_KICK,
 };
 use super::holm::holm;
-use super::special::{chi2_sf, normal_sf};
+use crate::stats::dist::{chi2_sf, normal_sf};
 use crate::physics::{simulate_pair, Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};

@@ -36,9 +36,12 @@ pub fn local_start(run: &RunData) -> [f64; N_LOCAL] {
             rhs[a] += phi[a] * zi;
         }
     }
-    let l = super::linalg::cholesky_jittered(&m, 3);
-    super::linalg::chol_solve(&l, 3, &mut rhs);
     let t0 = 0.5 / run.fps.max(1.0);
+    let Some(l) = crate::lsq::dense::cholesky_jittered(&m, 3) else {
+        // no frames: nothing to start from but the first sample, if any
+        return [run.z_m.first().copied().unwrap_or(0.0), t0, 1e-6];
+    };
+    crate::lsq::dense::chol_solve(&l, 3, &mut rhs);
     // value and slope at t = −t0 (the kick)
     let u = -t0 - tm;
     let v0 = rhs[1] + 2.0 * rhs[2] * u;
@@ -136,9 +139,7 @@ pub fn measure_noise(
     for pass in 0..2 {
         for (run, fit) in runs.iter_mut().zip(&fits) {
             let res = residuals(run, base, base_params, &[], fit);
-            let mut abs: Vec<f64> = res.iter().map(|r| r.abs()).collect();
-            abs.sort_by(f64::total_cmp);
-            let mad_sigma = (1.4826 * abs[abs.len() / 2]).max(1e-12);
+            let mad_sigma = crate::stats::abs_scale(&res).max(1e-12);
             for (k, r) in run.keep.iter_mut().zip(&res) {
                 *k = r.abs() <= 5.0 * mad_sigma;
             }

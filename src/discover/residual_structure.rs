@@ -2,7 +2,7 @@
 //! the per-run runs test and lag-1 autocorrelation combined over runs.
 
 use super::sim::Motion;
-use super::special::normal_sf;
+use crate::stats::dist::normal_sf;
 use serde::Serialize;
 use std::collections::BTreeMap;
 

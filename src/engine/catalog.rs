@@ -1,5 +1,8 @@
 //! What the engine runs with: the stage kinds, their code fingerprints, and the code identity.
 //!
+//! The engine knows no kind by name: the caller (the command line, or a test) assembles the
+//! catalog from its kinds and hands it in.
+//!
 //! The fingerprint map is data, not a compile-time lookup, so a test can change one kind's
 //! fingerprint and watch exactly that stage and its descendants go stale.
 
@@ -16,10 +19,10 @@ pub struct Catalog {
 }
 
 impl Catalog {
-    /// The built-in kinds of `groove::stages::registry()` with the fingerprints computed by build.rs.
-    pub fn builtin() -> Catalog {
+    /// `kinds` with the code fingerprints that build.rs computed for this binary.
+    pub fn with_kinds(kinds: Vec<Box<dyn StageKind>>) -> Catalog {
         Catalog {
-            kinds: crate::stages::registry(),
+            kinds,
             fingerprints: identity::FINGERPRINTS
                 .iter()
                 .map(|(k, v)| (k.to_string(), v.to_string()))

@@ -5,52 +5,21 @@
 //! upstream outputs, so a stage rerun with byte-identical output leaves its descendants fresh
 //! (early cutoff), and a key seen before is found in the store without running (run-cache).
 
-use super::catalog::Catalog;
+use super::context::{Context, Evaluated};
 use super::dag;
 use super::error::EngineError;
 use super::execute::{execute, load_shared, Bound, Source};
-use super::hashing::{sha256_hex, HashCache};
+use super::hashing::sha256_hex;
 use super::inputs::hash_path;
 use super::key::{items_digest, StageKey};
-use super::lockfile::{LockStage, PipelineLock};
+use super::lockfile::LockStage;
 use super::materialize::{is_current, materialize};
-use super::pipeline::{InputSpec, Pipeline, StageSpec};
-use super::progress::Progress;
+use super::pipeline::{InputSpec, StageSpec};
 use super::provenance;
-use super::store::{Entry, Store, Stored};
+use super::store::{Entry, Stored};
 use rayon::prelude::*;
 use std::collections::{BTreeMap, BTreeSet};
 use std::time::Instant;
-
-/// Everything one evaluation needs.
-pub struct Context<'a> {
-    pub catalog: &'a Catalog,
-    pub pipeline: &'a Pipeline,
-    pub store: Store,
-    pub hashes: HashCache,
-    /// `pipeline.lock` as it was before this evaluation.
-    pub lock: PipelineLock,
-    pub progress: Progress,
-}
-
-impl<'a> Context<'a> {
-    pub fn new(catalog: &'a Catalog, pipeline: &'a Pipeline, progress: Progress) -> Context<'a> {
-        let store = Store::at(&pipeline.root);
-        let hashes = HashCache::load(&store.dir.join("hashes.json"));
-        Context {
-            catalog,
-            pipeline,
-            store,
-            hashes,
-            lock: PipelineLock::load(&lock_path(pipeline)),
-            progress,
-        }
-    }
-}
-
-pub fn lock_path(pipeline: &Pipeline) -> std::path::PathBuf {
-    pipeline.root.join("pipeline.lock")
-}
 
 /// What to do with one stage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,26 +28,6 @@ pub enum Action {
     Check,
     /// Run what is missing from the store (everything if `force`), then write its outputs.
     Run { force: bool },
-}
-
-/// What became of one stage.
-#[derive(Debug, Default)]
-pub struct Evaluated {
-    /// The key and its parts; `None` while an upstream stage's outputs are unknown.
-    pub current: Option<LockStage>,
-    /// Upstream stages whose outputs are unknown.
-    pub waiting_on: Vec<String>,
-    /// While waiting: the key parts known without the inputs (kind, params, cmd, code, seed).
-    pub pending: Option<LockStage>,
-    /// Every key has a complete entry in the store, so `current.outputs` is known.
-    pub complete: bool,
-    /// Keys that had no entry when the evaluation began (item names; `None` = the whole stage).
-    pub missing: Vec<Option<String>>,
-    /// Keys run in this evaluation.
-    pub executed: usize,
-    /// Outputs whose materialized path does not hold the stored content.
-    pub stale_outputs: Vec<String>,
-    pub failed: bool,
 }
 
 /// The seed a stage receives: the pipeline seed mixed with the stage name.
@@ -133,6 +82,8 @@ pub fn evaluate(
     (done, errors)
 }
 
+/// One stage: bind its inputs, compute its keys, run what is missing (when asked), then write or
+/// check its outputs.
 fn evaluate_stage(
     ctx: &Context,
     spec: &StageSpec,
@@ -140,7 +91,81 @@ fn evaluate_stage(
     action: Action,
 ) -> Result<Evaluated, EngineError> {
     let started = Instant::now();
-    let pipeline = ctx.pipeline;
+    let seed = stage_seed(ctx.pipeline.seed, &spec.name);
+    let (mut bound, waiting) = bind_inputs(ctx, spec, done)?;
+    if !waiting.is_empty() {
+        return Ok(Evaluated {
+            waiting_on: waiting.into_iter().collect(),
+            pending: Some(key_parts(ctx, spec, seed, BTreeMap::new())),
+            ..Evaluated::default()
+        });
+    }
+    bind_provenance(ctx, spec, done, &mut bound);
+    let units = unit_keys(ctx, spec, &bound, seed)?;
+    let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
+    let missing: Vec<Option<String>> = units
+        .iter()
+        .zip(&entries)
+        .filter(|(_, e)| e.is_none())
+        .map(|((item, _), _)| item.clone())
+        .collect();
+    let executed = match action {
+        Action::Run { force } => run_units(ctx, spec, &bound, &units, &mut entries, force, seed)?,
+        Action::Check => 0,
+    };
+    let complete = entries.iter().all(Option::is_some);
+    let outputs = if complete {
+        let entries: Vec<&Entry> = entries.iter().flatten().collect();
+        gather_outputs(spec, &units, &entries)?
+    } else {
+        BTreeMap::new()
+    };
+    let items: BTreeMap<String, String> = units
+        .iter()
+        .filter_map(|(item, k)| item.clone().map(|i| (i, k.clone())))
+        .collect();
+    let key = match &spec.foreach {
+        None => units[0].1.clone(),
+        Some(_) => items_digest(&items),
+    };
+    let current = LockStage {
+        key,
+        outputs,
+        items,
+        ..key_parts(
+            ctx,
+            spec,
+            seed,
+            bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
+        )
+    };
+    let stale_outputs = if complete {
+        write_or_check_outputs(ctx, spec, &current, action)?
+    } else {
+        Vec::new()
+    };
+    if let Action::Run { .. } = action {
+        report_finished(ctx, spec, started, executed, units.len());
+    }
+    Ok(Evaluated {
+        current: Some(current),
+        waiting_on: Vec::new(),
+        pending: None,
+        complete,
+        missing,
+        executed,
+        stale_outputs,
+        failed: false,
+    })
+}
+
+/// Bind every path input (hashed) and every upstream output that is known; the second value
+/// names the upstream stages whose outputs are not known yet.
+fn bind_inputs(
+    ctx: &Context,
+    spec: &StageSpec,
+    done: &BTreeMap<String, Evaluated>,
+) -> Result<(BTreeMap<String, Bound>, BTreeSet<String>), EngineError> {
     let mut bound: BTreeMap<String, Bound> = BTreeMap::new();
     let mut waiting = BTreeSet::new();
     for (name, input) in &spec.inputs {
@@ -153,33 +178,22 @@ fn evaluate_stage(
                     return Err(EngineError::Usage(format!(
                         "stage `{}` input `{name}`: {} does not exist; restore it or fix pipeline.toml",
                         spec.name,
-                        pipeline.show(path)
+                        ctx.pipeline.show(path)
                     )));
                 }
                 let stored = hash_path(path, &ctx.hashes)?;
-                bound.insert(
-                    name.clone(),
-                    Bound {
-                        stored,
-                        source: Source::Path(path.clone()),
-                    },
-                );
+                let source = Source::Path(path.clone());
+                bound.insert(name.clone(), Bound { stored, source });
             }
             InputSpec::Stage { stage, output } => {
-                match done
+                let upstream = done
                     .get(stage)
                     .filter(|e| e.complete)
-                    .and_then(|e| e.current.as_ref())
-                {
+                    .and_then(|e| e.current.as_ref());
+                match upstream {
                     Some(up) => {
                         let stored = up.outputs[output].clone();
-                        bound.insert(
-                            name.clone(),
-                            Bound {
-                                stored,
-                                source: Source::Store,
-                            },
-                        );
+                        bound.insert(name.clone(), Bound { stored, source: Source::Store });
                     }
                     None => {
                         waiting.insert(stage.clone());
@@ -189,12 +203,39 @@ fn evaluate_stage(
             InputSpec::Provenance => {}
         }
     }
-    let code = ctx.catalog.fingerprint(&spec.kind);
-    let seed = stage_seed(pipeline.seed, &spec.name);
-    let parts = |inputs: BTreeMap<String, Stored>| LockStage {
+    Ok((bound, waiting))
+}
+
+/// Bind the `engine:provenance` inputs (made once every upstream stage is known).
+fn bind_provenance(
+    ctx: &Context,
+    spec: &StageSpec,
+    done: &BTreeMap<String, Evaluated>,
+    bound: &mut BTreeMap<String, Bound>,
+) {
+    for (name, input) in &spec.inputs {
+        if *input == InputSpec::Provenance {
+            let bytes = provenance::record(ctx, spec, done);
+            let stored = Stored::File {
+                sha256: sha256_hex(&bytes),
+            };
+            let source = Source::Memory(bytes);
+            bound.insert(name.clone(), Bound { stored, source });
+        }
+    }
+}
+
+/// The key parts known without the outputs: kind, code, version, seed, params, cmd and `inputs`.
+fn key_parts(
+    ctx: &Context,
+    spec: &StageSpec,
+    seed: u64,
+    inputs: BTreeMap<String, Stored>,
+) -> LockStage {
+    LockStage {
         kind: spec.kind.clone(),
         key: String::new(),
-        code: code.to_string(),
+        code: ctx.catalog.fingerprint(&spec.kind).to_string(),
         groove_version: ctx.catalog.version.clone(),
         seed,
         params: spec.canonical_params.clone(),
@@ -202,30 +243,16 @@ fn evaluate_stage(
         inputs,
         outputs: BTreeMap::new(),
         items: BTreeMap::new(),
-    };
-    if !waiting.is_empty() {
-        return Ok(Evaluated {
-            waiting_on: waiting.into_iter().collect(),
-            pending: Some(parts(BTreeMap::new())),
-            ..Evaluated::default()
-        });
     }
-    for (name, input) in &spec.inputs {
-        if *input == InputSpec::Provenance {
-            let bytes = provenance::record(ctx, spec, done);
-            let stored = Stored::File {
-                sha256: sha256_hex(&bytes),
-            };
-            bound.insert(
-                name.clone(),
-                Bound {
-                    stored,
-                    source: Source::Memory(bytes),
-                },
-            );
-        }
-    }
+}
 
+/// The keys to look up: one for the whole stage, or one per item of a per-item stage.
+fn unit_keys(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    seed: u64,
+) -> Result<Vec<(Option<String>, String)>, EngineError> {
     let digests: BTreeMap<String, String> = bound
         .iter()
         .map(|(n, b)| (n.clone(), b.stored.digest()))
@@ -240,167 +267,166 @@ fn evaluate_stage(
             item,
             seed,
             groove_version: &ctx.catalog.version,
-            code,
+            code: ctx.catalog.fingerprint(&spec.kind),
         }
         .digest()
     };
-    let units: Vec<(Option<String>, String)> = match &spec.foreach {
-        None => vec![(None, key_of(&digests, None))],
-        Some(f) => {
-            // every per-item input (present) as item → hash; the first one names the items
-            let mut per_item: Vec<(&String, &BTreeMap<String, String>)> = Vec::new();
-            for name in std::iter::once(f).chain(&spec.foreach_with) {
-                match bound.get(name).map(|b| &b.stored) {
-                    None => {}
-                    Some(Stored::Collection { items }) => per_item.push((name, items)),
-                    Some(Stored::File { .. }) => {
-                        return Err(EngineError::StageFailed {
-                            stage: spec.name.clone(),
-                            item: None,
-                            message: format!(
-                                "foreach input `{name}` is a single file; bind it to a folder or to a per-item output"
-                            ),
-                        })
-                    }
-                }
-            }
-            match per_item.first() {
-                Some((first, items)) if *first == f => {
-                    let mut units = Vec::new();
-                    for item in items.keys() {
-                        let mut d = digests.clone();
-                        for (name, items) in &per_item {
-                            let Some(h) = items.get(item) else {
-                                return Err(EngineError::StageFailed {
-                                    stage: spec.name.clone(),
-                                    item: Some(item.clone()),
-                                    message: format!(
-                                        "per-item input `{name}` has no item `{item}`; the inputs in `foreach` must have the same items"
-                                    ),
-                                });
-                            };
-                            d.insert((*name).clone(), h.clone());
-                        }
-                        units.push((Some(item.clone()), key_of(&d, Some(item))));
-                    }
-                    units
-                }
-                // the primary per-item input is an absent optional input: no items
-                _ => Vec::new(),
+    let Some(f) = &spec.foreach else {
+        return Ok(vec![(None, key_of(&digests, None))]);
+    };
+    let per_item = per_item_inputs(spec, bound)?;
+    // the primary per-item input is an absent optional input: no items
+    let Some((_, items)) = per_item.first().filter(|(first, _)| *first == f) else {
+        return Ok(Vec::new());
+    };
+    let mut units = Vec::new();
+    for item in items.keys() {
+        let mut d = digests.clone();
+        for (name, items) in &per_item {
+            let Some(h) = items.get(item) else {
+                return Err(EngineError::StageFailed {
+                    stage: spec.name.clone(),
+                    item: Some(item.clone()),
+                    message: format!(
+                        "per-item input `{name}` has no item `{item}`; the inputs in `foreach` must have the same items"
+                    ),
+                });
+            };
+            d.insert((*name).clone(), h.clone());
+        }
+        units.push((Some(item.clone()), key_of(&d, Some(item))));
+    }
+    Ok(units)
+}
+
+/// Every per-item input that is present, as (name, item → hash), the `foreach` input first.
+fn per_item_inputs<'b>(
+    spec: &'b StageSpec,
+    bound: &'b BTreeMap<String, Bound>,
+) -> Result<Vec<(&'b String, &'b BTreeMap<String, String>)>, EngineError> {
+    let mut per_item = Vec::new();
+    for name in spec.foreach.iter().chain(&spec.foreach_with) {
+        match bound.get(name).map(|b| &b.stored) {
+            None => {}
+            Some(Stored::Collection { items }) => per_item.push((name, items)),
+            Some(Stored::File { .. }) => {
+                return Err(EngineError::StageFailed {
+                    stage: spec.name.clone(),
+                    item: None,
+                    message: format!(
+                        "foreach input `{name}` is a single file; bind it to a folder or to a per-item output"
+                    ),
+                })
             }
         }
-    };
+    }
+    Ok(per_item)
+}
 
-    let mut entries: Vec<Option<Entry>> = units.iter().map(|(_, k)| ctx.store.entry(k)).collect();
-    let missing: Vec<Option<String>> = units
-        .iter()
-        .zip(&entries)
-        .filter(|(_, e)| e.is_none())
-        .map(|((item, _), _)| item.clone())
+/// Run the keys without a store entry (every key if `force`), items in parallel; fills
+/// `entries` and returns how many keys ran.
+fn run_units(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    units: &[(Option<String>, String)],
+    entries: &mut [Option<Entry>],
+    force: bool,
+    seed: u64,
+) -> Result<usize, EngineError> {
+    let todo: Vec<usize> = (0..units.len())
+        .filter(|&i| force || entries[i].is_none())
+        .collect();
+    if todo.is_empty() {
+        return Ok(0);
+    }
+    ctx.progress.started(&spec.name, todo.len());
+    let shared = load_shared(ctx, spec, bound)?;
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<Result<Entry, EngineError>> = todo
+        .par_iter()
+        .map(|&i| {
+            let (item, key) = (units[i].0.as_deref(), &units[i].1);
+            let result = execute(ctx, spec, bound, &shared, item, key, seed);
+            if spec.foreach.is_some() {
+                let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                ctx.progress.item_done(&spec.name, n, todo.len());
+            }
+            result
+        })
         .collect();
     let mut executed = 0;
-    if let Action::Run { force } = action {
-        let todo: Vec<usize> = (0..units.len())
-            .filter(|&i| force || entries[i].is_none())
-            .collect();
-        if !todo.is_empty() {
-            ctx.progress.started(&spec.name, todo.len());
-            let shared = load_shared(ctx, spec, &bound)?;
-            let finished = std::sync::atomic::AtomicUsize::new(0);
-            let results: Vec<Result<Entry, EngineError>> = todo
-                .par_iter()
-                .map(|&i| {
-                    let (item, key) = (units[i].0.as_deref(), &units[i].1);
-                    let result = execute(ctx, spec, &bound, &shared, item, key, seed);
-                    if spec.foreach.is_some() {
-                        let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                        ctx.progress.item_done(&spec.name, n, todo.len());
-                    }
-                    result
-                })
-                .collect();
-            for (&i, r) in todo.iter().zip(results) {
-                entries[i] = Some(r?);
-                executed += 1;
-            }
-        }
+    for (&i, r) in todo.iter().zip(results) {
+        entries[i] = Some(r?);
+        executed += 1;
     }
+    Ok(executed)
+}
 
-    let complete = entries.iter().all(Option::is_some);
+/// The stage's outputs from its complete entries: a per-item stage's files gathered into
+/// Collections named by item.
+fn gather_outputs(
+    spec: &StageSpec,
+    units: &[(Option<String>, String)],
+    entries: &[&Entry],
+) -> Result<BTreeMap<String, Stored>, EngineError> {
     let mut outputs = BTreeMap::new();
-    if complete {
-        let entries: Vec<&Entry> = entries.iter().flatten().collect();
-        for name in spec.outputs.keys() {
-            let stored = match &spec.foreach {
-                None => entries[0].outputs[name].clone(),
-                Some(_) => Stored::Collection {
-                    items: units
-                        .iter()
-                        .zip(&entries)
-                        .map(|((item, _), e)| match &e.outputs[name] {
-                            Stored::File { sha256 } => Ok((item.clone().unwrap_or_default(), sha256.clone())),
-                            Stored::Collection { .. } => Err(EngineError::Usage(format!(
-                                "store entry of stage `{}` holds a collection per item; run `groove clean`",
-                                spec.name
-                            ))),
-                        })
-                        .collect::<Result<_, _>>()?,
-                },
-            };
-            outputs.insert(name.clone(), stored);
-        }
-    }
-    let items: BTreeMap<String, String> = units
-        .iter()
-        .filter_map(|(item, k)| item.clone().map(|i| (i, k.clone())))
-        .collect();
-    let key = match &spec.foreach {
-        None => units[0].1.clone(),
-        Some(_) => items_digest(&items),
-    };
-    let current = LockStage {
-        key,
-        outputs,
-        items,
-        ..parts(bound.into_iter().map(|(n, b)| (n, b.stored)).collect())
-    };
-
-    let mut stale_outputs = Vec::new();
-    if complete {
-        for (name, path) in &spec.outputs {
-            let Some(path) = path else { continue };
-            let stored = &current.outputs[name];
-            match action {
-                Action::Run { .. } => {
-                    materialize(&ctx.store, path, stored, &ctx.hashes)?;
-                }
-                Action::Check => {
-                    if !is_current(path, stored, &ctx.hashes) {
-                        stale_outputs.push(name.clone());
-                    }
-                }
-            }
-        }
-    }
-    if let Action::Run { .. } = action {
-        let secs = started.elapsed().as_secs_f64();
-        let what = match (executed, units.len()) {
-            (0, _) => format!("reused ({secs:.2} s)"),
-            (n, total) if spec.foreach.is_some() => {
-                format!("ran {n} of {total} items in {secs:.2} s")
-            }
-            _ => format!("ran in {secs:.2} s"),
+    for name in spec.outputs.keys() {
+        let stored = match &spec.foreach {
+            None => entries[0].outputs[name].clone(),
+            Some(_) => Stored::Collection {
+                items: units
+                    .iter()
+                    .zip(entries)
+                    .map(|((item, _), e)| match &e.outputs[name] {
+                        Stored::File { sha256 } => {
+                            Ok((item.clone().unwrap_or_default(), sha256.clone()))
+                        }
+                        Stored::Collection { .. } => Err(EngineError::Usage(format!(
+                            "store entry of stage `{}` holds a collection per item; run `groove clean`",
+                            spec.name
+                        ))),
+                    })
+                    .collect::<Result<_, _>>()?,
+            },
         };
-        ctx.progress.finished(&spec.name, &what);
+        outputs.insert(name.clone(), stored);
     }
-    Ok(Evaluated {
-        current: Some(current),
-        waiting_on: Vec::new(),
-        pending: None,
-        complete,
-        missing,
-        executed,
-        stale_outputs,
-        failed: false,
-    })
+    Ok(outputs)
+}
+
+/// Materialize the outputs that have a path (`Run`), or name those whose path does not hold
+/// the stored content (`Check`).
+fn write_or_check_outputs(
+    ctx: &Context,
+    spec: &StageSpec,
+    current: &LockStage,
+    action: Action,
+) -> Result<Vec<String>, EngineError> {
+    let mut stale_outputs = Vec::new();
+    for (name, path) in &spec.outputs {
+        let Some(path) = path else { continue };
+        let stored = &current.outputs[name];
+        match action {
+            Action::Run { .. } => {
+                materialize(&ctx.store, path, stored, &ctx.hashes)?;
+            }
+            Action::Check if !is_current(path, stored, &ctx.hashes) => {
+                stale_outputs.push(name.clone())
+            }
+            Action::Check => {}
+        }
+    }
+    Ok(stale_outputs)
+}
+
+/// The progress line of a stage that was run or reused.
+fn report_finished(ctx: &Context, spec: &StageSpec, started: Instant, executed: usize, total: usize) {
+    let secs = started.elapsed().as_secs_f64();
+    let what = match executed {
+        0 => format!("reused ({secs:.2} s)"),
+        n if spec.foreach.is_some() => format!("ran {n} of {total} items in {secs:.2} s"),
+        _ => format!("ran in {secs:.2} s"),
+    };
+    ctx.progress.finished(&spec.name, &what);
 }

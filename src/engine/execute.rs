@@ -3,7 +3,7 @@
 
 use super::command;
 use super::error::EngineError;
-use super::evaluate::Context;
+use super::context::Context;
 use super::hashing::sha256_hex;
 use super::inputs::load_path;
 use super::pipeline::StageSpec;

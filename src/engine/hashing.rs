@@ -88,7 +88,7 @@ impl HashCache {
         }
         let bytes = serde_json::to_vec(&*self.entries.lock().expect("hash cache lock"))
             .expect("hash cache serializes");
-        super::store::write_atomic(&self.path, &bytes)
+        super::atomic::write_atomic(&self.path, &bytes)
     }
 }
 

@@ -4,7 +4,8 @@
 //! when a result changes, and written by rename so an interrupted run never leaves half a file.
 
 use super::error::EngineError;
-use super::store::{write_atomic, Stored};
+use super::atomic::write_atomic;
+use super::store::Stored;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;

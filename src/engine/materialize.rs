@@ -7,7 +7,8 @@
 use super::error::{EngineError, IoContext};
 use super::hashing::HashCache;
 use super::inputs::dir_files;
-use super::store::{unique_name, write_atomic, Store, Stored};
+use super::atomic::{unique_name, write_atomic};
+use super::store::{Store, Stored};
 use std::path::Path;
 
 /// Does the path already hold exactly this artifact?

@@ -4,9 +4,11 @@
 //! [`evaluate`] walks the DAG in waves, hashing inputs and looking stage keys up in the
 //! [`store::Store`]; [`run`] executes what is missing, [`status`] explains what is stale.
 
+pub mod atomic;
 pub mod catalog;
 pub mod command;
 pub mod config;
+pub mod context;
 pub mod dag;
 pub mod error;
 pub mod evaluate;

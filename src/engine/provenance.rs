@@ -2,7 +2,7 @@
 //! and every upstream stage's key. Sorted and free of times, so it changes only when they do.
 
 use super::dag;
-use super::evaluate::{Context, Evaluated};
+use super::context::{Context, Evaluated};
 use super::inputs::hash_path;
 use super::pipeline::{InputSpec, StageSpec};
 use super::store::Stored;

@@ -7,12 +7,13 @@
 
 use super::catalog::Catalog;
 use super::error::{EngineError, IoContext};
-use super::evaluate::lock_path;
+use super::context::lock_path;
 use super::hashing::sha256_hex;
 use super::lockfile::PipelineLock;
 use super::pipeline::Pipeline;
 use super::status::{status, StageStatus, State};
-use super::store::{unique_name, Store, Stored};
+use super::atomic::unique_name;
+use super::store::{Store, Stored};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! Why a stage is stale, in words: which input, param or code changed, old → new where cheap.
 
-use super::evaluate::Evaluated;
+use super::context::Evaluated;
 use super::lockfile::LockStage;
 use super::pipeline::{InputSpec, Pipeline, StageSpec};
 use super::store::Stored;

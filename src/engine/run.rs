@@ -3,7 +3,8 @@
 use super::catalog::Catalog;
 use super::dag;
 use super::error::{EngineError, IoContext};
-use super::evaluate::{evaluate, lock_path, Action, Context};
+use super::context::{lock_path, Context};
+use super::evaluate::{evaluate, Action};
 use super::pipeline::Pipeline;
 use super::progress::Progress;
 use super::project_lock;
@@ -172,7 +173,7 @@ pub fn run(
 /// Put the named completed stages into the lock; true when one of them ran something.
 fn record<'a>(
     lock: &mut super::lockfile::PipelineLock,
-    done: &std::collections::BTreeMap<String, super::evaluate::Evaluated>,
+    done: &std::collections::BTreeMap<String, super::context::Evaluated>,
     names: impl Iterator<Item = &'a String>,
 ) -> bool {
     let mut ran = false;

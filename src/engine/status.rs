@@ -3,7 +3,8 @@
 use super::catalog::Catalog;
 use super::dag;
 use super::error::EngineError;
-use super::evaluate::{evaluate, Action, Context, Evaluated};
+use super::context::{Context, Evaluated};
+use super::evaluate::{evaluate, Action};
 use super::pipeline::Pipeline;
 use super::progress::Progress;
 use super::reasons::reasons;

@@ -6,13 +6,13 @@
 //! way: the entry appears (one rename) only after all its blobs exist, so a kill at any moment
 //! leaves either no entry or a complete one. Leftovers in `tmp/` are removed by the next run.
 
+use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
 use super::hashing::sha256_hex;
 use super::stage::Artifact;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// An artifact as the store records it: object hashes instead of bytes.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -42,33 +42,6 @@ pub struct Entry {
 
 pub struct Store {
     pub dir: PathBuf,
-}
-
-static UNIQUE: AtomicU64 = AtomicU64::new(0);
-
-/// A name no other writer uses: process id and a counter.
-pub fn unique_name(prefix: &str) -> String {
-    format!(
-        "{prefix}-{}-{}",
-        std::process::id(),
-        UNIQUE.fetch_add(1, Ordering::Relaxed)
-    )
-}
-
-/// Write a file by writing a sibling temp file and renaming it over the target.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), EngineError> {
-    let parent = path.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).at(parent)?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = parent.join(unique_name(&format!(".{name}.groove-tmp")));
-    std::fs::write(&tmp, bytes).at(&tmp)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        EngineError::io(path, e)
-    })
 }
 
 impl Store {

@@ -2,9 +2,10 @@
 //! the T-vs-v0 and μ-vs-v0 lines, each with a seeded bootstrap interval over whole runs.
 
 use super::bootstrap::percentile_intervals;
-use super::regression::{line_fit, mean_where, weighted_mean};
+use super::regression::{mean_where, weighted_mean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, MaterialSummary, SingleSummary};
+use crate::stats::ols_indexed as line_fit;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

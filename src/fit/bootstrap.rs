@@ -52,11 +52,7 @@ pub fn percentile_intervals<const K: usize>(
             continue;
         }
         d.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            let pos = p * (d.len() - 1) as f64;
-            let (i, f) = (pos.floor() as usize, pos - pos.floor());
-            d[i] + f * (d[(i + 1).min(d.len() - 1)] - d[i])
-        };
+        let q = |p: f64| crate::stats::quantile_interpolated(d, p);
         let a = 0.5 * (1.0 - level);
         out[k] = Some(Interval {
             lo: q(a),

@@ -1,8 +1,9 @@
 //! Fitting: the closed-form baseline to each run (robust Levenberg–Marquardt), per-material
 //! aggregates with bootstrap intervals, re-simulation residuals and their pooled statistics.
 //!
-//! Code map: `model` (closed form + analytic Jacobian), `lm` (robust LM with bounds), `loss`,
-//! `robust` (scale, outliers, standard errors), `start` (start values from the data), `segment`
+//! Code map: `model` (closed form + analytic Jacobian), `lm`, `loss`, `robust` and `status` (the
+//! shared least-squares core [`crate::lsq`] at this model's size), `track_problem` (a track as a
+//! least-squares problem), `start` (start values from the data), `segment`
 //! (any time range, any free subset), `single` (a single run), `aggregate` + `bootstrap` +
 //! `regression` (per material), `summary` and `fits_csv` (the output contract), `residuals`
 //! (re-simulation) and `residual_stats` (pooled statistics for discovery). `collision` belongs to

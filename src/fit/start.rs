@@ -3,9 +3,9 @@
 //! extrapolated to the kick, and μ from how far the early (sliding) frames run ahead of that
 //! rolling motion. Medians throughout, so outliers do not matter.
 
-use super::loss::median_in_place;
 use super::model::{MU, NP, T0, TD, V0, Z0};
 use crate::physics::{Groove, G_MPS2};
+use crate::stats::median_in_place;
 
 /// Start values [z0, t0, v0, 0, μ, T] for the frames `t_s`, `z_m` (at least 10) of a single run.
 pub fn single_start(

@@ -12,7 +12,7 @@ pub struct TrackProblem<'a> {
     pub groove: Groove,
 }
 
-impl Problem for TrackProblem<'_> {
+impl Problem<NP> for TrackProblem<'_> {
     fn n_obs(&self) -> usize {
         self.t_s.len()
     }

@@ -1,5 +1,4 @@
 //! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out.
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/aggregate.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_info};
 use crate::engine::stage::{

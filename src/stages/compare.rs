@@ -1,5 +1,4 @@
 //! The `compare` stage kind: every run's residuals in, pooled residual statistics out (for discovery).
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/compare.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, json_pretty, parse_item};
 use crate::engine::stage::{

@@ -1,5 +1,4 @@
-//! The `discover` stage kind: recordings and per-run fits in, diagnosis.json out.
-// groove:uses src/discover src/physics src/fit src/recording.rs src/stages/discover.rs
+//! The `discover` stage kind: recordings in, diagnosis.json out.
 
 use crate::discover::{discover, Options};
 use crate::engine::stage::{
@@ -22,7 +21,7 @@ impl StageKind for Discover {
         "discover"
     }
     fn inputs(&self) -> &'static [&'static str] {
-        &["runs", "fits"]
+        &["runs"]
     }
     fn outputs(&self) -> &'static [&'static str] {
         &["diagnosis"]
@@ -47,8 +46,8 @@ impl StageKind for Discover {
             })?;
             recordings.push(rec);
         }
-        // the per-run fits are not re-read: discovery refits every run with its own integrator to
-        // measure noise and flag outliers consistently; `fits` only orders the stage after `fit`
+        // discovery refits every run with its own integrator (to measure noise and flag outliers
+        // consistently), so it reads no per-run fit and a change to `fit` does not rerun it
         let mut diagnosis = discover(&recordings, &opts);
         crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings);
         let mut bytes = serde_json::to_vec_pretty(&diagnosis)

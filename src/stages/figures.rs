@@ -1,5 +1,4 @@
 //! The `figures` stage kind: every report figure rendered to SVG, as a Collection by file name.
-// groove:uses src/report src/physics src/recording.rs src/stages/figures.rs
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,

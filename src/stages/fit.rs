@@ -1,5 +1,4 @@
 //! The `fit` stage kind (per run): a Recording in, its `fit::RunFit` JSON out.
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/fit.rs src/stages/fit_io.rs
 
 use super::fit_io::{file_input, json_bytes, param_error};
 use crate::engine::stage::{

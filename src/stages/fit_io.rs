@@ -1,5 +1,4 @@
 //! Helpers shared by the fit-side stage kinds (fit, aggregate, simulate, compare): reading inputs out of artifacts, writing JSON bytes.
-// groove:uses src/engine/stage.rs src/recording.rs src/stages/fit_io.rs
 
 use crate::engine::stage::{Artifact, ParamError, StageError, StageInput};
 use crate::recording::RunInfo;

@@ -1,5 +1,4 @@
 //! The `ingest` stage kind: the dataset folder's files in, checked recordings, a typed table and the list of skipped runs out.
-// groove:uses src/ingest src/recording.rs src/stages/ingest.rs
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,

@@ -13,8 +13,8 @@ pub mod report;
 pub mod simulate;
 pub mod validate;
 
-/// Every built-in kind, in a fixed order. The engine looks kinds up here by name; `command` is the
-/// engine's own kind and is not listed.
+/// Every built-in kind, in a fixed order. The command line hands them to the engine
+/// (`Catalog::with_kinds`); `command` is the engine's own kind and is not listed.
 pub fn registry() -> Vec<Box<dyn StageKind>> {
     #[allow(unused_mut)]
     let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();

@@ -1,5 +1,4 @@
 //! The `report` stage kind: report.html (self-contained) and report.md from the figures and artifacts.
-// groove:uses src/report src/physics src/recording.rs src/stages/report.rs
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,

@@ -1,5 +1,4 @@
 //! The `simulate` stage kind (per run): re-simulate the run with its fitted parameters, residuals out.
-// groove:uses src/fit src/physics src/recording.rs src/engine/stage.rs src/stages/simulate.rs src/stages/fit_io.rs
 
 use super::fit_io::{collection_input, file_input, json_bytes, param_error, parse_item};
 use crate::engine::stage::{

@@ -1,5 +1,4 @@
 //! The `validate` stage kind: recovered values beside the truth of a synthesized dataset.
-// groove:uses src/stages/validate.rs src/synth/truth.rs src/physics
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,

@@ -10,6 +10,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use std::collections::BTreeMap;
 
+pub mod reference;
+
 pub const S: f64 = 0.577_858;
 
 /// The truth of a synthesized data set.

@@ -3,7 +3,8 @@
 //! through the Schur complement of the block-arrow normal equations. Residuals are expected
 //! whitened (in units of each run's noise), so the cost is a χ²-like deviance.
 
-use super::lm::{solve_spd, ParamSpec, Termination};
+use super::lm::ParamSpec;
+use crate::lsq::Termination;
 use rayon::prelude::*;
 
 /// A problem with shared parameters and one block of own parameters per run.
@@ -253,17 +254,17 @@ pub fn minimize_blocks<P: BlockProblem>(
                     lambda = (lambda / 3.0).max(1e-12);
                     improved = true;
                     if drop < opts.cost_tol + 1e-6 * cost {
-                        termination = Termination::Converged;
+                        termination = Termination::SmallCostChange;
                     }
                     break;
                 }
                 lambda *= 4.0;
             }
             if !improved {
-                termination = Termination::Converged;
+                termination = Termination::NoFurtherDecrease;
                 break;
             }
-            if termination == Termination::Converged {
+            if termination.is_converged() {
                 break;
             }
         }
@@ -328,6 +329,13 @@ pub fn minimize_blocks<P: BlockProblem>(
         termination,
         iterations,
     }
+}
+
+/// Solve A x = b (A symmetric positive definite, as rows) with the `lsq` dense back-end.
+fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
+    let n = b.len();
+    let flat: Vec<f64> = a.iter().flatten().copied().collect();
+    crate::lsq::dense::solve_spd(&flat, n, b)
 }
 
 /// Normal-equation pieces of one block: U (own×own), W (own×shared), V part, gradients.
@@ -617,6 +625,6 @@ mod tests {
         }
         let se = res.shared_se(0);
         assert!(se > 0.0 && se < 0.01, "se {se}");
-        assert_eq!(res.termination, Termination::Converged);
+        assert!(res.termination.is_converged());
     }
 }

@@ -1,25 +1,6 @@
 //! Falling curves of the coefficient of restitution against impact speed, fitted by weighted
 //! least squares to points (speed m/s, C, standard error of C).
 
-/// Weighted least squares C = c0 + b v: (c0, b).
-pub fn line_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
-    let (mut sw, mut sx, mut sy, mut sxx, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(x, y, se) in p {
-        let w = 1.0 / (se * se);
-        sw += w;
-        sx += w * x;
-        sy += w * y;
-        sxx += w * x * x;
-        sxy += w * x * y;
-    }
-    let det = sw * sxx - sx * sx;
-    if p.len() < 2 || det <= 1e-12 * sw * sxx {
-        return None;
-    }
-    let b = (sw * sxy - sx * sy) / det;
-    Some(((sy - b * sx) / sw, b))
-}
-
 /// Weighted least squares of 1 − C = a v through the origin.
 pub fn one_minus_av(p: &[(f64, f64, f64)]) -> Option<f64> {
     let (mut num, mut den) = (0.0, 0.0);
@@ -76,6 +57,7 @@ pub fn exp_fit(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stats::weighted_line as line_fit;
 
     /// Points on C = 0.6 + 0.4 e^{−v/0.1} with small alternating errors.
     fn points() -> Vec<(f64, f64, f64)> {

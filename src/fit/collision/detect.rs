@@ -26,19 +26,10 @@ pub fn noise_scale_m(track: &TrackData) -> f64 {
     if d.is_empty() {
         return f64::NAN;
     }
-    median_abs(&mut d) * 1.4826
+    crate::stats::abs_scale(&d)
 }
 
-pub fn median(v: &mut [f64]) -> f64 {
-    let mid = v.len() / 2;
-    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    v[mid]
-}
-
-fn median_abs(v: &mut [f64]) -> f64 {
-    v.iter_mut().for_each(|x| *x = x.abs());
-    median(v)
-}
+pub use crate::stats::upper_median as median;
 
 /// Theil–Sen line through the samples `lo..hi`: (slope m/s, value at `t_ref`).
 pub fn robust_line(track: &TrackData, lo: usize, hi: usize, t_ref: f64) -> Option<(f64, f64)> {

@@ -3,19 +3,15 @@
 //!
 //! The fit helper's `fit::segment` fits one segment at a time; a collision run needs one problem
 //! with shared μ, T, fitted impact times and z continuous across impacts, so this module keeps its
-//! own dense solver. Problems are small (≤ ~40 parameters, a few thousand residuals).
+//! own robust loop on the shared dense back-end ([`crate::lsq::dense`]) with forward-difference
+//! Jacobians ([`crate::lsq::fd`]). Problems are small (≤ ~40 parameters, a few thousand residuals).
 
-/// Why the solver stopped; not converging is a result, not an error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Termination {
-    /// The relative cost change or the step fell below tolerance.
-    Converged,
-    /// The iteration budget ran out first.
-    MaxIterations,
-    /// The normal equations could not be solved even with heavy damping.
-    Singular,
-}
+use crate::lsq::dense;
+use crate::lsq::fd::jacobian_columns;
+use crate::lsq::loss::huber_weight;
+pub use crate::lsq::Termination;
+// 1.4826 · median |r|: the residuals of a good fit have median ≈ 0
+use crate::stats::abs_scale as robust_scale;
 
 /// Solver settings.
 #[derive(Debug, Clone, Copy)]
@@ -89,6 +85,12 @@ where
     let mut r = vec![0.0; n];
     let mut w = vec![1.0; n];
     let mut jac = vec![vec![0.0; n]; m];
+    let step: Vec<f64> = specs.iter().map(|s| s.step).collect();
+    let lower: Vec<f64> = specs.iter().map(|s| s.lower).collect();
+    let upper: Vec<f64> = specs.iter().map(|s| s.upper).collect();
+    let jacobian = |p: &[f64], r: &[f64], jac: &mut [Vec<f64>]| {
+        jacobian_columns(&residuals, p, &step, &lower, &upper, r, jac)
+    };
     let mut iterations = 0;
     let mut termination = Termination::MaxIterations;
     let mut scale;
@@ -104,17 +106,17 @@ where
         let mut history: Vec<f64> = vec![cost];
         for _ in 0..opts.max_iter {
             iterations += 1;
-            jacobian(&residuals, &p, specs, &r, &mut jac);
-            let (mut a, g) = normal_equations(&jac, &r, &w);
+            jacobian(&p[..], &r[..], &mut jac[..]);
+            let (mut a, g) = dense::normal_equations(&jac, &r, &w);
             hold_fixed(specs, &mut a);
             let mut improved = false;
             for _ in 0..12 {
                 let mut damped = a.clone();
                 for i in 0..m {
-                    damped[i][i] += lambda * a[i][i].max(1e-30);
+                    damped[i * m + i] += lambda * a[i * m + i].max(1e-30);
                 }
                 let neg_g: Vec<f64> = g.iter().map(|x| -x).collect();
-                let Some(step) = solve_spd(&damped, &neg_g) else {
+                let Some(step) = dense::solve_spd(&damped, m, &neg_g) else {
                     lambda *= 10.0;
                     continue;
                 };
@@ -149,7 +151,7 @@ where
                         || rel * cost_before < opts.chi2_tol * scale * scale
                         || plateau
                     {
-                        termination = Termination::Converged;
+                        termination = Termination::SmallCostChange;
                     }
                     break;
                 }
@@ -157,10 +159,10 @@ where
             }
             if !improved {
                 // no downhill step at any damping: a (local) minimum for these weights
-                termination = Termination::Converged;
+                termination = Termination::NoFurtherDecrease;
                 break;
             }
-            if termination == Termination::Converged {
+            if termination.is_converged() {
                 break;
             }
         }
@@ -168,21 +170,19 @@ where
     residuals(&p, &mut r);
     scale = robust_scale(&r).max(opts.scale_floor);
     huber_weights(&r, opts.huber_c * scale, &mut w);
-    jacobian(&residuals, &p, specs, &r, &mut jac);
-    let (mut a, _) = normal_equations(&jac, &r, &w);
+    jacobian(&p[..], &r[..], &mut jac[..]);
+    let (mut a, _) = dense::normal_equations(&jac, &r, &w);
     hold_fixed(specs, &mut a);
-    let covariance = match invert_spd(&a) {
-        Some(inv) => inv
-            .into_iter()
-            .enumerate()
-            .map(|(i, row)| {
-                row.into_iter()
-                    .enumerate()
-                    .map(|(j, x)| {
+    // a tiny ridge keeps a parameter the data barely constrain from spoiling the others' errors
+    let covariance = match dense::invert_spd_scaled(&a, m, 1e-12) {
+        Some(inv) => (0..m)
+            .map(|i| {
+                (0..m)
+                    .map(|j| {
                         if specs[i].lower == specs[i].upper || specs[j].lower == specs[j].upper {
                             0.0
                         } else {
-                            x * scale * scale
+                            inv[i * m + j] * scale * scale
                         }
                     })
                     .collect()
@@ -203,155 +203,28 @@ where
     }
 }
 
-/// 1.4826 · median |r| (the residuals of a good fit have median ≈ 0).
-pub fn robust_scale(r: &[f64]) -> f64 {
-    let mut a: Vec<f64> = r
-        .iter()
-        .map(|x| x.abs())
-        .filter(|x| x.is_finite())
-        .collect();
-    if a.is_empty() {
-        return f64::NAN;
-    }
-    let mid = a.len() / 2;
-    a.select_nth_unstable_by(mid, |x, y| x.total_cmp(y));
-    1.4826 * a[mid]
-}
-
 /// A parameter with lower == upper is held: its row and column become the identity.
-fn hold_fixed(specs: &[ParamSpec], a: &mut [Vec<f64>]) {
+fn hold_fixed(specs: &[ParamSpec], a: &mut [f64]) {
+    let m = specs.len();
     for (i, s) in specs.iter().enumerate() {
         if s.lower == s.upper {
-            for j in 0..a.len() {
-                a[i][j] = 0.0;
-                a[j][i] = 0.0;
+            for j in 0..m {
+                a[i * m + j] = 0.0;
+                a[j * m + i] = 0.0;
             }
-            a[i][i] = 1.0;
+            a[i * m + i] = 1.0;
         }
     }
 }
 
 fn huber_weights(r: &[f64], c: f64, w: &mut [f64]) {
     for (wi, ri) in w.iter_mut().zip(r) {
-        let a = ri.abs();
-        *wi = if a <= c { 1.0 } else { c / a };
+        *wi = huber_weight(ri.abs(), c);
     }
 }
 
 fn weighted_cost(r: &[f64], w: &[f64]) -> f64 {
     r.iter().zip(w).map(|(x, wi)| wi * x * x).sum()
-}
-
-fn jacobian<F>(f: &F, p: &[f64], specs: &[ParamSpec], r0: &[f64], jac: &mut [Vec<f64>])
-where
-    F: Fn(&[f64], &mut [f64]),
-{
-    let mut q = p.to_vec();
-    let mut r1 = vec![0.0; r0.len()];
-    for (j, s) in specs.iter().enumerate() {
-        if s.lower == s.upper {
-            jac[j].iter_mut().for_each(|x| *x = 0.0);
-            continue;
-        }
-        // forward differences, stepping inward at the upper bound so the box is respected
-        let h = if p[j] + s.step > s.upper {
-            -s.step
-        } else {
-            s.step
-        };
-        q[j] = p[j] + h;
-        f(&q, &mut r1);
-        for (i, col) in jac[j].iter_mut().enumerate() {
-            *col = (r1[i] - r0[i]) / h;
-        }
-        q[j] = p[j];
-    }
-}
-
-fn normal_equations(jac: &[Vec<f64>], r: &[f64], w: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
-    let m = jac.len();
-    let mut a = vec![vec![0.0; m]; m];
-    let mut g = vec![0.0; m];
-    for i in 0..m {
-        g[i] = jac[i]
-            .iter()
-            .zip(r)
-            .zip(w)
-            .map(|((j, r), w)| j * r * w)
-            .sum();
-        for k in 0..=i {
-            let v: f64 = jac[i]
-                .iter()
-                .zip(&jac[k])
-                .zip(w)
-                .map(|((a, b), w)| a * b * w)
-                .sum();
-            a[i][k] = v;
-            a[k][i] = v;
-        }
-    }
-    (a, g)
-}
-
-/// Cholesky solve of a symmetric positive definite system; None when not positive definite.
-pub fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
-    let l = cholesky(a)?;
-    let n = b.len();
-    let mut y = vec![0.0; n];
-    for i in 0..n {
-        let s: f64 = (0..i).map(|k| l[i][k] * y[k]).sum();
-        y[i] = (b[i] - s) / l[i][i];
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| l[k][i] * x[k]).sum();
-        x[i] = (y[i] - s) / l[i][i];
-    }
-    Some(x)
-}
-
-fn cholesky(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = a.len();
-    let mut l = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..=i {
-            let s: f64 = (0..j).map(|k| l[i][k] * l[j][k]).sum();
-            if i == j {
-                let d = a[i][i] - s;
-                if !(d > 0.0) || !d.is_finite() {
-                    return None;
-                }
-                l[i][i] = d.sqrt();
-            } else {
-                l[i][j] = (a[i][j] - s) / l[j][j];
-            }
-        }
-    }
-    Some(l)
-}
-
-/// Inverse of a symmetric positive definite matrix (scaled to unit diagonal for conditioning).
-fn invert_spd(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = a.len();
-    let d: Vec<f64> = (0..n).map(|i| a[i][i].max(1e-300).sqrt()).collect();
-    // a tiny ridge keeps a parameter the data barely constrain from spoiling the others' errors
-    let scaled: Vec<Vec<f64>> = (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| a[i][j] / (d[i] * d[j]) + if i == j { 1e-12 } else { 0.0 })
-                .collect()
-        })
-        .collect();
-    let mut inv = vec![vec![0.0; n]; n];
-    for j in 0..n {
-        let mut e = vec![0.0; n];
-        e[j] = 1.0;
-        let col = solve_spd(&scaled, &e)?;
-        for i in 0..n {
-            inv[i][j] = col[i] / (d[i] * d[j]);
-        }
-    }
-    Some(inv)
 }
 
 #[cfg(test)]

@@ -130,9 +130,9 @@ pub fn summarize_fit(
     let data = &res.residuals[..layout.n_data()];
     let rms = (data.iter().map(|r| r * r).sum::<f64>() / data.len().max(1) as f64).sqrt();
     let status = match res.termination {
-        Termination::Converged => CollisionStatus::Converged,
-        Termination::MaxIterations => CollisionStatus::MaxIterations,
+        t if t.is_converged() => CollisionStatus::Converged,
         Termination::Singular => CollisionStatus::Singular,
+        _ => CollisionStatus::MaxIterations,
     };
     CollisionFit {
         run: info.run.clone(),

@@ -3,10 +3,11 @@
 //! restitution against impact speed per material and setup, with seeded bootstrap intervals
 //! over whole runs. Also the points behind Figs. 4.4a–c.
 
-use super::curves::{exp_fit, line_fit, one_minus_av};
+use super::curves::{exp_fit, one_minus_av};
 use super::mu_pp::{impulse_fit, slip_slope};
 use super::types::{CollisionFit, CollisionStatus, Contact, ImpactFit, PreImpactSource};
 use crate::recording::{RunInfo, Setup};
+use crate::stats::{quantile_nearest, weighted_line as line_fit};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -127,13 +128,49 @@ fn setup_of(info: &RunInfo, f: &CollisionFit) -> Option<Setup> {
     f.setup.or(info.setup)
 }
 
+/// The usable fits of a data set.
+type Runs<'a> = [&'a (RunInfo, CollisionFit)];
+
 /// Summarize collision fits; `k` = m R²/I; bootstrap seeded with `seed`.
 pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> CollisionSummary {
     let runs: Vec<&(RunInfo, CollisionFit)> = fits.iter().filter(|(_, f)| usable(f)).collect();
+    let (spin_points, restitution_points) = points(&runs);
+    let mu_pp = mu_pp(&runs, k, seed);
     let mut notes = Vec::new();
+    if mu_pp.n_slip == 0 {
+        notes.push(
+            "no slip impact was resolved: μ_pp is only bounded from below by the stick impacts"
+                .into(),
+        );
+    }
+    if runs.len() < fits.len() {
+        notes.push(format!(
+            "{} collision run(s) left out: fit failed or no impact",
+            fits.len() - runs.len()
+        ));
+    }
+    let restitution = restitution_curves(&runs, seed);
+    CollisionSummary {
+        n_runs: fits.len(),
+        n_runs_fitted: runs.len(),
+        n_impacts: spin_points.len(),
+        k,
+        mu_pp,
+        restitution,
+        spin_points,
+        restitution_points,
+        bootstrap_seed: seed,
+        bootstrap_resamples: RESAMPLES,
+        notes,
+        whole_run: None,
+    }
+}
+
+/// The points behind Figs. 4.4a–c: one spin point and one restitution point per impact.
+fn points(runs: &Runs) -> (Vec<SpinPoint>, Vec<RestitutionPoint>) {
     let mut spin_points = Vec::new();
     let mut restitution_points = Vec::new();
-    for (info, f) in &runs {
+    for (info, f) in runs {
         for im in &f.impacts {
             spin_points.push(SpinPoint {
                 run: f.run.clone(),
@@ -157,6 +194,38 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
             });
         }
     }
+    (spin_points, restitution_points)
+}
+
+/// `RESAMPLES` resamples with replacement of `n` items.
+fn draw_resamples(rng: &mut ChaCha8Rng, n: usize) -> Vec<Vec<usize>> {
+    (0..RESAMPLES)
+        .map(|_| (0..n).map(|_| rng.random_range(0..n.max(1))).collect())
+        .collect()
+}
+
+/// The 95 % percentile interval (nearest order statistics) of the finite bootstrap values
+/// around `value`; NaN bounds when fewer than half the resamples gave a value.
+fn percentile_interval(value: f64, boots: impl Iterator<Item = Option<f64>>) -> Interval {
+    let mut boots: Vec<f64> = boots.flatten().filter(|x| x.is_finite()).collect();
+    if boots.len() < RESAMPLES / 2 {
+        return Interval {
+            value,
+            lo: f64::NAN,
+            hi: f64::NAN,
+        };
+    }
+    boots.sort_by(f64::total_cmp);
+    Interval {
+        value,
+        lo: quantile_nearest(&boots, 0.025),
+        hi: quantile_nearest(&boots, 0.975),
+    }
+}
+
+/// μ_pp from the slip impacts (the slope of Δv_a against Δv_z, and the whole impulse model),
+/// bootstrapped over whole runs, and the lower bound the stick impacts set.
+fn mu_pp(runs: &Runs, k: f64, seed: u64) -> MuPp {
     let impacts_of = |sel: &[usize]| -> Vec<&ImpactFit> {
         sel.iter().flat_map(|&i| runs[i].1.impacts.iter()).collect()
     };
@@ -167,36 +236,10 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
         count(Contact::Stick),
         count(Contact::Undetermined),
     );
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let resamples: Vec<Vec<usize>> = (0..RESAMPLES)
-        .map(|_| {
-            (0..runs.len())
-                .map(|_| rng.random_range(0..runs.len().max(1)))
-                .collect()
-        })
-        .collect();
+    let resamples = draw_resamples(&mut ChaCha8Rng::seed_from_u64(seed), runs.len());
     let interval = |est: &dyn Fn(&[usize]) -> Option<f64>| -> Option<Interval> {
         let value = est(&all)?;
-        let mut boots: Vec<f64> = resamples
-            .iter()
-            .filter_map(|s| est(s))
-            .filter(|x| x.is_finite())
-            .collect();
-        if boots.len() < RESAMPLES / 2 {
-            return Some(Interval {
-                value,
-                lo: f64::NAN,
-                hi: f64::NAN,
-            });
-        }
-        boots.sort_by(|a, b| a.total_cmp(b));
-        let q =
-            |p: f64| boots[((p * (boots.len() - 1) as f64).round() as usize).min(boots.len() - 1)];
-        Some(Interval {
-            value,
-            lo: q(0.025),
-            hi: q(0.975),
-        })
+        Some(percentile_interval(value, resamples.iter().map(|s| est(s))))
     };
     let slope = |sel: &[usize]| slip_slope(&impacts_of(sel), k);
     let impulse = |sel: &[usize]| impulse_fit(&impacts_of(sel), k);
@@ -207,19 +250,19 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
         .filter(|im| im.contact == Contact::Stick && im.target_dvz_mps.value > 0.0)
         .map(|im| im.spin_sum_before_mps.abs() / (2.0 * k * im.target_dvz_mps.value))
         .reduce(f64::max);
-    if n_slip == 0 {
-        notes.push(
-            "no slip impact was resolved: μ_pp is only bounded from below by the stick impacts"
-                .into(),
-        );
+    MuPp {
+        value: from_impulse_fit.or(from_slip_slope),
+        from_slip_slope,
+        from_impulse_fit,
+        stick_lower_bound,
+        n_slip,
+        n_stick,
+        n_undetermined,
     }
-    if runs.len() < fits.len() {
-        notes.push(format!(
-            "{} collision run(s) left out: fit failed or no impact",
-            fits.len() - runs.len()
-        ));
-    }
-    // restitution curves per (material, setup)
+}
+
+/// Restitution curves per (material, setup), in that order.
+fn restitution_curves(runs: &Runs, seed: u64) -> Vec<RestitutionCurve> {
     let mut groups: BTreeMap<(String, String), Vec<usize>> = BTreeMap::new();
     for (i, (info, f)) in runs.iter().enumerate() {
         let setup = setup_of(info, f)
@@ -230,99 +273,56 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
             .or_default()
             .push(i);
     }
-    let mut restitution = Vec::new();
-    for idx in groups.values() {
-        let pts = |sel: &[usize]| -> Vec<(f64, f64, f64)> {
-            sel.iter()
-                .flat_map(|&i| runs[idx[i]].1.impacts.first())
-                .filter_map(|im| {
-                    let se = im.restitution.se?;
-                    (se <= MAX_C_SE
-                        && im.restitution.value.is_finite()
-                        && im.impact_speed_mps.value > 0.0)
-                        .then_some((
-                            im.impact_speed_mps.value,
-                            im.restitution.value,
-                            se.max(0.01),
-                        ))
-                })
-                .collect()
-        };
-        let local: Vec<usize> = (0..idx.len()).collect();
-        let all_pts = pts(&local);
-        if all_pts.len() < 2 {
-            continue;
-        }
-        let mut local_rng =
-            ChaCha8Rng::seed_from_u64(seed ^ (idx[0] as u64).wrapping_mul(0x9E37_79B9));
-        let local_samples: Vec<Vec<usize>> = (0..RESAMPLES)
-            .map(|_| {
-                (0..idx.len())
-                    .map(|_| local_rng.random_range(0..idx.len()))
-                    .collect()
+    groups
+        .values()
+        .filter_map(|idx| restitution_curve(runs, idx, seed))
+        .collect()
+}
+
+/// The restitution curve of the runs `idx` (their first impacts with a usable C), bootstrapped
+/// over those runs; None with fewer than two points.
+fn restitution_curve(runs: &Runs, idx: &[usize], seed: u64) -> Option<RestitutionCurve> {
+    let pts = |sel: &[usize]| -> Vec<(f64, f64, f64)> {
+        sel.iter()
+            .flat_map(|&i| runs[idx[i]].1.impacts.first())
+            .filter_map(|im| {
+                let se = im.restitution.se?;
+                (se <= MAX_C_SE
+                    && im.restitution.value.is_finite()
+                    && im.impact_speed_mps.value > 0.0)
+                    .then_some((
+                        im.impact_speed_mps.value,
+                        im.restitution.value,
+                        se.max(0.01),
+                    ))
             })
-            .collect();
-        let iv = |f: &dyn Fn(&[(f64, f64, f64)]) -> Option<f64>| -> Interval {
-            let value = f(&all_pts).unwrap_or(f64::NAN);
-            let mut boots: Vec<f64> = local_samples
-                .iter()
-                .filter_map(|s| f(&pts(s)))
-                .filter(|x| x.is_finite())
-                .collect();
-            boots.sort_by(|a, b| a.total_cmp(b));
-            if boots.len() < RESAMPLES / 2 {
-                return Interval {
-                    value,
-                    lo: f64::NAN,
-                    hi: f64::NAN,
-                };
-            }
-            let q = |p: f64| {
-                boots[((p * (boots.len() - 1) as f64).round() as usize).min(boots.len() - 1)]
-            };
-            Interval {
-                value,
-                lo: q(0.025),
-                hi: q(0.975),
-            }
-        };
-        let (info, f) = runs[idx[0]];
-        let speeds = all_pts.iter().map(|p| p.0);
-        restitution.push(RestitutionCurve {
-            material: info.material.clone(),
-            setup: setup_of(info, f),
-            n_impacts: all_pts.len(),
-            n_runs: idx.len(),
-            c0: iv(&|p| line_fit(p).map(|l| l.0)),
-            slope_per_mps: iv(&|p| line_fit(p).map(|l| -l.1)),
-            a_per_mps: iv(&one_minus_av),
-            c_inf: iv(&|p| exp_fit(p).map(|f| f.0)),
-            v_ref_mps: iv(&|p| exp_fit(p).map(|f| f.1)),
-            mean_c: all_pts.iter().map(|p| p.1).sum::<f64>() / all_pts.len() as f64,
-            min_speed_mps: speeds.clone().fold(f64::INFINITY, f64::min),
-            max_speed_mps: speeds.fold(0.0, f64::max),
-        });
+            .collect()
+    };
+    let local: Vec<usize> = (0..idx.len()).collect();
+    let all_pts = pts(&local);
+    if all_pts.len() < 2 {
+        return None;
     }
-    CollisionSummary {
-        n_runs: fits.len(),
-        n_runs_fitted: runs.len(),
-        n_impacts: spin_points.len(),
-        k,
-        mu_pp: MuPp {
-            value: from_impulse_fit.or(from_slip_slope),
-            from_slip_slope,
-            from_impulse_fit,
-            stick_lower_bound,
-            n_slip,
-            n_stick,
-            n_undetermined,
-        },
-        restitution,
-        spin_points,
-        restitution_points,
-        bootstrap_seed: seed,
-        bootstrap_resamples: RESAMPLES,
-        notes,
-        whole_run: None,
-    }
+    let mut local_rng = ChaCha8Rng::seed_from_u64(seed ^ (idx[0] as u64).wrapping_mul(0x9E37_79B9));
+    let local_samples = draw_resamples(&mut local_rng, idx.len());
+    let iv = |f: &dyn Fn(&[(f64, f64, f64)]) -> Option<f64>| -> Interval {
+        let value = f(&all_pts).unwrap_or(f64::NAN);
+        percentile_interval(value, local_samples.iter().map(|s| f(&pts(s))))
+    };
+    let (info, f) = runs[idx[0]];
+    let speeds = all_pts.iter().map(|p| p.0);
+    Some(RestitutionCurve {
+        material: info.material.clone(),
+        setup: setup_of(info, f),
+        n_impacts: all_pts.len(),
+        n_runs: idx.len(),
+        c0: iv(&|p| line_fit(p).map(|l| l.0)),
+        slope_per_mps: iv(&|p| line_fit(p).map(|l| -l.1)),
+        a_per_mps: iv(&one_minus_av),
+        c_inf: iv(&|p| exp_fit(p).map(|f| f.0)),
+        v_ref_mps: iv(&|p| exp_fit(p).map(|f| f.1)),
+        mean_c: all_pts.iter().map(|p| p.1).sum::<f64>() / all_pts.len() as f64,
+        min_speed_mps: speeds.clone().fold(f64::INFINITY, f64::min),
+        max_speed_mps: speeds.fold(0.0, f64::max),
+    })
 }

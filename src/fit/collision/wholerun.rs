@@ -11,7 +11,7 @@
 
 use super::blocks::{minimize_blocks, BlockOptions, BlockProblem, BlockResult};
 use super::detect::{median, noise_scale_m, robust_line};
-use super::lm::{ParamSpec, Termination};
+use super::lm::ParamSpec;
 use super::model::TrackData;
 use crate::physics::{simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term};
 use crate::recording::{Recording, Setup};
@@ -430,7 +430,7 @@ impl GroupFit {
         self.result.cost()
     }
     pub fn converged(&self) -> bool {
-        self.result.termination == Termination::Converged
+        self.result.termination.is_converged()
     }
 }
 

@@ -1,0 +1,12 @@
+//! Small statistics shared by the fits, the collision fits and the discoverer: medians and robust
+//! scales (each convention named once), straight-line fits, quantiles of bootstrap draws, and the
+//! distributions behind p-values (from `statrs`).
+
+pub mod dist;
+pub mod line;
+pub mod median;
+pub mod quantile;
+
+pub use line::{ols_indexed, ols_line, weighted_line, Line};
+pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
+pub use quantile::{quantile_interpolated, quantile_nearest};
