@@ -38,6 +38,9 @@ pub struct MuPpProfile {
     pub verdict: ProfileVerdict,
     /// The deviance rise used for the interval.
     pub threshold: f64,
+    /// Run-level dispersion the deviances were divided by (≥ 1): how much more the runs
+    /// disagree about μ_pp than their noise says (a sandwich over runs at the estimate).
+    pub dispersion: f64,
 }
 
 /// The grid: log-spaced from 0.05 to 5 (13 values).
@@ -87,6 +90,7 @@ pub fn profile_mu_pp(
     // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
     // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
     let se_ln = best.result.shared_se(MU_PP) / mu_best;
+    let mut dispersion = 1.0;
     if se_ln.is_finite() && se_ln > 0.0 {
         let h = (1.96 * se_ln).max(1e-4);
         for k in [-2.0, -1.0, 1.0, 2.0] {
@@ -101,6 +105,21 @@ pub fn profile_mu_pp(
             };
             fits.push((mu, solve(mu, &from)));
         }
+        // runs are the independent units: per-run slopes of the deviance at the estimate
+        // against its curvature (sandwich / model variance of ln μ_pp)
+        let n = fits.len();
+        let (minus, plus) = (&fits[n - 3].1, &fits[n - 2].1);
+        let c0 = &best.result.block_cost;
+        let (cm, cp) = (&minus.result.block_cost, &plus.result.block_cost);
+        let curv: f64 = (0..c0.len())
+            .map(|r| (cp[r] + cm[r] - 2.0 * c0[r]) / (h * h))
+            .sum();
+        let spread: f64 = (0..c0.len())
+            .map(|r| ((cp[r] - cm[r]) / (2.0 * h)).powi(2))
+            .sum();
+        if curv > 0.0 && spread.is_finite() {
+            dispersion = (spread / (2.0 * curv)).max(1.0);
+        }
     }
     fits.sort_by(|a, b| a.0.total_cmp(&b.0));
     let c_min = fits
@@ -111,7 +130,7 @@ pub fn profile_mu_pp(
         .iter()
         .map(|(mu_pp, f)| ProfilePoint {
             mu_pp: *mu_pp,
-            deviance: (f.cost() - c_min).max(0.0),
+            deviance: (f.cost() - c_min).max(0.0) / dispersion,
             converged: f.converged(),
         })
         .collect();
@@ -128,6 +147,7 @@ pub fn profile_mu_pp(
         verdict: verdict(&points, estimate, DELTA_95),
         points,
         threshold: DELTA_95,
+        dispersion,
     }
 }
 
