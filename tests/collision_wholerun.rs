@@ -96,14 +96,18 @@ fn strong_friction_profile_contains_the_truth_and_the_law_is_recovered() {
     assert!(contact.candidates.iter().all(|c| c.heldout_rms_noise > 0.5));
 }
 
-fn physics(mu: f64, terms: Vec<Term>) -> BTreeMap<String, Model> {
+/// The single runs' physics of 440c, taken as exact (no standard errors).
+fn physics(mu: f64, terms: Vec<Term>) -> BTreeMap<String, (Model, [f64; 3])> {
     [(
         "440c".to_string(),
-        Model {
-            groove: Groove::CHAPTER,
-            friction: Friction::Constant { mu },
-            terms,
-        },
+        (
+            Model {
+                groove: Groove::CHAPTER,
+                friction: Friction::Constant { mu },
+                terms,
+            },
+            [0.0; 3],
+        ),
     )]
     .into()
 }
@@ -112,7 +116,7 @@ fn physics(mu: f64, terms: Vec<Term>) -> BTreeMap<String, Model> {
 /// own physics are not.
 #[test]
 fn pairs_under_a_drag_the_single_runs_do_not_share_are_flagged() {
-    let finding = |recs: &[Recording], model: BTreeMap<String, Model>| {
+    let finding = |recs: &[Recording], model: BTreeMap<String, (Model, [f64; 3])>| {
         let (findings, _) = check_pairs(recs, &model, Groove::CHAPTER, 80);
         findings
             .into_iter()

@@ -1,8 +1,9 @@
 //! Discovery on pairs: does the single-run physics that discovery accepted also explain the
 //! collision runs? Per material, the whole-run pair fit (`fit::collision::wholerun`) is made
-//! twice: with μ_pg and the drag held at what the single runs gave, and with them free. A
-//! likelihood-ratio test (χ² with the freed parameters' count, Holm over materials, α = 0.01)
-//! says whether the pairs move under physics the single runs do not share. Then the residuals
+//! twice: with μ_pg and the drag held at what the single runs gave, and with them free. A Wald
+//! χ² of the pairs' (μ_pg, T0, T') against the single runs' values, with both sets of errors
+//! (3 degrees of freedom, Holm over materials, α = 0.01), says whether the pairs move under
+//! physics the single runs do not share (the deviance gain of freeing them is reported beside). Then the residuals
 //! of the free fit are split by time since the last impact: a misfit concentrated in the
 //! milliseconds after impacts (an F ratio of the mean squared whitened residual against the rest
 //! of the run) points at the impact model itself (restitution law, spin transfer).
@@ -72,6 +73,34 @@ pub fn single_run_physics(
     })
 }
 
+/// Wald χ² of (μ_pg, T0, T') of the free pair fit against the single runs' values (standard
+/// errors `se`); None when the single runs' drag is not linear or saturating.
+fn wald(free: &GroupFit, model: &Model, se: &[f64; 3]) -> Option<f64> {
+    let mu_s = match model.friction {
+        Friction::Constant { mu } => mu,
+        Friction::VelocityDependent { .. } => return None,
+    };
+    let (t_s, tp_s) = match model.terms.as_slice() {
+        [Term::SaturatingDrag { t0_s, tp_s_per_mps }] => (*t0_s, *tp_s_per_mps),
+        [Term::LinearDrag { t_s }] => (*t_s, 0.0),
+        _ => return None,
+    };
+    let sh = &free.result.shared;
+    let t0 = sh[LN_T0].exp();
+    let idx = [MU_PG, LN_T0, TP];
+    let jac = [1.0, t0, 1.0];
+    let d = [sh[MU_PG] - mu_s, t0 - t_s, sh[TP] - tp_s];
+    let mut a = vec![0.0; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            a[3 * i + j] = jac[i] * free.result.shared_cov[idx[i]][idx[j]] * jac[j];
+        }
+        a[4 * i] += se[i] * se[i];
+    }
+    let x = crate::lsq::dense::solve_spd(&a, 3, &d)?;
+    Some(d.iter().zip(&x).map(|(a, b)| a * b).sum())
+}
+
 /// Mean squared whitened residuals within `IMPACT_WINDOW_S` after an impact and elsewhere,
 /// with their counts.
 fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ((f64, usize), (f64, usize)) {
@@ -103,7 +132,7 @@ fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ((f64, usize), (f64, usi
 /// material); materials without collision runs or without physics are skipped with a note.
 pub fn check_pairs(
     recordings: &[Recording],
-    physics: &BTreeMap<String, Model>,
+    physics: &BTreeMap<String, (Model, [f64; 3])>,
     groove: Groove,
     max_iter: usize,
 ) -> (Vec<Finding>, Vec<String>) {
@@ -122,7 +151,7 @@ pub fn check_pairs(
     }
     let mut drafts = Vec::new();
     for (material, runs) in &by_material {
-        let Some(model) = physics.get(material) else {
+        let Some((model, single_se)) = physics.get(material) else {
             notes.push(format!(
                 "collision runs of {material}: no single-run physics of this material to test"
             ));
@@ -162,7 +191,11 @@ pub fn check_pairs(
                 held = again;
             }
         }
-        let lr = held.cost() - free.cost();
+        let deviance_gain = held.cost() - free.cost();
+        // the single runs' values carry their own errors: compare them with the pairs' by a
+        // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
+        // treat the single runs' values as exact
+        let lr = wald(&free, model, single_se).unwrap_or(deviance_gain);
         let extra = 3;
         let p = chi2_sf(lr.max(0.0), extra as f64);
         let ((near, n_near), (far, n_far)) = split_by_impact(runs, &free);
@@ -203,6 +236,7 @@ pub fn check_pairs(
         where_.insert("experiment".to_string(), serde_json::json!("collision"));
         where_.insert("material".to_string(), serde_json::json!(material));
         where_.insert("n_runs".to_string(), serde_json::json!(n_runs));
+        where_.insert("deviance_gain".to_string(), serde_json::json!(held.cost() - free.cost()));
         where_.insert(
             "rms_noise_held".to_string(),
             serde_json::json!((held.cost() / n_pts.max(1) as f64).sqrt()),
@@ -301,12 +335,26 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
         .iter()
         .map(|(k, v)| (k.clone(), v.value))
         .collect();
+    let se = |k: String| {
+        diagnosis
+            .model_parameters
+            .get(&k)
+            .map(|e| e.stderr)
+            .filter(|x| x.is_finite())
+            .unwrap_or(0.0)
+    };
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
         match single_run_physics(&params, m, groove) {
             Ok(model) => {
-                physics.insert(m.clone(), model);
+                let t_key = if params.contains_key(&format!("t0_s_{m}")) {
+                    format!("t0_s_{m}")
+                } else {
+                    format!("t_s_{m}")
+                };
+                let errs = [se(format!("mu_{m}")), se(t_key), se("tp_s_per_mps".into())];
+                physics.insert(m.clone(), (model, errs));
             }
             Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
         }

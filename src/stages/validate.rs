@@ -162,6 +162,8 @@ pub fn validate(truth: &Truth, summary: &Value, diagnosis: &Value) -> Value {
             findings
                 .iter()
                 .filter(|f| f["accepted"].as_bool() == Some(true))
+                // findings about collision runs (discover::pairs) name no single-run term
+                .filter(|f| f["where"]["experiment"] != "collision")
                 .filter_map(|f| f["effect"].as_str().map(str::to_string))
                 .collect()
         })

@@ -174,3 +174,19 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     b.table(res);
     Some(b)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn words_say_bound_or_interval_and_compare_with_the_chapter() {
+        let lb = mu_pp_words("316", &json!({"kind": "lower_bound", "lo": 0.81}));
+        assert!(lb.contains("bound μ_pp from below at 0.81") && lb.contains("allowed but not measured"));
+        let iv = mu_pp_words("440c", &json!({"kind": "interval", "estimate": 1.39, "lo": 1.35, "hi": 1.43}));
+        assert!(iv.contains("μ_pp = 1.390") && iv.contains("1.4 is inside"), "{iv}");
+        let out = mu_pp_words("440c", &json!({"kind": "interval", "estimate": 0.3, "lo": 0.29, "hi": 0.31}));
+        assert!(out.contains("outside"), "{out}");
+    }
+}
