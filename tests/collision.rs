@@ -489,6 +489,11 @@ fn shipped_dataset_impacts_match_their_truth() {
     {
         let (run, setup) = (&rec.info.run, rec.info.setup.unwrap());
         let fit = fit_collision(rec, &CollisionOptions::default());
+        // a fit that ends at its iteration limit says why (issue 15)
+        assert!(
+            fit.status != CollisionStatus::MaxIterations || fit.message.contains("iteration limit"),
+            "{run}: stopped at its iteration limit without a reason"
+        );
         let truth = shipped_truth(run, &rec.info.material, setup);
         let (im, tr) = (&fit.impacts[0], &truth[0]);
         assert!(

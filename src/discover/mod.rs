@@ -19,6 +19,7 @@ pub mod holm;
 pub mod joint;
 pub mod locate;
 pub mod null_distribution;
+pub mod pairs;
 pub mod perrun;
 pub mod residual_structure;
 pub mod run;

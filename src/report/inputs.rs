@@ -58,6 +58,13 @@ fn items<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Vec<(&'a str, &'a [u8])>
 }
 
 impl ReportData {
+    /// The whole-run collision fits of summary.json as JSON (read by the whole-run section and
+    /// the μ_pp profile figure; not yet through typed accessors).
+    pub fn whole_run_json(&self) -> Option<serde_json::Value> {
+        let whole = self.summary.as_ref()?.collisions.as_ref()?.whole_run.as_ref()?;
+        serde_json::to_value(whole).ok()
+    }
+
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,
     /// `fits_csv`, `residuals`, `summary`, `diagnosis`, `validation`, `provenance`, `skipped`.
     pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {

@@ -33,6 +33,7 @@ impl StageKind for Aggregate {
         let runs = collection_input(input, "runs", "aggregate")?;
         let mut singles = Vec::new();
         let mut collisions = Vec::new();
+        let mut pair_recordings = Vec::new();
         for (item, bytes) in fits {
             match parse_item::<RunFit>(item, bytes, "the fit")? {
                 RunFit::Single(f) => singles.push(f),
@@ -43,6 +44,11 @@ impl StageKind for Aggregate {
                         ))
                     })?;
                     collisions.push((run_info(item, rec)?, c));
+                    pair_recordings.push(parse_item::<crate::recording::Recording>(
+                        item,
+                        rec,
+                        "the recording",
+                    )?);
                 }
             }
         }
@@ -61,7 +67,17 @@ impl StageKind for Aggregate {
             );
             None
         } else {
-            Some(collision::summarize_seeded(&collisions, opts.k, input.seed))
+            let mut c = collision::summarize_seeded(&collisions, opts.k, input.seed);
+            let groove = crate::physics::Groove {
+                s: collision::CollisionOptions::default().s,
+                k: opts.k,
+            };
+            c.whole_run = Some(collision::whole_summary::analyze(
+                &pair_recordings,
+                groove,
+                &collision::whole_summary::WholeRunOptions::default(),
+            ));
+            Some(c)
         };
         let summary = Summary {
             single,

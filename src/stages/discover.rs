@@ -48,7 +48,8 @@ impl StageKind for Discover {
         }
         // discovery refits every run with its own integrator (to measure noise and flag outliers
         // consistently), so it reads no per-run fit and a change to `fit` does not rerun it
-        let diagnosis = discover(&recordings, &opts);
+        let mut diagnosis = discover(&recordings, &opts);
+        crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings);
         let mut bytes = serde_json::to_vec_pretty(&diagnosis)
             .map_err(|e| StageError(format!("diagnosis could not be serialized: {e}")))?;
         bytes.push(b'\n');

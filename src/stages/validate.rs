@@ -203,6 +203,8 @@ fn effect_check(truth: &Truth, diagnosis: &Diagnosis) -> EffectCheck {
         .findings
         .iter()
         .filter(|f| f.accepted)
+        // findings about collision runs (discover::pairs) name no single-run term
+        .filter(|f| f.where_.get("experiment").and_then(|v| v.as_str()) != Some("collision"))
         .filter_map(|f| Effect::from_id(&f.effect))
         .collect();
     EffectCheck {

@@ -104,12 +104,26 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
     }
     let mut fit = summarize_fit(info, direction, &layout, &res);
     fit.setup = Some(setup);
+    if fit.status == CollisionStatus::MaxIterations {
+        fit.message = format!(
+            "stopped at its iteration limit ({} iterations) with χ² still falling slowly: the \
+             solver creeps along the kinks the sliding–rolling switches put into the closed-form \
+             pieces. The whole-run fit (summary.json, collisions.whole_run) models the same run \
+             event by event",
+            res.iterations
+        );
+    }
     if t_stop.is_finite() {
         fit.fit_end_s = Some(t_stop);
-        fit.message = format!(
+        let stop = format!(
             "fitted up to t = {t_stop:.5} s: there the pair touches again without an impact the \
              data resolve, and the closed-form pieces no longer describe the motion"
         );
+        fit.message = if fit.message.is_empty() {
+            stop
+        } else {
+            format!("{stop}; {}", fit.message)
+        };
     }
     fit
 }

@@ -8,6 +8,7 @@
 //! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
 //! form, `impulse` is the impact model, `trajectory` evaluates a fitted run for figures.
 
+pub mod blocks;
 pub mod curves;
 pub mod detect;
 mod fit;
@@ -18,12 +19,16 @@ pub mod motion;
 pub mod mu_pp;
 mod options;
 pub mod plan;
+pub mod profile;
 mod report;
+pub mod restitution_law;
 mod secondary;
 mod start;
 pub mod summary;
 mod trajectory;
 pub mod types;
+pub mod whole_summary;
+pub mod wholerun;
 
 pub use fit::fit_collision;
 pub use options::CollisionOptions;

@@ -111,6 +111,10 @@ pub struct CollisionSummary {
     pub bootstrap_seed: u64,
     pub bootstrap_resamples: usize,
     pub notes: Vec<String>,
+    /// The whole-run pair fits per material (μ_pp profile, restitution laws); absent when the
+    /// stage did not compute them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub whole_run: Option<super::whole_summary::WholeRunSummary>,
 }
 
 /// Default bootstrap seed when the caller has none (the aggregate stage passes its own).
@@ -169,6 +173,7 @@ pub fn summarize_seeded(fits: &[(RunInfo, CollisionFit)], k: f64, seed: u64) -> 
         bootstrap_seed: seed,
         bootstrap_resamples: RESAMPLES,
         notes,
+        whole_run: None,
     }
 }
 

@@ -7,6 +7,7 @@ pub mod fig_4_2c;
 pub mod fig_4_2d;
 pub mod fig_4_3;
 pub mod fig_4_4;
+pub mod mu_pp_profile;
 pub mod secondary;
 
 use super::inputs::ReportData;
@@ -62,6 +63,7 @@ pub fn render_all(
         put("fig_4_3d.svg", Some(dd));
     }
     put("fig_4_4a.svg", fig_4_4::render_a(d, g.k)?);
+    put("fig_mu_pp_profile.svg", mu_pp_profile::render_fig(d)?);
     let coll_mats: Vec<String> = {
         let mut m: Vec<String> = d.collisions.iter().map(|c| c.material.clone()).collect();
         m.sort();

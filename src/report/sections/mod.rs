@@ -7,6 +7,7 @@ pub mod data;
 pub mod discovery;
 pub mod provenance;
 pub mod summary;
+pub mod whole_run;
 
 use super::audit::{audit, AuditItem};
 use super::inputs::ReportData;

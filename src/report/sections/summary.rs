@@ -89,6 +89,32 @@ pub fn block(d: &ReportData) -> Block {
             "stick impacts".into(),
         ]);
     }
+    // μ_pp of the whole-run fits: the profile's interval or bound per material
+    let whole = d.whole_run_json();
+    for m in whole
+        .as_ref()
+        .and_then(|w| w.get("materials")?.as_array())
+        .into_iter()
+        .flatten()
+    {
+        let name = m.get("material").and_then(|v| v.as_str()).unwrap_or("?");
+        let Some(v) = m.get("profile").and_then(|p| p.get("verdict")) else {
+            continue;
+        };
+        let f = |k: &str| v.get(k).and_then(|x| x.as_f64()).unwrap_or(f64::NAN);
+        let text = match v.get("kind").and_then(|k| k.as_str()) {
+            Some("interval") => format!("{:.3} [{:.3}, {:.3}]", f("estimate"), f("lo"), f("hi")),
+            Some("lower_bound") => format!("> {:.2}", f("lo")),
+            Some("upper_bound") => format!("< {:.2}", f("hi")),
+            _ => "not constrained".into(),
+        };
+        t.push(vec![
+            format!("μ_pp of {name} (whole-run profile, 95 %)"),
+            text,
+            "1.4".into(),
+            "summary.json".into(),
+        ]);
+    }
     if !t.rows.is_empty() {
         b.table(t);
     }

@@ -1,0 +1,376 @@
+//! Discovery on pairs: does the single-run physics that discovery accepted also explain the
+//! collision runs? Per material, the whole-run pair fit (`fit::collision::wholerun`) is made
+//! twice: with μ_pg and the drag held at what the single runs gave, and with them free. A Wald
+//! χ² of the pairs' (μ_pg, T0, T') against the single runs' values, with both sets of errors
+//! (3 degrees of freedom, Holm over materials, α = 0.01), says whether the pairs move under
+//! physics the single runs do not share (the deviance gain of freeing them is reported beside). Then the residuals
+//! of the free fit are split by time since the last impact: a misfit concentrated in the
+//! milliseconds after impacts (an F ratio of the mean squared whitened residual against the rest
+//! of the run) points at the impact model itself (restitution law, spin transfer).
+
+use crate::fit::collision::lm::Termination;
+use crate::fit::collision::wholerun::{
+    fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, TP, T_KICK,
+};
+use super::holm::holm;
+use crate::stats::dist::{chi2_sf, normal_sf};
+use crate::physics::{simulate_pair, Friction, Groove, Model, Term};
+use crate::recording::{Experiment, Recording};
+use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
+use std::collections::BTreeMap;
+
+/// Significance of both tests.
+pub const ALPHA: f64 = 0.01;
+/// Window after an impact that counts as "at the impact" (s).
+pub const IMPACT_WINDOW_S: f64 = 5e-3;
+/// An impact-specific misfit must also raise the mean squared residual by this factor.
+const MIN_RATIO: f64 = 1.3;
+
+/// The one-particle physics the single runs support, per material, from a diagnosis' final
+/// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
+/// `alpha_deg`). None for a material whose physics cannot be expressed as `physics` terms.
+pub fn single_run_physics(
+    params: &BTreeMap<String, f64>,
+    material: &str,
+    groove: Groove,
+) -> Result<Model, String> {
+    let get = |k: &str| params.get(k).copied();
+    let mu = get(&format!("mu_{material}"))
+        .ok_or_else(|| format!("no mu_{material} in the accepted model"))?;
+    let mut terms = Vec::new();
+    if let (Some(t0), Some(tp)) = (get(&format!("t0_s_{material}")), get("tp_s_per_mps")) {
+        terms.push(Term::SaturatingDrag {
+            t0_s: t0,
+            tp_s_per_mps: tp,
+        });
+    } else if let Some(t) = get(&format!("t_s_{material}")) {
+        terms.push(Term::LinearDrag { t_s: t });
+    } else {
+        return Err(format!("no drag time of {material} in the accepted model"));
+    }
+    if let Some(c) = get("c_per_m") {
+        terms.push(Term::QuadraticDrag { c_per_m: c });
+    }
+    if let Some(c) = get("c") {
+        terms.push(Term::RollingResistance { c });
+    }
+    if let Some(a) = get("alpha_deg") {
+        terms.push(Term::GrooveTilt { alpha_deg: a });
+    }
+    if params
+        .keys()
+        .any(|k| k.starts_with("ln_vc_mps_") || k.starts_with("sin1") || k.starts_with("cos1"))
+    {
+        return Err(
+            "the accepted model has a term (velocity-dependent friction or a position force) the pair fit does not carry"
+                .into(),
+        );
+    }
+    Ok(Model {
+        groove,
+        friction: Friction::Constant { mu },
+        terms,
+    })
+}
+
+/// Wald χ² of (μ_pg, T0, T') of the free pair fit against the single runs' values (standard
+/// errors `se`); None when the single runs' drag is not linear or saturating.
+fn wald(free: &GroupFit, model: &Model, se: &[f64; 3]) -> Option<f64> {
+    let mu_s = match model.friction {
+        Friction::Constant { mu } => mu,
+        Friction::VelocityDependent { .. } => return None,
+    };
+    let (t_s, tp_s) = match model.terms.as_slice() {
+        [Term::SaturatingDrag { t0_s, tp_s_per_mps }] => (*t0_s, *tp_s_per_mps),
+        [Term::LinearDrag { t_s }] => (*t_s, 0.0),
+        _ => return None,
+    };
+    let sh = &free.result.shared;
+    let t0 = sh[LN_T0].exp();
+    let idx = [MU_PG, LN_T0, TP];
+    let jac = [1.0, t0, 1.0];
+    let d = [sh[MU_PG] - mu_s, t0 - t_s, sh[TP] - tp_s];
+    let mut a = vec![0.0; 9];
+    for i in 0..3 {
+        for j in 0..3 {
+            a[3 * i + j] = jac[i] * free.result.shared_cov[idx[i]][idx[j]] * jac[j];
+        }
+        a[4 * i] += se[i] * se[i];
+    }
+    let x = crate::lsq::dense::solve_spd(&a, 3, &d)?;
+    Some(d.iter().zip(&x).map(|(a, b)| a * b).sum())
+}
+
+/// Mean squared whitened residuals within `IMPACT_WINDOW_S` after an impact and elsewhere,
+/// with their counts.
+fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ((f64, usize), (f64, usize)) {
+    let (mut near, mut far) = ((0.0, 0usize), (0.0, 0usize));
+    for (run, own) in runs.iter().zip(&fit.result.own) {
+        let shared = &fit.result.shared;
+        let model = fit.spec.model(shared);
+        let pair = fit.spec.pair(shared, run.setup, run.diameter_m);
+        let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
+        let traj = simulate_pair(&model, &pair, run.init(own), &rel);
+        for p in 0..2 {
+            for &(i, zd) in &run.samples[p] {
+                let u = ((traj.particles[p].z_m[i] - zd) / run.sigma_m).powi(2).min(100.0);
+                let close = traj
+                    .impacts
+                    .iter()
+                    .any(|im| !im.joined && rel[i] >= im.t_s && rel[i] - im.t_s < IMPACT_WINDOW_S);
+                let bin = if close { &mut near } else { &mut far };
+                bin.0 += u;
+                bin.1 += 1;
+            }
+        }
+    }
+    let mean = |b: (f64, usize)| (b.0 / b.1.max(1) as f64, b.1);
+    (mean(near), mean(far))
+}
+
+/// Test the collision runs of `recordings` against the single-run physics `physics` (per
+/// material); materials without collision runs or without physics are skipped with a note.
+pub fn check_pairs(
+    recordings: &[Recording],
+    physics: &BTreeMap<String, (Model, [f64; 3])>,
+    groove: Groove,
+    max_iter: usize,
+) -> (Vec<Finding>, Vec<String>) {
+    let mut by_material: BTreeMap<String, Vec<PairRun>> = BTreeMap::new();
+    let mut notes = Vec::new();
+    for rec in recordings
+        .iter()
+        .filter(|r| r.info.experiment == Experiment::Collision)
+    {
+        if let Ok(run) = PairRun::from_recording(rec, rec.info.setup) {
+            by_material
+                .entry(rec.info.material.clone())
+                .or_default()
+                .push(run);
+        }
+    }
+    let mut drafts = Vec::new();
+    for (material, runs) in &by_material {
+        let Some((model, single_se)) = physics.get(material) else {
+            notes.push(format!(
+                "collision runs of {material}: no single-run physics of this material to test"
+            ));
+            continue;
+        };
+        let free_spec = FitSpec::new(groove);
+        let free = fit_group(runs, &free_spec, None, max_iter);
+        let mut start = free.clone();
+        start.result.shared[MU_PG] = match model.friction {
+            Friction::Constant { mu } => mu,
+            Friction::VelocityDependent { mu_inf, .. } => mu_inf,
+        };
+        let held_spec = FitSpec {
+            drag: DragSpec::Held(model.terms.clone()),
+            ..FitSpec::new(groove)
+        };
+        // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
+        let mut held = crate::fit::collision::wholerun::fit_group_with(
+            runs,
+            &held_spec,
+            &start.result.shared,
+            Some(free.result.own.as_slice()),
+            &|i| i != MU_PG && i != LN_T0 && i != TP,
+            max_iter,
+        );
+        if held.cost() > free.cost() {
+            // a second start from the held physics' own optimum of the per-run parameters
+            let again = crate::fit::collision::wholerun::fit_group_with(
+                runs,
+                &held_spec,
+                &held.result.shared,
+                Some(held.result.own.as_slice()),
+                &|i| i != MU_PG && i != LN_T0 && i != TP,
+                max_iter,
+            );
+            if again.cost() < held.cost() {
+                held = again;
+            }
+        }
+        let deviance_gain = held.cost() - free.cost();
+        // the single runs' values carry their own errors: compare them with the pairs' by a
+        // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
+        // treat the single runs' values as exact
+        let lr = wald(&free, model, single_se).unwrap_or(deviance_gain);
+        let extra = 3;
+        let p = chi2_sf(lr.max(0.0), extra as f64);
+        let ((near, n_near), (far, n_far)) = split_by_impact(runs, &free);
+        let ratio = near / far.max(1e-12);
+        // F-like ratio of two mean squares: sd of ln ratio ≈ √(2/n1 + 2/n2)
+        let z = ratio.ln() / (2.0 / n_near.max(1) as f64 + 2.0 / n_far.max(1) as f64).sqrt();
+        let p_impact = normal_sf(z);
+        let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
+        let sigma = runs.iter().map(|r| r.sigma_m).sum::<f64>() / runs.len() as f64;
+        drafts.push((material.clone(), (runs.len(), n_pts, sigma), free, held, lr, p, ratio, p_impact, n_near));
+    }
+    let p_phys = holm(&drafts.iter().map(|d| d.5).collect::<Vec<_>>());
+    let p_imp = holm(&drafts.iter().map(|d| d.7).collect::<Vec<_>>());
+    let mut findings = Vec::new();
+    for (k, (material, (n_runs, n_pts, sigma), free, held, lr, p, ratio, p_impact, n_near)) in
+        drafts.into_iter().enumerate()
+    {
+        let sh = &free.result.shared;
+        let v = |x: f64, se: f64| Value {
+            value: x,
+            stderr: se,
+        };
+        let mut parameters = BTreeMap::new();
+        parameters.insert(
+            "mu_pg_pairs".to_string(),
+            v(sh[MU_PG], free.result.shared_se(MU_PG)),
+        );
+        parameters.insert(
+            "t0_s_pairs".to_string(),
+            v(sh[LN_T0].exp(), sh[LN_T0].exp() * free.result.shared_se(LN_T0)),
+        );
+        parameters.insert(
+            "tp_s_per_mps_pairs".to_string(),
+            v(sh[TP], free.result.shared_se(TP)),
+        );
+        let accepted = p_phys[k] < ALPHA && lr > 0.0;
+        let mut where_ = BTreeMap::new();
+        where_.insert("experiment".to_string(), serde_json::json!("collision"));
+        where_.insert("material".to_string(), serde_json::json!(material));
+        where_.insert("n_runs".to_string(), serde_json::json!(n_runs));
+        where_.insert("deviance_gain".to_string(), serde_json::json!(held.cost() - free.cost()));
+        where_.insert(
+            "rms_noise_held".to_string(),
+            serde_json::json!((held.cost() / n_pts.max(1) as f64).sqrt()),
+        );
+        where_.insert(
+            "rms_noise_free".to_string(),
+            serde_json::json!((free.cost() / n_pts.max(1) as f64).sqrt()),
+        );
+        let status = |f: &GroupFit| {
+            if f.result.termination == Termination::MaxIterations {
+                "stopped at its iteration limit"
+            } else {
+                "converged"
+            }
+        };
+        let score = |f: &GroupFit, n_global: usize, terms: &str| ModelScore {
+            cv_rms_m: f64::NAN,
+            rms_m: (f.cost() / n_pts.max(1) as f64).sqrt() * sigma,
+            chi2: f.cost(),
+            n_global_params: n_global,
+            terms: vec![terms.to_string()],
+        };
+        findings.push(Finding {
+            effect: "pair_physics_mismatch".into(),
+            accepted,
+            form: "μ_pg and drag of the collision runs fitted (saturating drag) vs held at the single runs' accepted physics".into(),
+            parameters,
+            evidence: Evidence {
+                lr,
+                extra_params: 3,
+                p_value: p,
+                p_holm: p_phys[k],
+                decision: format!(
+                    "{} (held fit {}, free fit {})",
+                    if accepted {
+                        "the pairs move under friction or drag the single runs do not share"
+                    } else {
+                        "the single runs' physics explains the pair motion"
+                    },
+                    status(&held),
+                    status(&free)
+                ),
+                ..Evidence::default()
+            },
+            where_,
+            baseline: score(&held, 0, "single runs' physics held"),
+            extended: score(&free, 3, "μ_pg, T0, T' of the pairs"),
+        });
+        let accepted_imp = p_imp[k] < ALPHA && ratio > MIN_RATIO;
+        let mut where_ = BTreeMap::new();
+        where_.insert("experiment".to_string(), serde_json::json!("collision"));
+        where_.insert("material".to_string(), serde_json::json!(material));
+        where_.insert("window_after_impact_s".to_string(), serde_json::json!(IMPACT_WINDOW_S));
+        where_.insert("samples_after_impacts".to_string(), serde_json::json!(n_near));
+        let mut parameters = BTreeMap::new();
+        parameters.insert(
+            "mean_square_ratio".to_string(),
+            v(ratio, ratio * (2.0 / n_near.max(1) as f64).sqrt()),
+        );
+        findings.push(Finding {
+            effect: "impact_specific_mismatch".into(),
+            accepted: accepted_imp,
+            form: "mean squared residual within 5 ms after impacts against the rest of the run (impulse rule, restitution law)".into(),
+            parameters,
+            evidence: Evidence {
+                lr: ratio,
+                p_value: p_impact,
+                p_holm: p_imp[k],
+                decision: if accepted_imp {
+                    "the misfit concentrates after impacts: the impact model misses something".into()
+                } else {
+                    "no misfit specific to impacts".into()
+                },
+                ..Evidence::default()
+            },
+            where_,
+            baseline: score(&free, 3, "whole-run pair model"),
+            extended: ModelScore::default(),
+        });
+    }
+    (findings, notes)
+}
+
+/// The discover stage's hook: test the collision runs against the diagnosis' final model and
+/// append the findings (each with `where.experiment = "collision"`); notes go to `note`.
+pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings: &[Recording]) {
+    if !recordings
+        .iter()
+        .any(|r| r.info.experiment == Experiment::Collision)
+    {
+        return;
+    }
+    let groove = Groove::CHAPTER;
+    let params: BTreeMap<String, f64> = diagnosis
+        .model_parameters
+        .iter()
+        .map(|(k, v)| (k.clone(), v.value))
+        .collect();
+    let se = |k: String| {
+        diagnosis
+            .model_parameters
+            .get(&k)
+            .map(|e| e.stderr)
+            .filter(|x| x.is_finite())
+            .unwrap_or(0.0)
+    };
+    let mut physics = BTreeMap::new();
+    let mut notes = Vec::new();
+    for m in &diagnosis.materials {
+        match single_run_physics(&params, m, groove) {
+            Ok(model) => {
+                let t_key = if params.contains_key(&format!("t0_s_{m}")) {
+                    format!("t0_s_{m}")
+                } else {
+                    format!("t_s_{m}")
+                };
+                let errs = [se(format!("mu_{m}")), se(t_key), se("tp_s_per_mps".into())];
+                physics.insert(m.clone(), (model, errs));
+            }
+            Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
+        }
+    }
+    let (findings, more) = check_pairs(recordings, &physics, groove, 80);
+    diagnosis.findings.extend(findings);
+    notes.extend(more);
+    if diagnosis.findings.iter().any(|f| {
+        f.accepted && f.where_.get("experiment") == Some(&serde_json::json!("collision"))
+    }) {
+        diagnosis.mismatch = true;
+    }
+    for n in notes {
+        if !diagnosis.note.is_empty() {
+            diagnosis.note.push_str("; ");
+        }
+        diagnosis.note.push_str(&n);
+    }
+}

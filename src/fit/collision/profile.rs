@@ -1,0 +1,238 @@
+//! Profile likelihood of μ_pp: the whole-run fit's deviance with μ_pp held at each value of a
+//! grid (every other parameter refitted), and what it implies — an interval when the profile has
+//! a minimum inside the grid, a one-sided bound when it is flat towards one end.
+
+use super::wholerun::{fit_group, FitSpec, GroupFit, PairRun, MU_PP};
+use serde::{Deserialize, Serialize};
+
+/// Rise of the deviance that bounds a 95 % interval of one parameter (χ²₁ quantile).
+pub const DELTA_95: f64 = 3.841_458_820_694_124;
+
+/// One grid value.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfilePoint {
+    pub mu_pp: f64,
+    /// Deviance above the best fit (χ² units; 0 at the minimum).
+    pub deviance: f64,
+    pub converged: bool,
+}
+
+/// What the profile says about μ_pp.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum ProfileVerdict {
+    /// A minimum inside the grid; the 95 % interval.
+    Interval { estimate: f64, lo: f64, hi: f64 },
+    /// Flat above `lo`: the recordings only say μ_pp > lo (95 %).
+    LowerBound { lo: f64 },
+    /// Flat below `hi`: μ_pp < hi (95 %).
+    UpperBound { hi: f64 },
+    /// Flat over the whole grid: the recordings do not constrain μ_pp.
+    Unconstrained,
+}
+
+/// The profile of one material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MuPpProfile {
+    pub points: Vec<ProfilePoint>,
+    pub verdict: ProfileVerdict,
+    /// The deviance rise used for the interval.
+    pub threshold: f64,
+    /// Run-level dispersion the deviances were divided by (≥ 1): how much more the runs
+    /// disagree about μ_pp than their noise says (a sandwich over runs at the estimate).
+    pub dispersion: f64,
+}
+
+/// The grid: log-spaced from 0.05 to 5 (13 values).
+pub fn default_grid() -> Vec<f64> {
+    (0..=12).map(|i| 0.05 * 10f64.powf(i as f64 / 6.0)).collect()
+}
+
+/// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
+/// from the grid value nearest the best estimate, each starting from its neighbour's solution.
+pub fn profile_mu_pp(
+    runs: &[PairRun],
+    best: &GroupFit,
+    grid: &[f64],
+    max_iter: usize,
+) -> MuPpProfile {
+    let mu_best = best.result.shared[MU_PP];
+    let n = grid.len();
+    let centre = (0..n)
+        .min_by(|&a, &b| {
+            (grid[a].ln() - mu_best.ln())
+                .abs()
+                .total_cmp(&(grid[b].ln() - mu_best.ln()).abs())
+        })
+        .unwrap_or(0);
+    let mut fits: Vec<Option<GroupFit>> = vec![None; n];
+    let solve = |mu: f64, from: &GroupFit| {
+        let spec = FitSpec {
+            mu_pp_held: Some(mu),
+            ..best.spec.clone()
+        };
+        fit_group(runs, &spec, Some(from), max_iter)
+    };
+    fits[centre] = Some(solve(grid[centre], best));
+    for i in (0..centre).rev() {
+        let from = fits[i + 1].clone().unwrap();
+        fits[i] = Some(solve(grid[i], &from));
+    }
+    for i in centre + 1..n {
+        let from = fits[i - 1].clone().unwrap();
+        fits[i] = Some(solve(grid[i], &from));
+    }
+    let mut fits: Vec<(f64, GroupFit)> = grid
+        .iter()
+        .copied()
+        .zip(fits.into_iter().flatten())
+        .collect();
+    // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
+    // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
+    let se_ln = best.result.shared_se(MU_PP) / mu_best;
+    let mut dispersion = 1.0;
+    if se_ln.is_finite() && se_ln > 0.0 {
+        let h = (1.96 * se_ln).max(1e-4);
+        for k in [-2.0, -1.0, 1.0, 2.0] {
+            let mu = mu_best * (k * h).exp();
+            let from = if k.abs() > 1.5 {
+                fits.iter()
+                    .min_by(|a, b| (a.0.ln() - mu.ln()).abs().total_cmp(&(b.0.ln() - mu.ln()).abs()))
+                    .map(|f| f.1.clone())
+                    .unwrap_or_else(|| best.clone())
+            } else {
+                best.clone()
+            };
+            fits.push((mu, solve(mu, &from)));
+        }
+        // runs are the independent units: per-run slopes of the deviance at the estimate
+        // against its curvature (sandwich / model variance of ln μ_pp)
+        let n = fits.len();
+        let (minus, plus) = (&fits[n - 3].1, &fits[n - 2].1);
+        let c0 = &best.result.block_cost;
+        let (cm, cp) = (&minus.result.block_cost, &plus.result.block_cost);
+        let curv: f64 = (0..c0.len())
+            .map(|r| (cp[r] + cm[r] - 2.0 * c0[r]) / (h * h))
+            .sum();
+        let spread: f64 = (0..c0.len())
+            .map(|r| ((cp[r] - cm[r]) / (2.0 * h)).powi(2))
+            .sum();
+        if curv > 0.0 && spread.is_finite() {
+            dispersion = (spread / (2.0 * curv)).max(1.0);
+        }
+    }
+    fits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let c_min = fits
+        .iter()
+        .map(|f| f.1.cost())
+        .fold(best.cost(), f64::min);
+    let points: Vec<ProfilePoint> = fits
+        .iter()
+        .map(|(mu_pp, f)| ProfilePoint {
+            mu_pp: *mu_pp,
+            deviance: (f.cost() - c_min).max(0.0) / dispersion,
+            converged: f.converged(),
+        })
+        .collect();
+    let estimate = if best.cost() <= c_min + 1e-9 {
+        mu_best
+    } else {
+        points
+            .iter()
+            .min_by(|a, b| a.deviance.total_cmp(&b.deviance))
+            .map(|p| p.mu_pp)
+            .unwrap_or(mu_best)
+    };
+    MuPpProfile {
+        verdict: verdict(&points, estimate, DELTA_95),
+        points,
+        threshold: DELTA_95,
+        dispersion,
+    }
+}
+
+/// Where the deviance crosses `delta` on either side of the estimate (its square root
+/// interpolated linearly in ln μ_pp between profile values), or a one-sided bound when it never does on one side.
+pub fn verdict(points: &[ProfilePoint], estimate: f64, delta: f64) -> ProfileVerdict {
+    // the estimate itself is the profile's minimum (deviance 0)
+    let mut all: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| (p.mu_pp.ln() - estimate.ln()).abs() > 1e-9)
+        .map(|p| (p.mu_pp.ln(), p.deviance))
+        .collect();
+    all.push((estimate.ln(), 0.0));
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let c = all
+        .iter()
+        .position(|p| p.0 == estimate.ln())
+        .unwrap_or(0);
+    // the signed root of the deviance is linear in the parameter near a quadratic minimum
+    let cross = |a: (f64, f64), b: (f64, f64)| {
+        let (ra, rb) = (a.1.max(0.0).sqrt(), b.1.max(0.0).sqrt());
+        let f = (delta.sqrt() - ra) / (rb - ra);
+        (a.0 + f * (b.0 - a.0)).exp()
+    };
+    let lo = (0..c)
+        .rev()
+        .find(|&i| all[i].1 > delta)
+        .map(|i| cross(all[i + 1], all[i]));
+    let hi = (c + 1..all.len())
+        .find(|&i| all[i].1 > delta)
+        .map(|i| cross(all[i - 1], all[i]));
+    match (lo, hi) {
+        (Some(lo), Some(hi)) => ProfileVerdict::Interval { estimate, lo, hi },
+        (Some(lo), None) => ProfileVerdict::LowerBound { lo },
+        (None, Some(hi)) => ProfileVerdict::UpperBound { hi },
+        (None, None) => ProfileVerdict::Unconstrained,
+    }
+}
+
+impl ProfileVerdict {
+    /// Whether `mu` is inside what the profile allows.
+    pub fn contains(&self, mu: f64) -> bool {
+        match *self {
+            ProfileVerdict::Interval { lo, hi, .. } => lo <= mu && mu <= hi,
+            ProfileVerdict::LowerBound { lo } => mu >= lo,
+            ProfileVerdict::UpperBound { hi } => mu <= hi,
+            ProfileVerdict::Unconstrained => true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pts(f: impl Fn(f64) -> f64) -> Vec<ProfilePoint> {
+        default_grid()
+            .into_iter()
+            .map(|mu| ProfilePoint {
+                mu_pp: mu,
+                deviance: f(mu),
+                converged: true,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_parabola_in_ln_mu_gives_its_interval() {
+        // D = ((ln μ − ln 0.3)/0.1)²: crosses 3.84 at ln μ = ln 0.3 ± 0.196
+        let p = pts(|mu| ((mu.ln() - 0.3f64.ln()) / 0.1).powi(2));
+        let ProfileVerdict::Interval { lo, hi, .. } = verdict(&p, 0.3, DELTA_95) else {
+            panic!("no interval");
+        };
+        assert!((lo / 0.3 - (-0.196f64).exp()).abs() < 0.06, "{lo}");
+        assert!((hi / 0.3 - 0.196f64.exp()).abs() < 0.06, "{hi}");
+    }
+
+    #[test]
+    fn a_profile_flat_above_gives_a_lower_bound() {
+        // rises steeply below 0.8, flat above
+        let p = pts(|mu| if mu < 0.8 { 50.0 * (0.8 - mu) } else { 0.0 });
+        match verdict(&p, 2.0, DELTA_95) {
+            ProfileVerdict::LowerBound { lo } => assert!(lo > 0.5 && lo < 0.8, "{lo}"),
+            v => panic!("{v:?}"),
+        }
+        assert!(verdict(&pts(|_| 0.0), 1.0, DELTA_95) == ProfileVerdict::Unconstrained);
+    }
+}

@@ -1,0 +1,174 @@
+//! The restitution law C(v) of one material and setup from the whole-run fits: each form
+//! (constant, linear, saturating) fitted to the runs of that setup with the rest of the shared
+//! physics held at the material's best fit, and chosen by its error on held-out runs
+//! (k-fold over runs: the law is fitted on the other runs, then only the held-out runs' own
+//! parameters are fitted). Intervals are ±1.96 standard errors of the all-runs fit.
+
+use super::wholerun::{
+    fit_group_with, fit_own_only, law_slots, law_start, FitSpec, GroupFit, LawForm, PairRun,
+};
+use crate::recording::Setup;
+use serde::{Deserialize, Serialize};
+
+/// A parameter of a law with its 95 % interval.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LawParameter {
+    pub name: String,
+    pub value: f64,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// One candidate form.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LawCandidate {
+    pub form: LawForm,
+    pub parameters: Vec<LawParameter>,
+    /// RMS of the held-out runs' residuals, in units of their position noise.
+    pub heldout_rms_noise: f64,
+    /// Held-out Huber deviance summed over the folds.
+    pub heldout_deviance: f64,
+}
+
+/// The law chosen for one material and setup.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LawChoice {
+    pub setup: Setup,
+    pub n_runs: usize,
+    pub folds: usize,
+    pub chosen: LawForm,
+    pub candidates: Vec<LawCandidate>,
+}
+
+impl LawChoice {
+    pub fn chosen_candidate(&self) -> Option<&LawCandidate> {
+        self.candidates.iter().find(|c| c.form == self.chosen)
+    }
+}
+
+/// A simpler form is kept unless a richer one lowers the held-out deviance by more than this.
+const PREFER_SIMPLER: f64 = 4.0;
+
+/// Choose the law of `setup` among `runs` (one material) around the material's fit `best`.
+/// None when fewer than 3 runs have this setup.
+pub fn choose_law(
+    runs: &[PairRun],
+    best: &GroupFit,
+    setup: Setup,
+    folds: usize,
+    max_iter: usize,
+) -> Option<LawChoice> {
+    let sub: Vec<PairRun> = runs.iter().filter(|r| r.setup == setup).cloned().collect();
+    if sub.len() < 3 {
+        return None;
+    }
+    let own_sub: Vec<Vec<f64>> = runs
+        .iter()
+        .zip(&best.result.own)
+        .filter(|(r, _)| r.setup == setup)
+        .map(|(_, o)| o.clone())
+        .collect();
+    let k = folds.clamp(2, sub.len());
+    let (ia, ib) = law_slots(setup);
+    let free = |i: usize| i == ia || i == ib;
+    let slot = match setup {
+        Setup::Rolling => 0,
+        Setup::Contact => 1,
+    };
+    let mut candidates = Vec::new();
+    for form in LawForm::ALL {
+        let mut spec = best.spec.clone();
+        spec.laws[slot] = form;
+        let mut shared = best.result.shared.clone();
+        if form != best.spec.laws[slot] {
+            [shared[ia], shared[ib]] = law_start(form);
+            if form == LawForm::Linear {
+                // start from the best law's line through its speeds
+                shared[ia] = 0.95;
+            }
+        }
+        let all = fit_group_with(&sub, &spec, &shared, Some(own_sub.as_slice()), &free, max_iter);
+        let cov = &all.result.shared_cov;
+        let se = |i: usize| cov[i][i].max(0.0).sqrt();
+        let (a, b) = (all.result.shared[ia], all.result.shared[ib]);
+        let names = form.parameter_names();
+        let mut parameters = vec![LawParameter {
+            name: names[0].into(),
+            value: a,
+            lo: a - 1.96 * se(ia),
+            hi: a + 1.96 * se(ia),
+        }];
+        match form {
+            LawForm::Constant => {}
+            LawForm::Linear => parameters.push(LawParameter {
+                name: names[1].into(),
+                value: b,
+                lo: b - 1.96 * se(ib),
+                hi: b + 1.96 * se(ib),
+            }),
+            LawForm::Saturating => parameters.push(LawParameter {
+                name: names[1].into(),
+                value: b.exp(),
+                lo: (b - 1.96 * se(ib)).exp(),
+                hi: (b + 1.96 * se(ib)).exp(),
+            }),
+        }
+        // k-fold over runs
+        let (mut dev, mut n) = (0.0, 0usize);
+        for f in 0..k {
+            let train: Vec<usize> = (0..sub.len()).filter(|i| i % k != f).collect();
+            let test: Vec<usize> = (0..sub.len()).filter(|i| i % k == f).collect();
+            let pick = |ix: &[usize]| ix.iter().map(|&i| sub[i].clone()).collect::<Vec<_>>();
+            let own_train: Vec<Vec<f64>> =
+                train.iter().map(|&i| all.result.own[i].clone()).collect();
+            let fitted = fit_group_with(
+                &pick(&train),
+                &spec,
+                &all.result.shared,
+                Some(own_train.as_slice()),
+                &free,
+                max_iter,
+            );
+            let held = pick(&test);
+            let out = fit_own_only(&held, &spec, &fitted.result.shared, max_iter);
+            dev += out.cost();
+            n += held.iter().map(PairRun::n_samples).sum::<usize>();
+        }
+        candidates.push(LawCandidate {
+            form,
+            parameters,
+            heldout_rms_noise: (dev / n.max(1) as f64).sqrt(),
+            heldout_deviance: dev,
+        });
+    }
+    // the simplest form within PREFER_SIMPLER of the lowest held-out deviance
+    let min = candidates
+        .iter()
+        .map(|c| c.heldout_deviance)
+        .fold(f64::INFINITY, f64::min);
+    let chosen = candidates
+        .iter()
+        .find(|c| c.heldout_deviance <= min + PREFER_SIMPLER)
+        .map(|c| c.form)
+        .unwrap_or(LawForm::Saturating);
+    Some(LawChoice {
+        setup,
+        n_runs: sub.len(),
+        folds: k,
+        chosen,
+        candidates,
+    })
+}
+
+/// The spec with each setup's chosen law form.
+pub fn with_chosen(spec: &FitSpec, choices: &[LawChoice]) -> FitSpec {
+    let mut out = spec.clone();
+    for c in choices {
+        let slot = match c.setup {
+            Setup::Rolling => 0,
+            Setup::Contact => 1,
+        };
+        out.laws[slot] = c.chosen;
+    }
+    out
+}

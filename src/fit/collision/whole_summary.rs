@@ -1,0 +1,292 @@
+//! The whole-run collision analysis of a dataset, per material: the joint fit of every
+//! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
+//! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
+
+use super::lm::Termination;
+use super::profile::{default_grid, profile_mu_pp, MuPpProfile, ProfileVerdict};
+use super::restitution_law::{choose_law, with_chosen, LawChoice};
+use super::types::Estimate;
+use super::wholerun::{
+    fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, T_KICK, TP, V0,
+};
+use crate::physics::{simulate_pair, Groove, Phase};
+use crate::recording::{Experiment, Recording, Setup};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Settings of the whole-run analysis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WholeRunOptions {
+    /// Iteration limit of the joint fits (a fit that reaches it is reported as such).
+    pub max_iter: usize,
+    /// Iteration limit of each profile and cross-validation fit (they start near a solution).
+    pub step_iter: usize,
+    /// μ_pp values of the profile.
+    pub grid: Vec<f64>,
+    /// Folds of the held-out choice of the restitution law.
+    pub folds: usize,
+}
+
+impl Default for WholeRunOptions {
+    fn default() -> Self {
+        WholeRunOptions {
+            max_iter: 80,
+            step_iter: 25,
+            grid: default_grid(),
+            folds: 3,
+        }
+    }
+}
+
+/// One run in the whole-run fit of its material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WholeRun {
+    pub run: String,
+    pub setup: Setup,
+    /// Kick speed of the striker (lab frame, m/s).
+    pub v0_mps: Estimate,
+    pub t_kick_s: f64,
+    /// RMS of the residuals (m) and the position noise (m).
+    pub rms_m: f64,
+    pub noise_m: f64,
+    pub n_points: usize,
+    /// Impacts the fitted model makes in the recorded time, and how many slip.
+    pub n_impacts: usize,
+    pub n_slip: usize,
+    /// The first impact: approach speed (m/s) and C of the fitted law there.
+    pub first_impact_speed_mps: Option<f64>,
+    pub first_impact_restitution: Option<f64>,
+    /// RMS of the residuals (in units of the noise) by phase of the particle and by time since
+    /// the last impact (`0-1ms`, `1-5ms`, `5-20ms`, `>20ms`, `before`).
+    pub residual_by_phase: BTreeMap<String, f64>,
+    pub residual_by_time_since_impact: BTreeMap<String, f64>,
+}
+
+/// The whole-run analysis of one material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MaterialWholeRun {
+    pub material: String,
+    pub n_runs: usize,
+    pub status: Termination,
+    pub iterations: usize,
+    pub max_iter: usize,
+    /// The drag form of the shared physics.
+    pub drag: String,
+    pub mu_pg: Estimate,
+    pub t0_s: Estimate,
+    pub tp_s_per_mps: Estimate,
+    /// μ_pp of the best fit (its standard error is meaningful only with an interval).
+    pub mu_pp: Estimate,
+    pub profile: MuPpProfile,
+    pub restitution: Vec<LawChoice>,
+    /// Deviance (χ² units) and residual RMS in noise units over all runs.
+    pub deviance: f64,
+    pub rms_noise: f64,
+    pub runs: Vec<WholeRun>,
+    pub notes: Vec<String>,
+}
+
+/// summary.json → collisions → whole_run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WholeRunSummary {
+    pub materials: Vec<MaterialWholeRun>,
+    pub notes: Vec<String>,
+}
+
+impl MaterialWholeRun {
+    /// The sentence the report prints about μ_pp.
+    pub fn mu_pp_words(&self) -> String {
+        match self.profile.verdict {
+            ProfileVerdict::Interval { estimate, lo, hi } => format!(
+                "μ_pp = {estimate:.2} (95 % profile interval {lo:.2}–{hi:.2}); the chapter's 1.4 is {}",
+                if (lo..=hi).contains(&1.4) { "inside it" } else { "outside it" }
+            ),
+            ProfileVerdict::LowerBound { lo } => format!(
+                "the recordings bound μ_pp from below at {lo:.2} (95 %): the profile is flat above, so the chapter's 1.4 is {}",
+                if 1.4 >= lo { "allowed but not measured" } else { "excluded" }
+            ),
+            ProfileVerdict::UpperBound { hi } => {
+                format!("the recordings bound μ_pp from above at {hi:.2} (95 %)")
+            }
+            ProfileVerdict::Unconstrained => {
+                "the recordings do not constrain μ_pp over the profiled range".to_string()
+            }
+        }
+    }
+}
+
+fn est(res: &GroupFit, i: usize) -> Estimate {
+    Estimate::new(res.result.shared[i], res.result.shared_se(i))
+}
+
+/// Analyze every collision run of `recs` (per material).
+pub fn analyze(recs: &[Recording], groove: Groove, opts: &WholeRunOptions) -> WholeRunSummary {
+    let mut by_material: BTreeMap<String, Vec<PairRun>> = BTreeMap::new();
+    let mut notes = Vec::new();
+    for rec in recs
+        .iter()
+        .filter(|r| r.info.experiment == Experiment::Collision)
+    {
+        match PairRun::from_recording(rec, rec.info.setup) {
+            Ok(run) => by_material
+                .entry(rec.info.material.clone())
+                .or_default()
+                .push(run),
+            Err(e) => notes.push(format!("{} left out of the whole-run fit: {e}", rec.info.run)),
+        }
+    }
+    let materials = by_material
+        .into_iter()
+        .map(|(material, runs)| analyze_material(&material, &runs, groove, opts))
+        .collect();
+    WholeRunSummary { materials, notes }
+}
+
+/// The whole-run analysis of the runs of one material.
+pub fn analyze_material(
+    material: &str,
+    runs: &[PairRun],
+    groove: Groove,
+    opts: &WholeRunOptions,
+) -> MaterialWholeRun {
+    let spec = FitSpec::new(groove);
+    let first = fit_group(runs, &spec, None, opts.max_iter);
+    let mut notes = Vec::new();
+    let choices: Vec<LawChoice> = [Setup::Rolling, Setup::Contact]
+        .into_iter()
+        .filter_map(|s| choose_law(runs, &first, s, opts.folds, opts.step_iter))
+        .collect();
+    let chosen = with_chosen(&spec, &choices);
+    let best = if chosen == spec {
+        first
+    } else {
+        let mut start = first.clone();
+        // carry the chosen forms' all-runs values into the start
+        for c in &choices {
+            let (ia, ib) = super::wholerun::law_slots(c.setup);
+            if let Some(cand) = c.chosen_candidate() {
+                start.result.shared[ia] = cand.parameters[0].value;
+                start.result.shared[ib] = match (c.chosen, cand.parameters.get(1)) {
+                    (super::wholerun::LawForm::Saturating, Some(p)) => p.value.ln(),
+                    (_, Some(p)) => p.value,
+                    (_, None) => 0.0,
+                };
+            }
+        }
+        let refit = fit_group(runs, &chosen, Some(&start), opts.max_iter);
+        if refit.cost() <= first.cost() + 50.0 || !first.converged() {
+            refit
+        } else {
+            notes.push("the refit with the chosen laws did not reach the first fit's deviance; the first fit is kept".into());
+            first
+        }
+    };
+    if best.result.termination == Termination::MaxIterations {
+        notes.push(format!(
+            "the joint fit stopped at its iteration limit ({}); raise whole_run.max_iter",
+            opts.max_iter
+        ));
+    }
+    let profile = profile_mu_pp(runs, &best, &opts.grid, opts.step_iter);
+    let n_points: usize = runs.iter().map(PairRun::n_samples).sum();
+    let whole_runs = runs
+        .iter()
+        .zip(best.result.own.iter().zip(&best.result.own_se))
+        .map(|(r, (own, se))| describe_run(r, &best, own, se))
+        .collect();
+    MaterialWholeRun {
+        material: material.to_string(),
+        n_runs: runs.len(),
+        status: best.result.termination,
+        iterations: best.result.iterations,
+        max_iter: opts.max_iter,
+        drag: match best.spec.drag {
+            DragSpec::Saturating => "saturating".into(),
+            DragSpec::Linear => "linear".into(),
+            DragSpec::Held(_) => "held".into(),
+        },
+        mu_pg: est(&best, MU_PG),
+        t0_s: Estimate::new(
+            best.result.shared[LN_T0].exp(),
+            best.result.shared[LN_T0].exp() * best.result.shared_se(LN_T0),
+        ),
+        tp_s_per_mps: est(&best, TP),
+        mu_pp: est(&best, MU_PP),
+        profile,
+        restitution: choices,
+        deviance: best.cost(),
+        rms_noise: (best.cost() / n_points.max(1) as f64).sqrt(),
+        runs: whole_runs,
+        notes,
+    }
+}
+
+fn time_bin(dt: Option<f64>) -> &'static str {
+    match dt {
+        None => "before",
+        Some(d) if d < 1e-3 => "0-1ms",
+        Some(d) if d < 5e-3 => "1-5ms",
+        Some(d) if d < 20e-3 => "5-20ms",
+        Some(_) => ">20ms",
+    }
+}
+
+/// One run at the fit: impacts, residuals by phase and by time since the last impact.
+fn describe_run(run: &PairRun, fit: &GroupFit, own: &[f64], se: &[f64]) -> WholeRun {
+    let shared = &fit.result.shared;
+    let model = fit.spec.model(shared);
+    let pair = fit.spec.pair(shared, run.setup, run.diameter_m);
+    let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
+    let traj = simulate_pair(&model, &pair, run.init(own), &rel);
+    let mut by_phase: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    let mut by_time: BTreeMap<String, (f64, usize)> = BTreeMap::new();
+    let (mut ss, mut n) = (0.0, 0usize);
+    for p in 0..2 {
+        for &(i, zd) in &run.samples[p] {
+            let zm = traj.particles[p].z_m[i];
+            let r = zm - zd;
+            let u = (r / run.sigma_m).powi(2);
+            ss += r * r;
+            n += 1;
+            let phase = match traj.particles[p].phase[i] {
+                Phase::Sliding => "sliding",
+                Phase::Rolling => "rolling",
+                Phase::Rest => "rest",
+            };
+            let e = by_phase.entry(phase.to_string()).or_default();
+            e.0 += u;
+            e.1 += 1;
+            let last = traj
+                .impacts
+                .iter()
+                .rev()
+                .find(|im| im.t_s <= rel[i])
+                .map(|im| rel[i] - im.t_s);
+            let e = by_time.entry(time_bin(last).to_string()).or_default();
+            e.0 += u;
+            e.1 += 1;
+        }
+    }
+    let rms = |m: BTreeMap<String, (f64, usize)>| -> BTreeMap<String, f64> {
+        m.into_iter()
+            .map(|(k, (s, n))| (k, (s / n.max(1) as f64).sqrt()))
+            .collect()
+    };
+    let real: Vec<_> = traj.impacts.iter().filter(|im| !im.joined).collect();
+    WholeRun {
+        run: run.run.clone(),
+        setup: run.setup,
+        v0_mps: Estimate::new(own[V0], se[V0]),
+        t_kick_s: own[T_KICK],
+        rms_m: (ss / n.max(1) as f64).sqrt(),
+        noise_m: run.sigma_m,
+        n_points: n,
+        n_impacts: traj.impacts.len(),
+        n_slip: real.iter().filter(|im| im.slip).count(),
+        first_impact_speed_mps: traj.impacts.first().map(|im| im.v_impact_mps),
+        first_impact_restitution: traj.impacts.first().map(|im| im.restitution),
+        residual_by_phase: rms(by_phase),
+        residual_by_time_since_impact: rms(by_time),
+    }
+}

@@ -1,0 +1,542 @@
+//! Whole-run pair fits: every collision run of a material simulated from its kick with the
+//! event-driven two-particle model (`physics::simulate_pair`: every impact, first and secondary,
+//! and the sliding and rolling of both particles between them), fitted to both tracks at once.
+//!
+//! Shared per material: μ_pg, the drag (saturating v/(T0 + T'|v|), linear, or held at the single
+//! runs' physics), μ_pp, and one restitution law C(v) per setup. Per run: the striker's start
+//! position and kick speed, the gap to the target (rolling setup; the contact setup starts
+//! touching) and the kick time within the frame before the first sample. The simulator locates
+//! every phase switch and impact as an event, so positions are continuous in the parameters and
+//! the finite-difference derivatives of `blocks` see the events move, not jump.
+
+use super::blocks::{minimize_blocks, BlockOptions, BlockProblem, BlockResult};
+use super::detect::{median, noise_scale_m, robust_line};
+use super::lm::ParamSpec;
+use super::model::TrackData;
+use crate::physics::{simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term};
+use crate::recording::{Recording, Setup};
+use serde::{Deserialize, Serialize};
+
+/// Form of a restitution law C(v) of the impact speed v.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LawForm {
+    /// C = c.
+    Constant,
+    /// C = c0 − slope·v.
+    Linear,
+    /// C = c_inf + (1 − c_inf) e^{−v/v_ref} (physics.md).
+    Saturating,
+}
+
+impl LawForm {
+    pub const ALL: [LawForm; 3] = [LawForm::Constant, LawForm::Linear, LawForm::Saturating];
+
+    /// The law from its two parameter slots (a, b): constant (c, —), linear (c0, slope),
+    /// saturating (c_inf, ln v_ref).
+    pub fn law(self, a: f64, b: f64) -> Restitution {
+        match self {
+            LawForm::Constant => Restitution::Constant(a),
+            LawForm::Linear => Restitution::Linear {
+                c0: a,
+                slope_per_mps: b,
+            },
+            LawForm::Saturating => Restitution::SpeedDependent {
+                c0: a,
+                v_ref_mps: b.exp(),
+            },
+        }
+    }
+
+    /// Names of its parameters (SI units in the names) and how slot b maps to them.
+    pub fn parameter_names(self) -> &'static [&'static str] {
+        match self {
+            LawForm::Constant => &["c"],
+            LawForm::Linear => &["c0", "slope_per_mps"],
+            LawForm::Saturating => &["c_inf", "v_ref_mps"],
+        }
+    }
+
+    fn specs(self) -> [ParamSpec; 2] {
+        let spec = |start: f64, lower: f64, upper: f64, step: f64| ParamSpec {
+            start,
+            lower,
+            upper,
+            step,
+        };
+        match self {
+            LawForm::Constant => [spec(0.7, 0.0, 1.0, 1e-5), spec(0.0, 0.0, 0.0, 1e-5)],
+            LawForm::Linear => [spec(0.95, 0.0, 1.2, 1e-5), spec(1.0, -5.0, 50.0, 1e-4)],
+            LawForm::Saturating => [
+                spec(0.5, 0.0, 1.0, 1e-5),
+                spec(0.08f64.ln(), 1e-3f64.ln(), 3.0f64.ln(), 1e-5),
+            ],
+        }
+    }
+}
+
+/// How drag enters the shared physics.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DragSpec {
+    /// −v/(T0 + T'|v|), both fitted (T' ≥ 0; T' = 0 is linear drag).
+    Saturating,
+    /// −v/T, fitted.
+    Linear,
+    /// These terms, held (the physics the single runs were found to follow); μ_pg stays fitted.
+    Held(Vec<Term>),
+}
+
+/// One collision run prepared for the whole-run fit (lab frame).
+#[derive(Debug, Clone)]
+pub struct PairRun {
+    pub run: String,
+    pub material: String,
+    pub setup: Setup,
+    /// +1 when the striker moves toward +z.
+    pub direction: f64,
+    pub diameter_m: f64,
+    pub fps: f64,
+    /// Sorted union of both tracks' sample times.
+    pub t_s: Vec<f64>,
+    /// Per particle: (index into `t_s`, measured z).
+    pub samples: [Vec<(usize, f64)>; 2],
+    /// Position noise (m) the residuals are divided by.
+    pub sigma_m: f64,
+    /// Start values of the own parameters.
+    start: [f64; 4],
+}
+
+/// Indices of the shared parameters.
+pub const MU_PG: usize = 0;
+pub const LN_T0: usize = 1;
+pub const TP: usize = 2;
+pub const MU_PP: usize = 3;
+/// Slots (a, b) of the rolling law, then of the contact law.
+pub const LAW: usize = 4;
+pub const N_SHARED: usize = 8;
+/// Indices of the own parameters of a run.
+pub const Z1: usize = 0;
+pub const GAP: usize = 1;
+pub const V0: usize = 2;
+pub const T_KICK: usize = 3;
+
+fn law_slot(setup: Setup) -> usize {
+    match setup {
+        Setup::Rolling => LAW,
+        Setup::Contact => LAW + 2,
+    }
+}
+
+const MIN_POINTS: usize = 20;
+
+impl PairRun {
+    /// Prepare a recording (particle 0 striker, 1 target; the setup from runs.csv or guessed
+    /// from whether the target moves from the first frames).
+    pub fn from_recording(rec: &Recording, setup_hint: Option<Setup>) -> Result<PairRun, String> {
+        let info = &rec.info;
+        let (Some(st), Some(tg)) = (rec.track(0), rec.track(1)) else {
+            return Err("needs tracks of particle 0 (striker) and 1 (target)".into());
+        };
+        if st.t_s.len() < MIN_POINTS || tg.t_s.len() < MIN_POINTS {
+            return Err(format!("a track has fewer than {MIN_POINTS} samples"));
+        }
+        let head = |z: &[f64]| {
+            let mut h = z[..5].to_vec();
+            median(&mut h)
+        };
+        let direction = if head(&tg.z_m) >= head(&st.z_m) {
+            1.0
+        } else {
+            -1.0
+        };
+        let mut t: Vec<f64> = st.t_s.iter().chain(&tg.t_s).copied().collect();
+        t.sort_by(|a, b| a.total_cmp(b));
+        t.dedup();
+        let index = |x: f64| t.partition_point(|y| *y < x);
+        let samples = [st, tg].map(|tr| {
+            tr.t_s
+                .iter()
+                .zip(&tr.z_m)
+                .map(|(&ts, &z)| (index(ts), z))
+                .collect::<Vec<_>>()
+        });
+        let data = |tr: &crate::recording::Track| TrackData {
+            t_s: tr.t_s.clone(),
+            z_m: tr.z_m.clone(),
+        };
+        let (ds, dt) = (data(st), data(tg));
+        let sigma_m = noise_scale_m(&ds).min(noise_scale_m(&dt)).max(1e-8);
+        let frame = 1.0 / info.fps;
+        let t_first = t[0];
+        let t_kick = t_first - 0.5 * frame;
+        let line = |d: &TrackData| robust_line(d, 0, d.t_s.len().min(8), t_kick);
+        let (v_st, z_st) = line(&ds).unwrap_or((0.0, ds.z_m[0]));
+        let (v_tg, _) = line(&dt).unwrap_or((0.0, dt.z_m[0]));
+        let moving_target = (v_tg * direction) > 0.2 * (v_st * direction).abs().max(1e-3);
+        let setup = setup_hint.unwrap_or(if moving_target {
+            Setup::Contact
+        } else {
+            Setup::Rolling
+        });
+        let v0 = match setup {
+            Setup::Rolling => v_st,
+            Setup::Contact => v_st + v_tg,
+        };
+        let gap = match setup {
+            Setup::Rolling => (direction * (head(&tg.z_m) - z_st) - info.diameter_m).max(0.0),
+            Setup::Contact => 0.0,
+        };
+        Ok(PairRun {
+            run: info.run.clone(),
+            material: info.material.clone(),
+            setup,
+            direction,
+            diameter_m: info.diameter_m,
+            fps: info.fps,
+            t_s: t,
+            samples,
+            sigma_m,
+            start: [z_st, gap, direction * (v0 * direction).max(1e-3), t_kick],
+        })
+    }
+
+    pub fn n_samples(&self) -> usize {
+        self.samples[0].len() + self.samples[1].len()
+    }
+
+    fn own_specs(&self) -> Vec<ParamSpec> {
+        let frame = 1.0 / self.fps;
+        let [z, gap, v0, tk] = self.start;
+        let (vlo, vhi) = if self.direction > 0.0 {
+            (1e-4, 3.0)
+        } else {
+            (-3.0, -1e-4)
+        };
+        vec![
+            ParamSpec {
+                start: z,
+                lower: z - 0.05,
+                upper: z + 0.05,
+                step: 1e-9,
+            },
+            match self.setup {
+                Setup::Rolling => ParamSpec {
+                    start: gap,
+                    lower: 0.0,
+                    upper: gap + 0.05,
+                    step: 1e-9,
+                },
+                Setup::Contact => ParamSpec {
+                    start: 0.0,
+                    lower: 0.0,
+                    upper: 0.0,
+                    step: 1e-9,
+                },
+            },
+            ParamSpec {
+                start: v0,
+                lower: vlo,
+                upper: vhi,
+                step: 1e-7,
+            },
+            ParamSpec {
+                start: tk,
+                lower: self.t_s[0] - 1.5 * frame,
+                upper: self.t_s[0] - 1e-3 * frame,
+                step: 1e-8,
+            },
+        ]
+    }
+
+    /// The initial states at the kick (lab frame) for own parameters `own`.
+    pub fn init(&self, own: &[f64]) -> [State; 2] {
+        [
+            State {
+                z_m: own[Z1],
+                v_mps: own[V0],
+                va_mps: 0.0,
+            },
+            State {
+                z_m: own[Z1] + self.direction * (self.diameter_m + own[GAP]),
+                v_mps: 0.0,
+                va_mps: 0.0,
+            },
+        ]
+    }
+}
+
+/// The shared physics and contact laws of a whole-run fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSpec {
+    pub groove: Groove,
+    pub drag: DragSpec,
+    /// Law forms of the rolling and the contact setup.
+    pub laws: [LawForm; 2],
+    /// Hold μ_pp at this value (the profile), or fit it.
+    pub mu_pp_held: Option<f64>,
+}
+
+impl FitSpec {
+    pub fn new(groove: Groove) -> FitSpec {
+        FitSpec {
+            groove,
+            drag: DragSpec::Saturating,
+            laws: [LawForm::Saturating, LawForm::Saturating],
+            mu_pp_held: None,
+        }
+    }
+
+    fn law_form(&self, setup: Setup) -> LawForm {
+        match setup {
+            Setup::Rolling => self.laws[0],
+            Setup::Contact => self.laws[1],
+        }
+    }
+
+    /// The one-particle model at shared parameters `p`.
+    pub fn model(&self, p: &[f64]) -> Model {
+        let terms = match &self.drag {
+            DragSpec::Saturating => vec![Term::SaturatingDrag {
+                t0_s: p[LN_T0].exp(),
+                tp_s_per_mps: p[TP],
+            }],
+            DragSpec::Linear => vec![Term::LinearDrag {
+                t_s: p[LN_T0].exp(),
+            }],
+            DragSpec::Held(t) => t.clone(),
+        };
+        Model {
+            groove: self.groove,
+            friction: Friction::Constant { mu: p[MU_PG] },
+            terms,
+        }
+    }
+
+    /// The contact parameters of a run of `setup` at shared parameters `p`.
+    pub fn pair(&self, p: &[f64], setup: Setup, diameter_m: f64) -> PairParams {
+        let i = law_slot(setup);
+        PairParams {
+            restitution: self.law_form(setup).law(p[i], p[i + 1]),
+            mu_pp: p[MU_PP],
+            radius_m: 0.5 * diameter_m,
+        }
+    }
+
+    /// Bounds and start values of the shared parameters (`start` overrides the defaults).
+    pub fn shared_specs(&self, start: Option<&[f64]>, runs: &[PairRun]) -> Vec<ParamSpec> {
+        let spec = |start: f64, lower: f64, upper: f64, step: f64| ParamSpec {
+            start,
+            lower,
+            upper,
+            step,
+        };
+        let hold = |s: ParamSpec, x: f64| ParamSpec {
+            start: x,
+            lower: x,
+            upper: x,
+            ..s
+        };
+        let mut out = vec![
+            spec(0.3, 0.02, 1.5, 1e-6),
+            spec(0.06f64.ln(), 0.003f64.ln(), 10f64.ln(), 1e-5),
+            spec(0.5, 0.0, 30.0, 1e-4),
+            spec(1.0, 0.02, 20.0, 1e-5),
+        ];
+        for form in self.laws {
+            out.extend(form.specs());
+        }
+        match self.drag {
+            DragSpec::Saturating => {}
+            DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
+            DragSpec::Held(_) => {
+                out[LN_T0] = hold(out[LN_T0], out[LN_T0].start);
+                out[TP] = hold(out[TP], 0.0);
+            }
+        }
+        if let Some(s) = start {
+            for (o, x) in out.iter_mut().zip(s) {
+                if o.lower < o.upper && x.is_finite() {
+                    o.start = x.clamp(o.lower, o.upper);
+                }
+            }
+        }
+        // a law no run uses is held at its start; so is μ_pp when held
+        for setup in [Setup::Rolling, Setup::Contact] {
+            if !runs.iter().any(|r| r.setup == setup) {
+                let i = law_slot(setup);
+                out[i] = hold(out[i], out[i].start);
+                out[i + 1] = hold(out[i + 1], out[i + 1].start);
+            }
+        }
+        if let Some(mu) = self.mu_pp_held {
+            out[MU_PP] = hold(out[MU_PP], mu);
+        }
+        out
+    }
+}
+
+struct Problem<'a> {
+    runs: &'a [PairRun],
+    spec: &'a FitSpec,
+}
+
+impl BlockProblem for Problem<'_> {
+    fn n_blocks(&self) -> usize {
+        self.runs.len()
+    }
+    fn n_residuals(&self, b: usize) -> usize {
+        self.runs[b].n_samples()
+    }
+    fn residuals(&self, b: usize, shared: &[f64], own: &[f64], out: &mut [f64]) {
+        residuals(&self.runs[b], self.spec, shared, own, out);
+    }
+    fn uses(&self, b: usize, i: usize) -> bool {
+        if i < LAW {
+            return true;
+        }
+        let slot = law_slot(self.runs[b].setup);
+        i == slot || i == slot + 1
+    }
+}
+
+/// Whitened residuals (model − data)/σ of both tracks of a run, striker first.
+pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out: &mut [f64]) {
+    let model = spec.model(shared);
+    let pair = spec.pair(shared, run.setup, run.diameter_m);
+    let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
+    let traj = simulate_pair(&model, &pair, run.init(own), &rel);
+    let mut k = 0;
+    for p in 0..2 {
+        let z = &traj.particles[p].z_m;
+        for &(i, zd) in &run.samples[p] {
+            out[k] = match z.get(i) {
+                Some(zm) if zm.is_finite() => (zm - zd) / run.sigma_m,
+                _ => 1e6,
+            };
+            k += 1;
+        }
+    }
+}
+
+/// The result of a whole-run fit of one group of runs.
+#[derive(Debug, Clone)]
+pub struct GroupFit {
+    pub spec: FitSpec,
+    pub result: BlockResult,
+}
+
+impl GroupFit {
+    pub fn cost(&self) -> f64 {
+        self.result.cost()
+    }
+    pub fn converged(&self) -> bool {
+        self.result.termination.is_converged()
+    }
+}
+
+/// Fit `runs` (one material) with `spec`, from `start` (shared and per-run values of an earlier
+/// fit of the same runs) or the defaults.
+pub fn fit_group(
+    runs: &[PairRun],
+    spec: &FitSpec,
+    start: Option<&GroupFit>,
+    max_iter: usize,
+) -> GroupFit {
+    let shared_specs = spec.shared_specs(start.map(|s| s.result.shared.as_slice()), runs);
+    let own_specs: Vec<Vec<ParamSpec>> = runs
+        .iter()
+        .enumerate()
+        .map(|(b, r)| {
+            let mut sp = r.own_specs();
+            if let Some(own) = start.and_then(|s| s.result.own.get(b)) {
+                for (s, x) in sp.iter_mut().zip(own) {
+                    if s.lower < s.upper {
+                        s.start = x.clamp(s.lower, s.upper);
+                    }
+                }
+            }
+            sp
+        })
+        .collect();
+    let opts = BlockOptions {
+        max_iter,
+        ..BlockOptions::default()
+    };
+    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
+    GroupFit {
+        spec: spec.clone(),
+        result,
+    }
+}
+
+/// Fit only the per-run parameters with every shared parameter held at `shared` (the held-out
+/// part of cross-validation).
+pub fn fit_own_only(runs: &[PairRun], spec: &FitSpec, shared: &[f64], max_iter: usize) -> GroupFit {
+    fit_group_with(runs, spec, shared, None, &|_| false, max_iter)
+}
+
+/// Fit `runs` with `spec` from shared values `shared` (and per-run values `own` when given),
+/// freeing only the shared parameters `free` picks; the others are held. The per-run
+/// parameters are always fitted.
+pub fn fit_group_with(
+    runs: &[PairRun],
+    spec: &FitSpec,
+    shared: &[f64],
+    own: Option<&[Vec<f64>]>,
+    free: &dyn Fn(usize) -> bool,
+    max_iter: usize,
+) -> GroupFit {
+    let shared_specs: Vec<ParamSpec> = spec
+        .shared_specs(Some(shared), runs)
+        .into_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            if free(i) {
+                s
+            } else {
+                let x = if s.lower == s.upper { s.start } else { shared[i] };
+                ParamSpec {
+                    start: x,
+                    lower: x,
+                    upper: x,
+                    ..s
+                }
+            }
+        })
+        .collect();
+    let own_specs: Vec<Vec<ParamSpec>> = runs
+        .iter()
+        .enumerate()
+        .map(|(b, r)| {
+            let mut sp = r.own_specs();
+            if let Some(o) = own.and_then(|o| o.get(b)) {
+                for (s, x) in sp.iter_mut().zip(o) {
+                    if s.lower < s.upper {
+                        s.start = x.clamp(s.lower, s.upper);
+                    }
+                }
+            }
+            sp
+        })
+        .collect();
+    let opts = BlockOptions {
+        max_iter,
+        ..BlockOptions::default()
+    };
+    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
+    GroupFit {
+        spec: spec.clone(),
+        result,
+    }
+}
+
+/// The law slots (a, b) of `setup` in the shared parameters.
+pub fn law_slots(setup: Setup) -> (usize, usize) {
+    let i = law_slot(setup);
+    (i, i + 1)
+}
+
+/// Default start values of a law form's slots.
+pub fn law_start(form: LawForm) -> [f64; 2] {
+    form.specs().map(|s| s.start)
+}

@@ -1,0 +1,75 @@
+//! The profile of μ_pp beside Fig. 4.4a: per material, the whole-run fit's deviance with μ_pp
+//! held at each value (summary.json → collisions.whole_run), drawn as its square root (a
+//! parabola's root is a V), with the 95 % level and the chapter's 1.4.
+
+use super::common::{legend, line, linear_chart, render, scatter};
+use crate::report::chapter;
+use crate::report::inputs::ReportData;
+use crate::report::style;
+use plotters::prelude::*;
+
+/// √Δχ² above this is drawn at this value (the far ends of the profile rise by thousands).
+pub const CLIP: f64 = 12.0;
+
+/// (material, [(μ_pp, deviance)], threshold) of each material with a profile.
+pub fn profiles(d: &ReportData) -> Vec<(String, Vec<(f64, f64)>, f64)> {
+    let whole = d.whole_run_json();
+    let Some(mats) = whole
+        .as_ref()
+        .and_then(|w| w.get("materials")?.as_array())
+    else {
+        return Vec::new();
+    };
+    mats.iter()
+        .filter_map(|m| {
+            let name = m.get("material")?.as_str()?.to_string();
+            let prof = m.get("profile")?;
+            let pts: Vec<(f64, f64)> = prof
+                .get("points")?
+                .as_array()?
+                .iter()
+                .filter_map(|p| Some((p.get("mu_pp")?.as_f64()?, p.get("deviance")?.as_f64()?)))
+                .collect();
+            let thr = prof.get("threshold")?.as_f64()?;
+            (!pts.is_empty()).then_some((name, pts, thr))
+        })
+        .collect()
+}
+
+/// Render the profile figure, or None without whole-run profiles.
+pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
+    let profs = profiles(d);
+    if profs.is_empty() {
+        return Ok(None);
+    }
+    let xs = profs.iter().flat_map(|p| p.1.iter().map(|q| q.0.log10()));
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| (a.0.min(x), a.1.max(x)));
+    let xr = (lo - 0.05, hi + 0.05);
+    let yr = (0.0, CLIP * 1.05);
+    let svg = render(|root| {
+        let mut c = linear_chart(
+            root,
+            "μ_pp profile of the whole-run fits",
+            xr,
+            yr,
+            "log10 μ_pp",
+            "√(deviance above the best fit)",
+        )?;
+        for (i, (m, pts, _)) in profs.iter().enumerate() {
+            let col = style::material_colour(m, i);
+            let p: Vec<(f64, f64)> = pts
+                .iter()
+                .map(|&(mu, dev)| (mu.log10(), dev.max(0.0).sqrt().min(CLIP)))
+                .collect();
+            line(&mut c, p.clone(), col, 2, false, None)?;
+            scatter(&mut c, &p, style::marker(m, false), col, true, Some(m))?;
+        }
+        let thr = profs[0].2.sqrt();
+        line(&mut c, vec![(xr.0, thr), (xr.1, thr)], style::GREY, 1, true, Some("95 % level"))?;
+        let ch = chapter::MU_PP.log10();
+        line(&mut c, vec![(ch, 0.0), (ch, yr.1)], style::BLACK, 1, true, Some("chapter 1.4"))?;
+        legend(&mut c, SeriesLabelPosition::UpperRight)?;
+        Ok(())
+    })?;
+    Ok(Some(svg))
+}
