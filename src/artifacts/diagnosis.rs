@@ -188,6 +188,10 @@ pub struct Line {
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
     GrooveTilt,
+    /// Collision runs only: the impacts do something the impulse rule misses.
+    ImpactSpecificMismatch,
+    /// Collision runs only: the pairs' friction or drag differ from the single runs'.
+    PairPhysicsMismatch,
     PositionDependentForce,
     RollingResistance,
     Unexplained,
@@ -197,8 +201,10 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in id order.
-    pub const ALL: [Effect; 6] = [
+    pub const ALL: [Effect; 8] = [
         Effect::GrooveTilt,
+        Effect::ImpactSpecificMismatch,
+        Effect::PairPhysicsMismatch,
         Effect::PositionDependentForce,
         Effect::RollingResistance,
         Effect::Unexplained,
@@ -210,6 +216,8 @@ impl Effect {
     pub fn id(self) -> &'static str {
         match self {
             Effect::GrooveTilt => "groove_tilt",
+            Effect::ImpactSpecificMismatch => "impact_specific_mismatch",
+            Effect::PairPhysicsMismatch => "pair_physics_mismatch",
             Effect::PositionDependentForce => "position_dependent_force",
             Effect::RollingResistance => "rolling_resistance",
             Effect::Unexplained => "unexplained",

@@ -8,6 +8,7 @@
 //! milliseconds after impacts (an F ratio of the mean squared whitened residual against the rest
 //! of the run) points at the impact model itself (restitution law, spin transfer).
 
+use crate::artifacts::diagnosis::Effect;
 use crate::fit::collision::lm::Termination;
 use crate::fit::collision::wholerun::{
     fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, TP, T_KICK,
@@ -260,7 +261,7 @@ pub fn check_pairs(
             terms: vec![terms.to_string()],
         };
         findings.push(Finding {
-            effect: "pair_physics_mismatch".into(),
+            effect: Effect::PairPhysicsMismatch.id().into(),
             accepted,
             form: "μ_pg and drag of the collision runs fitted (saturating drag) vs held at the single runs' accepted physics".into(),
             parameters,
@@ -297,7 +298,7 @@ pub fn check_pairs(
             v(ratio, ratio * (2.0 / n_near.max(1) as f64).sqrt()),
         );
         findings.push(Finding {
-            effect: "impact_specific_mismatch".into(),
+            effect: Effect::ImpactSpecificMismatch.id().into(),
             accepted: accepted_imp,
             form: "mean squared residual within 5 ms after impacts against the rest of the run (impulse rule, restitution law)".into(),
             parameters,
