@@ -25,7 +25,10 @@ fn main() {
         code_deps::fingerprint(&root, &[root.join("src/engine/command.rs")]),
     );
     // fallback for a kind whose adapter file is not named after it: any code change invalidates it
-    fingerprints.insert("*".into(), code_deps::fingerprint(&root, &[root.join("src")]));
+    fingerprints.insert(
+        "*".into(),
+        code_deps::fingerprint(&root, &[root.join("src")]),
+    );
 
     let commit = code_commit(&root);
     let mut out = String::from("/// Code fingerprint of every built-in kind, sorted by kind.\n");

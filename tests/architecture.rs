@@ -15,7 +15,10 @@ fn repo() -> &'static Path {
 }
 
 fn rel(root: &Path, p: &Path) -> String {
-    p.strip_prefix(root).unwrap_or(p).to_string_lossy().replace('\\', "/")
+    p.strip_prefix(root)
+        .unwrap_or(p)
+        .to_string_lossy()
+        .replace('\\', "/")
 }
 
 /// Every file the engine reaches (from `src/engine/mod.rs`) that lies outside `src/engine/`.
@@ -125,7 +128,10 @@ fn the_engine_check_catches_an_analysis_import() {
         ],
     );
     assert_eq!(engine_escapes(&src), ["fit/single.rs"]);
-    write(dir.path(), &[("src/engine/catalog.rs", "use super::store;\n")]);
+    write(
+        dir.path(),
+        &[("src/engine/catalog.rs", "use super::store;\n")],
+    );
     assert!(engine_escapes(&src).is_empty());
 }
 
@@ -133,7 +139,10 @@ fn the_engine_check_catches_an_analysis_import() {
 fn the_engine_files_form_no_cycle() {
     let src = repo().join("src");
     if let Some(cycle) = find_cycle(&src, &src.join("engine")) {
-        panic!("engine modules use each other in a cycle: {}", cycle.join(" -> "));
+        panic!(
+            "engine modules use each other in a cycle: {}",
+            cycle.join(" -> ")
+        );
     }
 }
 
@@ -166,25 +175,55 @@ fn the_files_a_kind_uses_are_followed_through_its_paths() {
     write(
         dir.path(),
         &[
-            ("src/lib.rs", "pub mod engine;\npub mod fit;\npub mod report;\npub mod stages;\n"),
+            (
+                "src/lib.rs",
+                "pub mod engine;\npub mod fit;\npub mod report;\npub mod stages;\n",
+            ),
             ("src/engine/mod.rs", "pub mod stage;\npub mod store;\n"),
-            ("src/engine/stage.rs", "use super::super::engine::store as _s;\n"),
-            ("src/engine/store.rs", "//! reached from stage.rs only through super::super\n"),
-            ("src/fit/mod.rs", "pub mod lm;\nmod robust;\nmod robust_impl;\npub use lm::solve;\n"),
-            ("src/fit/robust_impl.rs", "impl super::robust::Huber { pub fn k(&self) {} }\n"),
-            ("src/fit/lm.rs", "pub fn solve() { super::robust::huber(); }\n"),
-            ("src/fit/robust.rs", "pub struct Huber;\npub fn huber() {}\n"),
+            (
+                "src/engine/stage.rs",
+                "use super::super::engine::store as _s;\n",
+            ),
+            (
+                "src/engine/store.rs",
+                "//! reached from stage.rs only through super::super\n",
+            ),
+            (
+                "src/fit/mod.rs",
+                "pub mod lm;\nmod robust;\nmod robust_impl;\npub use lm::solve;\n",
+            ),
+            (
+                "src/fit/robust_impl.rs",
+                "impl super::robust::Huber { pub fn k(&self) {} }\n",
+            ),
+            (
+                "src/fit/lm.rs",
+                "pub fn solve() { super::robust::huber(); }\n",
+            ),
+            (
+                "src/fit/robust.rs",
+                "pub struct Huber;\npub fn huber() {}\n",
+            ),
             ("src/report/mod.rs", "pub mod html;\n"),
-            ("src/report/html.rs", "const T: &str = include_str!(\"templates/page.html\");\n"),
+            (
+                "src/report/html.rs",
+                "const T: &str = include_str!(\"templates/page.html\");\n",
+            ),
             ("src/report/templates/page.html", "<p></p>\n"),
-            ("src/stages/mod.rs", "pub mod fit;\npub mod fit_io;\npub mod report;\n"),
+            (
+                "src/stages/mod.rs",
+                "pub mod fit;\npub mod fit_io;\npub mod report;\n",
+            ),
             (
                 "src/stages/fit.rs",
                 "use crate::{engine::stage::{self as s}, fit::lm};\nuse super::fit_io::read;\n\
                  #[cfg(test)]\nmod tests {\n    use super::*;\n    use crate::report::html;\n}\n",
             ),
             ("src/stages/fit_io.rs", "pub fn read() {}\n"),
-            ("src/stages/report.rs", "fn f() { crate::report::html::render() }\n"),
+            (
+                "src/stages/report.rs",
+                "fn f() { crate::report::html::render() }\n",
+            ),
         ],
     );
     let used = |kind: &str| -> Vec<String> {
@@ -207,13 +246,23 @@ fn the_files_a_kind_uses_are_followed_through_its_paths() {
     );
     assert_eq!(
         used("report"),
-        ["report/html.rs", "report/templates/page.html", "stages/report.rs"]
+        [
+            "report/html.rs",
+            "report/templates/page.html",
+            "stages/report.rs"
+        ]
     );
     // an edit to a used module changes the fingerprint; an edit elsewhere does not
     let before = code_deps::kind_fingerprints(dir.path());
-    write(dir.path(), &[("src/report/mod.rs", "pub mod html;\n// edited\n")]);
+    write(
+        dir.path(),
+        &[("src/report/mod.rs", "pub mod html;\n// edited\n")],
+    );
     assert_eq!(code_deps::kind_fingerprints(dir.path()), before);
-    write(dir.path(), &[("src/fit/robust_impl.rs", "impl super::robust::Huber {}\n")]);
+    write(
+        dir.path(),
+        &[("src/fit/robust_impl.rs", "impl super::robust::Huber {}\n")],
+    );
     let after = code_deps::kind_fingerprints(dir.path());
     assert_ne!(after["fit"], before["fit"]);
     assert_eq!(after["report"], before["report"]);
@@ -221,8 +270,10 @@ fn the_files_a_kind_uses_are_followed_through_its_paths() {
 
 #[test]
 fn compiled_fingerprints_are_those_of_the_modules_each_kind_uses() {
-    let compiled: BTreeMap<&str, &str> =
-        groove::engine::identity::FINGERPRINTS.iter().copied().collect();
+    let compiled: BTreeMap<&str, &str> = groove::engine::identity::FINGERPRINTS
+        .iter()
+        .copied()
+        .collect();
     let derived = code_deps::kind_fingerprints(repo());
     for kind in groove::stages::registry() {
         let name = kind.kind();
@@ -246,9 +297,14 @@ fn every_kind_fingerprints_what_it_uses_and_nothing_it_does_not() {
     for kind in groove::stages::registry() {
         let files = used(kind.kind());
         // every kind implements the contract in engine/stage.rs and reads recordings or artifacts
-        assert!(files.contains("engine/stage.rs"), "{}: {files:?}", kind.kind());
         assert!(
-            !files.iter().any(|f| f.starts_with("engine/") && f != "engine/stage.rs"
+            files.contains("engine/stage.rs"),
+            "{}: {files:?}",
+            kind.kind()
+        );
+        assert!(
+            !files.iter().any(|f| f.starts_with("engine/")
+                && f != "engine/stage.rs"
                 && f != "engine/error.rs"),
             "kind `{}` reaches engine internals: {files:?}",
             kind.kind()
@@ -270,7 +326,11 @@ fn every_kind_fingerprints_what_it_uses_and_nothing_it_does_not() {
     // no hand-kept list is left to drift
     for kind in groove::stages::registry() {
         let text = fs::read_to_string(src.join(format!("stages/{}.rs", kind.kind()))).unwrap();
-        assert!(!text.contains("groove:uses"), "{}: a hand-kept uses list", kind.kind());
+        assert!(
+            !text.contains("groove:uses"),
+            "{}: a hand-kept uses list",
+            kind.kind()
+        );
     }
 }
 
@@ -287,7 +347,9 @@ fn a_kind_reads_only_the_inputs_it_declares() {
 }
 
 fn section<'a>(text: &'a str, heading: &str) -> &'a str {
-    let start = text.find(heading).unwrap_or_else(|| panic!("README has no `{heading}`"));
+    let start = text
+        .find(heading)
+        .unwrap_or_else(|| panic!("README has no `{heading}`"));
     let body = &text[start + heading.len()..];
     let level = heading.chars().take_while(|c| *c == '#').count();
     let end = body
@@ -317,7 +379,12 @@ fn the_readme_code_map_names_every_module() {
             missing.push(name.to_string());
         }
     }
-    for top in ["`src/main.rs`", "`src/cli/`", "`src/build.rs`", "`src/build/code_deps.rs`"] {
+    for top in [
+        "`src/main.rs`",
+        "`src/cli/`",
+        "`src/build.rs`",
+        "`src/build/code_deps.rs`",
+    ] {
         if !map.contains(top) {
             missing.push(top.to_string());
         }
@@ -351,19 +418,36 @@ fn the_readme_keeps_its_set_up_and_reference_sections() {
         assert!(readme.contains(line), "README lost `{line}`");
     }
     // the invariants are stated once
-    for phrase in ["knows no analysis", "byte-identical report", "only by `validate`"] {
-        assert_eq!(readme.matches(phrase).count(), 1, "`{phrase}` is stated more than once");
+    for phrase in [
+        "knows no analysis",
+        "byte-identical report",
+        "only by `validate`",
+    ] {
+        assert_eq!(
+            readme.matches(phrase).count(),
+            1,
+            "`{phrase}` is stated more than once"
+        );
     }
     // every dependency is explained
     let deps = section(&readme, "## Dependencies and why");
     let cargo = fs::read_to_string(repo().join("Cargo.toml")).unwrap();
     for table in ["[dependencies]", "[dev-dependencies]"] {
-        let body = cargo.split(table).nth(1).unwrap().split("\n[").next().unwrap();
+        let body = cargo
+            .split(table)
+            .nth(1)
+            .unwrap()
+            .split("\n[")
+            .next()
+            .unwrap();
         for line in body.lines() {
             let Some((name, _)) = line.split_once(" = ") else {
                 continue;
             };
-            assert!(deps.contains(name.trim()), "README does not say why `{name}` is a dependency");
+            assert!(
+                deps.contains(name.trim()),
+                "README does not say why `{name}` is a dependency"
+            );
         }
     }
 }

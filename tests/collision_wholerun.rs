@@ -8,13 +8,13 @@ use groove::fit::collision::lm::Termination;
 use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
 use groove::fit::collision::whole_summary::{analyze, WholeRunOptions};
 use groove::fit::collision::wholerun::{fit_group, FitSpec, LawForm, PairRun, MU_PP};
-use groove::physics::{Friction, Model, Term};
-use groove::recording::Setup;
-use std::collections::BTreeMap;
 use groove::ingest::{read_dataset_dir, IngestParams};
 use groove::physics::Groove;
+use groove::physics::{Friction, Model, Term};
+use groove::recording::Setup;
 use groove::recording::{Experiment, Recording};
 use groove::synth::{synth_tables, Truth};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 fn fixture(name: &str) -> String {
@@ -49,7 +49,11 @@ fn mu_pp_from_slipping_impacts_within_ten_percent() {
     let runs = pair_runs(&recs, "440c");
     assert_eq!(runs.len(), 8);
     let best = fit_group(&runs, &FitSpec::new(Groove::CHAPTER), None, 80);
-    assert!(best.result.termination.is_converged(), "{:?}", best.result.termination);
+    assert!(
+        best.result.termination.is_converged(),
+        "{:?}",
+        best.result.termination
+    );
     let mu = best.result.shared[MU_PP];
     assert!((mu - 0.3).abs() < 0.03, "μ_pp {mu} vs 0.3");
     let profile = profile_mu_pp(&runs, &best, &default_grid(), 25);

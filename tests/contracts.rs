@@ -105,15 +105,26 @@ fn made() -> Made {
     let tables = synth_tables(&truth);
     let dataset = Artifact::Collection(BTreeMap::from([
         ("runs.csv".to_string(), tables.runs_csv.into_bytes()),
-        ("trajectories.csv".to_string(), tables.trajectories_csv.into_bytes()),
+        (
+            "trajectories.csv".to_string(),
+            tables.trajectories_csv.into_bytes(),
+        ),
     ]));
-    let ingest = run(&stages::ingest::Ingest, &BTreeMap::from([("dataset", &dataset)]), None);
+    let ingest = run(
+        &stages::ingest::Ingest,
+        &BTreeMap::from([("dataset", &dataset)]),
+        None,
+    );
     let runs = items(&ingest["runs"]);
     let mut fits = BTreeMap::new();
     let mut residuals = BTreeMap::new();
     for (item, rec) in runs {
         let rec_a = Artifact::File(rec.clone());
-        let fit = run(&stages::fit::Fit, &BTreeMap::from([("runs", &rec_a)]), Some(item));
+        let fit = run(
+            &stages::fit::Fit,
+            &BTreeMap::from([("runs", &rec_a)]),
+            Some(item),
+        );
         let fit_bytes = file(&fit["fits"]).to_vec();
         let fit_a = Artifact::File(fit_bytes.clone());
         let sim = run(
@@ -140,8 +151,7 @@ fn made() -> Made {
     // validation against this dataset's truth; the diagnosis is the shipped one (discovery is
     // too slow for this test and its contract is pinned by the shipped reports/)
     let truth_a = Artifact::File(truth_text.into_bytes());
-    let diagnosis_a =
-        Artifact::File(std::fs::read(repo().join("reports/diagnosis.json")).unwrap());
+    let diagnosis_a = Artifact::File(std::fs::read(repo().join("reports/diagnosis.json")).unwrap());
     let val = run(
         &stages::validate::Validate,
         &BTreeMap::from([
@@ -191,7 +201,9 @@ fn every_stage_artifact_is_pinned_and_reads_back_into_its_type() {
     let csv = String::from_utf8(m.fits_csv.clone()).unwrap();
     let rows = artifacts::fits_table::parse(&csv).unwrap();
     assert_eq!(rows.len(), csv.lines().count() - 1);
-    assert!(rows.iter().all(|r| r.v0_mps.is_some() && !r.status.is_empty()));
+    assert!(rows
+        .iter()
+        .all(|r| r.v0_mps.is_some() && !r.status.is_empty()));
 
     let (item, single_res) = first_with(&m.residuals, r#""experiment":"single""#);
     golden("residuals_single.json", single_res);
@@ -236,9 +248,11 @@ fn a_validation_without_truth_and_a_provenance_record_keep_their_shape() {
     let p = br#"{"groove_version":"0.1.0","code_commit":"abc","fingerprints":{"fit":"f1"},"seed":7,"inputs":[{"path":"${data}/runs.csv","sha256":"00"}],"stages":[{"stage":"fit","kind":"fit","key":"k"}]}"#;
     round_trip::<artifacts::Provenance>("provenance", p, false);
     let renamed = String::from_utf8_lossy(p).replace("code_commit", "commit");
-    assert!(artifacts::from_json::<artifacts::Provenance>("provenance", renamed.as_bytes())
-        .unwrap_err()
-        .contains("rerun"));
+    assert!(
+        artifacts::from_json::<artifacts::Provenance>("provenance", renamed.as_bytes())
+            .unwrap_err()
+            .contains("rerun")
+    );
 }
 
 #[test]

@@ -44,7 +44,10 @@ fn trajectories_csv() -> String {
     for (run, particle) in [("s1", 0), ("c1", 0), ("c1", 1)] {
         for f in 0..25 {
             let t = f as f64 / 1000.0;
-            s += &format!("{run},{particle},{f},{t},{}\n", 1e-3 * particle as f64 + 0.02 * t);
+            s += &format!(
+                "{run},{particle},{f},{t},{}\n",
+                1e-3 * particle as f64 + 0.02 * t
+            );
         }
     }
     s
@@ -53,28 +56,49 @@ fn trajectories_csv() -> String {
 fn trackpy_csv() -> String {
     let mut s = String::from(",y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle\n");
     for f in 0..25 {
-        s += &format!("{f},100.0,{},50,2,0.1,10,60,0.01,{f},3\n", 20.0 + 0.7 * f as f64);
+        s += &format!(
+            "{f},100.0,{},50,2,0.1,10,60,0.01,{f},3\n",
+            20.0 + 0.7 * f as f64
+        );
     }
     s
 }
 
 fn trackmate_csv() -> String {
-    let mut s = String::from("LABEL,ID,TRACK_ID,QUALITY,POSITION_X,POSITION_Y,POSITION_Z,POSITION_T,FRAME\n");
+    let mut s = String::from(
+        "LABEL,ID,TRACK_ID,QUALITY,POSITION_X,POSITION_Y,POSITION_Z,POSITION_T,FRAME\n",
+    );
     s += "Label,Spot ID,Track ID,Quality,X,Y,Z,T,Frame\n";
     s += "Label,Spot ID,Track ID,Quality,X,Y,Z,T,Frame\n";
     s += ",,,(quality),(micron),(micron),(micron),(sec),\n";
     for f in 0..25 {
-        s += &format!("ID{f},{f},0,1.0,{},5.0,0.0,{}E-3,{f}\n", 20.0 + 0.7 * f as f64, f);
+        s += &format!(
+            "ID{f},{f},0,1.0,{},5.0,0.0,{}E-3,{f}\n",
+            20.0 + 0.7 * f as f64,
+            f
+        );
     }
     s
 }
 
 fn trajectories_parquet() -> Vec<u8> {
     let text = trajectories_csv();
-    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
-    let num = |k: usize| rows.iter().map(|r| r[k].parse::<f64>().unwrap()).collect::<Vec<_>>();
-    let int = |k: usize| rows.iter().map(|r| r[k].parse::<i64>().unwrap()).collect::<Vec<_>>();
+    let num = |k: usize| {
+        rows.iter()
+            .map(|r| r[k].parse::<f64>().unwrap())
+            .collect::<Vec<_>>()
+    };
+    let int = |k: usize| {
+        rows.iter()
+            .map(|r| r[k].parse::<i64>().unwrap())
+            .collect::<Vec<_>>()
+    };
     let mut df = DataFrame::new(
         rows.len(),
         vec![
@@ -124,10 +148,39 @@ fn interesting_byte() -> impl Strategy<Value = u8> {
 /// Tokens a broken export or a typing slip produces.
 fn hostile_token() -> impl Strategy<Value = Vec<u8>> {
     prop::sample::select(vec![
-        "", "nan", "NaN", "inf", "-inf", "1e308", "-1e308", "9.2e18", "1e20", "1e-400", "0",
-        "-0", "-1", "10000", "100000000", "9223372036854775807", "-9223372036854775808",
-        "18446744073709551616", "\"", "\"\"", ",", ",,", "\n", "\r\n", "x", "single", "collision",
-        "contact", "0.5", "3e-4", "\u{feff}", "é", "\u{0}",
+        "",
+        "nan",
+        "NaN",
+        "inf",
+        "-inf",
+        "1e308",
+        "-1e308",
+        "9.2e18",
+        "1e20",
+        "1e-400",
+        "0",
+        "-0",
+        "-1",
+        "10000",
+        "100000000",
+        "9223372036854775807",
+        "-9223372036854775808",
+        "18446744073709551616",
+        "\"",
+        "\"\"",
+        ",",
+        ",,",
+        "\n",
+        "\r\n",
+        "x",
+        "single",
+        "collision",
+        "contact",
+        "0.5",
+        "3e-4",
+        "\u{feff}",
+        "é",
+        "\u{0}",
     ])
     .prop_map(|s| s.as_bytes().to_vec())
     .boxed()
@@ -192,7 +245,10 @@ fn ingest_bounded(files: &Files, params: &IngestParams) -> Result<(), TestCaseEr
     prop_assert!(took < LIMIT, "ingest took {took:?}");
     if let Err(e) = result {
         let message = e.to_string();
-        prop_assert!(!message.contains("Schema") && !message.contains("cSV"), "{message}");
+        prop_assert!(
+            !message.contains("Schema") && !message.contains("cSV"),
+            "{message}"
+        );
         for p in &e.problems {
             prop_assert!(!p.message.is_empty() && !p.fix.is_empty(), "{p:?}");
         }
@@ -285,7 +341,10 @@ fn project() -> tempfile::TempDir {
 fn the_seed_inputs_are_valid() {
     let interchange = Files::from([
         ("runs.csv".to_string(), RUNS_CSV.as_bytes().to_vec()),
-        ("trajectories.csv".to_string(), trajectories_csv().into_bytes()),
+        (
+            "trajectories.csv".to_string(),
+            trajectories_csv().into_bytes(),
+        ),
     ]);
     ingest::ingest(&interchange, &IngestParams::default()).unwrap_or_else(|e| panic!("{e}"));
     let parquet = Files::from([
@@ -304,6 +363,10 @@ fn the_seed_inputs_are_valid() {
         dir.path().join("pipeline.toml"),
     )
     .unwrap();
-    config::load(&dir.path().join("pipeline.toml"), &Overrides::default(), &Catalog::with_kinds(groove::stages::registry()))
-        .unwrap_or_else(|e| panic!("{e}"));
+    config::load(
+        &dir.path().join("pipeline.toml"),
+        &Overrides::default(),
+        &Catalog::with_kinds(groove::stages::registry()),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
 }

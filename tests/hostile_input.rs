@@ -21,7 +21,12 @@ const FRAMES: i64 = 40;
 /// s1 (rows 2..41), s2 (rows 42..81), c1 particle 0 (82..121), c1 particle 1 (122..161).
 fn lines() -> Vec<String> {
     let mut out = Vec::new();
-    for (run, particle, z0) in [("s1", 0, 0.001), ("s2", 0, 0.002), ("c1", 0, 0.0), ("c1", 1, 0.004)] {
+    for (run, particle, z0) in [
+        ("s1", 0, 0.001),
+        ("s2", 0, 0.002),
+        ("c1", 0, 0.0),
+        ("c1", 1, 0.004),
+    ] {
         for f in 0..FRAMES {
             let t = f as f64 / FPS;
             out.push(format!("{run},{particle},{f},{t},{}", z0 + 0.01 * t));
@@ -62,7 +67,11 @@ fn with_cell(k: usize, field: usize, value: &str) -> Files {
 fn refused(files: &Files) -> String {
     let started = Instant::now();
     let result = ingest::ingest(files, &IngestParams::default());
-    assert!(started.elapsed() < Duration::from_secs(10), "ingest took {:?}", started.elapsed());
+    assert!(
+        started.elapsed() < Duration::from_secs(10),
+        "ingest took {:?}",
+        started.elapsed()
+    );
     match result {
         Ok(i) => panic!("ingest accepted bad input ({} runs)", i.recordings.len()),
         Err(e) => e.to_string(),
@@ -71,7 +80,10 @@ fn refused(files: &Files) -> String {
 
 fn assert_mentions(message: &str, parts: &[&str]) {
     for p in parts {
-        assert!(message.contains(p), "error {message:?} does not contain {p:?}");
+        assert!(
+            message.contains(p),
+            "error {message:?} does not contain {p:?}"
+        );
     }
 }
 
@@ -117,7 +129,11 @@ fn a_frame_rate_in_khz_is_refused_with_the_fix() {
 
 #[test]
 fn implausible_diameters_are_refused() {
-    for (value, hint) in [("0.3", "millimetres"), ("300", "millimetres"), ("3e-9", "3e-4")] {
+    for (value, hint) in [
+        ("0.3", "millimetres"),
+        ("300", "millimetres"),
+        ("3e-9", "3e-4"),
+    ] {
         let runs = RUNS.replace("s1,single,316,3e-4", &format!("s1,single,316,{value}"));
         let e = refused(&files_with(&runs, &lines()));
         assert_mentions(&e, &["runs.csv row 2, column diameter_m", hint]);
@@ -155,23 +171,48 @@ fn times_that_disagree_with_frame_over_fps_are_refused() {
         })
         .collect();
     let e = refused(&files_with(RUNS, &ls));
-    assert_mentions(&e, &["trajectories.csv row 3, column t_s", "frames per second", "runs.csv row 2"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.csv row 3, column t_s",
+            "frames per second",
+            "runs.csv row 2",
+        ],
+    );
 }
 
 #[test]
 fn the_clock_tolerance_accepts_rounded_times_and_a_rounded_frame_rate() {
     // times written to 4 decimals at 29.97 fps declared as 30: well within the tolerance
     let ls: Vec<String> = (0..FRAMES)
-        .map(|f| format!("s1,0,{f},{:.4},{}", f as f64 / 29.97, 0.001 + 1e-5 * f as f64))
+        .map(|f| {
+            format!(
+                "s1,0,{f},{:.4},{}",
+                f as f64 / 29.97,
+                0.001 + 1e-5 * f as f64
+            )
+        })
         .collect();
     let runs = "run,experiment,material,diameter_m,fps\ns1,single,316,3e-4,60\n";
     let ls60: Vec<String> = (0..FRAMES)
-        .map(|f| format!("s1,0,{f},{:.4},{}", f as f64 / 59.94, 0.001 + 1e-5 * f as f64))
+        .map(|f| {
+            format!(
+                "s1,0,{f},{:.4},{}",
+                f as f64 / 59.94,
+                0.001 + 1e-5 * f as f64
+            )
+        })
         .collect();
     assert!(ingest::ingest(&files_with(runs, &ls60), &IngestParams::default()).is_ok());
     let runs30 = "run,experiment,material,diameter_m,fps\ns1,single,316,3e-4,50\n";
     let ls50: Vec<String> = (0..FRAMES)
-        .map(|f| format!("s1,0,{f},{:.5},{}", f as f64 / 50.04, 0.001 + 1e-5 * f as f64))
+        .map(|f| {
+            format!(
+                "s1,0,{f},{:.5},{}",
+                f as f64 / 50.04,
+                0.001 + 1e-5 * f as f64
+            )
+        })
         .collect();
     assert!(ingest::ingest(&files_with(runs30, &ls50), &IngestParams::default()).is_ok());
     drop(ls);
@@ -184,27 +225,53 @@ fn time_going_backwards_is_refused() {
     ls[10] = "s1,0,10,0.011,0.00111".into();
     ls[11] = "s1,0,11,0.010,0.00110".into();
     let e = refused(&files_with(RUNS, &ls));
-    assert_mentions(&e, &["trajectories.csv row 13, column t_s", "time goes backwards", "row 12"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.csv row 13, column t_s",
+            "time goes backwards",
+            "row 12",
+        ],
+    );
 }
 
 #[test]
 fn a_collision_run_without_its_target_is_refused() {
-    let ls: Vec<String> = lines().into_iter().filter(|l| !l.starts_with("c1,1,")).collect();
+    let ls: Vec<String> = lines()
+        .into_iter()
+        .filter(|l| !l.starts_with("c1,1,"))
+        .collect();
     let e = refused(&files_with(RUNS, &ls));
-    assert_mentions(&e, &["trajectories.csv row 82, column frame", "run \"c1\" has 0 frames of particle 1 (the target)"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.csv row 82, column frame",
+            "run \"c1\" has 0 frames of particle 1 (the target)",
+        ],
+    );
 }
 
 #[test]
 fn numbers_stored_as_text_in_parquet_are_refused() {
     let ls = lines();
-    let col = |k: usize| -> Vec<String> { ls.iter().map(|l| l.split(',').nth(k).unwrap().to_string()).collect() };
+    let col = |k: usize| -> Vec<String> {
+        ls.iter()
+            .map(|l| l.split(',').nth(k).unwrap().to_string())
+            .collect()
+    };
     let parse = |k: usize| -> Vec<f64> { col(k).iter().map(|s| s.parse().unwrap()).collect() };
     let mut df = DataFrame::new(
         ls.len(),
         vec![
             Column::new("run".into(), col(0)),
-            Column::new("particle".into(), parse(1).iter().map(|&x| x as i64).collect::<Vec<_>>()),
-            Column::new("frame".into(), parse(2).iter().map(|&x| x as i64).collect::<Vec<_>>()),
+            Column::new(
+                "particle".into(),
+                parse(1).iter().map(|&x| x as i64).collect::<Vec<_>>(),
+            ),
+            Column::new(
+                "frame".into(),
+                parse(2).iter().map(|&x| x as i64).collect::<Vec<_>>(),
+            ),
             Column::new("t_s".into(), col(3)), // numbers as strings
             Column::new("z_m".into(), parse(4)),
         ],
@@ -216,7 +283,14 @@ fn numbers_stored_as_text_in_parquet_are_refused() {
     files.remove("trajectories.csv");
     files.insert("trajectories.parquet".into(), bytes);
     let e = refused(&files);
-    assert_mentions(&e, &["trajectories.parquet, column t_s", "stored as text", "float64"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.parquet, column t_s",
+            "stored as text",
+            "float64",
+        ],
+    );
 }
 
 #[test]
@@ -228,16 +302,28 @@ fn invalid_utf8_is_named_at_its_row_and_column() {
     bytes[at + 1] = 0xff;
     files.insert("trajectories.csv".into(), bytes);
     let e = refused(&files);
-    assert_mentions(&e, &["trajectories.csv row 1, column", "header row is not UTF-8", "save the file as UTF-8"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.csv row 1, column",
+            "header row is not UTF-8",
+            "save the file as UTF-8",
+        ],
+    );
 
     let mut files = good();
     let text = String::from_utf8(files["runs.csv"].clone()).unwrap();
-    let mut bytes = text.replace("s2,single,316", "s2,single,31\u{1}").into_bytes();
+    let mut bytes = text
+        .replace("s2,single,316", "s2,single,31\u{1}")
+        .into_bytes();
     let at = bytes.iter().position(|&b| b == 1).unwrap();
     bytes[at] = 0xc3; // a lone lead byte
     files.insert("runs.csv".into(), bytes);
     let e = refused(&files);
-    assert_mentions(&e, &["runs.csv row 3, column material", "is not UTF-8 text"]);
+    assert_mentions(
+        &e,
+        &["runs.csv row 3, column material", "is not UTF-8 text"],
+    );
 }
 
 #[test]
@@ -245,7 +331,14 @@ fn extra_fields_are_said_in_groove_words() {
     let mut ls = lines();
     ls[20] = format!("{},0.5", ls[20]);
     let e = refused(&files_with(RUNS, &ls));
-    assert_mentions(&e, &["trajectories.csv row 22", "6 fields but the header names 5 columns", "double quotes"]);
+    assert_mentions(
+        &e,
+        &[
+            "trajectories.csv row 22",
+            "6 fields but the header names 5 columns",
+            "double quotes",
+        ],
+    );
     assert!(!e.contains("Schema"), "{e}");
 }
 
@@ -303,8 +396,8 @@ fn the_fit_flags_rather_than_panics_on_runs_ingest_would_refuse() {
     let opts = groove::fit::FitOptions::default();
     let cases = [
         recording(20.0, |f| f as f64 / 20.0, |f| 1e-3 + 1e-4 * f as f64), // fps typed in kHz
-        recording(1000.0, |_| 0.0, |f| 1e-3 + 1e-4 * f as f64),          // every t_s = 0
-        recording(1000.0, |f| f as f64 / 1000.0, |_| 1e-3),              // no motion
+        recording(1000.0, |_| 0.0, |f| 1e-3 + 1e-4 * f as f64),           // every t_s = 0
+        recording(1000.0, |f| f as f64 / 1000.0, |_| 1e-3),               // no motion
     ];
     for rec in cases {
         let started = Instant::now();
@@ -317,11 +410,19 @@ fn the_fit_flags_rather_than_panics_on_runs_ingest_would_refuse() {
 #[test]
 fn discovery_leaves_out_samples_beyond_the_ingest_limits_instead_of_hanging() {
     let good_run = |name: &str, v: f64| {
-        let mut r = recording(1000.0, |f| f as f64 / 1000.0, move |f| 1e-3 + v * f as f64 / 1000.0);
+        let mut r = recording(
+            1000.0,
+            |f| f as f64 / 1000.0,
+            move |f| 1e-3 + v * f as f64 / 1000.0,
+        );
         r.info.run = name.into();
         r
     };
-    let mut recs = vec![good_run("a", 0.01), good_run("b", -0.01), good_run("c", 0.02)];
+    let mut recs = vec![
+        good_run("a", 0.01),
+        good_run("b", -0.01),
+        good_run("c", 0.02),
+    ];
     // one huge time and one huge position, as in the reproducers
     recs[0].tracks[0].t_s[39] = 1e20;
     recs[1].tracks[0].z_m[20] = 1e308;
@@ -341,7 +442,10 @@ fn damaged_parquet_is_an_error_not_a_panic() {
     let ls = lines();
     let mut df = DataFrame::new(
         ls.len(),
-        vec![Column::new("run".into(), ls.iter().map(|l| l[..2].to_string()).collect::<Vec<_>>())],
+        vec![Column::new(
+            "run".into(),
+            ls.iter().map(|l| l[..2].to_string()).collect::<Vec<_>>(),
+        )],
     )
     .unwrap();
     let mut bytes = Vec::new();

@@ -70,7 +70,13 @@ fn base() -> &'static Path {
         let truth = repo().join("tests/fixtures/truths/hostile_small.toml");
         let out = groove_within(
             scratch(),
-            &["synth", "--truth", truth.to_str().unwrap(), "--out", dataset.to_str().unwrap()],
+            &[
+                "synth",
+                "--truth",
+                truth.to_str().unwrap(),
+                "--out",
+                dataset.to_str().unwrap(),
+            ],
             Duration::from_secs(600),
         );
         assert!(out.status.success(), "synth: {}", text(&out.stderr));
@@ -110,10 +116,16 @@ fn copy_of_base(name: &str) -> PathBuf {
 /// a run may touch without changing anything the user sees).
 fn tree_hashes(dir: &Path) -> BTreeMap<String, String> {
     fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
-        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
         for entry in entries {
             let path = entry.unwrap().path();
-            let rel = path.strip_prefix(root).unwrap().to_string_lossy().into_owned();
+            let rel = path
+                .strip_prefix(root)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned();
             if [".groove/hashes.json", ".groove/run.log", ".groove/lock"].contains(&rel.as_str()) {
                 continue;
             }
@@ -159,7 +171,11 @@ fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
     assert!(before.contains_key("reports/report.html") && before.contains_key("pipeline.lock"));
     let out = groove_within(&project, &["run"], LIMIT);
     let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{name}: exit code; stderr:\n{stderr}");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{name}: exit code; stderr:\n{stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     let after = tree_hashes(&project);
     let changed: Vec<&String> = before
@@ -173,7 +189,10 @@ fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
 
 fn assert_names(stderr: &str, parts: &[&str]) {
     for p in parts {
-        assert!(stderr.contains(p), "the error does not name `{p}`:\n{stderr}");
+        assert!(
+            stderr.contains(p),
+            "the error does not name `{p}`:\n{stderr}"
+        );
     }
 }
 
@@ -194,7 +213,11 @@ fn first_run(project: &Path, experiment: &str) -> String {
 fn a_position_of_1e308_exits_2_at_its_cell() {
     let err = refused("z_1e308", |p| {
         edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 { set_field(l, 4, "1e308") } else { l.into() }]
+            vec![if k == 101 {
+                set_field(l, 4, "1e308")
+            } else {
+                l.into()
+            }]
         })
     });
     assert_names(&err, &["trajectories.csv row 101, column z_m"]);
@@ -205,7 +228,11 @@ fn huge_times_exit_2_at_their_cell() {
     for value in ["1e308", "-1e308", "9.2e18", "-9.2e18", "1e20"] {
         let err = refused(&format!("t_{value}"), |p| {
             edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-                vec![if k == 101 { set_field(l, 3, value) } else { l.into() }]
+                vec![if k == 101 {
+                    set_field(l, 3, value)
+                } else {
+                    l.into()
+                }]
             })
         });
         assert_names(&err, &["trajectories.csv row 101, column t_s"]);
@@ -216,7 +243,11 @@ fn huge_times_exit_2_at_their_cell() {
 fn a_far_frame_at_a_matching_time_exits_2() {
     let err = refused("far_frame", |p| {
         edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 { set_field(&set_field(l, 2, "100000000"), 3, "10000") } else { l.into() }]
+            vec![if k == 101 {
+                set_field(&set_field(l, 2, "100000000"), 3, "10000")
+            } else {
+                l.into()
+            }]
         })
     });
     assert_names(&err, &["trajectories.csv row 101, column t_s"]);
@@ -226,7 +257,11 @@ fn a_far_frame_at_a_matching_time_exits_2() {
 fn a_frame_rate_typed_in_khz_exits_2_saying_so() {
     let err = refused("fps_khz", |p| {
         edit_lines(&p.join("data/runs.csv"), |k, l| {
-            vec![if k == 2 { set_field(l, 4, "10") } else { l.into() }]
+            vec![if k == 2 {
+                set_field(l, 4, "10")
+            } else {
+                l.into()
+            }]
         })
     });
     assert_names(&err, &["runs.csv row 2, column fps", "kHz", "10000"]);
@@ -237,7 +272,11 @@ fn a_run_whose_times_are_all_zero_exits_2() {
     let err = refused("t_zero", |p| {
         let run = first_run(p, "single");
         edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k > 1 && l.starts_with(&format!("{run},")) { set_field(l, 3, "0") } else { l.into() }]
+            vec![if k > 1 && l.starts_with(&format!("{run},")) {
+                set_field(l, 3, "0")
+            } else {
+                l.into()
+            }]
         })
     });
     assert_names(&err, &["trajectories.csv row 3, column t_s", "not after"]);
@@ -247,7 +286,11 @@ fn a_run_whose_times_are_all_zero_exits_2() {
 fn time_going_backwards_exits_2() {
     let err = refused("t_backwards", |p| {
         let path = p.join("data/trajectories.csv");
-        let lines: Vec<String> = std::fs::read_to_string(&path).unwrap().lines().map(String::from).collect();
+        let lines: Vec<String> = std::fs::read_to_string(&path)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect();
         let t = |k: usize| lines[k - 1].split(',').nth(3).unwrap().to_string();
         let (t101, t102) = (t(101), t(102));
         edit_lines(&path, |k, l| {
@@ -258,7 +301,13 @@ fn time_going_backwards_exits_2() {
             }]
         })
     });
-    assert_names(&err, &["trajectories.csv row 102, column t_s", "time goes backwards"]);
+    assert_names(
+        &err,
+        &[
+            "trajectories.csv row 102, column t_s",
+            "time goes backwards",
+        ],
+    );
 }
 
 #[test]
@@ -266,10 +315,21 @@ fn a_collision_run_without_its_target_exits_2() {
     let err = refused("no_target", |p| {
         let run = first_run(p, "collision");
         edit_lines(&p.join("data/trajectories.csv"), |_, l| {
-            if l.starts_with(&format!("{run},1,")) { vec![] } else { vec![l.into()] }
+            if l.starts_with(&format!("{run},1,")) {
+                vec![]
+            } else {
+                vec![l.into()]
+            }
         })
     });
-    assert_names(&err, &["trajectories.csv", "column frame", "has 0 frames of particle 1 (the target)"]);
+    assert_names(
+        &err,
+        &[
+            "trajectories.csv",
+            "column frame",
+            "has 0 frames of particle 1 (the target)",
+        ],
+    );
 }
 
 #[test]
@@ -279,7 +339,13 @@ fn a_row_with_an_extra_field_exits_2_in_groove_words() {
             vec![if k == 50 { format!("{l},7") } else { l.into() }]
         })
     });
-    assert_names(&err, &["trajectories.csv row 50", "6 fields but the header names 5 columns"]);
+    assert_names(
+        &err,
+        &[
+            "trajectories.csv row 50",
+            "6 fields but the header names 5 columns",
+        ],
+    );
     assert!(!err.contains("Schema") && !err.contains("cSV"), "{err}");
 }
 
@@ -292,7 +358,14 @@ fn invalid_utf8_in_the_header_exits_2_naming_row_and_column() {
         bytes[at + 3] = 0xe9; // "mat\xe9rial", Latin-1
         std::fs::write(&path, bytes).unwrap();
     });
-    assert_names(&err, &["runs.csv row 1, column", "not UTF-8", "save the file as UTF-8"]);
+    assert_names(
+        &err,
+        &[
+            "runs.csv row 1, column",
+            "not UTF-8",
+            "save the file as UTF-8",
+        ],
+    );
 }
 
 #[test]
@@ -300,9 +373,17 @@ fn numbers_stored_as_text_in_parquet_exit_2() {
     use polars::prelude::*;
     let err = refused("parquet_text", |p| {
         let csv = std::fs::read_to_string(p.join("data/trajectories.csv")).unwrap();
-        let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+        let rows: Vec<Vec<&str>> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').collect())
+            .collect();
         let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
-        let int = |k: usize| rows.iter().map(|r| r[k].parse::<i64>().unwrap()).collect::<Vec<_>>();
+        let int = |k: usize| {
+            rows.iter()
+                .map(|r| r[k].parse::<i64>().unwrap())
+                .collect::<Vec<_>>()
+        };
         let mut df = DataFrame::new(
             rows.len(),
             vec![
@@ -319,7 +400,10 @@ fn numbers_stored_as_text_in_parquet_exit_2() {
         std::fs::remove_file(p.join("data/trajectories.csv")).unwrap();
         std::fs::write(p.join("data/trajectories.parquet"), bytes).unwrap();
     });
-    assert_names(&err, &["trajectories.parquet, column t_s", "stored as text"]);
+    assert_names(
+        &err,
+        &["trajectories.parquet, column t_s", "stored as text"],
+    );
 }
 
 // ------------------------------------------------------------------------ a hostile world
@@ -336,7 +420,11 @@ fn symlinked_tables_are_followed() {
     }
     let out = groove_within(&project, &["run"], LIMIT);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).contains("0 stages run"), "{}", text(&out.stdout));
+    assert!(
+        text(&out.stdout).contains("0 stages run"),
+        "{}",
+        text(&out.stdout)
+    );
     assert_eq!(tree_hashes(&project.join("reports")), reports);
 }
 
@@ -347,8 +435,16 @@ fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
     std::fs::write(project.join("data/notes (copy).txt"), "kick 3 was odd").unwrap();
     let out = groove_within(&project, &["run"], LIMIT);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(text(&out.stdout).contains("0 stages run"), "{}", text(&out.stdout));
-    assert!(text(&out.stderr).contains("notes (copy).txt is not read"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains("0 stages run"),
+        "{}",
+        text(&out.stdout)
+    );
+    assert!(
+        text(&out.stderr).contains("notes (copy).txt is not read"),
+        "{}",
+        text(&out.stderr)
+    );
     assert_eq!(tree_hashes(&project.join("reports")), reports);
 }
 
@@ -356,13 +452,23 @@ fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
 
 /// Runs `args` in a copy of the base project after `setup`, expecting `code`; returns the
 /// output and checks that no file outside `may_change` (relative paths) changed.
-fn engine_case(name: &str, setup: impl FnOnce(&Path), args: &[&str], code: i32, may_change: &[&str]) -> (PathBuf, Output) {
+fn engine_case(
+    name: &str,
+    setup: impl FnOnce(&Path),
+    args: &[&str],
+    code: i32,
+    may_change: &[&str],
+) -> (PathBuf, Output) {
     let project = copy_of_base(name);
     setup(&project);
     let before = tree_hashes(&project);
     let out = groove_within(&project, args, Duration::from_secs(60));
     let stderr = text(&out.stderr);
-    assert_eq!(out.status.code(), Some(code), "{name}: exit code; stderr:\n{stderr}");
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{name}: exit code; stderr:\n{stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     let after = tree_hashes(&project);
     let changed: Vec<&String> = before
@@ -388,7 +494,11 @@ fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
         "half_updated",
         |p| {
             let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
-            std::fs::write(p.join("pipeline.toml"), toml.replace("seed = 20261122", "seed = 7")).unwrap();
+            std::fs::write(
+                p.join("pipeline.toml"),
+                toml.replace("seed = 20261122", "seed = 7"),
+            )
+            .unwrap();
             append_config(p, "\n[stages.boom]\nkind = \"command\"\ncmd = \"cat {in.s} > {out.o}; exit 3\"\ninputs = { s = \"aggregate:summary\" }\noutputs = { o = \"${reports}/boom.txt\" }\n");
         },
         &["run"],
@@ -402,7 +512,11 @@ fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
 fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
     for (name, target, says) in [
         ("escape", "../../outside.txt", "outside the project folder"),
-        ("absolute", "/tmp/groove-hostile-absolute.txt", "outside the project folder"),
+        (
+            "absolute",
+            "/tmp/groove-hostile-absolute.txt",
+            "outside the project folder",
+        ),
         ("onto_data", "${data}/runs.csv", "dataset folder"),
         ("onto_lock", "pipeline.lock", "pipeline.lock"),
         ("onto_config", "pipeline.toml", "pipeline config"),
@@ -412,7 +526,10 @@ fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
             &format!("out_{name}"),
             |p| {
                 let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
-                let toml = toml.replace("summary = \"${reports}/summary.json\"", &format!("summary = \"{target}\""));
+                let toml = toml.replace(
+                    "summary = \"${reports}/summary.json\"",
+                    &format!("summary = \"{target}\""),
+                );
                 std::fs::write(p.join("pipeline.toml"), toml).unwrap();
             },
             &["run"],
@@ -420,7 +537,10 @@ fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
             &["pipeline.toml"],
         );
         let err = text(&out.stderr);
-        assert!(err.contains("pipeline.toml:") && err.contains(says), "{name}: {err}");
+        assert!(
+            err.contains("pipeline.toml:") && err.contains(says),
+            "{name}: {err}"
+        );
     }
     assert!(!Path::new("/tmp/groove-hostile-absolute.txt").exists());
 }
@@ -428,7 +548,11 @@ fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
 #[test]
 fn reports_in_the_data_folder_are_refused() {
     let (_, out) = engine_case("out_is_data", |_| {}, &["run", "--out", "data"], 2, &[]);
-    assert!(text(&out.stderr).contains("dataset folder"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("dataset folder"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 #[test]
@@ -439,15 +563,25 @@ fn a_file_output_never_replaces_a_folder() {
             std::fs::create_dir_all(p.join("reports/keep")).unwrap();
             std::fs::write(p.join("reports/keep/mine.txt"), "mine").unwrap();
             let toml = std::fs::read_to_string(p.join("pipeline.toml")).unwrap();
-            let toml = toml.replace("summary = \"${reports}/summary.json\"", "summary = \"${reports}/keep\"");
+            let toml = toml.replace(
+                "summary = \"${reports}/summary.json\"",
+                "summary = \"${reports}/keep\"",
+            );
             std::fs::write(p.join("pipeline.toml"), toml).unwrap();
         },
         &["run"],
         2,
         &[".groove/"],
     );
-    assert!(text(&out.stderr).contains("never replaces a folder"), "{}", text(&out.stderr));
-    assert_eq!(std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(), "mine");
+    assert!(
+        text(&out.stderr).contains("never replaces a folder"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(),
+        "mine"
+    );
 }
 
 #[test]
@@ -459,13 +593,24 @@ fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
         2,
         &[],
     );
-    assert!(text(&out.stderr).contains("is a file"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("is a file"),
+        "{}",
+        text(&out.stderr)
+    );
     let parent = project.parent().unwrap();
-    assert_eq!(std::fs::read_to_string(parent.join("publish_file-target")).unwrap(), "precious");
+    assert_eq!(
+        std::fs::read_to_string(parent.join("publish_file-target")).unwrap(),
+        "precious"
+    );
     // a kill during an earlier publish left a half-built bundle beside the target
     let leftover = parent.join(".publish_file-bundle.groove-new-1-1");
     std::fs::create_dir_all(&leftover).unwrap();
-    let out = groove_within(&project, &["publish", "--to", "../publish_file-bundle"], LIMIT);
+    let out = groove_within(
+        &project,
+        &["publish", "--to", "../publish_file-bundle"],
+        LIMIT,
+    );
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(!leftover.exists(), "the leftover of a killed publish stays");
     assert!(parent.join("publish_file-bundle/SHA256SUMS").is_file());
@@ -488,10 +633,21 @@ fn a_damaged_object_is_a_miss_and_the_stage_reruns() {
     std::fs::remove_file(project.join("reports/fits.csv")).unwrap();
     let out = groove_within(&project, &["run"], Duration::from_secs(60));
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert_eq!(std::fs::read(project.join("reports/fits.csv")).unwrap(), good);
-    assert_eq!(sha256_hex(&std::fs::read(&object).unwrap()), sha256_hex(&good), "the object is repaired");
+    assert_eq!(
+        std::fs::read(project.join("reports/fits.csv")).unwrap(),
+        good
+    );
+    assert_eq!(
+        sha256_hex(&std::fs::read(&object).unwrap()),
+        sha256_hex(&good),
+        "the object is repaired"
+    );
     let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+    assert!(
+        !text(&status.stdout).contains("\"stale\""),
+        "{}",
+        text(&status.stdout)
+    );
 }
 
 #[test]
@@ -506,14 +662,28 @@ fn verify_drops_damaged_objects_and_says_so() {
     std::fs::write(&object, bytes).unwrap();
     let out = groove_within(&project, &["verify"], Duration::from_secs(60));
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stdout));
-    let name = object.parent().unwrap().file_name().unwrap().to_string_lossy().into_owned()
+    let name = object
+        .parent()
+        .unwrap()
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .into_owned()
         + &object.file_name().unwrap().to_string_lossy();
-    assert!(text(&out.stdout).contains(&format!("dropped damaged object {name}")), "{}", text(&out.stdout));
+    assert!(
+        text(&out.stdout).contains(&format!("dropped damaged object {name}")),
+        "{}",
+        text(&out.stdout)
+    );
     assert!(!object.exists());
     let rerun = groove_within(&project, &["run"], Duration::from_secs(60));
     assert!(rerun.status.success(), "{}", text(&rerun.stderr));
     let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(!text(&status.stdout).contains("\"stale\""), "{}", text(&status.stdout));
+    assert!(
+        !text(&status.stdout).contains("\"stale\""),
+        "{}",
+        text(&status.stdout)
+    );
 }
 
 #[test]
@@ -525,7 +695,11 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(text(&out.stderr).contains("pipeline.toml:1: defines no stages"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("pipeline.toml:1: defines no stages"),
+        "{}",
+        text(&out.stderr)
+    );
     let before = tree_hashes(&project);
     let gc = groove_within(&project, &["gc"], LIMIT);
     assert_eq!(gc.status.code(), Some(2));
@@ -539,7 +713,11 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(text(&out.stderr).contains("nothing was removed"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("nothing was removed"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 #[test]
@@ -556,6 +734,14 @@ fn invalid_utf8_in_the_config_names_its_line() {
         2,
         &[],
     );
-    assert!(text(&out.stderr).contains("is not UTF-8"), "{}", text(&out.stderr));
-    assert!(text(&out.stderr).contains("pipeline.toml:"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("is not UTF-8"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(
+        text(&out.stderr).contains("pipeline.toml:"),
+        "{}",
+        text(&out.stderr)
+    );
 }

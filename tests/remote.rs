@@ -44,7 +44,10 @@ params = { scale = 1 }
 fn clone_with(runs: usize) -> Project {
     let p = Project::new(PIPELINE);
     for i in 0..runs {
-        p.write(&format!("data/run_{i:03}.csv"), &format!("t,z\n0,0.0\n1,0.{i}\n"));
+        p.write(
+            &format!("data/run_{i:03}.csv"),
+            &format!("t,z\n0,0.0\n1,0.{i}\n"),
+        );
     }
     p
 }
@@ -97,7 +100,11 @@ fn check_remote(remote: &Path) -> Vec<(String, serde_json::Value)> {
         for sha in blobs_of(&entry) {
             let blob = std::fs::read(blob_path(remote, &sha))
                 .unwrap_or_else(|e| panic!("entry {} names blob {sha}, absent: {e}", f.display()));
-            assert_eq!(sha256(&blob), sha, "blob {sha} on the remote is not what its name says");
+            assert_eq!(
+                sha256(&blob),
+                sha,
+                "blob {sha} on the remote is not what its name says"
+            );
         }
         out.push((f.file_stem().unwrap().to_string_lossy().into_owned(), entry));
     }
@@ -133,7 +140,11 @@ fn a_second_clone_runs_nothing_and_makes_the_same_bytes() {
 
     let b = clone();
     let out_b = b.ok(&["run", "--remote", &url]);
-    assert_eq!(b.take_trace(), Vec::<String>::new(), "clone B ran stages:\n{out_b}");
+    assert_eq!(
+        b.take_trace(),
+        Vec::<String>::new(),
+        "clone B ran stages:\n{out_b}"
+    );
     assert!(out_b.contains("groove: 0 stages run, 3 reused"), "{out_b}");
     assert_eq!(count(&out_b, "remote file://", "hits"), 5, "{out_b}");
     assert_eq!(count(&out_b, "remote file://", "misses"), 0, "{out_b}");
@@ -145,12 +156,27 @@ fn a_second_clone_runs_nothing_and_makes_the_same_bytes() {
         entries.len()
     );
     assert_eq!(count(&out_b, "remote file://", "LIST"), 0);
-    assert_eq!(count(&out_b, "remote file://", "PUT"), 0, "a hit is not pushed back");
+    assert_eq!(
+        count(&out_b, "remote file://", "PUT"),
+        0,
+        "a hit is not pushed back"
+    );
     assert_same_tree(&a.path("reports"), &b.path("reports"));
     assert_eq!(a.read("pipeline.lock"), b.read("pipeline.lock"));
     let status = b.ok(&["status", "--json"]);
-    let v: serde_json::Value = serde_json::from_str(status.lines().take_while(|l| !l.starts_with("groove:")).collect::<Vec<_>>().join("\n").as_str()).unwrap();
-    assert!(v.as_array().unwrap().iter().all(|s| s["state"] == "fresh"), "{status}");
+    let v: serde_json::Value = serde_json::from_str(
+        status
+            .lines()
+            .take_while(|l| !l.starts_with("groove:"))
+            .collect::<Vec<_>>()
+            .join("\n")
+            .as_str(),
+    )
+    .unwrap();
+    assert!(
+        v.as_array().unwrap().iter().all(|s| s["state"] == "fresh"),
+        "{status}"
+    );
 }
 
 #[test]
@@ -221,12 +247,17 @@ fn a_deleted_remote_blob_is_a_miss_and_only_that_item_reruns() {
     assert_eq!(b.take_trace(), vec!["fit run_001.csv".to_string()], "{out}");
     assert_eq!(count(&out, "remote file://", "misses"), 1, "{out}");
     assert_same_tree(&a.path("reports"), &b.path("reports"));
-    assert!(blob_path(remote.path(), &sha).exists(), "the push put the blob back");
+    assert!(
+        blob_path(remote.path(), &sha).exists(),
+        "the push put the blob back"
+    );
 }
 
 /// A small deterministic random sequence (no dependency, same moments on every machine).
 fn lcg(state: &mut u64) -> f64 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
@@ -260,12 +291,17 @@ fn kill_9_during_a_push_never_leaves_an_entry_without_its_blobs() {
         if n < total {
             partial += 1;
         }
-        eprintln!("trial {trial}: killed after {at:?} of {whole:?}: {n} of {total} entries, all complete");
+        eprintln!(
+            "trial {trial}: killed after {at:?} of {whole:?}: {n} of {total} entries, all complete"
+        );
         // the next push completes what the killed one left
         a.ok(&["push", "--remote", &url(remote.path())]);
         assert_eq!(check_remote(remote.path()).len(), total);
     }
-    assert!(partial >= 3, "only {partial} of 10 kills landed inside a push; the test proves little");
+    assert!(
+        partial >= 3,
+        "only {partial} of 10 kills landed inside a push; the test proves little"
+    );
 }
 
 #[test]
@@ -276,11 +312,30 @@ fn two_clones_pushing_the_same_keys_at_once_both_succeed() {
     a.ok(&["run", "--no-remote"]);
     b.ok(&["run", "--no-remote"]);
     // both pushes start together and race for the same names
-    let ca = a.command(&["push", "--remote", &url]).stdout(std::process::Stdio::piped()).spawn().unwrap();
-    let cb = b.command(&["push", "--remote", &url]).stdout(std::process::Stdio::piped()).spawn().unwrap();
-    let (pa, pb) = (ca.wait_with_output().unwrap(), cb.wait_with_output().unwrap());
-    assert!(pa.status.success(), "{}", String::from_utf8_lossy(&pa.stderr));
-    assert!(pb.status.success(), "{}", String::from_utf8_lossy(&pb.stderr));
+    let ca = a
+        .command(&["push", "--remote", &url])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let cb = b
+        .command(&["push", "--remote", &url])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (pa, pb) = (
+        ca.wait_with_output().unwrap(),
+        cb.wait_with_output().unwrap(),
+    );
+    assert!(
+        pa.status.success(),
+        "{}",
+        String::from_utf8_lossy(&pa.stderr)
+    );
+    assert!(
+        pb.status.success(),
+        "{}",
+        String::from_utf8_lossy(&pb.stderr)
+    );
     for out in [&pa, &pb] {
         let text = String::from_utf8_lossy(&out.stdout);
         assert_eq!(count(&text, "remote file://", "errors"), 0, "{text}");
@@ -297,8 +352,17 @@ fn an_unusable_remote_warns_once_and_local_work_goes_on() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stderr}");
     let warnings: Vec<&str> = stderr.lines().filter(|l| l.contains("warning")).collect();
-    assert_eq!(warnings.len(), 1, "one warning, not {}:\n{stderr}", warnings.len());
-    assert!(warnings[0].contains(url) && warnings[0].contains("create"), "{}", warnings[0]);
+    assert_eq!(
+        warnings.len(),
+        1,
+        "one warning, not {}:\n{stderr}",
+        warnings.len()
+    );
+    assert!(
+        warnings[0].contains(url) && warnings[0].contains("create"),
+        "{}",
+        warnings[0]
+    );
     assert_eq!(a.take_trace().len(), 12, "every stage ran locally");
     assert!(count(&stdout, "remote file://", "errors") >= 1, "{stdout}");
 
@@ -306,7 +370,10 @@ fn an_unusable_remote_warns_once_and_local_work_goes_on() {
     let out = b.groove(&["run", "--remote", url, "--remote-required"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("groove: error:") && stderr.contains("--remote-required"), "{stderr}");
+    assert!(
+        stderr.contains("groove: error:") && stderr.contains("--remote-required"),
+        "{stderr}"
+    );
 }
 
 #[test]
@@ -365,12 +432,20 @@ fn a_bad_remote_url_or_table_is_exit_2_with_the_fix() {
     let a = clone();
     let out = a.groove(&["run", "--remote", "ftp://host/x"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("file:///shared/path or s3://bucket/prefix"));
-    a.write("pipeline.toml", &format!("{PIPELINE}\n[remote]\nurl = \"file:///x\"\njobz = 3\n"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("file:///shared/path or s3://bucket/prefix")
+    );
+    a.write(
+        "pipeline.toml",
+        &format!("{PIPELINE}\n[remote]\nurl = \"file:///x\"\njobz = 3\n"),
+    );
     let out = a.groove(&["run"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("pipeline.toml:") && stderr.contains("jobz"), "{stderr}");
+    assert!(
+        stderr.contains("pipeline.toml:") && stderr.contains("jobz"),
+        "{stderr}"
+    );
 }
 
 /// Timed and counted push/pull of the shipped analysis, with two clones (CI runs it; with the
@@ -390,7 +465,10 @@ fn shipped_analysis_two_clones_through_a_file_remote() {
     shipped(&a);
     let started = Instant::now();
     let out_a = a.ok(&["run", "--data", &data, "--remote", &url]);
-    eprintln!("clone A ran the shipped analysis in {:.1} s", started.elapsed().as_secs_f64());
+    eprintln!(
+        "clone A ran the shipped analysis in {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
     let entries = check_remote(remote.path()).len() as u64;
     let objects = n_objects(remote.path()) as u64;
     let b = Project::new("");
@@ -399,12 +477,20 @@ fn shipped_analysis_two_clones_through_a_file_remote() {
     let out_b = b.ok(&["run", "--data", &data, "--remote", &url]);
     let pull_s = started.elapsed().as_secs_f64();
     assert!(out_b.contains("groove: 0 stages run"), "{out_b}");
-    assert!(count(&out_b, "remote file://", "GET") <= entries + objects, "{out_b}");
+    assert!(
+        count(&out_b, "remote file://", "GET") <= entries + objects,
+        "{out_b}"
+    );
     assert_same_tree(&a.path("reports"), &b.path("reports"));
     assert_eq!(a.read("pipeline.lock"), b.read("pipeline.lock"));
     let out_re = a.ok(&["push", "--data", &data, "--remote", &url]);
     assert_eq!(count(&out_re, "remote file://", "PUT"), 0, "{out_re}");
-    let line = |t: &str| t.lines().find(|l| l.contains("remote file://")).unwrap().to_string();
+    let line = |t: &str| {
+        t.lines()
+            .find(|l| l.contains("remote file://"))
+            .unwrap()
+            .to_string()
+    };
     println!("benchmark (shipped analysis, file:// remote): {entries} entries, {objects} blobs");
     println!("  push (clone A's run): {}", line(&out_a));
     println!("  pull (clone B's run, {pull_s:.2} s): {}", line(&out_b));
@@ -418,8 +504,9 @@ mod s3 {
     use super::*;
 
     fn bucket() -> String {
-        std::env::var("GROOVE_TEST_S3_BUCKET")
-            .expect("GROOVE_TEST_S3_BUCKET: start the S3 server with tests/infra/moto.sh (as .ci/run does)")
+        std::env::var("GROOVE_TEST_S3_BUCKET").expect(
+            "GROOVE_TEST_S3_BUCKET: start the S3 server with tests/infra/moto.sh (as .ci/run does)",
+        )
     }
 
     fn unique_prefix(name: &str) -> String {
@@ -437,7 +524,12 @@ mod s3 {
             .unwrap()
             .lines()
             .skip(from)
-            .filter(|l| l.contains(&format!("/{}/{prefix}", bucket())) || l.contains("list-type") || l.contains(&format!("\"GET /{} ", bucket())) || l.contains(&format!("\"GET /{}?", bucket())))
+            .filter(|l| {
+                l.contains(&format!("/{}/{prefix}", bucket()))
+                    || l.contains("list-type")
+                    || l.contains(&format!("\"GET /{} ", bucket()))
+                    || l.contains(&format!("\"GET /{}?", bucket()))
+            })
             .map(str::to_string)
             .collect()
     }
@@ -465,13 +557,25 @@ mod s3 {
         // the server's own log: GETs of B, each object at most once, and no listing
         let seen = requests(&prefix, from);
         let gets: Vec<&String> = seen.iter().filter(|l| l.contains("\"GET ")).collect();
-        assert!(gets.len() as u64 <= 7 + blobs, "{} GETs for 7 entries and {blobs} blobs", gets.len());
-        let mut paths: Vec<&str> = gets.iter().map(|l| l.split(' ').nth(6).unwrap_or("")).collect();
+        assert!(
+            gets.len() as u64 <= 7 + blobs,
+            "{} GETs for 7 entries and {blobs} blobs",
+            gets.len()
+        );
+        let mut paths: Vec<&str> = gets
+            .iter()
+            .map(|l| l.split(' ').nth(6).unwrap_or(""))
+            .collect();
         let n = paths.len();
         paths.sort();
         paths.dedup();
         assert_eq!(paths.len(), n, "an object was fetched twice: {gets:?}");
-        assert!(!seen.iter().any(|l| l.contains("list-type") || l.contains(&format!("\"GET /{} ", bucket())) || l.contains(&format!("\"GET /{}?", bucket()))), "a LIST was made: {seen:?}");
+        assert!(
+            !seen.iter().any(|l| l.contains("list-type")
+                || l.contains(&format!("\"GET /{} ", bucket()))
+                || l.contains(&format!("\"GET /{}?", bucket()))),
+            "a LIST was made: {seen:?}"
+        );
         // a re-push sends no body
         let from = log_len();
         let out = a.ok(&["push", "--remote", &url]);
@@ -486,8 +590,16 @@ mod s3 {
         let (a, b) = (clone_with(30), clone_with(30));
         a.ok(&["run", "--no-remote"]);
         b.ok(&["run", "--no-remote"]);
-        let ca = a.command(&["push", "--remote", &url]).stdout(std::process::Stdio::null()).spawn().unwrap();
-        let cb = b.command(&["push", "--remote", &url]).stdout(std::process::Stdio::null()).spawn().unwrap();
+        let ca = a
+            .command(&["push", "--remote", &url])
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let cb = b
+            .command(&["push", "--remote", &url])
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
         assert!(ca.wait_with_output().unwrap().status.success());
         assert!(cb.wait_with_output().unwrap().status.success());
         let c = clone_with(30);
@@ -512,10 +624,21 @@ mod s3 {
         assert!(out.status.success(), "{stderr}");
         let warnings: Vec<&str> = stderr.lines().filter(|l| l.contains("warning")).collect();
         assert_eq!(warnings.len(), 1, "{stderr}");
-        assert!(warnings[0].contains("AWS_ENDPOINT_URL") && warnings[0].contains("cannot reach"), "{}", warnings[0]);
+        assert!(
+            warnings[0].contains("AWS_ENDPOINT_URL") && warnings[0].contains("cannot reach"),
+            "{}",
+            warnings[0]
+        );
         assert_eq!(a.take_trace().len(), 12);
         let out = a
-            .command(&["run", "--remote", &url, "--remote-required", "--force", "summary"])
+            .command(&[
+                "run",
+                "--remote",
+                &url,
+                "--remote-required",
+                "--force",
+                "summary",
+            ])
             .env("AWS_ENDPOINT_URL", "http://127.0.0.1:9")
             .output()
             .unwrap();
@@ -539,18 +662,28 @@ mod s3 {
             p
         };
         let line = |t: &str, scheme: &str| {
-            t.lines().find(|l| l.contains(&format!("remote {scheme}"))).unwrap().to_string()
+            t.lines()
+                .find(|l| l.contains(&format!("remote {scheme}")))
+                .unwrap()
+                .to_string()
         };
         let a = mk();
         let started = Instant::now();
         let out_a = a.ok(&["run", "--data", &data, "--remote", &file_url]);
-        println!("clone A: the shipped analysis in {:.1} s", started.elapsed().as_secs_f64());
+        println!(
+            "clone A: the shipped analysis in {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
         let entries = check_remote(folder.path()).len() as u64;
         let objects = n_objects(folder.path()) as u64;
         let started = Instant::now();
         let push_s3 = a.ok(&["push", "--data", &data, "--remote", &s3_url]);
         let push_s3_s = started.elapsed().as_secs_f64();
-        assert_eq!(count(&push_s3, "remote s3://", "entries"), entries, "{push_s3}");
+        assert_eq!(
+            count(&push_s3, "remote s3://", "entries"),
+            entries,
+            "{push_s3}"
+        );
 
         let mut pulls = Vec::new();
         for (url, scheme) in [(&file_url, "file://"), (&s3_url, "s3://")] {
@@ -559,8 +692,15 @@ mod s3 {
             let out = b.ok(&["run", "--data", &data, "--remote", url]);
             let secs = started.elapsed().as_secs_f64();
             assert!(out.contains("groove: 0 stages run"), "{out}");
-            assert_eq!(count(&out, &format!("remote {scheme}"), "hits"), entries, "{out}");
-            assert!(count(&out, &format!("remote {scheme}"), "GET") <= entries + objects, "{out}");
+            assert_eq!(
+                count(&out, &format!("remote {scheme}"), "hits"),
+                entries,
+                "{out}"
+            );
+            assert!(
+                count(&out, &format!("remote {scheme}"), "GET") <= entries + objects,
+                "{out}"
+            );
             assert_eq!(count(&out, &format!("remote {scheme}"), "LIST"), 0);
             assert_same_tree(&a.path("reports"), &b.path("reports"));
             assert_eq!(a.read("pipeline.lock"), b.read("pipeline.lock"));
@@ -571,8 +711,14 @@ mod s3 {
         assert_eq!(count(&re_file, "remote file://", "PUT"), 0, "{re_file}");
         assert_eq!(count(&re_s3, "remote s3://", "PUT"), 0, "{re_s3}");
         println!("benchmark (shipped analysis): {entries} entries, {objects} blobs");
-        println!("  push to file:// (in clone A's run): {}", line(&out_a, "file://"));
-        println!("  push to s3 (groove push, {push_s3_s:.2} s): {}", line(&push_s3, "s3://"));
+        println!(
+            "  push to file:// (in clone A's run): {}",
+            line(&out_a, "file://")
+        );
+        println!(
+            "  push to s3 (groove push, {push_s3_s:.2} s): {}",
+            line(&push_s3, "s3://")
+        );
         for (scheme, secs, l) in &pulls {
             println!("  pull from {scheme} (clone run, {secs:.2} s): {l}");
         }

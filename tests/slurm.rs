@@ -24,7 +24,11 @@ fn job_name(tag: &str) -> String {
         .duration_since(std::time::UNIX_EPOCH)
         .unwrap()
         .as_nanos();
-    format!("groove-{tag}-{}-{}", std::process::id(), nanos % 1_000_000_000)
+    format!(
+        "groove-{tag}-{}-{}",
+        std::process::id(),
+        nanos % 1_000_000_000
+    )
 }
 
 /// Jobs (allocations) with this name, in any state.
@@ -53,7 +57,10 @@ fn dag_pipeline(layers: usize, width: usize) -> String {
     for l in 0..layers {
         for i in 0..width {
             let inputs = if l == 0 {
-                format!("a = \"data/s{i}.txt\", b = \"data/s{}.txt\"", (i + 1) % width)
+                format!(
+                    "a = \"data/s{i}.txt\", b = \"data/s{}.txt\"",
+                    (i + 1) % width
+                )
             } else {
                 format!(
                     "a = \"s{}_{i}:o\", b = \"s{}_{}:o\"",
@@ -94,7 +101,10 @@ fn a_200_stage_dag_on_slurm_matches_a_local_run_in_one_allocation() {
     let out = on_slurm.ok(&["run", "--executor", "slurm"]);
     let slurm_s = started.elapsed().as_secs_f64();
     assert_eq!(on_slurm.take_trace().len(), 200, "{out}");
-    assert!(out.contains("slurm: 1 allocation taken, 200 job steps"), "{out}");
+    assert!(
+        out.contains("slurm: 1 allocation taken, 200 job steps"),
+        "{out}"
+    );
     assert_eq!(jobs_named(&name).len(), 1, "exactly one allocation");
     assert_eq!(local.read("pipeline.lock"), on_slurm.read("pipeline.lock"));
     assert_same_tree(&local.path("reports"), &on_slurm.path("reports"));
@@ -106,7 +116,10 @@ fn a_200_stage_dag_on_slurm_matches_a_local_run_in_one_allocation() {
     // nothing changed: status and a second run agree, with no allocation taken
     let out = on_slurm.ok(&["run", "--executor", "slurm"]);
     assert!(out.contains("groove: 0 stages run"), "{out}");
-    assert!(out.contains("slurm: 0 allocations taken, 0 job steps"), "{out}");
+    assert!(
+        out.contains("slurm: 0 allocations taken, 0 job steps"),
+        "{out}"
+    );
     assert_eq!(jobs_named(&name).len(), 1);
     let status = on_slurm.ok(&["status"]);
     assert!(!status.contains("stale"), "{status}");
@@ -132,7 +145,10 @@ fn per_item_work_goes_in_batches_not_one_step_per_item() {
     let out = remote.ok(&["run", "--executor", "slurm"]);
     assert_eq!(remote.take_trace().len(), 100);
     // 100 items over a 2-CPU allocation with 1-CPU steps: 2 steps of 50 items
-    assert!(out.contains("slurm: 1 allocation taken, 2 job steps"), "{out}");
+    assert!(
+        out.contains("slurm: 1 allocation taken, 2 job steps"),
+        "{out}"
+    );
     assert_same_tree(&local.path("reports"), &remote.path("reports"));
     assert_eq!(local.read("pipeline.lock"), remote.read("pipeline.lock"));
 }
@@ -149,7 +165,10 @@ fn a_failing_step_exits_2_naming_the_stage_and_its_stderr_and_commits_nothing() 
     let out = p.groove(&["run", "--executor", "slurm"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("stage `bad`") && stderr.contains("the detector is unplugged"), "{stderr}");
+    assert!(
+        stderr.contains("stage `bad`") && stderr.contains("the detector is unplugged"),
+        "{stderr}"
+    );
     // good's entry only
     assert_eq!(files(&p.path(".groove/entries"), &[]).len(), 1);
     assert!(!p.path("bad.txt").exists());
@@ -173,28 +192,49 @@ fn a_cancelled_allocation_exits_2_and_the_rerun_does_only_the_unfinished_work() 
         .spawn()
         .unwrap();
     let deadline = Instant::now() + Duration::from_secs(60);
-    while !p.path("trace.txt").exists() || !std::fs::read_to_string(p.path("trace.txt")).unwrap().contains("slow") {
+    while !p.path("trace.txt").exists()
+        || !std::fs::read_to_string(p.path("trace.txt"))
+            .unwrap()
+            .contains("slow")
+    {
         assert!(Instant::now() < deadline, "stage slow never started");
         std::thread::sleep(Duration::from_millis(100));
     }
     let jobs = jobs_named(&name);
     assert_eq!(jobs.len(), 1);
-    assert!(Command::new("scancel").arg(&jobs[0]).status().unwrap().success());
+    assert!(Command::new("scancel")
+        .arg(&jobs[0])
+        .status()
+        .unwrap()
+        .success());
     let out = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("ended (cancelled, preempted or out of time)") && stderr.contains("resumes"), "{stderr}");
-    assert_eq!(p.take_trace(), vec!["first".to_string(), "slow".to_string()]);
+    assert!(
+        stderr.contains("ended (cancelled, preempted or out of time)")
+            && stderr.contains("resumes"),
+        "{stderr}"
+    );
+    assert_eq!(
+        p.take_trace(),
+        vec!["first".to_string(), "slow".to_string()]
+    );
     std::fs::remove_file(p.path("hold")).unwrap();
     let out = p.ok(&["run", "--executor", "slurm"]);
-    assert_eq!(p.take_trace(), vec!["last".to_string(), "slow".to_string()], "{out}");
+    assert_eq!(
+        p.take_trace(),
+        vec!["last".to_string(), "slow".to_string()],
+        "{out}"
+    );
     assert_eq!(p.read("last.txt"), "1\n");
 }
 
 /// The code commit the report names (masked: a clone may name another one).
 fn masked(path: &Path) -> Vec<u8> {
     let bytes = std::fs::read(path).unwrap();
-    let Ok(text) = String::from_utf8(bytes.clone()) else { return bytes };
+    let Ok(text) = String::from_utf8(bytes.clone()) else {
+        return bytes;
+    };
     let md = std::fs::read_to_string(path.parent().unwrap().join("report.md")).unwrap_or_default();
     let commit = md
         .lines()
@@ -237,7 +277,10 @@ fn a_bad_slurm_table_is_exit_2_naming_its_line_before_any_allocation() {
     for (table, needle) in [
         ("[slurm]\ncpus = 0\n", "cpus must be at least 1"),
         ("[slurm]\ncpu = 2\n", "unknown field `cpu`"),
-        ("[slurm.kinds.command]\nmemory = \"2G\"\n", "unknown field `memory`"),
+        (
+            "[slurm.kinds.command]\nmemory = \"2G\"\n",
+            "unknown field `memory`",
+        ),
     ] {
         let p = Project::new(&format!(
             "[project]\nseed = 1\n\n[stages.a]\nkind = \"command\"\ncmd = \"echo 1 > {{out.o}}\"\noutputs = {{ o = \"a.txt\" }}\n\n{table}"
@@ -245,7 +288,10 @@ fn a_bad_slurm_table_is_exit_2_naming_its_line_before_any_allocation() {
         let out = p.groove(&["run", "--executor", "slurm"]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{table}: {stderr}");
-        assert!(stderr.contains("pipeline.toml:") && stderr.contains(needle), "{table}: {stderr}");
+        assert!(
+            stderr.contains("pipeline.toml:") && stderr.contains(needle),
+            "{table}: {stderr}"
+        );
         assert!(!p.path("a.txt").exists());
         // the table is valid pipeline.toml for everything else
         if needle.contains("at least") {

@@ -64,7 +64,12 @@ fn trackpy_rows(text: &str, run_of_file: &str) -> Vec<(String, i64, i64, f64)> {
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |n: &str| head.iter().position(|h| *h == n);
-    let (x, frame, particle, run) = (col("x").unwrap(), col("frame").unwrap(), col("particle").unwrap(), col("run"));
+    let (x, frame, particle, run) = (
+        col("x").unwrap(),
+        col("frame").unwrap(),
+        col("particle").unwrap(),
+        col("run"),
+    );
     lines
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
@@ -94,7 +99,12 @@ fn interchange_of(rows: &[(String, i64, i64, f64)], materials: &[(String, String
         runs += &format!("{run},single,{material},0.0003,{FPS}\n");
         let f0 = mine.iter().map(|r| r.2).min().unwrap();
         for r in mine {
-            traj += &format!("{run},0,{},{:e},{:e}\n", r.2, (r.2 - f0) as f64 / FPS, r.3 * M_PER_PX);
+            traj += &format!(
+                "{run},0,{},{:e},{:e}\n",
+                r.2,
+                (r.2 - f0) as f64 / FPS,
+                r.3 * M_PER_PX
+            );
         }
     }
     Files::from([
@@ -116,22 +126,37 @@ fn assert_same_recordings(got: &[Recording], want: &[Recording]) {
         assert_eq!(gt.frame, wt.frame, "{}", g.info.run);
         for k in 0..gt.frame.len() {
             assert!((gt.t_s[k] - wt.t_s[k]).abs() < 1e-15);
-            assert!((gt.z_m[k] - wt.z_m[k]).abs() < 1e-15, "{} {} {}", g.info.run, gt.z_m[k], wt.z_m[k]);
+            assert!(
+                (gt.z_m[k] - wt.z_m[k]).abs() < 1e-15,
+                "{} {} {}",
+                g.info.run,
+                gt.z_m[k],
+                wt.z_m[k]
+            );
         }
     }
 }
 
 fn fits(recs: &[Recording]) -> Vec<SingleFit> {
-    recs.iter().map(|r| fit_single(r, &FitOptions::default())).collect()
+    recs.iter()
+        .map(|r| fit_single(r, &FitOptions::default()))
+        .collect()
 }
 
 /// The fits agree to 1e-9 (relative) in v0, μ and T.
 fn assert_same_fits(got: &[SingleFit], want: &[SingleFit]) {
     assert_eq!(got.len(), want.len());
     for (g, w) in got.iter().zip(want) {
-        assert_eq!((&g.run, &g.material, &g.status), (&w.run, &w.material, &w.status));
+        assert_eq!(
+            (&g.run, &g.material, &g.status),
+            (&w.run, &w.material, &w.status)
+        );
         for (a, b) in [(g.v0_mps, w.v0_mps), (g.mu, w.mu), (g.t_drag_s, w.t_drag_s)] {
-            assert!((a - b).abs() <= 1e-9 * b.abs().max(1e-3), "{}: {a} vs {b}", g.run);
+            assert!(
+                (a - b).abs() <= 1e-9 * b.abs().max(1e-3),
+                "{}: {a} vs {b}",
+                g.run
+            );
         }
     }
 }
@@ -148,7 +173,10 @@ fn truth() -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
             (f[0].to_string(), f[v].parse::<f64>().unwrap())
         })
         .collect();
-    let t: toml::Table = std::fs::read_to_string(fixtures().join("truth.toml")).unwrap().parse().unwrap();
+    let t: toml::Table = std::fs::read_to_string(fixtures().join("truth.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
     let mu = t["materials"]
         .as_array()
         .unwrap()
@@ -179,8 +207,19 @@ fn trackpy_file_of_all_runs_gives_the_interchange_fits_and_the_truth() {
     for f in &fg {
         assert_eq!(f.status, "converged", "{f:?}");
         let v = v0[&f.run];
-        assert!((f.v0_mps - v).abs() < 0.01 * v.abs(), "{}: v0 {} truth {v}", f.run, f.v0_mps);
-        assert!((f.mu - mu[&f.material]).abs() < 0.03, "{}: mu {} truth {}", f.run, f.mu, mu[&f.material]);
+        assert!(
+            (f.v0_mps - v).abs() < 0.01 * v.abs(),
+            "{}: v0 {} truth {v}",
+            f.run,
+            f.v0_mps
+        );
+        assert!(
+            (f.mu - mu[&f.material]).abs() < 0.03,
+            "{}: mu {} truth {}",
+            f.run,
+            f.mu,
+            mu[&f.material]
+        );
     }
 }
 
@@ -194,7 +233,11 @@ fn one_trackpy_file_per_run_with_a_manifest_of_two_materials() {
     assert_eq!(got.recordings.len(), materials.len());
     for r in &got.recordings {
         let m = &materials.iter().find(|m| m.0 == r.info.run).unwrap().1;
-        assert_eq!(&r.info.material, m, "the manifest labels run {}", r.info.run);
+        assert_eq!(
+            &r.info.material, m,
+            "the manifest labels run {}",
+            r.info.run
+        );
     }
     let mut rows = Vec::new();
     for (run, _) in &materials {
@@ -240,7 +283,10 @@ fn trackmate_csv_under_its_default_name_gives_the_interchange_fits() {
     assert!(files.contains_key("Spots in tracks statistics.csv"));
     let materials = manifest(&files);
     let got = ingest_ok(&files, &IngestParams::default());
-    assert_eq!(got.recordings[0].info.run, materials[0].0, "the manifest names the file's run");
+    assert_eq!(
+        got.recordings[0].info.run, materials[0].0,
+        "the manifest names the file's run"
+    );
     let want = interchange_of_run(&materials[0].0, &materials[0].1);
     assert_same_recordings(&got.recordings, &want);
     assert_same_fits(&fits(&got.recordings), &fits(&want));
@@ -277,7 +323,10 @@ fn manifest_rows_and_files_must_match() {
     runs += "single-999,316,0.0003,10000,single\n";
     files.insert("runs.csv".into(), runs.into_bytes());
     let e = ingest::ingest(&files, &params()).unwrap_err().to_string();
-    assert!(e.contains("runs.csv row 8, column run: run \"single-999\" is in no tracker file"), "{e}");
+    assert!(
+        e.contains("runs.csv row 8, column run: run \"single-999\" is in no tracker file"),
+        "{e}"
+    );
 }
 
 // ------------------------------------------------------------ through the binary
@@ -342,7 +391,10 @@ fn wrong_axis_exits_2_naming_the_runs_and_the_axis_to_try() {
     let out = groove(p.path(), &["run"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("calibration.axis = \"y\" looks wrong"), "{err}");
+    assert!(
+        err.contains("calibration.axis = \"y\" looks wrong"),
+        "{err}"
+    );
     assert!(err.contains("set calibration.axis = \"x\""), "{err}");
     assert!(err.contains("single-316-001"), "{err}");
     assert!(!p.path().join("reports/report.md").exists());
@@ -352,13 +404,21 @@ fn wrong_axis_exits_2_naming_the_runs_and_the_axis_to_try() {
 fn a_dropped_track_and_a_file_name_with_spaces_reach_the_report() {
     let p = project("trackmate_xml", "{ }");
     let out = groove(p.path(), &["run"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let md = std::fs::read_to_string(p.path().join("reports/report.md")).unwrap();
     assert!(md.contains("track 1 (3 spots, frames "), "{md}");
     assert!(!md.contains("Nothing was left out"), "{md}");
     let p = project("trackmate_csv", "{ }");
     let out = groove(p.path(), &["run"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let md = std::fs::read_to_string(p.path().join("reports/report.md")).unwrap();
     assert!(md.contains("Nothing was left out"), "{md}");
 }
@@ -372,9 +432,15 @@ fn pixel_locked_trackpy_runs_give_mu_per_material_and_flag_what_cannot_be_fitted
     let (v0, mu) = truth();
     let summary = aggregate_single(&fs, &AggregateOptions::default(), 7);
     let recovered = fs.iter().filter(|f| f.restarted).count();
-    eprintln!("pixel-locked runs recovered by restarts: {recovered} of {}", fs.len());
+    eprintln!(
+        "pixel-locked runs recovered by restarts: {recovered} of {}",
+        fs.len()
+    );
     for f in &fs {
-        let listed = summary.materials[&f.material].left_out.iter().any(|l| l.run == f.run);
+        let listed = summary.materials[&f.material]
+            .left_out
+            .iter()
+            .any(|l| l.run == f.run);
         // A fit far from the truth is never averaged in: it is flagged and listed.
         let mu_se = f.mu_se.unwrap_or(f64::INFINITY);
         let wrong = (f.mu - mu[&f.material]).abs() > 0.05 + 3.0 * mu_se
@@ -386,7 +452,10 @@ fn pixel_locked_trackpy_runs_give_mu_per_material_and_flag_what_cannot_be_fitted
     }
     for (m, s) in &summary.materials {
         let w = s.mu_weighted.value;
-        assert!((w - mu[m]).abs() < 0.01, "material {m}: weighted mu {w}, truth {}", mu[m]);
+        assert!(
+            (w - mu[m]).abs() < 0.01,
+            "material {m}: weighted mu {w}, truth {}",
+            mu[m]
+        );
     }
 }
-

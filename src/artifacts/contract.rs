@@ -75,7 +75,10 @@ pub fn markdown() -> String {
     s.push('\n');
     s.push_str(&line("`fits.csv` columns", &fits_table::COLUMNS));
     s.push_str(&line("`summary.json`", fields_of::<summary::Summary>()));
-    s.push_str(&line("`summary.json` `single`", fields_of::<summary::SingleSummary>()));
+    s.push_str(&line(
+        "`summary.json` `single`",
+        fields_of::<summary::SingleSummary>(),
+    ));
     s.push_str(&line(
         "`summary.json` `single.materials.<material>` and `single.pooled`",
         fields_of::<summary::MaterialSummary>(),
@@ -96,13 +99,22 @@ pub fn markdown() -> String {
         "`summary.json` `collisions`",
         fields_of::<summary::CollisionSummary>(),
     ));
-    s.push_str(&line("`summary.json` `collisions.mu_pp`", fields_of::<summary::MuPp>()));
+    s.push_str(&line(
+        "`summary.json` `collisions.mu_pp`",
+        fields_of::<summary::MuPp>(),
+    ));
     s.push_str(&line(
         "`summary.json` `collisions.restitution[]`",
         fields_of::<summary::RestitutionCurve>(),
     ));
-    s.push_str(&line("`diagnosis.json`", fields_of::<diagnosis::Diagnosis>()));
-    s.push_str(&line("`diagnosis.json` `findings[]`", fields_of::<diagnosis::Finding>()));
+    s.push_str(&line(
+        "`diagnosis.json`",
+        fields_of::<diagnosis::Diagnosis>(),
+    ));
+    s.push_str(&line(
+        "`diagnosis.json` `findings[]`",
+        fields_of::<diagnosis::Finding>(),
+    ));
     s.push_str(&line(
         "`diagnosis.json` `findings[].evidence`",
         fields_of::<diagnosis::Evidence>(),

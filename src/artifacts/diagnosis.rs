@@ -239,7 +239,10 @@ mod tests {
     #[test]
     fn effect_ids_are_the_serialized_names_in_sorted_order() {
         for e in Effect::ALL {
-            assert_eq!(serde_json::to_string(&e).unwrap(), format!("\"{}\"", e.id()));
+            assert_eq!(
+                serde_json::to_string(&e).unwrap(),
+                format!("\"{}\"", e.id())
+            );
             assert_eq!(Effect::from_id(e.id()), Some(e));
         }
         assert!(Effect::ALL.windows(2).all(|w| w[0].id() < w[1].id()));

@@ -28,7 +28,10 @@ pub struct FitsRow {
 
 /// Read fits.csv; the header must be `HEADER` exactly.
 pub fn parse(csv: &str) -> Result<Vec<FitsRow>, String> {
-    let mut lines = csv.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = csv
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     match lines.next() {
         None => return Ok(Vec::new()),
         Some((_, h)) if h.trim() == HEADER => {}
@@ -50,9 +53,8 @@ pub fn parse(csv: &str) -> Result<Vec<FitsRow>, String> {
                 COLUMNS.len()
             ));
         }
-        let num = |c: usize| -> Option<f64> {
-            cells[c].parse::<f64>().ok().filter(|x| x.is_finite())
-        };
+        let num =
+            |c: usize| -> Option<f64> { cells[c].parse::<f64>().ok().filter(|x| x.is_finite()) };
         rows.push(FitsRow {
             run: cells[0].to_string(),
             material: cells[1].to_string(),
@@ -81,7 +83,8 @@ mod tests {
 
     #[test]
     fn reads_rows_and_rejects_another_header() {
-        let csv = format!("{HEADER}\nb,440c,-5e-2,1e-4,2.9e-1,,1.1e-1,4e-3,1e-2,1.1e-6,converged\n");
+        let csv =
+            format!("{HEADER}\nb,440c,-5e-2,1e-4,2.9e-1,,1.1e-1,4e-3,1e-2,1.1e-6,converged\n");
         let rows = parse(&csv).unwrap();
         assert_eq!(rows.len(), 1);
         assert_eq!((rows[0].v0_mps, rows[0].mu_se), (Some(-0.05), None));

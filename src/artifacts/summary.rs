@@ -3,7 +3,8 @@
 
 pub use crate::fit::bootstrap::Interval;
 pub use crate::fit::collision::summary::{
-    CollisionSummary, Interval as BootstrapValue, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
+    CollisionSummary, Interval as BootstrapValue, MuPp, RestitutionCurve, RestitutionPoint,
+    SpinPoint,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -44,7 +44,10 @@ fn impl_index(src: &Path) -> BTreeMap<String, Vec<PathBuf>> {
     let mut files = Vec::new();
     collect_files(src, &mut files);
     let mut index: BTreeMap<String, Vec<PathBuf>> = BTreeMap::new();
-    for f in files.into_iter().filter(|f| f.extension().is_some_and(|e| e == "rs")) {
+    for f in files
+        .into_iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "rs"))
+    {
         let text = without_tests(&fs::read_to_string(&f).unwrap_or_default());
         for line in text.lines() {
             if let Some(ty) = impl_target(line.trim_start()) {
@@ -80,7 +83,10 @@ fn impl_target(line: &str) -> Option<String> {
         .chars()
         .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
         .collect();
-    path.rsplit("::").next().filter(|n| !n.is_empty()).map(str::to_string)
+    path.rsplit("::")
+        .next()
+        .filter(|n| !n.is_empty())
+        .map(str::to_string)
 }
 
 /// The names of the structs, enums, unions, traits and type aliases a file defines.
@@ -198,9 +204,12 @@ fn children_dir(file: &Path) -> PathBuf {
 
 /// The file of module `name` whose parent keeps its children in `dir`.
 fn module_file(dir: &Path, name: &str) -> Option<PathBuf> {
-    [dir.join(format!("{name}.rs")), dir.join(name).join("mod.rs")]
-        .into_iter()
-        .find(|f| f.is_file())
+    [
+        dir.join(format!("{name}.rs")),
+        dir.join(name).join("mod.rs"),
+    ]
+    .into_iter()
+    .find(|f| f.is_file())
 }
 
 /// The file of the module whose children are in `dir` (not the crate root).

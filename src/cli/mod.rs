@@ -109,11 +109,15 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             if settings.read_only {
                 return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
             }
-            let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+            let cache =
+                std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
             let store = groove::engine::store::Store::at(&pipeline.root);
-            let lock = groove::engine::lockfile::PipelineLock::load(&groove::engine::context::lock_path(&pipeline));
+            let lock = groove::engine::lockfile::PipelineLock::load(
+                &groove::engine::context::lock_path(&pipeline),
+            );
             let keys = groove::engine::remote::sync::lock_keys(&lock);
-            let synced = groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
+            let synced =
+                groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
             println!(
                 "groove: push: {} keys in pipeline.lock, {} not in the local store",
                 synced.keys, synced.skipped
@@ -125,7 +129,8 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             let Some(settings) = remote_settings(&project, &remote)? else {
                 return Err(EngineError::Usage("no remote to pull from; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
             };
-            let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+            let cache =
+                std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
             let fresh = groove::engine::remote::sync::pull(&catalog, &pipeline, &cache)?;
             println!(
                 "groove: pull: {fresh} of {} stages now have every result in the local store",

@@ -8,16 +8,16 @@
 //! milliseconds after impacts (an F ratio of the mean squared whitened residual against the rest
 //! of the run) points at the impact model itself (restitution law, spin transfer).
 
+use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
+use super::holm::holm;
 use crate::artifacts::diagnosis::Effect;
 use crate::fit::collision::lm::Termination;
 use crate::fit::collision::wholerun::{
     fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, TP, T_KICK,
 };
-use super::holm::holm;
-use crate::stats::dist::{chi2_sf, normal_sf};
 use crate::physics::{simulate_pair, Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
-use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
+use crate::stats::dist::{chi2_sf, normal_sf};
 use std::collections::BTreeMap;
 
 /// Significance of both tests.
@@ -114,7 +114,9 @@ fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ((f64, usize), (f64, usi
         let traj = simulate_pair(&model, &pair, run.init(own), &rel);
         for p in 0..2 {
             for &(i, zd) in &run.samples[p] {
-                let u = ((traj.particles[p].z_m[i] - zd) / run.sigma_m).powi(2).min(100.0);
+                let u = ((traj.particles[p].z_m[i] - zd) / run.sigma_m)
+                    .powi(2)
+                    .min(100.0);
                 let close = traj
                     .impacts
                     .iter()
@@ -206,7 +208,17 @@ pub fn check_pairs(
         let p_impact = normal_sf(z);
         let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
         let sigma = runs.iter().map(|r| r.sigma_m).sum::<f64>() / runs.len() as f64;
-        drafts.push((material.clone(), (runs.len(), n_pts, sigma), free, held, lr, p, ratio, p_impact, n_near));
+        drafts.push((
+            material.clone(),
+            (runs.len(), n_pts, sigma),
+            free,
+            held,
+            lr,
+            p,
+            ratio,
+            p_impact,
+            n_near,
+        ));
     }
     let p_phys = holm(&drafts.iter().map(|d| d.5).collect::<Vec<_>>());
     let p_imp = holm(&drafts.iter().map(|d| d.7).collect::<Vec<_>>());
@@ -226,7 +238,10 @@ pub fn check_pairs(
         );
         parameters.insert(
             "t0_s_pairs".to_string(),
-            v(sh[LN_T0].exp(), sh[LN_T0].exp() * free.result.shared_se(LN_T0)),
+            v(
+                sh[LN_T0].exp(),
+                sh[LN_T0].exp() * free.result.shared_se(LN_T0),
+            ),
         );
         parameters.insert(
             "tp_s_per_mps_pairs".to_string(),
@@ -237,7 +252,10 @@ pub fn check_pairs(
         where_.insert("experiment".to_string(), serde_json::json!("collision"));
         where_.insert("material".to_string(), serde_json::json!(material));
         where_.insert("n_runs".to_string(), serde_json::json!(n_runs));
-        where_.insert("deviance_gain".to_string(), serde_json::json!(held.cost() - free.cost()));
+        where_.insert(
+            "deviance_gain".to_string(),
+            serde_json::json!(held.cost() - free.cost()),
+        );
         where_.insert(
             "rms_noise_held".to_string(),
             serde_json::json!((held.cost() / n_pts.max(1) as f64).sqrt()),
@@ -290,8 +308,14 @@ pub fn check_pairs(
         let mut where_ = BTreeMap::new();
         where_.insert("experiment".to_string(), serde_json::json!("collision"));
         where_.insert("material".to_string(), serde_json::json!(material));
-        where_.insert("window_after_impact_s".to_string(), serde_json::json!(IMPACT_WINDOW_S));
-        where_.insert("samples_after_impacts".to_string(), serde_json::json!(n_near));
+        where_.insert(
+            "window_after_impact_s".to_string(),
+            serde_json::json!(IMPACT_WINDOW_S),
+        );
+        where_.insert(
+            "samples_after_impacts".to_string(),
+            serde_json::json!(n_near),
+        );
         let mut parameters = BTreeMap::new();
         parameters.insert(
             "mean_square_ratio".to_string(),
@@ -363,9 +387,11 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
     let (findings, more) = check_pairs(recordings, &physics, groove, 80);
     diagnosis.findings.extend(findings);
     notes.extend(more);
-    if diagnosis.findings.iter().any(|f| {
-        f.accepted && f.where_.get("experiment") == Some(&serde_json::json!("collision"))
-    }) {
+    if diagnosis
+        .findings
+        .iter()
+        .any(|f| f.accepted && f.where_.get("experiment") == Some(&serde_json::json!("collision")))
+    {
         diagnosis.mismatch = true;
     }
     for n in notes {

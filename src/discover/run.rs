@@ -6,13 +6,13 @@ use super::data::{prepare_runs, RunData};
 use super::diagnosis::{
     CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ModelScore, Settings,
 };
+use super::drift::line;
 use super::forward::{finding, fold_of, median_speed, run_round, Model};
 use super::locate::locate;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::residual_structure::Structure;
 use super::Options;
 use crate::recording::Recording;
-use super::drift::line;
 use serde_json::json;
 use std::collections::BTreeMap;
 

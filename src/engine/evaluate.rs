@@ -196,7 +196,13 @@ fn bind_inputs(
                 match upstream {
                     Some(up) => {
                         let stored = up.outputs[output].clone();
-                        bound.insert(name.clone(), Bound { stored, source: Source::Store });
+                        bound.insert(
+                            name.clone(),
+                            Bound {
+                                stored,
+                                source: Source::Store,
+                            },
+                        );
                     }
                     None => {
                         waiting.insert(stage.clone());
@@ -458,7 +464,13 @@ fn write_or_check_outputs(
 }
 
 /// The progress line of a stage that was run or reused.
-fn report_finished(ctx: &Context, spec: &StageSpec, started: Instant, executed: usize, total: usize) {
+fn report_finished(
+    ctx: &Context,
+    spec: &StageSpec,
+    started: Instant,
+    executed: usize,
+    total: usize,
+) {
     let secs = started.elapsed().as_secs_f64();
     let what = match executed {
         0 => format!("reused ({secs:.2} s)"),

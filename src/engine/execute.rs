@@ -2,8 +2,8 @@
 //! declared output was produced, store the outputs and commit the entry.
 
 use super::command;
-use super::error::EngineError;
 use super::context::Context;
+use super::error::EngineError;
 use super::hashing::sha256_hex;
 use super::inputs::load_path;
 use super::pipeline::StageSpec;

@@ -49,7 +49,10 @@ fn note_skipped(dir: &Path, name: &str) {
     static SAID: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
         std::sync::Mutex::new(std::collections::BTreeSet::new());
     let path = dir.join(name);
-    let fresh = SAID.lock().map(|mut s| s.insert(path.clone())).unwrap_or(false);
+    let fresh = SAID
+        .lock()
+        .map(|mut s| s.insert(path.clone()))
+        .unwrap_or(false);
     if fresh {
         eprintln!(
             "groove: note: {} is not read (file names in an input folder may use only letters, digits, `.`, `_` and `-`; rename it to use it)",

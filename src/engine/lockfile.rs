@@ -3,8 +3,8 @@
 //! Deterministic (sorted maps, no times, no paths outside the project) so that it only changes
 //! when a result changes, and written by rename so an interrupted run never leaves half a file.
 
-use super::error::EngineError;
 use super::atomic::write_atomic;
+use super::error::EngineError;
 use super::store::Stored;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

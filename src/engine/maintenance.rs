@@ -1,7 +1,7 @@
 //! `groove clean` and `groove gc`: emptying the store, or dropping entries the lock no longer names.
 
-use super::error::{EngineError, IoContext};
 use super::context::lock_path;
+use super::error::{EngineError, IoContext};
 use super::lockfile::PipelineLock;
 use super::pipeline::Pipeline;
 use super::project_lock;

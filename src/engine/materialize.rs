@@ -4,10 +4,10 @@
 //! only when all are staged are they swapped in, a file by one rename, a collection by two; a run
 //! with a failed stage stages nothing, so the last good outputs stay whole.
 
+use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
 use super::hashing::HashCache;
 use super::inputs::dir_files;
-use super::atomic::unique_name;
 use super::store::{Store, Stored};
 use std::path::Path;
 
@@ -134,7 +134,10 @@ pub fn check_no_symlink_below(base: &Path, path: &Path) -> Result<(), EngineErro
     let parts: Vec<_> = rel.components().collect();
     for part in parts.iter().take(parts.len().saturating_sub(1)) {
         at.push(part);
-        if at.symlink_metadata().is_ok_and(|m| m.file_type().is_symlink()) {
+        if at
+            .symlink_metadata()
+            .is_ok_and(|m| m.file_type().is_symlink())
+        {
             return Err(EngineError::Usage(format!(
                 "{} is a symbolic link; groove does not write through links inside the project (the output {} could land outside it): replace the link with a folder",
                 at.display(),

@@ -1,8 +1,8 @@
 //! The `engine:provenance` input: a JSON record of the code, the seed, every data input's hash
 //! and every upstream stage's key. Sorted and free of times, so it changes only when they do.
 
-use super::dag;
 use super::context::{Context, Evaluated};
+use super::dag;
 use super::inputs::hash_path;
 use super::pipeline::{InputSpec, StageSpec};
 use super::store::Stored;

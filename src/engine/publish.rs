@@ -5,14 +5,14 @@
 //! listing each file's sha256. Files come from the store, not from the working copy, so what
 //! is published is exactly what the lock describes.
 
+use super::atomic::unique_name;
 use super::catalog::Catalog;
-use super::error::{EngineError, IoContext};
 use super::context::lock_path;
+use super::error::{EngineError, IoContext};
 use super::hashing::sha256_hex;
 use super::lockfile::PipelineLock;
 use super::pipeline::Pipeline;
 use super::status::{status, StageStatus, State};
-use super::atomic::unique_name;
 use super::store::{Store, Stored};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

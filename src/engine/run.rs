@@ -1,9 +1,9 @@
 //! `groove run`: take the project lock, run what is stale, write outputs, update `pipeline.lock`.
 
 use super::catalog::Catalog;
+use super::context::{lock_path, Context};
 use super::dag;
 use super::error::{EngineError, IoContext};
-use super::context::{lock_path, Context};
 use super::evaluate::{evaluate, Action};
 use super::pipeline::Pipeline;
 use super::progress::Progress;

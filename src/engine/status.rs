@@ -1,9 +1,9 @@
 //! `groove status`: every stage fresh or stale, with the reasons.
 
 use super::catalog::Catalog;
+use super::context::{Context, Evaluated};
 use super::dag;
 use super::error::EngineError;
-use super::context::{Context, Evaluated};
 use super::evaluate::{evaluate, Action};
 use super::pipeline::Pipeline;
 use super::progress::Progress;

@@ -36,4 +36,3 @@ pub use single::{fit_single, SingleFit};
 pub use status::Termination;
 
 pub use crate::artifacts::run_fit::RunFit;
-

@@ -57,7 +57,11 @@ pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         let m = v.len();
-        if m % 2 == 1 { v[m / 2] } else { 0.5 * (v[m / 2 - 1] + v[m / 2]) }
+        if m % 2 == 1 {
+            v[m / 2]
+        } else {
+            0.5 * (v[m / 2 - 1] + v[m / 2])
+        }
     };
     let mid = median(ok.iter().map(|&i| y[i]).collect());
     let mad = 1.4826 * median(ok.iter().map(|&i| (y[i] - mid).abs()).collect());
@@ -113,6 +117,9 @@ mod tests {
         assert!((robust - 0.30).abs() < 0.01, "{robust}");
         // without a wild run it is the ordinary weighted mean
         let calm = robust_weighted_mean(&y[..9], &se[..9], &idx[..9]);
-        assert!((calm - weighted_mean(&y[..9], &se[..9], &idx[..9])).abs() < 2e-3, "{calm}");
+        assert!(
+            (calm - weighted_mean(&y[..9], &se[..9], &idx[..9])).abs() < 2e-3,
+            "{calm}"
+        );
     }
 }

@@ -17,7 +17,6 @@ pub const POSITION_BINS: usize = 10;
 
 pub use crate::artifacts::comparison::{Bin, Comparison, GroupStats};
 
-
 /// Running sums of one group; `last` marks where the current stretch of a run stopped.
 #[derive(Default, Clone)]
 struct Acc {

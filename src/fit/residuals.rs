@@ -10,7 +10,6 @@ use crate::recording::Recording;
 
 pub use crate::artifacts::residuals::{Phase, RunResiduals};
 
-
 impl From<physics::Phase> for Phase {
     fn from(p: physics::Phase) -> Phase {
         match p {
@@ -20,8 +19,6 @@ impl From<physics::Phase> for Phase {
         }
     }
 }
-
-
 
 impl RunResiduals {
     fn empty(rec: &Recording, status: String) -> RunResiduals {

@@ -3,8 +3,8 @@
 
 use super::lm::Workspace;
 use super::model::{Prepared, MU, NP, T0, TD, V0, Z0};
-use super::quality::{early_speed, suspect_reasons};
 use super::options::FitOptions;
+use super::quality::{early_speed, suspect_reasons};
 use super::robust::fit_robust;
 use super::segment::{model_bounds, settings};
 use super::start::single_start;
@@ -14,7 +14,6 @@ use crate::physics::Groove;
 use crate::recording::Recording;
 
 pub use crate::artifacts::run_fit::SingleFit;
-
 
 /// Fit particle 0 of a single run.
 pub fn fit_single(rec: &Recording, opts: &FitOptions) -> SingleFit {
@@ -117,7 +116,11 @@ pub fn fit_track(
         iterations: r.iterations,
         termination: r.termination,
         status,
-        suspect: if r.termination.is_converged() { why } else { Vec::new() },
+        suspect: if r.termination.is_converged() {
+            why
+        } else {
+            Vec::new()
+        },
         restarted,
     }
 }

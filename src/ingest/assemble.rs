@@ -2,8 +2,8 @@
 //! assembly of checked samples into one `Recording` per run, sorted by run, particle and frame.
 
 use super::error::Problem;
-use super::sanity;
 use super::samples::{RunRow, Sample, SampleFile};
+use super::sanity;
 use crate::recording::{Experiment, Recording, Track};
 use std::collections::{BTreeMap, BTreeSet};
 

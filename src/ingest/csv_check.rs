@@ -15,11 +15,12 @@ pub fn check(file: &str, bytes: &[u8]) -> Result<(), Problem> {
     let names = header_names(bytes, header);
     if let Err(e) = std::str::from_utf8(bytes) {
         let at = e.valid_up_to();
-        let row = rows
+        let row = rows.iter().find(|r| at < r.end).unwrap_or(header);
+        let field = row
+            .fields
             .iter()
-            .find(|r| at < r.end)
-            .unwrap_or(header);
-        let field = row.fields.iter().position(|&(_, end)| at < end).unwrap_or(0);
+            .position(|&(_, end)| at < end)
+            .unwrap_or(0);
         let column = names
             .get(field)
             .filter(|n| !n.is_empty())

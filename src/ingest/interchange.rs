@@ -1,8 +1,8 @@
 //! Reads the interchange format of data-format.md: runs.csv and trajectories.csv (or `.parquet`).
 
 use super::error::Problem;
-use super::sanity;
 use super::samples::{RunRow, Sample, SampleFile};
+use super::sanity;
 use super::table::{Col, Table};
 use crate::recording::{Experiment, RunInfo, Setup};
 use std::collections::BTreeMap;

@@ -148,7 +148,8 @@ fn row(table: &Table, i: usize, run: &str) -> Result<RunEntry, Problem> {
         if table.text(column, i).is_none() {
             return Ok(None);
         }
-        let fix = format!("write {what}, a positive number, or leave it empty to use the calibration");
+        let fix =
+            format!("write {what}, a positive number, or leave it empty to use the calibration");
         let x = table.float(column, i, &fix)?;
         if x <= 0.0 {
             return Err(table.problem(column, i, format!("{x} is not positive"), fix));

@@ -104,19 +104,17 @@ pub fn ingest(
         .into_iter()
         .filter(|n| !by_run.contains_key(&n.run))
         .collect();
-    skipped.extend(by_run
-        .into_iter()
-        .map(|(run, mut ps)| {
-            ps.sort();
-            let more = match ps.len() {
-                1 => String::new(),
-                n => format!(" (and {} more problems)", n - 1),
-            };
-            Skipped {
-                run,
-                reason: format!("{}{more}", ps[0]),
-            }
-        }));
+    skipped.extend(by_run.into_iter().map(|(run, mut ps)| {
+        ps.sort();
+        let more = match ps.len() {
+            1 => String::new(),
+            n => format!(" (and {} more problems)", n - 1),
+        };
+        Skipped {
+            run,
+            reason: format!("{}{more}", ps[0]),
+        }
+    }));
     skipped.sort();
     Ok(Ingested {
         recordings,
@@ -325,7 +323,11 @@ fn check_manifest_files(
 ) {
     let held: BTreeMap<&str, &str> = spot_files
         .iter()
-        .flat_map(|f| f.runs.iter().map(move |r| (r.run.as_str(), f.file.as_str())))
+        .flat_map(|f| {
+            f.runs
+                .iter()
+                .map(move |r| (r.run.as_str(), f.file.as_str()))
+        })
         .collect();
     for e in &m.entries {
         if held.contains_key(e.values.run.as_str()) {

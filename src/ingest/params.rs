@@ -167,7 +167,10 @@ impl IngestParams {
         }
         let plausible = [
             ("calibration.fps", c.fps.map(super::sanity::fps)),
-            ("calibration.diameter_m", c.diameter_m.map(super::sanity::diameter)),
+            (
+                "calibration.diameter_m",
+                c.diameter_m.map(super::sanity::diameter),
+            ),
         ];
         for (key, verdict) in plausible {
             if let Some(Err((message, fix))) = verdict {

@@ -31,8 +31,13 @@ pub type Complaint = (String, String);
 pub fn fps(fps: f64) -> Result<(), Complaint> {
     if fps < FPS_MIN {
         return Err((
-            format!("{fps} frames per second is below {FPS_MIN}, too slow for a high-speed recording"),
-            format!("write the frame rate in frames per second (if {fps} is in kHz, write {})", fps * 1000.0),
+            format!(
+                "{fps} frames per second is below {FPS_MIN}, too slow for a high-speed recording"
+            ),
+            format!(
+                "write the frame rate in frames per second (if {fps} is in kHz, write {})",
+                fps * 1000.0
+            ),
         ));
     }
     if fps > FPS_MAX {
@@ -49,7 +54,10 @@ pub fn diameter(d: f64) -> Result<(), Complaint> {
     if d > DIAMETER_MAX_M {
         return Err((
             format!("a diameter of {d} m is above {DIAMETER_MAX_M} m"),
-            format!("write the diameter in metres (if {d} is in millimetres, write {:e})", d / 1000.0),
+            format!(
+                "write the diameter in metres (if {d} is in millimetres, write {:e})",
+                d / 1000.0
+            ),
         ));
     }
     if d < DIAMETER_MIN_M {

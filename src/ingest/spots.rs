@@ -194,7 +194,10 @@ pub fn calibrate(file: &SpotFile, rs: &RunSpots, meta: &RunMeta) -> Result<Calib
     for (id, ss) in &tracks {
         let mut frames = BTreeSet::new();
         if let Some(twice) = ss.iter().find(|s| !frames.insert(s.frame)) {
-            let first = ss.iter().find(|s| s.frame == twice.frame).map_or(0, |s| s.row);
+            let first = ss
+                .iter()
+                .find(|s| s.frame == twice.frame)
+                .map_or(0, |s| s.row);
             let fix = match rs.named_by_file {
                 true => "if the file holds several runs (videos), add a column `run` naming each row's run, or write one file per run (see README, Tracker exports); otherwise delete one of the two rows",
                 false => "check that each run's rows carry the right run id; otherwise delete one of the two rows",
@@ -290,7 +293,10 @@ pub fn calibrate(file: &SpotFile, rs: &RunSpots, meta: &RunMeta) -> Result<Calib
 /// longest track is taken whole; each shorter one (longest first, then lower id) adds its spots in
 /// frames not yet covered by an earlier track, and its other spots are left out as spurious (said
 /// in `notes`, one line per track).
-fn merge_fragments<'a>(tracks: &BTreeMap<i64, Vec<&'a Spot>>, notes: &mut Vec<String>) -> Vec<&'a Spot> {
+fn merge_fragments<'a>(
+    tracks: &BTreeMap<i64, Vec<&'a Spot>>,
+    notes: &mut Vec<String>,
+) -> Vec<&'a Spot> {
     let mut order: Vec<(i64, &Vec<&'a Spot>)> = tracks.iter().map(|(&id, ss)| (id, ss)).collect();
     order.sort_by_key(|&(id, ss)| (std::cmp::Reverse(ss.len()), id));
     let longest = order.first().map(|&(id, _)| id);
@@ -308,7 +314,10 @@ fn merge_fragments<'a>(tracks: &BTreeMap<i64, Vec<&'a Spot>>, notes: &mut Vec<St
             let hi = ss.iter().map(|s| s.frame).max().unwrap_or(0);
             let what = match fresh.len() {
                 0 => format!("track {id} ({} spots, frames {lo}–{hi}) left out", ss.len()),
-                n => format!("{dropped} of the {} spots of track {id} (frames {lo}–{hi}) left out, {n} kept", ss.len()),
+                n => format!(
+                    "{dropped} of the {} spots of track {id} (frames {lo}–{hi}) left out, {n} kept",
+                    ss.len()
+                ),
             };
             notes.push(format!(
                 "{what}: a longer track (track {}) already has a spot in those frames, so they are taken as spurious detections",

@@ -384,9 +384,15 @@ fn guarded<T>(read: impl FnOnce() -> PolarsResult<T>) -> Result<T, String> {
 /// structures, internal names) is left out rather than shown untranslated.
 fn parser_words(reason: &str) -> String {
     const WORDS: [(&str, &str); 9] = [
-        ("found more fields than defined", "a row has more fields than the header"),
+        (
+            "found more fields than defined",
+            "a row has more fields than the header",
+        ),
         ("invalid utf-8", "the text is not UTF-8"),
-        ("csv malformed", "the quoting or the field count is malformed"),
+        (
+            "csv malformed",
+            "the quoting or the field count is malformed",
+        ),
         ("out of spec", "the file does not follow the Parquet format"),
         ("thrift", "the file's metadata is damaged"),
         ("invalidoffset", "the file's metadata is damaged"),
@@ -408,7 +414,10 @@ mod tests {
 
     #[test]
     fn parser_wording_is_translated() {
-        assert_eq!(parser_words("CSV malformed: quote"), "the quoting or the field count is malformed");
+        assert_eq!(
+            parser_words("CSV malformed: quote"),
+            "the quoting or the field count is malformed"
+        );
         assert_eq!(
             parser_words("parquet error: Error { error_kind: InvalidOffset }"),
             "the file's metadata is damaged"

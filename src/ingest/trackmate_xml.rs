@@ -28,8 +28,8 @@ pub fn metres_per(unit: &str) -> Option<f64> {
     match unit.trim() {
         "m" | "meter" | "metre" | "meters" | "metres" => Some(1.0),
         "mm" | "millimeter" | "millimetre" | "millimeters" | "millimetres" => Some(1e-3),
-        "µm" | "μm" | "um" | "micron" | "microns" | "micrometer" | "micrometre"
-        | "micrometers" | "micrometres" => Some(1e-6),
+        "µm" | "μm" | "um" | "micron" | "microns" | "micrometer" | "micrometre" | "micrometers"
+        | "micrometres" => Some(1e-6),
         "nm" | "nanometer" | "nanometre" | "nanometers" | "nanometres" => Some(1e-9),
         _ => None,
     }
@@ -55,10 +55,7 @@ fn line_of(bytes: &[u8], offset: usize) -> usize {
 }
 
 /// The attributes of an element, unescaped, by name.
-fn attributes(
-    e: &BytesStart,
-    reader: &Reader<&[u8]>,
-) -> Result<BTreeMap<String, String>, String> {
+fn attributes(e: &BytesStart, reader: &Reader<&[u8]>) -> Result<BTreeMap<String, String>, String> {
     let mut out = BTreeMap::new();
     for a in e.attributes() {
         let a = a.map_err(|e| e.to_string())?;
@@ -86,7 +83,12 @@ struct RawSpot {
 /// Reads one TrackMate XML file into the spots of one run named after the file. Spots with
 /// problems are returned as problems of the run; tracks TrackMate's filters removed and spots it
 /// hid are left out and listed in the file's notes.
-pub fn read(file: &str, bytes: &[u8], axis: Axis, run: &str) -> Result<(SpotFile, Vec<Problem>), Problem> {
+pub fn read(
+    file: &str,
+    bytes: &[u8],
+    axis: Axis,
+    run: &str,
+) -> Result<(SpotFile, Vec<Problem>), Problem> {
     let mut reader = Reader::from_reader(bytes);
     let mut problems = Vec::new();
     let mut spots: Vec<RawSpot> = Vec::new();
@@ -136,7 +138,11 @@ pub fn read(file: &str, bytes: &[u8], axis: Axis, run: &str) -> Result<(SpotFile
         })?;
         let number = |key: &str| -> Result<f64, Problem> {
             let text = attrs.get(key).ok_or_else(|| {
-                bad(key, format!("the element has no {key} attribute"), "save the TrackMate file again from Fiji")
+                bad(
+                    key,
+                    format!("the element has no {key} attribute"),
+                    "save the TrackMate file again from Fiji",
+                )
             })?;
             match text.trim().parse::<f64>() {
                 Ok(x) if x.is_finite() => Ok(x),
@@ -150,7 +156,11 @@ pub fn read(file: &str, bytes: &[u8], axis: Axis, run: &str) -> Result<(SpotFile
         let whole = |key: &str| -> Result<i64, Problem> {
             let x = number(key)?;
             if x.fract() != 0.0 || x.abs() > 9.0e15 {
-                return Err(bad(key, format!("{x} is not a whole number"), "write a whole number"));
+                return Err(bad(
+                    key,
+                    format!("{x} is not a whole number"),
+                    "write a whole number",
+                ));
             }
             Ok(x as i64)
         };
@@ -160,7 +170,11 @@ pub fn read(file: &str, bytes: &[u8], axis: Axis, run: &str) -> Result<(SpotFile
                 spatial_units = attrs.get("spatialunits").cloned().unwrap_or_default();
                 time_units = attrs.get("timeunits").cloned().unwrap_or_default();
             }
-            b"ImageData" => interval = attrs.get("timeinterval").and_then(|t| t.trim().parse().ok()),
+            b"ImageData" => {
+                interval = attrs
+                    .get("timeinterval")
+                    .and_then(|t| t.trim().parse().ok())
+            }
             b"Spot" => {
                 let spot = (|| {
                     Ok::<RawSpot, Problem>(RawSpot {

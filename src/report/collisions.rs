@@ -1,7 +1,9 @@
 //! Collision-run fits read from the per-run fit JSON: impacts (pre/post velocities and spins) and the
 //! fitted motion segments of each particle.
 
-use crate::artifacts::collision_fit::{CollisionFit, Contact, Estimate, ImpactFit, PhaseKind, SegmentFit};
+use crate::artifacts::collision_fit::{
+    CollisionFit, Contact, Estimate, ImpactFit, PhaseKind, SegmentFit,
+};
 use crate::recording::Setup;
 
 /// One impact of a collision run.
@@ -200,7 +202,10 @@ mod tests {
         assert!(c.contact && c.usable());
         assert_eq!(c.status, "max_iterations");
         let i = &c.impacts[0];
-        assert_eq!((i.speed_mps, i.restitution, i.slip), (0.1, Some(0.7), Some(true)));
+        assert_eq!(
+            (i.speed_mps, i.restitution, i.slip),
+            (0.1, Some(0.7), Some(true))
+        );
         assert_eq!(i.dva_target_mps, None);
     }
 }

@@ -2,7 +2,9 @@
 
 use super::collisions::{self, CollisionRun};
 use super::singles::{self, SingleRow};
-use crate::artifacts::{self, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation};
+use crate::artifacts::{
+    self, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
+};
 use crate::recording::Recording;
 use std::collections::BTreeMap;
 
@@ -61,7 +63,13 @@ impl ReportData {
     /// The whole-run collision fits of summary.json as JSON (read by the whole-run section and
     /// the μ_pp profile figure; not yet through typed accessors).
     pub fn whole_run_json(&self) -> Option<serde_json::Value> {
-        let whole = self.summary.as_ref()?.collisions.as_ref()?.whole_run.as_ref()?;
+        let whole = self
+            .summary
+            .as_ref()?
+            .collisions
+            .as_ref()?
+            .whole_run
+            .as_ref()?;
         serde_json::to_value(whole).ok()
     }
 

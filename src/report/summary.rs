@@ -182,7 +182,11 @@ pub fn mu_pp_stick_lower_bound(d: &ReportData) -> Option<f64> {
 /// `collisions.restitution`: (a in C = 1 − a·v, its interval, impacts).
 pub fn restitution_curve(d: &ReportData, material: &str, contact: bool) -> Option<(Agg, usize)> {
     let list = &d.summary.as_ref()?.collisions.as_ref()?.restitution;
-    let setup = if contact { Setup::Contact } else { Setup::Rolling };
+    let setup = if contact {
+        Setup::Contact
+    } else {
+        Setup::Rolling
+    };
     let c = list
         .iter()
         .find(|c| c.material == material && c.setup.unwrap_or(Setup::Rolling) == setup)?;

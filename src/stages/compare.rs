@@ -1,11 +1,11 @@
 //! The `compare` stage kind: every run's residuals in, pooled residual statistics out (for discovery).
 
 use super::fit_io::{collection_input, json_pretty, parse_item};
+use crate::artifacts::RunResiduals;
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::residual_stats::compare;
-use crate::artifacts::RunResiduals;
 use serde::{Deserialize, Serialize};
 
 /// `kind = "compare"`.

@@ -1,9 +1,9 @@
 //! The `figures` stage kind: every report figure rendered to SVG, as a Collection by file name.
 
+use super::report::unpack;
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
-use super::report::unpack;
 use crate::report::{render_figures, FigureOptions, ReportData};
 
 /// Renders `fig_4_2b.svg`, `fig_4_2c.svg`, … from the runs, the fits and the aggregates.

@@ -2,7 +2,9 @@
 
 use crate::artifacts::diagnosis::{Diagnosis, Effect};
 use crate::artifacts::summary::Summary;
-use crate::artifacts::validation::{EffectCheck, MuPpCheck, ParameterCheck, TruthEffect, Validation};
+use crate::artifacts::validation::{
+    EffectCheck, MuPpCheck, ParameterCheck, TruthEffect, Validation,
+};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
@@ -85,7 +87,8 @@ fn json_input<T: serde::de::DeserializeOwned>(
             "input `{name}` is missing; bind it in pipeline.toml"
         ))
     })?;
-    crate::artifacts::from_json(&format!("input `{name}`"), file(artifact, name)?).map_err(StageError)
+    crate::artifacts::from_json(&format!("input `{name}`"), file(artifact, name)?)
+        .map_err(StageError)
 }
 
 /// The effect of `diagnosis.json` that a truth term belongs to (`None`: the baseline's own drag).

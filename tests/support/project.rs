@@ -51,7 +51,8 @@ impl Project {
     pub fn command(&self, args: &[&str]) -> Command {
         let mut c = Command::new(GROOVE);
         c.args(args).current_dir(self.dir.path());
-        c.env_remove("GROOVE_REMOTE").env_remove("GROOVE_REMOTE_READ_ONLY");
+        c.env_remove("GROOVE_REMOTE")
+            .env_remove("GROOVE_REMOTE_READ_ONLY");
         c
     }
 
@@ -87,7 +88,9 @@ pub fn files(dir: &Path, skip: &[&str]) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        let Ok(rd) = std::fs::read_dir(&d) else { continue };
+        let Ok(rd) = std::fs::read_dir(&d) else {
+            continue;
+        };
         for entry in rd {
             let path = entry.unwrap().path();
             let name = path.file_name().unwrap().to_string_lossy().into_owned();
@@ -108,7 +111,13 @@ pub fn files(dir: &Path, skip: &[&str]) -> Vec<PathBuf> {
 /// Assert two folders hold the same files with the same bytes.
 pub fn assert_same_tree(a: &Path, b: &Path) {
     let (fa, fb) = (files(a, &[]), files(b, &[]));
-    assert_eq!(fa, fb, "the file sets of {} and {} differ", a.display(), b.display());
+    assert_eq!(
+        fa,
+        fb,
+        "the file sets of {} and {} differ",
+        a.display(),
+        b.display()
+    );
     assert!(!fa.is_empty(), "{} is empty", a.display());
     for f in &fa {
         assert!(

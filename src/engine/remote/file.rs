@@ -90,13 +90,13 @@ impl Backend for FileRemote {
     fn put_if_absent(&self, name: &str, bytes: &[u8]) -> Result<bool, RemoteError> {
         let path = self.path(name);
         let staged = self.stage(bytes)?;
-        let linked = self
-            .parent_of(&path)
-            .and_then(|()| match std::fs::hard_link(&staged, &path) {
-                Ok(()) => Ok(true),
-                Err(e) if e.kind() == ErrorKind::AlreadyExists => Ok(false),
-                Err(e) => Err(self.io_error(&path, e)),
-            });
+        let linked =
+            self.parent_of(&path)
+                .and_then(|()| match std::fs::hard_link(&staged, &path) {
+                    Ok(()) => Ok(true),
+                    Err(e) if e.kind() == ErrorKind::AlreadyExists => Ok(false),
+                    Err(e) => Err(self.io_error(&path, e)),
+                });
         let _ = std::fs::remove_file(&staged);
         linked
     }
@@ -104,9 +104,9 @@ impl Backend for FileRemote {
     fn put_overwrite(&self, name: &str, bytes: &[u8]) -> Result<(), RemoteError> {
         let path = self.path(name);
         let staged = self.stage(bytes)?;
-        let moved = self.parent_of(&path).and_then(|()| {
-            std::fs::rename(&staged, &path).map_err(|e| self.io_error(&path, e))
-        });
+        let moved = self
+            .parent_of(&path)
+            .and_then(|()| std::fs::rename(&staged, &path).map_err(|e| self.io_error(&path, e)));
         if moved.is_err() {
             let _ = std::fs::remove_file(&staged);
         }

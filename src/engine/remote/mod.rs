@@ -11,9 +11,9 @@ pub mod backend;
 pub mod cache;
 pub mod file;
 pub mod push;
-pub mod settings;
 #[cfg(feature = "s3")]
 pub mod s3;
+pub mod settings;
 pub mod sync;
 
 pub use cache::{Mode, RemoteCache, Tally};

@@ -187,7 +187,9 @@ fn run_task(shared: &Shared, task: Task) {
             if !ok {
                 job.failed.store(true, Ordering::SeqCst);
             }
-            if job.blobs_left.fetch_sub(1, Ordering::SeqCst) == 1 && !job.failed.load(Ordering::SeqCst) {
+            if job.blobs_left.fetch_sub(1, Ordering::SeqCst) == 1
+                && !job.failed.load(Ordering::SeqCst)
+            {
                 push_task(shared, Task::Entry(job));
             }
         }
@@ -215,7 +217,11 @@ fn push_blob(shared: &Shared, sha: &str) -> bool {
     if !repair {
         match cache.backend.exists(&name) {
             Ok(true) => {
-                shared.present.lock().expect("present set").insert(sha.to_string());
+                shared
+                    .present
+                    .lock()
+                    .expect("present set")
+                    .insert(sha.to_string());
                 return true;
             }
             Ok(false) => {}
@@ -245,7 +251,11 @@ fn push_blob(shared: &Shared, sha: &str) -> bool {
             if repair {
                 cache.repair.lock().expect("repair lock").remove(sha);
             }
-            shared.present.lock().expect("present set").insert(sha.to_string());
+            shared
+                .present
+                .lock()
+                .expect("present set")
+                .insert(sha.to_string());
             true
         }
         Err(e) => {

@@ -37,7 +37,8 @@ impl S3Remote {
                 "remote `{url}` names no bucket; write s3://bucket/prefix"
             )));
         }
-        let region = env(&["AWS_REGION", "AWS_DEFAULT_REGION"]).unwrap_or_else(|| "us-east-1".into());
+        let region =
+            env(&["AWS_REGION", "AWS_DEFAULT_REGION"]).unwrap_or_else(|| "us-east-1".into());
         let (endpoint, style) = match env(&["AWS_ENDPOINT_URL", "AWS_ENDPOINT"]) {
             Some(e) => (e, UrlStyle::Path),
             None => (
@@ -51,12 +52,11 @@ impl S3Remote {
             ))
         })?;
         let bucket = Bucket::new(endpoint_url, style, name.to_string(), region).map_err(|e| {
-            EngineError::Usage(format!("remote `{url}`: {e}; check the bucket name and AWS_ENDPOINT_URL"))
+            EngineError::Usage(format!(
+                "remote `{url}`: {e}; check the bucket name and AWS_ENDPOINT_URL"
+            ))
         })?;
-        let credentials = match (
-            env(&["AWS_ACCESS_KEY_ID"]),
-            env(&["AWS_SECRET_ACCESS_KEY"]),
-        ) {
+        let credentials = match (env(&["AWS_ACCESS_KEY_ID"]), env(&["AWS_SECRET_ACCESS_KEY"])) {
             (Some(k), Some(s)) => Some(match env(&["AWS_SESSION_TOKEN"]) {
                 Some(t) => Credentials::new_with_token(k, s, t),
                 None => Credentials::new(k, s),
@@ -170,7 +170,11 @@ impl Backend for S3Remote {
             .bucket
             .put_object(self.credentials.as_ref(), &object)
             .sign(SIGN_FOR);
-        let resp = self.agent.put(url.as_str()).send(bytes).map_err(transport)?;
+        let resp = self
+            .agent
+            .put(url.as_str())
+            .send(bytes)
+            .map_err(transport)?;
         match resp.status().as_u16() {
             200 | 201 | 204 => Ok(()),
             s => Err(self.refused(s, "PUT")),

@@ -79,7 +79,9 @@ pub fn pull(
     let store_dir = pipeline.root.join(".groove");
     let progress = Progress::new(pipeline.stages.len() as u64, true);
     let _lock = crate::engine::project_lock::acquire(&store_dir, |holder| {
-        eprintln!("groove: another groove run holds this project ({holder}); waiting for it to finish")
+        eprintln!(
+            "groove: another groove run holds this project ({holder}); waiting for it to finish"
+        )
     })?;
     let mut ctx = Context::new(catalog, pipeline, progress);
     ctx.remote = Some(Arc::clone(cache));

@@ -16,7 +16,11 @@ use std::sync::Mutex;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum StepError {
     /// The step ran and failed: its exit code and the tail of its stderr.
-    Failed { job: String, code: i32, stderr: String },
+    Failed {
+        job: String,
+        code: i32,
+        stderr: String,
+    },
     /// The allocation is gone (cancelled, preempted, out of time).
     AllocationEnded { job: String, detail: String },
     /// Slurm's tools failed (not installed, no controller).
@@ -67,7 +71,13 @@ impl Allocations {
         if partition == default_partition {
             if let Ok(job) = std::env::var("SLURM_JOB_ID") {
                 if !job.is_empty() && std::env::var("SLURM_STEP_ID").is_err() {
-                    held.insert(partition.into(), Allocation { job: job.clone(), owned: false });
+                    held.insert(
+                        partition.into(),
+                        Allocation {
+                            job: job.clone(),
+                            owned: false,
+                        },
+                    );
                     return Ok(job);
                 }
             }
@@ -108,7 +118,13 @@ impl Allocations {
             )));
         };
         self.taken.fetch_add(1, Ordering::Relaxed);
-        held.insert(partition.into(), Allocation { job: job.clone(), owned: true });
+        held.insert(
+            partition.into(),
+            Allocation {
+                job: job.clone(),
+                owned: true,
+            },
+        );
         Ok(job)
     }
 
@@ -123,7 +139,12 @@ impl Allocations {
     }
 
     /// Run `argv` as one job step with `resources`; Ok when it exited 0.
-    pub fn run_step(&self, resources: &StepResources, name: &str, argv: &[String]) -> Result<(), StepError> {
+    pub fn run_step(
+        &self,
+        resources: &StepResources,
+        name: &str,
+        argv: &[String],
+    ) -> Result<(), StepError> {
         let partition = resources
             .partition
             .clone()
@@ -131,7 +152,10 @@ impl Allocations {
             .unwrap_or_default();
         let job = self.job_for(&partition)?;
         if self.ended.load(Ordering::Relaxed) {
-            return Err(StepError::AllocationEnded { job, detail: String::new() });
+            return Err(StepError::AllocationEnded {
+                job,
+                detail: String::new(),
+            });
         }
         let mut cmd = Command::new("srun");
         cmd.arg(format!("--jobid={job}"))
@@ -149,7 +173,9 @@ impl Allocations {
         cmd.args(argv).stdin(Stdio::null());
         self.steps.fetch_add(1, Ordering::Relaxed);
         let out = cmd.output().map_err(|e| {
-            StepError::Slurm(format!("cannot run srun ({e}); install Slurm's client tools or run with --executor local"))
+            StepError::Slurm(format!(
+                "cannot run srun ({e}); install Slurm's client tools or run with --executor local"
+            ))
         })?;
         if out.status.success() {
             return Ok(());
@@ -157,7 +183,10 @@ impl Allocations {
         let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
         if !Self::alive(&job) {
             self.ended.store(true, Ordering::Relaxed);
-            return Err(StepError::AllocationEnded { job, detail: tail(&stderr, 3) });
+            return Err(StepError::AllocationEnded {
+                job,
+                detail: tail(&stderr, 3),
+            });
         }
         Err(StepError::Failed {
             job,

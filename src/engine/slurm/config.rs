@@ -111,9 +111,8 @@ struct StageDoc {
 
 /// Read `[slurm]` and `[stages.*.slurm]` from the pipeline file. Errors name the line.
 pub fn load(config_path: &Path) -> Result<SlurmConfig, EngineError> {
-    let text = std::fs::read_to_string(config_path).map_err(|e| {
-        EngineError::Usage(format!("cannot read {}: {e}", config_path.display()))
-    })?;
+    let text = std::fs::read_to_string(config_path)
+        .map_err(|e| EngineError::Usage(format!("cannot read {}: {e}", config_path.display())))?;
     let file = Source::new(config_path, &text);
     let doc: Doc = toml::from_str(&text).map_err(|e| {
         let line = e.span().map(|s| file.line_of(s.start)).unwrap_or(1);

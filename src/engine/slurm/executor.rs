@@ -23,7 +23,9 @@ pub struct SlurmExecutor {
 impl SlurmExecutor {
     pub fn new(config: SlurmConfig) -> Result<SlurmExecutor, EngineError> {
         let program = std::env::current_exe().map_err(|e| {
-            EngineError::Usage(format!("cannot find the groove binary for the job steps: {e}"))
+            EngineError::Usage(format!(
+                "cannot find the groove binary for the job steps: {e}"
+            ))
         })?;
         Ok(SlurmExecutor {
             allocations: Allocations::new(config.allocation.clone()),
@@ -37,7 +39,12 @@ impl SlurmExecutor {
     }
 
     /// Run `job.units` as job steps (batched for per-item stages); one result per unit.
-    fn run_all(&self, store: &Store, job: &StepJob, per_item: bool) -> Vec<Result<Entry, EngineError>> {
+    fn run_all(
+        &self,
+        store: &Store,
+        job: &StepJob,
+        per_item: bool,
+    ) -> Vec<Result<Entry, EngineError>> {
         match self.try_run(store, job, per_item) {
             Ok(results) => results,
             Err(e) => job.units.iter().map(|_| Err(e_clone(&e))).collect(),
@@ -115,7 +122,11 @@ impl SlurmExecutor {
 /// The same error again (every unit of a stage whose steps could not run gets it).
 fn e_clone(e: &EngineError) -> EngineError {
     match e {
-        EngineError::StageFailed { stage, item, message } => EngineError::StageFailed {
+        EngineError::StageFailed {
+            stage,
+            item,
+            message,
+        } => EngineError::StageFailed {
             stage: stage.clone(),
             item: item.clone(),
             message: message.clone(),
@@ -144,7 +155,12 @@ fn step_error(stage: &str, e: StepError) -> EngineError {
 }
 
 impl StepRunner for SlurmExecutor {
-    fn run_units(&self, store: &Store, job: &StepJob, per_item: bool) -> Vec<Result<Entry, EngineError>> {
+    fn run_units(
+        &self,
+        store: &Store,
+        job: &StepJob,
+        per_item: bool,
+    ) -> Vec<Result<Entry, EngineError>> {
         self.run_all(store, job, per_item)
     }
 

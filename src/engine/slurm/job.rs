@@ -1,8 +1,8 @@
 //! What one job step is asked to do: a file the controller writes in the shared store's `tmp/`
 //! and `groove slurm-step FILE` reads on the compute node.
 
-use crate::engine::error::{EngineError, IoContext};
 use crate::engine::atomic::write_atomic;
+use crate::engine::error::{EngineError, IoContext};
 use crate::engine::store::{Entry, Store, Stored};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -38,7 +38,10 @@ pub struct StepJob {
 
 impl StepJob {
     pub fn write(&self, path: &Path) -> Result<(), EngineError> {
-        write_atomic(path, &serde_json::to_vec(self).expect("a step job serializes"))
+        write_atomic(
+            path,
+            &serde_json::to_vec(self).expect("a step job serializes"),
+        )
     }
 
     pub fn read(path: &Path) -> Result<StepJob, EngineError> {
@@ -57,7 +60,12 @@ impl StepJob {
 pub trait StepRunner: Send + Sync {
     /// Run every unit of `job` (which names the stage, its inputs and its keys), committing into
     /// `store`; one result per unit, in order. `per_item`: the units are items of one stage.
-    fn run_units(&self, store: &Store, job: &StepJob, per_item: bool) -> Vec<Result<Entry, EngineError>>;
+    fn run_units(
+        &self,
+        store: &Store,
+        job: &StepJob,
+        per_item: bool,
+    ) -> Vec<Result<Entry, EngineError>>;
     /// How many stages may run at once.
     fn slots(&self) -> usize;
     /// Give back what was taken (allocations) and say what was used.

@@ -8,8 +8,8 @@
 
 pub mod alloc;
 pub mod config;
-pub mod job;
 pub mod executor;
+pub mod job;
 pub mod worker;
 
 pub use executor::SlurmExecutor;

@@ -5,8 +5,8 @@
 use super::job::StepJob;
 use crate::engine::catalog::Catalog;
 use crate::engine::config::{self, Overrides};
-use crate::engine::error::EngineError;
 use crate::engine::context::Context;
+use crate::engine::error::EngineError;
 use crate::engine::execute::{execute, load_shared, Bound, Source};
 use crate::engine::progress::Progress;
 use rayon::prelude::*;
@@ -61,7 +61,16 @@ pub fn run_step(catalog: &Catalog, file: &Path) -> Result<usize, EngineError> {
             if ctx.store.entry(&u.key).is_some() {
                 return Ok(());
             }
-            execute(&ctx, spec, &bound, &shared, u.item.as_deref(), &u.key, job.seed).map(|_| ())
+            execute(
+                &ctx,
+                spec,
+                &bound,
+                &shared,
+                u.item.as_deref(),
+                &u.key,
+                job.seed,
+            )
+            .map(|_| ())
         })
         .collect();
     let mut done = 0;

@@ -156,9 +156,7 @@ pub fn minimize_blocks<P: BlockProblem>(
         .collect();
     let mut iterations = 0;
     let mut termination = Termination::MaxIterations;
-    let mut weights: Vec<Vec<f64>> = (0..nb)
-        .map(|b| vec![1.0; problem.n_residuals(b)])
-        .collect();
+    let mut weights: Vec<Vec<f64>> = (0..nb).map(|b| vec![1.0; problem.n_residuals(b)]).collect();
     for round in 0..opts.irls_rounds.max(1) {
         let rs: Vec<Vec<f64>> = (0..nb)
             .into_par_iter()
@@ -199,9 +197,8 @@ pub fn minimize_blocks<P: BlockProblem>(
                         .iter()
                         .enumerate()
                         .map(|(i, s)| {
-                            (!held(s) && problem.uses(b, i)).then(|| {
-                                fd_column(problem, b, &shared, &own[b], &r, s, (true, i))
-                            })
+                            (!held(s) && problem.uses(b, i))
+                                .then(|| fd_column(problem, b, &shared, &own[b], &r, s, (true, i)))
                         })
                         .collect();
                     BlockLin {
@@ -464,7 +461,11 @@ fn step(
         s[i][i] += lambda * vdiag[i].max(1e-30);
     }
     fix_shared(&mut s, &mut rhs, shared_specs);
-    let ds = if ms > 0 { solve_spd(&s, &rhs)? } else { Vec::new() };
+    let ds = if ms > 0 {
+        solve_spd(&s, &rhs)?
+    } else {
+        Vec::new()
+    };
     let dos = uinv_parts
         .iter()
         .map(|(_, ug, uw)| {
@@ -502,7 +503,13 @@ fn covariance(
             })
             .collect();
         let Some(uinv) = uinv else {
-            return (vec![vec![f64::NAN; ms]; ms], own_specs.iter().map(|sp| vec![f64::NAN; sp.len()]).collect());
+            return (
+                vec![vec![f64::NAN; ms]; ms],
+                own_specs
+                    .iter()
+                    .map(|sp| vec![f64::NAN; sp.len()])
+                    .collect(),
+            );
         };
         let uw: Vec<Vec<f64>> = (0..ms)
             .map(|j| {

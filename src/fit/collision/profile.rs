@@ -45,7 +45,9 @@ pub struct MuPpProfile {
 
 /// The grid: log-spaced from 0.05 to 5 (13 values).
 pub fn default_grid() -> Vec<f64> {
-    (0..=12).map(|i| 0.05 * 10f64.powf(i as f64 / 6.0)).collect()
+    (0..=12)
+        .map(|i| 0.05 * 10f64.powf(i as f64 / 6.0))
+        .collect()
 }
 
 /// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
@@ -97,7 +99,11 @@ pub fn profile_mu_pp(
             let mu = mu_best * (k * h).exp();
             let from = if k.abs() > 1.5 {
                 fits.iter()
-                    .min_by(|a, b| (a.0.ln() - mu.ln()).abs().total_cmp(&(b.0.ln() - mu.ln()).abs()))
+                    .min_by(|a, b| {
+                        (a.0.ln() - mu.ln())
+                            .abs()
+                            .total_cmp(&(b.0.ln() - mu.ln()).abs())
+                    })
                     .map(|f| f.1.clone())
                     .unwrap_or_else(|| best.clone())
             } else {
@@ -122,10 +128,7 @@ pub fn profile_mu_pp(
         }
     }
     fits.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let c_min = fits
-        .iter()
-        .map(|f| f.1.cost())
-        .fold(best.cost(), f64::min);
+    let c_min = fits.iter().map(|f| f.1.cost()).fold(best.cost(), f64::min);
     let points: Vec<ProfilePoint> = fits
         .iter()
         .map(|(mu_pp, f)| ProfilePoint {
@@ -162,10 +165,7 @@ pub fn verdict(points: &[ProfilePoint], estimate: f64, delta: f64) -> ProfileVer
         .collect();
     all.push((estimate.ln(), 0.0));
     all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let c = all
-        .iter()
-        .position(|p| p.0 == estimate.ln())
-        .unwrap_or(0);
+    let c = all.iter().position(|p| p.0 == estimate.ln()).unwrap_or(0);
     // the signed root of the deviance is linear in the parameter near a quadratic minimum
     let cross = |a: (f64, f64), b: (f64, f64)| {
         let (ra, rb) = (a.1.max(0.0).sqrt(), b.1.max(0.0).sqrt());

@@ -87,7 +87,14 @@ pub fn choose_law(
                 shared[ia] = 0.95;
             }
         }
-        let all = fit_group_with(&sub, &spec, &shared, Some(own_sub.as_slice()), &free, max_iter);
+        let all = fit_group_with(
+            &sub,
+            &spec,
+            &shared,
+            Some(own_sub.as_slice()),
+            &free,
+            max_iter,
+        );
         let cov = &all.result.shared_cov;
         let se = |i: usize| cov[i][i].max(0.0).sqrt();
         let (a, b) = (all.result.shared[ia], all.result.shared[ib]);

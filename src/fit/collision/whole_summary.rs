@@ -7,7 +7,7 @@ use super::profile::{default_grid, profile_mu_pp, MuPpProfile, ProfileVerdict};
 use super::restitution_law::{choose_law, with_chosen, LawChoice};
 use super::types::Estimate;
 use super::wholerun::{
-    fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, T_KICK, TP, V0,
+    fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK, V0,
 };
 use crate::physics::{simulate_pair, Groove, Phase};
 use crate::recording::{Experiment, Recording, Setup};
@@ -133,7 +133,10 @@ pub fn analyze(recs: &[Recording], groove: Groove, opts: &WholeRunOptions) -> Wh
                 .entry(rec.info.material.clone())
                 .or_default()
                 .push(run),
-            Err(e) => notes.push(format!("{} left out of the whole-run fit: {e}", rec.info.run)),
+            Err(e) => notes.push(format!(
+                "{} left out of the whole-run fit: {e}",
+                rec.info.run
+            )),
         }
     }
     let materials = by_material

@@ -13,7 +13,9 @@ use super::blocks::{minimize_blocks, BlockOptions, BlockProblem, BlockResult};
 use super::detect::{median, noise_scale_m, robust_line};
 use super::lm::ParamSpec;
 use super::model::TrackData;
-use crate::physics::{simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term};
+use crate::physics::{
+    simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term,
+};
 use crate::recording::{Recording, Setup};
 use serde::{Deserialize, Serialize};
 
@@ -494,7 +496,11 @@ pub fn fit_group_with(
             if free(i) {
                 s
             } else {
-                let x = if s.lower == s.upper { s.start } else { shared[i] };
+                let x = if s.lower == s.upper {
+                    s.start
+                } else {
+                    shared[i]
+                };
                 ParamSpec {
                     start: x,
                     lower: x,

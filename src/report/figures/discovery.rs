@@ -2,8 +2,8 @@
 //! drift (fitted T against |v0|) before and after the accepted physics, when diagnosis.json has it.
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
-use crate::report::style::{self, Marker};
 use crate::artifacts::diagnosis::{Diagnosis, DriftPoint};
+use crate::report::style::{self, Marker};
 use plotters::prelude::*;
 
 fn finite(x: f64) -> Option<f64> {

@@ -14,10 +14,7 @@ pub const CLIP: f64 = 12.0;
 /// (material, [(μ_pp, deviance)], threshold) of each material with a profile.
 pub fn profiles(d: &ReportData) -> Vec<(String, Vec<(f64, f64)>, f64)> {
     let whole = d.whole_run_json();
-    let Some(mats) = whole
-        .as_ref()
-        .and_then(|w| w.get("materials")?.as_array())
-    else {
+    let Some(mats) = whole.as_ref().and_then(|w| w.get("materials")?.as_array()) else {
         return Vec::new();
     };
     mats.iter()
@@ -43,7 +40,9 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
         return Ok(None);
     }
     let xs = profs.iter().flat_map(|p| p.1.iter().map(|q| q.0.log10()));
-    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| (a.0.min(x), a.1.max(x)));
+    let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| {
+        (a.0.min(x), a.1.max(x))
+    });
     let xr = (lo - 0.05, hi + 0.05);
     let yr = (0.0, CLIP * 1.05);
     let svg = render(|root| {
@@ -65,9 +64,23 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             scatter(&mut c, &p, style::marker(m, false), col, true, Some(m))?;
         }
         let thr = profs[0].2.sqrt();
-        line(&mut c, vec![(xr.0, thr), (xr.1, thr)], style::GREY, 1, true, Some("95 % level"))?;
+        line(
+            &mut c,
+            vec![(xr.0, thr), (xr.1, thr)],
+            style::GREY,
+            1,
+            true,
+            Some("95 % level"),
+        )?;
         let ch = chapter::MU_PP.log10();
-        line(&mut c, vec![(ch, 0.0), (ch, yr.1)], style::BLACK, 1, true, Some("chapter 1.4"))?;
+        line(
+            &mut c,
+            vec![(ch, 0.0), (ch, yr.1)],
+            style::BLACK,
+            1,
+            true,
+            Some("chapter 1.4"),
+        )?;
         legend(&mut c, SeriesLabelPosition::UpperRight)?;
         Ok(())
     })?;

@@ -2,12 +2,12 @@
 //! physics, before/after figures, and a comparison with the chapter's own correction (Eq. 4.8).
 
 use super::{Block, Table};
-use crate::report::chapter as ch;
-use crate::report::inputs::ReportData;
 use crate::artifacts::diagnosis::{
     CandidateRow, Diagnosis, Effect, Estimate, Evidence, Finding, Structure,
 };
 use crate::artifacts::validation::Validation;
+use crate::report::chapter as ch;
+use crate::report::inputs::ReportData;
 use crate::report::value::{as_num, sig};
 use serde::Deserialize;
 use serde_json::Value;
@@ -85,7 +85,13 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
     let truth_names: Vec<String> = effects
         .truth
         .iter()
-        .map(|t| format!("{} ({})", t.effect.id().replace('_', " "), short(&t.term, 6)))
+        .map(|t| {
+            format!(
+                "{} ({})",
+                t.effect.id().replace('_', " "),
+                short(&t.term, 6)
+            )
+        })
         .collect();
     let list = |v: Vec<String>| {
         if v.is_empty() {
@@ -349,10 +355,7 @@ fn where_text(w: &BTreeMap<String, Value>) -> String {
         ("drift_probes_before", "before"),
         ("drift_probes_after", "after"),
     ] {
-        let Some(list) = w
-            .get(key)
-            .and_then(|l| Vec::<Probe>::deserialize(l).ok())
-        else {
+        let Some(list) = w.get(key).and_then(|l| Vec::<Probe>::deserialize(l).ok()) else {
             continue;
         };
         let probes: Vec<String> = list
@@ -480,8 +483,11 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     } else {
         diag.candidates.iter().map(CandidateView::from).collect()
     };
-    let baseline_cv = finite(diag.baseline_model.cv_rms_m)
-        .or_else(|| diag.findings.iter().find_map(|f| finite(f.baseline.cv_rms_m)));
+    let baseline_cv = finite(diag.baseline_model.cv_rms_m).or_else(|| {
+        diag.findings
+            .iter()
+            .find_map(|f| finite(f.baseline.cv_rms_m))
+    });
     let caption = match baseline_cv {
         Some(cv) => format!(
             "Every candidate tested: evidence and fitted size (baseline held-out RMS {:.3} µm)",
@@ -522,7 +528,10 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             "No candidate term was accepted."
         });
     } else {
-        let names: Vec<String> = accepted.iter().map(|f| f.effect.replace('_', " ")).collect();
+        let names: Vec<String> = accepted
+            .iter()
+            .map(|f| f.effect.replace('_', " "))
+            .collect();
         b.para(format!("Accepted physics: {}.", names.join(", ")));
     }
     if !t.rows.is_empty() {

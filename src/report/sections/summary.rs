@@ -1,10 +1,10 @@
 //! Section 1: what was analysed, the key parameters with uncertainties, and what discovery found.
 
 use super::{Block, Table};
+use crate::artifacts::Diagnosis;
 use crate::physics::Groove;
 use crate::report::inputs::ReportData;
 use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
-use crate::artifacts::Diagnosis;
 use crate::report::value::pm;
 
 /// `value ± se [lo, hi]` of an aggregate.

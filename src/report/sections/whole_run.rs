@@ -53,10 +53,7 @@ fn fmt_param(p: &Value) -> String {
 pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let whole = d.whole_run_json()?;
     let mats = whole.get("materials")?.as_array()?;
-    let mut b = Block::new(
-        "whole-run",
-        "3.5.1 μ_pp and restitution from whole runs",
-    );
+    let mut b = Block::new("whole-run", "3.5.1 μ_pp and restitution from whole runs");
     b.para(
         "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag v/(T0 + T'|v|), μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the runs' dispersion (how much more the runs disagree than their noise says).",
     );
@@ -67,7 +64,17 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     );
     let mut t = Table::new(
         "Whole-run fits per material",
-        &["material", "runs", "status (iterations)", "μ_pp (best fit)", "μ_pg", "T0 (s)", "T' (s per m/s)", "RMS / noise", "run dispersion"],
+        &[
+            "material",
+            "runs",
+            "status (iterations)",
+            "μ_pp (best fit)",
+            "μ_pg",
+            "T0 (s)",
+            "T' (s per m/s)",
+            "RMS / noise",
+            "run dispersion",
+        ],
     );
     for m in mats {
         let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
@@ -84,10 +91,16 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         };
         t.push(vec![
             name.to_string(),
-            m.get("n_runs").and_then(Value::as_u64).unwrap_or(0).to_string(),
+            m.get("n_runs")
+                .and_then(Value::as_u64)
+                .unwrap_or(0)
+                .to_string(),
             format!(
                 "{} ({})",
-                m.get("status").and_then(Value::as_str).unwrap_or("?").replace('_', " "),
+                m.get("status")
+                    .and_then(Value::as_str)
+                    .unwrap_or("?")
+                    .replace('_', " "),
                 m.get("iterations").and_then(Value::as_u64).unwrap_or(0)
             ),
             est("mu_pp"),
@@ -97,13 +110,20 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             format!("{:.3}", num(m, "rms_noise").unwrap_or(f64::NAN)),
             format!(
                 "{:.2}",
-                m.get("profile").and_then(|p| num(p, "dispersion")).unwrap_or(f64::NAN)
+                m.get("profile")
+                    .and_then(|p| num(p, "dispersion"))
+                    .unwrap_or(f64::NAN)
             ),
         ]);
         if let Some(v) = m.get("profile").and_then(|p| p.get("verdict")) {
             b.para(mu_pp_words(name, v));
         }
-        for n in m.get("notes").and_then(Value::as_array).into_iter().flatten() {
+        for n in m
+            .get("notes")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
             if let Some(n) = n.as_str() {
                 b.para(format!("{name}: {n}."));
             }
@@ -116,9 +136,19 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     );
     for m in mats {
         let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
-        for c in m.get("restitution").and_then(Value::as_array).into_iter().flatten() {
+        for c in m
+            .get("restitution")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
             let chosen = c.get("chosen").and_then(Value::as_str).unwrap_or("");
-            for cand in c.get("candidates").and_then(Value::as_array).into_iter().flatten() {
+            for cand in c
+                .get("candidates")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
                 let form = cand.get("form").and_then(Value::as_str).unwrap_or("?");
                 let params: Vec<String> = cand
                     .get("parameters")
@@ -129,9 +159,19 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
                     .collect();
                 laws.push(vec![
                     name.to_string(),
-                    c.get("setup").and_then(Value::as_str).unwrap_or("?").to_string(),
-                    c.get("n_runs").and_then(Value::as_u64).unwrap_or(0).to_string(),
-                    if form == chosen { format!("**{form}** (chosen)") } else { form.to_string() },
+                    c.get("setup")
+                        .and_then(Value::as_str)
+                        .unwrap_or("?")
+                        .to_string(),
+                    c.get("n_runs")
+                        .and_then(Value::as_u64)
+                        .unwrap_or(0)
+                        .to_string(),
+                    if form == chosen {
+                        format!("**{form}** (chosen)")
+                    } else {
+                        form.to_string()
+                    },
                     params.join("; "),
                     format!("{:.4}", num(cand, "heldout_rms_noise").unwrap_or(f64::NAN)),
                 ]);
@@ -147,7 +187,12 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
         for key in ["residual_by_phase", "residual_by_time_since_impact"] {
             let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
-            for r in m.get("runs").and_then(Value::as_array).into_iter().flatten() {
+            for r in m
+                .get("runs")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
                 for (k, v) in r.get(key).and_then(Value::as_object).into_iter().flatten() {
                     if let Some(x) = v.as_f64() {
                         let e = acc.entry(k.clone()).or_default();
@@ -178,10 +223,21 @@ mod tests {
     #[test]
     fn words_say_bound_or_interval_and_compare_with_the_chapter() {
         let lb = mu_pp_words("316", &json!({"kind": "lower_bound", "lo": 0.81}));
-        assert!(lb.contains("bound μ_pp from below at 0.81") && lb.contains("allowed but not measured"));
-        let iv = mu_pp_words("440c", &json!({"kind": "interval", "estimate": 1.39, "lo": 1.35, "hi": 1.43}));
-        assert!(iv.contains("μ_pp = 1.390") && iv.contains("1.4 is inside"), "{iv}");
-        let out = mu_pp_words("440c", &json!({"kind": "interval", "estimate": 0.3, "lo": 0.29, "hi": 0.31}));
+        assert!(
+            lb.contains("bound μ_pp from below at 0.81") && lb.contains("allowed but not measured")
+        );
+        let iv = mu_pp_words(
+            "440c",
+            &json!({"kind": "interval", "estimate": 1.39, "lo": 1.35, "hi": 1.43}),
+        );
+        assert!(
+            iv.contains("μ_pp = 1.390") && iv.contains("1.4 is inside"),
+            "{iv}"
+        );
+        let out = mu_pp_words(
+            "440c",
+            &json!({"kind": "interval", "estimate": 0.3, "lo": 0.29, "hi": 0.31}),
+        );
         assert!(out.contains("outside"), "{out}");
     }
 }
