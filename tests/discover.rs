@@ -23,7 +23,6 @@ fn fast_options(seed: u64) -> Options {
         bootstrap: 12,
         bootstrap_iterations: 5,
         folds: 4,
-        position_harmonics: vec![1, 2],
         max_terms: 2,
         seed,
         ..Options::default()
@@ -413,8 +412,8 @@ fn stage_writes_the_contract_deterministically() {
     let mut params = toml::Table::new();
     params.insert("bootstrap".into(), toml::Value::Integer(6));
     params.insert(
-        "position_harmonics".into(),
-        toml::Value::Array(vec![toml::Value::Integer(1)]),
+        "candidates".into(),
+        toml::Value::Array(vec![toml::Value::String("groove_tilt".into())]),
     );
     let kind = Discover;
     let canonical = kind.canonical_params(&params).unwrap();
@@ -471,6 +470,7 @@ fn a_mismatch_no_candidate_explains_is_reported_unexplained() {
     };
     let opts = Options {
         candidates: vec!["groove_tilt".into()],
+        nonparametric: false,
         ..fast_options(8)
     };
     let d = discover(&synthesize(&truth, &SMALL, 8), &opts);
@@ -483,6 +483,33 @@ fn a_mismatch_no_candidate_explains_is_reported_unexplained() {
         .expect("an unexplained finding");
     assert!(f.form.contains("T drifts with |v0|"), "{}", f.form);
     assert!(f.where_.contains_key("residuals"));
+}
+
+#[test]
+fn what_no_named_form_explains_is_modelled_by_the_force_map() {
+    // the same drag with only a tilt to try: the nonparametric fallback models the missing
+    // acceleration as a spline in v, tests it like a candidate and reports it as unexplained
+    let truth = Truth {
+        sat_tp: Some(1.1),
+        t_s: 0.052,
+        ..Truth::baseline()
+    };
+    let opts = Options {
+        candidates: vec!["groove_tilt".into()],
+        ..fast_options(8)
+    };
+    let d = discover(&synthesize(&truth, &SMALL, 8), &opts);
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.accepted)
+        .expect("the spline fallback is accepted");
+    assert_eq!(f.effect, "unexplained");
+    assert!(f.form.contains("spline in v"), "{}", f.form);
+    assert!(f.parameters["peak_accel_mps2"].value > 0.0);
+    assert!(f.extended.cv_rms_m < f.baseline.cv_rms_m);
+    let maps = d.force_maps.as_ref().expect("force maps");
+    assert!(maps.before.iter().any(|m| m.variable == "v"));
 }
 
 #[test]

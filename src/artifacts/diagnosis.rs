@@ -49,6 +49,19 @@ pub struct Evidence {
     pub cv_paired_t: Option<f64>,
     pub cv_rms_m: Option<f64>,
     pub decision: String,
+    /// The smallest size of the term this dataset would have detected (None: no single size).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detection_limit: Option<DetectionLimit>,
+}
+
+/// The smallest size of a term the test would have found (90 % power), from the bootstrap null.
+#[derive(Clone, Debug, Serialize, Deserialize, Default)]
+pub struct DetectionLimit {
+    pub parameter: String,
+    #[serde(with = "super::nan_null")]
+    pub value: f64,
+    /// e.g. "a groove tilt above 0.0213 ° would have been found".
+    pub text: String,
 }
 
 /// One finding of the contract.
@@ -125,10 +138,87 @@ pub struct Diagnosis {
     pub residuals_before: Option<Structure>,
     pub residuals_after: Option<Structure>,
     pub drift: Option<Drift>,
+    /// The missing acceleration against z, v, t and the phase, before and after the accepted physics.
+    #[serde(default)]
+    pub force_maps: Option<ForceMaps>,
+    /// Periodograms of the baseline residuals in z and t (where searched).
+    #[serde(default)]
+    pub spectra: Vec<Spectrum>,
     pub runs_used: usize,
     pub materials: Vec<String>,
     pub settings: Settings,
     pub note: String,
+}
+
+/// Force maps of the baseline and of the final model.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ForceMaps {
+    pub before: Vec<ForceMap>,
+    pub after: Vec<ForceMap>,
+}
+
+/// A fitted force map: the missing acceleration as a smooth function of one variable.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ForceMap {
+    /// "z", "v", "t" or "phase".
+    pub variable: String,
+    /// Unit of `x`: "m", "m/s", "s", or "" for the phase (0 sliding, 1 rolling).
+    pub unit: String,
+    pub x: Vec<f64>,
+    /// Missing acceleration (m/s²) and its standard error at each x.
+    pub accel_mps2: Vec<f64>,
+    pub se_mps2: Vec<f64>,
+    /// Penalty chosen by cross-validation (relative to the mean diagonal) and the effective
+    /// number of map parameters it leaves.
+    #[serde(with = "super::nan_null")]
+    pub lambda: f64,
+    #[serde(with = "super::nan_null")]
+    pub edf: f64,
+    /// In-sample and held-out drop of χ² against no map (shared parameters refitted in both).
+    #[serde(with = "super::nan_null")]
+    pub chi2_drop: f64,
+    #[serde(with = "super::nan_null")]
+    pub cv_gain: f64,
+    /// Largest |accel| / se over the grid.
+    #[serde(with = "super::nan_null")]
+    pub max_abs_z: f64,
+    /// The spline (lo, hi, basis size, coefficients; absent for the phase map): not serialized.
+    #[serde(skip)]
+    pub spline: Option<(f64, f64, usize, Vec<f64>)>,
+}
+
+impl ForceMap {
+    /// Largest |accel| over the grid.
+    pub fn peak_mps2(&self) -> f64 {
+        self.accel_mps2.iter().fold(0.0, |m, a| m.max(a.abs()))
+    }
+}
+
+/// A periodogram of the residuals.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Spectrum {
+    /// "z" (coherent over runs) or "t" (a phase per run).
+    pub variable: String,
+    /// Wavelength (m) for z, frequency (Hz) for t.
+    pub x: Vec<f64>,
+    /// χ² drop at each x.
+    pub power: Vec<f64>,
+    /// Expected power of pure noise (2 for z, 2 per run for t).
+    #[serde(with = "super::nan_null")]
+    pub noise_power: f64,
+    pub peaks: Vec<Peak>,
+}
+
+/// A local maximum of a periodogram with the fitted force there.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Peak {
+    /// Wavenumber (rad/m) or angular frequency (rad/s).
+    #[serde(with = "super::nan_null")]
+    pub omega: f64,
+    #[serde(with = "super::nan_null")]
+    pub power: f64,
+    /// z: the sin and cos amplitudes (m/s²); t: the amplitude (m/s², bias-corrected) and 0.
+    pub coef: [f64; 2],
 }
 
 /// Pooled residual statistics of one bin.
@@ -194,6 +284,8 @@ pub enum Effect {
     PairPhysicsMismatch,
     PositionDependentForce,
     RollingResistance,
+    /// A force that depends on the time since the kick (e.g. a vibration), not on z or v.
+    TimeDependentForce,
     Unexplained,
     VelocityDependentDrag,
     VelocityDependentFriction,
@@ -201,12 +293,13 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in id order.
-    pub const ALL: [Effect; 8] = [
+    pub const ALL: [Effect; 9] = [
         Effect::GrooveTilt,
         Effect::ImpactSpecificMismatch,
         Effect::PairPhysicsMismatch,
         Effect::PositionDependentForce,
         Effect::RollingResistance,
+        Effect::TimeDependentForce,
         Effect::Unexplained,
         Effect::VelocityDependentDrag,
         Effect::VelocityDependentFriction,
@@ -220,6 +313,7 @@ impl Effect {
             Effect::PairPhysicsMismatch => "pair_physics_mismatch",
             Effect::PositionDependentForce => "position_dependent_force",
             Effect::RollingResistance => "rolling_resistance",
+            Effect::TimeDependentForce => "time_dependent_force",
             Effect::Unexplained => "unexplained",
             Effect::VelocityDependentDrag => "velocity_dependent_drag",
             Effect::VelocityDependentFriction => "velocity_dependent_friction",

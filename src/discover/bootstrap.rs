@@ -2,7 +2,8 @@
 //! each run's measured noise (Gaussian AR(1): its σ and lag-1 autocorrelation, so frames within a
 //! run stay dependent as in the data), refit the smaller and every larger model from warm starts.
 
-use super::candidate::{ParamInfo, Spec, N_LOCAL};
+use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
+use super::proposal::{propose, starts, wanted_for, Ranges};
 use super::data::RunData;
 use super::joint::{fit_joint, predict, FitControl, Fitted};
 use rand::{Rng, SeedableRng};
@@ -18,6 +19,9 @@ pub struct Alternative {
     pub spec: Spec,
     pub params: Vec<ParamInfo>,
     pub extra_starts: Vec<Vec<f64>>,
+    /// A term whose starts come from the residuals (periodogram, bump scan): each replicate
+    /// proposes its own starts from its own residuals, as the data did.
+    pub proposed: Option<(Extra, Ranges)>,
 }
 
 /// One synthetic data set drawn from the fitted null model.
@@ -58,10 +62,9 @@ pub fn lr_replicates(
     replicates: usize,
     seed: u64,
     iters: usize,
+    stop: Option<&EarlyStop>,
 ) -> Vec<Vec<f64>> {
-    let per_rep: Vec<Vec<f64>> = (0..replicates)
-        .into_par_iter()
-        .map(|b| {
+    let one = |b: usize| -> Vec<f64> {
             let mut rng = ChaCha8Rng::seed_from_u64(
                 seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
             );
@@ -78,10 +81,34 @@ pub fn lr_replicates(
                 &null_fit.local,
                 ctl,
             );
+            let needing: Vec<&Extra> = alts
+                .iter()
+                .filter_map(|a| a.proposed.as_ref().map(|p| &p.0))
+                .collect();
+            let props = match alts.iter().find_map(|a| a.proposed.as_ref()) {
+                Some((_, rg)) => propose(
+                    null_spec,
+                    null_params,
+                    &f0.global,
+                    &f0.local,
+                    &data,
+                    rg,
+                    wanted_for(&needing),
+                    None,
+                ),
+                None => Default::default(),
+            };
             alts.iter()
                 .map(|a| {
-                    let best = a
-                        .extra_starts
+                    let own;
+                    let list = match &a.proposed {
+                        Some((e, _)) => {
+                            own = starts(e, &props);
+                            &own
+                        }
+                        None => &a.extra_starts,
+                    };
+                    let best = list
                         .iter()
                         .map(|start| {
                             let mut g = f0.global.clone();
@@ -93,9 +120,45 @@ pub fn lr_replicates(
                     (f0.chi2 - best).max(0.0)
                 })
                 .collect()
-        })
-        .collect();
+    };
+    // replicates in batches; replicate b always has the same seed, so stopping early changes
+    // only how many are drawn, never what they are
+    let batch = 6;
+    let mut per_rep: Vec<Vec<f64>> = Vec::with_capacity(replicates);
+    while per_rep.len() < replicates {
+        let from = per_rep.len();
+        let to = (from + batch).min(replicates);
+        let more: Vec<Vec<f64>> = (from..to).into_par_iter().map(one).collect();
+        per_rep.extend(more);
+        if let Some(st) = stop {
+            if per_rep.len() < replicates && 2 * per_rep.len() >= replicates && st.clear(&per_rep) {
+                break;
+            }
+        }
+    }
     (0..alts.len())
         .map(|a| per_rep.iter().map(|r| r[a]).collect())
         .collect()
+}
+
+/// Sequential stopping of the bootstrap: once every statistic is far inside or far beyond its
+/// null (p below `alpha`/100 or above 0.5 after at least 6 replicates and half of those asked), more replicates cannot
+/// change a decision.
+pub struct EarlyStop {
+    /// Observed LR and degrees of freedom of each alternative.
+    pub observed: Vec<(f64, f64)>,
+    pub alpha: f64,
+}
+
+impl EarlyStop {
+    fn clear(&self, per_rep: &[Vec<f64>]) -> bool {
+        if per_rep.len() < 6 {
+            return false;
+        }
+        self.observed.iter().enumerate().all(|(a, (lr, df))| {
+            let reps: Vec<f64> = per_rep.iter().map(|r| r[a]).collect();
+            let p = super::null_distribution::NullFit::from_replicates(&reps, *df).p_value(*lr);
+            p < self.alpha / 100.0 || p > 0.5
+        })
+    }
 }

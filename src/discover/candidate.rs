@@ -4,8 +4,10 @@
 //! adds its own `[z0, t0, v0]`. An `Extra` is either a candidate physical term (with the effect id
 //! the diagnosis uses) or a drift probe: a phenomenological term that only locates a mismatch.
 
+use super::data::RunData;
 use super::sim::{Drag, SimModel};
 use super::G_MPS2;
+use crate::physics::{SplineForce, Term, Variable};
 
 /// One extra term of a joint model.
 #[derive(Clone, Debug, PartialEq)]
@@ -26,6 +28,25 @@ pub enum Extra {
         harmonics: usize,
         z_min_m: f64,
         span_m: f64,
+    },
+    /// a(z) = s·sin(k(z − z_ref)) + c·cos(k(z − z_ref)): a periodic force fixed in the lab
+    /// (waviness) with free wavenumber k in [k_lo, k_hi].
+    PeriodicZ { z_ref_m: f64, k_lo: f64, k_hi: f64 },
+    /// a(z) = A·exp(−(z − z_c)²/(2w²)): a localized force fixed in the lab (a bump, a defect).
+    Localized {
+        z_lo: f64,
+        z_hi: f64,
+        w_lo: f64,
+        w_hi: f64,
+    },
+    /// a(t) = A·sin(2π f t + φ_run), t since the kick, with each run's own phase (profiled).
+    TimePeriodic { f_lo: f64, f_hi: f64 },
+    /// The nonparametric model: a cubic B-spline in one variable with `segments` knot intervals.
+    Spline {
+        variable: Variable,
+        lo: f64,
+        dx: f64,
+        segments: usize,
     },
     /// Probe: T of a run = T_m + β·(|v0| − v_ref).
     SpeedDriftT { v_ref_mps: f64 },
@@ -64,6 +85,9 @@ impl Extra {
             Extra::GrooveTilt => Some("groove_tilt"),
             Extra::VelocityFriction { .. } => Some("velocity_dependent_friction"),
             Extra::PositionForce { .. } => Some("position_dependent_force"),
+            Extra::PeriodicZ { .. } | Extra::Localized { .. } => Some("position_dependent_force"),
+            Extra::TimePeriodic { .. } => Some("time_dependent_force"),
+            Extra::Spline { .. } => Some("unexplained"),
             _ => None,
         }
     }
@@ -81,9 +105,42 @@ impl Extra {
             Extra::PositionForce { harmonics, .. } => {
                 format!("a(z) = Fourier series over the observed z range, {harmonics} harmonics")
             }
+            Extra::PeriodicZ { .. } => {
+                "periodic in z: a = A sin(2 pi z / lambda + phi), fixed in the lab".into()
+            }
+            Extra::Localized { .. } => {
+                "localized in z: a = A exp(-(z - z_c)^2 / (2 w^2)), fixed in the lab".into()
+            }
+            Extra::TimePeriodic { .. } => {
+                "periodic in time: a = A sin(2 pi f t + phi_run), t since the kick, a phase per run"
+                    .into()
+            }
+            Extra::Spline {
+                variable, segments, ..
+            } => format!(
+                "spline in {}: a = cubic B-spline with {} coefficients (no named form)",
+                variable.label(),
+                segments + 3
+            ),
             Extra::SpeedDriftT { .. } => "probe: T drifts with |v0|".into(),
             Extra::SpeedDriftMu { .. } => "probe: mu drifts with |v0|".into(),
             Extra::DirectionAsymmetry => "probe: mu and T differ by direction".into(),
+        }
+    }
+
+    /// What the term's size is called in words ("a groove tilt").
+    pub fn size_name(&self) -> &'static str {
+        match self {
+            Extra::QuadraticDrag => "a quadratic drag coefficient",
+            Extra::SaturatingDrag => "a saturating drag slope T'",
+            Extra::RollingResistance => "a rolling resistance",
+            Extra::GrooveTilt => "a groove tilt",
+            Extra::VelocityFriction { .. } => "a velocity-dependent friction",
+            Extra::PositionForce { .. } | Extra::PeriodicZ { .. } => "a periodic force in z",
+            Extra::Localized { .. } => "a localized force",
+            Extra::TimePeriodic { .. } => "a periodic force in time",
+            Extra::Spline { .. } => "a smooth force",
+            _ => "a drift",
         }
     }
 
@@ -104,6 +161,28 @@ impl Extra {
                         p(&format!("cos{k}_mps2"), 0.0, -5.0, 5.0, 1e-4),
                     ]
                 })
+                .collect(),
+            Extra::PeriodicZ { k_lo, k_hi, .. } => vec![
+                p("k_per_m", 0.5 * (k_lo + k_hi), *k_lo, *k_hi, 1e-7 * k_hi),
+                p("sin_mps2", 0.0, -5.0, 5.0, 1e-4),
+                p("cos_mps2", 0.0, -5.0, 5.0, 1e-4),
+            ],
+            Extra::Localized {
+                z_lo,
+                z_hi,
+                w_lo,
+                w_hi,
+            } => vec![
+                p("amplitude_mps2", 0.0, -5.0, 5.0, 1e-4),
+                p("centre_m", 0.5 * (z_lo + z_hi), *z_lo, *z_hi, 1e-8),
+                p("width_m", (w_lo * w_hi).sqrt(), *w_lo, *w_hi, 1e-8),
+            ],
+            Extra::TimePeriodic { f_lo, f_hi } => vec![
+                p("frequency_hz", 0.5 * (f_lo + f_hi), *f_lo, *f_hi, 1e-3),
+                p("amplitude_mps2", 0.0, 0.0, 5.0, 1e-4),
+            ],
+            Extra::Spline { segments, .. } => (0..segments + 3)
+                .map(|j| p(&format!("coef{j}_mps2"), 0.0, -20.0, 20.0, 1e-4))
                 .collect(),
             Extra::SpeedDriftT { .. } => vec![p("dT_dv_s_per_mps", 0.0, -1e3, 1e3, 1e-3)],
             Extra::SpeedDriftMu { .. } => vec![p("dmu_dv_s_per_m", 0.0, -1e3, 1e3, 1e-4)],
@@ -179,9 +258,35 @@ impl Spec {
 
     /// True when z0 enters other than as an additive offset (a position-dependent force).
     pub fn position_dependent(&self) -> bool {
+        self.extras.iter().any(|e| {
+            matches!(
+                e,
+                Extra::PositionForce { .. }
+                    | Extra::PeriodicZ { .. }
+                    | Extra::Localized { .. }
+                    | Extra::Spline {
+                        variable: Variable::Z,
+                        ..
+                    }
+            )
+        })
+    }
+
+    /// True when a term has a phase of its own in each run (profiled in `run_model`).
+    pub fn has_run_phase(&self) -> bool {
         self.extras
             .iter()
-            .any(|e| matches!(e, Extra::PositionForce { .. }))
+            .any(|e| matches!(e, Extra::TimePeriodic { .. }))
+    }
+
+    /// The physics of one run, with each run's own phase of a time-periodic force chosen to fit
+    /// the run's recorded positions best (locals `l` = z0, t0, v0).
+    pub fn run_model(&self, g: &[f64], l: &[f64; N_LOCAL], run: &RunData) -> SimModel {
+        let mut m = self.sim_model(g, run.material, l[2]);
+        if self.has_run_phase() {
+            super::timeforce::profile_phase(&mut m, l, run);
+        }
+        m
     }
 
     /// The physics of one run for global parameters `g` and the run's v0.
@@ -197,6 +302,7 @@ impl Spec {
             roll_c: 0.0,
             tilt_mps2: 0.0,
             position: Vec::new(),
+            terms: Vec::new(),
         };
         let mut quad = 0.0;
         let mut tp = None;
@@ -223,6 +329,34 @@ impl Spec {
                         }
                     }
                 }
+                Extra::PeriodicZ { z_ref_m, .. } => {
+                    let (k, a, b) = (x[0], x[1], x[2]);
+                    let amp = a.hypot(b);
+                    if amp > 0.0 {
+                        m.position.push((amp, k, b.atan2(a) - k * z_ref_m));
+                    }
+                }
+                Extra::Localized { .. } => m.terms.push(Term::LocalizedForce {
+                    amp_mps2: x[0],
+                    centre_m: x[1],
+                    width_m: x[2],
+                }),
+                Extra::TimePeriodic { .. } => m.terms.push(Term::TimePeriodicForce {
+                    amp_mps2: x[1],
+                    freq_hz: x[0],
+                    phase_rad: 0.0,
+                }),
+                Extra::Spline {
+                    variable,
+                    lo,
+                    dx,
+                    segments,
+                } => m.terms.push(Term::Spline(SplineForce {
+                    variable: *variable,
+                    lo_x: *lo,
+                    dx: *dx,
+                    coefs_mps2: x[..segments + 3].to_vec(),
+                })),
                 Extra::SpeedDriftT { v_ref_mps } => t_s += x[0] * (v0_mps.abs() - v_ref_mps),
                 Extra::SpeedDriftMu { v_ref_mps } => mu += x[0] * (v0_mps.abs() - v_ref_mps),
                 Extra::DirectionAsymmetry => {

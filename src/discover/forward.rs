@@ -2,17 +2,25 @@
 //! (likelihood ratio less ln(n) per extra parameter) one that passes both the bootstrap likelihood-ratio test (Holm-corrected) and leave-runs-out
 //! cross-validation, refit, repeat; then ask the drift probes whether a mismatch is left unexplained.
 
-use super::bootstrap::{lr_replicates, Alternative};
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
 use super::cv::{cross_validate, folds, paired_t, CvResult};
 use super::data::RunData;
-use super::diagnosis::{CandidateRow, Estimate, Evidence, Finding, ModelScore};
+use super::diagnosis::{CandidateRow, DetectionLimit, Estimate, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::null_distribution::{empirical_p, NullFit};
+use super::proposal::{needs_proposal, starts as proposal_starts, Proposals, Ranges};
+use super::response::prepare;
+use super::screen::{screen, Screened, REPLICATES};
 use super::{Options, G_MPS2};
 use crate::stats::dist::t_upper_quantile;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
+
+/// Significant candidates fitted in full per round (strongest first, until one passes).
+pub const FULL_TRIES: usize = 3;
+/// Iterations of a full fit started from the screen's linear estimate.
+pub const FULL_ITERATIONS: usize = 25;
 
 /// Level of the one-sided paired test that held-out runs improve.
 pub const CV_LEVEL: f64 = 0.05;
@@ -49,26 +57,21 @@ impl Model {
         Model { spec, params, fit }
     }
 
-    /// The model with `extra` added, fitted from this model's values (best of several starts).
+    /// The model with `extra` added, fitted from this model's values and each of `starts` for
+    /// the term's parameters (the best fit is kept).
     pub fn extend(
         &self,
         extra: &Extra,
+        starts: &[Vec<f64>],
         materials: &[String],
         runs: &[RunData],
         max_iter: usize,
     ) -> Model {
-        let starts: Vec<Vec<f64>> = match extra {
-            Extra::VelocityFriction { materials } => [1e-4f64, 2e-3, 2e-2]
-                .iter()
-                .map(|v| vec![v.ln(); *materials])
-                .collect(),
-            e => vec![e.params().iter().map(|p| p.start).collect()],
-        };
         starts
-            .into_iter()
+            .par_iter()
             .map(|s| {
                 let mut g = self.fit.global.clone();
-                g.extend(s);
+                g.extend(s.iter().copied());
                 Model::fit(
                     self.spec.with(extra.clone()),
                     materials,
@@ -80,6 +83,17 @@ impl Model {
             })
             .min_by(|a, b| a.fit.chi2.total_cmp(&b.fit.chi2))
             .expect("at least one start")
+    }
+
+    /// The model without extra term `i`, refitted from the current values.
+    pub fn without(&self, i: usize, materials: &[String], runs: &[RunData], max_iter: usize) -> Model {
+        let off = self.spec.extra_offset(i);
+        let n = self.spec.extras[i].params().len();
+        let mut g = self.fit.global.clone();
+        g.drain(off..off + n);
+        let mut spec = self.spec.clone();
+        spec.extras.remove(i);
+        Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
     }
 
     pub fn score(&self, runs: &[RunData], cv: Option<&CvResult>) -> ModelScore {
@@ -109,6 +123,23 @@ pub fn extra_starts(extra: &Extra) -> Vec<Vec<f64>> {
             .map(|v| vec![v.ln(); *materials])
             .collect(),
         e => vec![e.params().iter().map(|p| p.start).collect()],
+    }
+}
+
+/// Starts of a term on the data: proposed from the residuals where the form needs it, the
+/// force map's spline (and zero) for the nonparametric term, else `extra_starts`.
+pub fn data_starts(extra: &Extra, props: &Proposals) -> Vec<Vec<f64>> {
+    if needs_proposal(extra) {
+        return proposal_starts(extra, props);
+    }
+    match extra {
+        Extra::Spline { .. } => {
+            let mut s = proposal_starts(extra, props);
+            s.extend(extra_starts(extra));
+            s.dedup();
+            s
+        }
+        e => extra_starts(e),
     }
 }
 
@@ -173,6 +204,61 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
                 out.insert(m.params[off + k].name.clone(), est(g[off + k], se[off + k]));
             }
         }
+        Extra::PeriodicZ { z_ref_m, .. } => {
+            let (k, a, b) = (g[off], g[off + 1], g[off + 2]);
+            let (sk, sa, sb) = (se[off], se[off + 1], se[off + 2]);
+            let amp = a.hypot(b).max(1e-300);
+            let amp_se = ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp;
+            out.insert("amplitude_mps2".into(), est(amp, amp_se));
+            out.insert("peak_accel_mps2".into(), est(amp, amp_se));
+            out.insert(
+                "wavelength_m".into(),
+                est(std::f64::consts::TAU / k, std::f64::consts::TAU * sk / (k * k)),
+            );
+            let phase = (b.atan2(a) - k * z_ref_m).rem_euclid(std::f64::consts::TAU);
+            let phase_se = (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp)).hypot(z_ref_m * sk);
+            out.insert("phase_rad".into(), est(phase, phase_se));
+        }
+        Extra::Localized { .. } => {
+            out.insert("amplitude_mps2".into(), est(g[off], se[off]));
+            out.insert("peak_accel_mps2".into(), est(g[off].abs(), se[off]));
+            out.insert("centre_m".into(), est(g[off + 1], se[off + 1]));
+            out.insert("width_m".into(), est(g[off + 2], se[off + 2]));
+        }
+        Extra::TimePeriodic { .. } => {
+            out.insert("frequency_hz".into(), est(g[off], se[off]));
+            out.insert("amplitude_mps2".into(), est(g[off + 1], se[off + 1]));
+            out.insert("peak_accel_mps2".into(), est(g[off + 1], se[off + 1]));
+        }
+        Extra::Spline {
+            variable,
+            lo,
+            dx,
+            segments,
+        } => {
+            let sp = crate::physics::SplineForce {
+                variable: *variable,
+                lo_x: *lo,
+                dx: *dx,
+                coefs_mps2: g[off..off + segments + 3].to_vec(),
+            };
+            let hi = lo + dx * *segments as f64;
+            let (mut peak, mut at, mut ss) = (0.0f64, *lo, 0.0);
+            for j in 0..=200 {
+                let x = lo + (hi - lo) * j as f64 / 200.0;
+                let a = sp.at(x);
+                ss += a * a;
+                if a.abs() > peak {
+                    peak = a.abs();
+                    at = x;
+                }
+            }
+            out.insert("peak_accel_mps2".into(), est(peak, f64::NAN));
+            out.insert("rms_accel_mps2".into(), est((ss / 201.0).sqrt(), f64::NAN));
+            out.insert("x_at_peak".into(), est(at, 0.0));
+            out.insert("x_lo".into(), est(*lo, 0.0));
+            out.insert("x_hi".into(), est(hi, 0.0));
+        }
         Extra::SpeedDriftT { .. } | Extra::SpeedDriftMu { .. } | Extra::DirectionAsymmetry => {
             for (k, p) in m.spec.extras[i].params().iter().enumerate() {
                 out.insert(p.name.clone(), est(g[off + k], se[off + k]));
@@ -182,11 +268,43 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
     out
 }
 
+/// The model a candidate would give to first order: the current fit with the screen's linear
+/// estimates of the term (not refitted; χ² lowered by the screen's statistic).
+fn pseudo(current: &Model, e: &Extra, s: Option<&Screened>, materials: &[String]) -> Model {
+    let spec = current.spec.with(e.clone());
+    let params = spec.global_params(materials);
+    let mut fit = current.fit.clone();
+    match s {
+        Some(s) => {
+            fit.global.extend(clamp_to(e, &s.estimate));
+            fit.global_se.extend(s.se.iter().copied());
+            fit.chi2 -= s.lr;
+        }
+        None => {
+            fit.global.extend(e.params().iter().map(|p| p.start));
+            fit.global_se.extend(e.params().iter().map(|_| f64::NAN));
+        }
+    }
+    fit.iterations = 0;
+    fit.converged = false;
+    Model { spec, params, fit }
+}
+
+/// Values of a term's parameters held inside their bounds.
+fn clamp_to(e: &Extra, v: &[f64]) -> Vec<f64> {
+    v.iter()
+        .zip(e.params())
+        .map(|(x, q)| if x.is_finite() { x.clamp(q.lo, q.hi) } else { q.start })
+        .collect()
+}
+
 /// Result of one round of tests against the current model.
 pub struct Round {
     pub rows: Vec<CandidateRow>,
     /// (index into rows, extended model, its CV) of the accepted term, if any.
     pub accepted: Option<(usize, Model, CvResult)>,
+    /// The bootstrap null of each candidate (same order as `rows`).
+    pub nulls: Vec<NullFit>,
     /// Probe rows significant after Holm over the probes.
     pub flagged_probes: Vec<CandidateRow>,
     pub probe_rows: Vec<CandidateRow>,
@@ -203,7 +321,8 @@ fn row(round: usize, e: &Extra, m: &Model, materials: &[String], ev: Evidence) -
     }
 }
 
-/// Test `entries` (candidate terms) and `probes` against `current`.
+/// Test `entries` (candidate terms) and `probes` against `current`; `props` are the proposals
+/// of the current residuals (starts of the forms that need them) and `rg` the data's ranges.
 #[allow(clippy::too_many_arguments)]
 pub fn run_round(
     round: usize,
@@ -215,35 +334,43 @@ pub fn run_round(
     runs: &[RunData],
     opts: &Options,
     fold: &[usize],
+    props: &Proposals,
+    rg: &Ranges,
 ) -> Round {
     let all: Vec<&Extra> = entries.iter().chain(probes).collect();
-    let fitted: Vec<Model> = all
-        .iter()
-        .map(|e| current.extend(e, materials, runs, 40))
-        .collect();
-    let alts: Vec<Alternative> = all
-        .iter()
-        .zip(&fitted)
-        .map(|(e, m)| Alternative {
-            spec: m.spec.clone(),
-            params: m.params.clone(),
-            extra_starts: extra_starts(e),
-        })
-        .collect();
+    let ne = entries.len();
+    let clock = std::time::Instant::now();
+    let trace = |what: &str| {
+        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+            eprintln!("round {round}: {what} at {:.2} s", clock.elapsed().as_secs_f64());
+        }
+    };
     let seed = opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    let reps = lr_replicates(
+    let prep = prepare(
         &current.spec,
         &current.params,
-        &current.fit,
-        &alts,
+        &current.fit.global,
+        &current.fit.local,
         runs,
-        opts.bootstrap,
-        seed,
-        opts.bootstrap_iterations,
     );
-    let lr: Vec<f64> = fitted
+    let screens = screen(
+        &all,
+        current,
+        runs,
+        &prep,
+        rg,
+        REPLICATES.max(opts.bootstrap),
+        seed,
+    );
+    drop(prep);
+    trace("screened");
+    let lr: Vec<f64> = screens
         .iter()
-        .map(|m| (current.fit.chi2 - m.fit.chi2).max(0.0))
+        .map(|s| s.as_ref().map(|s| s.lr).unwrap_or(0.0))
+        .collect();
+    let reps: Vec<Vec<f64>> = screens
+        .iter()
+        .map(|s| s.as_ref().map(|s| s.replicates.clone()).unwrap_or_default())
         .collect();
     let nulls: Vec<NullFit> = all
         .iter()
@@ -251,14 +378,20 @@ pub fn run_round(
         .map(|(e, r)| NullFit::from_replicates(r, e.params().len() as f64))
         .collect();
     let p: Vec<f64> = nulls.iter().zip(&lr).map(|(n, l)| n.p_value(*l)).collect();
-    let ne = entries.len();
+    // the linear estimates stand for every candidate; only the significant ones are fitted in
+    // full (from the screen's estimate and the residuals' proposals)
+    let linear: Vec<Model> = all
+        .iter()
+        .zip(&screens)
+        .map(|(e, s)| pseudo(current, e, s.as_ref(), materials))
+        .collect();
     let p_holm_e = holm(&p[..ne]);
     let p_holm_p = holm(&p[ne..]);
     // the held-out check confirms a term the LR test already found; one-sided 5 % on the paired t
     // over the runs: Student's t with (runs − 1) degrees of freedom
     let t_cv = t_upper_quantile(CV_LEVEL, runs.len().saturating_sub(1) as f64);
-    // cross-validate the significant candidates strongest first; the first that also predicts
-    // held-out runs better is the one accepted, so weaker ones need no cross-validation
+    // fit in full and cross-validate the significant candidates strongest first (at most
+    // FULL_TRIES of them); the first that also predicts held-out runs better is the one accepted.
     // "Strongest" is the LR less a Schwarz penalty of ln(n) per extra parameter: when a
     // one-parameter term explains as much as a six-parameter series (rolling resistance against a
     // position force when each direction of motion covers its own stretch of the groove), the
@@ -273,25 +406,62 @@ pub fn run_round(
         .collect();
     let mut order: Vec<usize> = (0..ne).filter(|i| p_holm_e[*i] < opts.alpha).collect();
     order.sort_by(|a, b| strength[*b].total_cmp(&strength[*a]).then(a.cmp(b)));
+    let mut fitted: Vec<Model> = linear.clone();
+    let full = |i: usize| -> Model {
+        let mut starts = vec![clamp_to(all[i], &linear[i].fit.global[current.fit.global.len()..])];
+        if !needs_proposal(all[i]) {
+            starts.extend(data_starts(all[i], props));
+        }
+        starts.dedup();
+        current.extend(all[i], &starts, materials, runs, FULL_ITERATIONS)
+    };
     let mut cv_of: Vec<Option<(CvResult, f64)>> = vec![None; ne];
     let mut best: Option<(usize, CvResult)> = None;
-    for &i in &order {
-        let cv = cross_validate(
-            &fitted[i].spec,
-            &fitted[i].params,
-            runs,
-            &fitted[i].fit,
-            fold,
-            opts.folds,
-        );
-        let t = paired_t(current_cv, &cv);
+    let check = |i: usize, fitted: &mut Vec<Model>, cv_of: &mut Vec<Option<(CvResult, f64)>>| {
+        if cv_of[i].is_none() {
+            fitted[i] = full(i);
+            let cv = cross_validate(
+                &fitted[i].spec,
+                &fitted[i].params,
+                runs,
+                &fitted[i].fit,
+                fold,
+                opts.folds,
+            );
+            let t = paired_t(current_cv, &cv);
+            cv_of[i] = Some((cv, t));
+        }
+        let (cv, t) = cv_of[i].clone().expect("just set");
         let passes = cv.cv_rms_m < current_cv.cv_rms_m && t > t_cv;
-        cv_of[i] = Some((cv.clone(), t));
+        (passes, cv)
+    };
+    for &i in order.iter().take(FULL_TRIES) {
+        let (passes, cv) = check(i, &mut fitted, &mut cv_of);
         if passes {
             best = Some((i, cv));
             break;
         }
     }
+    trace("fitted and cross-validated the strongest");
+    // of two representations that predict held-out runs equally well, the simpler is named; a
+    // representation explains as much only if its statistic is comparable
+    if let Some((b, b_cv)) = best.clone() {
+        let nb = all[b].params().len();
+        let mut simpler: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&j| all[j].params().len() < nb && lr[j] >= 0.5 * lr[b])
+            .collect();
+        simpler.sort_by_key(|&j| (all[j].params().len(), j));
+        for j in simpler {
+            let (passes, cv) = check(j, &mut fitted, &mut cv_of);
+            if passes && paired_t(&cv, &b_cv) <= t_cv {
+                best = Some((j, cv));
+                break;
+            }
+        }
+    }
+    trace("cross-validated");
     let mut rows = Vec::new();
     for (i, e) in all.iter().enumerate() {
         let is_probe = i >= ne;
@@ -312,6 +482,11 @@ pub fn run_round(
             cv_paired_t: None,
             cv_rms_m: None,
             decision: String::new(),
+            detection_limit: if is_probe {
+                None
+            } else {
+                detection_limit(e, &linear[i], &nulls[i], opts.alpha / ne.max(1) as f64)
+            },
         };
         ev.decision = if is_probe {
             if p_holm < opts.alpha {
@@ -321,7 +496,7 @@ pub fn run_round(
             }
             .into()
         } else if p_holm >= opts.alpha {
-            "rejected: likelihood ratio within the bootstrap null".into()
+            "rejected: likelihood ratio (first order) within its bootstrap null".into()
         } else if let Some((cv, t)) = &cv_of[i] {
             ev.cv_paired_t = Some(*t);
             ev.cv_rms_m = Some(cv.cv_rms_m);
@@ -330,8 +505,10 @@ pub fn run_round(
             } else {
                 "rejected: held-out runs do not improve".into()
             }
+        } else if best.is_some() {
+            "significant, not fitted in full: a stronger term passed both tests".into()
         } else {
-            "significant, not cross-validated: a stronger term passed both tests".into()
+            format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are")
         };
         rows.push(row(round, e, &fitted[i], materials, ev));
     }
@@ -348,6 +525,7 @@ pub fn run_round(
         .collect();
     rows.truncate(ne);
     Round {
+        nulls: nulls[..ne].to_vec(),
         rows,
         accepted,
         flagged_probes,
@@ -386,4 +564,60 @@ pub fn median_speed(local: &[[f64; N_LOCAL]]) -> f64 {
 /// Fold assignment for `runs` given per-run starting values.
 pub fn fold_of(runs: &[RunData], local: &[[f64; N_LOCAL]], k: usize) -> Vec<usize> {
     folds(runs, local, k)
+}
+
+/// The LR a term must exceed at `level` under its bootstrap null (bisection on the gamma tail).
+pub fn critical_lr(null: &NullFit, level: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while null.p_value(hi) > level && hi < 1e9 {
+        hi *= 2.0;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if null.p_value(mid) > level {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// The smallest size of a term this dataset would have detected (90 % power at the first Holm
+/// level): the size θ with |θ̂| > se·√c in 90 % of data sets, θ̂ ~ N(θ, s·se²), c the critical LR
+/// and s the null's inflation over χ² (dependent frames). None for terms without one size.
+pub fn detection_limit(e: &Extra, m: &Model, null: &NullFit, level: f64) -> Option<DetectionLimit> {
+    let off = m.spec.extra_offset(m.spec.extras.len() - 1);
+    let se = &m.fit.global_se;
+    let (name, unit, se_size, scale) = match e {
+        Extra::QuadraticDrag => ("c_per_m", "1/m", se[off], 1.0),
+        Extra::SaturatingDrag => ("tp_s_per_mps", "s²/m", se[off], 1.0),
+        Extra::RollingResistance => ("deceleration_mps2", "m/s²", se[off], G_MPS2),
+        Extra::GrooveTilt => ("alpha_deg", "°", se[off], 1.0),
+        Extra::PeriodicZ { .. } => ("amplitude_mps2", "m/s²", se[off + 1].hypot(se[off + 2]) / 2f64.sqrt(), 1.0),
+        Extra::Localized { .. } => ("amplitude_mps2", "m/s²", se[off], 1.0),
+        Extra::TimePeriodic { .. } => ("amplitude_mps2", "m/s²", se[off + 1], 1.0),
+        _ => return None,
+    };
+    if !(se_size.is_finite() && se_size > 0.0) {
+        return None;
+    }
+    let df = e.params().len() as f64;
+    let c = critical_lr(null, level);
+    let inflation = (null.mean / df).max(1.0);
+    let value = scale * se_size * (c.sqrt() + 1.2816 * inflation.sqrt());
+    Some(DetectionLimit {
+        parameter: name.into(),
+        value,
+        text: format!("{} above {} {} would have been found", e.size_name(), sig(value), unit),
+    })
+}
+
+/// Three significant digits.
+pub fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let d = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.d$}")
 }

@@ -35,7 +35,7 @@ pub struct FitControl {
 /// Predicted positions of `run` at its sample times.
 pub fn predict(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData, out: &mut [f64]) {
     let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
-    let model = spec.sim_model(g, run.material, l[2]);
+    let model = spec.run_model(g, l, run);
     model.simulate(l[0], l[2], &tt, out, None, None);
 }
 

@@ -15,7 +15,7 @@ pub fn locate(spec: &Spec, fit: &Fitted, runs: &[RunData], materials: &[String])
             let n = run.t_s.len();
             let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
             let (mut z, mut v, mut ph) = (vec![0.0; n], vec![0.0; n], vec![Motion::Sliding; n]);
-            let model = spec.sim_model(&fit.global, run.material, l[2]);
+            let model = spec.run_model(&fit.global, l, run);
             model.simulate(l[0], l[2], &tt, &mut z, Some(&mut v), Some(&mut ph));
             let keep = |i: &usize| run.keep[*i];
             RunResiduals {

@@ -14,6 +14,7 @@ pub mod cv;
 pub mod data;
 pub mod diagnosis;
 pub mod drift;
+pub mod forcemap;
 pub mod forward;
 pub mod holm;
 pub mod joint;
@@ -21,9 +22,14 @@ pub mod locate;
 pub mod null_distribution;
 pub mod pairs;
 pub mod perrun;
+pub mod proposal;
 pub mod residual_structure;
+pub mod response;
 pub mod run;
+pub mod screen;
 pub mod sim;
+pub mod spectral;
+pub mod timeforce;
 
 pub use diagnosis::Diagnosis;
 pub use run::discover;
@@ -33,12 +39,13 @@ use serde::{Deserialize, Serialize};
 pub use crate::physics::G_MPS2;
 
 /// Every candidate effect id the library knows, in the order they are listed.
-pub const EFFECTS: [&str; 5] = [
+pub const EFFECTS: [&str; 6] = [
     "velocity_dependent_drag",
     "rolling_resistance",
     "groove_tilt",
     "velocity_dependent_friction",
     "position_dependent_force",
+    "time_dependent_force",
 ];
 
 /// Settings of a discovery (the `discover` stage params, plus the seed).
@@ -55,8 +62,9 @@ pub struct Options {
     pub folds: usize,
     /// Candidate effect ids to test (see `EFFECTS`).
     pub candidates: Vec<String>,
-    /// Fourier basis sizes tried for a position-dependent force (chosen by cross-validation).
-    pub position_harmonics: Vec<usize>,
+    /// Model structure in a force map that no named form explains with a spline in its
+    /// variable (tested like a candidate, reported as `unexplained`).
+    pub nonparametric: bool,
     /// At most this many terms are added.
     pub max_terms: usize,
     /// Opening angle of the groove and m R²/I of the particle.
@@ -77,7 +85,7 @@ impl Default for Options {
             alpha: 0.01,
             folds: 5,
             candidates: EFFECTS.iter().map(|s| s.to_string()).collect(),
-            position_harmonics: vec![1, 2, 3],
+            nonparametric: true,
             max_terms: 3,
             groove_angle_deg: 70.6,
             k: 2.5,
@@ -111,12 +119,7 @@ impl Options {
                 );
             }
         }
-        if self.position_harmonics.is_empty() || self.position_harmonics.contains(&0) {
-            return bad(
-                "position_harmonics",
-                "list basis sizes ≥ 1, e.g. [1, 2, 3]".into(),
-            );
-        }
+
         if !(self.groove_angle_deg > 0.0 && self.groove_angle_deg < 180.0) {
             return bad("groove_angle_deg", "must lie in (0, 180) degrees".into());
         }

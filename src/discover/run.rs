@@ -4,10 +4,16 @@ use super::candidate::{Extra, Spec, N_LOCAL};
 use super::cv::{cross_validate, CvResult};
 use super::data::{prepare_runs, RunData};
 use super::diagnosis::{
-    CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ModelScore, Settings,
+    CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ForceMaps, ModelScore,
+    Settings,
 };
 use super::drift::line;
+use super::forcemap::ForceMap;
 use super::forward::{finding, fold_of, median_speed, run_round, Model};
+use super::null_distribution::NullFit;
+use super::proposal::{propose, wanted_for, Ranges, Wanted};
+use super::spectral::Spectrum;
+use crate::physics::Variable;
 use super::locate::locate;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::residual_structure::Structure;
@@ -20,13 +26,7 @@ fn median(mut v: Vec<f64>) -> f64 {
     crate::stats::upper_median(&mut v)
 }
 
-fn library(
-    opts: &Options,
-    n_materials: usize,
-    z_min_m: f64,
-    span_m: f64,
-    harmonics: usize,
-) -> Vec<Extra> {
+fn library(opts: &Options, n_materials: usize, rg: &Ranges) -> Vec<Extra> {
     let mut out = Vec::new();
     for c in &opts.candidates {
         match c.as_str() {
@@ -39,11 +39,11 @@ fn library(
             "velocity_dependent_friction" => out.push(Extra::VelocityFriction {
                 materials: n_materials,
             }),
-            "position_dependent_force" => out.push(Extra::PositionForce {
-                harmonics,
-                z_min_m,
-                span_m,
-            }),
+            "position_dependent_force" => {
+                out.push(rg.periodic_z());
+                out.push(rg.localized());
+            }
+            "time_dependent_force" => out.push(rg.time_periodic()),
             _ => {}
         }
     }
@@ -134,6 +134,8 @@ fn empty(opts: &Options, runs_used: usize, materials: Vec<String>, note: &str) -
         residuals_before: None,
         residuals_after: None,
         drift: None,
+        force_maps: None,
+        spectra: vec![],
         runs_used,
         materials,
         settings: settings(opts),
@@ -151,253 +153,425 @@ fn settings(opts: &Options) -> Settings {
     }
 }
 
-/// Choose the Fourier basis size of the position-dependent force by cross-validation against `current`.
-fn position_harmonics(
-    current: &Model,
+/// An accepted term with what the report shows about it.
+struct Accepted {
+    row: CandidateRow,
+    before: ModelScore,
+    after: ModelScore,
+    probes_after: Vec<CandidateRow>,
+    null: NullFit,
+    extra: Extra,
+}
+
+/// The baseline joint model with its starting values from the per-run fits.
+fn fit_baseline(
+    runs: &mut [RunData],
+    materials: &[String],
     opts: &Options,
+) -> (Model, Vec<PerRunFit>) {
+    let s = (opts.groove_angle_deg.to_radians() / 2.0).sin();
+    let base_spec = Spec {
+        n_materials: materials.len(),
+        s,
+        k: opts.k,
+        extras: vec![],
+    };
+    let base_params = base_spec.global_params(materials);
+    let per_run = measure_noise(runs, &base_spec, &base_params);
+    let mut g0 = Vec::new();
+    for m in 0..materials.len() {
+        g0.push(median(
+            runs.iter()
+                .zip(&per_run)
+                .filter(|(r, _)| r.material == m)
+                .map(|(_, f)| f.mu)
+                .collect(),
+        ));
+    }
+    for m in 0..materials.len() {
+        g0.push(median(
+            runs.iter()
+                .zip(&per_run)
+                .filter(|(r, _)| r.material == m)
+                .map(|(_, f)| f.t_s)
+                .collect(),
+        ));
+    }
+    let l0: Vec<[f64; N_LOCAL]> = per_run.iter().map(|f| f.local).collect();
+    let baseline = Model::fit(base_spec, materials, runs, &g0, &l0, 80);
+    (baseline, per_run)
+}
+
+/// Backward elimination: drop the weakest earlier term whose likelihood ratio, given the others,
+/// is within its own bootstrap null; repeat until every term is needed.
+fn eliminate(
+    current: &mut Model,
+    current_cv: &mut CvResult,
+    accepted: &mut Vec<Accepted>,
+    removed: &mut Vec<Accepted>,
     materials: &[String],
     runs: &[RunData],
     fold: &[usize],
-    z_min_m: f64,
-    span_m: f64,
-) -> usize {
-    let mut best = (opts.position_harmonics[0], f64::INFINITY);
-    if opts.position_harmonics.len() == 1 {
-        return best.0;
-    }
-    for &h in &opts.position_harmonics {
-        let m = current.extend(
-            &Extra::PositionForce {
-                harmonics: h,
-                z_min_m,
-                span_m,
-            },
-            materials,
-            runs,
-            40,
-        );
-        let cv = cross_validate(&m.spec, &m.params, runs, &m.fit, fold, opts.folds);
-        if cv.cv_rms_m < best.1 {
-            best = (h, cv.cv_rms_m);
+    opts: &Options,
+) {
+    loop {
+        if accepted.len() < 2 {
+            return;
         }
+        let last = accepted.len() - 1;
+        let mut weakest: Option<(usize, f64, f64, Model)> = None;
+        for (a, acc) in accepted.iter().enumerate().take(last) {
+            let Some(i) = current.spec.extras.iter().position(|e| *e == acc.extra) else {
+                continue;
+            };
+            let without = current.without(i, materials, runs, 40);
+            let lr = (without.fit.chi2 - current.fit.chi2).max(0.0);
+            let p = acc.null.p_value(lr);
+            if p >= opts.alpha && weakest.as_ref().map(|w| p > w.2).unwrap_or(true) {
+                weakest = Some((a, lr, p, without));
+            }
+        }
+        let Some((a, lr, p, without)) = weakest else {
+            return;
+        };
+        let mut gone = accepted.remove(a);
+        gone.row.accepted = false;
+        gone.row.evidence.decision = format!(
+            "removed by backward elimination: with the later terms its likelihood ratio is {lr:.1} (p = {p:.3}), within its bootstrap null"
+        );
+        removed.push(gone);
+        *current = without;
+        *current_cv = cross_validate(
+            &current.spec,
+            &current.params,
+            runs,
+            &current.fit,
+            fold,
+            opts.folds,
+        );
     }
-    best.0
 }
 
-/// Start values of the joint globals: per material the median per-run μ, then the median T.
-fn global_start(runs: &[RunData], per_run: &[PerRunFit], n_materials: usize) -> Vec<f64> {
-    let of_material = |m: usize, pick: fn(&PerRunFit) -> f64| -> Vec<f64> {
-        runs.iter()
-            .zip(per_run)
-            .filter(|(r, _)| r.material == m)
-            .map(|(_, f)| pick(f))
-            .collect()
-    };
-    let mut g0: Vec<f64> = (0..n_materials)
-        .map(|m| median(of_material(m, |f| f.mu)))
-        .collect();
-    g0.extend((0..n_materials).map(|m| median(of_material(m, |f| f.t_s))));
-    g0
+/// Run the whole discovery on `recordings` (single runs are used; collision runs are skipped).
+fn trace(t0: std::time::Instant, what: &str) {
+    if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+        eprintln!("discover: {what} at {:.2} s", t0.elapsed().as_secs_f64());
+    }
 }
 
-/// Lowest kept position and the span of kept positions over all runs (at least 1 µm).
-fn kept_extent(runs: &[RunData]) -> (f64, f64) {
-    let (zmin, zmax) = runs
-        .iter()
-        .flat_map(|r| {
-            r.z_m
-                .iter()
-                .zip(&r.keep)
-                .filter(|(_, k)| **k)
-                .map(|(z, _)| *z)
-        })
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
-            (a.min(z), b.max(z))
-        });
-    (zmin, (zmax - zmin).max(1e-6))
-}
-
-/// An accepted term: its row, the scores before and after it, and the probes of the next round.
-type Accepted = (CandidateRow, ModelScore, ModelScore, Vec<CandidateRow>);
-
-/// What the forward selection found: the final model and every row it tested.
-struct Selection {
-    current: Model,
-    current_cv: CvResult,
-    accepted: Vec<Accepted>,
-    table: Vec<CandidateRow>,
-    /// The rows of the round that accepted nothing (or hit the term limit).
-    last_rows: Vec<CandidateRow>,
-    last_probes: Vec<CandidateRow>,
-    /// Probes flagged in the last round with no term to explain them.
-    unexplained: Vec<CandidateRow>,
-}
-
-/// The common inputs of every selection round.
-struct Ground<'a> {
-    opts: &'a Options,
-    materials: &'a [String],
-    runs: &'a [RunData],
-    fold: &'a [usize],
-    probes: &'a [Extra],
-    z_min_m: f64,
-    span_m: f64,
-}
-
-/// Forward selection: each round tests the library's remaining terms against the current model
-/// and accepts the strongest passing one, until none passes or `max_terms` are in.
-fn select_terms(gr: &Ground, baseline: &Model, base_cv: &CvResult) -> Selection {
-    let (opts, runs) = (gr.opts, gr.runs);
-    let mut sel = Selection {
-        current: baseline.clone(),
-        current_cv: base_cv.clone(),
-        accepted: Vec::new(),
-        table: Vec::new(),
-        last_rows: Vec::new(),
-        last_probes: Vec::new(),
-        unexplained: Vec::new(),
-    };
-    let mut accepted_effects: Vec<String> = Vec::new();
+pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
+    let t0 = std::time::Instant::now();
+    let (mut runs, materials) = prepare_runs(recordings, opts.min_frames);
+    if runs.len() < 2 * opts.folds.max(2) {
+        return empty(
+            opts,
+            runs.len(),
+            materials,
+            &format!(
+                "discovery did not run: {} single runs with at least {} frames, fewer than the {} a joint model with {}-fold cross-validation needs; nothing was tested, so nothing can be said about missing physics",
+                runs.len(),
+                opts.min_frames,
+                2 * opts.folds.max(2),
+                opts.folds
+            ),
+        );
+    }
+    let (baseline, per_run) = fit_baseline(&mut runs, &materials, opts);
+    trace(t0, "baseline fitted");
+    let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
+    let base_cv = cross_validate(
+        &baseline.spec,
+        &baseline.params,
+        &runs,
+        &baseline.fit,
+        &fold,
+        opts.folds,
+    );
+    trace(t0, "baseline cross-validated");
+    let rg = Ranges::of(&runs);
+    let vref = median_speed(&baseline.fit.local);
+    let probes = vec![
+        Extra::SpeedDriftT { v_ref_mps: vref },
+        Extra::SpeedDriftMu { v_ref_mps: vref },
+        Extra::DirectionAsymmetry,
+    ];
+    let mut current = baseline.clone();
+    let mut current_cv: CvResult = base_cv.clone();
+    let mut accepted: Vec<Accepted> = Vec::new();
+    let mut removed: Vec<Accepted> = Vec::new();
+    let mut table: Vec<CandidateRow> = Vec::new();
+    let mut last_rows: Vec<CandidateRow> = Vec::new();
+    let mut last_probes: Vec<CandidateRow> = Vec::new();
+    let mut unexplained: Vec<CandidateRow> = Vec::new();
+    let mut maps_before: Vec<ForceMap> = Vec::new();
+    let mut spectra: Vec<Spectrum> = Vec::new();
     let mut round = 0;
     loop {
         round += 1;
-        let uses_position = opts
-            .candidates
-            .iter()
-            .any(|c| c == "position_dependent_force")
-            && !accepted_effects
-                .iter()
-                .any(|e| e == "position_dependent_force");
-        let harmonics = if uses_position {
-            position_harmonics(
-                &sel.current,
-                opts,
-                gr.materials,
-                runs,
-                gr.fold,
-                gr.z_min_m,
-                gr.span_m,
-            )
-        } else {
-            1
-        };
-        let entries: Vec<Extra> =
-            library(opts, gr.materials.len(), gr.z_min_m, gr.span_m, harmonics)
-                .into_iter()
-                .filter(|e| {
-                    !accepted_effects
-                        .iter()
-                        .any(|a| Some(a.as_str()) == e.effect())
+        // one cause, one term: a named effect is not added twice, except position forces of
+        // another form (a waviness and a bump)
+        let entries: Vec<Extra> = library(opts, materials.len(), &rg)
+            .into_iter()
+            .filter(|e| {
+                !accepted.iter().any(|a| {
+                    if e.effect() == Some("position_dependent_force") {
+                        std::mem::discriminant(&a.extra) == std::mem::discriminant(e)
+                    } else {
+                        Some(a.row.effect.as_str()) == e.effect()
+                    }
                 })
-                .collect();
+            })
+            .collect();
         if entries.is_empty() {
             break;
         }
+        let refs: Vec<&Extra> = entries.iter().collect();
+        let mut wanted = wanted_for(&refs);
+        wanted.maps = round == 1;
+        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+            eprintln!("round {round} starts");
+        }
+        let props = propose(
+            &current.spec,
+            &current.params,
+            &current.fit.global,
+            &current.fit.local,
+            &runs,
+            &rg,
+            wanted,
+            Some((&fold, opts.folds)),
+        );
+        if round == 1 {
+            maps_before = props.maps.clone();
+            spectra = props.z.iter().chain(props.t.iter()).cloned().collect();
+        }
+    trace(t0, "proposed");
         let r = run_round(
             round,
-            &sel.current,
-            &sel.current_cv,
+            &current,
+            &current_cv,
             &entries,
-            gr.probes,
-            gr.materials,
-            runs,
+            &probes,
+            &materials,
+            &runs,
             opts,
-            gr.fold,
+            &fold,
+            &props,
+            &rg,
         );
-        sel.table.extend(r.rows.iter().cloned());
-        sel.table.extend(r.probe_rows.iter().cloned());
-        if let Some(last) = sel.accepted.last_mut() {
-            last.3 = r.probe_rows.clone();
+        table.extend(r.rows.iter().cloned());
+        table.extend(r.probe_rows.iter().cloned());
+        if let Some(last) = accepted.last_mut() {
+            last.probes_after = r.probe_rows.clone();
         }
         match r.accepted {
-            Some((i, model, cv)) if sel.accepted.len() < opts.max_terms => {
-                let before = sel.current.score(runs, Some(&sel.current_cv));
-                let after = model.score(runs, Some(&cv));
+            Some((i, model, cv)) if accepted.len() < opts.max_terms => {
+                let before = current.score(&runs, Some(&current_cv));
+                let after = model.score(&runs, Some(&cv));
                 let mut row = r.rows[i].clone();
                 row.evidence.decision = format!(
                     "{} (flagged by {} probe(s))",
                     row.evidence.decision,
                     r.flagged_probes.len()
                 );
-                accepted_effects.push(row.effect.clone());
-                sel.accepted.push((row, before, after, vec![]));
-                sel.current = model;
-                sel.current_cv = cv;
-                sel.last_probes = r.probe_rows;
+                accepted.push(Accepted {
+                    row,
+                    before,
+                    after,
+                    probes_after: vec![],
+                    null: r.nulls[i].clone(),
+                    extra: entries[i].clone(),
+                });
+                current = model;
+                current_cv = cv;
+                last_probes = r.probe_rows;
+                eliminate(
+                    &mut current,
+                    &mut current_cv,
+                    &mut accepted,
+                    &mut removed,
+                    &materials,
+                    &runs,
+                    &fold,
+                    opts,
+                );
             }
             _ => {
-                sel.last_rows = r.rows;
-                sel.unexplained = r.flagged_probes;
-                sel.last_probes = r.probe_rows;
+                last_rows = r.rows;
+                unexplained = r.flagged_probes;
+                last_probes = r.probe_rows;
                 break;
             }
         }
-        if sel.accepted.len() >= opts.max_terms {
+        if accepted.len() >= opts.max_terms {
             break;
         }
     }
-    sel
-}
-
-/// Per-run drift of μ and T before (the baseline per-run fits) and after (the final model's extra
-/// terms held at their joint values).
-fn per_run_drift(
-    runs: &[RunData],
-    per_run: &[PerRunFit],
-    current: &Model,
-    materials: &[String],
-) -> Drift {
+    trace(t0, "rounds done");
+    // the nonparametric fallback: structure in a force map that no named form explained
+    let mut fallback: Option<Accepted> = None;
+    let mut maps_after: Vec<ForceMap> = Vec::new();
+    if opts.nonparametric {
+        let props = propose(
+            &current.spec,
+            &current.params,
+            &current.fit.global,
+            &current.fit.local,
+            &runs,
+            &rg,
+            Wanted {
+                z: false,
+                t: false,
+                bump: false,
+                maps: true,
+            },
+            Some((&fold, opts.folds)),
+        );
+        maps_after = props.maps.clone();
+        let strongest = props
+            .maps
+            .iter()
+            .filter(|m| m.spline.is_some() && m.cv_gain > 0.0)
+            .max_by(|a, b| a.cv_gain.total_cmp(&b.cv_gain));
+        let var = strongest.map(|m| match m.variable.as_str() {
+            "z" => Variable::Z,
+            "v" => Variable::V,
+            _ => Variable::T,
+        });
+        if let (Some(map), Some(var)) = (strongest, var) {
+            if let Some(spline) = rg.spline(map, var) {
+                round += 1;
+                let r = run_round(
+                    round,
+                    &current,
+                    &current_cv,
+                    std::slice::from_ref(&spline),
+                    &[],
+                    &materials,
+                    &runs,
+                    opts,
+                    &fold,
+                    &props,
+                    &rg,
+                );
+                table.extend(r.rows.iter().cloned());
+                if let Some((i, model, cv)) = r.accepted {
+                    let before = current.score(&runs, Some(&current_cv));
+                    let after = model.score(&runs, Some(&cv));
+                    let mut row = r.rows[i].clone();
+                    row.evidence.decision = format!(
+                        "accepted as a model of what no named form explains: the force map in {} shows structure (held-out χ² drop {:.1})",
+                        map.variable, map.cv_gain
+                    );
+                    fallback = Some(Accepted {
+                        row,
+                        before,
+                        after,
+                        probes_after: vec![],
+                        null: r.nulls[i].clone(),
+                        extra: spline,
+                    });
+                    current = model;
+                    current_cv = cv;
+                    maps_after = propose(
+                        &current.spec,
+                        &current.params,
+                        &current.fit.global,
+                        &current.fit.local,
+                        &runs,
+                        &rg,
+                        Wanted {
+                            z: false,
+                            t: false,
+                            bump: false,
+                            maps: true,
+                        },
+                        Some((&fold, opts.folds)),
+                    )
+                    .maps;
+                }
+            }
+        }
+    }
+    trace(t0, "fallback done");
+    let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
+    let residuals_after = locate(&current.spec, &current.fit, &runs, &materials);
+    // per-run drift with the final model's extra terms held at their joint values
     let extra_values: Vec<f64> = current.fit.global[2 * materials.len()..].to_vec();
     let after_fits = fit_each_run(
-        runs,
+        &runs,
         &current.spec,
         &current.params,
         &extra_values,
-        Some(per_run),
+        Some(&per_run),
     );
-    let before_pts = drift_points(runs, per_run, materials);
-    let after_pts = drift_points(runs, &after_fits, materials);
-    Drift {
-        lines_before: drift_lines(&before_pts, materials),
-        lines_after: drift_lines(&after_pts, materials),
+    let before_pts = drift_points(&runs, &per_run, &materials);
+    let after_pts = drift_points(&runs, &after_fits, &materials);
+    let drift = Drift {
+        lines_before: drift_lines(&before_pts, &materials),
+        lines_after: drift_lines(&after_pts, &materials),
         before: before_pts,
         after: after_pts,
         note: "per-run fits (own mu and T; extra terms held at the joint values in `after`); the fitted |v0| shares errors with T and mu, so the probes fitted inside the joint model carry the decision".into(),
-    }
-}
-
-/// The findings: each accepted term, then the unexplained flagged probes (if any), then the
-/// rejected terms of the last round.
-fn findings(
-    sel: &Selection,
-    final_score: &ModelScore,
-    residuals_before: &Structure,
-    residuals_after: &Structure,
-) -> Vec<Finding> {
+    };
+    trace(t0, "drift done");
     let mut findings: Vec<Finding> = Vec::new();
-    for (row, before, after, probes_after) in &sel.accepted {
+    for acc in accepted.iter().chain(fallback.iter()) {
         let mut w = BTreeMap::new();
-        let flagged: Vec<CandidateRow> = sel
-            .table
+        let flagged: Vec<CandidateRow> = table
             .iter()
-            .filter(|t| t.round == row.evidence.round && t.effect == "probe")
+            .filter(|t| t.round == acc.row.evidence.round && t.effect == "probe")
             .cloned()
             .collect();
         w.insert("drift_probes_before".to_string(), probes_json(&flagged));
-        w.insert("drift_probes_after".to_string(), probes_json(probes_after));
-        w.insert("residuals_before".to_string(), worst_bins(residuals_before));
-        findings.push(finding(row, before.clone(), after.clone(), w));
+        w.insert("drift_probes_after".to_string(), probes_json(&acc.probes_after));
+        w.insert(
+            "residuals_before".to_string(),
+            worst_bins(&residuals_before),
+        );
+        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
     }
-    if !sel.unexplained.is_empty() {
-        findings.push(unexplained_finding(
-            &sel.unexplained,
-            final_score,
-            residuals_after,
-        ));
-    }
-    for row in &sel.last_rows {
+    let final_score = current.score(&runs, Some(&current_cv));
+    if !unexplained.is_empty() && fallback.is_none() {
+        let strongest = unexplained
+            .iter()
+            .max_by(|a, b| a.evidence.lr.total_cmp(&b.evidence.lr))
+            .expect("non-empty");
         let mut w = BTreeMap::new();
-        w.insert("drift_probes".to_string(), probes_json(&sel.last_probes));
+        w.insert("drift_probes".to_string(), probes_json(&unexplained));
+        w.insert("residuals".to_string(), worst_bins(&residuals_after));
+        let mut parameters = BTreeMap::new();
+        for r in &unexplained {
+            for (k, v) in &r.parameters {
+                parameters.insert(k.clone(), *v);
+            }
+        }
+        findings.push(Finding {
+            effect: "unexplained".into(),
+            accepted: false,
+            form: unexplained
+                .iter()
+                .map(|r| r.form.clone())
+                .collect::<Vec<_>>()
+                .join("; "),
+            parameters,
+            evidence: strongest.evidence.clone(),
+            where_: w,
+            baseline: final_score.clone(),
+            extended: ModelScore {
+                cv_rms_m: f64::NAN,
+                ..final_score.clone()
+            },
+        });
+    }
+    for acc in &removed {
+        let mut w = BTreeMap::new();
+        w.insert("drift_probes".to_string(), probes_json(&acc.probes_after));
+        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
+    }
+    for row in &last_rows {
+        let mut w = BTreeMap::new();
+        w.insert("drift_probes".to_string(), probes_json(&last_probes));
         findings.push(finding(
             row,
             final_score.clone(),
@@ -408,130 +582,36 @@ fn findings(
             w,
         ));
     }
-    findings
-}
-
-/// A finding for flagged probes that no term explains, with the strongest probe's evidence.
-fn unexplained_finding(
-    unexplained: &[CandidateRow],
-    final_score: &ModelScore,
-    residuals_after: &Structure,
-) -> Finding {
-    let strongest = unexplained
-        .iter()
-        .max_by(|a, b| a.evidence.lr.total_cmp(&b.evidence.lr))
-        .expect("non-empty");
-    let mut w = BTreeMap::new();
-    w.insert("drift_probes".to_string(), probes_json(unexplained));
-    w.insert("residuals".to_string(), worst_bins(residuals_after));
-    let mut parameters = BTreeMap::new();
-    for r in unexplained {
-        for (k, v) in &r.parameters {
-            parameters.insert(k.clone(), *v);
-        }
-    }
-    Finding {
-        effect: "unexplained".into(),
-        accepted: false,
-        form: unexplained
-            .iter()
-            .map(|r| r.form.clone())
-            .collect::<Vec<_>>()
-            .join("; "),
-        parameters,
-        evidence: strongest.evidence.clone(),
-        where_: w,
-        baseline: final_score.clone(),
-        extended: ModelScore {
-            cv_rms_m: f64::NAN,
-            ..final_score.clone()
-        },
-    }
-}
-
-/// The final model's global parameters by name, with their standard errors.
-fn model_parameters(current: &Model) -> BTreeMap<String, Estimate> {
-    current
+    let mut model_parameters = BTreeMap::new();
+    for (p, (v, se)) in current
         .params
         .iter()
         .zip(current.fit.global.iter().zip(&current.fit.global_se))
-        .map(|(p, (v, se))| {
-            (
-                p.name.clone(),
-                Estimate {
-                    value: *v,
-                    stderr: *se,
-                },
-            )
-        })
-        .collect()
-}
-
-/// Run the whole discovery on `recordings` (single runs are used; collision runs are skipped):
-/// measure each run's noise, fit the joint baseline, select terms, then describe the result.
-pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
-    let (mut runs, materials) = prepare_runs(recordings, opts.min_frames);
-    if runs.len() < 2 * opts.folds.max(2) {
-        return empty(
-            opts,
-            runs.len(),
-            materials,
-            "too few single runs for a joint model and cross-validation: nothing tested",
+    {
+        model_parameters.insert(
+            p.name.clone(),
+            Estimate {
+                value: *v,
+                stderr: *se,
+            },
         );
     }
-    let s = (opts.groove_angle_deg.to_radians() / 2.0).sin();
-    let base_spec = Spec {
-        n_materials: materials.len(),
-        s,
-        k: opts.k,
-        extras: vec![],
-    };
-    let base_params = base_spec.global_params(&materials);
-    let per_run = measure_noise(&mut runs, &base_spec, &base_params);
-    let g0 = global_start(&runs, &per_run, materials.len());
-    let l0: Vec<[f64; N_LOCAL]> = per_run.iter().map(|f| f.local).collect();
-    let baseline = Model::fit(base_spec.clone(), &materials, &runs, &g0, &l0, 80);
-    let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
-    let base_cv = cross_validate(
-        &baseline.spec,
-        &baseline.params,
-        &runs,
-        &baseline.fit,
-        &fold,
-        opts.folds,
-    );
-    let vref = median_speed(&baseline.fit.local);
-    let (z_min_m, span_m) = kept_extent(&runs);
-    let probes = vec![
-        Extra::SpeedDriftT { v_ref_mps: vref },
-        Extra::SpeedDriftMu { v_ref_mps: vref },
-        Extra::DirectionAsymmetry,
-    ];
-    let ground = Ground {
-        opts,
-        materials: &materials,
-        runs: &runs,
-        fold: &fold,
-        probes: &probes,
-        z_min_m,
-        span_m,
-    };
-    let sel = select_terms(&ground, &baseline, &base_cv);
-    let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
-    let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
-    let drift = per_run_drift(&runs, &per_run, &sel.current, &materials);
-    let final_score = sel.current.score(&runs, Some(&sel.current_cv));
-    let findings = findings(&sel, &final_score, &residuals_before, &residuals_after);
+    let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {
-        mismatch: !sel.accepted.is_empty() || !sel.unexplained.is_empty(),
+        mismatch: any_accepted || !unexplained.is_empty(),
         findings,
-        candidates: sel.table.clone(),
+        candidates: table,
         model: final_score,
-        model_parameters: model_parameters(&sel.current),
+        model_parameters,
         baseline_model: baseline.score(&runs, Some(&base_cv)),
         residuals_before: Some(residuals_before),
         residuals_after: Some(residuals_after),
         drift: Some(drift),
+        force_maps: Some(ForceMaps {
+            before: maps_before,
+            after: maps_after,
+        }),
+        spectra,
         runs_used: runs.len(),
         materials,
         settings: settings(opts),

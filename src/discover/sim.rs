@@ -33,6 +33,9 @@ pub struct SimModel {
     pub tilt_mps2: f64,
     /// Position-dependent force terms: a = amp·sin(kz·z + phase), as (amp_mps2, kz_per_m, phase_rad).
     pub position: Vec<(f64, f64, f64)>,
+    /// Further physics terms (localized, time-periodic and spline forces), passed to the
+    /// integrator as they are.
+    pub terms: Vec<crate::physics::Term>,
 }
 
 /// Motion phase at a sample.
@@ -71,6 +74,7 @@ impl SimModel {
                 phase_rad,
             });
         }
+        terms.extend(self.terms.iter().cloned());
         Model {
             groove: Groove {
                 s: self.s,

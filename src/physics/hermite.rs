@@ -2,7 +2,8 @@
 //! second derivatives are known exactly), the 4th-order Dormand–Prince dense output for the rest.
 //!
 //! States are particle triples `[z, v, va, z, v, va, ...]`, so a position's derivative is the next
-//! component and its second derivative the next component of the derivative.
+//! component and its second derivative the next component of the derivative. A trailing component
+//! outside the triples (the time carried for time-dependent terms) uses the dense output.
 
 use super::rk::Step;
 
@@ -28,7 +29,7 @@ pub(crate) fn interpolate<const N: usize>(
     let one = 1.0 - th;
     let mut out = [0.0; N];
     for i in 0..N {
-        out[i] = if i % 3 == 0 {
+        out[i] = if i % 3 == 0 && i + 2 < N {
             q0 * y0[i]
                 + q1 * h * y0[i + 1]
                 + q2 * h * h * f0[i + 1]

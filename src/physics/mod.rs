@@ -19,6 +19,7 @@ mod phase;
 mod restitution;
 mod rk;
 mod simulate;
+mod spline;
 mod terms;
 mod trajectory;
 
@@ -31,5 +32,6 @@ pub use pair::{simulate_pair, Impact, PairParams, PairTrajectory, V_TOGETHER_MPS
 pub use phase::Phase;
 pub use restitution::Restitution;
 pub use simulate::simulate;
+pub use spline::{basis as spline_basis, n_basis as spline_n_basis, SplineForce, Variable};
 pub use terms::Term;
 pub use trajectory::{SwitchEvent, Trajectory};

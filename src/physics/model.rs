@@ -29,9 +29,9 @@ impl Model {
         }
     }
 
-    /// Sum of the extra accelerations at (z, v).
-    pub fn accel(&self, z_m: f64, v_mps: f64) -> f64 {
-        self.terms.iter().map(|t| t.accel(z_m, v_mps)).sum()
+    /// Sum of the extra accelerations at (z, v) and time since the kick t.
+    pub fn accel(&self, z_m: f64, v_mps: f64, t_s: f64) -> f64 {
+        self.terms.iter().map(|t| t.accel(z_m, v_mps, t_s)).sum()
     }
 
     /// Some term jumps where v changes sign.

@@ -21,8 +21,8 @@ const CONTACT_SLACK: f64 = 1e-9;
 /// Cap on all events (phase switches and impacts).
 const MAX_EVENTS: usize = 20_000;
 
-const TOL: Tolerance<6> = Tolerance {
-    atol: [1e-12, 1e-11, 1e-11, 1e-12, 1e-11, 1e-11],
+const TOL: Tolerance<7> = Tolerance {
+    atol: [1e-12, 1e-11, 1e-11, 1e-12, 1e-11, 1e-11, 1e-12],
     rtol: 1e-10,
 };
 
@@ -98,7 +98,7 @@ pub fn simulate_pair(
     let mut modes = [Mode::Rest; 2];
     let mut y = [0.0; 6];
     for i in 0..2 {
-        let (m, yi) = start(model, init[i].z_m, init[i].v_mps, init[i].va_mps);
+        let (m, yi) = start(model, init[i].z_m, init[i].v_mps, init[i].va_mps, 0.0);
         modes[i] = m;
         y[3 * i..3 * i + 3].copy_from_slice(&yi);
     }
@@ -124,32 +124,32 @@ pub fn simulate_pair(
         let mut sampler = Sampler {
             times: t_s,
             next,
-            store: |i: usize, yy: &[f64; 6]| {
+            store: |i: usize, yy: &[f64; 7]| {
                 p0[0].push(t_s[i], &yy[0..3], phases[0]);
                 p1[0].push(t_s[i], &yy[3..6], phases[1]);
             },
         };
         if both_rest || n_events >= MAX_EVENTS {
-            let yy = y;
+            let yy = with_t(&y, t);
             for i in next..t_s.len() {
                 (sampler.store)(i, &yy);
             }
             break;
         }
         let stop = advance(
-            &|yy: &[f64; 6]| {
-                let a: [f64; 3] = ms[0].rhs(model, &[yy[0], yy[1], yy[2]]);
-                let b: [f64; 3] = ms[1].rhs(model, &[yy[3], yy[4], yy[5]]);
-                [a[0], a[1], a[2], b[0], b[1], b[2]]
+            &|yy: &[f64; 7]| {
+                let a: [f64; 3] = ms[0].rhs(model, &[yy[0], yy[1], yy[2]], yy[6]);
+                let b: [f64; 3] = ms[1].rhs(model, &[yy[3], yy[4], yy[5]], yy[6]);
+                [a[0], a[1], a[2], b[0], b[1], b[2], 1.0]
             },
-            &|yy: &[f64; 6]| {
-                let a = ms[0].events(model, &[yy[0], yy[1], yy[2]]);
-                let b = ms[1].events(model, &[yy[3], yy[4], yy[5]]);
+            &|yy: &[f64; 7]| {
+                let a = ms[0].events(model, &[yy[0], yy[1], yy[2]], yy[6]);
+                let b = ms[1].events(model, &[yy[3], yy[4], yy[5]], yy[6]);
                 let gap = yy[3 * r] - yy[3 * l] - two_r;
                 [a[0], a[1], b[0], b[1], gap + CONTACT_SLACK * two_r]
             },
             t,
-            y,
+            with_t(&y, t),
             t_end,
             &mut sampler,
             &TOL,
@@ -157,7 +157,7 @@ pub fn simulate_pair(
         );
         next = sampler.next;
         t = stop.t_s;
-        y = stop.y;
+        y.copy_from_slice(&stop.y[..6]);
         n_events += 1;
         match stop.event {
             None => break,
@@ -170,7 +170,7 @@ pub fn simulate_pair(
             Some(e) => {
                 let i = e / 2;
                 let yi = [y[3 * i], y[3 * i + 1], y[3 * i + 2]];
-                let (m, y_new) = modes[i].after_event(model, e % 2, &yi);
+                let (m, y_new) = modes[i].after_event(model, e % 2, &yi, t);
                 note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
                 modes[i] = m;
                 y[3 * i..3 * i + 3].copy_from_slice(&y_new);
@@ -178,6 +178,11 @@ pub fn simulate_pair(
         }
     }
     out
+}
+
+/// The pair state with the time since the kick appended (time-dependent terms).
+fn with_t(y: &[f64; 6], t: f64) -> [f64; 7] {
+    [y[0], y[1], y[2], y[3], y[4], y[5], t]
 }
 
 fn note_switch(traj: &mut Trajectory, t_s: f64, from: Mode, to: Mode, y: &[f64; 3]) {
@@ -219,7 +224,7 @@ fn impact(
         (c, kick.slip, kick.v, kick.va)
     };
     for (idx, p) in [l, r].into_iter().enumerate() {
-        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx]);
+        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx], t_s);
         let from = modes[p];
         note_switch_phase(&mut out.particles[p], t_s, from, m, &yi);
         modes[p] = m;

@@ -8,11 +8,19 @@ use super::{Model, State, SwitchEvent, Trajectory};
 /// Cap on mode switches in one simulation (a guard against Zeno behaviour of odd models).
 const MAX_SWITCHES: usize = 10_000;
 
-/// Integration tolerances for one particle `[z, v, va]`.
-pub(crate) const TOL: Tolerance<3> = Tolerance {
-    atol: [1e-12, 1e-11, 1e-11],
+/// Integration tolerances for one particle `[z, v, va, t]` (t carried along for time-dependent terms).
+pub(crate) const TOL: Tolerance<4> = Tolerance {
+    atol: [1e-12, 1e-11, 1e-11, 1e-12],
     rtol: 1e-10,
 };
+
+fn with_t(y: &[f64; 3], t: f64) -> [f64; 4] {
+    [y[0], y[1], y[2], t]
+}
+
+fn head(y: &[f64; 4]) -> [f64; 3] {
+    [y[0], y[1], y[2]]
+}
 
 /// Simulate one particle from `init` at t = 0 and sample it at `t_s` (sorted ascending; times
 /// ≤ 0 get the initial state). Switches between sliding, rolling and rest are located as events.
@@ -25,7 +33,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
     let Some(&t_end) = t_s.last() else {
         return traj;
     };
-    let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps);
+    let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps, 0.0);
     let mut t = 0.0;
     let mut h = 1e-4;
     let mut next = 0;
@@ -42,13 +50,16 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
         let mut sampler = Sampler {
             times: t_s,
             next,
-            store: |i: usize, yy: &[f64; 3]| traj.push(t_s[i], yy, phase),
+            store: |i: usize, yy: &[f64; 4]| traj.push(t_s[i], &yy[..3], phase),
         };
         let stop = advance(
-            &|yy: &[f64; 3]| m.rhs(model, yy),
-            &|yy: &[f64; 3]| m.events(model, yy),
+            &|yy: &[f64; 4]| {
+                let d = m.rhs(model, &head(yy), yy[3]);
+                [d[0], d[1], d[2], 1.0]
+            },
+            &|yy: &[f64; 4]| m.events(model, &head(yy), yy[3]),
             t,
-            y,
+            with_t(&y, t),
             t_end,
             &mut sampler,
             &TOL,
@@ -57,7 +68,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
         next = sampler.next;
         t = stop.t_s;
         let Some(k) = stop.event else { break };
-        let (new_mode, new_y) = mode.after_event(model, k, &stop.y);
+        let (new_mode, new_y) = mode.after_event(model, k, &head(&stop.y), t);
         let slip_flip = matches!((mode, new_mode), (Mode::Slide { d: a, .. }, Mode::Slide { d: b, .. }) if a != b);
         if new_mode.phase() != phase || slip_flip {
             traj.events.push(SwitchEvent {

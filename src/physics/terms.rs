@@ -1,5 +1,7 @@
-//! Composable extra physics along the groove: accelerations a(z, v) other than groove friction.
+//! Composable extra physics along the groove: accelerations a(z, v, t) other than groove friction
+//! (t is the time since the kick of the particle's run).
 
+use super::spline::SplineForce;
 use super::G_MPS2;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
@@ -24,11 +26,27 @@ pub enum Term {
         wavelength_m: f64,
         phase_rad: f64,
     },
+    /// Localized force fixed in the lab (a bump, a defect): `amp exp(−(z − z_c)²/(2 w²))`.
+    LocalizedForce {
+        amp_mps2: f64,
+        centre_m: f64,
+        width_m: f64,
+    },
+    /// Force periodic in the time since the kick (a vibration): `amp sin(2π f t + φ)`.
+    /// A truth file may give each run its own φ (`[physics] time_phase_per_run = true`).
+    TimePeriodicForce {
+        amp_mps2: f64,
+        freq_hz: f64,
+        phase_rad: f64,
+    },
+    /// A smooth force of z, v or t given by a cubic B-spline (the nonparametric model).
+    Spline(SplineForce),
 }
 
 impl Term {
-    /// Acceleration (m/s²) at position `z_m` and velocity `v_mps`; sign terms give 0 at v = 0.
-    pub fn accel(&self, z_m: f64, v_mps: f64) -> f64 {
+    /// Acceleration (m/s²) at position `z_m`, velocity `v_mps` and time since the kick `t_s`;
+    /// sign terms give 0 at v = 0.
+    pub fn accel(&self, z_m: f64, v_mps: f64, t_s: f64) -> f64 {
         match *self {
             Term::LinearDrag { t_s } => -v_mps / t_s,
             Term::QuadraticDrag { c_per_m } => -c_per_m * v_mps * v_mps.abs(),
@@ -48,6 +66,29 @@ impl Term {
                 wavelength_m,
                 phase_rad,
             } => amp_mps2 * (TAU * z_m / wavelength_m + phase_rad).sin(),
+            Term::LocalizedForce {
+                amp_mps2,
+                centre_m,
+                width_m,
+            } => {
+                let u = (z_m - centre_m) / width_m;
+                amp_mps2 * (-0.5 * u * u).exp()
+            }
+            Term::TimePeriodicForce {
+                amp_mps2,
+                freq_hz,
+                phase_rad,
+            } => amp_mps2 * (TAU * freq_hz * t_s + phase_rad).sin(),
+            Term::Spline(ref sp) => sp.accel(z_m, v_mps, t_s),
+        }
+    }
+
+    /// The term depends on the time since the kick.
+    pub fn time_dependent(&self) -> bool {
+        match self {
+            Term::TimePeriodicForce { .. } => true,
+            Term::Spline(sp) => sp.variable == super::spline::Variable::T,
+            _ => false,
         }
     }
 
@@ -73,6 +114,9 @@ impl Term {
             Term::RollingResistance { .. } => "rolling resistance",
             Term::GrooveTilt { .. } => "groove tilt",
             Term::PositionForce { .. } => "position-dependent force",
+            Term::LocalizedForce { .. } => "localized force",
+            Term::TimePeriodicForce { .. } => "time-periodic force",
+            Term::Spline(_) => "spline force",
         }
     }
 }

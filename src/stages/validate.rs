@@ -100,7 +100,11 @@ pub fn effect_id(term: &Term) -> Option<Effect> {
         }
         Term::RollingResistance { .. } => Some(Effect::RollingResistance),
         Term::GrooveTilt { .. } => Some(Effect::GrooveTilt),
-        Term::PositionForce { .. } => Some(Effect::PositionDependentForce),
+        Term::PositionForce { .. } | Term::LocalizedForce { .. } => {
+            Some(Effect::PositionDependentForce)
+        }
+        Term::TimePeriodicForce { .. } => Some(Effect::TimeDependentForce),
+        Term::Spline(_) => Some(Effect::Unexplained),
     }
 }
 

@@ -52,7 +52,16 @@ pub(crate) fn synth_run(truth: &Truth, group: &RunGroup, j: usize, index: usize)
     let t_first = u_first / cam.fps;
     let frames = (group.duration_s * cam.fps).round() as usize;
     let t: Vec<f64> = (0..frames).map(|k| t_first + k as f64 / cam.fps).collect();
-    let model = truth.model(material);
+    let mut model = truth.model(material);
+    if truth.physics.time_phase_per_run {
+        // drawn only when asked for, after the other draws, so other datasets keep their streams
+        let u_phase: f64 = rng.random();
+        for term in &mut model.terms {
+            if let crate::physics::Term::TimePeriodicForce { phase_rad, .. } = term {
+                *phase_rad += std::f64::consts::TAU * u_phase;
+            }
+        }
+    }
     let striker = State {
         z_m: z_kick,
         v_mps: dir * v0,

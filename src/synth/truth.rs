@@ -34,12 +34,16 @@ fn solid_sphere() -> f64 {
     2.5
 }
 
-/// Extra accelerations a(z, v) acting on every particle, besides groove friction.
+/// Extra accelerations a(z, v, t) acting on every particle, besides groove friction.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PhysicsSpec {
     #[serde(default)]
     pub terms: Vec<Term>,
+    /// Give each run its own phase of every `time_periodic_force` (drawn uniformly): a vibration
+    /// that is not synchronised with the kick.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub time_phase_per_run: bool,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

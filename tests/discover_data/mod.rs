@@ -64,6 +64,7 @@ impl Truth {
                 .position
                 .map(|(a, lambda, ph)| vec![(a, 2.0 * std::f64::consts::PI / lambda, ph)])
                 .unwrap_or_default(),
+            terms: vec![],
         }
     }
 }

@@ -266,6 +266,7 @@ mod tests {
             roll_c: 0.0,
             tilt_mps2: 0.0,
             position: vec![],
+            terms: vec![],
         }
     }
 

@@ -2,6 +2,7 @@
 
 pub mod common;
 pub mod discovery;
+pub mod forcemap;
 pub mod fig_4_2b;
 pub mod fig_4_2c;
 pub mod fig_4_2d;
@@ -78,6 +79,12 @@ pub fn render_all(
     if let Some(diag) = &d.diagnosis {
         put("fig_discovery_cv.svg", discovery::render_cv(diag)?);
         put("fig_discovery_drift.svg", discovery::render_drift(diag)?);
+        for v in ["z", "v", "t"] {
+            put(
+                &format!("fig_discovery_forcemap_{v}.svg"),
+                forcemap::render_map(diag, v)?,
+            );
+        }
     }
     Ok(out)
 }

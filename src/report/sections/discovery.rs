@@ -468,11 +468,26 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     };
     let mismatch = diag.mismatch;
     let accepted: Vec<&Finding> = diag.findings.iter().filter(|f| f.accepted).collect();
+    if diag.candidates.is_empty() && diag.findings.is_empty() {
+        b.para(if diag.note.is_empty() {
+            "Discovery tested nothing on this dataset, so nothing can be said about missing physics.".to_string()
+        } else {
+            format!("{}.", diag.note.trim_end_matches('.'))
+        });
+        return b;
+    }
     b.para(if mismatch {
         "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."
     } else {
-        "No systematic mismatch: the pooled residuals and the per-run parameters show no structure beyond the noise, so nothing is missing from the baseline."
+        "No systematic mismatch was found: the pooled residuals and the per-run parameters show no structure beyond the noise. That is a statement at the detection limits below, not a proof that nothing is missing."
     });
+    let limits = detection_limits(diag);
+    if !limits.is_empty() {
+        b.para(format!(
+            "Detection limits on this dataset (90 % power at the first Holm level, from the bootstrap null of the last round that tested each form): {}.",
+            limits.join("; ")
+        ));
+    }
     if let Some(f) = diag.findings.iter().find(|f| !f.where_.is_empty()) {
         let effect = f.effect.replace('_', " ");
         b.para(format!("Where ({effect}): {}.", where_text(&f.where_)));
@@ -542,6 +557,17 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.table(t);
     }
     b.figure(figs, "fig_discovery_drift.svg", "The drift that flagged the mismatch: fitted T against |v0| for the baseline (grey) and for the extended model (green), with regression lines.");
+    for (v, what) in [
+        ("z", "the position in the lab"),
+        ("v", "the signed velocity"),
+        ("t", "the time since the kick"),
+    ] {
+        b.figure(
+            figs,
+            &format!("fig_discovery_forcemap_{v}.svg"),
+            &format!("Force map: the missing acceleration as a smooth function of {what} (penalized spline over every run, smoothness by leave-runs-out cross-validation, 95 % band), for the baseline (grey) and with the accepted physics (green). A band that holds zero is the picture of nothing missing in that variable."),
+        );
+    }
     if let Some(t) = drift_table(diag) {
         b.table(t);
     }
@@ -553,4 +579,21 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         None => "Comparison with the chapter's correction (Eq. 4.8): with nothing accepted there is no extended model to compare; Eq. 4.8's v/T0 − v²/L is in any case unphysical above L/T0 ≈ 48 mm/s (see the audit).".into(),
     });
     b
+}
+
+/// "a groove tilt above 0.02 ° would have been found", one per form, from the last round that
+/// tested it.
+fn detection_limits(diag: &Diagnosis) -> Vec<String> {
+    let mut by_form: BTreeMap<String, String> = BTreeMap::new();
+    let mut order: Vec<String> = Vec::new();
+    for c in &diag.candidates {
+        let Some(l) = &c.evidence.detection_limit else {
+            continue;
+        };
+        if !by_form.contains_key(&c.form) {
+            order.push(c.form.clone());
+        }
+        by_form.insert(c.form.clone(), l.text.clone());
+    }
+    order.into_iter().filter_map(|f| by_form.remove(&f)).collect()
 }

@@ -1,0 +1,147 @@
+//! Spectral search: pooled periodograms of the residuals in lab z and in time since the kick.
+//!
+//! At each trial wavenumber (or frequency) the residuals of every run, with its z0, t0, v0
+//! projected out, are regressed on the run's linear response to `sin` and `cos` forces; the power
+//! is the drop in χ² (residuals in units of each run's noise). In z the force is fixed in the lab,
+//! so one (sin, cos) pair is shared by every run (coherent). In time a vibration starts anew in
+//! each run, so each run gets its own pair and the drops add (incoherent, a phase per run). The
+//! peaks only propose candidates and their starting values; whether a peak is real is decided by
+//! the candidate's likelihood ratio against the parametric bootstrap, which repeats this search in
+//! every replicate (so the look-elsewhere effect is in the null).
+
+use super::response::{dot, Prepared};
+use rayon::prelude::*;
+use std::f64::consts::TAU;
+
+pub use crate::artifacts::diagnosis::{Peak, Spectrum};
+
+fn solve2(a: [f64; 3], b: [f64; 2]) -> Option<([f64; 2], f64)> {
+    let det = a[0] * a[2] - a[1] * a[1];
+    if det <= 1e-12 * (a[0] * a[2]).max(1e-300) {
+        return None;
+    }
+    let x = [
+        (a[2] * b[0] - a[1] * b[1]) / det,
+        (a[0] * b[1] - a[1] * b[0]) / det,
+    ];
+    Some((x, x[0] * b[0] + x[1] * b[1]))
+}
+
+/// The `n` highest local maxima, at least `min_sep` grid steps apart.
+fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Peak> {
+    let mut idx: Vec<usize> = (0..power.len())
+        .filter(|&i| {
+            (i == 0 || power[i] >= power[i - 1]) && (i + 1 == power.len() || power[i] >= power[i + 1])
+        })
+        .collect();
+    idx.sort_by(|a, b| power[*b].total_cmp(&power[*a]).then(a.cmp(b)));
+    let mut out: Vec<Peak> = Vec::new();
+    for i in idx {
+        if out.len() >= n {
+            break;
+        }
+        if out
+            .iter()
+            .any(|p| (p.omega - omega[i]).abs() < 2.5 * (omega[1.min(omega.len() - 1)] - omega[0]).abs())
+        {
+            continue;
+        }
+        out.push(Peak {
+            omega: omega[i],
+            power: power[i],
+            coef: coef[i],
+        });
+    }
+    out
+}
+
+/// The periodogram in lab z over wavenumbers `k` (rad/m), phases referred to `z_ref`.
+pub fn z_spectrum(prep: &[Prepared], z_ref: f64, k: &[f64]) -> Spectrum {
+    let rows: Vec<(f64, [f64; 2])> = k
+        .par_iter()
+        .map(|&kk| {
+            let mut a = [0.0; 3];
+            let mut b = [0.0; 2];
+            for p in prep {
+                let z = p.track.variable(crate::physics::Variable::Z);
+                let fs: Vec<f64> = z.iter().map(|z| (kk * (z - z_ref)).sin()).collect();
+                let fc: Vec<f64> = z.iter().map(|z| (kk * (z - z_ref)).cos()).collect();
+                let xs = p.column(p.track.respond_values(&fs));
+                let xc = p.column(p.track.respond_values(&fc));
+                a[0] += dot(&xs, &xs);
+                a[1] += dot(&xs, &xc);
+                a[2] += dot(&xc, &xc);
+                b[0] += dot(&xs, &p.y);
+                b[1] += dot(&xc, &p.y);
+            }
+            solve2(a, b).map(|(x, d)| (d, x)).unwrap_or((0.0, [0.0; 2]))
+        })
+        .collect();
+    let power: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    let coef: Vec<[f64; 2]> = rows.iter().map(|r| r.1).collect();
+    Spectrum {
+        variable: "z".into(),
+        x: k.iter().map(|k| TAU / k).collect(),
+        peaks: peaks_of(k, &power, &coef, 2),
+        power,
+        noise_power: 2.0,
+    }
+}
+
+/// The periodogram in time since the kick over frequencies `f_hz`, a phase per run.
+pub fn t_spectrum(prep: &[Prepared], f_hz: &[f64]) -> Spectrum {
+    let omega: Vec<f64> = f_hz.iter().map(|f| TAU * f).collect();
+    let rows: Vec<(f64, [f64; 2])> = omega
+        .par_iter()
+        .map(|&w| {
+            let (mut power, mut amp2, mut bias, mut n) = (0.0, 0.0, 0.0, 0.0);
+            for p in prep {
+                let (rs, rc) = p.track.respond_time(w);
+                let xs = p.column(rs);
+                let xc = p.column(rc);
+                let a = [dot(&xs, &xs), dot(&xs, &xc), dot(&xc, &xc)];
+                let b = [dot(&xs, &p.y), dot(&xc, &p.y)];
+                if let Some((x, d)) = solve2(a, b) {
+                    let det = a[0] * a[2] - a[1] * a[1];
+                    power += d;
+                    amp2 += x[0] * x[0] + x[1] * x[1];
+                    // the noise part of |x|²: trace of the inverse normal matrix
+                    bias += (a[0] + a[2]) / det;
+                    n += 1.0;
+                }
+            }
+            let amp = if n > 0.0 {
+                ((amp2 - bias) / n).max(0.0).sqrt()
+            } else {
+                0.0
+            };
+            (power, [amp, 0.0])
+        })
+        .collect();
+    let power: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    let coef: Vec<[f64; 2]> = rows.iter().map(|r| r.1).collect();
+    Spectrum {
+        variable: "t".into(),
+        x: f_hz.to_vec(),
+        peaks: peaks_of(&omega, &power, &coef, 2),
+        power,
+        noise_power: 2.0 * prep.len() as f64,
+    }
+}
+
+/// Wavenumbers from the observed span down to `lambda_min_m`, two per Fourier step.
+pub fn k_grid(span_m: f64, lambda_min_m: f64) -> Vec<f64> {
+    let k_lo = TAU / span_m;
+    let k_hi = TAU / lambda_min_m.min(span_m / 2.0);
+    let dk = 0.5 * k_lo;
+    let n = ((k_hi - k_lo) / dk).ceil() as usize + 1;
+    (0..n).map(|i| k_lo + i as f64 * dk).collect()
+}
+
+/// Frequencies from one period over the longest run up to `f_max_hz`, two per Fourier step.
+pub fn f_grid(duration_s: f64, f_max_hz: f64) -> Vec<f64> {
+    let f_lo = 1.0 / duration_s;
+    let df = 0.5 * f_lo;
+    let n = ((f_max_hz - f_lo) / df).floor().max(0.0) as usize + 1;
+    (0..n).map(|i| f_lo + i as f64 * df).collect()
+}
