@@ -85,10 +85,36 @@ fn within(got: f64, want: f64, what: &str) {
     );
 }
 
+/// Every candidate tested, one line each, for a failing assertion's message.
+fn table(d: &Diagnosis) -> String {
+    d.candidates
+        .iter()
+        .map(|c| {
+            format!(
+                "round {} {} [{}] lr {:.1} null mean {:.1} p_holm {:.2e} cv_t {:?}: {}",
+                c.round,
+                c.effect,
+                c.form.chars().take(24).collect::<String>(),
+                c.evidence.lr,
+                c.evidence.null_mean_lr,
+                c.evidence.p_holm,
+                c.evidence.cv_paired_t,
+                c.evidence.decision
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// The accepted findings are exactly `want` (effect, form fragment), in any order.
 fn exactly(d: &Diagnosis, want: &[(&str, &str)]) {
     let got = accepted(d);
-    assert_eq!(got.len(), want.len(), "accepted {got:?}, want {want:?}");
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "accepted {got:?}, want {want:?}\n{}",
+        table(d)
+    );
     for (e, form) in want {
         assert!(
             got.iter().any(|(ge, gf)| ge == e && gf.contains(form)),

@@ -392,7 +392,7 @@ pub fn run_round(
     let t_cv = t_upper_quantile(CV_LEVEL, runs.len().saturating_sub(1) as f64);
     // fit in full and cross-validate the significant candidates strongest first (at most
     // FULL_TRIES of them); the first that also predicts held-out runs better is the one accepted.
-    // "Strongest" is the LR less a Schwarz penalty of ln(n) per extra parameter: when a
+    // "Strongest" is the LR beyond its null (mean, and ln(n) per parameter) over the null spread: when a
     // one-parameter term explains as much as a six-parameter series (rolling resistance against a
     // position force when each direction of motion covers its own stretch of the groove), the
     // simpler physics is named.
@@ -401,8 +401,13 @@ pub fn run_round(
         .map(|r| r.keep.iter().filter(|k| **k).count())
         .sum();
     let penalty = (n_obs.max(2) as f64).ln();
+    // ranked by the statistic's excess over its own null (what noise alone gives this form,
+    // its search included) less ln(n) per parameter
     let strength: Vec<f64> = (0..ne)
-        .map(|i| lr[i] - penalty * all[i].params().len() as f64)
+        .map(|i| {
+            let df = all[i].params().len() as f64;
+            lr[i] - nulls[i].mean.max(df) - penalty * df
+        })
         .collect();
     let mut order: Vec<usize> = (0..ne).filter(|i| p_holm_e[*i] < opts.alpha).collect();
     order.sort_by(|a, b| strength[*b].total_cmp(&strength[*a]).then(a.cmp(b)));

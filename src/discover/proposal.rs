@@ -102,7 +102,9 @@ impl Ranges {
 
     pub fn time_periodic(&self) -> Extra {
         Extra::TimePeriodic {
-            f_lo: 0.5 / self.duration_s,
+            // three periods in the longest run at least: slower, a force in time is one smooth
+            // push per run, which drag, tilt or a force in z explain as well
+            f_lo: 3.0 / self.duration_s,
             f_hi: 1.05 * self.f_max_hz,
         }
     }
