@@ -7,30 +7,23 @@
 //! The dataset is synthesized once from tests/fixtures/truths/hostile_small.toml and one project
 //! runs the whole pipeline on it once; every test works on its own copy.
 
+#[path = "support/files.rs"]
+mod files;
+#[path = "support/parquet.rs"]
+mod parquet;
+
+use files::{
+    assert_names, copy_tree, edit_line, edit_lines, repo, scratch, set_cell, set_field, text,
+    tree_hashes, GROOVE,
+};
 use groove::engine::hashing::sha256_hex;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
 /// The longest a reproducer may take (the bound).
 const LIMIT: Duration = Duration::from_secs(10);
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn scratch() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hostile");
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    })
-}
 
 /// Runs the binary in `cwd`, killing it (and failing) if it takes longer than `limit`.
 fn groove_within(cwd: &Path, args: &[&str], limit: Duration) -> Output {
@@ -58,18 +51,14 @@ fn groove_within(cwd: &Path, args: &[&str], limit: Duration) -> Output {
     }
 }
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
 /// The project after one successful run of the whole pipeline.
 fn base() -> &'static Path {
     static BASE: OnceLock<PathBuf> = OnceLock::new();
     BASE.get_or_init(|| {
-        let dataset = scratch().join("dataset");
+        let dataset = scratch("hostile").join("dataset");
         let truth = repo().join("tests/fixtures/truths/hostile_small.toml");
         let out = groove_within(
-            scratch(),
+            scratch("hostile"),
             &[
                 "synth",
                 "--truth",
@@ -80,7 +69,7 @@ fn base() -> &'static Path {
             Duration::from_secs(600),
         );
         assert!(out.status.success(), "synth: {}", text(&out.stderr));
-        let project = scratch().join("base");
+        let project = scratch("hostile").join("base");
         std::fs::create_dir_all(project.join("data")).unwrap();
         std::fs::copy(repo().join("pipeline.toml"), project.join("pipeline.toml")).unwrap();
         for name in ["runs.csv", "trajectories.csv"] {
@@ -92,74 +81,11 @@ fn base() -> &'static Path {
     })
 }
 
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let path = entry.unwrap().path();
-        let target = to.join(path.file_name().unwrap());
-        if path.is_dir() {
-            copy_tree(&path, &target);
-        } else {
-            std::fs::copy(&path, &target).unwrap();
-        }
-    }
-}
-
 fn copy_of_base(name: &str) -> PathBuf {
-    let to = scratch().join(name);
+    let to = scratch("hostile").join(name);
     let _ = std::fs::remove_dir_all(&to);
     copy_tree(base(), &to);
     to
-}
-
-/// sha256 of every file under `dir` by relative path, except the store's caches and log (which
-/// a run may touch without changing anything the user sees).
-fn tree_hashes(dir: &Path) -> BTreeMap<String, String> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
-        let Ok(entries) = std::fs::read_dir(dir) else {
-            return;
-        };
-        for entry in entries {
-            let path = entry.unwrap().path();
-            let rel = path
-                .strip_prefix(root)
-                .unwrap()
-                .to_string_lossy()
-                .into_owned();
-            if [".groove/hashes.json", ".groove/run.log", ".groove/lock"].contains(&rel.as_str()) {
-                continue;
-            }
-            if path.is_dir() {
-                walk(root, &path, out);
-            } else {
-                out.insert(rel, sha256_hex(&std::fs::read(&path).unwrap()));
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
-
-/// Rewrites a file's lines: `edit(line_number, line)` returns the new lines for it (none to
-/// delete it). Line 1 is the header.
-fn edit_lines(path: &Path, mut edit: impl FnMut(usize, &str) -> Vec<String>) {
-    let content = std::fs::read_to_string(path).unwrap();
-    let mut out = String::new();
-    for (k, line) in content.lines().enumerate() {
-        for l in edit(k + 1, line) {
-            out += &l;
-            out.push('\n');
-        }
-    }
-    std::fs::write(path, out).unwrap();
-}
-
-/// The line with field `field` replaced.
-fn set_field(line: &str, field: usize, value: &str) -> String {
-    let mut cells: Vec<&str> = line.split(',').collect();
-    cells[field] = value;
-    cells.join(",")
 }
 
 /// Spoils a copy of the base project, runs it, and checks the acceptance: exit 2 within
@@ -187,15 +113,6 @@ fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
     stderr
 }
 
-fn assert_names(stderr: &str, parts: &[&str]) {
-    for p in parts {
-        assert!(
-            stderr.contains(p),
-            "the error does not name `{p}`:\n{stderr}"
-        );
-    }
-}
-
 /// The first run id of `experiment` in runs.csv.
 fn first_run(project: &Path, experiment: &str) -> String {
     let runs = std::fs::read_to_string(project.join("data/runs.csv")).unwrap();
@@ -212,13 +129,7 @@ fn first_run(project: &Path, experiment: &str) -> String {
 #[test]
 fn a_position_of_1e308_exits_2_at_its_cell() {
     let err = refused("z_1e308", |p| {
-        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 {
-                set_field(l, 4, "1e308")
-            } else {
-                l.into()
-            }]
-        })
+        set_cell(&p.join("data/trajectories.csv"), 101, 4, "1e308")
     });
     assert_names(&err, &["trajectories.csv row 101, column z_m"]);
 }
@@ -227,13 +138,7 @@ fn a_position_of_1e308_exits_2_at_its_cell() {
 fn huge_times_exit_2_at_their_cell() {
     for value in ["1e308", "-1e308", "9.2e18", "-9.2e18", "1e20"] {
         let err = refused(&format!("t_{value}"), |p| {
-            edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-                vec![if k == 101 {
-                    set_field(l, 3, value)
-                } else {
-                    l.into()
-                }]
-            })
+            set_cell(&p.join("data/trajectories.csv"), 101, 3, value)
         });
         assert_names(&err, &["trajectories.csv row 101, column t_s"]);
     }
@@ -242,12 +147,8 @@ fn huge_times_exit_2_at_their_cell() {
 #[test]
 fn a_far_frame_at_a_matching_time_exits_2() {
     let err = refused("far_frame", |p| {
-        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 {
-                set_field(&set_field(l, 2, "100000000"), 3, "10000")
-            } else {
-                l.into()
-            }]
+        edit_line(&p.join("data/trajectories.csv"), 101, |l| {
+            set_field(&set_field(l, 2, "100000000"), 3, "10000")
         })
     });
     assert_names(&err, &["trajectories.csv row 101, column t_s"]);
@@ -256,13 +157,7 @@ fn a_far_frame_at_a_matching_time_exits_2() {
 #[test]
 fn a_frame_rate_typed_in_khz_exits_2_saying_so() {
     let err = refused("fps_khz", |p| {
-        edit_lines(&p.join("data/runs.csv"), |k, l| {
-            vec![if k == 2 {
-                set_field(l, 4, "10")
-            } else {
-                l.into()
-            }]
-        })
+        set_cell(&p.join("data/runs.csv"), 2, 4, "10")
     });
     assert_names(&err, &["runs.csv row 2, column fps", "kHz", "10000"]);
 }
@@ -370,33 +265,9 @@ fn invalid_utf8_in_the_header_exits_2_naming_row_and_column() {
 
 #[test]
 fn numbers_stored_as_text_in_parquet_exit_2() {
-    use polars::prelude::*;
     let err = refused("parquet_text", |p| {
         let csv = std::fs::read_to_string(p.join("data/trajectories.csv")).unwrap();
-        let rows: Vec<Vec<&str>> = csv
-            .lines()
-            .skip(1)
-            .map(|l| l.split(',').collect())
-            .collect();
-        let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
-        let int = |k: usize| {
-            rows.iter()
-                .map(|r| r[k].parse::<i64>().unwrap())
-                .collect::<Vec<_>>()
-        };
-        let mut df = DataFrame::new(
-            rows.len(),
-            vec![
-                Column::new("run".into(), col(0)),
-                Column::new("particle".into(), int(1)),
-                Column::new("frame".into(), int(2)),
-                Column::new("t_s".into(), col(3)),
-                Column::new("z_m".into(), col(4)),
-            ],
-        )
-        .unwrap();
-        let mut bytes = Vec::new();
-        ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
+        let bytes = parquet::trajectories_parquet(&csv, true);
         std::fs::remove_file(p.join("data/trajectories.csv")).unwrap();
         std::fs::write(p.join("data/trajectories.parquet"), bytes).unwrap();
     });
@@ -411,7 +282,7 @@ fn numbers_stored_as_text_in_parquet_exit_2() {
 #[test]
 fn symlinked_tables_are_followed() {
     let project = copy_of_base("symlinks");
-    let elsewhere = scratch().join("symlinks-elsewhere");
+    let elsewhere = scratch("hostile").join("symlinks-elsewhere");
     std::fs::create_dir_all(&elsewhere).unwrap();
     let reports = tree_hashes(&project.join("reports"));
     for name in ["runs.csv", "trajectories.csv"] {
