@@ -117,7 +117,7 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
     let off = m.spec.extra_offset(i);
     let g = &m.fit.global;
     let se = &m.fit.global_se;
-    let est = |value: f64, stderr: f64| Estimate { value, stderr };
+    let est = Estimate::new;
     let mut out = BTreeMap::new();
     let nm = m.spec.n_materials;
     match &m.spec.extras[i] {

@@ -455,15 +455,7 @@ fn model_parameters(current: &Model) -> BTreeMap<String, Estimate> {
         .params
         .iter()
         .zip(current.fit.global.iter().zip(&current.fit.global_se))
-        .map(|(p, (v, se))| {
-            (
-                p.name.clone(),
-                Estimate {
-                    value: *v,
-                    stderr: *se,
-                },
-            )
-        })
+        .map(|(p, (v, se))| (p.name.clone(), Estimate::new(*v, *se)))
         .collect()
 }
 

@@ -108,9 +108,8 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let all: Vec<usize> = (0..ok.len()).collect();
     let point = stats(&all);
     let ci = percentile_intervals(ok.len(), opts.bootstrap_resamples, seed, opts.level, stats);
-    let est = |k: usize| Estimate {
-        value: point[k],
-        interval: if point[k].is_finite() { ci[k] } else { None },
+    let est = |k: usize| {
+        Estimate::with_interval(point[k], if point[k].is_finite() { ci[k] } else { None })
     };
     let speed_range_mps = (!speed.is_empty()).then(|| {
         [
