@@ -240,14 +240,16 @@ macro_rules! adapter {
                 use serde::{Deserialize, Deserializer, Serialize, Serializer};
                 use std::collections::BTreeMap;
 
+                /// The estimates in this shape, for a value built by hand (`serde_json::json!`).
+                pub fn shaped(m: &BTreeMap<String, Estimate>) -> BTreeMap<&str, Shape> {
+                    m.iter().map(|(k, e)| (k.as_str(), Shape::from(e))).collect()
+                }
+
                 pub fn serialize<S: Serializer>(
                     m: &BTreeMap<String, Estimate>,
                     s: S,
                 ) -> Result<S::Ok, S::Error> {
-                    m.iter()
-                        .map(|(k, e)| (k, Shape::from(e)))
-                        .collect::<BTreeMap<_, _>>()
-                        .serialize(s)
+                    shaped(m).serialize(s)
                 }
 
                 pub fn deserialize<'de, D: Deserializer<'de>>(
@@ -309,6 +311,12 @@ mod tests {
         assert!(s.absent.is_none());
         assert_eq!(s.named["a"].se, Some(0.0));
         assert_eq!(serde_json::to_string(&s).unwrap(), text);
+        // a value built by hand keeps the shape too
+        let by_hand = serde_json::json!({ "named": stderr::map::shaped(&s.named) });
+        assert_eq!(
+            by_hand.to_string(),
+            r#"{"named":{"a":{"stderr":0.0,"value":1.0},"b":{"stderr":0.5,"value":null}}}"#
+        );
     }
 
     #[test]

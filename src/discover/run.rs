@@ -12,6 +12,7 @@ use super::locate::locate;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::residual_structure::Structure;
 use super::Options;
+use crate::artifacts::estimate::stderr;
 use crate::recording::Recording;
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -118,7 +119,7 @@ fn worst_bins(s: &Structure) -> serde_json::Value {
 fn probes_json(rows: &[CandidateRow]) -> serde_json::Value {
     let v: Vec<serde_json::Value> = rows
         .iter()
-        .map(|r| json!({"probe": r.form, "p_holm": r.evidence.p_holm, "lr": r.evidence.lr, "parameters": r.parameters}))
+        .map(|r| json!({"probe": r.form, "p_holm": r.evidence.p_holm, "lr": r.evidence.lr, "parameters": stderr::map::shaped(&r.parameters)}))
         .collect();
     serde_json::Value::Array(v)
 }
