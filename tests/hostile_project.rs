@@ -91,26 +91,12 @@ fn copy_of_base(name: &str) -> PathBuf {
 /// Spoils a copy of the base project, runs it, and checks the acceptance: exit 2 within
 /// `LIMIT`, no panic, and every file of the project as it was before the run. Returns stderr.
 fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
-    let project = copy_of_base(name);
-    spoil(&project);
-    let before = tree_hashes(&project);
-    assert!(before.contains_key("reports/report.html") && before.contains_key("pipeline.lock"));
-    let out = groove_within(&project, &["run"], LIMIT);
-    let stderr = text(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{name}: exit code; stderr:\n{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
-    let after = tree_hashes(&project);
-    let changed: Vec<&String> = before
-        .keys()
-        .chain(after.keys())
-        .filter(|k| before.get(*k) != after.get(*k))
-        .collect();
-    assert!(changed.is_empty(), "{name}: files changed: {changed:?}");
-    stderr
+    let setup = |p: &Path| {
+        spoil(p);
+        assert!(p.join("reports/report.html").is_file() && p.join("pipeline.lock").is_file());
+    };
+    let (_, out) = case(name, setup, &["run"], LIMIT, 2, &[]);
+    text(&out.stderr)
 }
 
 /// The first run id of `experiment` in runs.csv.
@@ -311,11 +297,7 @@ fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
         "{}",
         text(&out.stdout)
     );
-    assert!(
-        text(&out.stderr).contains("notes (copy).txt is not read"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["notes (copy).txt is not read"]);
     assert_eq!(tree_hashes(&project.join("reports")), reports);
 }
 
@@ -330,10 +312,23 @@ fn engine_case(
     code: i32,
     may_change: &[&str],
 ) -> (PathBuf, Output) {
+    case(name, setup, args, Duration::from_secs(60), code, may_change)
+}
+
+/// Runs `args` within `limit` in a copy of the base project after `setup`, expecting `code` and
+/// no panic; no file outside `may_change` (relative paths) may change.
+fn case(
+    name: &str,
+    setup: impl FnOnce(&Path),
+    args: &[&str],
+    limit: Duration,
+    code: i32,
+    may_change: &[&str],
+) -> (PathBuf, Output) {
     let project = copy_of_base(name);
     setup(&project);
     let before = tree_hashes(&project);
-    let out = groove_within(&project, args, Duration::from_secs(60));
+    let out = groove_within(&project, args, limit);
     let stderr = text(&out.stderr);
     assert_eq!(
         out.status.code(),
@@ -376,7 +371,7 @@ fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
         2,
         &[".groove/"],
     );
-    assert!(text(&out.stderr).contains("boom"), "{}", text(&out.stderr));
+    assert_names(&text(&out.stderr), &["boom"]);
 }
 
 #[test]
@@ -419,11 +414,7 @@ fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
 #[test]
 fn reports_in_the_data_folder_are_refused() {
     let (_, out) = engine_case("out_is_data", |_| {}, &["run", "--out", "data"], 2, &[]);
-    assert!(
-        text(&out.stderr).contains("dataset folder"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["dataset folder"]);
 }
 
 #[test]
@@ -444,11 +435,7 @@ fn a_file_output_never_replaces_a_folder() {
         2,
         &[".groove/"],
     );
-    assert!(
-        text(&out.stderr).contains("never replaces a folder"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["never replaces a folder"]);
     assert_eq!(
         std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(),
         "mine"
@@ -464,11 +451,7 @@ fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("is a file"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["is a file"]);
     let parent = project.parent().unwrap();
     assert_eq!(
         std::fs::read_to_string(parent.join("publish_file-target")).unwrap(),
@@ -488,6 +471,16 @@ fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
 }
 
 /// The store object holding `rel` (a file of the project).
+/// `groove status` finds no stage stale.
+fn assert_every_stage_fresh(project: &Path) {
+    let status = groove_within(project, &["status", "--json"], LIMIT);
+    assert!(
+        !text(&status.stdout).contains("\"stale\""),
+        "{}",
+        text(&status.stdout)
+    );
+}
+
 fn object_of(project: &Path, rel: &str) -> PathBuf {
     let h = sha256_hex(&std::fs::read(project.join(rel)).unwrap());
     project.join(".groove/objects").join(&h[..2]).join(&h[2..])
@@ -513,12 +506,7 @@ fn a_damaged_object_is_a_miss_and_the_stage_reruns() {
         sha256_hex(&good),
         "the object is repaired"
     );
-    let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(
-        !text(&status.stdout).contains("\"stale\""),
-        "{}",
-        text(&status.stdout)
-    );
+    assert_every_stage_fresh(&project);
 }
 
 #[test]
@@ -549,12 +537,7 @@ fn verify_drops_damaged_objects_and_says_so() {
     assert!(!object.exists());
     let rerun = groove_within(&project, &["run"], Duration::from_secs(60));
     assert!(rerun.status.success(), "{}", text(&rerun.stderr));
-    let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(
-        !text(&status.stdout).contains("\"stale\""),
-        "{}",
-        text(&status.stdout)
-    );
+    assert_every_stage_fresh(&project);
 }
 
 #[test]
@@ -566,11 +549,7 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("pipeline.toml:1: defines no stages"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["pipeline.toml:1: defines no stages"]);
     let before = tree_hashes(&project);
     let gc = groove_within(&project, &["gc"], LIMIT);
     assert_eq!(gc.status.code(), Some(2));
@@ -584,11 +563,7 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("nothing was removed"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["nothing was removed"]);
 }
 
 #[test]
@@ -605,14 +580,6 @@ fn invalid_utf8_in_the_config_names_its_line() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("is not UTF-8"),
-        "{}",
-        text(&out.stderr)
-    );
-    assert!(
-        text(&out.stderr).contains("pipeline.toml:"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["is not UTF-8"]);
+    assert_names(&text(&out.stderr), &["pipeline.toml:"]);
 }
