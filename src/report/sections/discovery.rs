@@ -363,7 +363,7 @@ struct LargeBin {
 #[derive(Deserialize)]
 struct Probe {
     probe: String,
-    #[serde(default)]
+    #[serde(default, with = "crate::artifacts::estimate::stderr::map")]
     parameters: BTreeMap<String, Estimate>,
     p_holm: Option<f64>,
 }
@@ -607,6 +607,17 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_drift_probes_of_where_are_read_in_the_shape_discover_writes() {
+        let w: BTreeMap<String, Value> = serde_json::from_str(
+            r#"{"drift_probes_before": [{"probe": "probe: T drifts with |v0|", "p_holm": 3e-300,
+                "parameters": {"dT_dv_s_per_mps": {"stderr": 0.0024, "value": 1.101}}}]}"#,
+        )
+        .unwrap();
+        let text = where_text(&w);
+        assert!(text.contains("dT_dv_s_per_mps = 1.101 ± 0.0024"), "{text}");
+    }
 
     #[test]
     fn a_chi2_decided_finding_names_its_test_and_prints_no_bootstrap_zeros() {
