@@ -365,10 +365,15 @@ fn groove(project: &Path, args: &[&str]) -> std::process::Output {
 
 /// A project running ingest → fit → aggregate → figures → report on a copy of a fixture folder.
 fn project(fixture: &str, ingest_params: &str) -> tempfile::TempDir {
+    project_of(folder(fixture), ingest_params)
+}
+
+/// [`project`] on the dataset `files`.
+fn project_of(files: Files, ingest_params: &str) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     std::fs::create_dir(&data).unwrap();
-    for (name, bytes) in folder(fixture) {
+    for (name, bytes) in files {
         std::fs::write(data.join(name), bytes).unwrap();
     }
     let toml = format!(
@@ -804,4 +809,82 @@ fn one_wild_run_moves_the_t_vs_v0_line_by_less_than_its_share_and_a_suspect_one_
     let s = aggregate_single(&fs, &opts, 3);
     assert_eq!(s.materials["316"].left_out.len(), 1);
     assert_eq!(s.materials["316"].n_converged, 20);
+}
+
+// ------------------------------------------------------------ the restart count in the report
+
+/// Synthesized pixel-locked runs of material 316 in the interchange format: the first `n_wrong`
+/// runs of the null whose first fit (without restarts) is suspect, and `n_good` runs whose first
+/// fit is clean.
+fn locked_dataset(n_wrong: usize, n_good: usize) -> Files {
+    use groove::fit::lm::Workspace;
+    use groove::fit::single::{fit_track_using, Restarts};
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(33);
+    let mut ws = Workspace::default();
+    let (mut wrong, mut good) = (0, 0);
+    let mut runs = String::from("run,experiment,material,diameter_m,fps\n");
+    let mut traj = String::from("run,particle,frame,t_s,z_m\n");
+    for k in 0.. {
+        if wrong == n_wrong && good == n_good {
+            break;
+        }
+        let (_, _, t, z) = null_run(k, "pixel-locked", &mut rng);
+        let first = fit_track_using(&t, &z, FPS, &FitOptions::default(), &mut ws, Restarts::None);
+        let keep = match first.status.as_str() {
+            "suspect" if wrong < n_wrong => {
+                wrong += 1;
+                true
+            }
+            "converged" if good < n_good => {
+                good += 1;
+                true
+            }
+            _ => false,
+        };
+        if keep {
+            let run = format!("locked-{k:04}");
+            runs += &format!("{run},single,316,0.0003,{FPS}\n");
+            for (i, (t, z)) in t.iter().zip(&z).enumerate() {
+                traj += &format!("{run},0,{i},{t:e},{z:e}\n");
+            }
+        }
+    }
+    Files::from([
+        ("runs.csv".to_string(), runs.into_bytes()),
+        ("trajectories.csv".to_string(), traj.into_bytes()),
+    ])
+}
+
+#[test]
+fn the_report_says_how_many_suspect_first_fits_the_restarts_recovered() {
+    use groove::fit::aggregate::restart_note;
+    let files = locked_dataset(6, 4);
+    let recs = ingest_ok(&files, &IngestParams::default()).recordings;
+    let fs = fits(&recs);
+    let recovered = fs.iter().filter(|f| f.restarted).count();
+    let still = fs.iter().filter(|f| f.status == "suspect").count();
+    eprintln!("{recovered} recovered, {still} still suspect");
+    // every one of the six wrong first fits is either recovered or still suspect
+    assert_eq!(recovered + still, 6);
+    let note = restart_note(&fs).unwrap();
+    assert!(
+        note.starts_with(&format!(
+            "{recovered} of 6 single runs whose first fit looked wrong"
+        )) && note.ends_with(&format!(
+            "{still} stay suspect and are left out of the aggregates"
+        )),
+        "{note}"
+    );
+    let p = project_of(files, "{ }");
+    let out = groove(p.path(), &["run"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary = std::fs::read_to_string(p.path().join("reports/summary.json")).unwrap();
+    assert!(summary.contains(&note), "{summary}");
+    let md = std::fs::read_to_string(p.path().join("reports/report.md")).unwrap();
+    assert!(md.contains(&note), "{md}");
 }
