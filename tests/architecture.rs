@@ -1,6 +1,6 @@
 //! The shape of the code, checked: the engine names no analysis module and its files form no
 //! cycle, each kind's compiled code fingerprint covers exactly the modules it uses, and the
-//! README's code map names every module.
+//! README's code map names every module and names nothing that does not exist.
 
 #[path = "../src/build/code_deps.rs"]
 #[allow(dead_code)]
@@ -363,45 +363,181 @@ fn section<'a>(text: &'a str, heading: &str) -> &'a str {
     &body[..end]
 }
 
-#[test]
-fn the_readme_code_map_names_every_module() {
-    let readme = fs::read_to_string(repo().join("README.md")).unwrap();
-    let map = section(&readme, "### Code map");
-    let lib = fs::read_to_string(repo().join("src/lib.rs")).unwrap();
-    let mut missing = Vec::new();
+/// The backticked names of a text (`src/fit/`, `stage.rs`, `stages::registry()`, …).
+fn backticked(text: &str) -> Vec<&str> {
+    text.split('`').skip(1).step_by(2).collect()
+}
+
+/// A backticked name that names a file or folder: under the repository root (`src/…`,
+/// `tests/…`, `data/…`, `reports/…`) or relative to its entry's folders (`stage.rs`, `config/`).
+fn is_path(name: &str) -> bool {
+    !name.contains([' ', ':', '(', '['])
+        && (name.ends_with(".rs")
+            || name.ends_with('/')
+            || ["src/", "tests/", "data/", "reports/"]
+                .iter()
+                .any(|p| name.starts_with(p)))
+}
+
+/// Every folder at or below `dir`.
+fn folders(dir: &Path) -> Vec<PathBuf> {
+    let mut out = vec![dir.to_path_buf()];
+    let mut i = 0;
+    while i < out.len() {
+        if let Ok(entries) = fs::read_dir(&out[i]) {
+            out.extend(entries.flatten().map(|e| e.path()).filter(|p| p.is_dir()));
+        }
+        i += 1;
+    }
+    out.sort();
+    out
+}
+
+/// What is wrong with the code map `map` of the tree at `root`, both ways: a module of
+/// `src/lib.rs`, a folder of `src/` holding code, or a file of `src/engine/` it does not name,
+/// and a path it names that does not exist (a relative name is looked up below the folders its
+/// entry names, or below `src/`).
+fn code_map_problems(root: &Path, map: &str) -> Vec<String> {
+    let src = root.join("src");
+    let mut problems = Vec::new();
+    let names = backticked(map);
+    let lib = fs::read_to_string(src.join("lib.rs")).unwrap_or_default();
     for line in lib.lines() {
         let Some(name) = line.trim().strip_prefix("pub mod ") else {
             continue;
         };
         let name = name.trim_end_matches(';');
-        let (dir, file) = (format!("`src/{name}/`"), format!("`src/{name}.rs`"));
-        if !map.contains(&dir) && !map.contains(&file) {
-            missing.push(name.to_string());
+        let (dir, file) = (format!("src/{name}/"), format!("src/{name}.rs"));
+        if !names.contains(&dir.as_str()) && !names.contains(&file.as_str()) {
+            problems.push(format!("does not name module {name}"));
         }
     }
     for top in [
-        "`src/main.rs`",
-        "`src/cli/`",
-        "`src/build.rs`",
-        "`src/build/code_deps.rs`",
+        "src/main.rs",
+        "src/cli/",
+        "src/build.rs",
+        "src/build/code_deps.rs",
     ] {
-        if !map.contains(top) {
-            missing.push(top.to_string());
+        if !names.contains(&top) {
+            problems.push(format!("does not name {top}"));
+        }
+    }
+    // every folder of code, by its name (`sections/`) or a path through it (`fit/collision/`)
+    for dir in folders(&src).into_iter().skip(1) {
+        let holds_code = fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .any(|e| e.path().extension().is_some_and(|x| x == "rs"));
+        let shown = format!("{}/", dir.file_name().unwrap().to_string_lossy());
+        if holds_code && !names.iter().any(|n| n.contains(&shown)) {
+            problems.push(format!("does not name folder src/{}", rel(&src, &dir)));
         }
     }
     // the engine's files one by one (the folder a newcomer reads first)
-    for e in fs::read_dir(repo().join("src/engine")).unwrap().flatten() {
+    for e in fs::read_dir(src.join("engine"))
+        .into_iter()
+        .flatten()
+        .flatten()
+    {
         let name = e.file_name().to_string_lossy().into_owned();
         let shown = if e.path().is_dir() {
-            format!("`{name}/`")
+            format!("{name}/")
         } else {
-            format!("`{name}`")
+            name.clone()
         };
-        if name != "mod.rs" && !map.contains(&shown) {
-            missing.push(format!("src/engine/{name}"));
+        if name != "mod.rs" && !names.contains(&shown.as_str()) {
+            problems.push(format!("does not name src/engine/{name}"));
         }
     }
-    assert!(missing.is_empty(), "README's code map misses {missing:?}");
+    // the other way: every path it names exists; an entry is a top-level `- ` line with its
+    // continuation and sub-entries
+    let mut entries: Vec<String> = Vec::new();
+    for line in map.lines() {
+        if line.starts_with("- ") || entries.is_empty() {
+            entries.push(String::new());
+        }
+        let last = entries.last_mut().unwrap();
+        last.push_str(line);
+        last.push('\n');
+    }
+    for entry in &entries {
+        let names: Vec<&str> = backticked(entry)
+            .into_iter()
+            .filter(|n| is_path(n))
+            .collect();
+        let mut bases: Vec<PathBuf> = names
+            .iter()
+            .filter(|n| n.starts_with("src/") && n.ends_with('/'))
+            .flat_map(|n| folders(&root.join(n)))
+            .collect();
+        bases.push(src.clone());
+        for name in names {
+            let rooted = ["src/", "tests/", "data/", "reports/"]
+                .iter()
+                .any(|p| name.starts_with(p));
+            let found = if rooted {
+                root.join(name).exists()
+            } else {
+                bases.iter().any(|b| b.join(name).exists())
+            };
+            if !found {
+                problems.push(format!("names `{name}`, which does not exist"));
+            }
+        }
+    }
+    problems
+}
+
+#[test]
+fn the_readme_code_map_names_every_module_and_only_what_exists() {
+    let readme = fs::read_to_string(repo().join("README.md")).unwrap();
+    let map = section(&readme, "### Code map");
+    let problems = code_map_problems(repo(), map);
+    assert!(problems.is_empty(), "README's code map: {problems:#?}");
+}
+
+#[test]
+fn the_code_map_check_catches_a_missing_module_and_a_stale_path() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        &[
+            ("src/lib.rs", "pub mod engine;\npub mod fit;\n"),
+            ("src/main.rs", ""),
+            ("src/build.rs", ""),
+            ("src/build/code_deps.rs", ""),
+            ("src/cli/mod.rs", ""),
+            ("src/engine/mod.rs", "pub mod store;\n"),
+            ("src/engine/store.rs", ""),
+            ("src/fit/mod.rs", "pub mod lm;\n"),
+            ("src/fit/lm.rs", ""),
+            ("src/fit/collision/mod.rs", ""),
+        ],
+    );
+    let top = "- `src/main.rs`, `src/cli/`, `src/build.rs`, `src/build/code_deps.rs`: top\n";
+    let good = format!(
+        "{top}- `src/engine/`: engine\n  - `store.rs`: store\n- `src/fit/`: `lm.rs`, `fit/collision/`\n"
+    );
+    assert_eq!(code_map_problems(dir.path(), &good), Vec::<String>::new());
+    // a module and a folder the map forgets
+    let forgets = format!("{top}- `src/engine/`: `store.rs`\n");
+    assert_eq!(
+        code_map_problems(dir.path(), &forgets),
+        [
+            "does not name module fit",
+            "does not name folder src/fit",
+            "does not name folder src/fit/collision"
+        ]
+    );
+    // a path the map names that is gone: relative to its entry and rooted
+    let stale = format!("{good}- `src/fit/`: `robust.rs`; `tests/gone.rs`\n");
+    assert_eq!(
+        code_map_problems(dir.path(), &stale),
+        [
+            "names `robust.rs`, which does not exist",
+            "names `tests/gone.rs`, which does not exist"
+        ]
+    );
 }
 
 #[test]

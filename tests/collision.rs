@@ -299,7 +299,7 @@ fn mu_pp_from_slip_impacts_within_ten_percent() {
             (model.value - mu_pp).abs() < 0.1 * mu_pp,
             "impulse fit {model:?} vs {mu_pp}"
         );
-        assert!(model.lo <= model.value && model.value <= model.hi);
+        assert!(model.lo() <= model.value && model.value <= model.hi());
     }
 }
 
@@ -360,7 +360,7 @@ fn restitution_curve_follows_the_law() {
         );
     }
     assert!(
-        curve.slope_per_mps.lo > 0.0,
+        curve.slope_per_mps.lo() > 0.0,
         "C falls with speed: {:?}",
         curve.slope_per_mps
     );

@@ -260,9 +260,7 @@ fn every_effect_over_seeds() {
 #[ignore = "heavy: 20 seeds of each null"]
 fn nulls_over_twenty_seeds() {
     for name in ["null_quantized", "null_small"] {
-        let false_findings: Vec<u64> = (100..120)
-            .filter(|s| !check_null(name, Some(*s)))
-            .collect();
+        let false_findings: Vec<u64> = (100..120).filter(|s| !check_null(name, Some(*s))).collect();
         assert!(
             false_findings.len() <= 1,
             "{name}: seeds with a finding {false_findings:?}"

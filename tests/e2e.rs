@@ -7,13 +7,14 @@
 //! and 4 collision runs, nothing missing) and one project runs it once; the other tests copy that
 //! project, so most of them run nothing heavy. Everything lives under the target's tmp folder.
 
-use groove::engine::hashing::sha256_hex;
+#[path = "support/files.rs"]
+mod files;
+
+use files::{assert_names, copy_tree, edit_line, repo, scratch, text, tree_hashes, GROOVE};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
-
-const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
 const SINGLE_RUNS: usize = 16;
 const FITS_HEADER: &str = "run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status";
 const EFFECT_IDS: [&str; 8] = [
@@ -27,21 +28,6 @@ const EFFECT_IDS: [&str; 8] = [
     "unexplained",
 ];
 
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// The folder all tests of this binary work in (cleared once per test process).
-fn scratch() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("e2e");
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("scratch folder can be made");
-        dir
-    })
-}
-
 /// What the shared project did: its dataset, its folder and the two runs.
 struct Shared {
     dataset: PathBuf,
@@ -54,10 +40,10 @@ struct Shared {
 fn shared() -> &'static Shared {
     static SHARED: OnceLock<Shared> = OnceLock::new();
     SHARED.get_or_init(|| {
-        let dataset = scratch().join("dataset");
+        let dataset = scratch("e2e").join("dataset");
         let truth = repo().join("tests/fixtures/truths/e2e_small.toml");
         let out = groove(
-            scratch(),
+            scratch("e2e"),
             &[
                 "synth",
                 "--truth",
@@ -105,10 +91,6 @@ fn run(project: &Path, extra: &[&str]) -> Output {
     groove(project, &args)
 }
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
 fn assert_success(out: &Output, what: &str) {
     assert!(
         out.status.success(),
@@ -122,7 +104,7 @@ fn assert_success(out: &Output, what: &str) {
 /// A project folder: the repo's own pipeline.toml and a copy of the dataset's top-level files
 /// (and its truth/ folder when `with_truth`).
 fn new_project(name: &str, dataset: &Path, with_truth: bool) -> PathBuf {
-    let project = scratch().join(name);
+    let project = scratch("e2e").join(name);
     std::fs::create_dir_all(project.join("data")).unwrap();
     std::fs::copy(repo().join("pipeline.toml"), project.join("pipeline.toml")).unwrap();
     for entry in std::fs::read_dir(dataset).unwrap() {
@@ -139,48 +121,9 @@ fn new_project(name: &str, dataset: &Path, with_truth: bool) -> PathBuf {
 
 /// A copy of the shared project after its runs (store, lock, reports and all).
 fn copy_of_shared(name: &str) -> PathBuf {
-    let to = scratch().join(name);
+    let to = scratch("e2e").join(name);
     copy_tree(&shared().project, &to);
     to
-}
-
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let path = entry.unwrap().path();
-        let target = to.join(path.file_name().unwrap());
-        if path.is_dir() {
-            copy_tree(&path, &target);
-        } else {
-            std::fs::copy(&path, &target).unwrap();
-        }
-    }
-}
-
-/// sha256 of every file under `dir`, by path relative to it (empty if `dir` is missing).
-fn tree_hashes(dir: &Path) -> BTreeMap<String, String> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
-        let Ok(entries) = std::fs::read_dir(dir) else {
-            return;
-        };
-        for entry in entries {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                walk(root, &path, out);
-            } else {
-                let bytes = std::fs::read(&path).unwrap();
-                let rel = path
-                    .strip_prefix(root)
-                    .unwrap()
-                    .to_string_lossy()
-                    .into_owned();
-                out.insert(rel, sha256_hex(&bytes));
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
 }
 
 /// The store's content: its objects and its entries (not its caches, lock file or run log).
@@ -213,14 +156,6 @@ fn runs_of(dataset: &Path, experiment: &str) -> Vec<String> {
         .filter(|f| f[kind] == experiment)
         .map(|f| f[run].to_string())
         .collect()
-}
-
-/// Replaces line `line` (1-based, the header is line 1) of a file.
-fn edit_line(path: &Path, line: usize, edit: impl FnOnce(&str) -> String) {
-    let content = std::fs::read_to_string(path).unwrap();
-    let mut lines: Vec<String> = content.lines().map(str::to_string).collect();
-    lines[line - 1] = edit(&lines[line - 1]);
-    std::fs::write(path, lines.join("\n") + "\n").unwrap();
 }
 
 /// Sets the last field (z_m) of a trajectories.csv line.
@@ -534,15 +469,6 @@ fn bad_input(name: &str, spoil: impl FnOnce(&Path)) -> String {
     );
     assert_eq!(store_hashes(&project), store, "{name}: the store changed");
     stderr
-}
-
-fn assert_names(stderr: &str, parts: &[&str]) {
-    for p in parts {
-        assert!(
-            stderr.contains(p),
-            "the error does not name `{p}`:\n{stderr}"
-        );
-    }
 }
 
 #[test]

@@ -32,6 +32,9 @@ fn fixture(name: &str) -> Truth {
     Truth::parse(&std::fs::read_to_string(&path).unwrap()).unwrap()
 }
 
+/// How a suspect fit's reason for parameters without a standard error begins (fit/quality.rs).
+const UNIDENTIFIED: &str = "no standard error for";
+
 /// Baseline-fit RMS of one noisy run of `model`.
 fn fit_rms(model: &Model, v0_mps: f64, noise: &[f64]) -> f64 {
     let t: Vec<f64> = (0..noise.len()).map(|k| k as f64 * 1e-4).collect();
@@ -51,15 +54,36 @@ fn fit_rms(model: &Model, v0_mps: f64, noise: &[f64]) -> f64 {
         &FitOptions::default(),
         &mut Workspace::default(),
     );
-    // A slow run can fit to a bound (μ or T) and is then flagged `suspect` by the fit-quality
-    // checks; its RMS still says how well the baseline mimics the data, which is what concealment
-    // is about, so both finished states count here (a failed or unfinished fit does not).
-    assert!(
-        matches!(fit.status.as_str(), "converged" | "suspect"),
-        "v0 {v0_mps}: {} {:?}",
-        fit.status,
-        fit.suspect
-    );
+    // Only the slowest runs (5 mm/s: a sliding phase of a few frames) may end `suspect`, and
+    // then exactly because μ and T ran to their upper bounds (the fit turns the short slide into
+    // a long one); its RMS still says how well the baseline mimics the data, which is what
+    // concealment is about. Any other status or reason fails.
+    match fit.status.as_str() {
+        "converged" => {}
+        "suspect" => {
+            assert!(v0_mps.abs() <= 0.005, "v0 {v0_mps}: {:?}", fit.suspect);
+            let at_bound = |name: &str| {
+                fit.suspect
+                    .iter()
+                    .any(|w| w.starts_with(&format!("{name} = ")) && w.ends_with("is at its bound"))
+            };
+            assert!(
+                at_bound("μ") && at_bound("T") && fit.mu > 1.0 && fit.t_drag_s > 100.0,
+                "v0 {v0_mps}: μ {} T {} {:?}",
+                fit.mu,
+                fit.t_drag_s,
+                fit.suspect
+            );
+            assert!(
+                fit.suspect
+                    .iter()
+                    .all(|w| w.ends_with("is at its bound") || w.starts_with(UNIDENTIFIED)),
+                "v0 {v0_mps}: {:?}",
+                fit.suspect
+            );
+        }
+        other => panic!("v0 {v0_mps}: {other} {:?}", fit.termination),
+    }
     fit.rms_m
 }
 

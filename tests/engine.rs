@@ -3,39 +3,23 @@
 //! `command` stages (sh) in a temp dir; stages append their name to `trace.txt` when they run,
 //! so a test sees exactly which stages (and items) executed.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+#[path = "support/project.rs"]
+mod project;
+
+use project::{Project, PER_ITEM_PIPELINE};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
 
-/// A per-item pipeline: ingest copies the dataset, fit checksums each run, summary gathers the
-/// fits, plot decorates the summary; side is an independent branch.
-const PIPELINE: &str = r#"[project]
-seed = 7
-data = "data"
-reports = "reports"
+/// The per-item pipeline (ingest, fit per run, summary), then plot decorates the summary; side is
+/// an independent branch.
+fn pipeline() -> String {
+    format!("{PER_ITEM_PIPELINE}{PLOT_AND_SIDE}")
+}
 
-[stages.ingest]
-kind = "command"
-cmd = "echo ingest >> trace.txt; mkdir -p {out.runs}; cp {in.dataset}/* {out.runs}/"
-inputs = { dataset = "${data}" }
-outputs = { runs = "${reports}/runs" }
-
-[stages.fit]
-kind = "command"
-foreach = "runs"
-cmd = "echo fit {item} >> trace.txt; cksum < {in.runs} > {out.fit}"
-inputs = { runs = "ingest:runs" }
-outputs = { fit = "${reports}/fits" }
-
-[stages.summary]
-kind = "command"
-cmd = "echo summary >> trace.txt; cat {in.fits}/* | sort > {out.table}; echo scale {params.scale} >> {out.table}"
-inputs = { fits = "fit:fit" }
-outputs = { table = "${reports}/table.txt" }
-params = { scale = 1 }
-
+const PLOT_AND_SIDE: &str = r#"
 [stages.plot]
 kind = "command"
 cmd = "echo plot >> trace.txt; cat {in.table} > {out.plot}; echo {params.title} >> {out.plot}"
@@ -50,22 +34,10 @@ inputs = { settings = "settings.txt" }
 outputs = { note = "${reports}/note.txt" }
 "#;
 
-struct Project {
-    dir: tempfile::TempDir,
-}
-
 impl Project {
-    fn new(pipeline: &str) -> Project {
-        let p = Project {
-            dir: tempfile::tempdir().expect("temp dir"),
-        };
-        p.write("pipeline.toml", pipeline);
-        p
-    }
-
     /// The standard per-item project with three recordings.
     fn standard() -> Project {
-        Project::with_data(PIPELINE)
+        Project::with_data(&pipeline())
     }
 
     /// A pipeline with the standard dataset and settings.
@@ -78,96 +50,6 @@ impl Project {
         p.write("settings.txt", "hello\n");
         p
     }
-
-    fn path(&self, rel: &str) -> PathBuf {
-        self.dir.path().join(rel)
-    }
-
-    fn write(&self, rel: &str, text: &str) {
-        let p = self.path(rel);
-        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
-        std::fs::write(p, text).unwrap();
-    }
-
-    fn read(&self, rel: &str) -> String {
-        std::fs::read_to_string(self.path(rel)).unwrap_or_else(|e| panic!("read {rel}: {e}"))
-    }
-
-    fn command(&self, args: &[&str]) -> Command {
-        let mut c = Command::new(GROOVE);
-        c.args(args).current_dir(self.dir.path());
-        c
-    }
-
-    fn groove(&self, args: &[&str]) -> Output {
-        self.command(args).output().expect("run groove")
-    }
-
-    /// Run groove, expect exit 0, return stdout.
-    fn ok(&self, args: &[&str]) -> String {
-        let out = self.groove(args);
-        assert!(
-            out.status.success(),
-            "groove {args:?} failed: {}\n{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
-    }
-
-    /// The trace lines written since the last call (and clear it).
-    fn take_trace(&self) -> Vec<String> {
-        let p = self.path("trace.txt");
-        let text = std::fs::read_to_string(&p).unwrap_or_default();
-        let _ = std::fs::remove_file(&p);
-        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-        lines.sort();
-        lines
-    }
-
-    /// `groove status --json` as (stage, state, reasons).
-    fn status(&self) -> Vec<(String, String, Vec<String>)> {
-        let v: serde_json::Value = serde_json::from_str(&self.ok(&["status", "--json"])).unwrap();
-        v.as_array()
-            .unwrap()
-            .iter()
-            .map(|s| {
-                (
-                    s["stage"].as_str().unwrap().to_string(),
-                    s["state"].as_str().unwrap().to_string(),
-                    s["reasons"]
-                        .as_array()
-                        .unwrap()
-                        .iter()
-                        .map(|r| r.as_str().unwrap().to_string())
-                        .collect(),
-                )
-            })
-            .collect()
-    }
-
-    fn stale(&self) -> Vec<String> {
-        self.status()
-            .into_iter()
-            .filter(|s| s.1 == "stale")
-            .map(|s| s.0)
-            .collect()
-    }
-
-    fn reasons(&self, stage: &str) -> String {
-        self.status()
-            .into_iter()
-            .find(|s| s.0 == stage)
-            .unwrap()
-            .2
-            .join("; ")
-    }
-
-    fn edit(&self, rel: &str, from: &str, to: &str) {
-        let text = self.read(rel);
-        assert!(text.contains(from), "{rel} has no `{from}`");
-        self.write(rel, &text.replacen(from, to, 1));
-    }
 }
 
 fn strings(v: &[&str]) -> Vec<String> {
@@ -177,7 +59,7 @@ fn strings(v: &[&str]) -> Vec<String> {
 #[test]
 fn first_run_runs_everything_then_nothing_changed_runs_nothing() {
     let p = Project::standard();
-    let out = p.ok(&["run"]);
+    let out = p.stdout(&["run"]);
     assert!(out.contains("5 stages run, 0 reused"), "{out}");
     assert_eq!(
         p.take_trace(),
@@ -197,7 +79,7 @@ fn first_run_runs_everything_then_nothing_changed_runs_nothing() {
     assert!(p.read("reports/plot.txt").ends_with("scale 1\nfirst\n"));
     let lock_before = p.read("pipeline.lock");
 
-    let out = p.ok(&["run"]);
+    let out = p.stdout(&["run"]);
     assert!(out.contains("0 stages run, 5 reused"), "{out}");
     assert_eq!(p.take_trace(), Vec::<String>::new());
     assert!(p.status().iter().all(|s| s.1 == "fresh" && s.2.is_empty()));
@@ -211,7 +93,7 @@ fn first_run_runs_everything_then_nothing_changed_runs_nothing() {
 #[test]
 fn one_byte_of_one_recording_reruns_that_item_and_downstream_only() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     p.edit("data/run_b.csv", "0.7", "0.8");
 
@@ -224,7 +106,7 @@ fn one_byte_of_one_recording_reruns_that_item_and_downstream_only() {
     assert!(!why.contains("run_a.csv"), "{why}");
     assert!(p.reasons("fit").contains("waits on `ingest`"));
 
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(
         p.take_trace(),
         strings(&["fit run_b.csv", "ingest", "plot", "summary"])
@@ -235,7 +117,7 @@ fn one_byte_of_one_recording_reruns_that_item_and_downstream_only() {
 #[test]
 fn param_change_reruns_stage_and_descendants_and_reverting_reuses_the_store() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     let table_1 = p.read("reports/table.txt");
     p.edit("pipeline.toml", "scale = 1", "scale = 2");
@@ -248,7 +130,7 @@ fn param_change_reruns_stage_and_descendants_and_reverting_reuses_the_store() {
         p.reasons("summary")
     );
     assert!(p.reasons("plot").contains("waits on `summary`"));
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(p.take_trace(), strings(&["plot", "summary"]));
     assert!(p.read("reports/table.txt").ends_with("scale 2\n"));
 
@@ -259,7 +141,7 @@ fn param_change_reruns_stage_and_descendants_and_reverting_reuses_the_store() {
         why.contains("param `scale` changed: 2 → 1") && why.contains("already in the store"),
         "{why}"
     );
-    let out = p.ok(&["run"]);
+    let out = p.stdout(&["run"]);
     assert!(out.contains("0 stages run"), "{out}");
     assert_eq!(p.take_trace(), Vec::<String>::new());
     assert_eq!(p.read("reports/table.txt"), table_1);
@@ -269,7 +151,7 @@ fn param_change_reruns_stage_and_descendants_and_reverting_reuses_the_store() {
 #[test]
 fn identical_output_after_a_rerun_leaves_downstream_fresh() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     // a new command that writes the same bytes: fit reruns, summary does not (early cutoff)
     p.edit(
@@ -285,7 +167,7 @@ fn identical_output_after_a_rerun_leaves_downstream_fresh() {
         p.reasons("fit")
     );
     assert!(p.reasons("summary").contains("waits on `fit`"));
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(
         p.take_trace(),
         strings(&["fit run_a.csv", "fit run_b.csv", "fit run_c.csv"])
@@ -296,7 +178,7 @@ fn identical_output_after_a_rerun_leaves_downstream_fresh() {
 #[test]
 fn touch_reruns_nothing() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     let file = std::fs::File::options()
         .append(true)
@@ -306,21 +188,21 @@ fn touch_reruns_nothing() {
         .unwrap();
     drop(file);
     assert!(p.stale().is_empty());
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(p.take_trace(), Vec::<String>::new());
 }
 
 #[test]
 fn a_deleted_output_is_restored_from_the_store_without_running() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     std::fs::remove_file(p.path("reports/plot.txt")).unwrap();
     std::fs::remove_dir_all(p.path("reports/fits")).unwrap();
     assert!(p
         .reasons("plot")
         .contains("output `plot`: reports/plot.txt is missing or was modified"));
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(p.take_trace(), Vec::<String>::new());
     assert!(p.read("reports/plot.txt").ends_with("first\n"));
     assert_eq!(
@@ -332,7 +214,7 @@ fn a_deleted_output_is_restored_from_the_store_without_running() {
 #[test]
 fn a_failing_command_exits_2_with_its_stderr_and_keeps_the_last_good_outputs() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     let plot = p.read("reports/plot.txt");
     p.edit(
         "pipeline.toml",
@@ -354,7 +236,7 @@ fn a_failing_command_exits_2_with_its_stderr_and_keeps_the_last_good_outputs() {
 #[test]
 fn run_named_stage_runs_only_what_it_needs() {
     let p = Project::standard();
-    p.ok(&["run", "summary"]);
+    p.stdout(&["run", "summary"]);
     assert_eq!(
         p.take_trace(),
         strings(&[
@@ -367,13 +249,13 @@ fn run_named_stage_runs_only_what_it_needs() {
     );
     assert_eq!(p.stale(), strings(&["side", "plot"]));
     // --force reruns a fresh stage; --dry-run runs nothing
-    let out = p.ok(&["run", "--dry-run"]);
+    let out = p.stdout(&["run", "--dry-run"]);
     assert!(
         out.contains("plot") && out.contains("side") && !out.contains("summary"),
         "{out}"
     );
     assert_eq!(p.take_trace(), Vec::<String>::new());
-    p.ok(&["run", "summary", "--force", "summary"]);
+    p.stdout(&["run", "summary", "--force", "summary"]);
     assert_eq!(p.take_trace(), strings(&["summary"]));
 }
 
@@ -381,7 +263,7 @@ fn run_named_stage_runs_only_what_it_needs() {
 fn data_and_out_replace_the_project_folders() {
     let p = Project::standard();
     p.write("other/run_z.csv", "t,z\n0,1\n");
-    p.ok(&["run", "--data", "other", "--out", "elsewhere"]);
+    p.stdout(&["run", "--data", "other", "--out", "elsewhere"]);
     let trace = p.take_trace();
     assert!(
         trace.contains(&"fit run_z.csv".to_string()) && trace.len() == 5,
@@ -445,7 +327,7 @@ fn kill_9_mid_write_leaves_the_store_consistent_and_the_next_run_completes() {
     assert_eq!(killed.stale(), strings(&["first", "slow"]));
 
     killed.take_trace();
-    killed.ok(&["run"]);
+    killed.stdout(&["run"]);
     assert_eq!(killed.take_trace(), strings(&["slow"]));
     assert!(
         !killed.path(".groove/tmp").exists()
@@ -457,7 +339,7 @@ fn kill_9_mid_write_leaves_the_store_consistent_and_the_next_run_completes() {
 
     let clean = Project::new(SLOW);
     clean.write("x.txt", "x\n");
-    clean.ok(&["run"]);
+    clean.stdout(&["run"]);
     assert_eq!(
         killed.read("reports/slow.txt"),
         "partial and complete\none\n"
@@ -590,17 +472,17 @@ fn bad_pipelines_exit_2_naming_the_line() {
 #[test]
 fn dag_renders_text_dot_and_mermaid() {
     let p = Project::standard();
-    let text = p.ok(&["dag"]);
+    let text = p.stdout(&["dag"]);
     assert!(
         text.contains("fit (command foreach runs)") && text.contains("<- runs = ingest:runs"),
         "{text}"
     );
-    let dot = p.ok(&["dag", "--format", "dot"]);
+    let dot = p.stdout(&["dag", "--format", "dot"]);
     assert!(
         dot.starts_with("digraph groove {") && dot.contains("\"summary\" -> \"plot\""),
         "{dot}"
     );
-    let mermaid = p.ok(&["dag", "--format", "mermaid"]);
+    let mermaid = p.stdout(&["dag", "--format", "mermaid"]);
     assert!(
         mermaid.starts_with("graph LR") && mermaid.contains("fit -->|fit → fits| summary"),
         "{mermaid}"
@@ -619,8 +501,8 @@ fn publish_refuses_while_stale_then_writes_a_verified_bundle() {
     );
     assert!(!p.path("bundle").exists());
 
-    p.ok(&["run"]);
-    p.ok(&["publish", "--to", "bundle"]);
+    p.stdout(&["run"]);
+    p.stdout(&["publish", "--to", "bundle"]);
     let sums = p.read("bundle/SHA256SUMS");
     let listed: Vec<&str> = sums
         .lines()
@@ -649,16 +531,16 @@ fn publish_refuses_while_stale_then_writes_a_verified_bundle() {
 #[test]
 fn gc_drops_entries_the_lock_does_not_name() {
     let p = Project::standard();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.edit("pipeline.toml", "scale = 1", "scale = 2");
-    p.ok(&["run"]);
-    let out = p.ok(&["gc"]);
+    p.stdout(&["run"]);
+    let out = p.stdout(&["gc"]);
     assert!(out.contains("removed 2 store entries"), "{out}");
     p.edit("pipeline.toml", "scale = 2", "scale = 1");
     p.take_trace();
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     assert_eq!(p.take_trace(), strings(&["plot", "summary"]));
-    p.ok(&["clean"]);
+    p.stdout(&["clean"]);
     assert!(p.reasons("ingest").contains("missing from the store"));
 }
 
@@ -688,7 +570,7 @@ fn independent_stages_run_at_the_same_time() {
         wait("b", "a")
     ));
     p.write("x.txt", "x\n");
-    p.ok(&["run", "--jobs", "2"]);
+    p.stdout(&["run", "--jobs", "2"]);
     assert_eq!(p.read("reports/a.txt"), "a\n");
     assert_eq!(p.read("reports/b.txt"), "b\n");
 }
@@ -696,12 +578,13 @@ fn independent_stages_run_at_the_same_time() {
 #[test]
 fn a_stage_stepping_through_two_per_item_inputs_reruns_only_the_changed_item() {
     let p = Project::with_data(&format!(
-        "{PIPELINE}\n[stages.resid]\nkind = \"command\"\nforeach = [\"runs\", \"fits\"]\ncmd = \"echo resid {{item}} >> trace.txt; cat {{in.runs}} {{in.fits}} > {{out.r}}\"\ninputs = {{ runs = \"ingest:runs\", fits = \"fit:fit\" }}\noutputs = {{ r = \"${{reports}}/resid\" }}\n"
+        "{}\n[stages.resid]\nkind = \"command\"\nforeach = [\"runs\", \"fits\"]\ncmd = \"echo resid {{item}} >> trace.txt; cat {{in.runs}} {{in.fits}} > {{out.r}}\"\ninputs = {{ runs = \"ingest:runs\", fits = \"fit:fit\" }}\noutputs = {{ r = \"${{reports}}/resid\" }}\n",
+        pipeline()
     ));
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     p.take_trace();
     p.edit("data/run_b.csv", "0.7", "0.8");
-    p.ok(&["run"]);
+    p.stdout(&["run"]);
     let resid: Vec<String> = p
         .take_trace()
         .into_iter()
@@ -722,6 +605,6 @@ fn a_stage_stepping_through_two_per_item_inputs_reruns_only_the_changed_item() {
         .read("reports/resid/run_a.csv")
         .starts_with("t,z\n0,0.0\n1,0.5\n"));
     assert!(p
-        .ok(&["dag"])
+        .stdout(&["dag"])
         .contains("resid (command foreach runs, fits)"));
 }

@@ -5,10 +5,12 @@
 //! Each property runs 1,000 cases by default (a few seconds in CI); set `PROPTEST_CASES` for
 //! more, e.g. `PROPTEST_CASES=100000 cargo test --locked --test fuzz` for 100,000 per property.
 
+#[path = "support/parquet.rs"]
+mod parquet;
+
 use groove::engine::config::{self, Overrides};
 use groove::engine::Catalog;
 use groove::ingest::{self, Format, IngestParams};
-use polars::prelude::*;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use std::collections::BTreeMap;
@@ -82,37 +84,7 @@ fn trackmate_csv() -> String {
 }
 
 fn trajectories_parquet() -> Vec<u8> {
-    let text = trajectories_csv();
-    let rows: Vec<Vec<&str>> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
-    let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
-    let num = |k: usize| {
-        rows.iter()
-            .map(|r| r[k].parse::<f64>().unwrap())
-            .collect::<Vec<_>>()
-    };
-    let int = |k: usize| {
-        rows.iter()
-            .map(|r| r[k].parse::<i64>().unwrap())
-            .collect::<Vec<_>>()
-    };
-    let mut df = DataFrame::new(
-        rows.len(),
-        vec![
-            Column::new("run".into(), col(0)),
-            Column::new("particle".into(), int(1)),
-            Column::new("frame".into(), int(2)),
-            Column::new("t_s".into(), num(3)),
-            Column::new("z_m".into(), num(4)),
-        ],
-    )
-    .unwrap();
-    let mut bytes = Vec::new();
-    ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
-    bytes
+    parquet::trajectories_parquet(&trajectories_csv(), false)
 }
 
 fn tracker_params() -> IngestParams {

@@ -7,30 +7,23 @@
 //! The dataset is synthesized once from tests/fixtures/truths/hostile_small.toml and one project
 //! runs the whole pipeline on it once; every test works on its own copy.
 
+#[path = "support/files.rs"]
+mod files;
+#[path = "support/parquet.rs"]
+mod parquet;
+
+use files::{
+    assert_names, copy_tree, edit_line, edit_lines, repo, scratch, set_cell, set_field, text,
+    tree_hashes, GROOVE,
+};
 use groove::engine::hashing::sha256_hex;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
 /// The longest a reproducer may take (the bound).
 const LIMIT: Duration = Duration::from_secs(10);
-
-fn repo() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn scratch() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hostile");
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    })
-}
 
 /// Runs the binary in `cwd`, killing it (and failing) if it takes longer than `limit`.
 fn groove_within(cwd: &Path, args: &[&str], limit: Duration) -> Output {
@@ -58,18 +51,14 @@ fn groove_within(cwd: &Path, args: &[&str], limit: Duration) -> Output {
     }
 }
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
 /// The project after one successful run of the whole pipeline.
 fn base() -> &'static Path {
     static BASE: OnceLock<PathBuf> = OnceLock::new();
     BASE.get_or_init(|| {
-        let dataset = scratch().join("dataset");
+        let dataset = scratch("hostile").join("dataset");
         let truth = repo().join("tests/fixtures/truths/hostile_small.toml");
         let out = groove_within(
-            scratch(),
+            scratch("hostile"),
             &[
                 "synth",
                 "--truth",
@@ -80,7 +69,7 @@ fn base() -> &'static Path {
             Duration::from_secs(600),
         );
         assert!(out.status.success(), "synth: {}", text(&out.stderr));
-        let project = scratch().join("base");
+        let project = scratch("hostile").join("base");
         std::fs::create_dir_all(project.join("data")).unwrap();
         std::fs::copy(repo().join("pipeline.toml"), project.join("pipeline.toml")).unwrap();
         for name in ["runs.csv", "trajectories.csv"] {
@@ -92,108 +81,22 @@ fn base() -> &'static Path {
     })
 }
 
-fn copy_tree(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let path = entry.unwrap().path();
-        let target = to.join(path.file_name().unwrap());
-        if path.is_dir() {
-            copy_tree(&path, &target);
-        } else {
-            std::fs::copy(&path, &target).unwrap();
-        }
-    }
-}
-
 fn copy_of_base(name: &str) -> PathBuf {
-    let to = scratch().join(name);
+    let to = scratch("hostile").join(name);
     let _ = std::fs::remove_dir_all(&to);
     copy_tree(base(), &to);
     to
 }
 
-/// sha256 of every file under `dir` by relative path, except the store's caches and log (which
-/// a run may touch without changing anything the user sees).
-fn tree_hashes(dir: &Path) -> BTreeMap<String, String> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
-        let Ok(entries) = std::fs::read_dir(dir) else {
-            return;
-        };
-        for entry in entries {
-            let path = entry.unwrap().path();
-            let rel = path
-                .strip_prefix(root)
-                .unwrap()
-                .to_string_lossy()
-                .into_owned();
-            if [".groove/hashes.json", ".groove/run.log", ".groove/lock"].contains(&rel.as_str()) {
-                continue;
-            }
-            if path.is_dir() {
-                walk(root, &path, out);
-            } else {
-                out.insert(rel, sha256_hex(&std::fs::read(&path).unwrap()));
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
-
-/// Rewrites a file's lines: `edit(line_number, line)` returns the new lines for it (none to
-/// delete it). Line 1 is the header.
-fn edit_lines(path: &Path, mut edit: impl FnMut(usize, &str) -> Vec<String>) {
-    let content = std::fs::read_to_string(path).unwrap();
-    let mut out = String::new();
-    for (k, line) in content.lines().enumerate() {
-        for l in edit(k + 1, line) {
-            out += &l;
-            out.push('\n');
-        }
-    }
-    std::fs::write(path, out).unwrap();
-}
-
-/// The line with field `field` replaced.
-fn set_field(line: &str, field: usize, value: &str) -> String {
-    let mut cells: Vec<&str> = line.split(',').collect();
-    cells[field] = value;
-    cells.join(",")
-}
-
 /// Spoils a copy of the base project, runs it, and checks the acceptance: exit 2 within
 /// `LIMIT`, no panic, and every file of the project as it was before the run. Returns stderr.
 fn refused(name: &str, spoil: impl FnOnce(&Path)) -> String {
-    let project = copy_of_base(name);
-    spoil(&project);
-    let before = tree_hashes(&project);
-    assert!(before.contains_key("reports/report.html") && before.contains_key("pipeline.lock"));
-    let out = groove_within(&project, &["run"], LIMIT);
-    let stderr = text(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{name}: exit code; stderr:\n{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
-    let after = tree_hashes(&project);
-    let changed: Vec<&String> = before
-        .keys()
-        .chain(after.keys())
-        .filter(|k| before.get(*k) != after.get(*k))
-        .collect();
-    assert!(changed.is_empty(), "{name}: files changed: {changed:?}");
-    stderr
-}
-
-fn assert_names(stderr: &str, parts: &[&str]) {
-    for p in parts {
-        assert!(
-            stderr.contains(p),
-            "the error does not name `{p}`:\n{stderr}"
-        );
-    }
+    let setup = |p: &Path| {
+        spoil(p);
+        assert!(p.join("reports/report.html").is_file() && p.join("pipeline.lock").is_file());
+    };
+    let (_, out) = case(name, setup, &["run"], LIMIT, 2, &[]);
+    text(&out.stderr)
 }
 
 /// The first run id of `experiment` in runs.csv.
@@ -212,13 +115,7 @@ fn first_run(project: &Path, experiment: &str) -> String {
 #[test]
 fn a_position_of_1e308_exits_2_at_its_cell() {
     let err = refused("z_1e308", |p| {
-        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 {
-                set_field(l, 4, "1e308")
-            } else {
-                l.into()
-            }]
-        })
+        set_cell(&p.join("data/trajectories.csv"), 101, 4, "1e308")
     });
     assert_names(&err, &["trajectories.csv row 101, column z_m"]);
 }
@@ -227,13 +124,7 @@ fn a_position_of_1e308_exits_2_at_its_cell() {
 fn huge_times_exit_2_at_their_cell() {
     for value in ["1e308", "-1e308", "9.2e18", "-9.2e18", "1e20"] {
         let err = refused(&format!("t_{value}"), |p| {
-            edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-                vec![if k == 101 {
-                    set_field(l, 3, value)
-                } else {
-                    l.into()
-                }]
-            })
+            set_cell(&p.join("data/trajectories.csv"), 101, 3, value)
         });
         assert_names(&err, &["trajectories.csv row 101, column t_s"]);
     }
@@ -242,12 +133,8 @@ fn huge_times_exit_2_at_their_cell() {
 #[test]
 fn a_far_frame_at_a_matching_time_exits_2() {
     let err = refused("far_frame", |p| {
-        edit_lines(&p.join("data/trajectories.csv"), |k, l| {
-            vec![if k == 101 {
-                set_field(&set_field(l, 2, "100000000"), 3, "10000")
-            } else {
-                l.into()
-            }]
+        edit_line(&p.join("data/trajectories.csv"), 101, |l| {
+            set_field(&set_field(l, 2, "100000000"), 3, "10000")
         })
     });
     assert_names(&err, &["trajectories.csv row 101, column t_s"]);
@@ -256,13 +143,7 @@ fn a_far_frame_at_a_matching_time_exits_2() {
 #[test]
 fn a_frame_rate_typed_in_khz_exits_2_saying_so() {
     let err = refused("fps_khz", |p| {
-        edit_lines(&p.join("data/runs.csv"), |k, l| {
-            vec![if k == 2 {
-                set_field(l, 4, "10")
-            } else {
-                l.into()
-            }]
-        })
+        set_cell(&p.join("data/runs.csv"), 2, 4, "10")
     });
     assert_names(&err, &["runs.csv row 2, column fps", "kHz", "10000"]);
 }
@@ -370,33 +251,9 @@ fn invalid_utf8_in_the_header_exits_2_naming_row_and_column() {
 
 #[test]
 fn numbers_stored_as_text_in_parquet_exit_2() {
-    use polars::prelude::*;
     let err = refused("parquet_text", |p| {
         let csv = std::fs::read_to_string(p.join("data/trajectories.csv")).unwrap();
-        let rows: Vec<Vec<&str>> = csv
-            .lines()
-            .skip(1)
-            .map(|l| l.split(',').collect())
-            .collect();
-        let col = |k: usize| rows.iter().map(|r| r[k].to_string()).collect::<Vec<_>>();
-        let int = |k: usize| {
-            rows.iter()
-                .map(|r| r[k].parse::<i64>().unwrap())
-                .collect::<Vec<_>>()
-        };
-        let mut df = DataFrame::new(
-            rows.len(),
-            vec![
-                Column::new("run".into(), col(0)),
-                Column::new("particle".into(), int(1)),
-                Column::new("frame".into(), int(2)),
-                Column::new("t_s".into(), col(3)),
-                Column::new("z_m".into(), col(4)),
-            ],
-        )
-        .unwrap();
-        let mut bytes = Vec::new();
-        ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
+        let bytes = parquet::trajectories_parquet(&csv, true);
         std::fs::remove_file(p.join("data/trajectories.csv")).unwrap();
         std::fs::write(p.join("data/trajectories.parquet"), bytes).unwrap();
     });
@@ -411,7 +268,7 @@ fn numbers_stored_as_text_in_parquet_exit_2() {
 #[test]
 fn symlinked_tables_are_followed() {
     let project = copy_of_base("symlinks");
-    let elsewhere = scratch().join("symlinks-elsewhere");
+    let elsewhere = scratch("hostile").join("symlinks-elsewhere");
     std::fs::create_dir_all(&elsewhere).unwrap();
     let reports = tree_hashes(&project.join("reports"));
     for name in ["runs.csv", "trajectories.csv"] {
@@ -440,11 +297,7 @@ fn a_stray_file_in_the_data_folder_is_ignored_and_named() {
         "{}",
         text(&out.stdout)
     );
-    assert!(
-        text(&out.stderr).contains("notes (copy).txt is not read"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["notes (copy).txt is not read"]);
     assert_eq!(tree_hashes(&project.join("reports")), reports);
 }
 
@@ -459,10 +312,23 @@ fn engine_case(
     code: i32,
     may_change: &[&str],
 ) -> (PathBuf, Output) {
+    case(name, setup, args, Duration::from_secs(60), code, may_change)
+}
+
+/// Runs `args` within `limit` in a copy of the base project after `setup`, expecting `code` and
+/// no panic; no file outside `may_change` (relative paths) may change.
+fn case(
+    name: &str,
+    setup: impl FnOnce(&Path),
+    args: &[&str],
+    limit: Duration,
+    code: i32,
+    may_change: &[&str],
+) -> (PathBuf, Output) {
     let project = copy_of_base(name);
     setup(&project);
     let before = tree_hashes(&project);
-    let out = groove_within(&project, args, Duration::from_secs(60));
+    let out = groove_within(&project, args, limit);
     let stderr = text(&out.stderr);
     assert_eq!(
         out.status.code(),
@@ -505,7 +371,7 @@ fn a_stage_failing_after_others_finished_leaves_reports_and_lock_whole() {
         2,
         &[".groove/"],
     );
-    assert!(text(&out.stderr).contains("boom"), "{}", text(&out.stderr));
+    assert_names(&text(&out.stderr), &["boom"]);
 }
 
 #[test]
@@ -548,11 +414,7 @@ fn outputs_outside_the_project_or_onto_inputs_are_config_errors() {
 #[test]
 fn reports_in_the_data_folder_are_refused() {
     let (_, out) = engine_case("out_is_data", |_| {}, &["run", "--out", "data"], 2, &[]);
-    assert!(
-        text(&out.stderr).contains("dataset folder"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["dataset folder"]);
 }
 
 #[test]
@@ -573,11 +435,7 @@ fn a_file_output_never_replaces_a_folder() {
         2,
         &[".groove/"],
     );
-    assert!(
-        text(&out.stderr).contains("never replaces a folder"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["never replaces a folder"]);
     assert_eq!(
         std::fs::read_to_string(project.join("reports/keep/mine.txt")).unwrap(),
         "mine"
@@ -593,11 +451,7 @@ fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("is a file"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["is a file"]);
     let parent = project.parent().unwrap();
     assert_eq!(
         std::fs::read_to_string(parent.join("publish_file-target")).unwrap(),
@@ -617,6 +471,16 @@ fn publish_refuses_a_file_and_sweeps_its_own_leftovers() {
 }
 
 /// The store object holding `rel` (a file of the project).
+/// `groove status` finds no stage stale.
+fn assert_every_stage_fresh(project: &Path) {
+    let status = groove_within(project, &["status", "--json"], LIMIT);
+    assert!(
+        !text(&status.stdout).contains("\"stale\""),
+        "{}",
+        text(&status.stdout)
+    );
+}
+
 fn object_of(project: &Path, rel: &str) -> PathBuf {
     let h = sha256_hex(&std::fs::read(project.join(rel)).unwrap());
     project.join(".groove/objects").join(&h[..2]).join(&h[2..])
@@ -642,12 +506,7 @@ fn a_damaged_object_is_a_miss_and_the_stage_reruns() {
         sha256_hex(&good),
         "the object is repaired"
     );
-    let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(
-        !text(&status.stdout).contains("\"stale\""),
-        "{}",
-        text(&status.stdout)
-    );
+    assert_every_stage_fresh(&project);
 }
 
 #[test]
@@ -678,12 +537,7 @@ fn verify_drops_damaged_objects_and_says_so() {
     assert!(!object.exists());
     let rerun = groove_within(&project, &["run"], Duration::from_secs(60));
     assert!(rerun.status.success(), "{}", text(&rerun.stderr));
-    let status = groove_within(&project, &["status", "--json"], LIMIT);
-    assert!(
-        !text(&status.stdout).contains("\"stale\""),
-        "{}",
-        text(&status.stdout)
-    );
+    assert_every_stage_fresh(&project);
 }
 
 #[test]
@@ -695,11 +549,7 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("pipeline.toml:1: defines no stages"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["pipeline.toml:1: defines no stages"]);
     let before = tree_hashes(&project);
     let gc = groove_within(&project, &["gc"], LIMIT);
     assert_eq!(gc.status.code(), Some(2));
@@ -713,11 +563,7 @@ fn an_empty_config_changes_nothing_and_gc_keeps_the_store() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("nothing was removed"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["nothing was removed"]);
 }
 
 #[test]
@@ -734,14 +580,6 @@ fn invalid_utf8_in_the_config_names_its_line() {
         2,
         &[],
     );
-    assert!(
-        text(&out.stderr).contains("is not UTF-8"),
-        "{}",
-        text(&out.stderr)
-    );
-    assert!(
-        text(&out.stderr).contains("pipeline.toml:"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_names(&text(&out.stderr), &["is not UTF-8"]);
+    assert_names(&text(&out.stderr), &["pipeline.toml:"]);
 }

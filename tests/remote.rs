@@ -8,37 +8,12 @@
 #[path = "support/project.rs"]
 mod project;
 
-use project::{assert_same_tree, count, files, Project};
+use project::{assert_same_tree, count, files, Project, PER_ITEM_PIPELINE};
 use sha2::{Digest, Sha256};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// ingest copies the dataset, fit checksums each run (one key per run), summary gathers them.
-const PIPELINE: &str = r#"[project]
-seed = 7
-data = "data"
-reports = "reports"
-
-[stages.ingest]
-kind = "command"
-cmd = "echo ingest >> trace.txt; mkdir -p {out.runs}; cp {in.dataset}/* {out.runs}/"
-inputs = { dataset = "${data}" }
-outputs = { runs = "${reports}/runs" }
-
-[stages.fit]
-kind = "command"
-foreach = "runs"
-cmd = "echo fit {item} >> trace.txt; cksum < {in.runs} > {out.fit}"
-inputs = { runs = "ingest:runs" }
-outputs = { fit = "${reports}/fits" }
-
-[stages.summary]
-kind = "command"
-cmd = "echo summary >> trace.txt; cat {in.fits}/* | sort > {out.table}; echo scale {params.scale} >> {out.table}"
-inputs = { fits = "fit:fit" }
-outputs = { table = "${reports}/table.txt" }
-params = { scale = 1 }
-"#;
+const PIPELINE: &str = PER_ITEM_PIPELINE;
 
 /// A clone of the project with `runs` recordings (same bytes in every clone).
 fn clone_with(runs: usize) -> Project {

@@ -5,23 +5,7 @@
 use crate::recording::Setup;
 use serde::{Deserialize, Serialize};
 
-/// A fitted value and its standard error (None when the data do not constrain it). A value
-/// that could not be computed is NaN in memory and `null` in JSON.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Estimate {
-    #[serde(with = "super::nan_null")]
-    pub value: f64,
-    pub se: Option<f64>,
-}
-
-impl Estimate {
-    pub fn new(value: f64, se: f64) -> Estimate {
-        Estimate {
-            value,
-            se: se.is_finite().then_some(se),
-        }
-    }
-}
+pub use super::estimate::Estimate;
 
 /// How the fit of a run ended; anything but `converged` is shown, not hidden.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -2,6 +2,7 @@
 //! generated from the artifact types: the field names are read from the serde derives, so the
 //! README block (`markdown`, checked by `tests/contracts.rs`) cannot drift from the code.
 
+use super::estimate::shape;
 use super::{diagnosis, fits_table, summary};
 use serde::de::{self, Deserialize, Deserializer, Visitor};
 use std::fmt;
@@ -93,7 +94,7 @@ pub fn markdown() -> String {
     ));
     s.push_str(&line(
         "`summary.json` an estimate (`interval`: `lo`, `hi`)",
-        fields_of::<summary::Estimate>(),
+        fields_of::<shape::ValueInterval>(),
     ));
     s.push_str(&line(
         "`summary.json` `collisions`",
@@ -121,7 +122,7 @@ pub fn markdown() -> String {
     ));
     s.push_str(&line(
         "`diagnosis.json` a parameter",
-        fields_of::<diagnosis::Estimate>(),
+        fields_of::<shape::ValueStderr>(),
     ));
     s.push_str(&line(
         "`diagnosis.json` `candidates[]`",
@@ -143,8 +144,9 @@ mod tests {
 
     #[test]
     fn traces_the_serialized_names_in_order() {
-        assert_eq!(fields_of::<summary::Estimate>(), ["value", "interval"]);
+        assert_eq!(fields_of::<shape::ValueInterval>(), ["value", "interval"]);
         assert_eq!(fields_of::<collision_fit::Estimate>(), ["value", "se"]);
+        assert_eq!(fields_of::<shape::ValueBounds>(), ["value", "lo", "hi"]);
         assert!(fields_of::<diagnosis::Finding>().contains(&"where"));
         let md = markdown();
         assert!(md.starts_with(BEGIN) && md.ends_with(&format!("{END}\n")));

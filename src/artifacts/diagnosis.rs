@@ -4,14 +4,7 @@
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// A value with its standard error.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
-pub struct Estimate {
-    #[serde(with = "super::nan_null")]
-    pub value: f64,
-    #[serde(with = "super::nan_null")]
-    pub stderr: f64,
-}
+pub use super::estimate::Estimate;
 
 /// How well a model does: held-out error and in-sample fit.
 #[derive(Clone, Debug, Serialize, Deserialize, Default)]
@@ -70,6 +63,7 @@ pub struct Finding {
     pub effect: String,
     pub accepted: bool,
     pub form: String,
+    #[serde(with = "super::estimate::stderr::map")]
     pub parameters: BTreeMap<String, Estimate>,
     pub evidence: Evidence,
     #[serde(rename = "where")]
@@ -85,6 +79,7 @@ pub struct CandidateRow {
     pub effect: String,
     pub form: String,
     pub accepted: bool,
+    #[serde(with = "super::estimate::stderr::map")]
     pub parameters: BTreeMap<String, Estimate>,
     pub evidence: Evidence,
 }
@@ -133,6 +128,7 @@ pub struct Diagnosis {
     pub findings: Vec<Finding>,
     pub candidates: Vec<CandidateRow>,
     pub model: ModelScore,
+    #[serde(with = "super::estimate::stderr::map")]
     pub model_parameters: BTreeMap<String, Estimate>,
     pub baseline_model: ModelScore,
     pub residuals_before: Option<Structure>,

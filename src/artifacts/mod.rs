@@ -5,13 +5,15 @@
 //! One file per artifact family: `run_fit` + `collision_fit` (the `fit` stage's item per run),
 //! `fits_table` (fits.csv), `summary` (summary.json), `residuals` (`simulate`'s item per run),
 //! `comparison` (`compare`), `diagnosis` (diagnosis.json), `validation` (`validate`), `provenance`
-//! (`engine:provenance`), `skipped` (`ingest:skipped`); `contract` lists the documented fields of
+//! (`engine:provenance`), `skipped` (`ingest:skipped`); `estimate` is the one `Estimate` (value,
+//! standard error, interval) with the adapters that keep each file's shape; `contract` lists the documented fields of
 //! the published files for the README; `nan_null` carries a not-computed number as JSON `null`.
 
 pub mod collision_fit;
 pub mod comparison;
 pub mod contract;
 pub mod diagnosis;
+pub mod estimate;
 pub mod fits_table;
 pub mod nan_null;
 pub mod provenance;
@@ -23,6 +25,7 @@ pub mod validation;
 
 pub use comparison::Comparison;
 pub use diagnosis::Diagnosis;
+pub use estimate::{Estimate, Interval};
 pub use fits_table::FitsRow;
 pub use provenance::Provenance;
 pub use residuals::RunResiduals;

@@ -1,33 +1,31 @@
 //! The types of summary.json (the output contract of the fits): per-material estimates with
-//! bootstrap intervals, the T-vs-v0 line, and the collision aggregates when there are collision runs.
+//! bootstrap intervals (each an `Estimate` written as `{value, interval}`), the T-vs-v0 line, and the collision aggregates when there are collision runs.
 
-pub use crate::fit::bootstrap::Interval;
+pub use super::estimate::{Estimate, Interval};
+pub use crate::fit::collision::profile::{MuPpProfile, ProfilePoint, ProfileVerdict};
+pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice, LawParameter};
 pub use crate::fit::collision::summary::{
-    CollisionSummary, Interval as BootstrapValue, MuPp, RestitutionCurve, RestitutionPoint,
-    SpinPoint,
+    CollisionSummary, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
 };
+pub use crate::fit::collision::whole_summary::{MaterialWholeRun, WholeRun, WholeRunSummary};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-
-/// A value (null if it cannot be computed from the data) and its bootstrap percentile interval (level in `BootstrapInfo`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Estimate {
-    #[serde(with = "super::nan_null")]
-    pub value: f64,
-    pub interval: Option<Interval>,
-}
 
 /// T = intercept + slope·|v0| fitted over runs (Fig. 4.2c).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DragLine {
+    #[serde(with = "super::estimate::interval")]
     pub intercept_s: Estimate,
+    #[serde(with = "super::estimate::interval")]
     pub slope_s_per_mps: Estimate,
 }
 
 /// μ = intercept + slope·|v0| fitted over runs (Fig. 4.2d).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrictionLine {
+    #[serde(with = "super::estimate::interval")]
     pub intercept: Estimate,
+    #[serde(with = "super::estimate::interval")]
     pub slope_per_mps: Estimate,
 }
 
@@ -38,8 +36,10 @@ pub struct MaterialSummary {
     pub n_runs: usize,
     pub n_converged: usize,
     /// Inverse-variance weighted mean of μ over the converged runs.
+    #[serde(with = "super::estimate::interval")]
     pub mu_weighted: Estimate,
     /// Plain mean of μ over the runs with |v0| above `fast_min_speed_mps` (the chapter's value).
+    #[serde(with = "super::estimate::interval")]
     pub mu_fast: Estimate,
     pub n_fast: usize,
     pub t_vs_v0: DragLine,

@@ -3,9 +3,9 @@
 //! run stay dependent as in the data), refit the smaller and every larger model from warm starts.
 
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
-use super::proposal::{propose, starts, wanted_for, Ranges};
 use super::data::RunData;
 use super::joint::{fit_joint, predict, FitControl, Fitted};
+use super::proposal::{propose, starts, wanted_for, Ranges};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -65,61 +65,60 @@ pub fn lr_replicates(
     stop: Option<&EarlyStop>,
 ) -> Vec<Vec<f64>> {
     let one = |b: usize| -> Vec<f64> {
-            let mut rng = ChaCha8Rng::seed_from_u64(
-                seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-            );
-            let data = synthetic_runs(null_spec, null_fit, runs, &mut rng);
-            let ctl = FitControl {
-                max_iter: iters,
-                free_global: true,
-            };
-            let f0 = fit_joint(
+        let mut rng =
+            ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let data = synthetic_runs(null_spec, null_fit, runs, &mut rng);
+        let ctl = FitControl {
+            max_iter: iters,
+            free_global: true,
+        };
+        let f0 = fit_joint(
+            null_spec,
+            null_params,
+            &data,
+            &null_fit.global,
+            &null_fit.local,
+            ctl,
+        );
+        let needing: Vec<&Extra> = alts
+            .iter()
+            .filter_map(|a| a.proposed.as_ref().map(|p| &p.0))
+            .collect();
+        let props = match alts.iter().find_map(|a| a.proposed.as_ref()) {
+            Some((_, rg)) => propose(
                 null_spec,
                 null_params,
+                &f0.global,
+                &f0.local,
                 &data,
-                &null_fit.global,
-                &null_fit.local,
-                ctl,
-            );
-            let needing: Vec<&Extra> = alts
-                .iter()
-                .filter_map(|a| a.proposed.as_ref().map(|p| &p.0))
-                .collect();
-            let props = match alts.iter().find_map(|a| a.proposed.as_ref()) {
-                Some((_, rg)) => propose(
-                    null_spec,
-                    null_params,
-                    &f0.global,
-                    &f0.local,
-                    &data,
-                    rg,
-                    wanted_for(&needing),
-                    None,
-                ),
-                None => Default::default(),
-            };
-            alts.iter()
-                .map(|a| {
-                    let own;
-                    let list = match &a.proposed {
-                        Some((e, _)) => {
-                            own = starts(e, &props);
-                            &own
-                        }
-                        None => &a.extra_starts,
-                    };
-                    let best = list
-                        .iter()
-                        .map(|start| {
-                            let mut g = f0.global.clone();
-                            g.extend_from_slice(start);
-                            let l: Vec<[f64; N_LOCAL]> = f0.local.clone();
-                            fit_joint(&a.spec, &a.params, &data, &g, &l, ctl).chi2
-                        })
-                        .fold(f64::INFINITY, f64::min);
-                    (f0.chi2 - best).max(0.0)
-                })
-                .collect()
+                rg,
+                wanted_for(&needing),
+                None,
+            ),
+            None => Default::default(),
+        };
+        alts.iter()
+            .map(|a| {
+                let own;
+                let list = match &a.proposed {
+                    Some((e, _)) => {
+                        own = starts(e, &props);
+                        &own
+                    }
+                    None => &a.extra_starts,
+                };
+                let best = list
+                    .iter()
+                    .map(|start| {
+                        let mut g = f0.global.clone();
+                        g.extend_from_slice(start);
+                        let l: Vec<[f64; N_LOCAL]> = f0.local.clone();
+                        fit_joint(&a.spec, &a.params, &data, &g, &l, ctl).chi2
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                (f0.chi2 - best).max(0.0)
+            })
+            .collect()
     };
     // replicates in batches; replicate b always has the same seed, so stopping early changes
     // only how many are drawn, never what they are

@@ -86,7 +86,13 @@ impl Model {
     }
 
     /// The model without extra term `i`, refitted from the current values.
-    pub fn without(&self, i: usize, materials: &[String], runs: &[RunData], max_iter: usize) -> Model {
+    pub fn without(
+        &self,
+        i: usize,
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
         let off = self.spec.extra_offset(i);
         let n = self.spec.extras[i].params().len();
         let mut g = self.fit.global.clone();
@@ -148,7 +154,7 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
     let off = m.spec.extra_offset(i);
     let g = &m.fit.global;
     let se = &m.fit.global_se;
-    let est = |value: f64, stderr: f64| Estimate { value, stderr };
+    let est = Estimate::new;
     let mut out = BTreeMap::new();
     let nm = m.spec.n_materials;
     match &m.spec.extras[i] {
@@ -213,10 +219,14 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
             out.insert("peak_accel_mps2".into(), est(amp, amp_se));
             out.insert(
                 "wavelength_m".into(),
-                est(std::f64::consts::TAU / k, std::f64::consts::TAU * sk / (k * k)),
+                est(
+                    std::f64::consts::TAU / k,
+                    std::f64::consts::TAU * sk / (k * k),
+                ),
             );
             let phase = (b.atan2(a) - k * z_ref_m).rem_euclid(std::f64::consts::TAU);
-            let phase_se = (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp)).hypot(z_ref_m * sk);
+            let phase_se =
+                (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp)).hypot(z_ref_m * sk);
             out.insert("phase_rad".into(), est(phase, phase_se));
         }
         Extra::Localized { .. } => {
@@ -294,7 +304,13 @@ fn pseudo(current: &Model, e: &Extra, s: Option<&Screened>, materials: &[String]
 fn clamp_to(e: &Extra, v: &[f64]) -> Vec<f64> {
     v.iter()
         .zip(e.params())
-        .map(|(x, q)| if x.is_finite() { x.clamp(q.lo, q.hi) } else { q.start })
+        .map(|(x, q)| {
+            if x.is_finite() {
+                x.clamp(q.lo, q.hi)
+            } else {
+                q.start
+            }
+        })
         .collect()
 }
 
@@ -342,7 +358,10 @@ pub fn run_round(
     let clock = std::time::Instant::now();
     let trace = |what: &str| {
         if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
-            eprintln!("round {round}: {what} at {:.2} s", clock.elapsed().as_secs_f64());
+            eprintln!(
+                "round {round}: {what} at {:.2} s",
+                clock.elapsed().as_secs_f64()
+            );
         }
     };
     let seed = opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
@@ -413,7 +432,10 @@ pub fn run_round(
     order.sort_by(|a, b| strength[*b].total_cmp(&strength[*a]).then(a.cmp(b)));
     let mut fitted: Vec<Model> = linear.clone();
     let full = |i: usize| -> Model {
-        let mut starts = vec![clamp_to(all[i], &linear[i].fit.global[current.fit.global.len()..])];
+        let mut starts = vec![clamp_to(
+            all[i],
+            &linear[i].fit.global[current.fit.global.len()..],
+        )];
         if !needs_proposal(all[i]) {
             starts.extend(data_starts(all[i], props));
         }
@@ -599,7 +621,12 @@ pub fn detection_limit(e: &Extra, m: &Model, null: &NullFit, level: f64) -> Opti
         Extra::SaturatingDrag => ("tp_s_per_mps", "s²/m", se[off], 1.0),
         Extra::RollingResistance => ("deceleration_mps2", "m/s²", se[off], G_MPS2),
         Extra::GrooveTilt => ("alpha_deg", "°", se[off], 1.0),
-        Extra::PeriodicZ { .. } => ("amplitude_mps2", "m/s²", se[off + 1].hypot(se[off + 2]) / 2f64.sqrt(), 1.0),
+        Extra::PeriodicZ { .. } => (
+            "amplitude_mps2",
+            "m/s²",
+            se[off + 1].hypot(se[off + 2]) / 2f64.sqrt(),
+            1.0,
+        ),
         Extra::Localized { .. } => ("amplitude_mps2", "m/s²", se[off], 1.0),
         Extra::TimePeriodic { .. } => ("amplitude_mps2", "m/s²", se[off + 1], 1.0),
         _ => return None,
@@ -614,7 +641,12 @@ pub fn detection_limit(e: &Extra, m: &Model, null: &NullFit, level: f64) -> Opti
     Some(DetectionLimit {
         parameter: name.into(),
         value,
-        text: format!("{} above {} {} would have been found", e.size_name(), sig(value), unit),
+        text: format!(
+            "{} above {} {} would have been found",
+            e.size_name(),
+            sig(value),
+            unit
+        ),
     })
 }
 

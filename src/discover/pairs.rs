@@ -227,10 +227,7 @@ pub fn check_pairs(
         drafts.into_iter().enumerate()
     {
         let sh = &free.result.shared;
-        let v = |x: f64, se: f64| Value {
-            value: x,
-            stderr: se,
-        };
+        let v = Value::new;
         let mut parameters = BTreeMap::new();
         parameters.insert(
             "mu_pg_pairs".to_string(),
@@ -364,8 +361,7 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
         diagnosis
             .model_parameters
             .get(&k)
-            .map(|e| e.stderr)
-            .filter(|x| x.is_finite())
+            .and_then(|e| e.se)
             .unwrap_or(0.0)
     };
     let mut physics = BTreeMap::new();

@@ -263,7 +263,9 @@ pub fn propose(
 pub fn wanted_for(extras: &[&Extra]) -> Wanted {
     Wanted {
         z: extras.iter().any(|e| matches!(e, Extra::PeriodicZ { .. })),
-        t: extras.iter().any(|e| matches!(e, Extra::TimePeriodic { .. })),
+        t: extras
+            .iter()
+            .any(|e| matches!(e, Extra::TimePeriodic { .. })),
         bump: extras.iter().any(|e| matches!(e, Extra::Localized { .. })),
         maps: false,
     }
@@ -286,19 +288,19 @@ pub fn starts(e: &Extra, p: &Proposals) -> Vec<Vec<f64>> {
             .collect()
     };
     let out: Vec<Vec<f64>> = match e {
-        Extra::PeriodicZ { .. } => p
-            .z
-            .iter()
-            .flat_map(|s| s.peaks.iter())
-            .map(|pk| clamp(vec![pk.omega, pk.coef[0], pk.coef[1]]))
-            .collect(),
+        Extra::PeriodicZ { .. } => {
+            p.z.iter()
+                .flat_map(|s| s.peaks.iter())
+                .map(|pk| clamp(vec![pk.omega, pk.coef[0], pk.coef[1]]))
+                .collect()
+        }
         Extra::Localized { .. } => p.bumps.iter().map(|b| clamp(b.to_vec())).collect(),
-        Extra::TimePeriodic { .. } => p
-            .t
-            .iter()
-            .flat_map(|s| s.peaks.iter())
-            .map(|pk| clamp(vec![pk.omega / TAU, pk.coef[0].max(1e-3)]))
-            .collect(),
+        Extra::TimePeriodic { .. } => {
+            p.t.iter()
+                .flat_map(|s| s.peaks.iter())
+                .map(|pk| clamp(vec![pk.omega / TAU, pk.coef[0].max(1e-3)]))
+                .collect()
+        }
         Extra::Spline { variable, .. } => {
             let name = match variable {
                 Variable::Z => "z",

@@ -172,12 +172,8 @@ impl Track {
     /// Responses to `sin(ω t)` and `cos(ω t)` (t since the kick), integrated exactly per step.
     pub fn respond_time(&self, omega: f64) -> (Vec<f64>, Vec<f64>) {
         let n = self.t.len();
-        let (mut s1, mut s2, mut c1, mut c2) = (
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-        );
+        let (mut s1, mut s2, mut c1, mut c2) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let h = self.h;
         let (mut sa, mut ca) = (0.0f64, 1.0f64);
         // sin and cos on the uniform grid by rotation, re-anchored every 64 steps
@@ -410,7 +406,11 @@ mod tests {
                 freq_hz: 180.0,
                 phase_rad: 0.0,
             });
-            let fd: Vec<f64> = sim(&mt).iter().zip(&z0).map(|(a, b)| (a - b) / eps).collect();
+            let fd: Vec<f64> = sim(&mt)
+                .iter()
+                .zip(&z0)
+                .map(|(a, b)| (a - b) / eps)
+                .collect();
             let (rs, _) = track.respond_time(omega);
             let scale = fd.iter().map(|x| x.abs()).fold(0.0, f64::max);
             let err = fd
@@ -418,7 +418,10 @@ mod tests {
                 .zip(&rs)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            assert!(err < 0.05 * scale, "v0 {v0}: time force err {err} of {scale}");
+            assert!(
+                err < 0.05 * scale,
+                "v0 {v0}: time force err {err} of {scale}"
+            );
             // a localized force in z
             let mut ml = base();
             ml.terms.push(Term::LocalizedForce {
@@ -426,7 +429,11 @@ mod tests {
                 centre_m: 1e-3 + v0.signum() * 4e-4,
                 width_m: 2e-4,
             });
-            let fd: Vec<f64> = sim(&ml).iter().zip(&z0).map(|(a, b)| (a - b) / eps).collect();
+            let fd: Vec<f64> = sim(&ml)
+                .iter()
+                .zip(&z0)
+                .map(|(a, b)| (a - b) / eps)
+                .collect();
             let f: Vec<f64> = track
                 .z
                 .iter()
@@ -455,7 +462,10 @@ mod tests {
                 .zip(col)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            assert!(err < 0.03 * scale, "v0 {v0}: v0 column err {err} of {scale}");
+            assert!(
+                err < 0.03 * scale,
+                "v0 {v0}: v0 column err {err} of {scale}"
+            );
         }
     }
 }

@@ -4,20 +4,20 @@ use super::candidate::{Extra, Spec, N_LOCAL};
 use super::cv::{cross_validate, CvResult};
 use super::data::{prepare_runs, RunData};
 use super::diagnosis::{
-    CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ForceMaps, ModelScore,
-    Settings,
+    CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ForceMaps, ModelScore, Settings,
 };
 use super::drift::line;
 use super::forcemap::ForceMap;
 use super::forward::{finding, fold_of, median_speed, run_round, Model};
-use super::null_distribution::NullFit;
-use super::proposal::{propose, wanted_for, Ranges, Wanted};
-use super::spectral::Spectrum;
-use crate::physics::Variable;
 use super::locate::locate;
+use super::null_distribution::NullFit;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
+use super::proposal::{propose, wanted_for, Ranges, Wanted};
 use super::residual_structure::Structure;
+use super::spectral::Spectrum;
 use super::Options;
+use crate::artifacts::estimate::stderr;
+use crate::physics::Variable;
 use crate::recording::Recording;
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -118,7 +118,7 @@ fn worst_bins(s: &Structure) -> serde_json::Value {
 fn probes_json(rows: &[CandidateRow]) -> serde_json::Value {
     let v: Vec<serde_json::Value> = rows
         .iter()
-        .map(|r| json!({"probe": r.form, "p_holm": r.evidence.p_holm, "lr": r.evidence.lr, "parameters": r.parameters}))
+        .map(|r| json!({"probe": r.form, "p_holm": r.evidence.p_holm, "lr": r.evidence.lr, "parameters": stderr::map::shaped(&r.parameters)}))
         .collect();
     serde_json::Value::Array(v)
 }
@@ -345,7 +345,7 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
             maps_before = props.maps.clone();
             spectra = props.z.iter().chain(props.t.iter()).cloned().collect();
         }
-    trace(t0, "proposed");
+        trace(t0, "proposed");
         let r = run_round(
             round,
             &current,
@@ -524,7 +524,10 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
             .cloned()
             .collect();
         w.insert("drift_probes_before".to_string(), probes_json(&flagged));
-        w.insert("drift_probes_after".to_string(), probes_json(&acc.probes_after));
+        w.insert(
+            "drift_probes_after".to_string(),
+            probes_json(&acc.probes_after),
+        );
         w.insert(
             "residuals_before".to_string(),
             worst_bins(&residuals_before),
@@ -588,13 +591,7 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
         .iter()
         .zip(current.fit.global.iter().zip(&current.fit.global_se))
     {
-        model_parameters.insert(
-            p.name.clone(),
-            Estimate {
-                value: *v,
-                stderr: *se,
-            },
-        );
+        model_parameters.insert(p.name.clone(), Estimate::new(*v, *se));
     }
     let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {

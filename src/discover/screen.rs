@@ -107,12 +107,7 @@ impl Vectors {
                 None => vec![0.0; k * k],
             }
         };
-        Vectors {
-            y,
-            kept,
-            ginv,
-            gty,
-        }
+        Vectors { y, kept, ginv, gty }
     }
 
     fn n_rep(&self) -> usize {
@@ -168,13 +163,17 @@ impl Sums {
         let mut xg_ginv = vec![0.0; q * k];
         for a in 0..q {
             for c in 0..k {
-                xg_ginv[a * k + c] = (0..k).map(|d| self.xtg[a * k + d] * v.ginv[d * k + c]).sum();
+                xg_ginv[a * k + c] = (0..k)
+                    .map(|d| self.xtg[a * k + d] * v.ginv[d * k + c])
+                    .sum();
             }
         }
         let mut am = self.xtx.clone();
         for a in 0..q {
             for b in 0..q {
-                am[a * q + b] -= (0..k).map(|c| xg_ginv[a * k + c] * self.xtg[b * k + c]).sum::<f64>();
+                am[a * q + b] -= (0..k)
+                    .map(|c| xg_ginv[a * k + c] * self.xtg[b * k + c])
+                    .sum::<f64>();
             }
         }
         // a column the form cannot move (outside every run, or absorbed by the shared
@@ -204,7 +203,10 @@ impl Sums {
                     if dead[a] {
                         0.0
                     } else {
-                        xty[a] - (0..k).map(|d| xg_ginv[a * k + d] * v.gty[bb][d]).sum::<f64>()
+                        xty[a]
+                            - (0..k)
+                                .map(|d| xg_ginv[a * k + d] * v.gty[bb][d])
+                                .sum::<f64>()
                     }
                 })
                 .collect();
@@ -243,7 +245,12 @@ fn best_of(trials: Vec<Option<Trial>>, nrep: usize) -> Option<Trial> {
 
 /// Coherent trial: the same columns' coefficients in every run; `cols(p)` gives a run's columns
 /// (already in noise units with its locals projected) or None where the form cannot act.
-fn coherent<F>(prep: &[Prepared], v: &Vectors, q: usize, cols: F) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)>
+fn coherent<F>(
+    prep: &[Prepared],
+    v: &Vectors,
+    q: usize,
+    cols: F,
+) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)>
 where
     F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
 {
@@ -326,7 +333,11 @@ pub fn screen(
         .iter()
         .map(|e| {
             let t = match e {
-                Extra::PeriodicZ { k_lo, k_hi, z_ref_m } => periodic_z(prep, &v, rg, *z_ref_m, *k_lo, *k_hi),
+                Extra::PeriodicZ {
+                    k_lo,
+                    k_hi,
+                    z_ref_m,
+                } => periodic_z(prep, &v, rg, *z_ref_m, *k_lo, *k_hi),
                 Extra::Localized { w_lo, w_hi, .. } => localized(prep, &v, rg, *w_lo, *w_hi),
                 Extra::TimePeriodic { f_lo, f_hi } => time_periodic(prep, &v, rg, *f_lo, *f_hi),
                 Extra::Spline {
@@ -341,7 +352,8 @@ pub fn screen(
                     let trials: Vec<Option<Trial>> = [1e-3f64, 3e-3, 1e-2, 3e-2]
                         .par_iter()
                         .map(|vc| {
-                            let steps: Vec<(usize, f64)> = (0..*materials).map(|m| (m, vc.ln())).collect();
+                            let steps: Vec<(usize, f64)> =
+                                (0..*materials).map(|m| (m, vc.ln())).collect();
                             secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v).map(
                                 |(lr, _, se)| {
                                     (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()])
@@ -359,7 +371,14 @@ pub fn screen(
                         .enumerate()
                         .map(|(j, p)| {
                             let up = p.start + 100.0 * p.step;
-                            (j, if up <= p.hi { up } else { p.start - 100.0 * p.step })
+                            (
+                                j,
+                                if up <= p.hi {
+                                    up
+                                } else {
+                                    p.start - 100.0 * p.step
+                                },
+                            )
                         })
                         .collect();
                     secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v)
@@ -375,7 +394,14 @@ pub fn screen(
         .collect()
 }
 
-fn periodic_z(prep: &[Prepared], v: &Vectors, rg: &Ranges, z_ref: f64, k_lo: f64, k_hi: f64) -> Option<Trial> {
+fn periodic_z(
+    prep: &[Prepared],
+    v: &Vectors,
+    rg: &Ranges,
+    z_ref: f64,
+    k_lo: f64,
+    k_hi: f64,
+) -> Option<Trial> {
     let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
         .into_iter()
         .filter(|k| *k >= k_lo && *k <= k_hi)
@@ -392,7 +418,11 @@ fn periodic_z(prep: &[Prepared], v: &Vectors, rg: &Ranges, z_ref: f64, k_lo: f64
                     p.column(p.track.respond_values(&fc)),
                 ])
             })?;
-            Some((lr, vec![k, b[0], b[1]], vec![f64::NAN, var[0].sqrt(), var[1].sqrt()]))
+            Some((
+                lr,
+                vec![k, b[0], b[1]],
+                vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
+            ))
         })
         .collect();
     best_of(trials, v.n_rep())
@@ -426,7 +456,11 @@ fn localized(prep: &[Prepared], v: &Vectors, rg: &Ranges, w_lo: f64, w_hi: f64) 
                     .collect();
                 Some(vec![p.column(p.track.respond_values(&f))])
             })?;
-            Some((lr, vec![b[0], c, w], vec![var[0].sqrt(), f64::NAN, f64::NAN]))
+            Some((
+                lr,
+                vec![b[0], c, w],
+                vec![var[0].sqrt(), f64::NAN, f64::NAN],
+            ))
         })
         .collect();
     best_of(out, v.n_rep())
@@ -437,7 +471,13 @@ fn localized(prep: &[Prepared], v: &Vectors, rg: &Ranges, w_lo: f64, w_hi: f64) 
 /// orthogonal over many periods) and the data project to |b_r| at the best phase; a shared
 /// amplitude α drops χ² by Σ(2α|b_r| − α²a_r), at best (Σ|b_r|)²/Σa_r. A free amplitude per run
 /// would absorb any structure at all one run at a time; the shared one does not.
-fn time_periodic(prep: &[Prepared], v: &Vectors, rg: &Ranges, f_lo: f64, f_hi: f64) -> Option<Trial> {
+fn time_periodic(
+    prep: &[Prepared],
+    v: &Vectors,
+    rg: &Ranges,
+    f_lo: f64,
+    f_hi: f64,
+) -> Option<Trial> {
     let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
         .into_iter()
         .filter(|f| *f >= f_lo && *f <= f_hi)
@@ -471,14 +511,24 @@ fn time_periodic(prep: &[Prepared], v: &Vectors, rg: &Ranges, f_lo: f64, f_hi: f
     best_of(out, nrep)
 }
 
-fn spline(prep: &[Prepared], v: &Vectors, var: crate::physics::Variable, lo: f64, dx: f64, segments: usize) -> Option<Trial> {
+fn spline(
+    prep: &[Prepared],
+    v: &Vectors,
+    var: crate::physics::Variable,
+    lo: f64,
+    dx: f64,
+    segments: usize,
+) -> Option<Trial> {
     let nb = spline_n_basis(segments);
     let (lr, b, vv) = coherent(prep, v, nb, |p| {
         let x = p.track.variable(var);
         Some(
             (0..nb)
                 .map(|j| {
-                    let f: Vec<f64> = x.iter().map(|xv| spline_basis(lo, dx, segments, j, *xv)).collect();
+                    let f: Vec<f64> = x
+                        .iter()
+                        .map(|xv| spline_basis(lo, dx, segments, j, *xv))
+                        .collect();
                     p.column(p.track.respond_values(&f))
                 })
                 .collect(),

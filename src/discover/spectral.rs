@@ -31,7 +31,8 @@ fn solve2(a: [f64; 3], b: [f64; 2]) -> Option<([f64; 2], f64)> {
 fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Peak> {
     let mut idx: Vec<usize> = (0..power.len())
         .filter(|&i| {
-            (i == 0 || power[i] >= power[i - 1]) && (i + 1 == power.len() || power[i] >= power[i + 1])
+            (i == 0 || power[i] >= power[i - 1])
+                && (i + 1 == power.len() || power[i] >= power[i + 1])
         })
         .collect();
     idx.sort_by(|a, b| power[*b].total_cmp(&power[*a]).then(a.cmp(b)));
@@ -40,10 +41,9 @@ fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Pe
         if out.len() >= n {
             break;
         }
-        if out
-            .iter()
-            .any(|p| (p.omega - omega[i]).abs() < 2.5 * (omega[1.min(omega.len() - 1)] - omega[0]).abs())
-        {
+        if out.iter().any(|p| {
+            (p.omega - omega[i]).abs() < 2.5 * (omega[1.min(omega.len() - 1)] - omega[0]).abs()
+        }) {
             continue;
         }
         out.push(Peak {

@@ -121,7 +121,13 @@ mod tests {
     fn best_phase_recovers_a_known_phase() {
         // e = cos φ0·s + sin φ0·c with s, c orthonormal-ish
         let phi0: f64 = 2.2;
-        let k = [1.0, 0.1, 1.0, phi0.cos() + 0.1 * phi0.sin(), 0.1 * phi0.cos() + phi0.sin()];
+        let k = [
+            1.0,
+            0.1,
+            1.0,
+            phi0.cos() + 0.1 * phi0.sin(),
+            0.1 * phi0.cos() + phi0.sin(),
+        ];
         let phi = super::best_phase(&k);
         assert!((phi - phi0).abs() < 1e-6, "{phi}");
     }

@@ -1,12 +1,15 @@
 //! Per-material aggregates of single-run fits: μ (weighted, and the chapter's mean over fast runs),
-//! the T-vs-v0 and μ-vs-v0 lines, each with a seeded bootstrap interval over whole runs.
+//! the T-vs-v0 and μ-vs-v0 lines, each with a seeded bootstrap interval over whole runs. Only
+//! `converged` fits enter (a `suspect` or unfinished one is listed in `left_out`), and every
+//! estimate is one that a single wild run cannot capture: the robust weighted mean of μ and
+//! Theil–Sen lines.
 
 use super::bootstrap::percentile_intervals;
-use super::regression::{mean_where, robust_weighted_mean};
+use super::regression::{mean_where, robust_weighted_mean, theil_sen_indexed};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::ols_indexed as line_fit;
 use serde::{Deserialize, Serialize};
+use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 /// Params of the `aggregate` stage.
@@ -93,9 +96,11 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let mu_se: Vec<f64> = ok.iter().map(|f| f.mu_se.unwrap_or(f64::NAN)).collect();
     let t: Vec<f64> = ok.iter().map(|f| f.t_drag_s).collect();
     let fast = |i: usize| speed[i] > opts.fast_min_speed_mps;
+    let buf = RefCell::new(Vec::new());
     let stats = |idx: &[usize]| {
-        let (ta, tb) = line_fit(&speed, &t, idx);
-        let (ma, mb) = line_fit(&speed, &mu, idx);
+        let buf = &mut *buf.borrow_mut();
+        let (ta, tb) = theil_sen_indexed(&speed, &t, idx, buf);
+        let (ma, mb) = theil_sen_indexed(&speed, &mu, idx, buf);
         [
             robust_weighted_mean(&mu, &mu_se, idx),
             mean_where(&mu, idx, fast),
@@ -108,9 +113,8 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let all: Vec<usize> = (0..ok.len()).collect();
     let point = stats(&all);
     let ci = percentile_intervals(ok.len(), opts.bootstrap_resamples, seed, opts.level, stats);
-    let est = |k: usize| Estimate {
-        value: point[k],
-        interval: if point[k].is_finite() { ci[k] } else { None },
+    let est = |k: usize| {
+        Estimate::with_interval(point[k], if point[k].is_finite() { ci[k] } else { None })
     };
     let speed_range_mps = (!speed.is_empty()).then(|| {
         [
@@ -146,6 +150,21 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
             })
             .collect(),
     }
+}
+
+/// What the restarts of the single-run fits did, in words for summary.json's notes and the report:
+/// how many runs whose first fit was suspect (the signature of a fit that settled in a wrong basin,
+/// as pixel-locked tracker positions cause) a restart from other start values recovered, and how
+/// many stay suspect and are left out. `None` when every first fit passed its checks.
+pub fn restart_note(fits: &[SingleFit]) -> Option<String> {
+    let recovered = fits.iter().filter(|f| f.restarted).count();
+    let still = fits.iter().filter(|f| f.status == "suspect").count();
+    let n = recovered + still;
+    (n > 0).then(|| {
+        format!(
+            "{recovered} of {n} single runs whose first fit looked wrong (a parameter at a bound, the switch to rolling after the recording, v0 off the first frames' speed or structured residuals, as pixel-locked tracker positions cause) were recovered by a restart from other start values; {still} stay suspect and are left out of the aggregates"
+        )
+    })
 }
 
 /// FNV-1a of a name: a fixed, platform-independent way to give each material its own stream.

@@ -3,22 +3,8 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
-/// A percentile interval of a bootstrap distribution.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Interval {
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub lo: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub hi: f64,
-}
-
-impl Interval {
-    pub fn contains(&self, x: f64) -> bool {
-        self.lo <= x && x <= self.hi
-    }
-}
+pub use crate::artifacts::estimate::Interval;
 
 /// Percentile intervals at `level` (e.g. 0.95) of K statistics of n items, from `resamples`
 /// resamples drawn by ChaCha8 from `seed`. A statistic that is NaN on more than half of the

@@ -1,11 +1,11 @@
 //! Fit of a single run: the closed-form baseline (μ, T) with nuisance offset z0, kick time t0
 //! (within the first frame) and initial velocity v0 (its sign is the direction), robustly.
 
-use super::lm::Workspace;
+use super::lm::{Bounds, Workspace};
 use super::model::{Prepared, MU, NP, T0, TD, V0, Z0};
 use super::options::FitOptions;
 use super::quality::{early_speed, suspect_reasons};
-use super::robust::fit_robust;
+use super::robust::{fit_robust, RobustFit};
 use super::segment::{model_bounds, settings};
 use super::start::single_start;
 use super::status::Termination;
@@ -32,6 +32,19 @@ pub fn fit_single_with(rec: &Recording, opts: &FitOptions, ws: &mut Workspace) -
     fit
 }
 
+/// Which restarts a suspect first fit gets ([`Restarts::Grid`] in [`fit_track`]; `None` exists
+/// to measure what the restarts add, tests/trackers.rs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Restarts {
+    /// Keep the first fit.
+    None,
+    /// Free fits from a grid of starts: v0 from the first frames' speed (a local quadratic) and
+    /// from the data's start, μ at 0.1, 0.3 and 0.6, T at the data's start and ten times it.
+    /// (Holding v0 at the first frames' speed while the rest settles, then releasing it, recovered
+    /// no more runs on the pixel-locked null, nor did a linear or soft-L1 loss; see the README.)
+    Grid,
+}
+
 /// Fit the frames of one single-particle track recorded at `fps`; `run` and `material` are left empty.
 pub fn fit_track(
     t_s: &[f64],
@@ -39,6 +52,18 @@ pub fn fit_track(
     fps: f64,
     opts: &FitOptions,
     ws: &mut Workspace,
+) -> SingleFit {
+    fit_track_using(t_s, z_m, fps, opts, ws, Restarts::Grid)
+}
+
+/// [`fit_track`] with a chosen set of restarts.
+pub fn fit_track_using(
+    t_s: &[f64],
+    z_m: &[f64],
+    fps: f64,
+    opts: &FitOptions,
+    ws: &mut Workspace,
+    restarts: Restarts,
 ) -> SingleFit {
     let n = t_s.len().min(z_m.len());
     let groove = opts.groove();
@@ -61,28 +86,31 @@ pub fn fit_track(
         t_ref_s: 0.0,
         groove,
     };
-    let first = fit_robust(&prob, x0, &bounds, &settings(opts), ws);
-    let reasons = |x: &[f64; NP]| suspect_reasons(t_s, z_m, x, &bounds.lo, &bounds.hi, groove);
-    let mut why = reasons(&first.x);
+    let set = settings(opts);
+    let first = fit_robust(&prob, x0, &bounds, &set, ws);
+    let reasons =
+        |f: &RobustFit| suspect_reasons(t_s, z_m, &f.x, &f.se, &bounds.lo, &bounds.hi, groove);
+    let mut why = reasons(&first);
     let mut r = first;
     let mut restarted = false;
-    if r.termination.is_converged() && !why.is_empty() {
-        // Restarts: v0 from the first frames' speed (a local quadratic), μ spread over its
-        // physical range, T from the data's start. The clean fit with the smallest RMS wins.
-        let mut best: Option<(super::robust::RobustFit, Vec<String>)> = None;
-        for x in restarts(x0, early_speed(t_s, z_m), &bounds) {
-            let f = fit_robust(&prob, x, &bounds, &settings(opts), ws);
-            if !f.termination.is_converged() {
-                continue;
+    if r.termination.is_converged() && !why.is_empty() && restarts != Restarts::None {
+        // The clean restart with the smallest RMS wins; none clean: the first fit stands.
+        let v_early = early_speed(t_s, z_m).filter(|v| v.signum() == x0[V0].signum());
+        let mut best: Option<RobustFit> = None;
+        let mut consider = |f: RobustFit| {
+            if f.termination.is_converged()
+                && reasons(&f).is_empty()
+                && best.as_ref().is_none_or(|b| f.rms < b.rms)
+            {
+                best = Some(f);
             }
-            let w = reasons(&f.x);
-            if w.is_empty() && best.as_ref().is_none_or(|(b, _)| f.rms < b.rms) {
-                best = Some((f, w));
-            }
+        };
+        for x in grid(x0, v_early, &bounds) {
+            consider(fit_robust(&prob, x, &bounds, &set, ws));
         }
-        if let Some((f, w)) = best {
+        if let Some(f) = best {
+            why = Vec::new();
             r = f;
-            why = w;
             restarted = true;
         }
     }
@@ -125,12 +153,12 @@ pub fn fit_track(
     }
 }
 
-/// Start values for restarting a suspect fit: v0 from the early speed (if the data give one of
-/// the right sign) or the data's start, each with μ at 0.1, 0.3 and 0.6 and T at the data's start
-/// and ten times it.
-fn restarts(x0: [f64; NP], v_early: Option<f64>, bounds: &super::lm::Bounds) -> Vec<[f64; NP]> {
+/// The grid of [`Restarts::Grid`]: v0 from the first frames' speed (when it has the
+/// direction of the data's start) and the data's start, each with μ at 0.1, 0.3 and 0.6 and T at
+/// the data's start and ten times it.
+fn grid(x0: [f64; NP], v_early: Option<f64>, bounds: &Bounds) -> Vec<[f64; NP]> {
     let mut v0s = vec![x0[V0]];
-    if let Some(v) = v_early.filter(|v| v.signum() == x0[V0].signum() && v.abs() > 1e-6) {
+    if let Some(v) = v_early.filter(|v| v.abs() > 1e-6) {
         v0s.insert(0, v);
     }
     let mut out = Vec::new();

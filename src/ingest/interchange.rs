@@ -63,25 +63,13 @@ pub fn read_runs(table: &Table) -> Result<(Vec<RunRow>, Vec<Problem>), Problem> 
         .iter()
         .filter(|n| n.as_str() != "setup" && !RUN_COLUMNS.iter().any(|(c, _)| c == n))
         .collect();
-    let mut rows = Vec::with_capacity(table.height());
-    let mut problems = Vec::new();
-    for i in 0..table.height() {
-        let run = match table.string("run", i, "write the run's id") {
-            Ok(r) => r,
-            Err(p) => {
-                problems.push(p);
-                continue;
-            }
-        };
-        match run_info(table, i, &run, &extra_columns) {
-            Ok(info) => rows.push(RunRow {
-                info,
-                file: table.file.clone(),
-                row: table.row(i),
-            }),
-            Err(p) => problems.push(p.in_run(&run)),
-        }
-    }
+    let (rows, problems) = rows_by_run(table, |i, run| {
+        Ok(RunRow {
+            info: run_info(table, i, run, &extra_columns)?,
+            file: table.file.clone(),
+            row: table.row(i),
+        })
+    });
     Ok((rows, problems))
 }
 
@@ -92,18 +80,7 @@ fn run_info(
     extra_columns: &[&String],
 ) -> Result<RunInfo, Problem> {
     let experiment_text = table.string("experiment", i, "write single or collision")?;
-    let experiment = match experiment_text.to_ascii_lowercase().as_str() {
-        "single" => Experiment::Single,
-        "collision" => Experiment::Collision,
-        _ => {
-            return Err(table.problem(
-                "experiment",
-                i,
-                format!("{experiment_text:?} is not a known experiment kind"),
-                "write single (one particle) or collision (striker and target)",
-            ))
-        }
-    };
+    let experiment = experiment_of(table, i, &experiment_text)?;
     let material = table.string("material", i, "write the particle material, e.g. 316")?;
     let diameter_m = positive(table, "diameter_m", i, "the particle diameter in metres")?;
     sanity::diameter(diameter_m).map_err(|(m, fix)| table.problem("diameter_m", i, m, fix))?;
@@ -114,25 +91,8 @@ fn run_info(
         "the camera frame rate in frames per second",
     )?;
     sanity::fps(fps).map_err(|(m, fix)| table.problem("fps", i, m, fix))?;
-    let setup = match table.text("setup", i) {
-        None => None,
-        Some(s) => Some(match s.to_ascii_lowercase().as_str() {
-            "rolling" => Setup::Rolling,
-            "contact" => Setup::Contact,
-            _ => {
-                return Err(table.problem(
-                    "setup",
-                    i,
-                    format!("{s:?} is not a known setup"),
-                    "write rolling (the striker rolled in), contact (the pair started touching), or leave it empty",
-                ))
-            }
-        }),
-    };
-    let extra = extra_columns
-        .iter()
-        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v.into_owned())))
-        .collect();
+    let setup = setup_of(table, i)?;
+    let extra = extra_of(table, i, extra_columns);
     Ok(RunInfo {
         run: run.to_string(),
         experiment,
@@ -142,6 +102,70 @@ fn run_info(
         setup,
         extra,
     })
+}
+
+/// Each row's run id and what `read` makes of the row (a runs table: runs.csv of the
+/// interchange format or a tracker manifest). A row without a run id, or that `read` refuses, is
+/// left out and its problem kept (belonging to the row's run where the id is readable).
+pub fn rows_by_run<T>(
+    table: &Table,
+    mut read: impl FnMut(usize, &str) -> Result<T, Problem>,
+) -> (Vec<T>, Vec<Problem>) {
+    let mut rows = Vec::with_capacity(table.height());
+    let mut problems = Vec::new();
+    for i in 0..table.height() {
+        let run = match table.string("run", i, "write the run's id") {
+            Ok(r) => r,
+            Err(p) => {
+                problems.push(p);
+                continue;
+            }
+        };
+        match read(i, &run) {
+            Ok(row) => rows.push(row),
+            Err(p) => problems.push(p.in_run(&run)),
+        }
+    }
+    (rows, problems)
+}
+
+/// The experiment kind `text` written in row `i`'s `experiment` cell.
+pub fn experiment_of(table: &Table, i: usize, text: &str) -> Result<Experiment, Problem> {
+    match text.to_ascii_lowercase().as_str() {
+        "single" => Ok(Experiment::Single),
+        "collision" => Ok(Experiment::Collision),
+        _ => Err(table.problem(
+            "experiment",
+            i,
+            format!("{text:?} is not a known experiment kind"),
+            "write single (one particle) or collision (striker and target)",
+        )),
+    }
+}
+
+/// Row `i`'s optional `setup` cell.
+pub fn setup_of(table: &Table, i: usize) -> Result<Option<Setup>, Problem> {
+    let Some(s) = table.text("setup", i) else {
+        return Ok(None);
+    };
+    match s.to_ascii_lowercase().as_str() {
+        "rolling" => Ok(Some(Setup::Rolling)),
+        "contact" => Ok(Some(Setup::Contact)),
+        _ => Err(table.problem(
+            "setup",
+            i,
+            format!("{s:?} is not a known setup"),
+            "write rolling (the striker rolled in), contact (the pair started touching), or leave it empty",
+        )),
+    }
+}
+
+/// Row `i`'s non-empty cells of the columns groove does not interpret, kept as text.
+pub fn extra_of(table: &Table, i: usize, columns: &[&String]) -> BTreeMap<String, String> {
+    columns
+        .iter()
+        .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v.into_owned())))
+        .collect()
 }
 
 /// A finite positive number; `what` says what the column holds.

@@ -4,10 +4,11 @@
 //! A value a row leaves empty is taken from the calibration in the ingest params.
 
 use super::error::Problem;
+use super::interchange::{experiment_of, extra_of, rows_by_run, setup_of};
 use super::params::{Calibration, IngestParams, RunEntry};
 use super::spots::{RunMeta, Units};
 use super::table::Table;
-use crate::recording::{Experiment, RunInfo, Setup};
+use crate::recording::RunInfo;
 use std::collections::BTreeMap;
 
 /// The manifest's file name beside tracker exports.
@@ -105,41 +106,25 @@ fn read_rows(table: &Table) -> (Vec<Entry>, Vec<Problem>) {
         .iter()
         .filter(|n| !KNOWN.contains(&n.as_str()))
         .collect();
-    let mut entries: Vec<Entry> = Vec::new();
-    let mut problems = Vec::new();
-    for i in 0..table.height() {
-        let run = match table.string("run", i, "write the run's id") {
-            Ok(r) => r,
-            Err(p) => {
-                problems.push(p);
-                continue;
-            }
-        };
-        if let Some(first) = entries.iter().find(|e| e.values.run == run) {
-            problems.push(
-                table
-                    .problem(
-                        "run",
-                        i,
-                        format!("run {run:?} is listed twice (also row {})", first.row),
-                        "give each run one row",
-                    )
-                    .in_run(&run),
-            );
-            continue;
+    // the row each run was first listed in
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    let (entries, problems) = rows_by_run(table, |i, run| {
+        if let Some(first) = seen.get(run) {
+            return Err(table.problem(
+                "run",
+                i,
+                format!("run {run:?} is listed twice (also row {first})"),
+                "give each run one row",
+            ));
         }
-        match row(table, i, &run) {
-            Ok(values) => entries.push(Entry {
-                values,
-                extra: extra_columns
-                    .iter()
-                    .filter_map(|c| table.text(c, i).map(|v| (c.to_string(), v.into_owned())))
-                    .collect(),
-                row: table.row(i),
-            }),
-            Err(p) => problems.push(p.in_run(&run)),
-        }
-    }
+        let values = row(table, i, run)?;
+        seen.insert(run.to_string(), table.row(i));
+        Ok(Entry {
+            values,
+            extra: extra_of(table, i, &extra_columns),
+            row: table.row(i),
+        })
+    });
     (entries, problems)
 }
 
@@ -156,36 +141,11 @@ fn row(table: &Table, i: usize, run: &str) -> Result<RunEntry, Problem> {
         }
         Ok(Some(x))
     };
-    let experiment = match table.text("experiment", i) {
-        None => None,
-        Some(s) => Some(match s.to_ascii_lowercase().as_str() {
-            "single" => Experiment::Single,
-            "collision" => Experiment::Collision,
-            _ => {
-                return Err(table.problem(
-                    "experiment",
-                    i,
-                    format!("{s:?} is not a known experiment kind"),
-                    "write single (one particle) or collision (striker and target)",
-                ))
-            }
-        }),
-    };
-    let setup = match table.text("setup", i) {
-        None => None,
-        Some(s) => Some(match s.to_ascii_lowercase().as_str() {
-            "rolling" => Setup::Rolling,
-            "contact" => Setup::Contact,
-            _ => {
-                return Err(table.problem(
-                    "setup",
-                    i,
-                    format!("{s:?} is not a known setup"),
-                    "write rolling (the striker rolled in), contact (the pair started touching), or leave it empty",
-                ))
-            }
-        }),
-    };
+    let experiment = table
+        .text("experiment", i)
+        .map(|s| experiment_of(table, i, &s))
+        .transpose()?;
+    let setup = setup_of(table, i)?;
     Ok(RunEntry {
         run: run.to_string(),
         file: table.text("file", i).map(|s| s.into_owned()),

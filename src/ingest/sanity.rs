@@ -27,68 +27,91 @@ pub const CLOCK_TOLERANCE: f64 = 0.01;
 /// A message and a fix, for the caller to place at its file, row and column (or params key).
 pub type Complaint = (String, String);
 
+/// `x` within `lo ..= hi`, or the complaint of the side it falls out on (NaN is for the
+/// readers to refuse, not a range).
+fn within(
+    x: f64,
+    (lo, hi): (f64, f64),
+    below: impl FnOnce(f64) -> Complaint,
+    above: impl FnOnce(f64) -> Complaint,
+) -> Result<(), Complaint> {
+    if x < lo {
+        Err(below(x))
+    } else if x > hi {
+        Err(above(x))
+    } else {
+        Ok(())
+    }
+}
+
 /// The run's frame rate is plausible, or what is wrong with it.
 pub fn fps(fps: f64) -> Result<(), Complaint> {
-    if fps < FPS_MIN {
-        return Err((
-            format!(
-                "{fps} frames per second is below {FPS_MIN}, too slow for a high-speed recording"
-            ),
-            format!(
-                "write the frame rate in frames per second (if {fps} is in kHz, write {})",
-                fps * 1000.0
-            ),
-        ));
-    }
-    if fps > FPS_MAX {
-        return Err((
-            format!("{fps} frames per second is above {FPS_MAX:e}, faster than any camera"),
-            "write the frame rate in frames per second".to_string(),
-        ));
-    }
-    Ok(())
+    within(
+        fps,
+        (FPS_MIN, FPS_MAX),
+        |fps| {
+            (
+                format!(
+                    "{fps} frames per second is below {FPS_MIN}, too slow for a high-speed recording"
+                ),
+                format!(
+                    "write the frame rate in frames per second (if {fps} is in kHz, write {})",
+                    fps * 1000.0
+                ),
+            )
+        },
+        |fps| {
+            (
+                format!("{fps} frames per second is above {FPS_MAX:e}, faster than any camera"),
+                "write the frame rate in frames per second".to_string(),
+            )
+        },
+    )
 }
 
 /// The particle diameter is plausible, or what is wrong with it.
 pub fn diameter(d: f64) -> Result<(), Complaint> {
-    if d > DIAMETER_MAX_M {
-        return Err((
-            format!("a diameter of {d} m is above {DIAMETER_MAX_M} m"),
-            format!(
-                "write the diameter in metres (if {d} is in millimetres, write {:e})",
-                d / 1000.0
-            ),
-        ));
-    }
-    if d < DIAMETER_MIN_M {
-        return Err((
-            format!("a diameter of {d:e} m is below {DIAMETER_MIN_M:e} m (1 µm)"),
-            "write the diameter in metres, e.g. 3e-4 for 300 µm".to_string(),
-        ));
-    }
-    Ok(())
+    within(
+        d,
+        (DIAMETER_MIN_M, DIAMETER_MAX_M),
+        |d| {
+            (
+                format!("a diameter of {d:e} m is below {DIAMETER_MIN_M:e} m (1 µm)"),
+                "write the diameter in metres, e.g. 3e-4 for 300 µm".to_string(),
+            )
+        },
+        |d| {
+            (
+                format!("a diameter of {d} m is above {DIAMETER_MAX_M} m"),
+                format!(
+                    "write the diameter in metres (if {d} is in millimetres, write {:e})",
+                    d / 1000.0
+                ),
+            )
+        },
+    )
 }
 
 /// A position along the groove is plausible, or what is wrong with it.
 pub fn position(z: f64) -> Result<(), Complaint> {
-    if z.abs() > Z_MAX_M {
-        return Err((
+    let far = |z: f64| {
+        (
             format!("{z:e} m is farther than {Z_MAX_M} m from the origin"),
             "write the position in metres (not pixels or micrometres), or delete the row if it is a tracking error".to_string(),
-        ));
-    }
-    Ok(())
+        )
+    };
+    within(z, (-Z_MAX_M, Z_MAX_M), far, far)
 }
 
 /// A time stamp is plausible, or what is wrong with it.
 pub fn time(t: f64) -> Result<(), Complaint> {
-    if t.abs() > T_MAX_S {
-        return Err((
+    let far = |t: f64| {
+        (
             format!("{t:e} s is more than {T_MAX_S} s from the run's first frame"),
             "write the time in seconds since the run's first frame".to_string(),
-        ));
-    }
-    Ok(())
+        )
+    };
+    within(t, (-T_MAX_S, T_MAX_S), far, far)
 }
 
 /// The run's clock: along each track (sorted by particle, then frame, without duplicates) t_s

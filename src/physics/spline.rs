@@ -124,7 +124,11 @@ mod tests {
             coefs_mps2: (0..10).map(|j| 2.0 + 0.5 * (j as f64 - 1.0)).collect(),
         };
         for x in [0.0, 1.3, 4.5, 6.99] {
-            assert!((sp.at(x) - (2.0 + 0.5 * x)).abs() < 1e-12, "at {x}: {}", sp.at(x));
+            assert!(
+                (sp.at(x) - (2.0 + 0.5 * x)).abs() < 1e-12,
+                "at {x}: {}",
+                sp.at(x)
+            );
         }
         assert!((sp.at(-3.0) - 2.0).abs() < 1e-12, "held at the lower end");
     }

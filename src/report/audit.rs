@@ -241,7 +241,7 @@ pub fn mu_440c(d: &ReportData) -> AuditItem {
             "our 440c mean for |v0| > 0.03 m/s",
             super::value::pm(a.est),
         ));
-        if let Some(se) = a.est.stderr {
+        if let Some(se) = a.est.se {
             let z = |c: f64| (a.est.value - c) / se;
             numbers.push(row(
                 "distance from 0.293 / 0.296 (standard errors)",

@@ -2,6 +2,7 @@
 
 use super::collisions::{self, CollisionRun};
 use super::singles::{self, SingleRow};
+use crate::artifacts::summary::WholeRunSummary;
 use crate::artifacts::{
     self, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
 };
@@ -60,17 +61,14 @@ fn items<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Vec<(&'a str, &'a [u8])>
 }
 
 impl ReportData {
-    /// The whole-run collision fits of summary.json as JSON (read by the whole-run section and
-    /// the μ_pp profile figure; not yet through typed accessors).
-    pub fn whole_run_json(&self) -> Option<serde_json::Value> {
-        let whole = self
-            .summary
+    /// The whole-run collision fits of summary.json (`collisions.whole_run`), if any.
+    pub fn whole_run(&self) -> Option<&WholeRunSummary> {
+        self.summary
             .as_ref()?
             .collisions
             .as_ref()?
             .whole_run
-            .as_ref()?;
-        serde_json::to_value(whole).ok()
+            .as_ref()
     }
 
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,

@@ -1,7 +1,7 @@
 //! Per-run fits of single runs, read from fits.csv (the fixed output contract) and the per-run fit JSON.
 
-use super::value::Est;
 use crate::artifacts::fits_table;
+use crate::artifacts::Estimate;
 use crate::artifacts::SingleFit;
 use std::collections::BTreeMap;
 
@@ -10,9 +10,9 @@ use std::collections::BTreeMap;
 pub struct SingleRow {
     pub run: String,
     pub material: String,
-    pub v0_mps: Est,
-    pub mu: Est,
-    pub t_drag_s: Est,
+    pub v0_mps: Estimate,
+    pub mu: Estimate,
+    pub t_drag_s: Estimate,
     pub t1_s: Option<f64>,
     pub rms_m: Option<f64>,
     pub status: String,
@@ -39,17 +39,20 @@ pub fn parse_fits_csv(csv: &str) -> Result<Vec<SingleRow>, String> {
         .into_iter()
         .filter_map(|r| {
             Some(SingleRow {
-                v0_mps: Est {
+                v0_mps: Estimate {
                     value: r.v0_mps?,
-                    stderr: r.v0_se,
+                    se: r.v0_se,
+                    interval: None,
                 },
-                mu: Est {
+                mu: Estimate {
                     value: r.mu?,
-                    stderr: r.mu_se,
+                    se: r.mu_se,
+                    interval: None,
                 },
-                t_drag_s: Est {
+                t_drag_s: Estimate {
                     value: r.t_s?,
-                    stderr: r.t_se,
+                    se: r.t_se,
+                    interval: None,
                 },
                 t1_s: r.t1_s,
                 rms_m: r.rms_m,
@@ -69,10 +72,11 @@ fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
-fn est(value: f64, se: Option<f64>) -> Option<Est> {
-    Some(Est {
+fn est(value: f64, se: Option<f64>) -> Option<Estimate> {
+    Some(Estimate {
         value: finite(value)?,
-        stderr: se.and_then(finite),
+        se: se.and_then(finite),
+        interval: None,
     })
 }
 
@@ -116,7 +120,7 @@ mod tests {
         assert_eq!(rows.len(), 2);
         assert_eq!(rows[0].run, "a");
         assert_eq!(rows[1].v0_mps.value, -0.05);
-        assert_eq!(rows[1].t_drag_s.stderr, Some(0.004));
+        assert_eq!(rows[1].t_drag_s.se, Some(0.004));
         assert!(parse_fits_csv("run,material\n").is_err());
     }
 }

@@ -3,14 +3,13 @@
 
 use super::figures::common::ols;
 use super::inputs::ReportData;
-use super::value::Est;
-use crate::artifacts::summary::{BootstrapValue, Estimate, MaterialSummary, Summary};
+use crate::artifacts::summary::{Estimate, MaterialSummary, Summary};
 use crate::recording::Setup;
 
 /// An aggregate value, its interval if known, and where it came from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Agg {
-    pub est: Est,
+    pub est: Estimate,
     pub interval: Option<(f64, f64)>,
     /// "summary.json" or "per-run fits".
     pub source: &'static str,
@@ -23,23 +22,8 @@ fn finite_pair(lo: f64, hi: f64) -> Option<(f64, f64)> {
 /// An estimate of summary.json (value and bootstrap interval); None when it could not be computed.
 fn agg(e: &Estimate) -> Option<Agg> {
     e.value.is_finite().then(|| Agg {
-        est: Est {
-            value: e.value,
-            stderr: None,
-        },
-        interval: e.interval.and_then(|i| finite_pair(i.lo, i.hi)),
-        source: "summary.json",
-    })
-}
-
-/// A value with its bootstrap interval of summary.json's collision part.
-fn agg_bounded(e: &BootstrapValue) -> Option<Agg> {
-    e.value.is_finite().then(|| Agg {
-        est: Est {
-            value: e.value,
-            stderr: None,
-        },
-        interval: finite_pair(e.lo, e.hi),
+        est: Estimate::with_interval(e.value, None),
+        interval: finite_pair(e.lo(), e.hi()),
         source: "summary.json",
     })
 }
@@ -49,7 +33,7 @@ pub fn material<'a>(summary: &'a Summary, material: &str) -> Option<&'a Material
     summary.single.as_ref()?.materials.get(material)
 }
 
-fn mean_se(xs: &[f64]) -> Option<Est> {
+fn mean_se(xs: &[f64]) -> Option<Estimate> {
     let n = xs.len();
     if n == 0 {
         return None;
@@ -59,9 +43,10 @@ fn mean_se(xs: &[f64]) -> Option<Est> {
         let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64;
         (var / n as f64).sqrt()
     });
-    Some(Est {
+    Some(Estimate {
         value: m,
-        stderr: se,
+        se: se,
+        interval: None,
     })
 }
 
@@ -122,9 +107,10 @@ pub fn t_line(d: &ReportData, m: Option<&str>) -> Option<(Agg, Agg)> {
         .collect();
     let (a, b) = ols(&pts)?;
     let mk = |v| Agg {
-        est: Est {
+        est: Estimate {
             value: v,
-            stderr: None,
+            se: None,
+            interval: None,
         },
         interval: None,
         source: "per-run fits",
@@ -142,10 +128,10 @@ pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
         .and_then(|s| s.collisions.as_ref())
         .and_then(|c| {
             let m = &c.mu_pp;
-            m.value.and_then(|v| agg_bounded(&v)).or_else(|| {
+            m.value.and_then(|v| agg(&v)).or_else(|| {
                 m.from_slip_slope
                     .or(m.from_impulse_fit)
-                    .and_then(|v| agg_bounded(&v))
+                    .and_then(|v| agg(&v))
             })
         });
     from_summary.or_else(|| {
@@ -157,9 +143,10 @@ pub fn mu_pp(d: &ReportData, k: f64) -> Option<Agg> {
             .filter_map(|i| Some((i.dvz_target_mps?, i.dva_target_mps?)))
             .fold((0.0, 0.0), |(sxy, sxx), (x, y)| (sxy + x * y, sxx + x * x));
         (sxx > 0.0).then(|| Agg {
-            est: Est {
+            est: Estimate {
                 value: (sxy / sxx).abs() / k,
-                stderr: None,
+                se: None,
+                interval: None,
             },
             interval: None,
             source: "impacts (slip)",
@@ -190,5 +177,5 @@ pub fn restitution_curve(d: &ReportData, material: &str, contact: bool) -> Optio
     let c = list
         .iter()
         .find(|c| c.material == material && c.setup.unwrap_or(Setup::Rolling) == setup)?;
-    Some((agg_bounded(&c.a_per_mps)?, c.n_impacts))
+    Some((agg(&c.a_per_mps)?, c.n_impacts))
 }

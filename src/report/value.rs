@@ -3,12 +3,7 @@
 
 use serde_json::Value;
 
-/// A number with an optional standard error.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Est {
-    pub value: f64,
-    pub stderr: Option<f64>,
-}
+use crate::artifacts::Estimate;
 
 /// A JSON value read as a finite number (a number, or a numeric string).
 pub fn as_num(v: &Value) -> Option<f64> {
@@ -18,6 +13,15 @@ pub fn as_num(v: &Value) -> Option<f64> {
         _ => None,
     }?;
     x.is_finite().then_some(x)
+}
+
+/// The name a unit enum variant is written with in the artifacts (`max_iterations`, `rolling`),
+/// or `?` for anything that is not written as a string.
+pub fn serde_name<T: serde::Serialize>(x: &T) -> String {
+    match serde_json::to_value(x) {
+        Ok(Value::String(s)) => s,
+        _ => "?".into(),
+    }
 }
 
 /// Format a number with `digits` significant digits, plain notation where readable.
@@ -36,9 +40,9 @@ pub fn sig(x: f64, digits: usize) -> String {
     format!("{x:.decimals$}")
 }
 
-/// `value ± stderr` with sensible digits (two significant digits on the error).
-pub fn pm(e: Est) -> String {
-    match e.stderr {
+/// `value ± se` with sensible digits (two significant digits on the error).
+pub fn pm(e: Estimate) -> String {
+    match e.se {
         Some(se) if se > 0.0 && se.is_finite() => {
             let mag = se.log10().floor() as i32;
             let decimals = (1 - mag).max(0) as usize;
@@ -67,9 +71,10 @@ mod tests {
 
     #[test]
     fn formats_with_error_digits() {
-        let e = Est {
+        let e = Estimate {
             value: 0.33712,
-            stderr: Some(0.0042),
+            se: Some(0.0042),
+            interval: None,
         };
         assert_eq!(pm(e), "0.3371 ± 0.0042");
         assert_eq!(sig(2.1834, 3), "2.18");

@@ -4,7 +4,7 @@ use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
-use crate::fit::aggregate::{aggregate_single, AggregateOptions};
+use crate::fit::aggregate::{aggregate_single, restart_note, AggregateOptions};
 use crate::fit::summary::{BootstrapInfo, Summary};
 use crate::fit::{collision, fits_csv, RunFit};
 
@@ -59,6 +59,7 @@ impl StageKind for Aggregate {
             );
             None
         } else {
+            notes.extend(restart_note(&singles));
             Some(aggregate_single(&singles, &opts, input.seed))
         };
         let collisions = if collisions.is_empty() {

@@ -7,6 +7,34 @@ use std::process::{Command, Output};
 
 pub const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
 
+/// A per-item pipeline of `command` stages that append their name to `trace.txt` when they run:
+/// ingest copies the dataset, fit checksums each run (one key per run), summary gathers them.
+pub const PER_ITEM_PIPELINE: &str = r#"[project]
+seed = 7
+data = "data"
+reports = "reports"
+
+[stages.ingest]
+kind = "command"
+cmd = "echo ingest >> trace.txt; mkdir -p {out.runs}; cp {in.dataset}/* {out.runs}/"
+inputs = { dataset = "${data}" }
+outputs = { runs = "${reports}/runs" }
+
+[stages.fit]
+kind = "command"
+foreach = "runs"
+cmd = "echo fit {item} >> trace.txt; cksum < {in.runs} > {out.fit}"
+inputs = { runs = "ingest:runs" }
+outputs = { fit = "${reports}/fits" }
+
+[stages.summary]
+kind = "command"
+cmd = "echo summary >> trace.txt; cat {in.fits}/* | sort > {out.table}; echo scale {params.scale} >> {out.table}"
+inputs = { fits = "fit:fit" }
+outputs = { table = "${reports}/table.txt" }
+params = { scale = 1 }
+"#;
+
 pub struct Project {
     pub dir: tempfile::TempDir,
 }
@@ -80,6 +108,66 @@ impl Project {
         let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
         lines.sort();
         lines
+    }
+
+    /// Run groove, expect exit 0, return stdout alone.
+    pub fn stdout(&self, args: &[&str]) -> String {
+        let out = self.groove(args);
+        assert!(
+            out.status.success(),
+            "groove {args:?} failed: {}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    }
+
+    /// `groove status --json` as (stage, state, reasons).
+    pub fn status(&self) -> Vec<(String, String, Vec<String>)> {
+        let v: serde_json::Value =
+            serde_json::from_str(&self.stdout(&["status", "--json"])).unwrap();
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["stage"].as_str().unwrap().to_string(),
+                    s["state"].as_str().unwrap().to_string(),
+                    s["reasons"]
+                        .as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|r| r.as_str().unwrap().to_string())
+                        .collect(),
+                )
+            })
+            .collect()
+    }
+
+    /// The stale stages.
+    pub fn stale(&self) -> Vec<String> {
+        self.status()
+            .into_iter()
+            .filter(|s| s.1 == "stale")
+            .map(|s| s.0)
+            .collect()
+    }
+
+    /// Why `stage` is stale, joined by `; `.
+    pub fn reasons(&self, stage: &str) -> String {
+        self.status()
+            .into_iter()
+            .find(|s| s.0 == stage)
+            .unwrap()
+            .2
+            .join("; ")
+    }
+
+    /// Replaces the first `from` in file `rel` by `to` (which must be there).
+    pub fn edit(&self, rel: &str, from: &str, to: &str) {
+        let text = self.read(rel);
+        assert!(text.contains(from), "{rel} has no `{from}`");
+        self.write(rel, &text.replacen(from, to, 1));
     }
 }
 

@@ -10,8 +10,8 @@
 //! χ² per degree of freedom when that exceeds 1. A flat map inside its band is the picture of
 //! "nothing missing" in that variable.
 
-use crate::lsq::dense::{chol_inverse, chol_solve, cholesky_jittered};
 use super::response::{dot, Prepared};
+use crate::lsq::dense::{chol_inverse, chol_solve, cholesky_jittered};
 use crate::physics::{spline_basis, spline_n_basis, Phase, Variable};
 use rayon::prelude::*;
 
@@ -144,10 +144,11 @@ fn fit_map(
         .par_iter()
         .map(|&l| held_out(&pen_at(l, false)))
         .collect();
-    let (best, ss) = scores
-        .iter()
-        .enumerate()
-        .fold((0, f64::INFINITY), |b, (i, s)| if *s < b.1 { (i, *s) } else { b });
+    let (best, ss) =
+        scores.iter().enumerate().fold(
+            (0, f64::INFINITY),
+            |b, (i, s)| if *s < b.1 { (i, *s) } else { b },
+        );
     let lam = lambdas[best];
     let pen = pen_at(lam, false);
     let (th, l) = solve(&m, &pen, &c, p)?;
@@ -212,7 +213,10 @@ pub fn force_map(
                     cols.push(vec![0.0; p.y.len()]);
                     continue;
                 }
-                let f: Vec<f64> = x.iter().map(|v| spline_basis(lo, dx, segments, j, *v)).collect();
+                let f: Vec<f64> = x
+                    .iter()
+                    .map(|v| spline_basis(lo, dx, segments, j, *v))
+                    .collect();
                 cols.push(p.column(p.track.respond_values(&f)));
             }
             piece(&cols, &p.y)

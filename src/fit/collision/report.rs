@@ -15,6 +15,7 @@ pub fn failed_fit(info: &RunInfo, status: CollisionStatus, message: &str) -> Col
     let nan = Estimate {
         value: f64::NAN,
         se: None,
+        interval: None,
     };
     CollisionFit {
         run: info.run.clone(),
@@ -78,7 +79,7 @@ pub fn summarize_fit(
     let p = &res.params;
     let lab = |e: Estimate| Estimate {
         value: direction * e.value,
-        se: e.se,
+        ..e
     };
     let mut segments = Vec::new();
     for part in 0..2 {
@@ -190,7 +191,7 @@ fn impact_record(layout: &Layout, res: &LmResult, j: usize, direction: f64) -> I
     let est = |f: &dyn Fn(&[f64]) -> f64| propagate(res, f);
     let lab = |e: Estimate| Estimate {
         value: direction * e.value,
-        se: e.se,
+        ..e
     };
     let kin = |g: &dyn Fn(&[f64]) -> [f64; 4], i: usize| Kin {
         v_mps: lab(est(&|q| g(q)[i])),

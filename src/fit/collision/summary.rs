@@ -13,27 +13,23 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// A point estimate with a 95 % percentile bootstrap interval.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Interval {
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub value: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub lo: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub hi: f64,
-}
+/// A point estimate with a 95 % percentile bootstrap interval, written as `{value, lo, hi}`.
+pub use crate::artifacts::estimate::Estimate;
+use crate::artifacts::estimate::Interval;
 
 /// μ_pp estimates.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MuPp {
     /// The headline value: the impulse-model fit when there are slip impacts, else None.
-    pub value: Option<Interval>,
+    #[serde(with = "crate::artifacts::estimate::bounds::option")]
+    pub value: Option<Estimate>,
     /// Slope of −sign(S)·Δv_a against Δv_z of the target over slip impacts, divided by k.
-    pub from_slip_slope: Option<Interval>,
+    #[serde(with = "crate::artifacts::estimate::bounds::option")]
+    pub from_slip_slope: Option<Estimate>,
     /// μ_pp minimizing the misfit of the measured spin changes of both particles to the
     /// impulse model, stick and slip impacts together.
-    pub from_impulse_fit: Option<Interval>,
+    #[serde(with = "crate::artifacts::estimate::bounds::option")]
+    pub from_impulse_fit: Option<Estimate>,
     /// Stick impacts need μ_pp > |S| / (2 k J); the largest such bound.
     pub stick_lower_bound: Option<f64>,
     pub n_slip: usize,
@@ -50,14 +46,19 @@ pub struct RestitutionCurve {
     pub n_impacts: usize,
     pub n_runs: usize,
     /// C = c0 − slope · v (weighted least squares).
-    pub c0: Interval,
-    pub slope_per_mps: Interval,
+    #[serde(with = "crate::artifacts::estimate::bounds")]
+    pub c0: Estimate,
+    #[serde(with = "crate::artifacts::estimate::bounds")]
+    pub slope_per_mps: Estimate,
     /// C = 1 − a · v, the chapter's "C → 1 at low speed" form.
-    pub a_per_mps: Interval,
+    #[serde(with = "crate::artifacts::estimate::bounds")]
+    pub a_per_mps: Estimate,
     /// C = c_inf + (1 − c_inf) e^{−v/v_ref}: 1 for a gentle touch, falling to c_inf
     /// (the form `physics::Restitution::SpeedDependent` simulates).
-    pub c_inf: Interval,
-    pub v_ref_mps: Interval,
+    #[serde(with = "crate::artifacts::estimate::bounds")]
+    pub c_inf: Estimate,
+    #[serde(with = "crate::artifacts::estimate::bounds")]
+    pub v_ref_mps: Estimate,
     #[serde(with = "crate::artifacts::nan_null")]
     pub mean_c: f64,
     #[serde(with = "crate::artifacts::nan_null")]
@@ -217,21 +218,17 @@ fn draw_resamples(rng: &mut ChaCha8Rng, n: usize) -> Vec<Vec<usize>> {
 
 /// The 95 % percentile interval (nearest order statistics) of the finite bootstrap values
 /// around `value`; NaN bounds when fewer than half the resamples gave a value.
-fn percentile_interval(value: f64, boots: impl Iterator<Item = Option<f64>>) -> Interval {
+fn percentile_interval(value: f64, boots: impl Iterator<Item = Option<f64>>) -> Estimate {
     let mut boots: Vec<f64> = boots.flatten().filter(|x| x.is_finite()).collect();
     if boots.len() < RESAMPLES / 2 {
-        return Interval {
-            value,
-            lo: f64::NAN,
-            hi: f64::NAN,
-        };
+        return Estimate::with_interval(value, None);
     }
     boots.sort_by(f64::total_cmp);
-    Interval {
-        value,
+    let interval = Interval {
         lo: quantile_nearest(&boots, 0.025),
         hi: quantile_nearest(&boots, 0.975),
-    }
+    };
+    Estimate::with_interval(value, Some(interval))
 }
 
 /// μ_pp from the slip impacts (the slope of Δv_a against Δv_z, and the whole impulse model),
@@ -248,7 +245,7 @@ fn mu_pp(runs: &Runs, k: f64, seed: u64) -> MuPp {
         count(Contact::Undetermined),
     );
     let resamples = draw_resamples(&mut ChaCha8Rng::seed_from_u64(seed), runs.len());
-    let interval = |est: &dyn Fn(&[usize]) -> Option<f64>| -> Option<Interval> {
+    let interval = |est: &dyn Fn(&[usize]) -> Option<f64>| -> Option<Estimate> {
         let value = est(&all)?;
         Some(percentile_interval(value, resamples.iter().map(|s| est(s))))
     };
@@ -316,7 +313,7 @@ fn restitution_curve(runs: &Runs, idx: &[usize], seed: u64) -> Option<Restitutio
     }
     let mut local_rng = ChaCha8Rng::seed_from_u64(seed ^ (idx[0] as u64).wrapping_mul(0x9E37_79B9));
     let local_samples = draw_resamples(&mut local_rng, idx.len());
-    let iv = |f: &dyn Fn(&[(f64, f64, f64)]) -> Option<f64>| -> Interval {
+    let iv = |f: &dyn Fn(&[(f64, f64, f64)]) -> Option<f64>| -> Estimate {
         let value = f(&all_pts).unwrap_or(f64::NAN);
         percentile_interval(value, local_samples.iter().map(|s| f(&pts(s))))
     };

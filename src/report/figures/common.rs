@@ -230,15 +230,10 @@ pub fn robust_span(values: impl IntoIterator<Item = f64>, q: f64, pad: f64) -> (
 
 /// Least-squares line y = a + b x; None with fewer than two distinct x.
 pub fn ols(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
-    let n = pts.len() as f64;
-    if pts.len() < 2 {
-        return None;
-    }
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| (my - sxy / sxx * mx, sxy / sxx))
+    let (x, y): (Vec<f64>, Vec<f64>) = pts.iter().copied().unzip();
+    let all: Vec<usize> = (0..pts.len()).collect();
+    let (a, b) = crate::stats::ols_indexed(&x, &y, &all);
+    (!a.is_nan() && !b.is_nan()).then_some((a, b))
 }
 
 #[cfg(test)]

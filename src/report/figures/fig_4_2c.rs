@@ -86,7 +86,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
                 .collect();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
-                .filter_map(|r| Some((r.v0_mps.value.abs(), r.t_drag_s.value, r.t_drag_s.stderr?)))
+                .filter_map(|r| Some((r.v0_mps.value.abs(), r.t_drag_s.value, r.t_drag_s.se?)))
                 .filter(|(_, t, e)| t - e > y_lo && t + e < y_hi)
                 .collect();
             super::common::error_bars(&mut c, &bars, col)?;

@@ -60,7 +60,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             let off = all.len() - pts.len();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
-                .filter_map(|r| Some((r.v0_mps.value.abs(), r.mu.value, r.mu.stderr?)))
+                .filter_map(|r| Some((r.v0_mps.value.abs(), r.mu.value, r.mu.se?)))
                 .filter(|b| inside(b.1) && b.2 < 0.25 * (yr.1 - yr.0))
                 .collect();
             error_bars(&mut c, &bars, col)?;

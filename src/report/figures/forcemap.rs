@@ -3,14 +3,18 @@
 //! map whose band holds zero is the picture of "nothing missing" in that variable.
 
 use super::common::{legend, line, linear_chart, render, span};
+use crate::artifacts::diagnosis::Diagnosis;
 use crate::report::style;
 use plotters::prelude::*;
-use crate::artifacts::diagnosis::Diagnosis;
 
 /// (x, accel, se) of one map of `which` ("before"/"after") for `variable`.
 fn map_of(diag: &Diagnosis, which: &str, variable: &str) -> Option<Vec<(f64, f64, f64)>> {
     let maps = diag.force_maps.as_ref()?;
-    let list = if which == "before" { &maps.before } else { &maps.after };
+    let list = if which == "before" {
+        &maps.before
+    } else {
+        &maps.after
+    };
     let m = list.iter().find(|m| m.variable == variable)?;
     let (x, a, s) = (&m.x, &m.accel_mps2, &m.se_mps2);
     (x.len() == a.len() && a.len() == s.len() && x.len() > 1).then(|| {
@@ -56,7 +60,14 @@ pub fn render_map(diag: &Diagnosis, variable: &str) -> Result<Option<String>, St
             xdesc,
             "missing acceleration (m/s²)",
         )?;
-        line(&mut c, vec![(xr.0, 0.0), (xr.1, 0.0)], style::BLACK, 1, true, None)?;
+        line(
+            &mut c,
+            vec![(xr.0, 0.0), (xr.1, 0.0)],
+            style::BLACK,
+            1,
+            true,
+            None,
+        )?;
         for (m, col, name) in [
             (&before, style::BEFORE, "baseline"),
             (&after, style::AFTER, "with the accepted physics"),

@@ -2,12 +2,12 @@
 
 pub mod common;
 pub mod discovery;
-pub mod forcemap;
 pub mod fig_4_2b;
 pub mod fig_4_2c;
 pub mod fig_4_2d;
 pub mod fig_4_3;
 pub mod fig_4_4;
+pub mod forcemap;
 pub mod mu_pp_profile;
 pub mod secondary;
 

@@ -13,22 +13,20 @@ pub const CLIP: f64 = 12.0;
 
 /// (material, [(μ_pp, deviance)], threshold) of each material with a profile.
 pub fn profiles(d: &ReportData) -> Vec<(String, Vec<(f64, f64)>, f64)> {
-    let whole = d.whole_run_json();
-    let Some(mats) = whole.as_ref().and_then(|w| w.get("materials")?.as_array()) else {
+    let Some(whole) = d.whole_run() else {
         return Vec::new();
     };
-    mats.iter()
+    whole
+        .materials
+        .iter()
         .filter_map(|m| {
-            let name = m.get("material")?.as_str()?.to_string();
-            let prof = m.get("profile")?;
-            let pts: Vec<(f64, f64)> = prof
-                .get("points")?
-                .as_array()?
+            let pts: Vec<(f64, f64)> = m
+                .profile
+                .points
                 .iter()
-                .filter_map(|p| Some((p.get("mu_pp")?.as_f64()?, p.get("deviance")?.as_f64()?)))
+                .map(|p| (p.mu_pp, p.deviance))
                 .collect();
-            let thr = prof.get("threshold")?.as_f64()?;
-            (!pts.is_empty()).then_some((name, pts, thr))
+            (!pts.is_empty()).then(|| (m.material.clone(), pts, m.profile.threshold))
         })
         .collect()
 }

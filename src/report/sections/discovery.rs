@@ -118,7 +118,7 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
             .find(|t| t.effect.id() == f.effect)
             .map(|t| &t.term);
         for (name, p) in &f.parameters {
-            let ours = match (finite(p.value), finite(p.stderr)) {
+            let ours = match (finite(p.value), p.se.and_then(finite)) {
                 (Some(v), Some(se)) => format!("{} ± {}", sig(v, 4), sig(se, 2)),
                 (Some(v), None) => sig(v, 4),
                 _ => "—".into(),
@@ -145,20 +145,66 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
     }
 }
 
-/// The decisive statistics of a candidate's evidence: LR, p-values, CV, decision.
-pub fn evidence_text(e: &Evidence) -> String {
-    let mut parts: Vec<String> = [
-        (Some(e.lr), "LR"),
-        (Some(e.p_value), "p"),
-        (Some(e.p_empirical), "p (empirical)"),
-        (Some(e.p_holm), "p (Holm)"),
-        (e.cv_paired_t, "CV paired t"),
-    ]
-    .into_iter()
-    .filter_map(|(x, label)| Some(format!("{label} = {}", sig(finite(x?)?, 3))))
-    .collect();
+/// What decided a finding when no bootstrap null was simulated (`bootstrap_replicates` = 0): the
+/// collision-run tests of `discover/pairs.rs`, decided by a χ² or a normal law. The statistic's
+/// name and the law, or None for a bootstrap-decided candidate.
+fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
+    if e.bootstrap_replicates > 0 {
+        return None;
+    }
+    let stat = finite(e.lr).map_or("—".into(), |x| sig(x, 3));
+    Some(match Effect::from_id(effect) {
+        Some(Effect::ImpactSpecificMismatch) => format!(
+            "normal test: mean-square residual within 5 ms of an impact over the rest = {stat}"
+        ),
+        _ => format!("χ² test: χ²({}) = {stat}", e.extra_params),
+    })
+}
+
+/// The decisive statistics of a candidate's evidence: LR, p-values, CV, decision. A finding
+/// decided by a χ² or normal test (no bootstrap) names that test and shows no empirical p.
+pub fn evidence_text(effect: &str, e: &Evidence) -> String {
+    let closed = closed_form_test(effect, e);
+    let bootstrap = closed.is_none();
+    let mut parts: Vec<String> = closed.into_iter().collect();
+    parts.extend(
+        [
+            (bootstrap.then_some(e.lr), "LR"),
+            (Some(e.p_value), "p"),
+            (bootstrap.then_some(e.p_empirical), "p (empirical)"),
+            (Some(e.p_holm), "p (Holm)"),
+            (e.cv_paired_t, "CV paired t"),
+        ]
+        .into_iter()
+        .filter_map(|(x, label)| Some(format!("{label} = {}", sig(finite(x?)?, 3)))),
+    );
     parts.push(format!("decision: {}", e.decision));
     parts.join("; ")
+}
+
+/// The collision-run findings (`where.experiment` = `collision`), one row per material and test.
+fn collision_table(diag: &Diagnosis) -> Option<Table> {
+    let mut t = Table::new(
+        "Collision runs: do the pairs move under the single runs' physics? (whole-run pair fits, per material; Holm over materials, α = 0.01)",
+        &["material", "test", "evidence", "accepted"],
+    );
+    for f in &diag.findings {
+        if f.where_.get("experiment").and_then(Value::as_str) != Some("collision") {
+            continue;
+        }
+        let material = f
+            .where_
+            .get("material")
+            .and_then(Value::as_str)
+            .unwrap_or("?");
+        t.push(vec![
+            material.to_string(),
+            f.effect.replace('_', " "),
+            evidence_text(&f.effect, &f.evidence),
+            (if f.accepted { "yes" } else { "no" }).into(),
+        ]);
+    }
+    (!t.rows.is_empty()).then_some(t)
 }
 
 /// Residual RMS before and after by phase, speed, position, direction and material
@@ -262,7 +308,7 @@ pub fn params_text(ps: &BTreeMap<String, Estimate>) -> String {
         .iter()
         .map(|(k, p)| {
             let v = finite(p.value).map_or("—".into(), |x| sig(x, 4));
-            match finite(p.stderr) {
+            match p.se.and_then(finite) {
                 Some(se) => format!("{k} = {v} ± {}", sig(se, 2)),
                 None => format!("{k} = {v}"),
             }
@@ -317,7 +363,7 @@ struct LargeBin {
 #[derive(Deserialize)]
 struct Probe {
     probe: String,
-    #[serde(default)]
+    #[serde(default, with = "crate::artifacts::estimate::stderr::map")]
     parameters: BTreeMap<String, Estimate>,
     p_holm: Option<f64>,
 }
@@ -532,7 +578,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             f.form.to_string(),
             (if f.accepted { "yes" } else { "no" }).into(),
             params_text(f.parameters),
-            evidence_text(f.evidence),
+            evidence_text(f.effect, f.evidence),
             cv.map_or("—".into(), |x| format!("{:.3}", x * 1e6)),
         ]);
     }
@@ -550,6 +596,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.para(format!("Accepted physics: {}.", names.join(", ")));
     }
     if !t.rows.is_empty() {
+        b.table(t);
+    }
+    if let Some(t) = collision_table(diag) {
         b.table(t);
     }
     b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");
@@ -595,5 +644,69 @@ fn detection_limits(diag: &Diagnosis) -> Vec<String> {
         }
         by_form.insert(c.form.clone(), l.text.clone());
     }
-    order.into_iter().filter_map(|f| by_form.remove(&f)).collect()
+    order
+        .into_iter()
+        .filter_map(|f| by_form.remove(&f))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_drift_probes_of_where_are_read_in_the_shape_discover_writes() {
+        let w: BTreeMap<String, Value> = serde_json::from_str(
+            r#"{"drift_probes_before": [{"probe": "probe: T drifts with |v0|", "p_holm": 3e-300,
+                "parameters": {"dT_dv_s_per_mps": {"stderr": 0.0024, "value": 1.101}}}]}"#,
+        )
+        .unwrap();
+        let text = where_text(&w);
+        assert!(text.contains("dT_dv_s_per_mps = 1.101 ± 0.0024"), "{text}");
+    }
+
+    #[test]
+    fn a_chi2_decided_finding_names_its_test_and_prints_no_bootstrap_zeros() {
+        let pair = Evidence {
+            lr: 0.7112,
+            extra_params: 3,
+            p_value: 0.8706,
+            p_holm: 1.0,
+            decision: "the single runs' physics explains the pair motion".into(),
+            ..Evidence::default()
+        };
+        let text = evidence_text("pair_physics_mismatch", &pair);
+        assert!(
+            text.starts_with("χ² test: χ²(3) = 0.711; p = 0.871"),
+            "{text}"
+        );
+        assert!(
+            !text.contains("empirical") && !text.contains("LR"),
+            "{text}"
+        );
+        let impact = Evidence {
+            lr: 1.0737,
+            p_value: 3.0e-4,
+            ..Evidence::default()
+        };
+        let text = evidence_text("impact_specific_mismatch", &impact);
+        assert!(
+            text.starts_with("normal test: ") && text.contains("= 1.07"),
+            "{text}"
+        );
+        assert!(!text.contains("empirical"), "{text}");
+        // a bootstrap-decided candidate keeps its LR and empirical p
+        let boot = Evidence {
+            lr: 4.77,
+            bootstrap_replicates: 24,
+            p_value: 0.0773,
+            p_empirical: 0.12,
+            ..pair
+        };
+        let text = evidence_text("groove_tilt", &boot);
+        assert!(
+            text.starts_with("LR = 4.77; p = 0.0773; p (empirical) = 0.120"),
+            "{text}"
+        );
+    }
 }

@@ -1,6 +1,7 @@
 //! Section 1: what was analysed, the key parameters with uncertainties, and what discovery found.
 
 use super::{Block, Table};
+use crate::artifacts::summary::ProfileVerdict;
 use crate::artifacts::Diagnosis;
 use crate::physics::Groove;
 use crate::report::inputs::ReportData;
@@ -90,23 +91,15 @@ pub fn block(d: &ReportData) -> Block {
         ]);
     }
     // μ_pp of the whole-run fits: the profile's interval or bound per material
-    let whole = d.whole_run_json();
-    for m in whole
-        .as_ref()
-        .and_then(|w| w.get("materials")?.as_array())
-        .into_iter()
-        .flatten()
-    {
-        let name = m.get("material").and_then(|v| v.as_str()).unwrap_or("?");
-        let Some(v) = m.get("profile").and_then(|p| p.get("verdict")) else {
-            continue;
-        };
-        let f = |k: &str| v.get(k).and_then(|x| x.as_f64()).unwrap_or(f64::NAN);
-        let text = match v.get("kind").and_then(|k| k.as_str()) {
-            Some("interval") => format!("{:.3} [{:.3}, {:.3}]", f("estimate"), f("lo"), f("hi")),
-            Some("lower_bound") => format!("> {:.2}", f("lo")),
-            Some("upper_bound") => format!("< {:.2}", f("hi")),
-            _ => "not constrained".into(),
+    for m in d.whole_run().into_iter().flat_map(|w| &w.materials) {
+        let name = &m.material;
+        let text = match m.profile.verdict {
+            ProfileVerdict::Interval { estimate, lo, hi } => {
+                format!("{estimate:.3} [{lo:.3}, {hi:.3}]")
+            }
+            ProfileVerdict::LowerBound { lo } => format!("> {lo:.2}"),
+            ProfileVerdict::UpperBound { hi } => format!("< {hi:.2}"),
+            ProfileVerdict::Unconstrained => "not constrained".into(),
         };
         t.push(vec![
             format!("μ_pp of {name} (whole-run profile, 95 %)"),

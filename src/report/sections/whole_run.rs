@@ -3,56 +3,44 @@
 //! fits' status (summary.json → collisions.whole_run).
 
 use super::{Block, Table};
+use crate::artifacts::collision_fit::Estimate;
+use crate::artifacts::summary::{LawParameter, ProfileVerdict, WholeRun};
 use crate::report::inputs::ReportData;
-use serde_json::Value;
+use crate::report::value::serde_name;
 use std::collections::BTreeMap;
 
-fn num(v: &Value, k: &str) -> Option<f64> {
-    v.get(k)?.as_f64()
-}
-
 /// The sentence about μ_pp of one material's profile verdict (`profile.verdict`).
-pub fn mu_pp_words(material: &str, verdict: &Value) -> String {
-    let kind = verdict.get("kind").and_then(Value::as_str).unwrap_or("");
-    match kind {
-        "interval" => {
-            let (e, lo, hi) = (
-                num(verdict, "estimate").unwrap_or(f64::NAN),
-                num(verdict, "lo").unwrap_or(f64::NAN),
-                num(verdict, "hi").unwrap_or(f64::NAN),
-            );
-            format!(
-                "{material}: the profile has a minimum: μ_pp = {e:.3}, 95 % interval {lo:.3}–{hi:.3}; the chapter's 1.4 is {} it.",
-                if lo <= 1.4 && 1.4 <= hi { "inside" } else { "outside" }
-            )
-        }
-        "lower_bound" => format!(
-            "{material}: the profile is flat above: the recordings bound μ_pp from below at {:.2} (95 %), and the chapter's 1.4 is {}.",
-            num(verdict, "lo").unwrap_or(f64::NAN),
-            if num(verdict, "lo").unwrap_or(f64::NAN) <= 1.4 { "allowed but not measured" } else { "excluded" }
+pub fn mu_pp_words(material: &str, verdict: &ProfileVerdict) -> String {
+    match *verdict {
+        ProfileVerdict::Interval { estimate: e, lo, hi } => format!(
+            "{material}: the profile has a minimum: μ_pp = {e:.3}, 95 % interval {lo:.3}–{hi:.3}; the chapter's 1.4 is {} it.",
+            if lo <= 1.4 && 1.4 <= hi { "inside" } else { "outside" }
         ),
-        "upper_bound" => format!(
-            "{material}: the profile is flat below: the recordings bound μ_pp from above at {:.2} (95 %).",
-            num(verdict, "hi").unwrap_or(f64::NAN)
+        ProfileVerdict::LowerBound { lo } => format!(
+            "{material}: the profile is flat above: the recordings bound μ_pp from below at {lo:.2} (95 %), and the chapter's 1.4 is {}.",
+            if lo <= 1.4 { "allowed but not measured" } else { "excluded" }
         ),
-        _ => format!("{material}: the profile is flat: the recordings do not constrain μ_pp over the range profiled."),
+        ProfileVerdict::UpperBound { hi } => format!(
+            "{material}: the profile is flat below: the recordings bound μ_pp from above at {hi:.2} (95 %)."
+        ),
+        ProfileVerdict::Unconstrained => format!("{material}: the profile is flat: the recordings do not constrain μ_pp over the range profiled."),
     }
 }
 
-fn fmt_param(p: &Value) -> String {
-    format!(
-        "{} = {:.4} [{:.4}, {:.4}]",
-        p.get("name").and_then(Value::as_str).unwrap_or("?"),
-        num(p, "value").unwrap_or(f64::NAN),
-        num(p, "lo").unwrap_or(f64::NAN),
-        num(p, "hi").unwrap_or(f64::NAN)
-    )
+fn fmt_param(p: &LawParameter) -> String {
+    format!("{} = {:.4} [{:.4}, {:.4}]", p.name, p.value, p.lo, p.hi)
+}
+
+fn fmt_est(e: &Estimate) -> String {
+    match e.se {
+        Some(se) => format!("{:.4} ± {se:.4}", e.value),
+        None => format!("{:.4}", e.value),
+    }
 }
 
 /// The block, or None when the summary has no whole-run fits.
 pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
-    let whole = d.whole_run_json()?;
-    let mats = whole.get("materials")?.as_array()?;
+    let mats = &d.whole_run()?.materials;
     let mut b = Block::new("whole-run", "3.5.1 μ_pp and restitution from whole runs");
     b.para(
         "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag v/(T0 + T'|v|), μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the runs' dispersion (how much more the runs disagree than their noise says).",
@@ -77,56 +65,25 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         ],
     );
     for m in mats {
-        let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
-        let est = |k: &str| {
-            m.get(k)
-                .map(|e| {
-                    let v = num(e, "value").unwrap_or(f64::NAN);
-                    match num(e, "se") {
-                        Some(se) => format!("{v:.4} ± {se:.4}"),
-                        None => format!("{v:.4}"),
-                    }
-                })
-                .unwrap_or_default()
-        };
+        let name = &m.material;
         t.push(vec![
             name.to_string(),
-            m.get("n_runs")
-                .and_then(Value::as_u64)
-                .unwrap_or(0)
-                .to_string(),
+            m.n_runs.to_string(),
             format!(
                 "{} ({})",
-                m.get("status")
-                    .and_then(Value::as_str)
-                    .unwrap_or("?")
-                    .replace('_', " "),
-                m.get("iterations").and_then(Value::as_u64).unwrap_or(0)
+                serde_name(&m.status).replace('_', " "),
+                m.iterations
             ),
-            est("mu_pp"),
-            est("mu_pg"),
-            est("t0_s"),
-            est("tp_s_per_mps"),
-            format!("{:.3}", num(m, "rms_noise").unwrap_or(f64::NAN)),
-            format!(
-                "{:.2}",
-                m.get("profile")
-                    .and_then(|p| num(p, "dispersion"))
-                    .unwrap_or(f64::NAN)
-            ),
+            fmt_est(&m.mu_pp),
+            fmt_est(&m.mu_pg),
+            fmt_est(&m.t0_s),
+            fmt_est(&m.tp_s_per_mps),
+            format!("{:.3}", m.rms_noise),
+            format!("{:.2}", m.profile.dispersion),
         ]);
-        if let Some(v) = m.get("profile").and_then(|p| p.get("verdict")) {
-            b.para(mu_pp_words(name, v));
-        }
-        for n in m
-            .get("notes")
-            .and_then(Value::as_array)
-            .into_iter()
-            .flatten()
-        {
-            if let Some(n) = n.as_str() {
-                b.para(format!("{name}: {n}."));
-            }
+        b.para(mu_pp_words(name, &m.profile.verdict));
+        for n in &m.notes {
+            b.para(format!("{name}: {n}."));
         }
     }
     b.table(t);
@@ -135,45 +92,21 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         &["material", "setup", "runs", "form", "parameters", "held-out RMS / noise"],
     );
     for m in mats {
-        let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
-        for c in m
-            .get("restitution")
-            .and_then(Value::as_array)
-            .into_iter()
-            .flatten()
-        {
-            let chosen = c.get("chosen").and_then(Value::as_str).unwrap_or("");
-            for cand in c
-                .get("candidates")
-                .and_then(Value::as_array)
-                .into_iter()
-                .flatten()
-            {
-                let form = cand.get("form").and_then(Value::as_str).unwrap_or("?");
-                let params: Vec<String> = cand
-                    .get("parameters")
-                    .and_then(Value::as_array)
-                    .into_iter()
-                    .flatten()
-                    .map(fmt_param)
-                    .collect();
+        for c in &m.restitution {
+            for cand in &c.candidates {
+                let form = serde_name(&cand.form);
+                let params: Vec<String> = cand.parameters.iter().map(fmt_param).collect();
                 laws.push(vec![
-                    name.to_string(),
-                    c.get("setup")
-                        .and_then(Value::as_str)
-                        .unwrap_or("?")
-                        .to_string(),
-                    c.get("n_runs")
-                        .and_then(Value::as_u64)
-                        .unwrap_or(0)
-                        .to_string(),
-                    if form == chosen {
+                    m.material.clone(),
+                    serde_name(&c.setup),
+                    c.n_runs.to_string(),
+                    if cand.form == c.chosen {
                         format!("**{form}** (chosen)")
                     } else {
-                        form.to_string()
+                        form
                     },
                     params.join("; "),
-                    format!("{:.4}", num(cand, "heldout_rms_noise").unwrap_or(f64::NAN)),
+                    format!("{:.4}", cand.heldout_rms_noise),
                 ]);
             }
         }
@@ -184,26 +117,21 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         &["material", "phase or time since impact", "RMS / noise", "runs"],
     );
     for m in mats {
-        let name = m.get("material").and_then(Value::as_str).unwrap_or("?");
-        for key in ["residual_by_phase", "residual_by_time_since_impact"] {
+        type ByKey = fn(&WholeRun) -> &BTreeMap<String, f64>;
+        let keys: [ByKey; 2] = [
+            |r| &r.residual_by_phase,
+            |r| &r.residual_by_time_since_impact,
+        ];
+        for get in keys {
             let mut acc: BTreeMap<String, (f64, usize)> = BTreeMap::new();
-            for r in m
-                .get("runs")
-                .and_then(Value::as_array)
-                .into_iter()
-                .flatten()
-            {
-                for (k, v) in r.get(key).and_then(Value::as_object).into_iter().flatten() {
-                    if let Some(x) = v.as_f64() {
-                        let e = acc.entry(k.clone()).or_default();
-                        e.0 += x;
-                        e.1 += 1;
-                    }
-                }
+            for (k, x) in m.runs.iter().flat_map(get) {
+                let e = acc.entry(k.clone()).or_default();
+                e.0 += x;
+                e.1 += 1;
             }
             for (k, (sum, n)) in acc {
                 res.push(vec![
-                    name.to_string(),
+                    m.material.clone(),
                     k,
                     format!("{:.3}", sum / n.max(1) as f64),
                     n.to_string(),
@@ -218,17 +146,20 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
 
     #[test]
     fn words_say_bound_or_interval_and_compare_with_the_chapter() {
-        let lb = mu_pp_words("316", &json!({"kind": "lower_bound", "lo": 0.81}));
+        let lb = mu_pp_words("316", &ProfileVerdict::LowerBound { lo: 0.81 });
         assert!(
             lb.contains("bound μ_pp from below at 0.81") && lb.contains("allowed but not measured")
         );
         let iv = mu_pp_words(
             "440c",
-            &json!({"kind": "interval", "estimate": 1.39, "lo": 1.35, "hi": 1.43}),
+            &ProfileVerdict::Interval {
+                estimate: 1.39,
+                lo: 1.35,
+                hi: 1.43,
+            },
         );
         assert!(
             iv.contains("μ_pp = 1.390") && iv.contains("1.4 is inside"),
@@ -236,8 +167,14 @@ mod tests {
         );
         let out = mu_pp_words(
             "440c",
-            &json!({"kind": "interval", "estimate": 0.3, "lo": 0.29, "hi": 0.31}),
+            &ProfileVerdict::Interval {
+                estimate: 0.3,
+                lo: 0.29,
+                hi: 0.31,
+            },
         );
         assert!(out.contains("outside"), "{out}");
+        let high = mu_pp_words("316", &ProfileVerdict::LowerBound { lo: 2.0 });
+        assert!(high.contains("1.4 is excluded"), "{high}");
     }
 }
