@@ -4,11 +4,11 @@
 //! restitution law chosen by held-out error with parameters within 15 %.
 
 use groove::discover::pairs::check_pairs;
-use groove::fit::collision::lm::Termination;
 use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
 use groove::fit::collision::whole_summary::{analyze, WholeRunOptions};
 use groove::fit::collision::wholerun::{fit_group, FitSpec, LawForm, PairRun, MU_PP};
 use groove::ingest::{read_dataset_dir, IngestParams};
+use groove::lsq::Termination;
 use groove::physics::Groove;
 use groove::physics::{Friction, Model, Term};
 use groove::recording::Setup;

@@ -7,12 +7,13 @@
 //! position and kick speed, the gap to the target (rolling setup; the contact setup starts
 //! touching) and the kick time within the frame before the first sample. The simulator locates
 //! every phase switch and impact as an event, so positions are continuous in the parameters and
-//! the finite-difference derivatives of `blocks` see the events move, not jump.
+//! the finite-difference derivatives of `lsq::block` see the events move, not jump.
 
-use super::blocks::{minimize_blocks, BlockOptions, BlockProblem, BlockResult};
 use super::detect::{median, noise_scale_m, robust_line};
-use super::lm::ParamSpec;
 use super::model::TrackData;
+use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
+use crate::lsq::lm::ParamSpec;
+use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term,
 };
@@ -420,6 +421,19 @@ pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out
     }
 }
 
+/// Solver settings of the whole-run fits: Huber at 3 (the residuals are whitened), three IRLS
+/// rounds, converged when the deviance falls by less than 1e-3 plus a millionth of itself.
+fn settings(max_iter: usize) -> Settings {
+    Settings {
+        max_iter,
+        rounds: 3,
+        huber_k: 3.0,
+        scale: Scale::Fixed(1.0),
+        cost_tol: 1e-3,
+        rel_tol: 1e-6,
+    }
+}
+
 /// The result of a whole-run fit of one group of runs.
 #[derive(Debug, Clone)]
 pub struct GroupFit {
@@ -460,11 +474,12 @@ pub fn fit_group(
             sp
         })
         .collect();
-    let opts = BlockOptions {
-        max_iter,
-        ..BlockOptions::default()
-    };
-    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
+    let result = minimize_blocks(
+        &Problem { runs, spec },
+        &shared_specs,
+        &own_specs,
+        &settings(max_iter),
+    );
     GroupFit {
         spec: spec.clone(),
         result,
@@ -525,11 +540,12 @@ pub fn fit_group_with(
             sp
         })
         .collect();
-    let opts = BlockOptions {
-        max_iter,
-        ..BlockOptions::default()
-    };
-    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
+    let result = minimize_blocks(
+        &Problem { runs, spec },
+        &shared_specs,
+        &own_specs,
+        &settings(max_iter),
+    );
     GroupFit {
         spec: spec.clone(),
         result,
