@@ -146,7 +146,20 @@ impl BlockNormal {
             us.push(u);
             uws.push(uw);
         }
-        let s = masked(&s, &on[..ms], lambda);
+        // damping of the shared block on the undamped V's diagonal (the Schur complement of
+        // A + λ·diag A, consistent with `apply`)
+        for i in 0..ms {
+            let vdiag: f64 = self.pieces.iter().map(|p| p.v[i][i]).sum();
+            if on[i] {
+                s[i][i] += lambda * vdiag.max(1e-30);
+            } else {
+                for j in 0..ms {
+                    s[i][j] = 0.0;
+                    s[j][i] = 0.0;
+                }
+                s[i][i] = 1.0;
+            }
+        }
         Some((s, us, uws))
     }
 
