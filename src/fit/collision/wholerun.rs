@@ -459,13 +459,18 @@ pub fn fit_group(
     max_iter: usize,
 ) -> GroupFit {
     let shared_specs = spec.shared_specs(start.map(|s| s.result.shared.as_slice()), runs);
-    let own_specs: Vec<Vec<ParamSpec>> = runs
-        .iter()
+    let own = start.map(|s| s.result.own.as_slice());
+    solve_group(runs, spec, &shared_specs, own, max_iter)
+}
+
+/// The per-run parameter specs, started from `own` (an earlier fit's values) when given.
+fn own_specs_from(runs: &[PairRun], own: Option<&[Vec<f64>]>) -> Vec<Vec<ParamSpec>> {
+    runs.iter()
         .enumerate()
         .map(|(b, r)| {
             let mut sp = r.own_specs();
-            if let Some(own) = start.and_then(|s| s.result.own.get(b)) {
-                for (s, x) in sp.iter_mut().zip(own) {
+            if let Some(o) = own.and_then(|o| o.get(b)) {
+                for (s, x) in sp.iter_mut().zip(o) {
                     if s.lower < s.upper {
                         s.start = x.clamp(s.lower, s.upper);
                     }
@@ -473,10 +478,21 @@ pub fn fit_group(
             }
             sp
         })
-        .collect();
+        .collect()
+}
+
+/// Solve the whole-run fit of `runs` for the shared specs given and per-run specs from `own`.
+fn solve_group(
+    runs: &[PairRun],
+    spec: &FitSpec,
+    shared_specs: &[ParamSpec],
+    own: Option<&[Vec<f64>]>,
+    max_iter: usize,
+) -> GroupFit {
+    let own_specs = own_specs_from(runs, own);
     let result = minimize_blocks(
         &Problem { runs, spec },
-        &shared_specs,
+        shared_specs,
         &own_specs,
         &settings(max_iter),
     );
@@ -525,31 +541,7 @@ pub fn fit_group_with(
             }
         })
         .collect();
-    let own_specs: Vec<Vec<ParamSpec>> = runs
-        .iter()
-        .enumerate()
-        .map(|(b, r)| {
-            let mut sp = r.own_specs();
-            if let Some(o) = own.and_then(|o| o.get(b)) {
-                for (s, x) in sp.iter_mut().zip(o) {
-                    if s.lower < s.upper {
-                        s.start = x.clamp(s.lower, s.upper);
-                    }
-                }
-            }
-            sp
-        })
-        .collect();
-    let result = minimize_blocks(
-        &Problem { runs, spec },
-        &shared_specs,
-        &own_specs,
-        &settings(max_iter),
-    );
-    GroupFit {
-        spec: spec.clone(),
-        result,
-    }
+    solve_group(runs, spec, &shared_specs, own, max_iter)
 }
 
 /// The law slots (a, b) of `setup` in the shared parameters.
