@@ -1,5 +1,5 @@
 //! The `compare` stage's `comparison`: pooled re-simulation residual statistics by phase, speed,
-//! position, direction, material, experiment and run.
+//! position, direction, material, experiment and run; collision runs by phase and time since impact.
 
 use super::residuals::Phase;
 use serde::{Deserialize, Serialize};
@@ -17,7 +17,7 @@ pub struct GroupStats {
     pub runs_test_z: Option<f64>,
 }
 
-/// A group with its bin edges (speed in m/s, position in m).
+/// A group with its bin edges (speed in m/s, position in m, time in s).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Bin {
     pub lo: f64,
@@ -44,4 +44,18 @@ pub struct Comparison {
     /// "single" and "collision" (collision runs: both particles, piece by piece).
     pub by_experiment: BTreeMap<String, GroupStats>,
     pub by_run: BTreeMap<String, GroupStats>,
+    /// The collision runs' residuals (both particles, piece by piece) by phase and by time
+    /// since the last impact; null without collision runs.
+    pub pairs: Option<PairResiduals>,
+}
+
+/// Residuals of the collision runs' piecewise fits, where impacts could leave structure.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairResiduals {
+    pub n_runs: usize,
+    pub by_phase: BTreeMap<Phase, GroupStats>,
+    /// Frames before the run's first fitted impact (the striker's approach, the target at rest).
+    pub before_first_impact: GroupStats,
+    /// By time since the last impact (s); the last bin is open.
+    pub by_time_since_impact: Vec<Bin>,
 }

@@ -34,4 +34,6 @@ pub struct RunResiduals {
     pub phase: Vec<Phase>,
     /// |residual| above the fit's outlier cut (the fit left these frames out).
     pub outlier: Vec<bool>,
+    /// Times of the fitted impacts (s, first impact first); empty for single runs.
+    pub impacts_s: Vec<f64>,
 }

@@ -11,10 +11,10 @@
 use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use crate::artifacts::diagnosis::Effect;
-use crate::fit::collision::lm::Termination;
 use crate::fit::collision::wholerun::{
     fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, TP, T_KICK,
 };
+use crate::lsq::Termination;
 use crate::physics::{simulate_pair, Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use crate::stats::dist::{chi2_sf, normal_sf};

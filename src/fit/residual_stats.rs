@@ -1,5 +1,6 @@
 //! Pooled statistics of re-simulation residuals, grouped by phase, speed, position, direction,
-//! material, experiment and run: what is left for the discovery to explain. Outlier frames are left out.
+//! material, experiment and run: what is left for the discovery to explain; the collision runs'
+//! frames also by phase and by time since the last impact. Outlier frames are left out.
 //!
 //! Per group: count, mean, RMS, lag-1 autocorrelation (about zero, over consecutive frames of the
 //! same run in the same group) and the Wald–Wolfowitz runs test of the residual signs (runs summed
@@ -15,7 +16,24 @@ pub const SPEED_EDGES_MPS: [f64; 7] = [0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2]
 /// Number of equal-width position bins over the pooled range of z_obs.
 pub const POSITION_BINS: usize = 10;
 
-pub use crate::artifacts::comparison::{Bin, Comparison, GroupStats};
+pub use crate::artifacts::comparison::{Bin, Comparison, GroupStats, PairResiduals};
+
+/// Upper edges (s) of the bins of time since the last impact (collision runs); the last is open.
+pub const SINCE_IMPACT_EDGES_S: [f64; 3] = [1e-3, 5e-3, 20e-3];
+
+/// The bin of time since the last impact at `t_s` (0 before the first impact, then 1 + the
+/// index of the edge bin), for impact times `impacts_s` in time order.
+pub fn since_impact_bin(t_s: f64, impacts_s: &[f64]) -> usize {
+    match impacts_s.iter().rev().find(|&&ti| ti <= t_s) {
+        None => 0,
+        Some(ti) => {
+            1 + SINCE_IMPACT_EDGES_S
+                .iter()
+                .position(|&e| t_s - ti < e)
+                .unwrap_or(SINCE_IMPACT_EDGES_S.len())
+        }
+    }
+}
 
 /// Running sums of one group; `last` marks where the current stretch of a run stopped.
 #[derive(Default, Clone)]
@@ -158,6 +176,8 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
     let mut by_material = BTreeMap::new();
     let mut by_experiment = BTreeMap::new();
     let mut by_run = BTreeMap::new();
+    let (mut pair_phase, mut pair_time) = (BTreeMap::new(), BTreeMap::new());
+    let mut n_pair_runs = 0;
     let mut buf = Vec::new();
     let (mut n_frames, mut n_outliers) = (0, 0);
     for r in &used {
@@ -193,7 +213,35 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
             &mut buf,
         );
         feed(&mut by_run, r, |_| Some(r.run.clone()), &mut buf);
+        if r.experiment == Experiment::Collision {
+            n_pair_runs += 1;
+            feed(&mut pair_phase, r, |i| Some(r.phase[i]), &mut buf);
+            feed(
+                &mut pair_time,
+                r,
+                |i| Some(since_impact_bin(r.t_s[i], &r.impacts_s)),
+                &mut buf,
+            );
+        }
     }
+    let pairs = (n_pair_runs > 0).then(|| PairResiduals {
+        n_runs: n_pair_runs,
+        by_phase: finish(pair_phase),
+        before_first_impact: pair_time.get(&0).map(Acc::stats).unwrap_or_default(),
+        by_time_since_impact: pair_time
+            .iter()
+            .filter(|(b, _)| **b > 0)
+            .map(|(&b, a)| Bin {
+                lo: if b == 1 {
+                    0.0
+                } else {
+                    SINCE_IMPACT_EDGES_S[b - 2]
+                },
+                hi: SINCE_IMPACT_EDGES_S.get(b - 1).copied(),
+                stats: a.stats(),
+            })
+            .collect(),
+    });
     Comparison {
         n_runs: used.len(),
         skipped,
@@ -221,6 +269,7 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
         by_material: finish(by_material),
         by_experiment: finish(by_experiment),
         by_run: finish(by_run),
+        pairs,
     }
 }
 
@@ -245,6 +294,7 @@ mod tests {
             v_fit_mps: vec![0.01; n],
             phase: vec![Phase::Rolling; n],
             outlier: vec![false; n],
+            impacts_s: vec![],
         }
     }
 
@@ -271,5 +321,64 @@ mod tests {
         assert_eq!(c.by_position.len(), POSITION_BINS);
         assert_eq!(c.by_speed.len(), 1);
         assert_eq!(c.by_speed[0].lo, 0.01);
+    }
+
+    #[test]
+    fn collision_frames_are_binned_by_time_since_the_last_impact() {
+        // frames every 0.1 ms from t = 0; impacts at 2 ms and 10 ms; residuals mark the bin
+        // they belong in, so each bin's mean says which frames it got
+        let mut pair = run("c", vec![0.0; 300]);
+        pair.experiment = Experiment::Collision;
+        pair.impacts_s = vec![2e-3, 10e-3];
+        let want = |t: f64| -> f64 {
+            let since = if t < 2e-3 {
+                return 1.0;
+            } else if t < 10e-3 {
+                t - 2e-3
+            } else {
+                t - 10e-3
+            };
+            if since < 1e-3 {
+                2.0
+            } else if since < 5e-3 {
+                3.0
+            } else if since < 20e-3 {
+                4.0
+            } else {
+                5.0
+            }
+        };
+        pair.residual_m = pair.t_s.iter().map(|&t| want(t + 1e-9) * 1e-6).collect();
+        pair.t_s.iter_mut().for_each(|t| *t += 1e-9);
+        pair.phase[..100].fill(Phase::Sliding);
+        let c = compare(&[run("s", vec![1e-6; 50]), pair]);
+        let p = c.pairs.expect("a collision run gives pair residuals");
+        assert_eq!(p.n_runs, 1);
+        assert_eq!(p.before_first_impact.n, 20);
+        assert!((p.before_first_impact.mean_m - 1e-6).abs() < 1e-15);
+        // [0, 1 ms): 10 frames after each impact; [1, 5 ms): 40 + 40; [5, 20 ms): 30 + 150
+        let bins: Vec<(f64, Option<f64>, usize, f64)> = p
+            .by_time_since_impact
+            .iter()
+            .map(|b| (b.lo, b.hi, b.stats.n, b.stats.mean_m))
+            .collect();
+        assert_eq!(
+            bins.iter().map(|b| (b.0, b.1, b.2)).collect::<Vec<_>>(),
+            vec![
+                (0.0, Some(1e-3), 20),
+                (1e-3, Some(5e-3), 80),
+                (5e-3, Some(20e-3), 180)
+            ]
+        );
+        for (k, b) in bins.iter().enumerate() {
+            assert!(
+                (b.3 - (k as f64 + 2.0) * 1e-6).abs() < 1e-15,
+                "bin {k}: {b:?}"
+            );
+        }
+        assert_eq!(p.by_phase[&Phase::Sliding].n, 100);
+        assert_eq!(p.by_phase[&Phase::Rolling].n, 200);
+        // a dataset of single runs has none
+        assert!(compare(&[run("s", vec![1e-6; 50])]).pairs.is_none());
     }
 }

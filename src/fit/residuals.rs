@@ -36,6 +36,7 @@ impl RunResiduals {
             v_fit_mps: vec![],
             phase: vec![],
             outlier: vec![],
+            impacts_s: vec![],
         }
     }
 }
@@ -86,34 +87,21 @@ fn collision_residuals(rec: &Recording, c: &CollisionFit, groove: Groove) -> Run
     }
     let mut out = RunResiduals::empty(rec, "ok".into());
     out.direction = if c.direction >= 0 { 1 } else { -1 };
+    out.impacts_s = c.impacts.iter().map(|im| im.t_s.value).collect();
     let cut = 5.0 * c.noise_m;
     for track in &rec.tracks {
         for i in 0..track.t_s.len() {
             let t = track.t_s[i];
-            let Some(seg) = c
-                .segments
-                .iter()
-                .find(|s| s.particle == track.particle && s.t_start_s <= t && t <= s.t_end_s)
-            else {
+            let Some(st) = c.state_at(track.particle, t, groove) else {
                 continue;
             };
-            let model = Baseline {
-                mu: c.mu_pg.value,
-                t_drag_s: seg.t_drag_s.value,
-                groove,
-            };
-            let (dz, v, _, phase) = model.state_from(
-                seg.v_start_mps.value,
-                seg.va_start_mps.value,
-                t - seg.t_start_s,
-            );
             let sample = Sample {
                 particle: track.particle,
                 t_s: t,
                 z_obs_m: track.z_m[i],
-                z_fit_m: seg.z_start_m + dz,
-                v_fit_mps: v,
-                phase: phase.into(),
+                z_fit_m: st.z_m,
+                v_fit_mps: st.v_mps,
+                phase: st.phase.into(),
             };
             out.push(sample, cut);
         }

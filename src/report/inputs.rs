@@ -4,7 +4,7 @@ use super::collisions::{self, CollisionRun};
 use super::singles::{self, SingleRow};
 use crate::artifacts::summary::WholeRunSummary;
 use crate::artifacts::{
-    self, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
+    self, Comparison, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
 };
 use crate::recording::Recording;
 use std::collections::BTreeMap;
@@ -21,6 +21,8 @@ pub struct ReportData {
     /// Per-run simulate residuals (`simulate:residuals`), by run id.
     pub residuals: BTreeMap<String, RunResiduals>,
     pub summary: Option<Summary>,
+    /// The compare stage's pooled residuals (`compare:comparison`).
+    pub comparison: Option<Comparison>,
     pub diagnosis: Option<Diagnosis>,
     /// Absent when the dataset has no truth file (`{"truth": false}`).
     pub validation: Option<Validation>,
@@ -72,7 +74,7 @@ impl ReportData {
     }
 
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,
-    /// `fits_csv`, `residuals`, `summary`, `diagnosis`, `validation`, `provenance`, `skipped`.
+    /// `fits_csv`, `residuals`, `summary`, `comparison`, `diagnosis`, `validation`, `provenance`, `skipped`.
     pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {
         let mut d = ReportData::default();
         for (name, bytes) in items(inputs, "runs")? {
@@ -110,6 +112,9 @@ impl ReportData {
         }
         d.summary = file(inputs, "summary")?
             .map(|b| artifacts::from_json::<Summary>("summary", b))
+            .transpose()?;
+        d.comparison = file(inputs, "comparison")?
+            .map(|b| artifacts::from_json::<Comparison>("comparison", b))
             .transpose()?;
         d.diagnosis = file(inputs, "diagnosis")?
             .map(|b| artifacts::from_json::<Diagnosis>("diagnosis", b))

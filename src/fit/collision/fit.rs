@@ -11,12 +11,13 @@
 //! changes); (6) the record (`report`).
 
 use super::detect::{departure_time_s, index_at, noise_scale_m};
-use super::lm::{minimize, LmOptions, LmResult};
 use super::model::{Layout, TrackData};
 use super::options::CollisionOptions;
 use super::plan::Plan;
 use super::report::{failed_fit, summarize_fit};
 use super::types::{CollisionFit, CollisionStatus};
+use crate::lsq::dense_fit::{minimize, DenseFit as LmResult};
+use crate::lsq::lm::{Scale, Settings};
 use crate::recording::{Recording, Setup};
 
 const MIN_POINTS: usize = 20;
@@ -157,10 +158,17 @@ impl Fitter<'_> {
         let mut plan = plan.clone();
         self.set_time_bounds(&mut plan);
         let (layout, specs) = plan.build(tracks.clone(), self.opts.s, self.opts.k);
-        let lm = LmOptions {
+        // Huber at 2.5 robust scales (uncentred MAD of the positions, at least 5 % of the
+        // noise), four IRLS rounds; converged when χ² falls by less than 1e-3
+        let lm = Settings {
             max_iter,
-            scale_floor: 0.05 * self.sigma,
-            ..LmOptions::default()
+            rounds: 4,
+            huber_k: 2.5,
+            scale: Scale::Mad {
+                floor: 0.05 * self.sigma,
+            },
+            cost_tol: 1e-3,
+            rel_tol: 1e-10,
         };
         let res = minimize(
             |p, out| layout.residuals(p, out),

@@ -4,16 +4,14 @@
 //!
 //! Code map: `fit` (entry) → `detect` (noise, departure from rest, contacts in the gap) →
 //! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
-//! (the joint piecewise model) → `lm` (robust solver) → `report` (the per-run record, `types`).
+//! (the joint piecewise model) → `crate::lsq::dense_fit` (robust solver) → `report` (the per-run record, `types`).
 //! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
-//! form, `impulse` is the impact model, `trajectory` evaluates a fitted run for figures.
+//! form, `impulse` is the impact model, `trajectory` evaluates a fitted run (figures, residuals).
 
-pub mod blocks;
 pub mod curves;
 pub mod detect;
 mod fit;
 pub mod impulse;
-pub mod lm;
 pub mod model;
 pub mod motion;
 pub mod mu_pp;
@@ -33,4 +31,5 @@ pub mod wholerun;
 pub use fit::fit_collision;
 pub use options::CollisionOptions;
 pub use summary::{summarize, summarize_seeded, CollisionSummary};
+pub use trajectory::FittedState;
 pub use types::CollisionFit;

@@ -1,8 +1,8 @@
 //! A fit plan: starting values and bounds of every parameter of the joint model, turned into a
 //! `Layout` plus `ParamSpec`s, and read back from a solution.
 
-use super::lm::ParamSpec;
 use super::model::{DragPrior, ImpactTime, Layout, Piece, TrackData, MU, T_DRAG};
+use crate::lsq::lm::ParamSpec;
 
 /// The first piece of a particle's track when it does not start at an impact.
 #[derive(Debug, Clone, Copy, PartialEq)]

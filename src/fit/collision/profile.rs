@@ -2,17 +2,25 @@
 //! grid (every other parameter refitted), and what it implies — an interval when the profile has
 //! a minimum inside the grid, a one-sided bound when it is flat towards one end.
 
-use super::wholerun::{fit_group, FitSpec, GroupFit, PairRun, MU_PP};
+use super::wholerun::{fit_group, residuals, FitSpec, GroupFit, PairRun, MU_PP};
 use serde::{Deserialize, Serialize};
 
 /// Rise of the deviance that bounds a 95 % interval of one parameter (χ²₁ quantile).
 pub const DELTA_95: f64 = 3.841_458_820_694_124;
 
+/// Huber threshold of the whole-run fits (whitened residuals): residuals enter the serial
+/// correlation clipped here, as they enter the fit.
+const HUBER_K: f64 = 3.0;
+
+/// Largest lag-1 autocorrelation used for the variance inflation (factor 39).
+const RHO_MAX: f64 = 0.95;
+
 /// One grid value.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ProfilePoint {
     pub mu_pp: f64,
-    /// Deviance above the best fit (χ² units; 0 at the minimum).
+    /// Deviance above the best fit divided by the profile's `inflation` (χ² units; 0 at the
+    /// minimum).
     pub deviance: f64,
     pub converged: bool,
 }
@@ -38,9 +46,77 @@ pub struct MuPpProfile {
     pub verdict: ProfileVerdict,
     /// The deviance rise used for the interval.
     pub threshold: f64,
-    /// Run-level dispersion the deviances were divided by (≥ 1): how much more the runs
-    /// disagree about μ_pp than their noise says (a sandwich over runs at the estimate).
+    /// Run-level dispersion (≥ 1): how much more the runs disagree about μ_pp than their noise
+    /// says (a sandwich over runs at the estimate).
     pub dispersion: f64,
+    /// Pooled lag-1 autocorrelation of the best fit's residuals (consecutive samples of each
+    /// track of each run, Huber-clipped, not centred).
+    pub lag1_autocorrelation: f64,
+    /// Pooled lag-1 autocorrelation of the residuals' contributions to the μ_pp score
+    /// (residual × its derivative in ln μ_pp): the serial correlation where μ_pp is measured.
+    pub score_lag1_autocorrelation: f64,
+    /// Variance inflation of an AR(1) score, (1 + ρ)/(1 − ρ) with ρ =
+    /// `score_lag1_autocorrelation` (1 when ρ ≤ 0): the deviance of correlated residuals
+    /// counts each sample as more than the independent information it carries.
+    pub serial_factor: f64,
+    /// What the deviances were divided by: the larger of `dispersion` and `serial_factor` (both
+    /// estimate how much the fit's noise model understates the variance of the μ_pp score).
+    pub inflation: f64,
+}
+
+/// Pooled lag-1 autocorrelations at the best fit `fit`, over consecutive samples of every track
+/// of every run: of the whitened residuals ψ_k (clipped at the Huber threshold, as in the fit;
+/// not centred: a track's offset is correlation too), and of the residuals' contributions to
+/// the μ_pp score, g_k = ψ_k ∂r_k/∂ln μ_pp (the samples μ_pp depends on: sliding and impacts).
+/// Each is Σ x_k x_{k+1} / Σ x_k².
+pub fn serial_correlation(runs: &[PairRun], fit: &GroupFit) -> (f64, f64) {
+    const H: f64 = 1e-3;
+    let (mut lag, mut var, mut glag, mut gvar) = (0.0, 0.0, 0.0, 0.0);
+    let shifted = |k: f64| {
+        let mut p = fit.result.shared.clone();
+        p[MU_PP] *= (k * H).exp();
+        p
+    };
+    let (up, down) = (shifted(1.0), shifted(-1.0));
+    for (run, own) in runs.iter().zip(&fit.result.own) {
+        let n = run.n_samples();
+        let (mut r, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        residuals(run, &fit.spec, &fit.result.shared, own, &mut r);
+        residuals(run, &fit.spec, &up, own, &mut rp);
+        residuals(run, &fit.spec, &down, own, &mut rm);
+        let psi: Vec<f64> = r.iter().map(|x| x.clamp(-HUBER_K, HUBER_K)).collect();
+        let g: Vec<f64> = (0..n)
+            .map(|k| {
+                let d = (rp[k] - rm[k]) / (2.0 * H);
+                if rp[k].abs() < 1e5 && rm[k].abs() < 1e5 && d.is_finite() {
+                    psi[k] * d
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let n0 = run.samples[0].len();
+        for (lo, hi) in [(0, n0), (n0, n)] {
+            let (x, y) = (&psi[lo..hi], &g[lo..hi]);
+            var += x.iter().map(|v| v * v).sum::<f64>();
+            lag += x.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
+            gvar += y.iter().map(|v| v * v).sum::<f64>();
+            glag += y.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
+        }
+    }
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
+    (ratio(lag, var), ratio(glag, gvar))
+}
+
+/// Variance inflation (1 + ρ)/(1 − ρ) of the mean of AR(1) residuals with lag-1
+/// autocorrelation ρ (ρ clipped to [0, 0.95]).
+pub fn ar1_inflation(rho: f64) -> f64 {
+    let rho = if rho.is_finite() {
+        rho.clamp(0.0, RHO_MAX)
+    } else {
+        0.0
+    };
+    (1.0 + rho) / (1.0 - rho)
 }
 
 /// The grid: log-spaced from 0.05 to 5 (13 values).
@@ -127,13 +203,16 @@ pub fn profile_mu_pp(
             dispersion = (spread / (2.0 * curv)).max(1.0);
         }
     }
+    let (lag1_autocorrelation, score_lag1_autocorrelation) = serial_correlation(runs, best);
+    let serial_factor = ar1_inflation(score_lag1_autocorrelation);
+    let inflation = dispersion.max(serial_factor);
     fits.sort_by(|a, b| a.0.total_cmp(&b.0));
     let c_min = fits.iter().map(|f| f.1.cost()).fold(best.cost(), f64::min);
     let points: Vec<ProfilePoint> = fits
         .iter()
         .map(|(mu_pp, f)| ProfilePoint {
             mu_pp: *mu_pp,
-            deviance: (f.cost() - c_min).max(0.0) / dispersion,
+            deviance: (f.cost() - c_min).max(0.0) / inflation,
             converged: f.converged(),
         })
         .collect();
@@ -151,6 +230,10 @@ pub fn profile_mu_pp(
         points,
         threshold: DELTA_95,
         dispersion,
+        lag1_autocorrelation,
+        score_lag1_autocorrelation,
+        serial_factor,
+        inflation,
     }
 }
 
@@ -223,6 +306,15 @@ mod tests {
         };
         assert!((lo / 0.3 - (-0.196f64).exp()).abs() < 0.06, "{lo}");
         assert!((hi / 0.3 - 0.196f64.exp()).abs() < 0.06, "{hi}");
+    }
+
+    #[test]
+    fn ar1_inflation_follows_the_effective_sample_size() {
+        assert_eq!(ar1_inflation(0.0), 1.0);
+        assert_eq!(ar1_inflation(-0.4), 1.0);
+        assert!((ar1_inflation(0.7) - 1.7 / 0.3).abs() < 1e-12);
+        assert!((ar1_inflation(0.99) - 1.95 / 0.05).abs() < 1e-9);
+        assert_eq!(ar1_inflation(f64::NAN), 1.0);
     }
 
     #[test]

@@ -2,12 +2,13 @@
 //! with velocities and spins before and after, C, Δv of the target, stick/slip, and standard
 //! errors propagated from the fit's covariance.
 
-use super::lm::{LmResult, Termination};
 use super::model::{Layout, MU, T_DRAG};
 use super::types::{
     CollisionFit, CollisionStatus, Contact, Estimate, ImpactFit, Kin, PhaseKind, PhaseSpan,
     PreImpactSource, SegmentFit,
 };
+use crate::lsq::dense_fit::DenseFit as LmResult;
+use crate::lsq::Termination;
 use crate::recording::RunInfo;
 
 /// A record for a run that could not be fitted.

@@ -2,13 +2,14 @@
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
 //! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
 
-use super::lm::Termination;
 use super::profile::{default_grid, profile_mu_pp, MuPpProfile, ProfileVerdict};
 use super::restitution_law::{choose_law, with_chosen, LawChoice};
 use super::types::Estimate;
 use super::wholerun::{
     fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK, V0,
 };
+use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
+use crate::lsq::Termination;
 use crate::physics::{simulate_pair, Groove, Phase};
 use crate::recording::{Experiment, Recording, Setup};
 use serde::{Deserialize, Serialize};
@@ -225,13 +226,17 @@ pub fn analyze_material(
     }
 }
 
+/// The label of the bin of time since the last impact (the compare stage's bins).
 fn time_bin(dt: Option<f64>) -> &'static str {
+    const LABELS: [&str; 4] = ["0-1ms", "1-5ms", "5-20ms", ">20ms"];
     match dt {
         None => "before",
-        Some(d) if d < 1e-3 => "0-1ms",
-        Some(d) if d < 5e-3 => "1-5ms",
-        Some(d) if d < 20e-3 => "5-20ms",
-        Some(_) => ">20ms",
+        Some(d) => {
+            LABELS[SINCE_IMPACT_EDGES_S
+                .iter()
+                .position(|&e| d < e)
+                .unwrap_or(SINCE_IMPACT_EDGES_S.len())]
+        }
     }
 }
 

@@ -7,12 +7,13 @@
 //! position and kick speed, the gap to the target (rolling setup; the contact setup starts
 //! touching) and the kick time within the frame before the first sample. The simulator locates
 //! every phase switch and impact as an event, so positions are continuous in the parameters and
-//! the finite-difference derivatives of `blocks` see the events move, not jump.
+//! the finite-difference derivatives of `lsq::block` see the events move, not jump.
 
-use super::blocks::{minimize_blocks, BlockOptions, BlockProblem, BlockResult};
 use super::detect::{median, noise_scale_m, robust_line};
-use super::lm::ParamSpec;
 use super::model::TrackData;
+use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
+use crate::lsq::lm::ParamSpec;
+use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term,
 };
@@ -420,6 +421,19 @@ pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out
     }
 }
 
+/// Solver settings of the whole-run fits: Huber at 3 (the residuals are whitened), three IRLS
+/// rounds, converged when the deviance falls by less than 1e-3 plus a millionth of itself.
+fn settings(max_iter: usize) -> Settings {
+    Settings {
+        max_iter,
+        rounds: 3,
+        huber_k: 3.0,
+        scale: Scale::Fixed(1.0),
+        cost_tol: 1e-3,
+        rel_tol: 1e-6,
+    }
+}
+
 /// The result of a whole-run fit of one group of runs.
 #[derive(Debug, Clone)]
 pub struct GroupFit {
@@ -445,13 +459,18 @@ pub fn fit_group(
     max_iter: usize,
 ) -> GroupFit {
     let shared_specs = spec.shared_specs(start.map(|s| s.result.shared.as_slice()), runs);
-    let own_specs: Vec<Vec<ParamSpec>> = runs
-        .iter()
+    let own = start.map(|s| s.result.own.as_slice());
+    solve_group(runs, spec, &shared_specs, own, max_iter)
+}
+
+/// The per-run parameter specs, started from `own` (an earlier fit's values) when given.
+fn own_specs_from(runs: &[PairRun], own: Option<&[Vec<f64>]>) -> Vec<Vec<ParamSpec>> {
+    runs.iter()
         .enumerate()
         .map(|(b, r)| {
             let mut sp = r.own_specs();
-            if let Some(own) = start.and_then(|s| s.result.own.get(b)) {
-                for (s, x) in sp.iter_mut().zip(own) {
+            if let Some(o) = own.and_then(|o| o.get(b)) {
+                for (s, x) in sp.iter_mut().zip(o) {
                     if s.lower < s.upper {
                         s.start = x.clamp(s.lower, s.upper);
                     }
@@ -459,12 +478,24 @@ pub fn fit_group(
             }
             sp
         })
-        .collect();
-    let opts = BlockOptions {
-        max_iter,
-        ..BlockOptions::default()
-    };
-    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
+        .collect()
+}
+
+/// Solve the whole-run fit of `runs` for the shared specs given and per-run specs from `own`.
+fn solve_group(
+    runs: &[PairRun],
+    spec: &FitSpec,
+    shared_specs: &[ParamSpec],
+    own: Option<&[Vec<f64>]>,
+    max_iter: usize,
+) -> GroupFit {
+    let own_specs = own_specs_from(runs, own);
+    let result = minimize_blocks(
+        &Problem { runs, spec },
+        shared_specs,
+        &own_specs,
+        &settings(max_iter),
+    );
     GroupFit {
         spec: spec.clone(),
         result,
@@ -510,30 +541,7 @@ pub fn fit_group_with(
             }
         })
         .collect();
-    let own_specs: Vec<Vec<ParamSpec>> = runs
-        .iter()
-        .enumerate()
-        .map(|(b, r)| {
-            let mut sp = r.own_specs();
-            if let Some(o) = own.and_then(|o| o.get(b)) {
-                for (s, x) in sp.iter_mut().zip(o) {
-                    if s.lower < s.upper {
-                        s.start = x.clamp(s.lower, s.upper);
-                    }
-                }
-            }
-            sp
-        })
-        .collect();
-    let opts = BlockOptions {
-        max_iter,
-        ..BlockOptions::default()
-    };
-    let result = minimize_blocks(&Problem { runs, spec }, &shared_specs, &own_specs, &opts);
-    GroupFit {
-        spec: spec.clone(),
-        result,
-    }
+    solve_group(runs, spec, &shared_specs, own, max_iter)
 }
 
 /// The law slots (a, b) of `setup` in the shared parameters.

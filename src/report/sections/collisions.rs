@@ -240,7 +240,9 @@ fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
 
 /// The blocks of Figs. 4.3–4.4 and the secondary-collision factor.
 pub fn blocks(d: &ReportData, figs: &BTreeMap<String, String>) -> Vec<Block> {
-    let mut out = vec![fig_4_3_block(d, figs), fig_4_4a_block(d, figs)];
+    let mut out = vec![fig_4_3_block(d, figs)];
+    out.extend(super::compare::block(d));
+    out.push(fig_4_4a_block(d, figs));
     out.extend(super::whole_run::block(d, figs));
     out.push(fig_4_4bc_block(d, figs));
     out.push(secondary_block(figs));

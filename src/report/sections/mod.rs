@@ -3,6 +3,7 @@
 
 pub mod chapter;
 pub mod collisions;
+pub mod compare;
 pub mod data;
 pub mod discovery;
 pub mod provenance;
