@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 /// Significant candidates fitted in full per round (strongest first, until one passes).
 pub const FULL_TRIES: usize = 3;
 /// Iterations of a full fit started from the screen's linear estimate.
-pub const FULL_ITERATIONS: usize = 25;
+pub const FULL_ITERATIONS: usize = 40;
 
 /// Level of the one-sided paired test that held-out runs improve.
 pub const CV_LEVEL: f64 = 0.05;
@@ -436,9 +436,7 @@ pub fn run_round(
             all[i],
             &linear[i].fit.global[current.fit.global.len()..],
         )];
-        if !needs_proposal(all[i]) {
-            starts.extend(data_starts(all[i], props));
-        }
+        starts.extend(data_starts(all[i], props));
         starts.dedup();
         current.extend(all[i], &starts, materials, runs, FULL_ITERATIONS)
     };
