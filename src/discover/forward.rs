@@ -533,7 +533,7 @@ pub fn run_round(
         } else if best.is_some() {
             "significant, not fitted in full: a stronger term passed both tests".into()
         } else {
-            format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are")
+            format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are fitted in full and none of those passed the held-out check")
         };
         rows.push(row(round, e, &fitted[i], materials, ev));
     }

@@ -8,7 +8,6 @@
 //! term passing both is added and the search repeats. Drift probes (T or μ drifting with |v0|, a
 //! direction asymmetry), fitted inside the joint model, say whether a mismatch is left unexplained.
 
-pub mod bootstrap;
 pub mod candidate;
 pub mod cv;
 pub mod data;

@@ -141,41 +141,51 @@ pub struct Wanted {
     pub maps: bool,
 }
 
-/// Matched-filter scan for a Gaussian bump: widths doubling from the smallest, centres every
-/// half width; the two best separated (centre, width) with their least-squares amplitude.
-fn bump_scan(prep: &[Prepared], rg: &Ranges) -> Vec<[f64; 3]> {
-    let mut widths = Vec::new();
-    let mut w = rg.w_lo().max(0.05 * rg.span() / 8.0);
-    while w <= 0.25 * rg.span() {
-        widths.push(w);
-        w *= 2.0;
-    }
+/// Trial (centre, width) of a Gaussian bump: widths doubling from `w_lo` (at least 1/160 of the
+/// span) up to a quarter of the span (and `w_hi`), centres every half width over the range.
+pub fn bump_trials(rg: &Ranges, w_lo: f64, w_hi: f64) -> Vec<(f64, f64)> {
     let mut trials = Vec::new();
-    for &w in &widths {
+    let mut w = w_lo.max(0.05 * rg.span() / 8.0);
+    while w <= (0.25 * rg.span()).min(w_hi) {
         let mut c = rg.z_lo;
         while c <= rg.z_hi {
             trials.push((c, w));
             c += 0.5 * w;
         }
+        w *= 2.0;
     }
+    trials
+}
+
+/// A run's response to a unit Gaussian bump at (c, w) in lab z, in noise units with its locals
+/// projected out; None when the run never comes within three widths of it.
+pub fn bump_column(p: &Prepared, c: f64, w: f64) -> Option<Vec<f64>> {
+    let z = p.track.variable(Variable::Z);
+    if !z.iter().any(|zz| (zz - c).abs() < 3.0 * w) {
+        return None;
+    }
+    let f: Vec<f64> = z
+        .iter()
+        .map(|zz| {
+            let u = (zz - c) / w;
+            (-0.5 * u * u).exp()
+        })
+        .collect();
+    Some(p.column(p.track.respond_values(&f)))
+}
+
+/// Matched-filter scan for a Gaussian bump: widths doubling from the smallest, centres every
+/// half width; the two best separated (centre, width) with their least-squares amplitude.
+fn bump_scan(prep: &[Prepared], rg: &Ranges) -> Vec<[f64; 3]> {
+    let trials = bump_trials(rg, rg.w_lo(), f64::INFINITY);
     let stats: Vec<(f64, f64)> = trials
         .par_iter()
         .map(|&(c, w)| {
             let (mut a, mut b) = (0.0, 0.0);
             for p in prep {
-                let z = p.track.variable(Variable::Z);
-                let near = z.iter().any(|zz| (zz - c).abs() < 3.0 * w);
-                if !near {
+                let Some(x) = bump_column(p, c, w) else {
                     continue;
-                }
-                let f: Vec<f64> = z
-                    .iter()
-                    .map(|zz| {
-                        let u = (zz - c) / w;
-                        (-0.5 * u * u).exp()
-                    })
-                    .collect();
-                let x = p.column(p.track.respond_values(&f));
+                };
                 a += dot(&x, &x);
                 b += dot(&x, &p.y);
             }

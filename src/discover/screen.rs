@@ -17,7 +17,7 @@ use super::candidate::{Extra, N_LOCAL};
 use super::data::RunData;
 use super::forward::Model;
 use super::joint::predict;
-use super::proposal::Ranges;
+use super::proposal::{bump_column, bump_trials, Ranges};
 use super::response::Prepared;
 use super::spectral::{f_grid, k_grid};
 use crate::lsq::dense::{chol_inverse, cholesky_jittered};
@@ -429,33 +429,11 @@ fn periodic_z(
 }
 
 fn localized(prep: &[Prepared], v: &Vectors, rg: &Ranges, w_lo: f64, w_hi: f64) -> Option<Trial> {
-    let mut trials = Vec::new();
-    let mut w = w_lo.max(0.05 * rg.span() / 8.0);
-    while w <= (0.25 * rg.span()).min(w_hi) {
-        let mut c = rg.z_lo;
-        while c <= rg.z_hi {
-            trials.push((c, w));
-            c += 0.5 * w;
-        }
-        w *= 2.0;
-    }
+    let trials = bump_trials(rg, w_lo, w_hi);
     let out: Vec<Option<Trial>> = trials
         .par_iter()
         .map(|&(c, w)| {
-            let (lr, b, var) = coherent(prep, v, 1, |p| {
-                let z = p.track.variable(crate::physics::Variable::Z);
-                if !z.iter().any(|zz| (zz - c).abs() < 3.0 * w) {
-                    return None;
-                }
-                let f: Vec<f64> = z
-                    .iter()
-                    .map(|zz| {
-                        let u = (zz - c) / w;
-                        (-0.5 * u * u).exp()
-                    })
-                    .collect();
-                Some(vec![p.column(p.track.respond_values(&f))])
-            })?;
+            let (lr, b, var) = coherent(prep, v, 1, |p| bump_column(p, c, w).map(|x| vec![x]))?;
             Some((
                 lr,
                 vec![b[0], c, w],
