@@ -54,8 +54,14 @@ impl BlockResult {
     pub fn cost(&self) -> f64 {
         self.block_cost.iter().sum()
     }
+    /// Standard error of shared parameter `i`: NaN when the fit does not determine it.
     pub fn shared_se(&self, i: usize) -> f64 {
-        self.shared_cov[i][i].max(0.0).sqrt()
+        let v = self.shared_cov[i][i];
+        if v.is_nan() {
+            f64::NAN
+        } else {
+            v.max(0.0).sqrt()
+        }
     }
 }
 
@@ -177,8 +183,9 @@ impl BlockNormal {
 
     /// Covariance of the shared parameters (inverse Schur complement, NaN when singular) and
     /// the standard errors of the own ones (diagonal of U⁻¹ + U⁻¹W Σ WᵀU⁻¹), with `free`
-    /// marking the parameters that are not held.
-    fn covariance(&self, free: &[bool]) -> (Mat, Vec<Vec<f64>>) {
+    /// marking the parameters that are not held; true when the system is singular (everything
+    /// NaN). A free parameter the residuals do not depend on gets NaN alone.
+    fn covariance(&self, free: &[bool]) -> (Mat, Vec<Vec<f64>>, bool) {
         let ms = self.ms;
         let nan = || {
             (
@@ -187,9 +194,11 @@ impl BlockNormal {
                     .iter()
                     .map(|p| vec![f64::NAN; p.u.len()])
                     .collect(),
+                true,
             )
         };
-        // a free parameter with no information is held like a fixed one (as before: identity)
+        // a free parameter with no information is left out of the solve (its row and column the
+        // identity, which decouples it) and gets no standard error below
         let mut on = free.to_vec();
         for (b, p) in self.pieces.iter().enumerate() {
             for k in 0..p.u.len() {
@@ -244,7 +253,23 @@ impl BlockNormal {
             }
             own_se.push(se);
         }
-        (cov, own_se)
+        // not determined by the residuals: NaN, never the 1 the identity would give
+        let mut cov = cov;
+        for i in (0..ms).filter(|&i| free[i] && !on[i]) {
+            for j in 0..ms {
+                cov[i][j] = f64::NAN;
+                cov[j][i] = f64::NAN;
+            }
+        }
+        for (b, se) in own_se.iter_mut().enumerate() {
+            for (k, x) in se.iter_mut().enumerate() {
+                let i = self.offsets[b] + k;
+                if free[i] && !on[i] {
+                    *x = f64::NAN;
+                }
+            }
+        }
+        (cov, own_se, false)
     }
 }
 
@@ -532,9 +557,9 @@ pub fn minimize_blocks<P: BlockProblem>(
     let sol = lm::minimize(&flat, &specs, settings);
     let ms = shared_specs.len();
     let free: Vec<bool> = specs.iter().map(|s| !s.held()).collect();
-    let (shared_cov, own_se) = sol.normal.covariance(&free);
+    let (shared_cov, own_se, singular) = sol.normal.covariance(&free);
     let mut termination = sol.termination;
-    if ms > 0 && shared_cov.iter().any(|row| row.iter().any(|x| x.is_nan())) {
+    if singular && ms > 0 {
         termination = Termination::Singular;
     }
     let block_cost = (0..problem.n_blocks())
@@ -634,6 +659,40 @@ mod tests {
         }
         let se = res.shared_se(0);
         assert!(se > 0.0 && se < 0.01, "se {se}");
+        assert!(res.termination.is_converged(), "{:?}", res.termination);
+    }
+
+    /// [`Lines`] with a second shared parameter the residuals do not depend on.
+    struct Unused(Lines);
+
+    impl BlockProblem for Unused {
+        fn n_blocks(&self) -> usize {
+            self.0.n_blocks()
+        }
+        fn n_residuals(&self, b: usize) -> usize {
+            self.0.n_residuals(b)
+        }
+        fn residuals(&self, b: usize, shared: &[f64], own: &[f64], out: &mut [f64]) {
+            self.0.residuals(b, &shared[..1], own, out)
+        }
+    }
+
+    #[test]
+    fn a_parameter_the_data_do_not_determine_has_no_standard_error() {
+        let (lines, _) = lines();
+        let res = minimize_blocks(
+            &Unused(lines),
+            &[spec(0.0, -10.0, 10.0), spec(0.5, -10.0, 10.0)],
+            &vec![vec![spec(0.0, -10.0, 10.0)]; 3],
+            &settings(),
+        );
+        assert!((res.shared[0] - 0.7).abs() < 0.01, "{:?}", res.shared);
+        assert_eq!(res.shared[1], 0.5, "never stepped");
+        let se = res.shared_se(0);
+        assert!(se > 0.0 && se < 0.01, "the slope keeps its error: {se}");
+        assert!(res.shared_cov[1][1].is_nan(), "{:?}", res.shared_cov);
+        assert!(res.own_se.iter().all(|s| s[0].is_finite() && s[0] > 0.0));
+        // the minimum itself is found: the fit converged, one parameter is just not determined
         assert!(res.termination.is_converged(), "{:?}", res.termination);
     }
 
