@@ -71,73 +71,14 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             };
             let summary = run(&catalog, &pipeline, &opts)?;
             if dry_run {
-                if summary.would_run.is_empty() {
-                    println!("groove: nothing to run; every stage is fresh");
-                } else {
-                    println!("would run:");
-                    print!("{}", status::render(&summary.would_run));
-                }
+                print_would_run(&summary);
                 return Ok(ExitCode::SUCCESS);
             }
-            let report = pipeline.reports_dir.join("report.html");
-            let shown = if report.is_file() {
-                report
-            } else {
-                pipeline.reports_dir.clone()
-            };
-            println!(
-                "groove: {} stage{} run, {} reused, {:.2} s; report: {}",
-                summary.ran.len(),
-                if summary.ran.len() == 1 { "" } else { "s" },
-                summary.reused.len(),
-                summary.elapsed_s,
-                pipeline.show(&shown)
-            );
-            if let Some(line) = &summary.slurm_line {
-                println!("groove: {line}");
-            }
-            if let Some(line) = &summary.remote_line {
-                println!("groove: {line}");
-            }
+            print_run_summary(&pipeline, &summary);
             Ok(ExitCode::SUCCESS)
         }
-        Verb::Push { project, remote } => {
-            let pipeline = load(&project, &catalog)?;
-            let Some(settings) = remote_settings(&project, &remote)? else {
-                return Err(EngineError::Usage("no remote to push to; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
-            };
-            if settings.read_only {
-                return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
-            }
-            let cache =
-                std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
-            let store = groove::engine::store::Store::at(&pipeline.root);
-            let lock = groove::engine::lockfile::PipelineLock::load(
-                &groove::engine::context::lock_path(&pipeline),
-            );
-            let keys = groove::engine::remote::sync::lock_keys(&lock);
-            let synced =
-                groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
-            println!(
-                "groove: push: {} keys in pipeline.lock, {} not in the local store",
-                synced.keys, synced.skipped
-            );
-            remote_closing(&cache, settings.required)
-        }
-        Verb::Pull { project, remote } => {
-            let pipeline = load(&project, &catalog)?;
-            let Some(settings) = remote_settings(&project, &remote)? else {
-                return Err(EngineError::Usage("no remote to pull from; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
-            };
-            let cache =
-                std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
-            let fresh = groove::engine::remote::sync::pull(&catalog, &pipeline, &cache)?;
-            println!(
-                "groove: pull: {fresh} of {} stages now have every result in the local store",
-                pipeline.stages.len()
-            );
-            remote_closing(&cache, settings.required)
-        }
+        Verb::Push { project, remote } => push(&catalog, &project, &remote),
+        Verb::Pull { project, remote } => pull(&catalog, &project, &remote),
         Verb::SlurmStep { file } => {
             let threads = std::env::var("SLURM_CPUS_PER_TASK")
                 .ok()
@@ -188,29 +129,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             println!("groove: removed {entries} store entr{} and {objects} object(s) not in pipeline.lock", if entries == 1 { "y" } else { "ies" });
             Ok(ExitCode::SUCCESS)
         }
-        Verb::Verify { project } => {
-            let pipeline = load(&project, &catalog)?;
-            let v = maintenance::verify(&pipeline)?;
-            println!(
-                "groove: checked {} object(s) and {} store entr{}",
-                v.objects,
-                v.entries,
-                if v.entries == 1 { "y" } else { "ies" }
-            );
-            for o in &v.dropped_objects {
-                println!("dropped damaged object {o}");
-            }
-            for e in &v.dropped_entries {
-                println!("dropped entry {e} (it named a damaged or missing object; its stage runs again)");
-            }
-            if v.dropped_objects.is_empty() && v.dropped_entries.is_empty() {
-                println!("groove: the store is sound");
-                Ok(ExitCode::SUCCESS)
-            } else {
-                println!("groove: run `groove run` to recompute what was dropped");
-                Ok(ExitCode::from(1))
-            }
-        }
+        Verb::Verify { project } => verify(&catalog, &project),
         Verb::Synth { truth, out } => {
             groove::synth::run_synth(&truth, &out)
                 .map_err(|e| EngineError::Usage(format!("synth: {e}")))?;
@@ -237,5 +156,110 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                 }
             }
         }
+    }
+}
+
+/// `run --dry-run`: what would run and why.
+fn print_would_run(summary: &groove::engine::run::RunSummary) {
+    if summary.would_run.is_empty() {
+        println!("groove: nothing to run; every stage is fresh");
+    } else {
+        println!("would run:");
+        print!("{}", status::render(&summary.would_run));
+    }
+}
+
+/// The closing lines of `run`: stages run and reused, time, the report, Slurm and remote lines.
+fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSummary) {
+    let report = pipeline.reports_dir.join("report.html");
+    let shown = if report.is_file() {
+        report
+    } else {
+        pipeline.reports_dir.clone()
+    };
+    println!(
+        "groove: {} stage{} run, {} reused, {:.2} s; report: {}",
+        summary.ran.len(),
+        if summary.ran.len() == 1 { "" } else { "s" },
+        summary.reused.len(),
+        summary.elapsed_s,
+        pipeline.show(&shown)
+    );
+    if let Some(line) = &summary.slurm_line {
+        println!("groove: {line}");
+    }
+    if let Some(line) = &summary.remote_line {
+        println!("groove: {line}");
+    }
+}
+
+/// `push`: every result pipeline.lock names, from the local store to the remote.
+fn push(
+    catalog: &Catalog,
+    project: &Project,
+    remote: &RemoteArgs,
+) -> Result<ExitCode, EngineError> {
+    let pipeline = load(project, catalog)?;
+    let Some(settings) = remote_settings(project, remote)? else {
+        return Err(EngineError::Usage("no remote to push to; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
+    };
+    if settings.read_only {
+        return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
+    }
+    let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+    let store = groove::engine::store::Store::at(&pipeline.root);
+    let lock = groove::engine::lockfile::PipelineLock::load(&groove::engine::context::lock_path(
+        &pipeline,
+    ));
+    let keys = groove::engine::remote::sync::lock_keys(&lock);
+    let synced = groove::engine::remote::sync::push_all(&cache, &store, &keys, settings.jobs);
+    println!(
+        "groove: push: {} keys in pipeline.lock, {} not in the local store",
+        synced.keys, synced.skipped
+    );
+    remote_closing(&cache, settings.required)
+}
+
+/// `pull`: every stage's results from the remote into the local store.
+fn pull(
+    catalog: &Catalog,
+    project: &Project,
+    remote: &RemoteArgs,
+) -> Result<ExitCode, EngineError> {
+    let pipeline = load(project, catalog)?;
+    let Some(settings) = remote_settings(project, remote)? else {
+        return Err(EngineError::Usage("no remote to pull from; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
+    };
+    let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+    let fresh = groove::engine::remote::sync::pull(catalog, &pipeline, &cache)?;
+    println!(
+        "groove: pull: {fresh} of {} stages now have every result in the local store",
+        pipeline.stages.len()
+    );
+    remote_closing(&cache, settings.required)
+}
+
+/// `verify`: every store object against its sha256; exit 1 when something was dropped.
+fn verify(catalog: &Catalog, project: &Project) -> Result<ExitCode, EngineError> {
+    let pipeline = load(project, catalog)?;
+    let v = maintenance::verify(&pipeline)?;
+    println!(
+        "groove: checked {} object(s) and {} store entr{}",
+        v.objects,
+        v.entries,
+        if v.entries == 1 { "y" } else { "ies" }
+    );
+    for o in &v.dropped_objects {
+        println!("dropped damaged object {o}");
+    }
+    for e in &v.dropped_entries {
+        println!("dropped entry {e} (it named a damaged or missing object; its stage runs again)");
+    }
+    if v.dropped_objects.is_empty() && v.dropped_entries.is_empty() {
+        println!("groove: the store is sound");
+        Ok(ExitCode::SUCCESS)
+    } else {
+        println!("groove: run `groove run` to recompute what was dropped");
+        Ok(ExitCode::from(1))
     }
 }
