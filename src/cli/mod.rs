@@ -193,16 +193,28 @@ fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSumm
     }
 }
 
+/// The pipeline and the remote settings of `push` / `pull`; no remote configured is an error
+/// saying how to name one (`what`: "push to", "pull from").
+fn with_remote(
+    catalog: &Catalog,
+    project: &Project,
+    remote: &RemoteArgs,
+    what: &str,
+) -> Result<(Pipeline, groove::engine::remote::Settings), EngineError> {
+    let pipeline = load(project, catalog)?;
+    let Some(settings) = remote_settings(project, remote)? else {
+        return Err(EngineError::Usage(format!("no remote to {what}; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml")));
+    };
+    Ok((pipeline, settings))
+}
+
 /// `push`: every result pipeline.lock names, from the local store to the remote.
 fn push(
     catalog: &Catalog,
     project: &Project,
     remote: &RemoteArgs,
 ) -> Result<ExitCode, EngineError> {
-    let pipeline = load(project, catalog)?;
-    let Some(settings) = remote_settings(project, remote)? else {
-        return Err(EngineError::Usage("no remote to push to; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
-    };
+    let (pipeline, settings) = with_remote(catalog, project, remote, "push to")?;
     if settings.read_only {
         return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
     }
@@ -226,10 +238,7 @@ fn pull(
     project: &Project,
     remote: &RemoteArgs,
 ) -> Result<ExitCode, EngineError> {
-    let pipeline = load(project, catalog)?;
-    let Some(settings) = remote_settings(project, remote)? else {
-        return Err(EngineError::Usage("no remote to pull from; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml".into()));
-    };
+    let (pipeline, settings) = with_remote(catalog, project, remote, "pull from")?;
     let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
     let fresh = groove::engine::remote::sync::pull(catalog, &pipeline, &cache)?;
     println!(
