@@ -97,49 +97,11 @@ pub fn run(
     // read pipeline.lock only now that no other run can be writing it
     let mut ctx = Context::new(catalog, pipeline, progress);
     ctx.store.sweep_tmp()?;
-    if let Some(settings) = &opts.remote {
-        let cache = std::sync::Arc::new(super::remote::open(settings, &pipeline.root)?);
-        if !settings.read_only {
-            ctx.pusher = Some(super::remote::push::Pusher::start(
-                std::sync::Arc::clone(&cache),
-                &ctx.store,
-                settings.jobs,
-            ));
-        }
-        ctx.remote = Some(cache);
-    }
-    if opts.slurm {
-        let config = super::slurm::config::load(&pipeline.config_path)?;
-        ctx.steps = Some(Box::new(super::slurm::SlurmExecutor::new(config)?));
-    }
+    attach_backends(&mut ctx, opts)?;
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
     super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
-    let jobs = opts
-        .jobs
-        .unwrap_or_else(|| {
-            let cores = std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1);
-            // with Slurm, as many stages at once as the allocation has CPUs
-            match &ctx.steps {
-                Some(s) => cores.max(s.slots()),
-                None => cores,
-            }
-        })
-        .max(1);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs)
-        .build()
-        .map_err(|e| {
-            EngineError::Usage(format!(
-                "cannot start {jobs} worker threads: {e}; try a smaller --jobs"
-            ))
-        })?;
-    // results go to the store as stages finish; the project's outputs and pipeline.lock change
-    // only once every selected stage succeeded (all outputs together, then the lock), so a failed
-    // or killed run leaves the last good report whole and the lock as it was
-    let mut lock = ctx.lock.clone();
+    let pool = worker_pool(&ctx, opts.jobs)?;
     let (done, errors) = pool.install(|| {
         evaluate(
             &ctx,
@@ -152,50 +114,12 @@ pub fn run(
     });
     let mut errors = errors;
     if errors.is_empty() {
-        match materialize_all(&ctx, &done) {
-            Ok(()) => {
-                record(&mut lock, &done, done.keys());
-                lock.stages
-                    .retain(|name, _| pipeline.stages.contains_key(name));
-                lock.save(&lock_path(pipeline))?;
-            }
-            Err(e) => errors.push(e),
+        if let Err(e) = publish(&ctx, &done) {
+            errors.push(e);
         }
     }
-    let mut summary = RunSummary::default();
-    for (name, ev) in &done {
-        if ev.complete && ev.current.is_some() {
-            if ev.executed > 0 {
-                summary.ran.push(name.clone());
-            } else {
-                summary.reused.push(name.clone());
-            }
-        }
-    }
-    ctx.hashes.save()?;
-    if let Some(p) = ctx.pusher.take() {
-        p.finish();
-    }
-    if let Some(steps) = ctx.steps.take() {
-        summary.slurm_line = Some(steps.finish());
-    }
-    ctx.progress.finish();
-    summary.elapsed_s = ctx.progress.start.elapsed().as_secs_f64();
-
-    if let Some(cache) = &ctx.remote {
-        summary.remote_line = Some(cache.closing_line());
-        summary.remote = Some(cache.tally());
-    }
-    let mut log = ctx.progress.lines();
-    log.push(format!(
-        "run: {} ran, {} reused, {} failed, {:.3} s",
-        summary.ran.len(),
-        summary.reused.len(),
-        errors.len(),
-        summary.elapsed_s
-    ));
-    append_log(&store_dir.join("run.log"), &log)?;
-
+    let mut summary = tally(&done);
+    close(&mut ctx, &mut summary, errors.len(), &store_dir)?;
     if let (Some(cache), Some(settings)) = (&ctx.remote, &opts.remote) {
         if settings.required {
             if let Some(first) = cache.first_error() {
@@ -214,6 +138,111 @@ pub fn run(
         return Err(first);
     }
     Ok(summary)
+}
+
+/// The remote cache (and its pusher) and the Slurm executor the options ask for.
+fn attach_backends(ctx: &mut Context, opts: &RunOptions) -> Result<(), EngineError> {
+    if let Some(settings) = &opts.remote {
+        let cache = std::sync::Arc::new(super::remote::open(settings, &ctx.pipeline.root)?);
+        if !settings.read_only {
+            ctx.pusher = Some(super::remote::push::Pusher::start(
+                std::sync::Arc::clone(&cache),
+                &ctx.store,
+                settings.jobs,
+            ));
+        }
+        ctx.remote = Some(cache);
+    }
+    if opts.slurm {
+        let config = super::slurm::config::load(&ctx.pipeline.config_path)?;
+        ctx.steps = Some(Box::new(super::slurm::SlurmExecutor::new(config)?));
+    }
+    Ok(())
+}
+
+/// The worker threads: `jobs`, else one per core (with Slurm, as many as the allocation has CPUs).
+fn worker_pool(ctx: &Context, jobs: Option<usize>) -> Result<rayon::ThreadPool, EngineError> {
+    let jobs = jobs
+        .unwrap_or_else(|| {
+            let cores = std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1);
+            match &ctx.steps {
+                Some(s) => cores.max(s.slots()),
+                None => cores,
+            }
+        })
+        .max(1);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs)
+        .build()
+        .map_err(|e| {
+            EngineError::Usage(format!(
+                "cannot start {jobs} worker threads: {e}; try a smaller --jobs"
+            ))
+        })
+}
+
+/// Results went to the store as stages finished; the project's outputs and pipeline.lock change
+/// only now that every selected stage succeeded (all outputs together, then the lock), so a
+/// failed or killed run leaves the last good report whole and the lock as it was.
+fn publish(
+    ctx: &Context,
+    done: &std::collections::BTreeMap<String, super::context::Evaluated>,
+) -> Result<(), EngineError> {
+    materialize_all(ctx, done)?;
+    let mut lock = ctx.lock.clone();
+    record(&mut lock, done, done.keys());
+    lock.stages
+        .retain(|name, _| ctx.pipeline.stages.contains_key(name));
+    lock.save(&lock_path(ctx.pipeline))
+}
+
+/// Which completed stages ran and which were reused.
+fn tally(done: &std::collections::BTreeMap<String, super::context::Evaluated>) -> RunSummary {
+    let mut summary = RunSummary::default();
+    for (name, ev) in done {
+        if ev.complete && ev.current.is_some() {
+            if ev.executed > 0 {
+                summary.ran.push(name.clone());
+            } else {
+                summary.reused.push(name.clone());
+            }
+        }
+    }
+    summary
+}
+
+/// Save the file-hash cache, finish the pusher, the Slurm allocation and the progress line, and
+/// append this run's lines to `.groove/run.log`.
+fn close(
+    ctx: &mut Context,
+    summary: &mut RunSummary,
+    failed: usize,
+    store_dir: &std::path::Path,
+) -> Result<(), EngineError> {
+    ctx.hashes.save()?;
+    if let Some(p) = ctx.pusher.take() {
+        p.finish();
+    }
+    if let Some(steps) = ctx.steps.take() {
+        summary.slurm_line = Some(steps.finish());
+    }
+    ctx.progress.finish();
+    summary.elapsed_s = ctx.progress.start.elapsed().as_secs_f64();
+    if let Some(cache) = &ctx.remote {
+        summary.remote_line = Some(cache.closing_line());
+        summary.remote = Some(cache.tally());
+    }
+    let mut log = ctx.progress.lines();
+    log.push(format!(
+        "run: {} ran, {} reused, {} failed, {:.3} s",
+        summary.ran.len(),
+        summary.reused.len(),
+        failed,
+        summary.elapsed_s
+    ));
+    append_log(&store_dir.join("run.log"), &log)
 }
 
 /// Write every output of the completed stages to its path: all are staged beside their paths
