@@ -3,7 +3,7 @@
 
 pub use super::estimate::{Estimate, Interval};
 pub use crate::fit::collision::profile::{MuPpProfile, ProfilePoint, ProfileVerdict};
-pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice, LawParameter};
+pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice};
 pub use crate::fit::collision::summary::{
     CollisionSummary, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
 };

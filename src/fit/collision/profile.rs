@@ -125,11 +125,7 @@ pub fn residual_checks(runs: &[PairRun], fit: &GroupFit) -> ResidualChecks {
         }
     }
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
-    let scale = if inside > 0 {
-        var / inside as f64
-    } else {
-        1.0
-    };
+    let scale = if inside > 0 { var / inside as f64 } else { 1.0 };
     ResidualChecks {
         lag1: ratio(lag, var),
         score_lag1: ratio(glag, gvar),

@@ -4,7 +4,7 @@
 
 use super::{Block, Table};
 use crate::artifacts::collision_fit::Estimate;
-use crate::artifacts::summary::{LawParameter, MuPpProfile, ProfileVerdict, WholeRun};
+use crate::artifacts::summary::{MuPpProfile, ProfileVerdict, WholeRun};
 use crate::report::inputs::ReportData;
 use crate::report::value::serde_name;
 use std::collections::BTreeMap;
@@ -27,8 +27,8 @@ pub fn mu_pp_words(material: &str, verdict: &ProfileVerdict) -> String {
     }
 }
 
-fn fmt_param(p: &LawParameter) -> String {
-    format!("{} = {:.4} [{:.4}, {:.4}]", p.name, p.value, p.lo, p.hi)
+fn fmt_param((name, p): (&str, &Estimate)) -> String {
+    format!("{name} = {:.4} [{:.4}, {:.4}]", p.value, p.lo(), p.hi())
 }
 
 fn fmt_est(e: &Estimate) -> String {
@@ -114,7 +114,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         for c in &m.restitution {
             for cand in &c.candidates {
                 let form = serde_name(&cand.form);
-                let params: Vec<String> = cand.parameters.iter().map(fmt_param).collect();
+                let params: Vec<String> = cand.ordered().into_iter().map(fmt_param).collect();
                 laws.push(vec![
                     m.material.clone(),
                     serde_name(&c.setup),
