@@ -71,23 +71,33 @@ fn mu_pp_from_slipping_impacts_within_ten_percent() {
 #[test]
 fn mu_pp_across_the_slip_range_within_ten_percent() {
     for mu_true in [0.2, 0.45] {
-        let text = fixture("collision_slip.toml").replace("mu_pp = 0.3", &format!("mu_pp = {mu_true}"));
+        let text =
+            fixture("collision_slip.toml").replace("mu_pp = 0.3", &format!("mu_pp = {mu_true}"));
         assert!(text.contains(&format!("mu_pp = {mu_true}")));
         let runs = pair_runs(&dataset(&text), "440c");
         let best = fit_group(&runs, &FitSpec::new(Groove::CHAPTER), None, 80);
         assert!(best.converged(), "{mu_true}: {:?}", best.result.termination);
         let mu = best.result.shared[MU_PP];
-        assert!((mu - mu_true).abs() < 0.1 * mu_true, "μ_pp {mu} vs {mu_true}");
+        assert!(
+            (mu - mu_true).abs() < 0.1 * mu_true,
+            "μ_pp {mu} vs {mu_true}"
+        );
         // the first impact of every rolling run slips in the fitted model
         for (run, own) in runs.iter().zip(&best.result.own) {
             if run.setup != Setup::Rolling {
                 continue;
             }
             let model = best.spec.model(&best.result.shared);
-            let pair = best.spec.pair(&best.result.shared, run.setup, run.diameter_m);
+            let pair = best
+                .spec
+                .pair(&best.result.shared, run.setup, run.diameter_m);
             let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[3]).max(0.0)).collect();
             let tr = groove::physics::simulate_pair(&model, &pair, run.init(own), &rel);
-            assert!(tr.impacts.first().is_some_and(|im| im.slip), "{mu_true} {}: first impact sticks", run.run);
+            assert!(
+                tr.impacts.first().is_some_and(|im| im.slip),
+                "{mu_true} {}: first impact sticks",
+                run.run
+            );
         }
     }
 }

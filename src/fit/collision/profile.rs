@@ -15,6 +15,12 @@ const HUBER_K: f64 = 3.0;
 /// Largest lag-1 autocorrelation used for the variance inflation (factor 39).
 const RHO_MAX: f64 = 0.95;
 
+/// The walk along the grid stops in a direction once a fit beyond the estimate lies this far
+/// (raw deviance above the best fit) above the minimum: even divided by the largest serial
+/// inflation (39) it is far above the 95 % level, and the fits further out, the slowest of
+/// the profile, would only draw the curve.
+pub const STOP_DEVIANCE: f64 = 1e4;
+
 /// One grid value.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ProfilePoint {
@@ -43,6 +49,9 @@ pub enum ProfileVerdict {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MuPpProfile {
     pub points: Vec<ProfilePoint>,
+    /// Grid values not fitted: beyond a fit whose deviance passed `STOP_DEVIANCE` (raw), on the
+    /// same side of the estimate.
+    pub not_fitted: Vec<f64>,
     pub verdict: ProfileVerdict,
     /// The deviance rise used for the interval.
     pub threshold: f64,
@@ -156,7 +165,9 @@ pub fn default_grid() -> Vec<f64> {
 }
 
 /// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
-/// from the grid value nearest the best estimate, each starting from its neighbour's solution.
+/// from the grid value nearest the best estimate, each starting from its neighbour's solution,
+/// and stop in a direction after a fit beyond the estimate whose deviance passes
+/// `STOP_DEVIANCE`.
 pub fn profile_mu_pp(
     runs: &[PairRun],
     best: &GroupFit,
@@ -180,19 +191,38 @@ pub fn profile_mu_pp(
         };
         fit_group(runs, &spec, Some(from), max_iter)
     };
-    fits[centre] = Some(solve(grid[centre], best));
+    if n > 0 {
+        fits[centre] = Some(solve(grid[centre], best));
+    }
+    // past the stop level on the far side of the estimate: the walk goes no further
+    let stop = |mu: f64, f: &GroupFit, down: bool| {
+        (if down { mu < mu_best } else { mu > mu_best }) && f.cost() - best.cost() > STOP_DEVIANCE
+    };
     for i in (0..centre).rev() {
-        let from = fits[i + 1].clone().unwrap();
-        fits[i] = Some(solve(grid[i], &from));
+        let from = fits[i + 1].as_ref().unwrap();
+        if stop(grid[i + 1], from, true) {
+            break;
+        }
+        fits[i] = Some(solve(grid[i], from));
     }
     for i in centre + 1..n {
-        let from = fits[i - 1].clone().unwrap();
-        fits[i] = Some(solve(grid[i], &from));
+        let from = fits[i - 1].as_ref().unwrap();
+        if stop(grid[i - 1], from, false) {
+            break;
+        }
+        fits[i] = Some(solve(grid[i], from));
     }
+    let not_fitted: Vec<f64> = grid
+        .iter()
+        .zip(&fits)
+        .filter(|(_, f)| f.is_none())
+        .map(|(mu, _)| *mu)
+        .collect();
     let mut fits: Vec<(f64, GroupFit)> = grid
         .iter()
         .copied()
-        .zip(fits.into_iter().flatten())
+        .zip(fits)
+        .filter_map(|(mu, f)| f.map(|f| (mu, f)))
         .collect();
     // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
     // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
@@ -257,6 +287,7 @@ pub fn profile_mu_pp(
     MuPpProfile {
         verdict: verdict(&points, estimate, DELTA_95),
         points,
+        not_fitted,
         threshold: DELTA_95,
         dispersion,
         lag1_autocorrelation: checks.lag1,

@@ -358,6 +358,7 @@ mod tests {
                     converged,
                 })
                 .collect(),
+            not_fitted: Vec::new(),
             verdict: ProfileVerdict::Interval {
                 estimate: 1.4,
                 lo: 1.39,
@@ -381,8 +382,9 @@ mod tests {
         let far = profile(&[(0.34, 3e6, false), (0.5, 1e5, true), (1.4, 0.0, true)]);
         let words = unconverged_profile_note(&far, 25).unwrap();
         assert!(
-            words.starts_with("1 of 3 profile fits stopped at their iteration limit (25): μ_pp = 0.340")
-                && words.contains("does not move the interval"),
+            words.starts_with(
+                "1 of 3 profile fits stopped at their iteration limit (25): μ_pp = 0.340"
+            ) && words.contains("does not move the interval"),
             "{words}"
         );
         // nearer than any converged crossing: it may

@@ -4,7 +4,7 @@
 
 use super::{Block, Table};
 use crate::artifacts::collision_fit::Estimate;
-use crate::artifacts::summary::{MuPpProfile, ProfileVerdict, WholeRun};
+use crate::artifacts::summary::{MuPpProfile, ProfileVerdict, WholeRun, STOP_DEVIANCE};
 use crate::report::inputs::ReportData;
 use crate::report::value::serde_name;
 use std::collections::BTreeMap;
@@ -56,6 +56,18 @@ fn inflation_words(p: &MuPpProfile) -> String {
     }
 }
 
+/// The grid values the profile did not fit, and why (None when it fitted them all).
+fn not_fitted_words(p: &MuPpProfile) -> Option<String> {
+    if p.not_fitted.is_empty() {
+        return None;
+    }
+    let at: Vec<String> = p.not_fitted.iter().map(|mu| format!("{mu:.3}")).collect();
+    Some(format!(
+        "the profile was not fitted at μ_pp = {}: its walk along the grid stops in each direction after a fit beyond the estimate whose deviance rises more than {STOP_DEVIANCE:.0} above the best fit, where μ_pp is already excluded by far",
+        at.join(", ")
+    ))
+}
+
 /// The block, or None when the summary has no whole-run fits.
 pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let mats = &d.whole_run()?.materials;
@@ -100,6 +112,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             format!("{:.2}", m.profile.dispersion),
         ]);
         b.para(mu_pp_words(name, &m.profile.verdict));
+        if let Some(w) = not_fitted_words(&m.profile) {
+            b.para(format!("{name}: {w}."));
+        }
         b.para(format!("{name}: {}.", inflation_words(&m.profile)));
         for n in &m.notes {
             b.para(format!("{name}: {n}."));
