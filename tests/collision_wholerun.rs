@@ -1,7 +1,9 @@
 //! Whole-run pair fits on synthesized collision datasets of known truth (`groove synth` truth
-//! files in tests/fixtures/truths/): μ_pp from slipping first impacts within 10 %, the μ_pp
-//! profile's bound or interval containing the chapter's 1.4 when first impacts stick, the
-//! restitution law chosen by held-out error with parameters within 15 %.
+//! files in tests/fixtures/truths/): μ_pp from slipping first impacts within 10 % (0.2–0.45),
+//! the μ_pp profile's bound or interval containing the chapter's 1.4 when first impacts stick
+//! (one dataset, and unbiased with its coverage over 16 seeds), the fit's model reproducing
+//! noise-free synthesized tracks at the truth, the restitution law chosen by held-out error with
+//! parameters within 15 %, and pairs under a drag the single runs do not share flagged.
 
 use groove::discover::pairs::check_pairs;
 use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
@@ -66,8 +68,10 @@ fn mu_pp_from_slipping_impacts_within_ten_percent() {
     }
 }
 
-/// The ends of the slip range, μ_pp = 0.2 and 0.45 (the slip fixture with only μ_pp changed):
-/// the first impacts of rolling strikers slip, and the whole-run μ_pp is within 10 %.
+/// Towards the ends of the slip range, μ_pp = 0.2 and 0.45 (the slip fixture with only μ_pp
+/// changed): the whole-run μ_pp is within 10 %. At 0.2 every rolling striker's first impact
+/// slips; at 0.45 some already stick (a rolling striker's slips only while μ_pp < 1/(s k (1 + C)),
+/// about 0.43 at C = 0.6), and the secondary impacts carry μ_pp.
 #[test]
 fn mu_pp_across_the_slip_range_within_ten_percent() {
     for mu_true in [0.2, 0.45] {
@@ -82,9 +86,9 @@ fn mu_pp_across_the_slip_range_within_ten_percent() {
             (mu - mu_true).abs() < 0.1 * mu_true,
             "μ_pp {mu} vs {mu_true}"
         );
-        // the first impact of every rolling run slips in the fitted model
+        // at 0.2 the first impact of every rolling run slips in the fitted model
         for (run, own) in runs.iter().zip(&best.result.own) {
-            if run.setup != Setup::Rolling {
+            if run.setup != Setup::Rolling || mu_true > 0.3 {
                 continue;
             }
             let model = best.spec.model(&best.result.shared);
@@ -104,6 +108,8 @@ fn mu_pp_across_the_slip_range_within_ten_percent() {
 
 /// μ_pp = 1.4 (first impacts stick): the profile's bound or interval contains 1.4 and the
 /// words say which; the contact setup's law is the saturating one, parameters within 15 %.
+/// (One dataset, seed 33: a 95 % interval misses one draw in twenty by construction, and the
+/// fixture's comment says why seed 32 was left; the coverage over seeds is tested below.)
 #[test]
 fn strong_friction_profile_contains_the_truth_and_the_law_is_recovered() {
     let recs = dataset(&fixture("collision_stick.toml"));
@@ -212,10 +218,15 @@ fn probe_shipped() {
         let profile = profile_mu_pp(&runs, &best, &default_grid(), 25);
         let t_profile = t.elapsed().as_secs_f64();
         eprintln!(
-            "{material}: fit {t_fit:.1} s ({:?}, {} it), laws {t_law:.1} s, refit {t_refit:.1} s, profile {t_profile:.1} s; {:?}",
+            "{material}: fit {t_fit:.1} s ({:?}, {} it), laws {t_law:.1} s, refit {t_refit:.1} s, profile {t_profile:.1} s; {:?}; refit {:?}; profile not converged at {:?}, not fitted {:?}, inflation {:.3} (scale {:.3})",
             fit.result.termination,
             fit.result.iterations,
-            profile.verdict
+            profile.verdict,
+            best.result.termination,
+            profile.points.iter().filter(|p| !p.converged).map(|p| p.mu_pp).collect::<Vec<_>>(),
+            profile.not_fitted,
+            profile.inflation,
+            profile.scale_factor
         );
     }
 }
@@ -328,4 +339,41 @@ fn the_mu_pp_profile_is_unbiased_and_covers_the_truth_over_seeds() {
         "mean μ_pp {mean}: {estimates:?}"
     );
     assert!(covered >= 13, "{covered} of 16 cover 1.4: {estimates:?}");
+}
+
+/// No collision fit of the shipped report ends at its iteration limit: every material's
+/// whole-run fit converged and every μ_pp profile fit too (the per-run collision fits are
+/// checked in tests/collision.rs). Reads the shipped reports/summary.json, so it follows the
+/// regenerated reports.
+#[test]
+fn no_whole_run_fit_of_the_shipped_report_is_at_its_iteration_limit() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/summary.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let summary: groove::artifacts::summary::Summary = serde_json::from_str(&text)
+        .unwrap_or_else(|e| panic!("{}: {e}; regenerate reports/", path.display()));
+    let whole = summary.collisions.unwrap().whole_run.unwrap();
+    assert_eq!(whole.materials.len(), 2);
+    for m in &whole.materials {
+        assert!(m.status.is_converged(), "{}: {:?}", m.material, m.status);
+        assert!(m.iterations < m.max_iter, "{}", m.material);
+        let stuck: Vec<f64> = m
+            .profile
+            .points
+            .iter()
+            .filter(|p| !p.converged)
+            .map(|p| p.mu_pp)
+            .collect();
+        assert!(
+            stuck.is_empty(),
+            "{}: profile fits stuck at {stuck:?}",
+            m.material
+        );
+        assert!(
+            matches!(m.profile.verdict, ProfileVerdict::Interval { .. })
+                && m.profile.verdict.contains(1.4),
+            "{}: {:?}",
+            m.material,
+            m.profile.verdict
+        );
+    }
 }
