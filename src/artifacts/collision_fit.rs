@@ -6,19 +6,11 @@ use crate::recording::Setup;
 use serde::{Deserialize, Serialize};
 
 pub use super::estimate::Estimate;
+pub use crate::lsq::Termination;
 
-/// How the fit of a run ended; anything but `converged` is shown, not hidden.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CollisionStatus {
-    Converged,
-    MaxIterations,
-    Singular,
-    /// The target never left rest (rolling setup): no impact to measure.
-    NoImpact,
-    /// A track is missing or too short to fit.
-    TooFewPoints,
-}
+/// The `status` word of a rolling-setup run whose target never left rest: no impact to measure
+/// (the approach was fitted; `termination` says how that fit ended).
+pub const NO_IMPACT: &str = "no_impact";
 
 /// Phase of one particle's motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -125,7 +117,11 @@ pub struct CollisionFit {
     pub setup: Option<Setup>,
     /// +1 when the striker moves toward +z, −1 toward −z.
     pub direction: i32,
-    pub status: CollisionStatus,
+    /// How the joint fit ended (a missing or short track is `too_few_points`).
+    pub termination: Termination,
+    /// One word: `converged`, `max_iterations` or `failed` (from `termination`), or
+    /// `no_impact` (see [`NO_IMPACT`]); anything but `converged` is shown, not hidden.
+    pub status: String,
     pub message: String,
     /// Particle–groove friction, shared by both particles and all segments.
     pub mu_pg: Estimate,
@@ -146,4 +142,13 @@ pub struct CollisionFit {
     /// The fit stops here (s) when the pair touches again without a resolvable impact; later
     /// samples are left out (see `message`). None: the whole tracks were fitted.
     pub fit_end_s: Option<f64>,
+}
+
+impl CollisionFit {
+    /// Whether its impacts can be used: it has impacts and its fit converged or stopped at the
+    /// iteration limit with a result.
+    pub fn usable(&self) -> bool {
+        self.status != NO_IMPACT
+            && (self.termination.is_converged() || self.termination == Termination::MaxIterations)
+    }
 }

@@ -2,8 +2,10 @@
 //! bootstrap intervals (each an `Estimate` written as `{value, interval}`), the T-vs-v0 line, and the collision aggregates when there are collision runs.
 
 pub use super::estimate::{Estimate, Interval};
-pub use crate::fit::collision::profile::{MuPpProfile, ProfilePoint, ProfileVerdict};
-pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice, LawParameter};
+pub use crate::fit::collision::profile::{
+    MuPpProfile, ProfilePoint, ProfileVerdict, STOP_DEVIANCE,
+};
+pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice};
 pub use crate::fit::collision::summary::{
     CollisionSummary, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
 };

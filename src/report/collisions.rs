@@ -132,10 +132,7 @@ pub fn from_fit(fit: &CollisionFit, setup: Option<Setup>) -> CollisionRun {
             .partial_cmp(&(b.particle, b.t_start_s))
             .unwrap()
     });
-    let status = serde_json::to_value(fit.status)
-        .ok()
-        .and_then(|v| v.as_str().map(str::to_string))
-        .unwrap_or_default();
+    let status = fit.status.clone();
     CollisionRun {
         run: fit.run.clone(),
         material: fit.material.clone(),
@@ -150,7 +147,7 @@ pub fn from_fit(fit: &CollisionFit, setup: Option<Setup>) -> CollisionRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::artifacts::collision_fit::{CollisionStatus, Kin, PreImpactSource};
+    use crate::artifacts::collision_fit::{Kin, PreImpactSource, Termination};
 
     fn est(value: f64) -> Estimate {
         Estimate::new(value, 0.001)
@@ -185,7 +182,8 @@ mod tests {
             material: "316".into(),
             setup: None,
             direction: 1,
-            status: CollisionStatus::MaxIterations,
+            termination: Termination::MaxIterations,
+            status: Termination::MaxIterations.status_word().into(),
             message: String::new(),
             mu_pg: est(0.3),
             t_drag_s: est(0.05),

@@ -15,9 +15,10 @@ use super::model::{Layout, TrackData};
 use super::options::CollisionOptions;
 use super::plan::Plan;
 use super::report::{failed_fit, summarize_fit};
-use super::types::{CollisionFit, CollisionStatus};
+use super::types::{CollisionFit, NO_IMPACT};
 use crate::lsq::dense_fit::{minimize, DenseFit as LmResult};
 use crate::lsq::lm::{Scale, Settings};
+use crate::lsq::Termination;
 use crate::recording::{Recording, Setup};
 
 const MIN_POINTS: usize = 20;
@@ -28,14 +29,14 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
     let (Some(st), Some(tg)) = (rec.track(0), rec.track(1)) else {
         return failed_fit(
             info,
-            CollisionStatus::TooFewPoints,
+            Termination::TooFewPoints,
             "a collision run needs tracks of particle 0 (striker) and 1 (target); check the particle column",
         );
     };
     if st.t_s.len() < MIN_POINTS || tg.t_s.len() < MIN_POINTS {
         return failed_fit(
             info,
-            CollisionStatus::TooFewPoints,
+            Termination::TooFewPoints,
             &format!("striker or target has fewer than {MIN_POINTS} samples; record longer runs"),
         );
     }
@@ -77,7 +78,7 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
                 let plan = fitter.approach_plan();
                 let (layout, res) = fitter.solve(&plan, &fitter.tracks);
                 let mut fit = summarize_fit(info, direction, &layout, &res);
-                fit.status = CollisionStatus::NoImpact;
+                fit.status = NO_IMPACT.into();
                 fit.message = "the target never left rest: no impact in this run".into();
                 return fit;
             }
@@ -105,7 +106,7 @@ pub fn fit_collision(rec: &Recording, opts: &CollisionOptions) -> CollisionFit {
     }
     let mut fit = summarize_fit(info, direction, &layout, &res);
     fit.setup = Some(setup);
-    if fit.status == CollisionStatus::MaxIterations {
+    if fit.termination == Termination::MaxIterations {
         fit.message = format!(
             "stopped at its iteration limit ({} iterations) with χ² still falling slowly: the \
              solver creeps along the kinks the sliding–rolling switches put into the closed-form \

@@ -15,6 +15,12 @@ const HUBER_K: f64 = 3.0;
 /// Largest lag-1 autocorrelation used for the variance inflation (factor 39).
 const RHO_MAX: f64 = 0.95;
 
+/// The walk along the grid stops in a direction once a fit beyond the estimate lies this far
+/// (raw deviance above the best fit) above the minimum: even divided by the largest serial
+/// inflation (39) it is far above the 95 % level, and the fits further out, the slowest of
+/// the profile, would only draw the curve.
+pub const STOP_DEVIANCE: f64 = 1e4;
+
 /// One grid value.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ProfilePoint {
@@ -43,6 +49,9 @@ pub enum ProfileVerdict {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MuPpProfile {
     pub points: Vec<ProfilePoint>,
+    /// Grid values not fitted: beyond a fit whose deviance passed `STOP_DEVIANCE` (raw), on the
+    /// same side of the estimate.
+    pub not_fitted: Vec<f64>,
     pub verdict: ProfileVerdict,
     /// The deviance rise used for the interval.
     pub threshold: f64,
@@ -59,19 +68,38 @@ pub struct MuPpProfile {
     /// `score_lag1_autocorrelation` (1 when ρ ≤ 0): the deviance of correlated residuals
     /// counts each sample as more than the independent information it carries.
     pub serial_factor: f64,
-    /// What the deviances were divided by: the larger of `dispersion` and `serial_factor` (both
-    /// estimate how much the fit's noise model understates the variance of the μ_pp score).
+    /// Scale of the Huber deviance, mean ψ² / mean ψ′ of the best fit's whitened residuals
+    /// (ψ clipped at the Huber threshold, ψ′ = 1 inside it): 1 when each run's noise estimate
+    /// is right; the average rise of the deviance at the true μ_pp otherwise.
+    pub scale_factor: f64,
+    /// What the deviances were divided by: the larger of `dispersion` and `scale_factor` ×
+    /// `serial_factor` (both estimate how much the fit's noise model understates the variance of
+    /// the μ_pp score).
     pub inflation: f64,
+}
+
+/// What the best fit's residuals say about the deviance's noise model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResidualChecks {
+    /// Lag-1 autocorrelation of the whitened residuals.
+    pub lag1: f64,
+    /// Lag-1 autocorrelation of their contributions to the μ_pp score.
+    pub score_lag1: f64,
+    /// mean ψ² / mean ψ′ (the Huber deviance's scale).
+    pub scale: f64,
 }
 
 /// Pooled lag-1 autocorrelations at the best fit `fit`, over consecutive samples of every track
 /// of every run: of the whitened residuals ψ_k (clipped at the Huber threshold, as in the fit;
 /// not centred: a track's offset is correlation too), and of the residuals' contributions to
 /// the μ_pp score, g_k = ψ_k ∂r_k/∂ln μ_pp (the samples μ_pp depends on: sliding and impacts).
-/// Each is Σ x_k x_{k+1} / Σ x_k².
-pub fn serial_correlation(runs: &[PairRun], fit: &GroupFit) -> (f64, f64) {
+/// Each is Σ x_k x_{k+1} / Σ x_k². And the deviance's scale mean ψ² / mean ψ′: a Huber
+/// deviance rises at the true parameter by this much on average (the robust analogue of
+/// the residual variance; 1 when the whitening noise is right).
+pub fn residual_checks(runs: &[PairRun], fit: &GroupFit) -> ResidualChecks {
     const H: f64 = 1e-3;
     let (mut lag, mut var, mut glag, mut gvar) = (0.0, 0.0, 0.0, 0.0);
+    let mut inside = 0usize;
     let shifted = |k: f64| {
         let mut p = fit.result.shared.clone();
         p[MU_PP] *= (k * H).exp();
@@ -85,6 +113,7 @@ pub fn serial_correlation(runs: &[PairRun], fit: &GroupFit) -> (f64, f64) {
         residuals(run, &fit.spec, &up, own, &mut rp);
         residuals(run, &fit.spec, &down, own, &mut rm);
         let psi: Vec<f64> = r.iter().map(|x| x.clamp(-HUBER_K, HUBER_K)).collect();
+        inside += r.iter().filter(|x| x.abs() <= HUBER_K).count();
         let g: Vec<f64> = (0..n)
             .map(|k| {
                 let d = (rp[k] - rm[k]) / (2.0 * H);
@@ -105,7 +134,16 @@ pub fn serial_correlation(runs: &[PairRun], fit: &GroupFit) -> (f64, f64) {
         }
     }
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 0.0 };
-    (ratio(lag, var), ratio(glag, gvar))
+    let scale = if inside > 0 { var / inside as f64 } else { 1.0 };
+    ResidualChecks {
+        lag1: ratio(lag, var),
+        score_lag1: ratio(glag, gvar),
+        scale: if scale.is_finite() && scale > 0.0 {
+            scale
+        } else {
+            1.0
+        },
+    }
 }
 
 /// Variance inflation (1 + ρ)/(1 − ρ) of the mean of AR(1) residuals with lag-1
@@ -127,7 +165,9 @@ pub fn default_grid() -> Vec<f64> {
 }
 
 /// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
-/// from the grid value nearest the best estimate, each starting from its neighbour's solution.
+/// from the grid value nearest the best estimate, each starting from its neighbour's solution,
+/// and stop in a direction after a fit beyond the estimate whose deviance passes
+/// `STOP_DEVIANCE`.
 pub fn profile_mu_pp(
     runs: &[PairRun],
     best: &GroupFit,
@@ -151,19 +191,38 @@ pub fn profile_mu_pp(
         };
         fit_group(runs, &spec, Some(from), max_iter)
     };
-    fits[centre] = Some(solve(grid[centre], best));
+    if n > 0 {
+        fits[centre] = Some(solve(grid[centre], best));
+    }
+    // past the stop level on the far side of the estimate: the walk goes no further
+    let stop = |mu: f64, f: &GroupFit, down: bool| {
+        (if down { mu < mu_best } else { mu > mu_best }) && f.cost() - best.cost() > STOP_DEVIANCE
+    };
     for i in (0..centre).rev() {
-        let from = fits[i + 1].clone().unwrap();
-        fits[i] = Some(solve(grid[i], &from));
+        let from = fits[i + 1].as_ref().unwrap();
+        if stop(grid[i + 1], from, true) {
+            break;
+        }
+        fits[i] = Some(solve(grid[i], from));
     }
     for i in centre + 1..n {
-        let from = fits[i - 1].clone().unwrap();
-        fits[i] = Some(solve(grid[i], &from));
+        let from = fits[i - 1].as_ref().unwrap();
+        if stop(grid[i - 1], from, false) {
+            break;
+        }
+        fits[i] = Some(solve(grid[i], from));
     }
+    let not_fitted: Vec<f64> = grid
+        .iter()
+        .zip(&fits)
+        .filter(|(_, f)| f.is_none())
+        .map(|(mu, _)| *mu)
+        .collect();
     let mut fits: Vec<(f64, GroupFit)> = grid
         .iter()
         .copied()
-        .zip(fits.into_iter().flatten())
+        .zip(fits)
+        .filter_map(|(mu, f)| f.map(|f| (mu, f)))
         .collect();
     // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
     // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
@@ -203,9 +262,9 @@ pub fn profile_mu_pp(
             dispersion = (spread / (2.0 * curv)).max(1.0);
         }
     }
-    let (lag1_autocorrelation, score_lag1_autocorrelation) = serial_correlation(runs, best);
-    let serial_factor = ar1_inflation(score_lag1_autocorrelation);
-    let inflation = dispersion.max(serial_factor);
+    let checks = residual_checks(runs, best);
+    let serial_factor = ar1_inflation(checks.score_lag1);
+    let inflation = dispersion.max(checks.scale * serial_factor);
     fits.sort_by(|a, b| a.0.total_cmp(&b.0));
     let c_min = fits.iter().map(|f| f.1.cost()).fold(best.cost(), f64::min);
     let points: Vec<ProfilePoint> = fits
@@ -228,11 +287,13 @@ pub fn profile_mu_pp(
     MuPpProfile {
         verdict: verdict(&points, estimate, DELTA_95),
         points,
+        not_fitted,
         threshold: DELTA_95,
         dispersion,
-        lag1_autocorrelation,
-        score_lag1_autocorrelation,
+        lag1_autocorrelation: checks.lag1,
+        score_lag1_autocorrelation: checks.score_lag1,
         serial_factor,
+        scale_factor: checks.scale,
         inflation,
     }
 }

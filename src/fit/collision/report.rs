@@ -4,15 +4,15 @@
 
 use super::model::{Layout, MU, T_DRAG};
 use super::types::{
-    CollisionFit, CollisionStatus, Contact, Estimate, ImpactFit, Kin, PhaseKind, PhaseSpan,
-    PreImpactSource, SegmentFit,
+    CollisionFit, Contact, Estimate, ImpactFit, Kin, PhaseKind, PhaseSpan, PreImpactSource,
+    SegmentFit,
 };
 use crate::lsq::dense_fit::DenseFit as LmResult;
 use crate::lsq::Termination;
 use crate::recording::RunInfo;
 
 /// A record for a run that could not be fitted.
-pub fn failed_fit(info: &RunInfo, status: CollisionStatus, message: &str) -> CollisionFit {
+pub fn failed_fit(info: &RunInfo, termination: Termination, message: &str) -> CollisionFit {
     let nan = Estimate {
         value: f64::NAN,
         se: None,
@@ -23,7 +23,8 @@ pub fn failed_fit(info: &RunInfo, status: CollisionStatus, message: &str) -> Col
         material: info.material.clone(),
         setup: info.setup,
         direction: 1,
-        status,
+        termination,
+        status: termination.status_word().to_string(),
         message: message.to_string(),
         mu_pg: nan,
         t_drag_s: nan,
@@ -131,17 +132,13 @@ pub fn summarize_fit(
         .collect();
     let data = &res.residuals[..layout.n_data()];
     let rms = (data.iter().map(|r| r * r).sum::<f64>() / data.len().max(1) as f64).sqrt();
-    let status = match res.termination {
-        t if t.is_converged() => CollisionStatus::Converged,
-        Termination::Singular => CollisionStatus::Singular,
-        _ => CollisionStatus::MaxIterations,
-    };
     CollisionFit {
         run: info.run.clone(),
         material: info.material.clone(),
         setup: info.setup,
         direction: direction as i32,
-        status,
+        termination: res.termination,
+        status: res.termination.status_word().to_string(),
         message: String::new(),
         mu_pg: Estimate::new(p[MU], res.se(MU)),
         t_drag_s: Estimate::new(p[T_DRAG].exp(), p[T_DRAG].exp() * res.se(T_DRAG)),

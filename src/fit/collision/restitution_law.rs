@@ -7,23 +7,19 @@
 use super::wholerun::{
     fit_group_with, fit_own_only, law_slots, law_start, FitSpec, GroupFit, LawForm, PairRun,
 };
+use crate::artifacts::estimate::{Estimate, Interval};
 use crate::recording::Setup;
 use serde::{Deserialize, Serialize};
-
-/// A parameter of a law with its 95 % interval.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LawParameter {
-    pub name: String,
-    pub value: f64,
-    pub lo: f64,
-    pub hi: f64,
-}
+use std::collections::BTreeMap;
 
 /// One candidate form.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LawCandidate {
     pub form: LawForm,
-    pub parameters: Vec<LawParameter>,
+    /// Each parameter by name (`LawForm::parameter_names`) with its standard error and 95 %
+    /// interval (written `{value, lo, hi}`).
+    #[serde(with = "crate::artifacts::estimate::bounds::map")]
+    pub parameters: BTreeMap<String, Estimate>,
     /// RMS of the held-out runs' residuals, in units of their position noise.
     pub heldout_rms_noise: f64,
     /// Held-out Huber deviance summed over the folds.
@@ -38,6 +34,17 @@ pub struct LawChoice {
     pub folds: usize,
     pub chosen: LawForm,
     pub candidates: Vec<LawCandidate>,
+}
+
+impl LawCandidate {
+    /// The parameters in the order of `LawForm::parameter_names` (slot a, then b).
+    pub fn ordered(&self) -> Vec<(&'static str, &Estimate)> {
+        self.form
+            .parameter_names()
+            .iter()
+            .filter_map(|n| self.parameters.get(*n).map(|e| (*n, e)))
+            .collect()
+    }
 }
 
 impl LawChoice {
@@ -99,26 +106,36 @@ pub fn choose_law(
         let se = |i: usize| cov[i][i].max(0.0).sqrt();
         let (a, b) = (all.result.shared[ia], all.result.shared[ib]);
         let names = form.parameter_names();
-        let mut parameters = vec![LawParameter {
-            name: names[0].into(),
-            value: a,
-            lo: a - 1.96 * se(ia),
-            hi: a + 1.96 * se(ia),
-        }];
+        // value, standard error and 95 % interval (v_ref's through its logarithm, the fitted slot)
+        let linear = |x: f64, s: f64| Estimate {
+            value: x,
+            se: s.is_finite().then_some(s),
+            interval: Some(Interval {
+                lo: x - 1.96 * s,
+                hi: x + 1.96 * s,
+            }),
+        };
+        let mut parameters = BTreeMap::from([(names[0].to_string(), linear(a, se(ia)))]);
         match form {
             LawForm::Constant => {}
-            LawForm::Linear => parameters.push(LawParameter {
-                name: names[1].into(),
-                value: b,
-                lo: b - 1.96 * se(ib),
-                hi: b + 1.96 * se(ib),
-            }),
-            LawForm::Saturating => parameters.push(LawParameter {
-                name: names[1].into(),
-                value: b.exp(),
-                lo: (b - 1.96 * se(ib)).exp(),
-                hi: (b + 1.96 * se(ib)).exp(),
-            }),
+            LawForm::Linear => {
+                parameters.insert(names[1].into(), linear(b, se(ib)));
+            }
+            LawForm::Saturating => {
+                let v = b.exp();
+                let s = se(ib);
+                parameters.insert(
+                    names[1].into(),
+                    Estimate {
+                        value: v,
+                        se: (v * s).is_finite().then_some(v * s),
+                        interval: Some(Interval {
+                            lo: (b - 1.96 * s).exp(),
+                            hi: (b + 1.96 * s).exp(),
+                        }),
+                    },
+                );
+            }
         }
         // k-fold over runs
         let (mut dev, mut n) = (0.0, 0usize);

@@ -5,7 +5,7 @@
 
 use super::curves::{exp_fit, one_minus_av};
 use super::mu_pp::{impulse_fit, slip_slope};
-use super::types::{CollisionFit, CollisionStatus, Contact, ImpactFit, PreImpactSource};
+use super::types::{CollisionFit, Contact, ImpactFit, PreImpactSource};
 use crate::recording::{RunInfo, Setup};
 use crate::stats::{quantile_nearest, weighted_line as line_fit};
 use rand::{Rng, SeedableRng};
@@ -130,10 +130,7 @@ pub fn summarize(fits: &[(RunInfo, CollisionFit)]) -> CollisionSummary {
 }
 
 fn usable(f: &CollisionFit) -> bool {
-    matches!(
-        f.status,
-        CollisionStatus::Converged | CollisionStatus::MaxIterations
-    )
+    f.usable()
 }
 
 fn setup_of(info: &RunInfo, f: &CollisionFit) -> Option<Setup> {

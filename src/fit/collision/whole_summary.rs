@@ -170,10 +170,11 @@ pub fn analyze_material(
         for c in &choices {
             let (ia, ib) = super::wholerun::law_slots(c.setup);
             if let Some(cand) = c.chosen_candidate() {
-                start.result.shared[ia] = cand.parameters[0].value;
-                start.result.shared[ib] = match (c.chosen, cand.parameters.get(1)) {
-                    (super::wholerun::LawForm::Saturating, Some(p)) => p.value.ln(),
-                    (_, Some(p)) => p.value,
+                let p = cand.ordered();
+                start.result.shared[ia] = p.first().map_or(f64::NAN, |(_, e)| e.value);
+                start.result.shared[ib] = match (c.chosen, p.get(1)) {
+                    (super::wholerun::LawForm::Saturating, Some((_, e))) => e.value.ln(),
+                    (_, Some((_, e))) => e.value,
                     (_, None) => 0.0,
                 };
             }
@@ -193,6 +194,9 @@ pub fn analyze_material(
         ));
     }
     let profile = profile_mu_pp(runs, &best, &opts.grid, opts.step_iter);
+    if let Some(note) = unconverged_profile_note(&profile, opts.step_iter) {
+        notes.push(note);
+    }
     let n_points: usize = runs.iter().map(PairRun::n_samples).sum();
     let whole_runs = runs
         .iter()
@@ -224,6 +228,46 @@ pub fn analyze_material(
         runs: whole_runs,
         notes,
     }
+}
+
+/// Words for profile fits that stopped at their iteration limit (None when every one
+/// converged): where they are, and whether they lie beyond the 95 % level (then they only draw
+/// the curve) or could move the interval.
+pub fn unconverged_profile_note(profile: &MuPpProfile, step_iter: usize) -> Option<String> {
+    let bad: Vec<_> = profile.points.iter().filter(|p| !p.converged).collect();
+    if bad.is_empty() {
+        return None;
+    }
+    let at: Vec<String> = bad
+        .iter()
+        .map(|p| format!("μ_pp = {:.3} (deviance {:.3e})", p.mu_pp, p.deviance))
+        .collect();
+    // harmless when a converged fit above the 95 % level lies between the estimate and it: the
+    // verdict takes the first crossing on each side
+    let centre = match profile.verdict {
+        ProfileVerdict::Interval { estimate, .. } => Some(estimate),
+        _ => None,
+    };
+    let far = centre.is_some_and(|c| {
+        bad.iter().all(|b| {
+            profile.points.iter().any(|q| {
+                q.converged
+                    && q.deviance > profile.threshold
+                    && (q.mu_pp - c) * (b.mu_pp - q.mu_pp) > 0.0
+            })
+        })
+    });
+    Some(format!(
+        "{} of {} profile fits stopped at their iteration limit ({step_iter}): {}; {}",
+        bad.len(),
+        profile.points.len(),
+        at.join(", "),
+        if far {
+            "each lies beyond a converged fit above the 95 % level, so it only draws the curve (its deviance is an upper bound) and does not move the interval"
+        } else {
+            "not all lie beyond a converged fit above the 95 % level: the verdict may move with more iterations (raise whole_run.step_iter)"
+        }
+    ))
 }
 
 /// The label of the bin of time since the last impact (the compare stage's bins).
@@ -296,5 +340,56 @@ fn describe_run(run: &PairRun, fit: &GroupFit, own: &[f64], se: &[f64]) -> Whole
         first_impact_restitution: traj.impacts.first().map(|im| im.restitution),
         residual_by_phase: rms(by_phase),
         residual_by_time_since_impact: rms(by_time),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::collision::profile::{ProfilePoint, DELTA_95};
+
+    fn profile(points: &[(f64, f64, bool)]) -> MuPpProfile {
+        MuPpProfile {
+            points: points
+                .iter()
+                .map(|&(mu_pp, deviance, converged)| ProfilePoint {
+                    mu_pp,
+                    deviance,
+                    converged,
+                })
+                .collect(),
+            not_fitted: Vec::new(),
+            verdict: ProfileVerdict::Interval {
+                estimate: 1.4,
+                lo: 1.39,
+                hi: 1.41,
+            },
+            threshold: DELTA_95,
+            dispersion: 1.0,
+            lag1_autocorrelation: 0.0,
+            score_lag1_autocorrelation: 0.0,
+            serial_factor: 1.0,
+            scale_factor: 1.0,
+            inflation: 1.0,
+        }
+    }
+
+    #[test]
+    fn a_profile_fit_at_its_iteration_limit_is_said_with_whether_it_matters() {
+        let all = profile(&[(0.5, 1e5, true), (1.4, 0.0, true), (2.0, 1e4, true)]);
+        assert_eq!(unconverged_profile_note(&all, 25), None);
+        // beyond a converged crossing: only draws the curve
+        let far = profile(&[(0.34, 3e6, false), (0.5, 1e5, true), (1.4, 0.0, true)]);
+        let words = unconverged_profile_note(&far, 25).unwrap();
+        assert!(
+            words.starts_with(
+                "1 of 3 profile fits stopped at their iteration limit (25): μ_pp = 0.340"
+            ) && words.contains("does not move the interval"),
+            "{words}"
+        );
+        // nearer than any converged crossing: it may
+        let near = profile(&[(0.5, 1e5, true), (1.38, 5.0, false), (1.4, 0.0, true)]);
+        let words = unconverged_profile_note(&near, 25).unwrap();
+        assert!(words.contains("may move"), "{words}");
     }
 }

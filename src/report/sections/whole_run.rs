@@ -4,7 +4,7 @@
 
 use super::{Block, Table};
 use crate::artifacts::collision_fit::Estimate;
-use crate::artifacts::summary::{LawParameter, MuPpProfile, ProfileVerdict, WholeRun};
+use crate::artifacts::summary::{MuPpProfile, ProfileVerdict, WholeRun, STOP_DEVIANCE};
 use crate::report::inputs::ReportData;
 use crate::report::value::serde_name;
 use std::collections::BTreeMap;
@@ -27,8 +27,8 @@ pub fn mu_pp_words(material: &str, verdict: &ProfileVerdict) -> String {
     }
 }
 
-fn fmt_param(p: &LawParameter) -> String {
-    format!("{} = {:.4} [{:.4}, {:.4}]", p.name, p.value, p.lo, p.hi)
+fn fmt_param((name, p): (&str, &Estimate)) -> String {
+    format!("{name} = {:.4} [{:.4}, {:.4}]", p.value, p.lo(), p.hi())
 }
 
 fn fmt_est(e: &Estimate) -> String {
@@ -38,20 +38,34 @@ fn fmt_est(e: &Estimate) -> String {
     }
 }
 
-/// How the profile's deviance was scaled: by the residuals' serial correlation, by the runs'
-/// dispersion, or not at all.
+/// How the profile's deviance was scaled: by the residuals' scale and serial correlation, by
+/// the runs' dispersion, or not at all.
 fn inflation_words(p: &MuPpProfile) -> String {
     let rho = p.score_lag1_autocorrelation;
     let rho_r = p.lag1_autocorrelation;
     let serial = p.serial_factor;
+    let scale = p.scale_factor;
     let disp = p.dispersion;
-    if serial <= 1.0 && disp <= 1.0 {
-        format!("the profile interval is not widened: the μ_pp score's lag-1 autocorrelation is ρ = {rho:.2} (residuals' {rho_r:.2}) and the run dispersion {disp:.2}")
-    } else if serial >= disp {
-        format!("the profile interval is widened by the residuals' serial correlation: the μ_pp score's lag-1 autocorrelation is ρ = {rho:.2} (residuals' {rho_r:.2}), so the deviance is divided by (1 + ρ)/(1 − ρ) = {serial:.2} (run dispersion {disp:.2})")
+    let noise = scale * serial;
+    if p.inflation <= 1.0 {
+        format!("the profile interval is not widened: the deviance's scale is {scale:.2}, the μ_pp score's lag-1 autocorrelation ρ = {rho:.2} (residuals' {rho_r:.2}) and the run dispersion {disp:.2}")
+    } else if noise >= disp {
+        format!("the profile interval is widened by the residuals: the deviance is divided by their scale {scale:.2} (mean ψ²/mean ψ′; the noise estimates are {}) times the serial-correlation factor (1 + ρ)/(1 − ρ) = {serial:.2} (the μ_pp score's lag-1 autocorrelation ρ = {rho:.2}, residuals' {rho_r:.2}), {noise:.2} in all (run dispersion {disp:.2})", if scale > 1.0 { "low" } else { "not low" })
     } else {
-        format!("the profile interval is widened by the runs' dispersion: the deviance is divided by {disp:.2} (the μ_pp score's lag-1 autocorrelation ρ = {rho:.2}, residuals' {rho_r:.2}, factor {serial:.2})")
+        format!("the profile interval is widened by the runs' dispersion: the deviance is divided by {disp:.2} (the residuals' scale {scale:.2}, the μ_pp score's lag-1 autocorrelation ρ = {rho:.2}, residuals' {rho_r:.2}, factor {serial:.2})")
     }
+}
+
+/// The grid values the profile did not fit, and why (None when it fitted them all).
+fn not_fitted_words(p: &MuPpProfile) -> Option<String> {
+    if p.not_fitted.is_empty() {
+        return None;
+    }
+    let at: Vec<String> = p.not_fitted.iter().map(|mu| format!("{mu:.3}")).collect();
+    Some(format!(
+        "the profile was not fitted at μ_pp = {}: its walk along the grid stops in each direction after a fit beyond the estimate whose deviance rises more than {STOP_DEVIANCE:.0} above the best fit, where μ_pp is already excluded by far",
+        at.join(", ")
+    ))
 }
 
 /// The block, or None when the summary has no whole-run fits.
@@ -59,12 +73,12 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let mats = &d.whole_run()?.materials;
     let mut b = Block::new("whole-run", "3.5.1 μ_pp and restitution from whole runs");
     b.para(
-        "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag v/(T0 + T'|v|), μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the larger of the runs' dispersion (how much more the runs disagree than their noise says) and the serial-correlation factor (1 + ρ)/(1 − ρ), ρ the pooled lag-1 autocorrelation of the best fit's residuals weighted by their sensitivity to μ_pp (the μ_pp score): successive positions of a sliding sphere miss the model together, so the samples carry less independent information than their number says.",
+        "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag v/(T0 + T'|v|), μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the larger of the runs' dispersion (how much more the runs disagree than their noise says) and the residuals' own estimate of the same: their scale (mean ψ²/mean ψ′ of the Huber-clipped whitened residuals, above 1 when the noise estimates are low) times the serial-correlation factor (1 + ρ)/(1 − ρ), ρ the pooled lag-1 autocorrelation of the best fit's residuals weighted by their sensitivity to μ_pp (the μ_pp score): successive positions of a sliding sphere miss the model together, so the samples carry less independent information than their number says.",
     );
     b.figure(
         figs,
         "fig_mu_pp_profile.svg",
-        "μ_pp profile: square root of the whole-run fit's deviance above its best (divided by the larger of the run dispersion and the serial-correlation factor), μ_pp held at each value (clipped at 12); dashed: the 95 % level and the chapter's 1.4.",
+        "μ_pp profile: square root of the whole-run fit's deviance above its best (divided by the larger of the run dispersion and the residuals' scale times their serial-correlation factor), μ_pp held at each value (clipped at 12); dashed: the 95 % level and the chapter's 1.4.",
     );
     let mut t = Table::new(
         "Whole-run fits per material",
@@ -98,6 +112,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             format!("{:.2}", m.profile.dispersion),
         ]);
         b.para(mu_pp_words(name, &m.profile.verdict));
+        if let Some(w) = not_fitted_words(&m.profile) {
+            b.para(format!("{name}: {w}."));
+        }
         b.para(format!("{name}: {}.", inflation_words(&m.profile)));
         for n in &m.notes {
             b.para(format!("{name}: {n}."));
@@ -112,7 +129,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         for c in &m.restitution {
             for cand in &c.candidates {
                 let form = serde_name(&cand.form);
-                let params: Vec<String> = cand.parameters.iter().map(fmt_param).collect();
+                let params: Vec<String> = cand.ordered().into_iter().map(fmt_param).collect();
                 laws.push(vec![
                     m.material.clone(),
                     serde_name(&c.setup),
