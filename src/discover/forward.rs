@@ -5,7 +5,8 @@
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
 use super::cv::{cross_validate, folds, paired_t, CvResult};
 use super::data::RunData;
-use super::diagnosis::{CandidateRow, DetectionLimit, Estimate, Evidence, Finding, ModelScore};
+use super::detection::detection_limit;
+use super::diagnosis::{CandidateRow, Estimate, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::null_distribution::{empirical_p, NullFit};
@@ -510,7 +511,13 @@ pub fn run_round(
             detection_limit: if is_probe {
                 None
             } else {
-                detection_limit(e, &linear[i], &nulls[i], opts.alpha / ne.max(1) as f64)
+                detection_limit(
+                    e,
+                    &linear[i],
+                    screens[i].as_ref().and_then(|s| s.typical.as_ref()),
+                    &nulls[i],
+                    opts.alpha / ne.max(1) as f64,
+                )
             },
         };
         ev.decision = if is_probe {
@@ -589,70 +596,4 @@ pub fn median_speed(local: &[[f64; N_LOCAL]]) -> f64 {
 /// Fold assignment for `runs` given per-run starting values.
 pub fn fold_of(runs: &[RunData], local: &[[f64; N_LOCAL]], k: usize) -> Vec<usize> {
     folds(runs, local, k)
-}
-
-/// The LR a term must exceed at `level` under its bootstrap null (bisection on the gamma tail).
-pub fn critical_lr(null: &NullFit, level: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0, 1.0);
-    while null.p_value(hi) > level && hi < 1e9 {
-        hi *= 2.0;
-    }
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if null.p_value(mid) > level {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
-/// The smallest size of a term this dataset would have detected (90 % power at the first Holm
-/// level): the size θ with |θ̂| > se·√c in 90 % of data sets, θ̂ ~ N(θ, s·se²), c the critical LR
-/// and s the null's inflation over χ² (dependent frames). None for terms without one size.
-pub fn detection_limit(e: &Extra, m: &Model, null: &NullFit, level: f64) -> Option<DetectionLimit> {
-    let off = m.spec.extra_offset(m.spec.extras.len() - 1);
-    let se = &m.fit.global_se;
-    let (name, unit, se_size, scale) = match e {
-        Extra::QuadraticDrag => ("c_per_m", "1/m", se[off], 1.0),
-        Extra::SaturatingDrag => ("tp_s_per_mps", "s²/m", se[off], 1.0),
-        Extra::RollingResistance => ("deceleration_mps2", "m/s²", se[off], G_MPS2),
-        Extra::GrooveTilt => ("alpha_deg", "°", se[off], 1.0),
-        Extra::PeriodicZ { .. } => (
-            "amplitude_mps2",
-            "m/s²",
-            se[off + 1].hypot(se[off + 2]) / 2f64.sqrt(),
-            1.0,
-        ),
-        Extra::Localized { .. } => ("amplitude_mps2", "m/s²", se[off], 1.0),
-        Extra::TimePeriodic { .. } => ("amplitude_mps2", "m/s²", se[off + 1], 1.0),
-        _ => return None,
-    };
-    if !(se_size.is_finite() && se_size > 0.0) {
-        return None;
-    }
-    let df = e.params().len() as f64;
-    let c = critical_lr(null, level);
-    let inflation = (null.mean / df).max(1.0);
-    let value = scale * se_size * (c.sqrt() + 1.2816 * inflation.sqrt());
-    Some(DetectionLimit {
-        parameter: name.into(),
-        value,
-        text: format!(
-            "{} above {} {} would have been found",
-            e.size_name(),
-            sig(value),
-            unit
-        ),
-    })
-}
-
-/// Three significant digits.
-pub fn sig(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let d = (2 - x.abs().log10().floor() as i32).max(0) as usize;
-    format!("{x:.d$}")
 }

@@ -11,6 +11,7 @@
 pub mod candidate;
 pub mod cv;
 pub mod data;
+pub mod detection;
 pub mod diagnosis;
 pub mod drift;
 pub mod forcemap;

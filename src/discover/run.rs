@@ -8,11 +8,11 @@ use super::diagnosis::{
 };
 use super::drift::line;
 use super::forcemap::ForceMap;
-use super::forward::{finding, fold_of, median_speed, run_round, Model};
+use super::forward::{finding, fold_of, median_speed, run_round, Model, Round};
 use super::locate::locate;
 use super::null_distribution::NullFit;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
-use super::proposal::{propose, wanted_for, Ranges, Wanted};
+use super::proposal::{propose, wanted_for, Proposals, Ranges, Wanted};
 use super::residual_structure::Structure;
 use super::spectral::Spectrum;
 use super::Options;
@@ -202,63 +202,438 @@ fn fit_baseline(
     (baseline, per_run)
 }
 
-/// Backward elimination: drop the weakest earlier term whose likelihood ratio, given the others,
-/// is within its own bootstrap null; repeat until every term is needed.
-fn eliminate(
-    current: &mut Model,
-    current_cv: &mut CvResult,
-    accepted: &mut Vec<Accepted>,
-    removed: &mut Vec<Accepted>,
-    materials: &[String],
-    runs: &[RunData],
-    fold: &[usize],
-    opts: &Options,
-) {
-    loop {
-        if accepted.len() < 2 {
-            return;
+/// The data and settings every step of a discovery reads.
+struct Ctx<'a> {
+    runs: &'a [RunData],
+    materials: &'a [String],
+    fold: &'a [usize],
+    rg: &'a Ranges,
+    opts: &'a Options,
+    t0: std::time::Instant,
+}
+
+impl Ctx<'_> {
+    /// With GROOVE_DISCOVER_TRACE set, print what was done and when (stderr only).
+    fn trace(&self, what: &str) {
+        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+            eprintln!(
+                "discover: {what} at {:.2} s",
+                self.t0.elapsed().as_secs_f64()
+            );
         }
-        let last = accepted.len() - 1;
-        let mut weakest: Option<(usize, f64, f64, Model)> = None;
-        for (a, acc) in accepted.iter().enumerate().take(last) {
-            let Some(i) = current.spec.extras.iter().position(|e| *e == acc.extra) else {
-                continue;
+    }
+
+    /// What the residuals of `model` propose (spectra, bumps, force maps, as `wanted`).
+    fn proposals(&self, model: &Model, wanted: Wanted) -> Proposals {
+        propose(
+            &model.spec,
+            &model.params,
+            &model.fit.global,
+            &model.fit.local,
+            self.runs,
+            self.rg,
+            wanted,
+            Some((self.fold, self.opts.folds)),
+        )
+    }
+
+    /// The force maps of `model` alone.
+    fn force_maps(&self, model: &Model) -> Proposals {
+        self.proposals(
+            model,
+            Wanted {
+                z: false,
+                t: false,
+                bump: false,
+                maps: true,
+            },
+        )
+    }
+
+    fn cross_validate(&self, model: &Model) -> CvResult {
+        cross_validate(
+            &model.spec,
+            &model.params,
+            self.runs,
+            &model.fit,
+            self.fold,
+            self.opts.folds,
+        )
+    }
+}
+
+/// The state of the term selection: the current model and what the diagnosis reports of it.
+struct Selection {
+    current: Model,
+    current_cv: CvResult,
+    accepted: Vec<Accepted>,
+    removed: Vec<Accepted>,
+    /// Every candidate and probe row of every round.
+    table: Vec<CandidateRow>,
+    /// The candidates of the last round (none accepted) and its probes.
+    last_rows: Vec<CandidateRow>,
+    last_probes: Vec<CandidateRow>,
+    /// Probes still flagging a mismatch when no candidate passed.
+    unexplained: Vec<CandidateRow>,
+    maps_before: Vec<ForceMap>,
+    spectra: Vec<Spectrum>,
+    round: usize,
+}
+
+impl Selection {
+    fn new(baseline: &Model, base_cv: &CvResult) -> Selection {
+        Selection {
+            current: baseline.clone(),
+            current_cv: base_cv.clone(),
+            accepted: Vec::new(),
+            removed: Vec::new(),
+            table: Vec::new(),
+            last_rows: Vec::new(),
+            last_probes: Vec::new(),
+            unexplained: Vec::new(),
+            maps_before: Vec::new(),
+            spectra: Vec::new(),
+            round: 0,
+        }
+    }
+
+    /// The library's candidates not yet accepted: one cause, one term, so a named effect is not
+    /// added twice, except position forces of another form (a waviness and a bump).
+    fn candidates_left(&self, ctx: &Ctx) -> Vec<Extra> {
+        library(ctx.opts, ctx.materials.len(), ctx.rg)
+            .into_iter()
+            .filter(|e| {
+                !self.accepted.iter().any(|a| {
+                    if e.effect() == Some("position_dependent_force") {
+                        std::mem::discriminant(&a.extra) == std::mem::discriminant(e)
+                    } else {
+                        Some(a.row.effect.as_str()) == e.effect()
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// Make `model` (with its CV) the current one, accepting row `i` of round `r` as `extra`.
+    fn accept(&mut self, r: &Round, i: usize, extra: Extra, model: Model, cv: CvResult, ctx: &Ctx) {
+        let before = self.current.score(ctx.runs, Some(&self.current_cv));
+        let after = model.score(ctx.runs, Some(&cv));
+        let mut row = r.rows[i].clone();
+        row.evidence.decision = format!(
+            "{} (flagged by {} probe(s))",
+            row.evidence.decision,
+            r.flagged_probes.len()
+        );
+        self.accepted.push(Accepted {
+            row,
+            before,
+            after,
+            probes_after: vec![],
+            null: r.nulls[i].clone(),
+            extra,
+        });
+        self.current = model;
+        self.current_cv = cv;
+    }
+
+    /// Backward elimination: drop the weakest earlier term whose likelihood ratio, given the
+    /// others, is within its own bootstrap null; repeat until every term is needed.
+    fn eliminate(&mut self, ctx: &Ctx) {
+        loop {
+            if self.accepted.len() < 2 {
+                return;
+            }
+            let last = self.accepted.len() - 1;
+            let mut weakest: Option<(usize, f64, f64, Model)> = None;
+            for (a, acc) in self.accepted.iter().enumerate().take(last) {
+                let Some(i) = self
+                    .current
+                    .spec
+                    .extras
+                    .iter()
+                    .position(|e| *e == acc.extra)
+                else {
+                    continue;
+                };
+                let without = self.current.without(i, ctx.materials, ctx.runs, 40);
+                let lr = (without.fit.chi2 - self.current.fit.chi2).max(0.0);
+                let p = acc.null.p_value(lr);
+                if p >= ctx.opts.alpha && weakest.as_ref().map(|w| p > w.2).unwrap_or(true) {
+                    weakest = Some((a, lr, p, without));
+                }
+            }
+            let Some((a, lr, p, without)) = weakest else {
+                return;
             };
-            let without = current.without(i, materials, runs, 40);
-            let lr = (without.fit.chi2 - current.fit.chi2).max(0.0);
-            let p = acc.null.p_value(lr);
-            if p >= opts.alpha && weakest.as_ref().map(|w| p > w.2).unwrap_or(true) {
-                weakest = Some((a, lr, p, without));
+            let mut gone = self.accepted.remove(a);
+            gone.row.accepted = false;
+            gone.row.evidence.decision = format!(
+                "removed by backward elimination: with the later terms its likelihood ratio is {lr:.1} (p = {p:.3}), within its bootstrap null"
+            );
+            self.removed.push(gone);
+            self.current = without;
+            self.current_cv = ctx.cross_validate(&self.current);
+        }
+    }
+}
+
+/// Forward selection from the baseline: each round tests the candidates left, accepts the
+/// strongest passing both tests and re-tests the earlier terms; it stops when none passes, when
+/// the library is exhausted or at `max_terms`.
+fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
+    let vref = median_speed(&baseline.fit.local);
+    let probes = vec![
+        Extra::SpeedDriftT { v_ref_mps: vref },
+        Extra::SpeedDriftMu { v_ref_mps: vref },
+        Extra::DirectionAsymmetry,
+    ];
+    let mut sel = Selection::new(baseline, base_cv);
+    loop {
+        sel.round += 1;
+        let entries = sel.candidates_left(ctx);
+        if entries.is_empty() {
+            break;
+        }
+        let refs: Vec<&Extra> = entries.iter().collect();
+        let mut wanted = wanted_for(&refs);
+        wanted.maps = sel.round == 1;
+        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+            eprintln!("round {} starts", sel.round);
+        }
+        let props = ctx.proposals(&sel.current, wanted);
+        if sel.round == 1 {
+            sel.maps_before = props.maps.clone();
+            sel.spectra = props.z.iter().chain(props.t.iter()).cloned().collect();
+        }
+        ctx.trace("proposed");
+        let mut r = run_round(
+            sel.round,
+            &sel.current,
+            &sel.current_cv,
+            &entries,
+            &probes,
+            ctx.materials,
+            ctx.runs,
+            ctx.opts,
+            ctx.fold,
+            &props,
+            ctx.rg,
+        );
+        sel.table.extend(r.rows.iter().cloned());
+        sel.table.extend(r.probe_rows.iter().cloned());
+        if let Some(last) = sel.accepted.last_mut() {
+            last.probes_after = r.probe_rows.clone();
+        }
+        match r.accepted.take() {
+            Some((i, model, cv)) if sel.accepted.len() < ctx.opts.max_terms => {
+                sel.accept(&r, i, entries[i].clone(), model, cv, ctx);
+                sel.last_probes = r.probe_rows;
+                sel.eliminate(ctx);
+            }
+            _ => {
+                sel.last_rows = r.rows;
+                sel.unexplained = r.flagged_probes;
+                sel.last_probes = r.probe_rows;
+                break;
             }
         }
-        let Some((a, lr, p, without)) = weakest else {
-            return;
-        };
-        let mut gone = accepted.remove(a);
-        gone.row.accepted = false;
-        gone.row.evidence.decision = format!(
-            "removed by backward elimination: with the later terms its likelihood ratio is {lr:.1} (p = {p:.3}), within its bootstrap null"
-        );
-        removed.push(gone);
-        *current = without;
-        *current_cv = cross_validate(
-            &current.spec,
-            &current.params,
-            runs,
-            &current.fit,
-            fold,
-            opts.folds,
-        );
+        if sel.accepted.len() >= ctx.opts.max_terms {
+            break;
+        }
+    }
+    sel
+}
+
+/// The nonparametric fallback: structure in a force map that no named form explained is
+/// modelled by a spline in the map's variable and tested like a candidate. Returns the accepted
+/// spline, if any, and the force maps of the final model.
+fn model_what_is_left(sel: &mut Selection, ctx: &Ctx) -> (Option<Accepted>, Vec<ForceMap>) {
+    if !ctx.opts.nonparametric {
+        return (None, Vec::new());
+    }
+    let props = ctx.force_maps(&sel.current);
+    let strongest = props
+        .maps
+        .iter()
+        .filter(|m| m.spline.is_some() && m.cv_gain > 0.0)
+        .max_by(|a, b| a.cv_gain.total_cmp(&b.cv_gain));
+    let Some(map) = strongest else {
+        return (None, props.maps);
+    };
+    let var = match map.variable.as_str() {
+        "z" => Variable::Z,
+        "v" => Variable::V,
+        _ => Variable::T,
+    };
+    let Some(spline) = ctx.rg.spline(map, var) else {
+        return (None, props.maps);
+    };
+    sel.round += 1;
+    let r = run_round(
+        sel.round,
+        &sel.current,
+        &sel.current_cv,
+        std::slice::from_ref(&spline),
+        &[],
+        ctx.materials,
+        ctx.runs,
+        ctx.opts,
+        ctx.fold,
+        &props,
+        ctx.rg,
+    );
+    sel.table.extend(r.rows.iter().cloned());
+    let Some((i, model, cv)) = r.accepted else {
+        return (None, props.maps);
+    };
+    let before = sel.current.score(ctx.runs, Some(&sel.current_cv));
+    let after = model.score(ctx.runs, Some(&cv));
+    let mut row = r.rows[i].clone();
+    row.evidence.decision = format!(
+        "accepted as a model of what no named form explains: the force map in {} shows structure (held-out χ² drop {:.1})",
+        map.variable, map.cv_gain
+    );
+    let accepted = Accepted {
+        row,
+        before,
+        after,
+        probes_after: vec![],
+        null: r.nulls[i].clone(),
+        extra: spline,
+    };
+    sel.current = model;
+    sel.current_cv = cv;
+    (Some(accepted), ctx.force_maps(&sel.current).maps)
+}
+
+/// Per-run fits before and after: each run's own μ and T, with the final model's extra terms
+/// held at their joint values in `after`.
+fn drift_of(current: &Model, per_run: &[PerRunFit], ctx: &Ctx) -> Drift {
+    let (runs, materials) = (ctx.runs, ctx.materials);
+    let extra_values: Vec<f64> = current.fit.global[2 * materials.len()..].to_vec();
+    let after_fits = fit_each_run(
+        runs,
+        &current.spec,
+        &current.params,
+        &extra_values,
+        Some(per_run),
+    );
+    let before_pts = drift_points(runs, per_run, materials);
+    let after_pts = drift_points(runs, &after_fits, materials);
+    Drift {
+        lines_before: drift_lines(&before_pts, materials),
+        lines_after: drift_lines(&after_pts, materials),
+        before: before_pts,
+        after: after_pts,
+        note: "per-run fits (own mu and T; extra terms held at the joint values in `after`); the fitted |v0| shares errors with T and mu, so the probes fitted inside the joint model carry the decision".into(),
     }
 }
 
-/// Run the whole discovery on `recordings` (single runs are used; collision runs are skipped).
-fn trace(t0: std::time::Instant, what: &str) {
-    if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
-        eprintln!("discover: {what} at {:.2} s", t0.elapsed().as_secs_f64());
+/// The findings: the accepted terms (and the fallback), a mismatch left unexplained, the terms
+/// removed by backward elimination, and the candidates of the last round.
+fn findings_of(
+    sel: &Selection,
+    fallback: Option<&Accepted>,
+    residuals_before: &Structure,
+    residuals_after: &Structure,
+    final_score: &ModelScore,
+) -> Vec<Finding> {
+    let mut findings: Vec<Finding> = Vec::new();
+    for acc in sel.accepted.iter().chain(fallback) {
+        let mut w = BTreeMap::new();
+        let flagged: Vec<CandidateRow> = sel
+            .table
+            .iter()
+            .filter(|t| t.round == acc.row.evidence.round && t.effect == "probe")
+            .cloned()
+            .collect();
+        w.insert("drift_probes_before".to_string(), probes_json(&flagged));
+        w.insert(
+            "drift_probes_after".to_string(),
+            probes_json(&acc.probes_after),
+        );
+        w.insert("residuals_before".to_string(), worst_bins(residuals_before));
+        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
+    }
+    if !sel.unexplained.is_empty() && fallback.is_none() {
+        findings.push(unexplained_finding(
+            &sel.unexplained,
+            residuals_after,
+            final_score,
+        ));
+    }
+    for acc in &sel.removed {
+        let mut w = BTreeMap::new();
+        w.insert("drift_probes".to_string(), probes_json(&acc.probes_after));
+        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
+    }
+    for row in &sel.last_rows {
+        let mut w = BTreeMap::new();
+        w.insert("drift_probes".to_string(), probes_json(&sel.last_probes));
+        findings.push(finding(
+            row,
+            final_score.clone(),
+            ModelScore {
+                cv_rms_m: row.evidence.cv_rms_m.unwrap_or(f64::NAN),
+                ..Default::default()
+            },
+            w,
+        ));
+    }
+    findings
+}
+
+/// A mismatch the drift probes flag and no term explained: not modelled, so not accepted.
+fn unexplained_finding(
+    unexplained: &[CandidateRow],
+    residuals_after: &Structure,
+    final_score: &ModelScore,
+) -> Finding {
+    let strongest = unexplained
+        .iter()
+        .max_by(|a, b| a.evidence.lr.total_cmp(&b.evidence.lr))
+        .expect("non-empty");
+    let mut w = BTreeMap::new();
+    w.insert("drift_probes".to_string(), probes_json(unexplained));
+    w.insert("residuals".to_string(), worst_bins(residuals_after));
+    let mut parameters = BTreeMap::new();
+    for r in unexplained {
+        for (k, v) in &r.parameters {
+            parameters.insert(k.clone(), *v);
+        }
+    }
+    Finding {
+        effect: "unexplained".into(),
+        accepted: false,
+        form: unexplained
+            .iter()
+            .map(|r| r.form.clone())
+            .collect::<Vec<_>>()
+            .join("; "),
+        parameters,
+        evidence: strongest.evidence.clone(),
+        where_: w,
+        baseline: final_score.clone(),
+        extended: ModelScore {
+            cv_rms_m: f64::NAN,
+            ..final_score.clone()
+        },
     }
 }
 
+/// The final model's global parameters with their standard errors, by name.
+fn model_parameters(current: &Model) -> BTreeMap<String, Estimate> {
+    current
+        .params
+        .iter()
+        .zip(current.fit.global.iter().zip(&current.fit.global_se))
+        .map(|(p, (v, se))| (p.name.clone(), Estimate::new(*v, *se)))
+        .collect()
+}
+
+/// Run the whole discovery on `recordings` (single runs are used; collision runs are skipped):
+/// measure each run's noise and fit the joint baseline, select terms, model what is left with the
+/// force map, then report the findings, the drift and the residuals before and after.
 pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
     let t0 = std::time::Instant::now();
     let (mut runs, materials) = prepare_runs(recordings, opts.min_frames);
@@ -277,338 +652,51 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
         );
     }
     let (baseline, per_run) = fit_baseline(&mut runs, &materials, opts);
-    trace(t0, "baseline fitted");
     let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
-    let base_cv = cross_validate(
-        &baseline.spec,
-        &baseline.params,
-        &runs,
-        &baseline.fit,
-        &fold,
-        opts.folds,
-    );
-    trace(t0, "baseline cross-validated");
     let rg = Ranges::of(&runs);
-    let vref = median_speed(&baseline.fit.local);
-    let probes = vec![
-        Extra::SpeedDriftT { v_ref_mps: vref },
-        Extra::SpeedDriftMu { v_ref_mps: vref },
-        Extra::DirectionAsymmetry,
-    ];
-    let mut current = baseline.clone();
-    let mut current_cv: CvResult = base_cv.clone();
-    let mut accepted: Vec<Accepted> = Vec::new();
-    let mut removed: Vec<Accepted> = Vec::new();
-    let mut table: Vec<CandidateRow> = Vec::new();
-    let mut last_rows: Vec<CandidateRow> = Vec::new();
-    let mut last_probes: Vec<CandidateRow> = Vec::new();
-    let mut unexplained: Vec<CandidateRow> = Vec::new();
-    let mut maps_before: Vec<ForceMap> = Vec::new();
-    let mut spectra: Vec<Spectrum> = Vec::new();
-    let mut round = 0;
-    loop {
-        round += 1;
-        // one cause, one term: a named effect is not added twice, except position forces of
-        // another form (a waviness and a bump)
-        let entries: Vec<Extra> = library(opts, materials.len(), &rg)
-            .into_iter()
-            .filter(|e| {
-                !accepted.iter().any(|a| {
-                    if e.effect() == Some("position_dependent_force") {
-                        std::mem::discriminant(&a.extra) == std::mem::discriminant(e)
-                    } else {
-                        Some(a.row.effect.as_str()) == e.effect()
-                    }
-                })
-            })
-            .collect();
-        if entries.is_empty() {
-            break;
-        }
-        let refs: Vec<&Extra> = entries.iter().collect();
-        let mut wanted = wanted_for(&refs);
-        wanted.maps = round == 1;
-        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
-            eprintln!("round {round} starts");
-        }
-        let props = propose(
-            &current.spec,
-            &current.params,
-            &current.fit.global,
-            &current.fit.local,
-            &runs,
-            &rg,
-            wanted,
-            Some((&fold, opts.folds)),
-        );
-        if round == 1 {
-            maps_before = props.maps.clone();
-            spectra = props.z.iter().chain(props.t.iter()).cloned().collect();
-        }
-        trace(t0, "proposed");
-        let r = run_round(
-            round,
-            &current,
-            &current_cv,
-            &entries,
-            &probes,
-            &materials,
-            &runs,
-            opts,
-            &fold,
-            &props,
-            &rg,
-        );
-        table.extend(r.rows.iter().cloned());
-        table.extend(r.probe_rows.iter().cloned());
-        if let Some(last) = accepted.last_mut() {
-            last.probes_after = r.probe_rows.clone();
-        }
-        match r.accepted {
-            Some((i, model, cv)) if accepted.len() < opts.max_terms => {
-                let before = current.score(&runs, Some(&current_cv));
-                let after = model.score(&runs, Some(&cv));
-                let mut row = r.rows[i].clone();
-                row.evidence.decision = format!(
-                    "{} (flagged by {} probe(s))",
-                    row.evidence.decision,
-                    r.flagged_probes.len()
-                );
-                accepted.push(Accepted {
-                    row,
-                    before,
-                    after,
-                    probes_after: vec![],
-                    null: r.nulls[i].clone(),
-                    extra: entries[i].clone(),
-                });
-                current = model;
-                current_cv = cv;
-                last_probes = r.probe_rows;
-                eliminate(
-                    &mut current,
-                    &mut current_cv,
-                    &mut accepted,
-                    &mut removed,
-                    &materials,
-                    &runs,
-                    &fold,
-                    opts,
-                );
-            }
-            _ => {
-                last_rows = r.rows;
-                unexplained = r.flagged_probes;
-                last_probes = r.probe_rows;
-                break;
-            }
-        }
-        if accepted.len() >= opts.max_terms {
-            break;
-        }
-    }
-    trace(t0, "rounds done");
-    // the nonparametric fallback: structure in a force map that no named form explained
-    let mut fallback: Option<Accepted> = None;
-    let mut maps_after: Vec<ForceMap> = Vec::new();
-    if opts.nonparametric {
-        let props = propose(
-            &current.spec,
-            &current.params,
-            &current.fit.global,
-            &current.fit.local,
-            &runs,
-            &rg,
-            Wanted {
-                z: false,
-                t: false,
-                bump: false,
-                maps: true,
-            },
-            Some((&fold, opts.folds)),
-        );
-        maps_after = props.maps.clone();
-        let strongest = props
-            .maps
-            .iter()
-            .filter(|m| m.spline.is_some() && m.cv_gain > 0.0)
-            .max_by(|a, b| a.cv_gain.total_cmp(&b.cv_gain));
-        let var = strongest.map(|m| match m.variable.as_str() {
-            "z" => Variable::Z,
-            "v" => Variable::V,
-            _ => Variable::T,
-        });
-        if let (Some(map), Some(var)) = (strongest, var) {
-            if let Some(spline) = rg.spline(map, var) {
-                round += 1;
-                let r = run_round(
-                    round,
-                    &current,
-                    &current_cv,
-                    std::slice::from_ref(&spline),
-                    &[],
-                    &materials,
-                    &runs,
-                    opts,
-                    &fold,
-                    &props,
-                    &rg,
-                );
-                table.extend(r.rows.iter().cloned());
-                if let Some((i, model, cv)) = r.accepted {
-                    let before = current.score(&runs, Some(&current_cv));
-                    let after = model.score(&runs, Some(&cv));
-                    let mut row = r.rows[i].clone();
-                    row.evidence.decision = format!(
-                        "accepted as a model of what no named form explains: the force map in {} shows structure (held-out χ² drop {:.1})",
-                        map.variable, map.cv_gain
-                    );
-                    fallback = Some(Accepted {
-                        row,
-                        before,
-                        after,
-                        probes_after: vec![],
-                        null: r.nulls[i].clone(),
-                        extra: spline,
-                    });
-                    current = model;
-                    current_cv = cv;
-                    maps_after = propose(
-                        &current.spec,
-                        &current.params,
-                        &current.fit.global,
-                        &current.fit.local,
-                        &runs,
-                        &rg,
-                        Wanted {
-                            z: false,
-                            t: false,
-                            bump: false,
-                            maps: true,
-                        },
-                        Some((&fold, opts.folds)),
-                    )
-                    .maps;
-                }
-            }
-        }
-    }
-    trace(t0, "fallback done");
-    let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
-    let residuals_after = locate(&current.spec, &current.fit, &runs, &materials);
-    // per-run drift with the final model's extra terms held at their joint values
-    let extra_values: Vec<f64> = current.fit.global[2 * materials.len()..].to_vec();
-    let after_fits = fit_each_run(
-        &runs,
-        &current.spec,
-        &current.params,
-        &extra_values,
-        Some(&per_run),
-    );
-    let before_pts = drift_points(&runs, &per_run, &materials);
-    let after_pts = drift_points(&runs, &after_fits, &materials);
-    let drift = Drift {
-        lines_before: drift_lines(&before_pts, &materials),
-        lines_after: drift_lines(&after_pts, &materials),
-        before: before_pts,
-        after: after_pts,
-        note: "per-run fits (own mu and T; extra terms held at the joint values in `after`); the fitted |v0| shares errors with T and mu, so the probes fitted inside the joint model carry the decision".into(),
+    let ctx = Ctx {
+        runs: &runs,
+        materials: &materials,
+        fold: &fold,
+        rg: &rg,
+        opts,
+        t0,
     };
-    trace(t0, "drift done");
-    let mut findings: Vec<Finding> = Vec::new();
-    for acc in accepted.iter().chain(fallback.iter()) {
-        let mut w = BTreeMap::new();
-        let flagged: Vec<CandidateRow> = table
-            .iter()
-            .filter(|t| t.round == acc.row.evidence.round && t.effect == "probe")
-            .cloned()
-            .collect();
-        w.insert("drift_probes_before".to_string(), probes_json(&flagged));
-        w.insert(
-            "drift_probes_after".to_string(),
-            probes_json(&acc.probes_after),
-        );
-        w.insert(
-            "residuals_before".to_string(),
-            worst_bins(&residuals_before),
-        );
-        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
-    }
-    let final_score = current.score(&runs, Some(&current_cv));
-    if !unexplained.is_empty() && fallback.is_none() {
-        let strongest = unexplained
-            .iter()
-            .max_by(|a, b| a.evidence.lr.total_cmp(&b.evidence.lr))
-            .expect("non-empty");
-        let mut w = BTreeMap::new();
-        w.insert("drift_probes".to_string(), probes_json(&unexplained));
-        w.insert("residuals".to_string(), worst_bins(&residuals_after));
-        let mut parameters = BTreeMap::new();
-        for r in &unexplained {
-            for (k, v) in &r.parameters {
-                parameters.insert(k.clone(), *v);
-            }
-        }
-        findings.push(Finding {
-            effect: "unexplained".into(),
-            accepted: false,
-            form: unexplained
-                .iter()
-                .map(|r| r.form.clone())
-                .collect::<Vec<_>>()
-                .join("; "),
-            parameters,
-            evidence: strongest.evidence.clone(),
-            where_: w,
-            baseline: final_score.clone(),
-            extended: ModelScore {
-                cv_rms_m: f64::NAN,
-                ..final_score.clone()
-            },
-        });
-    }
-    for acc in &removed {
-        let mut w = BTreeMap::new();
-        w.insert("drift_probes".to_string(), probes_json(&acc.probes_after));
-        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
-    }
-    for row in &last_rows {
-        let mut w = BTreeMap::new();
-        w.insert("drift_probes".to_string(), probes_json(&last_probes));
-        findings.push(finding(
-            row,
-            final_score.clone(),
-            ModelScore {
-                cv_rms_m: row.evidence.cv_rms_m.unwrap_or(f64::NAN),
-                ..Default::default()
-            },
-            w,
-        ));
-    }
-    let mut model_parameters = BTreeMap::new();
-    for (p, (v, se)) in current
-        .params
-        .iter()
-        .zip(current.fit.global.iter().zip(&current.fit.global_se))
-    {
-        model_parameters.insert(p.name.clone(), Estimate::new(*v, *se));
-    }
+    ctx.trace("baseline fitted");
+    let base_cv = ctx.cross_validate(&baseline);
+    ctx.trace("baseline cross-validated");
+    let mut sel = select_terms(&baseline, &base_cv, &ctx);
+    ctx.trace("rounds done");
+    let (fallback, maps_after) = model_what_is_left(&mut sel, &ctx);
+    ctx.trace("fallback done");
+    let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
+    let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
+    let drift = drift_of(&sel.current, &per_run, &ctx);
+    ctx.trace("drift done");
+    let final_score = sel.current.score(&runs, Some(&sel.current_cv));
+    let findings = findings_of(
+        &sel,
+        fallback.as_ref(),
+        &residuals_before,
+        &residuals_after,
+        &final_score,
+    );
     let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {
-        mismatch: any_accepted || !unexplained.is_empty(),
+        mismatch: any_accepted || !sel.unexplained.is_empty(),
         findings,
-        candidates: table,
         model: final_score,
-        model_parameters,
+        model_parameters: model_parameters(&sel.current),
         baseline_model: baseline.score(&runs, Some(&base_cv)),
         residuals_before: Some(residuals_before),
         residuals_after: Some(residuals_after),
         drift: Some(drift),
         force_maps: Some(ForceMaps {
-            before: maps_before,
+            before: sel.maps_before,
             after: maps_after,
         }),
-        spectra,
+        spectra: sel.spectra,
+        candidates: sel.table,
         runs_used: runs.len(),
         materials,
         settings: settings(opts),

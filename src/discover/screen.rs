@@ -42,6 +42,37 @@ pub struct Screened {
     /// standard errors (NaN where the trial grid, not a fit, set the value).
     pub estimate: Vec<f64>,
     pub se: Vec<f64>,
+    /// A searched form's information about its size at its most sensitive trial (for its
+    /// detection limit, `detection.rs`); None for a named term.
+    pub typical: Option<Typical>,
+}
+
+/// The information about a searched form's size at its most sensitive trial (the grid's trial
+/// of most information: a long wavelength, a wide bump, a low frequency), with that trial in
+/// words; not the trial the data liked best, whose information can be anything from the grid's
+/// best to its worst (a frequency near the Nyquist limit hardly moves the positions).
+#[derive(Clone, Debug)]
+pub enum Typical {
+    /// Standard error of the size (an amplitude) of a form coherent over the runs.
+    Se { se: f64, at: String },
+    /// Each run's information a_r about the amplitude of a force periodic in time with a phase
+    /// per run (`time_periodic`).
+    PerRun { a: Vec<f64>, at: String },
+}
+
+/// The trial of least standard error `se_of(trial's se)` (the first of equals).
+fn most_sensitive(
+    trials: &[Option<Trial>],
+    se_of: impl Fn(&[f64]) -> f64,
+) -> Option<(f64, &Trial)> {
+    let mut best: Option<(f64, &Trial)> = None;
+    for t in trials.iter().flatten() {
+        let se = se_of(&t.2);
+        if se.is_finite() && best.is_none_or(|b| se < b.0) {
+            best = Some((se, t));
+        }
+    }
+    best
 }
 
 /// Each run's data residual (replicate 0) and noise replicates, projected and in noise units.
@@ -345,7 +376,7 @@ pub fn screen(
                     lo,
                     dx,
                     segments,
-                } => spline(prep, &v, *variable, *lo, *dx, *segments),
+                } => (spline(prep, &v, *variable, *lo, *dx, *segments), None),
                 Extra::VelocityFriction { materials } => {
                     let lo = e.params()[0].lo;
                     let theta0 = vec![lo; *materials];
@@ -361,7 +392,7 @@ pub fn screen(
                             )
                         })
                         .collect();
-                    best_of(trials, nrep)
+                    (best_of(trials, nrep), None)
                 }
                 _ => {
                     let ps = e.params();
@@ -381,14 +412,19 @@ pub fn screen(
                             )
                         })
                         .collect();
-                    secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v)
+                    (
+                        secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v),
+                        None,
+                    )
                 }
             };
+            let (t, typical) = t;
             t.map(|(lr, estimate, se)| Screened {
                 lr: lr[0],
                 replicates: lr[1..].to_vec(),
                 estimate,
                 se,
+                typical,
             })
         })
         .collect()
@@ -401,7 +437,7 @@ fn periodic_z(
     z_ref: f64,
     k_lo: f64,
     k_hi: f64,
-) -> Option<Trial> {
+) -> (Option<Trial>, Option<Typical>) {
     let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
         .into_iter()
         .filter(|k| *k >= k_lo && *k <= k_hi)
@@ -425,10 +461,21 @@ fn periodic_z(
             ))
         })
         .collect();
-    best_of(trials, v.n_rep())
+    let typical =
+        most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(|(se, t)| Typical::Se {
+            se,
+            at: format!("at a wavelength of {:.3} mm", 1e3 * TAU / t.1[0]),
+        });
+    (best_of(trials, v.n_rep()), typical)
 }
 
-fn localized(prep: &[Prepared], v: &Vectors, rg: &Ranges, w_lo: f64, w_hi: f64) -> Option<Trial> {
+fn localized(
+    prep: &[Prepared],
+    v: &Vectors,
+    rg: &Ranges,
+    w_lo: f64,
+    w_hi: f64,
+) -> (Option<Trial>, Option<Typical>) {
     let trials = bump_trials(rg, w_lo, w_hi);
     let out: Vec<Option<Trial>> = trials
         .par_iter()
@@ -441,7 +488,15 @@ fn localized(prep: &[Prepared], v: &Vectors, rg: &Ranges, w_lo: f64, w_hi: f64) 
             ))
         })
         .collect();
-    best_of(out, v.n_rep())
+    let typical = most_sensitive(&out, |se| se[0]).map(|(se, t)| Typical::Se {
+        se,
+        at: format!(
+            "of width {:.3} mm at z = {:.2} mm",
+            1e3 * t.1[2],
+            1e3 * t.1[1]
+        ),
+    });
+    (best_of(out, v.n_rep()), typical)
 }
 
 /// A force periodic in time with one amplitude and each run's own phase. Per run the (sin, cos)
@@ -455,17 +510,17 @@ fn time_periodic(
     rg: &Ranges,
     f_lo: f64,
     f_hi: f64,
-) -> Option<Trial> {
+) -> (Option<Trial>, Option<Typical>) {
     let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
         .into_iter()
         .filter(|f| *f >= f_lo && *f <= f_hi)
         .collect();
     let nrep = v.n_rep();
-    let out: Vec<Option<Trial>> = fs
+    let out: Vec<(Option<Trial>, Vec<f64>)> = fs
         .par_iter()
         .map(|&f| {
             let mut sb = vec![0.0; nrep];
-            let mut sa = 0.0;
+            let mut info = Vec::with_capacity(prep.len());
             for (p, yr) in prep.iter().zip(&v.y) {
                 let (rs, rc) = p.track.respond_time(TAU * f);
                 let xs = p.column(rs);
@@ -474,19 +529,41 @@ fn time_periodic(
                 if a <= 0.0 {
                     continue;
                 }
-                sa += a;
+                info.push(a);
                 for (bb, yb) in yr.iter().enumerate() {
                     sb[bb] += dot(&xs, yb).hypot(dot(&xc, yb));
                 }
             }
+            let sa: f64 = info.iter().sum();
             if sa <= 0.0 {
-                return None;
+                return (None, info);
             }
             let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
-            Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()]))
+            (
+                Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
+                info,
+            )
         })
         .collect();
-    best_of(out, nrep)
+    // the most sensitive frequency: the most information over the runs
+    let mut top: Option<(f64, usize)> = None;
+    for (i, (t, info)) in out.iter().enumerate() {
+        let sa: f64 = info.iter().sum();
+        if t.is_some() && top.is_none_or(|b| sa > b.0) {
+            top = Some((sa, i));
+        }
+    }
+    let typical = top.map(|(_, i)| Typical::PerRun {
+        a: out[i].1.clone(),
+        at: format!(
+            "at {:.0} Hz (higher at higher frequencies, as f² far above)",
+            fs[i]
+        ),
+    });
+    (
+        best_of(out.into_iter().map(|(t, _)| t).collect(), nrep),
+        typical,
+    )
 }
 
 fn spline(

@@ -1,11 +1,17 @@
 //! Each run's own phase of a force periodic in time: a vibration is not synchronised with the
 //! kick, so the phase is a parameter of every run, fitted (profiled) inside each prediction.
 //!
-//! For amplitude A and frequency f the run is simulated three times: without the force, with
-//! `A sin(2π f t)` and with `A cos(2π f t)`. For small forces the motion responds linearly, so the
-//! phase that best fits the recorded positions minimises
+//! For amplitude A and frequency f the run is simulated without the force, with `A sin(2π f t)`,
+//! with `A cos(2π f t)` and, for the run's own parameters, with v0 stepped. For small forces the
+//! motion responds linearly, so the phase that best fits the recorded positions minimises
 //! `|e − cos φ·δs − sin φ·δc|²` (e the residual without the force, δs and δc the two responses),
 //! a one-dimensional problem solved on a grid and refined; the run's model then carries that phase.
+//!
+//! The run's z0, t0 and v0 are projected out of e, δs and δc first (as in the screen). A force
+//! switched on at the kick leaves a velocity offset `A cos φ/ω` that grows into a drift of tens of
+//! µm over a run, a hundred times the oscillation it comes with; v0 absorbs that drift, but a phase
+//! chosen on the raw residual is the one that cancels it, not the one of the oscillation, and the
+//! amplitude fitted with such phases comes out near 2/π of the truth.
 
 use super::candidate::N_LOCAL;
 use super::data::RunData;
@@ -17,6 +23,38 @@ fn simulate(m: &SimModel, l: &[f64; N_LOCAL], tt: &[f64]) -> Vec<f64> {
     let mut z = vec![0.0; tt.len()];
     m.simulate(l[0], l[2], tt, &mut z, None, None);
     z
+}
+
+/// An orthonormal basis (Gram–Schmidt, twice) of the run's local columns at its kept samples.
+fn local_basis(cols: [Vec<f64>; 3]) -> Vec<Vec<f64>> {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    for mut x in cols {
+        let norm0 = dot(&x, &x).sqrt();
+        if !(norm0 > 0.0) {
+            continue;
+        }
+        for _ in 0..2 {
+            for qi in &q {
+                let p = dot(qi, &x);
+                x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+            }
+        }
+        let norm = dot(&x, &x).sqrt();
+        if norm > 1e-9 * norm0 {
+            x.iter_mut().for_each(|a| *a /= norm);
+            q.push(x);
+        }
+    }
+    q
+}
+
+/// `x` with its components along the orthonormal `basis` removed.
+fn project_out(basis: &[Vec<f64>], x: &mut [f64]) {
+    for qi in basis {
+        let p: f64 = qi.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+        x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+    }
 }
 
 /// Sum of squares of `e − cos φ·s − sin φ·c` from the sums (ss, sc, cc, es, ec).
@@ -81,7 +119,18 @@ pub fn profile_phase(m: &mut SimModel, l: &[f64; N_LOCAL], run: &RunData) {
     let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
     let mut without = m.clone();
     without.terms.remove(idx);
-    let z0 = simulate(&without, l, &tt);
+    let mut z0 = vec![0.0; tt.len()];
+    let mut v = vec![0.0; tt.len()];
+    without.simulate(l[0], l[2], &tt, &mut z0, Some(&mut v), None);
+    // the run's own columns: z0, t0 (the velocity) and v0 (a step of the integrator)
+    let dv = 1e-6 * l[2].abs().max(1e-3);
+    let zv = simulate(&without, &[l[0], l[1], l[2] + dv], &tt);
+    let kept: Vec<usize> = (0..tt.len()).filter(|&i| run.keep[i]).collect();
+    let basis = local_basis([
+        vec![1.0; kept.len()],
+        kept.iter().map(|&i| v[i]).collect(),
+        kept.iter().map(|&i| (zv[i] - z0[i]) / dv).collect(),
+    ]);
     let with_phase = |phase_rad: f64| {
         let mut w = m.clone();
         w.terms[idx] = Term::TimePeriodicForce {
@@ -93,19 +142,19 @@ pub fn profile_phase(m: &mut SimModel, l: &[f64; N_LOCAL], run: &RunData) {
     };
     let zs = with_phase(0.0);
     let zc = with_phase(FRAC_PI_2);
+    let column = |z: &[f64]| -> Vec<f64> {
+        let mut x: Vec<f64> = kept.iter().map(|&i| z[i] - z0[i]).collect();
+        project_out(&basis, &mut x);
+        x
+    };
+    let (e, s, c) = (column(&run.z_m), column(&zs), column(&zc));
     let mut k = [0.0; 5];
-    for i in 0..tt.len() {
-        if !run.keep[i] {
-            continue;
-        }
-        let e = run.z_m[i] - z0[i];
-        let s = zs[i] - z0[i];
-        let c = zc[i] - z0[i];
-        k[0] += s * s;
-        k[1] += s * c;
-        k[2] += c * c;
-        k[3] += e * s;
-        k[4] += e * c;
+    for j in 0..e.len() {
+        k[0] += s[j] * s[j];
+        k[1] += s[j] * c[j];
+        k[2] += c[j] * c[j];
+        k[3] += e[j] * s[j];
+        k[4] += e[j] * c[j];
     }
     let phase_rad = best_phase(&k);
     m.terms[idx] = Term::TimePeriodicForce {

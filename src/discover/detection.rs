@@ -1,0 +1,243 @@
+//! Detection limits: the smallest size of each candidate this dataset would have found.
+//!
+//! A named term's limit comes from the standard error of its size in the candidate model. A form
+//! whose scale is searched (a wavelength, a bump's centre and width, a frequency) has a limit for
+//! each trial scale; it is given at the grid's most sensitive trial, named in the text
+//! (`screen::Typical`), not at the trial the data happened to like best: that one's information
+//! can be anything from the grid's best to its worst (a force in time must grow as f² to move the
+//! positions as much, so near the Nyquist limit it hardly moves them), and a limit read there says
+//! more about the noise than about the dataset. A median over the trials is no better: over a
+//! frequency grid spaced evenly up to the Nyquist limit it sits at kHz (72 m/s² on the shipped data).
+
+use super::candidate::Extra;
+use super::diagnosis::DetectionLimit;
+use super::forward::Model;
+use super::null_distribution::NullFit;
+use super::screen::Typical;
+use super::G_MPS2;
+use std::f64::consts::FRAC_PI_2;
+
+/// One-sided 90 % power: the size is found in 90 % of datasets.
+const Z_POWER: f64 = 1.2816;
+
+/// The LR a term must exceed at `level` under its bootstrap null (bisection on the gamma tail).
+pub fn critical_lr(null: &NullFit, level: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while null.p_value(hi) > level && hi < 1e9 {
+        hi *= 2.0;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if null.p_value(mid) > level {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// The smallest size of a term this dataset would have detected (90 % power at the first Holm
+/// level `level`). For a term estimated coherently over the runs: the size θ with |θ̂| > se·√c in
+/// 90 % of data sets, θ̂ ~ N(θ, s·se²), c the critical LR and s the null's inflation over χ²
+/// (dependent frames); se at the most sensitive trial for a searched form. For a force periodic in time
+/// with a phase per run: see `time_limit`. None for terms without one size.
+pub fn detection_limit(
+    e: &Extra,
+    m: &Model,
+    typical: Option<&Typical>,
+    null: &NullFit,
+    level: f64,
+) -> Option<DetectionLimit> {
+    let off = m.spec.extra_offset(m.spec.extras.len() - 1);
+    let se = &m.fit.global_se;
+    let typical_se = match typical {
+        Some(Typical::Se { se, .. }) => Some(*se),
+        _ => None,
+    };
+    let at = match typical {
+        Some(Typical::Se { at, .. }) | Some(Typical::PerRun { at, .. }) => format!(" {at}"),
+        None => String::new(),
+    };
+    let (name, unit, se_size, scale) = match e {
+        Extra::QuadraticDrag => ("c_per_m", "1/m", se[off], 1.0),
+        Extra::SaturatingDrag => ("tp_s_per_mps", "s²/m", se[off], 1.0),
+        Extra::RollingResistance => ("deceleration_mps2", "m/s²", se[off], G_MPS2),
+        Extra::GrooveTilt => ("alpha_deg", "°", se[off], 1.0),
+        Extra::PeriodicZ { .. } => (
+            "amplitude_mps2",
+            "m/s²",
+            typical_se.unwrap_or(se[off + 1].hypot(se[off + 2]) / 2f64.sqrt()),
+            1.0,
+        ),
+        Extra::Localized { .. } => ("amplitude_mps2", "m/s²", typical_se.unwrap_or(se[off]), 1.0),
+        Extra::TimePeriodic { .. } => ("amplitude_mps2", "m/s²", se[off + 1], 1.0),
+        _ => return None,
+    };
+    let c = critical_lr(null, level);
+    let value = match (e, typical) {
+        (Extra::TimePeriodic { .. }, Some(Typical::PerRun { a, .. })) => time_limit(a, c)?,
+        _ => {
+            if !(se_size.is_finite() && se_size > 0.0) {
+                return None;
+            }
+            let df = e.params().len() as f64;
+            let inflation = (null.mean / df).max(1.0);
+            scale * se_size * (c.sqrt() + Z_POWER * inflation.sqrt())
+        }
+    };
+    Some(DetectionLimit {
+        parameter: name.into(),
+        value,
+        text: format!(
+            "{} above {} {}{at} would have been found",
+            e.size_name(),
+            sig(value),
+            unit
+        ),
+    })
+}
+
+/// The amplitude of a force periodic in time, with its own phase in each run, that the screen's
+/// statistic `S = (Σ|b_r|)²/Σa_r` (`screen::time_periodic`) exceeds the critical value `c` with
+/// 90 % power, `a_r` each run's information at the typical frequency. In each run's noise units
+/// |b_r|/√a_r follows a Rice law of parameter ν_r = A√a_r (a run's projection at its best phase),
+/// with mean R(ν) and variance 2 + ν² − R(ν)², so √S has mean Σ√a_r R(ν_r)/√Σa and variance
+/// Σa_r(2 + ν_r² − R²)/Σa. When each run alone sees the force below its noise (ν_r < 1), R(ν)
+/// grows with ν² only, and the limit is far above the `se·√c` of a coherent term.
+fn time_limit(a: &[f64], c: f64) -> Option<f64> {
+    let sa: f64 = a.iter().sum();
+    if !(sa > 0.0 && c.is_finite()) {
+        return None;
+    }
+    let margin = |amp: f64| {
+        let (mut mean, mut var) = (0.0, 0.0);
+        for &ar in a {
+            let nu = amp * ar.sqrt();
+            let r = rice_mean(nu);
+            mean += ar.sqrt() * r;
+            var += ar * (2.0 + nu * nu - r * r).max(0.0);
+        }
+        mean / sa.sqrt() - Z_POWER * (var / sa).sqrt() - c.sqrt()
+    };
+    let mut hi = 1.0 / sa.sqrt();
+    while margin(hi) < 0.0 {
+        hi *= 2.0;
+        if hi > 1e6 {
+            return None;
+        }
+    }
+    let mut lo = 0.0;
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if margin(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(hi)
+}
+
+/// Mean of the length of a 2-D Gaussian vector with unit variance per component and mean of
+/// length ν (the Rice law): √(π/2)·[(1 + 2x)·I0e(x) + 2x·I1e(x)], x = ν²/4.
+pub fn rice_mean(nu: f64) -> f64 {
+    let x = 0.25 * nu * nu;
+    if x > 700.0 {
+        return nu + 0.5 / nu;
+    }
+    FRAC_PI_2.sqrt() * ((1.0 + 2.0 * x) * i0e(x) + 2.0 * x * i1e(x))
+}
+
+/// e^(−x)·I0(x), x ≥ 0 (polynomial approximations, relative error below 2e-7).
+fn i0e(x: f64) -> f64 {
+    if x < 3.75 {
+        let t = (x / 3.75).powi(2);
+        (-x).exp()
+            * (1.0
+                + t * (3.5156229
+                    + t * (3.0899424
+                        + t * (1.2067492 + t * (0.2659732 + t * (0.0360768 + t * 0.0045813))))))
+    } else {
+        let t = 3.75 / x;
+        (0.39894228
+            + t * (0.01328592
+                + t * (0.00225319
+                    + t * (-0.00157565
+                        + t * (0.00916281
+                            + t * (-0.02057706
+                                + t * (0.02635537 + t * (-0.01647633 + t * 0.00392377))))))))
+            / x.sqrt()
+    }
+}
+
+/// e^(−x)·I1(x), x ≥ 0 (polynomial approximations, relative error below 2e-7).
+fn i1e(x: f64) -> f64 {
+    if x < 3.75 {
+        let t = (x / 3.75).powi(2);
+        (-x).exp()
+            * x
+            * (0.5
+                + t * (0.87890594
+                    + t * (0.51498869
+                        + t * (0.15084934 + t * (0.02658733 + t * (0.00301532 + t * 0.00032411))))))
+    } else {
+        let t = 3.75 / x;
+        (0.39894228
+            + t * (-0.03988024
+                + t * (-0.00362018
+                    + t * (0.00163801
+                        + t * (-0.01031555
+                            + t * (0.02282967
+                                + t * (-0.02895312 + t * (0.01787654 - t * 0.00420059))))))))
+            / x.sqrt()
+    }
+}
+
+/// Three significant digits.
+pub fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let d = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.d$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Rice mean against a direct quadrature of E|ν + Z| over the plane.
+    #[test]
+    fn rice_mean_matches_a_quadrature() {
+        for nu in [0.0, 0.3, 1.0, 1.7, 3.0, 5.5, 12.0] {
+            let (h, n) = (0.02, 500);
+            let mut s = 0.0;
+            for i in -n..=n {
+                for j in -n..=n {
+                    let (x, y) = (i as f64 * h, j as f64 * h);
+                    let w = (-0.5 * (x * x + y * y)).exp();
+                    s += w * ((nu + x).powi(2) + y * y).sqrt();
+                }
+            }
+            let q = s * h * h / std::f64::consts::TAU;
+            let r = rice_mean(nu);
+            assert!((r - q).abs() < 1e-4 * q, "nu {nu}: {r} against {q}");
+        }
+    }
+
+    /// The limit is the amplitude at which the statistic's mean less 1.28 of its spread meets
+    /// the critical value, and it grows with the critical value.
+    #[test]
+    fn time_limit_reaches_the_critical_value_with_90_percent_power() {
+        let a = vec![400.0; 60];
+        let c = 180.0;
+        let amp = time_limit(&a, c).expect("a limit");
+        let nu = amp * 20.0;
+        let r = rice_mean(nu);
+        let mean = 60f64.sqrt() * r;
+        let sd = (2.0 + nu * nu - r * r).sqrt();
+        assert!((mean - Z_POWER * sd - c.sqrt()).abs() < 1e-6, "{mean} {sd}");
+        assert!(time_limit(&a, 2.0 * c).expect("a limit") > amp);
+    }
+}
