@@ -1089,3 +1089,178 @@ fn many_problems_are_counted_and_listed_in_file_order() {
     let second = e.find("row 3,").unwrap();
     assert!(first < second, "{e}");
 }
+
+// ---------------------------------------------------------------- the columnar path
+
+/// The shipped dataset's top-level files.
+fn shipped_files() -> Files {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let mut files = Files::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            files.insert(name, std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}
+
+/// The row-by-row reference's recordings of `files`.
+fn row_by_row(files: &Files) -> Vec<Recording> {
+    ingest::ingest_row_by_row(files, &params())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .recordings
+}
+
+/// The columnar path reads `files` (it does not fall back) and gives the row-by-row recordings.
+fn assert_columnar_matches(files: &Files, what: &str) -> Vec<Recording> {
+    let columnar = ingest::ingest_columnar(files, &params())
+        .unwrap_or_else(|| panic!("{what}: the columnar path fell back to row by row"));
+    let reference = row_by_row(files);
+    assert_eq!(columnar.len(), reference.len(), "{what}");
+    assert_eq!(columnar, reference, "{what}");
+    columnar
+}
+
+/// The shipped trajectories with their data lines in a seeded random order.
+fn shuffled_trajectories(files: &Files, seed: u64) -> Files {
+    let text = String::from_utf8(files["trajectories.csv"].clone()).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let mut rows: Vec<&str> = lines.collect();
+    rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let mut out = files.clone();
+    out.insert(
+        "trajectories.csv".into(),
+        format!("{header}\n{}\n", rows.join("\n")).into_bytes(),
+    );
+    out
+}
+
+#[test]
+fn columnar_ingest_gives_the_row_by_row_items_on_the_shipped_data() {
+    let files = shipped_files();
+    let recs = assert_columnar_matches(&files, "shipped data");
+    assert!(recs.len() > 100, "{} runs", recs.len());
+    // The stage's items (names and bytes, hence their keys downstream) are those of the
+    // row-by-row recordings.
+    let out = stage_outputs(&files, &toml::Table::new());
+    let Artifact::Collection(items) = &out["runs"] else {
+        panic!("runs is not a collection")
+    };
+    let expected: BTreeMap<String, Vec<u8>> = row_by_row(&files)
+        .iter()
+        .map(|r| (item_name(&r.info.run), serde_json::to_vec(r).unwrap()))
+        .collect();
+    assert_eq!(items, &expected);
+}
+
+#[test]
+fn columnar_ingest_of_shuffled_rows_gives_the_same_items() {
+    let files = shipped_files();
+    let reference = stage_outputs(&files, &toml::Table::new());
+    for seed in [7, 8] {
+        let shuffled = shuffled_trajectories(&files, seed);
+        assert_columnar_matches(&shuffled, &format!("shuffled, seed {seed}"));
+        assert_eq!(
+            stage_outputs(&shuffled, &toml::Table::new()),
+            reference,
+            "seed {seed}"
+        );
+    }
+}
+
+#[test]
+fn columnar_ingest_reads_parquet_as_csv() {
+    let recs = known_recordings();
+    let from_csv = assert_columnar_matches(&interchange_csv(&recs), "known, CSV");
+    let from_parquet = assert_columnar_matches(&interchange_parquet(&recs), "known, Parquet");
+    assert_eq!(from_csv, from_parquet);
+    assert_eq!(from_csv, expected());
+}
+
+#[test]
+fn damaged_files_fall_back_to_row_by_row_with_its_message() {
+    let recs = known_recordings();
+    let n = trajectory_lines(&recs).len();
+    let cases: Vec<(&str, Files)> = vec![
+        (
+            "extra field",
+            edit_trajectory(&recs, 3, |l| format!("{l},9")),
+        ),
+        (
+            "missing field",
+            edit_trajectory(&recs, 3, |l| l.rsplit_once(',').unwrap().0.into()),
+        ),
+        (
+            "quoted number",
+            edit_trajectory(&recs, 3, |l| set_field(l, 4, "\"0.25\"")),
+        ),
+        (
+            "spaces around a number",
+            edit_trajectory(&recs, 3, |l| set_field(l, 3, " 0.001 ")),
+        ),
+        (
+            "frame written 12.0",
+            edit_trajectory(&recs, 0, |l| set_field(l, 2, "0.0")),
+        ),
+        ("nan", edit_trajectory(&recs, 5, |l| set_field(l, 4, "NaN"))),
+        (
+            "empty cell",
+            edit_trajectory(&recs, 5, |l| set_field(l, 3, "")),
+        ),
+        (
+            "far position",
+            edit_trajectory(&recs, 5, |l| set_field(l, 4, "1e3")),
+        ),
+        (
+            "unknown particle",
+            edit_trajectory(&recs, 5, |l| set_field(l, 1, "7")),
+        ),
+        (
+            "negative particle",
+            edit_trajectory(&recs, 5, |l| set_field(l, 1, "-1")),
+        ),
+        (
+            "duplicate frame",
+            edit_trajectory(&recs, 6, |l| {
+                let prev = trajectory_lines(&recs)[5].clone();
+                set_field(l, 2, prev.split(',').nth(2).unwrap())
+            }),
+        ),
+        (
+            "clock off",
+            edit_trajectory(&recs, n - 1, |l| set_field(l, 3, "0.5")),
+        ),
+        (
+            "unknown run",
+            edit_trajectory(&recs, n - 1, |l| set_field(l, 0, "zz9")),
+        ),
+        (
+            "run id with a space",
+            edit_trajectory(&recs, 2, |l| {
+                let run = l.split(',').next().unwrap().to_string();
+                set_field(l, 0, &format!(" {run}"))
+            }),
+        ),
+    ];
+    let mut refused = 0;
+    for (what, files) in cases {
+        let fast = ingest::ingest(&files, &params()).map_err(|e| e.to_string());
+        let slow = ingest::ingest_row_by_row(&files, &params()).map_err(|e| e.to_string());
+        assert_eq!(fast, slow, "{what}");
+        if slow.is_err() {
+            refused += 1;
+            assert!(
+                ingest::ingest_columnar(&files, &params()).is_none(),
+                "{what}: the columnar path took a damaged file"
+            );
+        }
+    }
+    // All but three: a quoted number, a frame written as `0.0` and spaces around a run id are
+    // accepted (row by row, since the columnar path leaves them to it), and read the same.
+    assert_eq!(refused, 11);
+    let accepted = edit_trajectory(&recs, 0, |l| set_field(l, 2, "0.0"));
+    assert_eq!(run_ok(&accepted, &params()), expected());
+}
