@@ -478,7 +478,7 @@ fn shuffled_rows_give_byte_identical_outputs() {
 }
 
 #[test]
-fn stage_outputs_hold_recordings_table_and_an_empty_skipped_list() {
+fn stage_outputs_hold_recordings_and_an_empty_skipped_list() {
     let out = stage_outputs(&interchange_csv(&known_recordings()), &toml::Table::new());
     let Artifact::Collection(runs) = &out["runs"] else {
         panic!("runs is not a collection")
@@ -487,25 +487,11 @@ fn stage_outputs_hold_recordings_table_and_an_empty_skipped_list() {
     let c01: Recording = serde_json::from_slice(&runs["c01"]).unwrap();
     assert_eq!(c01, expected()[0]);
     assert_eq!(out["skipped"], Artifact::File(b"[]\n".to_vec()));
-    // The table reads back as trajectories.parquet and gives the same recordings.
-    let Artifact::File(table) = &out["table"] else {
-        panic!("table is not a file")
-    };
-    let df = ParquetReader::new(Cursor::new(table.clone()))
-        .finish()
-        .unwrap();
-    let n: usize = known_recordings()
-        .iter()
-        .flat_map(|r| &r.tracks)
-        .map(|t| t.frame.len())
-        .sum();
-    assert_eq!(df.height(), n);
-    assert_eq!(df.column("z_m").unwrap().dtype(), &DataType::Float64);
-    assert_eq!(df.column("frame").unwrap().dtype(), &DataType::Int64);
-    let mut files = interchange_csv(&known_recordings());
-    files.remove("trajectories.csv");
-    files.insert("trajectories.parquet".into(), table.clone());
-    assert_eq!(run_ok(&files, &params()), expected());
+    assert_eq!(
+        out.keys().collect::<Vec<_>>(),
+        ["runs", "skipped"],
+        "no Parquet table of all samples: no stage reads one"
+    );
 }
 
 #[test]

@@ -26,7 +26,7 @@ mod trackmate_xml;
 mod trackpy;
 
 pub use error::{IngestError, Problem};
-pub use output::{item_name, skipped_json, table_parquet, Skipped};
+pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
 use crate::recording::Recording;
