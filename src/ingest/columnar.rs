@@ -1,6 +1,7 @@
-//! The fast path of the interchange format: trajectories read with a typed schema by polars, sorted
-//! by (run, particle, frame) in polars, and each run's rows sliced straight into `Recording` tracks,
-//! with no per-row structs and no maps of rows.
+//! The fast path of the interchange format: trajectories read with a typed schema by polars,
+//! grouped by run (sorted by (run, particle, frame) in polars when the rows do not come grouped),
+//! and each run's rows sliced straight into `Recording` tracks, with no per-row structs and no
+//! maps of rows.
 //!
 //! It gives a dataset's recordings only when the dataset is clean: every check of the row-by-row
 //! path (`interchange`, `assemble`, `sanity`) holds. At the first thing it would have to complain
@@ -51,12 +52,12 @@ pub fn recordings(files: &BTreeMap<String, Vec<u8>>, min_frames: usize) -> Optio
     };
     let cols = Columns::of(df)?;
     let mut recordings = Vec::with_capacity(infos.len());
-    for (run, rows) in run_ranges(&cols.run)? {
+    for (run, rows) in &cols.runs {
         let info = infos.remove(run.as_str())?;
-        recordings.push(recording(info, &cols, rows, min_frames)?);
+        recordings.push(recording(info, &cols, rows.clone(), min_frames)?);
     }
-    // Every run of runs.csv has rows; polars sorted the rows by run (bytewise, as `str` orders),
-    // so the recordings are in the order of the row-by-row path's map.
+    // Sorted by run as the row-by-row path's map sorts them; every run of runs.csv has rows.
+    recordings.sort_by(|a, b| a.info.run.cmp(&b.info.run));
     infos.is_empty().then_some(recordings)
 }
 
@@ -141,9 +142,10 @@ fn read_parquet(bytes: &[u8]) -> Option<DataFrame> {
     DataFrame::new(df.height(), columns).ok()
 }
 
-/// The five columns sorted by (run, particle, frame), without nulls.
+/// The five columns, each run's rows in one block sorted by (particle, frame), without nulls.
 struct Columns {
-    run: StringChunked,
+    /// Each run's id and its rows.
+    runs: Vec<(String, Range<usize>)>,
     particle: Vec<i64>,
     frame: Vec<i64>,
     t_s: Vec<f64>,
@@ -151,17 +153,27 @@ struct Columns {
 }
 
 impl Columns {
+    /// The columns as they come when each run's rows are one block sorted by (particle, frame),
+    /// as `groove synth` and most trackers write them; otherwise after polars sorted the rows by
+    /// (run, particle, frame).
     fn of(df: DataFrame) -> Option<Columns> {
         if df.columns().iter().any(|c| c.null_count() > 0) {
             return None;
         }
-        let df = if is_sorted(&df)? {
-            df
-        } else {
-            let by = COLUMNS[..3].iter().map(|(n, _)| *n);
-            df.sort(by, SortMultipleOptions::default().with_multithreaded(true))
-                .ok()?
-        };
+        if let Some(grouped) = Columns::grouped(&df)? {
+            return Some(grouped);
+        }
+        let by = COLUMNS[..3].iter().map(|(n, _)| *n);
+        let sorted = df
+            .sort(by, SortMultipleOptions::default().with_multithreaded(true))
+            .ok()?;
+        Columns::grouped(&sorted)?
+    }
+
+    /// `Some(None)` if the rows are not grouped by run and sorted within each run; `None` on a
+    /// column of another type or a run id the row-by-row path reads differently (it trims
+    /// cells; an empty one is a problem).
+    fn grouped(df: &DataFrame) -> Option<Option<Columns>> {
         let column = |name: &str| -> Option<Column> { Some(df.column(name).ok()?.rechunk()) };
         let ints = |name: &str| -> Option<Vec<i64>> {
             Some(column(name)?.i64().ok()?.cont_slice().ok()?.to_vec())
@@ -169,55 +181,43 @@ impl Columns {
         let floats = |name: &str| -> Option<Vec<f64>> {
             Some(column(name)?.f64().ok()?.cont_slice().ok()?.to_vec())
         };
-        Some(Columns {
-            run: column("run")?.str().ok()?.clone(),
-            particle: ints("particle")?,
-            frame: ints("frame")?,
-            t_s: floats("t_s")?,
-            z_m: floats("z_m")?,
-        })
-    }
-}
-
-/// Whether the rows already come sorted by (run, particle, frame), as `groove synth` and most
-/// trackers write them (then polars need not sort). `None` on a column of another type.
-fn is_sorted(df: &DataFrame) -> Option<bool> {
-    let run = df.column("run").ok()?.str().ok()?;
-    let particle = df.column("particle").ok()?.i64().ok()?;
-    let frame = df.column("frame").ok()?.i64().ok()?;
-    let mut keys = run
-        .iter()
-        .map(|r| r.unwrap_or_default())
-        .zip(particle.into_no_null_iter())
-        .zip(frame.into_no_null_iter());
-    let Some(mut previous) = keys.next() else {
-        return Some(true);
-    };
-    for key in keys {
-        if key < previous {
-            return Some(false);
-        }
-        previous = key;
-    }
-    Some(true)
-}
-
-/// Each run's id and its rows, in order. `None` for an id the row-by-row path reads differently
-/// (it trims cells; an empty one is a problem).
-fn run_ranges(run: &StringChunked) -> Option<Vec<(String, Range<usize>)>> {
-    let mut ranges: Vec<(String, Range<usize>)> = Vec::new();
-    for (i, id) in run.iter().map(|r| r.unwrap_or_default()).enumerate() {
-        match ranges.last_mut() {
-            Some((last, rows)) if last == id => rows.end = i + 1,
-            _ => {
-                if id.is_empty() || id.trim() != id {
-                    return None;
+        let particle = ints("particle")?;
+        let frame = ints("frame")?;
+        let run_column = column("run")?;
+        let run = run_column.str().ok()?;
+        let mut runs: Vec<(String, Range<usize>)> = Vec::new();
+        for arr in run.downcast_iter() {
+            for id in arr.values_iter() {
+                let i = runs.last().map_or(0, |(_, rows)| rows.end);
+                match runs.last_mut() {
+                    Some((last, rows)) if last == id => {
+                        if (particle[i], frame[i]) < (particle[i - 1], frame[i - 1]) {
+                            return Some(None);
+                        }
+                        rows.end = i + 1;
+                    }
+                    _ => {
+                        if id.is_empty() || id.trim() != id {
+                            return None;
+                        }
+                        runs.push((id.to_string(), i..i + 1));
+                    }
                 }
-                ranges.push((id.to_string(), i..i + 1));
             }
         }
+        let mut ids: Vec<&str> = runs.iter().map(|(r, _)| r.as_str()).collect();
+        ids.sort_unstable();
+        if ids.windows(2).any(|w| w[0] == w[1]) {
+            return Some(None);
+        }
+        Some(Some(Columns {
+            runs,
+            particle,
+            frame,
+            t_s: floats("t_s")?,
+            z_m: floats("z_m")?,
+        }))
     }
-    Some(ranges)
 }
 
 /// One run's recording from its rows (sorted by particle and frame), or `None` if the row-by-row
