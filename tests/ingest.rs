@@ -1250,3 +1250,83 @@ fn damaged_files_fall_back_to_row_by_row_with_its_message() {
     let accepted = edit_trajectory(&recs, 0, |l| set_field(l, 2, "0.0"));
     assert_eq!(run_ok(&accepted, &params()), expected());
 }
+
+// ---------------------------------------------------------------- a campaign of many runs
+
+/// The process's peak resident memory so far (`VmHWM` of /proc/self/status), bytes.
+fn peak_rss_bytes() -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap();
+    let kib: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    kib * 1024
+}
+
+/// Issue 13's campaign: `GROOVE_CAMPAIGN_RUNS` runs (default 100,000; half 316, half 440c, 600
+/// frames each, the shipped physics and camera) written by `groove synth`, read into memory as
+/// the engine reads a dataset folder, and ingested by the stage (recordings and their items).
+/// Asserts every run became an item and that the process's peak RSS stays within 5 × the
+/// CSV's size + 512 MB (measured: 4.8 × at 10,000 runs, 1.27 GB): the input's bytes, the typed
+/// columns, the recordings and the items are in memory together, so this is today's bound, not
+/// the issue's target (1 GB at 100,000 runs needs a streaming engine input; see
+/// tests/bench/CAMPAIGN.md). Prints the figures. Peak RSS is the process's, so run it alone:
+/// `cargo test --locked --features s3 --test ingest -- --ignored --exact campaign_ingests_within_its_memory_bound`
+/// (100,000 runs: ≈ 2.6 GB of CSV on disk in a temporary folder, minutes).
+#[test]
+#[ignore]
+fn campaign_ingests_within_its_memory_bound() {
+    let n: usize = std::env::var("GROOVE_CAMPAIGN_RUNS")
+        .map(|v| v.parse().expect("GROOVE_CAMPAIGN_RUNS is a number of runs"))
+        .unwrap_or(100_000);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = std::fs::read_to_string(root.join("data/truth/truth.toml")).unwrap();
+    let mut truth = shipped.split("[[runs]]").next().unwrap().to_string();
+    for (material, count) in [("316", n / 2), ("440c", n - n / 2)] {
+        truth += &format!(
+            "\n[[runs]]\nexperiment = \"single\"\nmaterial = \"{material}\"\ncount = {count}\n\
+             v0_mps = [0.005, 0.1]\ndirections = \"both\"\nduration_s = 0.06\n"
+        );
+    }
+    let truth_path = dir.path().join("truth.toml");
+    std::fs::write(&truth_path, truth).unwrap();
+    let data = dir.path().join("data");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_groove"))
+        .args(["synth", "--truth"])
+        .arg(&truth_path)
+        .arg("--out")
+        .arg(&data)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "groove synth failed");
+    let mut files = Files::new();
+    for name in ["runs.csv", "trajectories.csv"] {
+        files.insert(name.into(), std::fs::read(data.join(name)).unwrap());
+    }
+    let csv_bytes = files["trajectories.csv"].len() as u64;
+    let started = std::time::Instant::now();
+    let out = stage_outputs(&files, &toml::Table::new());
+    let took = started.elapsed();
+    let Artifact::Collection(items) = &out["runs"] else {
+        panic!("runs is not a collection")
+    };
+    assert_eq!(items.len(), n);
+    let item_bytes: usize = items.values().map(Vec::len).sum();
+    drop(out);
+    let peak = peak_rss_bytes();
+    let bound = 5 * csv_bytes + (512 << 20);
+    eprintln!(
+        "campaign of {n} runs: {:.0} MB of CSV, ingested in {:.1} s, items {:.0} MB \
+         ({} bytes per run), peak RSS {:.0} MB (bound {:.0} MB)",
+        csv_bytes as f64 / 1e6,
+        took.as_secs_f64(),
+        item_bytes as f64 / 1e6,
+        item_bytes / n,
+        peak as f64 / 1e6,
+        bound as f64 / 1e6
+    );
+    assert!(
+        peak <= bound,
+        "peak RSS {peak} bytes is above {bound} (5 × the CSV + 512 MB)"
+    );
+}

@@ -51,8 +51,9 @@ impl StageKind for Ingest {
         };
         let ingested = ingest::ingest(files, &params).map_err(|e| StageError(e.to_string()))?;
         let mut runs = BTreeMap::new();
-        for r in &ingested.recordings {
-            let json = serde_json::to_vec(r)
+        // Each recording is freed as soon as its item is made, so both are not held whole.
+        for r in ingested.recordings {
+            let json = serde_json::to_vec(&r)
                 .map_err(|e| StageError(format!("cannot serialize run {:?} ({e})", r.info.run)))?;
             runs.insert(ingest::item_name(&r.info.run), json);
         }
