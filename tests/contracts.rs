@@ -69,6 +69,7 @@ fn run(
         inputs: inputs.clone(),
         item,
         seed: SEED,
+        progress: None,
     })
     .unwrap_or_else(|e| panic!("stage {} failed: {}", kind.kind(), e.0))
 }

@@ -424,6 +424,7 @@ fn stage_writes_the_contract_deterministically() {
             inputs: [("runs", &runs), ("fits", &fits)].into_iter().collect(),
             item: None,
             seed: 5,
+            progress: None,
         };
         match kind.run(&input).unwrap().remove("diagnosis") {
             Some(Artifact::File(bytes)) => bytes,

@@ -367,6 +367,7 @@ fn stage_input<'a>(
         inputs,
         item,
         seed: 3,
+        progress: None,
     }
 }
 

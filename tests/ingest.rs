@@ -404,6 +404,7 @@ fn stage_outputs(files: &Files, params: &toml::Table) -> BTreeMap<String, Artifa
         inputs: BTreeMap::from([("dataset", &dataset)]),
         item: None,
         seed: 1,
+        progress: None,
     };
     Ingest
         .run(&input)

@@ -501,6 +501,7 @@ fn stage_kinds_run_through_the_contract() {
         inputs: a.iter().map(|(k, v)| (k.as_str(), v)).collect(),
         item: None,
         seed: 1,
+        progress: None,
     };
     let out = figures.run(&input).expect("figures stage runs");
     let Artifact::Collection(items) = &out["figures"] else {
@@ -515,6 +516,7 @@ fn stage_kinds_run_through_the_contract() {
         inputs: a2.iter().map(|(k, v)| (k.as_str(), v)).collect(),
         item: None,
         seed: 1,
+        progress: None,
     };
     let pages = report.run(&input).expect("report stage runs");
     let Artifact::File(md) = &pages["md"] else {

@@ -589,7 +589,7 @@ fn null_run(
     use rand::Rng;
     use rand_distr::{Distribution, Normal};
     let unit = Normal::new(0.0, 1.0).unwrap();
-    let dir = if k % 2 == 0 { 1.0 } else { -1.0 };
+    let dir = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     let v0 = dir * rng.random_range(0.005..0.1);
     let mu = rng.random_range(0.25..0.40);
     let model = Model {

@@ -11,7 +11,7 @@ pub use crate::fit::collision::whole_summary::{MaterialWholeRun, WholeRun, Whole
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// T = intercept + slope·|v0| fitted over runs (Fig. 4.2c).
+/// T = intercept + slope·|v0|, a Theil–Sen line over the runs (Fig. 4.2c).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DragLine {
     #[serde(with = "super::estimate::interval")]
@@ -20,7 +20,7 @@ pub struct DragLine {
     pub slope_s_per_mps: Estimate,
 }
 
-/// μ = intercept + slope·|v0| fitted over runs (Fig. 4.2d).
+/// μ = intercept + slope·|v0|, a Theil–Sen line over the runs (Fig. 4.2d).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrictionLine {
     #[serde(with = "super::estimate::interval")]

@@ -67,7 +67,7 @@ impl Vectors {
                 let innov = (1.0 - rho * rho).sqrt();
                 for b in 0..replicates {
                     let mut rng = ChaCha8Rng::seed_from_u64(
-                        seed ^ ((p.run as u64) << 20 | b as u64 + 1)
+                        seed ^ (((p.run as u64) << 20) | (b as u64 + 1))
                             .wrapping_mul(0x9E37_79B9_7F4A_7C15),
                     );
                     let mut e: f64 = rng.sample(StandardNormal);

@@ -92,11 +92,14 @@ pub fn execute(
         command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
+        // per-item stages already show `done/total items`
+        let detail = |what: &str| ctx.progress.detail(&spec.name, what);
         let input = StageInput {
             params: &spec.params,
             inputs,
             item,
             seed,
+            progress: item.is_none().then_some(&detail as &(dyn Fn(&str) + Sync)),
         };
         // a panicking kind fails its stage; the other stages and the store are unaffected
         match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {

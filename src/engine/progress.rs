@@ -56,6 +56,14 @@ impl Progress {
         }
     }
 
+    /// What a long-running stage is doing now (e.g. `round 2: screening 9 candidates`): shown on
+    /// the terminal's bar only; plain output and the run log stay one line per stage.
+    pub fn detail(&self, stage: &str, what: &str) {
+        if let Some(bar) = &self.bar {
+            bar.set_message(format!("{stage}: {what}"));
+        }
+    }
+
     /// A stage is done (ran or reused); `what` says how, with its time.
     pub fn finished(&self, stage: &str, what: &str) {
         let line = format!("{stage}: {what}");

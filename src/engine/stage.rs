@@ -25,6 +25,18 @@ pub struct StageInput<'a> {
     pub item: Option<&'a str>,
     /// The pipeline seed (from `pipeline.toml`), mixed with the stage name by the engine.
     pub seed: u64,
+    /// Where a long stage says what it is doing (the engine's progress line); `None` when nobody
+    /// listens (tests, a Slurm job step).
+    pub progress: Option<&'a (dyn Fn(&str) + Sync)>,
+}
+
+impl StageInput<'_> {
+    /// Tell the progress line what the stage is doing now. Never part of an output.
+    pub fn report(&self, what: &str) {
+        if let Some(p) = self.progress {
+            p(what);
+        }
+    }
 }
 
 /// What a stage returns: artifacts by output name. Every declared output must be present.

@@ -5,9 +5,10 @@
 //! Theil–Sen lines.
 
 use super::bootstrap::percentile_intervals;
-use super::regression::{mean_where, robust_weighted_mean, theil_sen_indexed};
+use super::regression::{mean_where, robust_weighted_mean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
+use crate::stats::theil_sen_indexed;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

@@ -4,7 +4,9 @@
 //! `suspect`, with the reasons.
 
 use super::model::{Prepared, MU, NP, T0, TD, V0};
+use crate::lsq::dense::solve_spd;
 use crate::physics::Groove;
+use crate::stats::{ols_line, upper_median, Line, MAD_TO_SIGMA};
 
 /// v0 further than this fraction from the first frames' speed is suspect.
 const V0_TOLERANCE: f64 = 0.3;
@@ -73,7 +75,14 @@ pub fn suspect_reasons(
     // The first frames' speed against the fitted model's over the same frames: the slope of the
     // residuals there, which a fit in the right basin keeps within its error.
     let w = (n / 10).clamp(10, 40).min(n);
-    if let Some((slope, se)) = line_slope(&t_s[..w], &r[..w]) {
+    // (at least 4 frames, so that the slope's error has 2 degrees of freedom)
+    let line = (w >= 4).then(|| ols_line(&t_s[..w], &r[..w])).flatten();
+    if let Some(Line {
+        slope,
+        slope_se: se,
+        ..
+    }) = line
+    {
         let model_speed = (m.eval(t_s[w - 1], 0.0) - m.eval(t_s[0], 0.0)) / (t_s[w - 1] - t_s[0]);
         if slope.abs() > V0_TOLERANCE * model_speed.abs() + 3.0 * se {
             why.push(format!(
@@ -129,57 +138,17 @@ pub fn early_speed_se(t_s: &[f64], z_m: &[f64]) -> Option<(f64, f64)> {
             }
         }
     }
-    let sol = solve3(s, y)?;
+    let s: Vec<f64> = s.iter().flatten().copied().collect();
+    let sol = solve_spd(&s, 3, &y)?;
     let rss: f64 = (0..n)
         .map(|i| {
             let tau = t_s[i] - t0;
             (z_m[i] - sol[0] - sol[1] * tau - sol[2] * tau * tau).powi(2)
         })
         .sum();
-    let inv_bb = solve3(s, [0.0, 1.0, 0.0])?[1];
+    let inv_bb = solve_spd(&s, 3, &[0.0, 1.0, 0.0])?[1];
     let se = (rss / (n - 3) as f64 * inv_bb.max(0.0)).sqrt();
     (sol[1].is_finite() && se.is_finite()).then_some((sol[1], se))
-}
-
-/// Least-squares slope of y on t and its standard error; `None` for fewer than 4 points.
-fn line_slope(t: &[f64], y: &[f64]) -> Option<(f64, f64)> {
-    let n = t.len().min(y.len());
-    if n < 4 {
-        return None;
-    }
-    let tm = t[..n].iter().sum::<f64>() / n as f64;
-    let ym = y[..n].iter().sum::<f64>() / n as f64;
-    let sxx: f64 = t[..n].iter().map(|v| (v - tm).powi(2)).sum();
-    if sxx <= 0.0 {
-        return None;
-    }
-    let b = (0..n).map(|i| (t[i] - tm) * (y[i] - ym)).sum::<f64>() / sxx;
-    let rss: f64 = (0..n).map(|i| (y[i] - ym - b * (t[i] - tm)).powi(2)).sum();
-    Some((b, (rss / (n - 2) as f64 / sxx).sqrt()))
-}
-
-fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
-    for c in 0..3 {
-        let p = (c..3).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        a.swap(c, p);
-        b.swap(c, p);
-        if a[c][c].abs() < 1e-300 {
-            return None;
-        }
-        for r in c + 1..3 {
-            let f = a[r][c] / a[c][c];
-            for k in c..3 {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = [0.0; 3];
-    for c in (0..3).rev() {
-        let s: f64 = (c + 1..3).map(|k| a[c][k] * x[k]).sum();
-        x[c] = (b[c] - s) / a[c][c];
-    }
-    Some(x)
 }
 
 /// RMS of the residuals' windowed means over what white noise with the residuals' frame-to-frame
@@ -189,8 +158,7 @@ fn structure(r: &[f64]) -> Option<f64> {
         return None;
     }
     let mut d: Vec<f64> = r.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
-    d.sort_by(f64::total_cmp);
-    let sigma = 1.4826 * d[d.len() / 2] / 2f64.sqrt();
+    let sigma = MAD_TO_SIGMA * upper_median(&mut d) / 2f64.sqrt();
     let means: Vec<f64> = r
         .chunks_exact(WINDOW)
         .map(|c| c.iter().sum::<f64>() / WINDOW as f64)

@@ -1,4 +1,8 @@
-//! Small estimators over runs: plain, weighted and robust weighted means, and the Theil–Sen line.
+//! Means over runs: plain, inverse-variance weighted, and robust weighted (the Theil–Sen line
+//! and the medians are in `stats`).
+
+use crate::lsq::loss::{huber_weight, HUBER_K};
+use crate::stats::{median_in_place, MAD_TO_SIGMA};
 
 /// Mean of y over `idx` restricted to the entries where `keep` holds; NaN if none.
 pub fn mean_where(y: &[f64], idx: &[usize], keep: impl Fn(usize) -> bool) -> f64 {
@@ -34,9 +38,6 @@ pub fn weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
     }
 }
 
-/// Huber's tuning constant for the M-step of [`robust_weighted_mean`].
-const HUBER_C: f64 = 1.345;
-
 /// A weighted mean of y over `idx` that no single run can capture: each run's variance is its
 /// se² plus the between-run scatter τ² (the runs' robust spread, 1.4826·MAD, squared, less their
 /// median se²), then Huber weights on the runs' standardised deviations (reweighted from the
@@ -54,17 +55,9 @@ pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
     }
     // Between-run scatter from the spread of the runs (1.4826·MAD) less their typical own
     // variance, so that a wild run does not inflate it.
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let m = v.len();
-        if m % 2 == 1 {
-            v[m / 2]
-        } else {
-            0.5 * (v[m / 2 - 1] + v[m / 2])
-        }
-    };
+    let median = |mut v: Vec<f64>| median_in_place(&mut v);
     let mid = median(ok.iter().map(|&i| y[i]).collect());
-    let mad = 1.4826 * median(ok.iter().map(|&i| (y[i] - mid).abs()).collect());
+    let mad = MAD_TO_SIGMA * median(ok.iter().map(|&i| (y[i] - mid).abs()).collect());
     let typical_var = median(ok.iter().map(|&i| se[i] * se[i]).collect());
     let tau2 = (mad * mad - typical_var).max(0.0);
     let var: Vec<f64> = ok.iter().map(|&i| se[i] * se[i] + tau2).collect();
@@ -73,7 +66,7 @@ pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
         let (mut s, mut w) = (0.0, 0.0);
         for (j, &i) in ok.iter().enumerate() {
             let z = (y[i] - mean).abs() / var[j].sqrt();
-            let h = if z > HUBER_C { HUBER_C / z } else { 1.0 };
+            let h = huber_weight(z, HUBER_K);
             s += h * y[i] / var[j];
             w += h / var[j];
         }
@@ -85,45 +78,6 @@ pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
         }
     }
     mean
-}
-
-/// Theil–Sen line y = a + b·x over the pairs picked by `idx` (indices may repeat, as in a
-/// bootstrap resample): b is the median of the slopes between every two picked points with
-/// different x, a the median of y − b·x. One wild point changes at most m − 1 of the m(m − 1)/2
-/// slopes, so it can move b only to a neighbouring order statistic of the others (breakdown
-/// 29 %), whatever its leverage. `buf` is reused. (NaN, NaN) if the x values do not vary.
-pub fn theil_sen_indexed(x: &[f64], y: &[f64], idx: &[usize], buf: &mut Vec<f64>) -> (f64, f64) {
-    buf.clear();
-    for (k, &i) in idx.iter().enumerate() {
-        for &j in &idx[k + 1..] {
-            let dx = x[j] - x[i];
-            if dx != 0.0 {
-                buf.push((y[j] - y[i]) / dx);
-            }
-        }
-    }
-    let b = median_of(buf);
-    if b.is_nan() {
-        return (f64::NAN, f64::NAN);
-    }
-    buf.clear();
-    buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
-    (median_of(buf), b)
-}
-
-/// Median of `v` (reordered in place); NaN if empty or if it holds NaN.
-fn median_of(v: &mut [f64]) -> f64 {
-    let m = v.len();
-    if m == 0 || v.iter().any(|a| a.is_nan()) {
-        return f64::NAN;
-    }
-    let (_, &mut hi, _) = v.select_nth_unstable_by(m / 2, f64::total_cmp);
-    if m % 2 == 1 {
-        hi
-    } else {
-        let lo = v[..m / 2].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (lo + hi)
-    }
 }
 
 #[cfg(test)]
@@ -160,32 +114,5 @@ mod tests {
             (calm - weighted_mean(&y[..9], &se[..9], &idx[..9])).abs() < 2e-3,
             "{calm}"
         );
-    }
-
-    #[test]
-    fn theil_sen_recovers_a_line_and_one_wild_point_moves_it_by_less_than_its_share() {
-        // 20 points on T = 0.05 + 1.1·v with a small zig-zag, v in 0.01..0.1
-        let x: Vec<f64> = (0..20).map(|i| 0.01 + 0.09 * i as f64 / 19.0).collect();
-        let mut y: Vec<f64> = x
-            .iter()
-            .enumerate()
-            .map(|(i, v)| 0.05 + 1.1 * v + if i % 2 == 0 { 2e-3 } else { -2e-3 })
-            .collect();
-        let idx: Vec<usize> = (0..20).collect();
-        let mut buf = Vec::new();
-        let (a, b) = theil_sen_indexed(&x, &y, &idx, &mut buf);
-        assert!((b - 1.1).abs() < 0.05 && (a - 0.05).abs() < 5e-3, "{a} {b}");
-        // a wild run at the fastest speed (most leverage): T 1 s instead of 0.16 s
-        y[19] = 1.0;
-        let (_, ols) = crate::stats::ols_indexed(&x, &y, &idx);
-        let (_, wild) = theil_sen_indexed(&x, &y, &idx, &mut buf);
-        // least squares follows it (slope ~5), Theil–Sen moves by less than 1/20 of that pull
-        assert!(ols > 3.0, "{ols}");
-        assert!(
-            (wild - b).abs() < (ols - b) / 20.0,
-            "{b} → {wild} (ols {ols})"
-        );
-        // no spread in x: no line
-        assert!(theil_sen_indexed(&x, &y, &[3, 3, 3], &mut buf).1.is_nan());
     }
 }

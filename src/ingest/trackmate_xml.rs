@@ -184,7 +184,7 @@ pub fn read(
                         y: number("POSITION_Y")?,
                         visible: attrs
                             .get("VISIBILITY")
-                            .is_none_or(|v| v.trim().parse::<f64>().map_or(true, |v| v != 0.0)),
+                            .is_none_or(|v| v.trim().parse::<f64>() != Ok(0.0)),
                         line,
                     })
                 })();

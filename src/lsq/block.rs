@@ -21,6 +21,18 @@ pub trait BlockProblem: Sync {
     fn uses(&self, _b: usize, _i: usize) -> bool {
         true
     }
+    /// ∂r_b/∂own_k at `shared`, `own` into `out` when the problem knows it in closed form (then
+    /// true, and the back-end skips that forward difference); false, the default, to difference.
+    fn own_column(
+        &self,
+        _b: usize,
+        _k: usize,
+        _shared: &[f64],
+        _own: &[f64],
+        _out: &mut [f64],
+    ) -> bool {
+        false
+    }
 }
 
 /// The solution.
@@ -383,6 +395,20 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         r1.iter().zip(r0).map(|(a, b)| (a - b) / h).collect()
     }
 
+    /// ∂r_b/∂(own parameter `k`): the problem's closed form if it has one, else a difference.
+    fn own_column(&self, b: usize, x: &[f64], r0: &[f64], spec: &ParamSpec, k: usize) -> Vec<f64> {
+        let ms = self.shared_specs.len();
+        let mut out = vec![0.0; r0.len()];
+        if self
+            .problem
+            .own_column(b, k, &x[..ms], self.own(x, b), &mut out)
+        {
+            out
+        } else {
+            self.column(b, x, r0, spec, None, Some(k))
+        }
+    }
+
     /// The normal-equation pieces and gradient parts of block `b`.
     fn block_pieces(
         &self,
@@ -395,7 +421,7 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         let ja: Vec<Option<Vec<f64>>> = self.own_specs[b]
             .iter()
             .enumerate()
-            .map(|(i, s)| (!s.held()).then(|| self.column(b, x, r, s, None, Some(i))))
+            .map(|(i, s)| (!s.held()).then(|| self.own_column(b, x, r, s, i)))
             .collect();
         let jb: Vec<Option<Vec<f64>>> = self
             .shared_specs

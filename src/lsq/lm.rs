@@ -128,7 +128,7 @@ fn active(x: &[f64], g: &[f64], specs: &[ParamSpec]) -> Vec<bool> {
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            !s.held() && !((x[i] <= s.lower && g[i] > 0.0) || (x[i] >= s.upper && g[i] < 0.0))
+            !(s.held() || (x[i] <= s.lower && g[i] > 0.0) || (x[i] >= s.upper && g[i] < 0.0))
         })
         .collect()
 }

@@ -2,8 +2,8 @@
 //! the back-ends — `fixed` (allocation-free arrays, the per-run hot path) with its robust loop
 //! `robust`; `lm`, the Levenberg–Marquardt driver (Huber IRLS rounds, the same active-set bound
 //! strategy) of `dense_fit` (a collision run) and `block` (shared plus per-run parameters through
-//! a Schur complement: the whole-run pair fits); `dense` (Cholesky solves and inverses of small
-//! dense systems, also for discovery's block-sparse fit), and `fd` (forward-difference Jacobian
+//! a Schur complement: the whole-run pair fits and discovery's joint fit); `dense` (Cholesky
+//! solves and inverses of small dense systems), and `fd` (forward-difference Jacobian
 //! columns that step inward at an upper bound). A singular system is `None` or
 //! [`Termination::Singular`], never a made-up factor.
 

@@ -45,7 +45,7 @@ fn mean_se(xs: &[f64]) -> Option<Estimate> {
     });
     Some(Estimate {
         value: m,
-        se: se,
+        se,
         interval: None,
     })
 }

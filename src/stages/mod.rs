@@ -16,17 +16,16 @@ pub mod validate;
 /// Every built-in kind, in a fixed order. The command line hands them to the engine
 /// (`Catalog::with_kinds`); `command` is the engine's own kind and is not listed.
 pub fn registry() -> Vec<Box<dyn StageKind>> {
-    #[allow(unused_mut)]
-    let mut kinds: Vec<Box<dyn StageKind>> = Vec::new();
-    // one line per kind, e.g. `kinds.push(Box::new(ingest::Ingest));`
-    kinds.push(Box::new(ingest::Ingest));
-    kinds.push(Box::new(fit::Fit));
-    kinds.push(Box::new(aggregate::Aggregate));
-    kinds.push(Box::new(simulate::Simulate));
-    kinds.push(Box::new(compare::Compare));
-    kinds.push(Box::new(discover::Discover));
-    kinds.push(Box::new(validate::Validate));
-    kinds.push(Box::new(figures::Figures));
-    kinds.push(Box::new(report::Report));
-    kinds
+    // one line per kind
+    vec![
+        Box::new(ingest::Ingest),
+        Box::new(fit::Fit),
+        Box::new(aggregate::Aggregate),
+        Box::new(simulate::Simulate),
+        Box::new(compare::Compare),
+        Box::new(discover::Discover),
+        Box::new(validate::Validate),
+        Box::new(figures::Figures),
+        Box::new(report::Report),
+    ]
 }

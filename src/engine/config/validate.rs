@@ -8,6 +8,7 @@ use crate::engine::command;
 use crate::engine::dag;
 use crate::engine::error::{EngineError, IoContext};
 use crate::engine::pipeline::{InputSpec, Pipeline, StageSpec};
+use crate::engine::stage::StageKind;
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
 use toml::Spanned;
@@ -127,39 +128,8 @@ fn validate_stage(
         )));
     }
     let here = |s: &Spanned<String>| file.line_of(s.span().start);
-
-    let mut inputs = BTreeMap::new();
-    for (input_name, binding) in raw.inputs {
-        let input_line = here(&input_name);
-        let input_name = input_name.into_inner();
-        let spec = parse_binding(pipeline, binding.into_inner()).map_err(|m| {
-            file.error(
-                input_line,
-                format!("stage `{name}` input `{input_name}`: {m}"),
-            )
-        })?;
-        lines
-            .inputs
-            .insert((name.to_string(), input_name.clone()), input_line);
-        inputs.insert(input_name, spec);
-    }
-
-    let mut outputs = BTreeMap::new();
-    for (output_name, path) in raw.outputs {
-        let output_line = here(&output_name);
-        let output_name = output_name.into_inner();
-        let path = substitute(pipeline, path.get_ref()).map_err(|m| {
-            file.error(
-                output_line,
-                format!("stage `{name}` output `{output_name}`: {m}"),
-            )
-        })?;
-        lines
-            .outputs
-            .insert((name.to_string(), output_name.clone()), output_line);
-        outputs.insert(output_name, Some(path));
-    }
-
+    let inputs = stage_inputs(pipeline, name, raw.inputs, file, lines)?;
+    let mut outputs = stage_outputs(pipeline, name, raw.outputs, file, lines)?;
     let params_lines: BTreeMap<String, usize> = raw
         .params
         .keys()
@@ -170,8 +140,13 @@ fn validate_stage(
         .into_iter()
         .map(|(k, v)| (k.into_inner(), v.into_inner()))
         .collect();
-
     let cmd = raw.cmd.map(|c| (here(&c), c.into_inner()));
+    let at = Place {
+        file,
+        name,
+        kind: &kind,
+        line,
+    };
     let (canonical_params, cmd) = if let Some(kind_impl) = builtin {
         if let Some((cmd_line, _)) = cmd {
             return Err(file.error(
@@ -179,42 +154,7 @@ fn validate_stage(
                 format!("stage `{name}`: `cmd` is only for kind `command`; remove it"),
             ));
         }
-        for input in kind_impl.inputs() {
-            if !inputs.contains_key(*input) {
-                return Err(file.error(line, format!(
-                    "stage `{name}` (kind `{kind}`) is missing input `{input}`; add `{input} = \"<stage>:<output>\"` or a path to its inputs"
-                )));
-            }
-        }
-        for input_name in inputs.keys() {
-            let known = kind_impl.inputs().contains(&input_name.as_str())
-                || kind_impl.optional_inputs().contains(&input_name.as_str());
-            if !known {
-                let takes: Vec<&str> = kind_impl
-                    .inputs()
-                    .iter()
-                    .chain(kind_impl.optional_inputs())
-                    .copied()
-                    .collect();
-                return Err(file.error(
-                    lines.inputs[&(name.to_string(), input_name.clone())],
-                    format!(
-                        "stage `{name}`: kind `{kind}` has no input `{input_name}`; it takes: {}",
-                        takes.join(", ")
-                    ),
-                ));
-            }
-        }
-        for output_name in outputs.keys() {
-            if !kind_impl.outputs().contains(&output_name.as_str()) {
-                return Err(file.error(lines.outputs[&(name.to_string(), output_name.clone())], format!(
-                    "stage `{name}`: kind `{kind}` has no output `{output_name}`; it writes: {}", kind_impl.outputs().join(", ")
-                )));
-            }
-        }
-        for o in kind_impl.outputs() {
-            outputs.entry(o.to_string()).or_insert(None);
-        }
+        check_builtin_bindings(&at, kind_impl, &inputs, &mut outputs, lines)?;
         let canonical = kind_impl.canonical_params(&params).map_err(|e| {
             let at = params_lines.get(&e.key).copied().unwrap_or(line);
             file.error(
@@ -224,43 +164,13 @@ fn validate_stage(
         })?;
         (super::super::key::canonical_json(canonical), None)
     } else {
-        let Some((cmd_line, cmd)) = cmd else {
-            return Err(file.error(line, format!("stage `{name}` (kind `command`) needs `cmd = \"...\"`, the shell command to run")));
-        };
-        if outputs.is_empty() {
-            return Err(file.error(line, format!("stage `{name}` (kind `command`) declares no outputs; add `outputs = {{ NAME = \"path\" }}`")));
-        }
-        command::check_placeholders(&cmd, &inputs, &outputs, &params)
-            .map_err(|m| file.error(cmd_line, format!("stage `{name}`: {m}")))?;
-        let json = serde_json::to_value(&params)
-            .map_err(|e| file.error(line, format!("stage `{name}`: params: {e}")))?;
+        let (json, cmd) = command_stage(&at, cmd, &inputs, &outputs, &params)?;
         (super::super::key::canonical_json(json), Some(cmd))
     };
-
     let (foreach, foreach_with) = match raw.foreach {
-        Some(f) => {
-            let f_line = file.line_of(f.span().start);
-            let mut names = match f.into_inner() {
-                Foreach::One(one) => vec![one],
-                Foreach::Many(many) => many,
-            };
-            if names.is_empty() {
-                return Err(file.error(f_line, format!("stage `{name}`: foreach = [] names no input; name the collection input to map over")));
-            }
-            for f in &names {
-                if !inputs.contains_key(f) {
-                    return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
-                }
-                if matches!(inputs[f], InputSpec::Provenance) {
-                    return Err(file.error(f_line, format!("stage `{name}`: foreach cannot step through `{f}`, the provenance record; name a collection input")));
-                }
-            }
-            let first = names.remove(0);
-            (Some(first), names)
-        }
+        Some(f) => stage_foreach(file, name, f, &inputs)?,
         None => (None, Vec::new()),
     };
-
     Ok(StageSpec {
         name: name.to_string(),
         kind,
@@ -273,6 +183,181 @@ fn validate_stage(
         canonical_params,
         cmd,
     })
+}
+
+/// Where a stage stands, for its errors.
+struct Place<'a> {
+    file: &'a Source,
+    name: &'a str,
+    kind: &'a str,
+    line: usize,
+}
+
+/// The stage's input bindings parsed, their lines noted.
+fn stage_inputs(
+    pipeline: &Pipeline,
+    name: &str,
+    raw: BTreeMap<Spanned<String>, Spanned<RawInput>>,
+    file: &Source,
+    lines: &mut Lines,
+) -> Result<BTreeMap<String, InputSpec>, EngineError> {
+    let mut inputs = BTreeMap::new();
+    for (input_name, binding) in raw {
+        let input_line = file.line_of(input_name.span().start);
+        let input_name = input_name.into_inner();
+        let spec = parse_binding(pipeline, binding.into_inner()).map_err(|m| {
+            file.error(
+                input_line,
+                format!("stage `{name}` input `{input_name}`: {m}"),
+            )
+        })?;
+        lines
+            .inputs
+            .insert((name.to_string(), input_name.clone()), input_line);
+        inputs.insert(input_name, spec);
+    }
+    Ok(inputs)
+}
+
+/// The stage's output paths with `${…}` substituted, their lines noted.
+fn stage_outputs(
+    pipeline: &Pipeline,
+    name: &str,
+    raw: BTreeMap<Spanned<String>, Spanned<String>>,
+    file: &Source,
+    lines: &mut Lines,
+) -> Result<BTreeMap<String, Option<PathBuf>>, EngineError> {
+    let mut outputs = BTreeMap::new();
+    for (output_name, path) in raw {
+        let output_line = file.line_of(output_name.span().start);
+        let output_name = output_name.into_inner();
+        let path = substitute(pipeline, path.get_ref()).map_err(|m| {
+            file.error(
+                output_line,
+                format!("stage `{name}` output `{output_name}`: {m}"),
+            )
+        })?;
+        lines
+            .outputs
+            .insert((name.to_string(), output_name.clone()), output_line);
+        outputs.insert(output_name, Some(path));
+    }
+    Ok(outputs)
+}
+
+/// A built-in kind's inputs and outputs against what the stage binds: every required input
+/// bound, nothing the kind does not take; the kind's undeclared outputs added (not materialized).
+fn check_builtin_bindings(
+    at: &Place,
+    kind_impl: &dyn StageKind,
+    inputs: &BTreeMap<String, InputSpec>,
+    outputs: &mut BTreeMap<String, Option<PathBuf>>,
+    lines: &Lines,
+) -> Result<(), EngineError> {
+    let Place {
+        file,
+        name,
+        kind,
+        line,
+    } = *at;
+    for input in kind_impl.inputs() {
+        if !inputs.contains_key(*input) {
+            return Err(file.error(line, format!(
+                "stage `{name}` (kind `{kind}`) is missing input `{input}`; add `{input} = \"<stage>:<output>\"` or a path to its inputs"
+            )));
+        }
+    }
+    for input_name in inputs.keys() {
+        let known = kind_impl.inputs().contains(&input_name.as_str())
+            || kind_impl.optional_inputs().contains(&input_name.as_str());
+        if !known {
+            let takes: Vec<&str> = kind_impl
+                .inputs()
+                .iter()
+                .chain(kind_impl.optional_inputs())
+                .copied()
+                .collect();
+            return Err(file.error(
+                lines.inputs[&(name.to_string(), input_name.clone())],
+                format!(
+                    "stage `{name}`: kind `{kind}` has no input `{input_name}`; it takes: {}",
+                    takes.join(", ")
+                ),
+            ));
+        }
+    }
+    for output_name in outputs.keys() {
+        if !kind_impl.outputs().contains(&output_name.as_str()) {
+            return Err(file.error(
+                lines.outputs[&(name.to_string(), output_name.clone())],
+                format!(
+                    "stage `{name}`: kind `{kind}` has no output `{output_name}`; it writes: {}",
+                    kind_impl.outputs().join(", ")
+                ),
+            ));
+        }
+    }
+    for o in kind_impl.outputs() {
+        outputs.entry(o.to_string()).or_insert(None);
+    }
+    Ok(())
+}
+
+/// A `command` stage: its `cmd` (required), at least one output, placeholders that name
+/// something; returns the params as JSON and the command.
+fn command_stage(
+    at: &Place,
+    cmd: Option<(usize, String)>,
+    inputs: &BTreeMap<String, InputSpec>,
+    outputs: &BTreeMap<String, Option<PathBuf>>,
+    params: &toml::Table,
+) -> Result<(serde_json::Value, String), EngineError> {
+    let Place {
+        file, name, line, ..
+    } = *at;
+    let Some((cmd_line, cmd)) = cmd else {
+        return Err(file.error(
+            line,
+            format!(
+                "stage `{name}` (kind `command`) needs `cmd = \"...\"`, the shell command to run"
+            ),
+        ));
+    };
+    if outputs.is_empty() {
+        return Err(file.error(line, format!("stage `{name}` (kind `command`) declares no outputs; add `outputs = {{ NAME = \"path\" }}`")));
+    }
+    command::check_placeholders(&cmd, inputs, outputs, params)
+        .map_err(|m| file.error(cmd_line, format!("stage `{name}`: {m}")))?;
+    let json = serde_json::to_value(params)
+        .map_err(|e| file.error(line, format!("stage `{name}`: params: {e}")))?;
+    Ok((json, cmd))
+}
+
+/// `foreach`: the first input named, and the others stepped through with it.
+fn stage_foreach(
+    file: &Source,
+    name: &str,
+    f: Spanned<Foreach>,
+    inputs: &BTreeMap<String, InputSpec>,
+) -> Result<(Option<String>, Vec<String>), EngineError> {
+    let f_line = file.line_of(f.span().start);
+    let mut names = match f.into_inner() {
+        Foreach::One(one) => vec![one],
+        Foreach::Many(many) => many,
+    };
+    if names.is_empty() {
+        return Err(file.error(f_line, format!("stage `{name}`: foreach = [] names no input; name the collection input to map over")));
+    }
+    for f in &names {
+        if !inputs.contains_key(f) {
+            return Err(file.error(f_line, format!("stage `{name}`: foreach = \"{f}\" names no input of this stage; name one of its inputs")));
+        }
+        if matches!(inputs[f], InputSpec::Provenance) {
+            return Err(file.error(f_line, format!("stage `{name}`: foreach cannot step through `{f}`, the provenance record; name a collection input")));
+        }
+    }
+    let first = names.remove(0);
+    Ok((Some(first), names))
 }
 
 /// `"engine:provenance"`, `"stage:output"`, a path, or `{ path, optional }`.

@@ -118,7 +118,10 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
             .find(|t| t.effect.id() == f.effect)
             .map(|t| &t.term);
         for (name, p) in &f.parameters {
-            let ours = match (finite(p.value), p.se.and_then(finite)) {
+            let ours = match (
+                finite(p.value),
+                p.se.and_then(finite).filter(|se| *se > 0.0),
+            ) {
                 (Some(v), Some(se)) => format!("{} ± {}", sig(v, 4), sig(se, 2)),
                 (Some(v), None) => sig(v, 4),
                 _ => "—".into(),
@@ -308,7 +311,8 @@ pub fn params_text(ps: &BTreeMap<String, Estimate>) -> String {
         .iter()
         .map(|(k, p)| {
             let v = finite(p.value).map_or("—".into(), |x| sig(x, 4));
-            match p.se.and_then(finite) {
+            // a zero error marks a value that was set, not estimated (a spline's range)
+            match p.se.and_then(finite).filter(|se| *se > 0.0) {
                 Some(se) => format!("{k} = {v} ± {}", sig(se, 2)),
                 None => format!("{k} = {v}"),
             }
