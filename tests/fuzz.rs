@@ -209,12 +209,19 @@ fn edits() -> impl Strategy<Value = Vec<Edit>> {
     prop::collection::vec(edit(), 1..8)
 }
 
-/// Ingests, checking time; the outcome does not matter, only that there is one.
+/// Ingests, checking time; the outcome does not matter, only that there is one, and that it is
+/// the row-by-row path's (the columnar fast path takes a damaged file for a clean one never).
 fn ingest_bounded(files: &Files, params: &IngestParams) -> Result<(), TestCaseError> {
     let started = Instant::now();
     let result = ingest::ingest(files, params);
     let took = started.elapsed();
     prop_assert!(took < LIMIT, "ingest took {took:?}");
+    let reference = ingest::ingest_row_by_row(files, params);
+    match (&result, &reference) {
+        (Ok(a), Ok(b)) => prop_assert_eq!(a, b),
+        (Err(a), Err(b)) => prop_assert_eq!(a.to_string(), b.to_string()),
+        (a, b) => prop_assert!(false, "columnar {a:?} but row by row {b:?}"),
+    }
     if let Err(e) = result {
         let message = e.to_string();
         prop_assert!(

@@ -479,7 +479,7 @@ fn shuffled_rows_give_byte_identical_outputs() {
 }
 
 #[test]
-fn stage_outputs_hold_recordings_table_and_an_empty_skipped_list() {
+fn stage_outputs_hold_recordings_and_an_empty_skipped_list() {
     let out = stage_outputs(&interchange_csv(&known_recordings()), &toml::Table::new());
     let Artifact::Collection(runs) = &out["runs"] else {
         panic!("runs is not a collection")
@@ -488,25 +488,11 @@ fn stage_outputs_hold_recordings_table_and_an_empty_skipped_list() {
     let c01: Recording = serde_json::from_slice(&runs["c01"]).unwrap();
     assert_eq!(c01, expected()[0]);
     assert_eq!(out["skipped"], Artifact::File(b"[]\n".to_vec()));
-    // The table reads back as trajectories.parquet and gives the same recordings.
-    let Artifact::File(table) = &out["table"] else {
-        panic!("table is not a file")
-    };
-    let df = ParquetReader::new(Cursor::new(table.clone()))
-        .finish()
-        .unwrap();
-    let n: usize = known_recordings()
-        .iter()
-        .flat_map(|r| &r.tracks)
-        .map(|t| t.frame.len())
-        .sum();
-    assert_eq!(df.height(), n);
-    assert_eq!(df.column("z_m").unwrap().dtype(), &DataType::Float64);
-    assert_eq!(df.column("frame").unwrap().dtype(), &DataType::Int64);
-    let mut files = interchange_csv(&known_recordings());
-    files.remove("trajectories.csv");
-    files.insert("trajectories.parquet".into(), table.clone());
-    assert_eq!(run_ok(&files, &params()), expected());
+    assert_eq!(
+        out.keys().collect::<Vec<_>>(),
+        ["runs", "skipped"],
+        "no Parquet table of all samples: no stage reads one"
+    );
 }
 
 #[test]
@@ -1089,4 +1075,259 @@ fn many_problems_are_counted_and_listed_in_file_order() {
     let first = e.find("row 2,").unwrap();
     let second = e.find("row 3,").unwrap();
     assert!(first < second, "{e}");
+}
+
+// ---------------------------------------------------------------- the columnar path
+
+/// The shipped dataset's top-level files.
+fn shipped_files() -> Files {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data");
+    let mut files = Files::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            files.insert(name, std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}
+
+/// The row-by-row reference's recordings of `files`.
+fn row_by_row(files: &Files) -> Vec<Recording> {
+    ingest::ingest_row_by_row(files, &params())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .recordings
+}
+
+/// The columnar path reads `files` (it does not fall back) and gives the row-by-row recordings.
+fn assert_columnar_matches(files: &Files, what: &str) -> Vec<Recording> {
+    let columnar = ingest::ingest_columnar(files, &params())
+        .unwrap_or_else(|| panic!("{what}: the columnar path fell back to row by row"));
+    let reference = row_by_row(files);
+    assert_eq!(columnar.len(), reference.len(), "{what}");
+    assert_eq!(columnar, reference, "{what}");
+    columnar
+}
+
+/// The shipped trajectories with their data lines in a seeded random order.
+fn shuffled_trajectories(files: &Files, seed: u64) -> Files {
+    let text = String::from_utf8(files["trajectories.csv"].clone()).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let mut rows: Vec<&str> = lines.collect();
+    rows.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let mut out = files.clone();
+    out.insert(
+        "trajectories.csv".into(),
+        format!("{header}\n{}\n", rows.join("\n")).into_bytes(),
+    );
+    out
+}
+
+#[test]
+fn columnar_ingest_gives_the_row_by_row_items_on_the_shipped_data() {
+    let files = shipped_files();
+    let recs = assert_columnar_matches(&files, "shipped data");
+    assert!(recs.len() > 100, "{} runs", recs.len());
+    // The stage's items (names and bytes, hence their keys downstream) are those of the
+    // row-by-row recordings.
+    let out = stage_outputs(&files, &toml::Table::new());
+    let Artifact::Collection(items) = &out["runs"] else {
+        panic!("runs is not a collection")
+    };
+    let expected: BTreeMap<String, Vec<u8>> = row_by_row(&files)
+        .iter()
+        .map(|r| (item_name(&r.info.run), serde_json::to_vec(r).unwrap()))
+        .collect();
+    assert_eq!(items, &expected);
+}
+
+#[test]
+fn columnar_ingest_of_shuffled_rows_gives_the_same_items() {
+    let files = shipped_files();
+    let reference = stage_outputs(&files, &toml::Table::new());
+    for seed in [7, 8] {
+        let shuffled = shuffled_trajectories(&files, seed);
+        assert_columnar_matches(&shuffled, &format!("shuffled, seed {seed}"));
+        assert_eq!(
+            stage_outputs(&shuffled, &toml::Table::new()),
+            reference,
+            "seed {seed}"
+        );
+    }
+}
+
+#[test]
+fn columnar_ingest_reads_parquet_as_csv() {
+    let recs = known_recordings();
+    let from_csv = assert_columnar_matches(&interchange_csv(&recs), "known, CSV");
+    let from_parquet = assert_columnar_matches(&interchange_parquet(&recs), "known, Parquet");
+    assert_eq!(from_csv, from_parquet);
+    assert_eq!(from_csv, expected());
+}
+
+#[test]
+fn damaged_files_fall_back_to_row_by_row_with_its_message() {
+    let recs = known_recordings();
+    let n = trajectory_lines(&recs).len();
+    let cases: Vec<(&str, Files)> = vec![
+        (
+            "extra field",
+            edit_trajectory(&recs, 3, |l| format!("{l},9")),
+        ),
+        (
+            "missing field",
+            edit_trajectory(&recs, 3, |l| l.rsplit_once(',').unwrap().0.into()),
+        ),
+        (
+            "quoted number",
+            edit_trajectory(&recs, 3, |l| set_field(l, 4, "\"0.25\"")),
+        ),
+        (
+            "spaces around a number",
+            edit_trajectory(&recs, 3, |l| set_field(l, 3, " 0.001 ")),
+        ),
+        (
+            "frame written 12.0",
+            edit_trajectory(&recs, 0, |l| set_field(l, 2, "0.0")),
+        ),
+        ("nan", edit_trajectory(&recs, 5, |l| set_field(l, 4, "NaN"))),
+        (
+            "empty cell",
+            edit_trajectory(&recs, 5, |l| set_field(l, 3, "")),
+        ),
+        (
+            "far position",
+            edit_trajectory(&recs, 5, |l| set_field(l, 4, "1e3")),
+        ),
+        (
+            "unknown particle",
+            edit_trajectory(&recs, 5, |l| set_field(l, 1, "7")),
+        ),
+        (
+            "negative particle",
+            edit_trajectory(&recs, 5, |l| set_field(l, 1, "-1")),
+        ),
+        (
+            "duplicate frame",
+            edit_trajectory(&recs, 6, |l| {
+                let prev = trajectory_lines(&recs)[5].clone();
+                set_field(l, 2, prev.split(',').nth(2).unwrap())
+            }),
+        ),
+        (
+            "clock off",
+            edit_trajectory(&recs, n - 1, |l| set_field(l, 3, "0.5")),
+        ),
+        (
+            "unknown run",
+            edit_trajectory(&recs, n - 1, |l| set_field(l, 0, "zz9")),
+        ),
+        (
+            "run id with a space",
+            edit_trajectory(&recs, 2, |l| {
+                let run = l.split(',').next().unwrap().to_string();
+                set_field(l, 0, &format!(" {run}"))
+            }),
+        ),
+    ];
+    let mut refused = 0;
+    for (what, files) in cases {
+        let fast = ingest::ingest(&files, &params()).map_err(|e| e.to_string());
+        let slow = ingest::ingest_row_by_row(&files, &params()).map_err(|e| e.to_string());
+        assert_eq!(fast, slow, "{what}");
+        if slow.is_err() {
+            refused += 1;
+            assert!(
+                ingest::ingest_columnar(&files, &params()).is_none(),
+                "{what}: the columnar path took a damaged file"
+            );
+        }
+    }
+    // All but three: a quoted number, a frame written as `0.0` and spaces around a run id are
+    // accepted (row by row, since the columnar path leaves them to it), and read the same.
+    assert_eq!(refused, 11);
+    let accepted = edit_trajectory(&recs, 0, |l| set_field(l, 2, "0.0"));
+    assert_eq!(run_ok(&accepted, &params()), expected());
+}
+
+// ---------------------------------------------------------------- a campaign of many runs
+
+/// The process's peak resident memory so far (`VmHWM` of /proc/self/status), bytes.
+fn peak_rss_bytes() -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status.lines().find(|l| l.starts_with("VmHWM:")).unwrap();
+    let kib: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    kib * 1024
+}
+
+/// Issue 13's campaign: `GROOVE_CAMPAIGN_RUNS` runs (default 100,000; half 316, half 440c, 600
+/// frames each, the shipped physics and camera) written by `groove synth`, read into memory as
+/// the engine reads a dataset folder, and ingested by the stage (recordings and their items).
+/// Asserts every run became an item and that the process's peak RSS stays within 5 × the
+/// CSV's size + 512 MB (measured: 4.8 × at 10,000 runs, 1.27 GB): the input's bytes, the typed
+/// columns, the recordings and the items are in memory together, so this is today's bound, not
+/// the issue's target (1 GB at 100,000 runs needs a streaming engine input; see
+/// tests/bench/CAMPAIGN.md). Prints the figures. Peak RSS is the process's, so run it alone:
+/// `cargo test --locked --features s3 --test ingest -- --ignored --exact campaign_ingests_within_its_memory_bound`
+/// (100,000 runs: ≈ 2.6 GB of CSV on disk in a temporary folder, minutes).
+#[test]
+#[ignore]
+fn campaign_ingests_within_its_memory_bound() {
+    let n: usize = std::env::var("GROOVE_CAMPAIGN_RUNS")
+        .map(|v| v.parse().expect("GROOVE_CAMPAIGN_RUNS is a number of runs"))
+        .unwrap_or(100_000);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let shipped = std::fs::read_to_string(root.join("data/truth/truth.toml")).unwrap();
+    let mut truth = shipped.split("[[runs]]").next().unwrap().to_string();
+    for (material, count) in [("316", n / 2), ("440c", n - n / 2)] {
+        truth += &format!(
+            "\n[[runs]]\nexperiment = \"single\"\nmaterial = \"{material}\"\ncount = {count}\n\
+             v0_mps = [0.005, 0.1]\ndirections = \"both\"\nduration_s = 0.06\n"
+        );
+    }
+    let truth_path = dir.path().join("truth.toml");
+    std::fs::write(&truth_path, truth).unwrap();
+    let data = dir.path().join("data");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_groove"))
+        .args(["synth", "--truth"])
+        .arg(&truth_path)
+        .arg("--out")
+        .arg(&data)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "groove synth failed");
+    let mut files = Files::new();
+    for name in ["runs.csv", "trajectories.csv"] {
+        files.insert(name.into(), std::fs::read(data.join(name)).unwrap());
+    }
+    let csv_bytes = files["trajectories.csv"].len() as u64;
+    let started = std::time::Instant::now();
+    let out = stage_outputs(&files, &toml::Table::new());
+    let took = started.elapsed();
+    let Artifact::Collection(items) = &out["runs"] else {
+        panic!("runs is not a collection")
+    };
+    assert_eq!(items.len(), n);
+    let item_bytes: usize = items.values().map(Vec::len).sum();
+    drop(out);
+    let peak = peak_rss_bytes();
+    let bound = 5 * csv_bytes + (512 << 20);
+    eprintln!(
+        "campaign of {n} runs: {:.0} MB of CSV, ingested in {:.1} s, items {:.0} MB \
+         ({} bytes per run), peak RSS {:.0} MB (bound {:.0} MB)",
+        csv_bytes as f64 / 1e6,
+        took.as_secs_f64(),
+        item_bytes as f64 / 1e6,
+        item_bytes / n,
+        peak as f64 / 1e6,
+        bound as f64 / 1e6
+    );
+    assert!(
+        peak <= bound,
+        "peak RSS {peak} bytes is above {bound} (5 × the CSV + 512 MB)"
+    );
 }

@@ -10,7 +10,6 @@ use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
 use crate::stats::theil_sen_indexed;
 use serde::{Deserialize, Serialize};
-use std::cell::RefCell;
 use std::collections::BTreeMap;
 
 /// Params of the `aggregate` stage.
@@ -97,9 +96,8 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let mu_se: Vec<f64> = ok.iter().map(|f| f.mu_se.unwrap_or(f64::NAN)).collect();
     let t: Vec<f64> = ok.iter().map(|f| f.t_drag_s).collect();
     let fast = |i: usize| speed[i] > opts.fast_min_speed_mps;
-    let buf = RefCell::new(Vec::new());
     let stats = |idx: &[usize]| {
-        let buf = &mut *buf.borrow_mut();
+        let buf = &mut Vec::with_capacity(idx.len() * idx.len().saturating_sub(1) / 2);
         let (ta, tb) = theil_sen_indexed(&speed, &t, idx, buf);
         let (ma, mb) = theil_sen_indexed(&speed, &mu, idx, buf);
         [

@@ -1,38 +1,49 @@
 //! Seeded bootstrap over whole runs: resample the runs with replacement, recompute the statistics,
-//! and report percentile intervals.
+//! and report percentile intervals (the resamples' statistics computed in parallel).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 pub use crate::artifacts::estimate::Interval;
 
 /// Percentile intervals at `level` (e.g. 0.95) of K statistics of n items, from `resamples`
 /// resamples drawn by ChaCha8 from `seed`. A statistic that is NaN on more than half of the
 /// resamples (too few distinct items) gets no interval.
+///
+/// The resamples are drawn in order from the one stream, a batch at a time, and the statistics
+/// of a batch are computed in parallel (rayon) and kept in draw order, so the intervals are the
+/// same bytes on any number of threads.
 pub fn percentile_intervals<const K: usize>(
     n: usize,
     resamples: usize,
     seed: u64,
     level: f64,
-    stat: impl Fn(&[usize]) -> [f64; K],
+    stat: impl Fn(&[usize]) -> [f64; K] + Sync,
 ) -> [Option<Interval>; K] {
     let mut out = [None; K];
     if n == 0 || resamples == 0 {
         return out;
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut idx = vec![0usize; n];
+    // At most about 8 MB of drawn indices at a time.
+    let batch = ((1 << 20) / n).clamp(2, 64);
     let mut draws: Vec<Vec<f64>> = vec![Vec::with_capacity(resamples); K];
-    for _ in 0..resamples {
-        for i in idx.iter_mut() {
-            *i = rng.random_range(0..n);
-        }
-        let s = stat(&idx);
-        for k in 0..K {
-            if s[k].is_finite() {
-                draws[k].push(s[k]);
+    let mut done = 0;
+    while done < resamples {
+        let b = batch.min(resamples - done);
+        let idx: Vec<Vec<usize>> = (0..b)
+            .map(|_| (0..n).map(|_| rng.random_range(0..n)).collect())
+            .collect();
+        let stats: Vec<[f64; K]> = idx.par_iter().map(|idx| stat(idx)).collect();
+        for s in stats {
+            for k in 0..K {
+                if s[k].is_finite() {
+                    draws[k].push(s[k]);
+                }
             }
         }
+        done += b;
     }
     for k in 0..K {
         let d = &mut draws[k];

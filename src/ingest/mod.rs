@@ -10,6 +10,7 @@
 
 mod assemble;
 mod axis;
+mod columnar;
 mod csv_check;
 pub mod error;
 mod interchange;
@@ -25,7 +26,7 @@ mod trackmate_xml;
 mod trackpy;
 
 pub use error::{IngestError, Problem};
-pub use output::{item_name, skipped_json, table_parquet, Skipped};
+pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
 use crate::recording::Recording;
@@ -51,18 +52,69 @@ const INTERCHANGE_FILES: [&str; 4] = [
     "trajectories.parquet",
 ];
 
-/// Reads and checks a dataset given as its top-level files (name → bytes).
+/// Reads and checks a dataset given as its top-level files (name → bytes). A clean dataset in
+/// the interchange format is read column by column (`columnar`); anything else, and any dataset
+/// with a problem, row by row (`ingest_row_by_row`), which names every problem's file, row and
+/// column. Both give the same recordings for a clean dataset.
 pub fn ingest(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
 ) -> Result<Ingested, IngestError> {
+    check_params(params)?;
+    if let Some(recordings) = ingest_columnar(files, params) {
+        {
+            let mut problems = Vec::new();
+            check_item_names(&recordings, &mut problems);
+            if problems.is_empty() && !recordings.is_empty() {
+                return Ok(Ingested {
+                    recordings,
+                    skipped: Vec::new(),
+                });
+            }
+        }
+    }
+    ingest_row_by_row(files, params)
+}
+
+/// The recordings of a clean interchange dataset read column by column, as `ingest` returns
+/// them; `None` where `ingest` reads the dataset row by row instead (other formats, a problem,
+/// anything the typed read might take differently).
+pub fn ingest_columnar(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+) -> Option<Vec<Recording>> {
+    let read = reads_interchange(files, params.format) && params.check().is_ok();
+    read.then(|| columnar::recordings(files, params.min_frames))
+        .flatten()
+}
+
+fn check_params(params: &IngestParams) -> Result<(), IngestError> {
     params.check().map_err(|p| {
         Problem::file(
             "pipeline.toml",
             format!("ingest param {}: {}", p.key, p.message),
             p.fix,
         )
-    })?;
+        .into()
+    })
+}
+
+/// Whether `read_sources` reads the folder as the interchange format without looking for
+/// tracker files first.
+fn reads_interchange(files: &BTreeMap<String, Vec<u8>>, format: Format) -> bool {
+    let trajectories = ["trajectories.csv", "trajectories.parquet"]
+        .iter()
+        .any(|f| files.contains_key(*f));
+    format == Format::Interchange || (format == Format::Auto && trajectories)
+}
+
+/// `ingest` reading every row into a sample first: the path that names every problem, and the
+/// reference the columnar path is tested against.
+pub fn ingest_row_by_row(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+) -> Result<Ingested, IngestError> {
+    check_params(params)?;
     let (runs, sample_files, mut problems, notes) = read_sources(files, params)?;
     let mut recordings = assemble::assemble(&runs, &sample_files, params.min_frames, &mut problems);
     if recordings.is_empty() && problems.is_empty() {

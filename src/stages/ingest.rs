@@ -1,4 +1,4 @@
-//! The `ingest` stage kind: the dataset folder's files in, checked recordings, a typed table and the list of skipped runs out.
+//! The `ingest` stage kind: the dataset folder's files in, checked recordings and the list of skipped runs out.
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
@@ -7,7 +7,8 @@ use crate::ingest::{self, IngestParams};
 use std::collections::BTreeMap;
 
 /// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → JSON
-/// `Recording`), `table` (Parquet of all samples) and `skipped` (JSON list of `{run, reason}`).
+/// `Recording`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
+/// was an output too; no stage read it, and writing it cost as much as reading the CSV typed.)
 pub struct Ingest;
 
 impl StageKind for Ingest {
@@ -20,7 +21,7 @@ impl StageKind for Ingest {
     }
 
     fn outputs(&self) -> &'static [&'static str] {
-        &["runs", "table", "skipped"]
+        &["runs", "skipped"]
     }
 
     fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
@@ -50,19 +51,14 @@ impl StageKind for Ingest {
         };
         let ingested = ingest::ingest(files, &params).map_err(|e| StageError(e.to_string()))?;
         let mut runs = BTreeMap::new();
-        for r in &ingested.recordings {
-            let json = serde_json::to_vec(r)
+        // Each recording is freed as soon as its item is made, so both are not held whole.
+        for r in ingested.recordings {
+            let json = serde_json::to_vec(&r)
                 .map_err(|e| StageError(format!("cannot serialize run {:?} ({e})", r.info.run)))?;
             runs.insert(ingest::item_name(&r.info.run), json);
         }
-        let table = ingest::table_parquet(&ingested.recordings).map_err(|e| {
-            StageError(format!(
-                "cannot write the parquet table ({e}); report this as a bug"
-            ))
-        })?;
         let mut out = StageOutputs::new();
         out.insert("runs".into(), Artifact::Collection(runs));
-        out.insert("table".into(), Artifact::File(table));
         out.insert(
             "skipped".into(),
             Artifact::File(ingest::skipped_json(&ingested.skipped)),

@@ -6,6 +6,8 @@
 #   --sizes "N …"  campaign sizes in runs (default "1000 10000"); each is half 316, half 440c
 #   --100k         also the 100,000-run campaign (≈ 2.6 GB of CSV, minutes, several GB of disk)
 #   --no-scipy     skip the SciPy least_squares comparison (needs python3 with numpy + scipy)
+#   --stage S      run `groove run S` instead of `groove run aggregate` (e.g. `fit`: ingest and
+#                  the fits only, where aggregate's Theil–Sen bootstrap, O(runs²), dominates)
 # Environment:
 #   GROOVE_BIN            the binary (default target/release/groove if built, else target/debug/groove)
 #   GROOVE_CAMPAIGN_DIR   scratch folder (default target/campaign); datasets are kept and reused
@@ -33,11 +35,13 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 sizes="1000 10000"
 scipy=1
+stage=aggregate
 while [ $# -gt 0 ]; do
     case "$1" in
         --100k) sizes="$sizes 100000" ;;
         --sizes) sizes="$2"; shift ;;
         --no-scipy) scipy=0 ;;
+        --stage) stage="$2"; shift ;;
         -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
         *) echo "campaign.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
@@ -165,7 +169,7 @@ PY
     rm -rf "$proj"
     mkdir -p "$proj"
     cp "$root/pipeline.toml" "$proj/"
-    run=("$GROOVE_BIN" run aggregate --config "$proj/pipeline.toml" --data "$data" --out "$proj/reports")
+    run=("$GROOVE_BIN" run "$stage" --config "$proj/pipeline.toml" --data "$data" --out "$proj/reports")
     measure "$n cold" "$proj/.groove" "${run[@]}"
     store=$(du -sb "$proj/.groove" | cut -f1)
     objects=$(du -sb "$proj/.groove/objects" | cut -f1)
