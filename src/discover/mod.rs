@@ -32,7 +32,7 @@ pub mod spectral;
 pub mod timeforce;
 
 pub use diagnosis::Diagnosis;
-pub use run::discover;
+pub use run::{discover, discover_reporting};
 
 use serde::{Deserialize, Serialize};
 

@@ -210,6 +210,8 @@ struct Ctx<'a> {
     rg: &'a Ranges,
     opts: &'a Options,
     t0: std::time::Instant,
+    /// Where the step under way is said (the stage's progress line).
+    say: &'a (dyn Fn(&str) + Sync),
 }
 
 impl Ctx<'_> {
@@ -400,6 +402,12 @@ fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
         if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
             eprintln!("round {} starts", sel.round);
         }
+        (ctx.say)(&format!(
+            "round {}: screening {} candidates against {} noise replicates",
+            sel.round,
+            entries.len(),
+            super::screen::REPLICATES.max(ctx.opts.bootstrap)
+        ));
         let props = ctx.proposals(&sel.current, wanted);
         if sel.round == 1 {
             sel.maps_before = props.maps.clone();
@@ -635,6 +643,16 @@ fn model_parameters(current: &Model) -> BTreeMap<String, Estimate> {
 /// measure each run's noise and fit the joint baseline, select terms, model what is left with the
 /// force map, then report the findings, the drift and the residuals before and after.
 pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
+    discover_reporting(recordings, opts, &|_| {})
+}
+
+/// `discover`, saying each step as it starts through `say` (e.g. `round 2: screening 9
+/// candidates against 60 noise replicates`); what is said never enters the diagnosis.
+pub fn discover_reporting(
+    recordings: &[Recording],
+    opts: &Options,
+    say: &(dyn Fn(&str) + Sync),
+) -> Diagnosis {
     let t0 = std::time::Instant::now();
     let (mut runs, materials) = prepare_runs(recordings, opts.min_frames);
     if runs.len() < 2 * opts.folds.max(2) {
@@ -651,6 +669,10 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
             ),
         );
     }
+    say(&format!(
+        "fitting the baseline model to {} runs",
+        runs.len()
+    ));
     let (baseline, per_run) = fit_baseline(&mut runs, &materials, opts);
     let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
     let rg = Ranges::of(&runs);
@@ -661,14 +683,18 @@ pub fn discover(recordings: &[Recording], opts: &Options) -> Diagnosis {
         rg: &rg,
         opts,
         t0,
+        say,
     };
     ctx.trace("baseline fitted");
+    say("cross-validating the baseline");
     let base_cv = ctx.cross_validate(&baseline);
     ctx.trace("baseline cross-validated");
     let mut sel = select_terms(&baseline, &base_cv, &ctx);
     ctx.trace("rounds done");
+    say("mapping what is left (force maps in z, v, t and phase)");
     let (fallback, maps_after) = model_what_is_left(&mut sel, &ctx);
     ctx.trace("fallback done");
+    say("residuals and drift before and after");
     let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
     let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
     let drift = drift_of(&sel.current, &per_run, &ctx);

@@ -89,6 +89,12 @@ pub fn aggregate_single(fits: &[SingleFit], opts: &AggregateOptions, seed: u64) 
     }
 }
 
+/// Run pairs behind a Theil–Sen slope: every pair up to these counts (about 2,000 runs for the
+/// estimate, 200 for a bootstrap resample), a uniform draw of this many above (`stats::line`).
+/// The resamples' extra spread widens the interval a little; it never narrows it.
+const POINT_PAIRS: usize = 2_000_000;
+const RESAMPLE_PAIRS: usize = 20_000;
+
 fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> MaterialSummary {
     let ok: Vec<&&SingleFit> = fits.iter().filter(|f| f.status == "converged").collect();
     let speed: Vec<f64> = ok.iter().map(|f| f.v0_mps.abs()).collect();
@@ -96,10 +102,10 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let mu_se: Vec<f64> = ok.iter().map(|f| f.mu_se.unwrap_or(f64::NAN)).collect();
     let t: Vec<f64> = ok.iter().map(|f| f.t_drag_s).collect();
     let fast = |i: usize| speed[i] > opts.fast_min_speed_mps;
-    let stats = |idx: &[usize]| {
-        let buf = &mut Vec::with_capacity(idx.len() * idx.len().saturating_sub(1) / 2);
-        let (ta, tb) = theil_sen_indexed(&speed, &t, idx, buf);
-        let (ma, mb) = theil_sen_indexed(&speed, &mu, idx, buf);
+    let stats_capped = |idx: &[usize], max_pairs: usize| {
+        let buf = &mut Vec::new();
+        let (ta, tb) = theil_sen_indexed(&speed, &t, idx, buf, max_pairs);
+        let (ma, mb) = theil_sen_indexed(&speed, &mu, idx, buf, max_pairs);
         [
             robust_weighted_mean(&mu, &mu_se, idx),
             mean_where(&mu, idx, fast),
@@ -110,8 +116,14 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         ]
     };
     let all: Vec<usize> = (0..ok.len()).collect();
-    let point = stats(&all);
-    let ci = percentile_intervals(ok.len(), opts.bootstrap_resamples, seed, opts.level, stats);
+    let point = stats_capped(&all, POINT_PAIRS);
+    let ci = percentile_intervals(
+        ok.len(),
+        opts.bootstrap_resamples,
+        seed,
+        opts.level,
+        |idx| stats_capped(idx, RESAMPLE_PAIRS),
+    );
     let est = |k: usize| {
         Estimate::with_interval(point[k], if point[k].is_finite() { ci[k] } else { None })
     };

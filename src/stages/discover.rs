@@ -1,6 +1,6 @@
 //! The `discover` stage kind: recordings in, diagnosis.json out.
 
-use crate::discover::{discover, Options};
+use crate::discover::{discover_reporting, Options};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
@@ -48,7 +48,8 @@ impl StageKind for Discover {
         }
         // discovery refits every run with its own integrator (to measure noise and flag outliers
         // consistently), so it reads no per-run fit and a change to `fit` does not rerun it
-        let mut diagnosis = discover(&recordings, &opts);
+        let say = |what: &str| input.report(what);
+        let mut diagnosis = discover_reporting(&recordings, &opts, &say);
         crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings);
         let mut bytes = serde_json::to_vec_pretty(&diagnosis)
             .map_err(|e| StageError(format!("diagnosis could not be serialized: {e}")))?;

@@ -97,10 +97,37 @@ pub fn weighted_line(p: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
 /// different x, a the median of y − b·x. One wild point changes at most m − 1 of the m(m − 1)/2
 /// slopes, so it can move b only to a neighbouring order statistic of the others (breakdown
 /// 29 %), whatever its leverage. `buf` is reused. (NaN, NaN) if the x values do not vary.
-pub fn theil_sen_indexed(x: &[f64], y: &[f64], idx: &[usize], buf: &mut Vec<f64>) -> (f64, f64) {
+///
+/// Above `max_pairs` pairs (a campaign of thousands of runs: m² work and memory per call) b is
+/// the median over `max_pairs` pairs drawn uniformly, with a generator seeded by `idx` itself
+/// (the same picks give the same line); that adds a spread of about 1.25·√(m/max_pairs)
+/// standard errors of b, which a bootstrap over such calls carries into its interval.
+pub fn theil_sen_indexed(
+    x: &[f64],
+    y: &[f64],
+    idx: &[usize],
+    buf: &mut Vec<f64>,
+    max_pairs: usize,
+) -> (f64, f64) {
     buf.clear();
-    for (k, &i) in idx.iter().enumerate() {
-        for &j in &idx[k + 1..] {
+    let m = idx.len();
+    if m * m.saturating_sub(1) / 2 <= max_pairs {
+        for (k, &i) in idx.iter().enumerate() {
+            for &j in &idx[k + 1..] {
+                let dx = x[j] - x[i];
+                if dx != 0.0 {
+                    buf.push((y[j] - y[i]) / dx);
+                }
+            }
+        }
+    } else {
+        let mut state = idx.iter().fold(m as u64, |h, &i| splitmix(h ^ i as u64));
+        let mut draws = 0;
+        while draws < max_pairs {
+            state = splitmix(state);
+            let i = idx[(state % m as u64) as usize];
+            let j = idx[((state >> 32) % m as u64) as usize];
+            draws += 1;
             let dx = x[j] - x[i];
             if dx != 0.0 {
                 buf.push((y[j] - y[i]) / dx);
@@ -114,6 +141,14 @@ pub fn theil_sen_indexed(x: &[f64], y: &[f64], idx: &[usize], buf: &mut Vec<f64>
     buf.clear();
     buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
     (median_of(buf), b)
+}
+
+/// One step of SplitMix64: a well-mixed 64-bit value from the last.
+fn splitmix(z: u64) -> u64 {
+    let mut z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }
 
 /// Median of `v` (reordered in place); NaN if empty or if it holds NaN.
@@ -154,12 +189,12 @@ mod tests {
             .collect();
         let idx: Vec<usize> = (0..20).collect();
         let mut buf = Vec::new();
-        let (a, b) = theil_sen_indexed(&x, &y, &idx, &mut buf);
+        let (a, b) = theil_sen_indexed(&x, &y, &idx, &mut buf, usize::MAX);
         assert!((b - 1.1).abs() < 0.05 && (a - 0.05).abs() < 5e-3, "{a} {b}");
         // a wild run at the fastest speed (most leverage): T 1 s instead of 0.16 s
         y[19] = 1.0;
         let (_, ols) = ols_indexed(&x, &y, &idx);
-        let (_, wild) = theil_sen_indexed(&x, &y, &idx, &mut buf);
+        let (_, wild) = theil_sen_indexed(&x, &y, &idx, &mut buf, usize::MAX);
         // least squares follows it (slope ~5), Theil–Sen moves by less than 1/20 of that pull
         assert!(ols > 3.0, "{ols}");
         assert!(
@@ -167,6 +202,28 @@ mod tests {
             "{b} → {wild} (ols {ols})"
         );
         // no spread in x: no line
-        assert!(theil_sen_indexed(&x, &y, &[3, 3, 3], &mut buf).1.is_nan());
+        assert!(theil_sen_indexed(&x, &y, &[3, 3, 3], &mut buf, usize::MAX)
+            .1
+            .is_nan());
+    }
+
+    #[test]
+    fn sampled_pairs_follow_the_exact_line_of_a_large_set() {
+        // 3,000 points on y = 2 + 0.5·x with a deterministic zig-zag of ±0.1
+        let x: Vec<f64> = (0..3000).map(|i| i as f64 / 100.0).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| 2.0 + 0.5 * v + 0.1 * ((i * 7919 % 13) as f64 / 6.0 - 1.0))
+            .collect();
+        let idx: Vec<usize> = (0..3000).collect();
+        let mut buf = Vec::new();
+        let (a, b) = theil_sen_indexed(&x, &y, &idx, &mut buf, usize::MAX);
+        let (sa, sb) = theil_sen_indexed(&x, &y, &idx, &mut buf, 50_000);
+        assert!(buf.capacity() < 4_000_000, "{}", buf.capacity());
+        assert!((b - 0.5).abs() < 1e-3 && (sb - b).abs() < 2e-3, "{b} {sb}");
+        assert!((sa - a).abs() < 0.02, "{a} {sa}");
+        // the same picks give the same line; other picks another draw
+        assert_eq!(theil_sen_indexed(&x, &y, &idx, &mut buf, 50_000), (sa, sb));
     }
 }
