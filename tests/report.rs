@@ -94,7 +94,7 @@ fn collision(
                "va_start_mps": e(0.0), "t_drag_s": e(0.06), "t_switch_s": sw, "spin_identified": true, "phases": [], "n_points": 50})
     };
     let fit = json!({"experiment": "collision", "run": run, "material": material, "setup": setup,
-        "direction": 1, "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
+        "direction": 1, "termination": "small_cost_change", "status": "converged", "message": "", "mu_pg": e(0.33), "t_drag_s": e(0.06),
         "segments": [seg(0, 0.0, 5e-3, 2e-3), seg(0, 5e-3, 0.03, 9e-3), seg(1, 5e-3, 0.03, 8e-3)],
         "impacts": impacts, "rms_m": 1e-6, "noise_m": 1e-6, "n_points": 600, "n_outliers": 0, "iterations": 9});
     (rec, fit)

@@ -260,16 +260,11 @@ fn bounded_step<const N: usize>(
             if !on[i] {
                 continue;
             }
-            let to = x[i] + step[i];
-            let bound = if to < bounds.lo[i] {
-                bounds.lo[i]
-            } else if to > bounds.hi[i] {
-                bounds.hi[i]
-            } else {
+            let Some(d) = super::step_to_bound(x[i], step[i], bounds.lo[i], bounds.hi[i]) else {
                 continue;
             };
             on[i] = false;
-            pinned[i] = Some(bound - x[i]);
+            pinned[i] = Some(d);
             hit = true;
         }
         if !hit {

@@ -164,16 +164,12 @@ fn bounded_step<N: Normal>(
                 step[i] = 0.0;
                 continue;
             }
-            let to = x[i] + step[i];
-            let bound = if to < specs[i].lower {
-                specs[i].lower
-            } else if to > specs[i].upper {
-                specs[i].upper
-            } else {
+            let Some(d) = super::step_to_bound(x[i], step[i], specs[i].lower, specs[i].upper)
+            else {
                 continue;
             };
             on[i] = false;
-            pinned[i] = Some(bound - x[i]);
+            pinned[i] = Some(d);
             hit = true;
         }
         if !hit {

@@ -18,3 +18,17 @@ pub mod robust;
 pub mod termination;
 
 pub use termination::Termination;
+
+/// Where a step of `step` from `x` leaves the box [lo, hi]: the step that stops on the bound it
+/// crosses (`bound − x`), or None inside. The active-set step of every back-end pins with it.
+#[inline]
+pub fn step_to_bound(x: f64, step: f64, lo: f64, hi: f64) -> Option<f64> {
+    let to = x + step;
+    if to < lo {
+        Some(lo - x)
+    } else if to > hi {
+        Some(hi - x)
+    } else {
+        None
+    }
+}
