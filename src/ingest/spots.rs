@@ -6,6 +6,7 @@ use super::params::Axis;
 use super::samples::{RunRow, Sample, SampleFile};
 use super::table::Table;
 use crate::recording::{Experiment, RunInfo};
+use crate::stats::{quantile_nearest, upper_median, MAD_TO_SIGMA};
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
@@ -370,19 +371,17 @@ pub fn motion(rs: &RunSpots) -> Option<Motion> {
 fn spread(x: &[f64]) -> f64 {
     let mut s = x.to_vec();
     s.sort_by(f64::total_cmp);
-    let at = |f: f64| s[((s.len() - 1) as f64 * f).round() as usize];
-    at(0.98) - at(0.02)
+    quantile_nearest(&s, 0.98) - quantile_nearest(&s, 0.02)
 }
 
-/// The noise of a smooth series from its second differences: 1.4826 · MAD / √6.
+/// The noise of a smooth series from its second differences: 1.4826 · MAD / √6, both medians
+/// the upper median (the convention this detector was calibrated with).
 fn noise(x: &[f64]) -> f64 {
     let mut d: Vec<f64> = x.windows(3).map(|w| w[0] - 2.0 * w[1] + w[2]).collect();
     if d.is_empty() {
         return 0.0;
     }
-    d.sort_by(f64::total_cmp);
-    let med = d[d.len() / 2];
+    let med = upper_median(&mut d);
     let mut dev: Vec<f64> = d.iter().map(|v| (v - med).abs()).collect();
-    dev.sort_by(f64::total_cmp);
-    1.4826 * dev[dev.len() / 2] / 6f64.sqrt()
+    MAD_TO_SIGMA * upper_median(&mut dev) / 6f64.sqrt()
 }
