@@ -65,7 +65,13 @@ impl Table {
 
     /// Reads a Parquet file. Rows are numbered from 1 (Parquet has no header line).
     pub fn from_parquet(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
-        let df = guarded(|| ParquetReader::new(Cursor::new(bytes)).finish()).map_err(|e| {
+        let df = guarded(|| {
+            // one thread: a damaged file gives the same first error (and message) every time
+            ParquetReader::new(Cursor::new(bytes))
+                .read_parallel(ParallelStrategy::None)
+                .finish()
+        })
+        .map_err(|e| {
             Problem::file(
                 file,
                 format!(
