@@ -178,25 +178,20 @@ fn fit_baseline(
     };
     let base_params = base_spec.global_params(materials);
     let per_run = measure_noise(runs, &base_spec, &base_params);
-    let mut g0 = Vec::new();
-    for m in 0..materials.len() {
-        g0.push(median(
+    // each material's median μ, then each material's median T (the global parameters' order)
+    let of_material = |m: usize, field: fn(&PerRunFit) -> f64| {
+        median(
             runs.iter()
                 .zip(&per_run)
                 .filter(|(r, _)| r.material == m)
-                .map(|(_, f)| f.mu)
+                .map(|(_, f)| field(f))
                 .collect(),
-        ));
-    }
-    for m in 0..materials.len() {
-        g0.push(median(
-            runs.iter()
-                .zip(&per_run)
-                .filter(|(r, _)| r.material == m)
-                .map(|(_, f)| f.t_s)
-                .collect(),
-        ));
-    }
+        )
+    };
+    let mut g0: Vec<f64> = (0..materials.len())
+        .map(|m| of_material(m, |f| f.mu))
+        .collect();
+    g0.extend((0..materials.len()).map(|m| of_material(m, |f| f.t_s)));
     let l0: Vec<[f64; N_LOCAL]> = per_run.iter().map(|f| f.local).collect();
     let baseline = Model::fit(base_spec, materials, runs, &g0, &l0, 80);
     (baseline, per_run)
