@@ -775,3 +775,67 @@ fn spline(
     })?;
     Some((lr, b, vv.iter().map(|x| x.sqrt()).collect()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Binomial tail P(X ≥ k), X ~ Bin(b, p), summed term by term from the definition.
+    fn tail(b: usize, p: f64, k: usize) -> f64 {
+        let choose = |n: usize, r: usize| -> f64 {
+            (0..r).map(|i| (n - i) as f64 / (i + 1) as f64).product()
+        };
+        (k..=b)
+            .map(|j| choose(b, j) * p.powi(j as i32) * (1.0 - p).powi((b - j) as i32))
+            .sum()
+    }
+
+    #[test]
+    fn the_stop_count_is_the_smallest_with_a_tail_below_the_stated_error() {
+        for (b, alpha) in [(20, 0.01), (20, 0.05), (30, 0.01), (12, 0.2)] {
+            let k = stop_count(b, alpha);
+            assert!(k <= b, "b {b} alpha {alpha}: some count must stop");
+            assert!(tail(b, alpha, k) <= STOP_ERROR, "b {b} alpha {alpha} k {k}");
+            assert!(
+                tail(b, alpha, k - 1) > STOP_ERROR,
+                "b {b} alpha {alpha} k {k}"
+            );
+        }
+        // four of twenty at α = 0.01 (P(X ≥ 3) = 0.0010 is just above 0.1 %)
+        assert_eq!(stop_count(20, 0.01), 4);
+        // too few replicates for a lax level: never stop early
+        assert_eq!(stop_count(5, 0.45), 6);
+    }
+
+    #[test]
+    fn only_a_statistic_inside_its_null_stops_early() {
+        // twenty replicates spread like a χ²₂ (quantiles at (i + 0.5)/20)
+        let reps: Vec<f64> = (0..20)
+            .map(|i| -2.0 * (1.0 - (i as f64 + 0.5) / 20.0).ln())
+            .collect();
+        let with = |data: f64| {
+            let mut lr = vec![data];
+            lr.extend(&reps);
+            lr
+        };
+        // at the null's median: half the replicates reach it
+        assert!(clearly_null(&with(1.4), 2.0, 0.01));
+        // beyond all but three replicates: open, the second batch is drawn
+        let third_largest = reps[17];
+        assert!(!clearly_null(&with(third_largest + 1e-9), 2.0, 0.01));
+        // far beyond every replicate
+        assert!(!clearly_null(&with(40.0), 2.0, 0.01));
+    }
+
+    #[test]
+    fn the_four_chain_dot_products_agree_with_the_plain_sums() {
+        let a: Vec<f64> = (0..37).map(|i| (i as f64 * 0.7).sin()).collect();
+        let b: Vec<f64> = (0..37).map(|i| (i as f64 * 0.3).cos()).collect();
+        let c: Vec<f64> = (0..37).map(|i| 1.0 / (1.0 + i as f64)).collect();
+        let plain = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        assert!((dot(&a, &c) - plain(&a, &c)).abs() < 1e-13);
+        let (s, t) = dot2(&a, &b, &c);
+        assert!((s - plain(&a, &c)).abs() < 1e-13);
+        assert!((t - plain(&b, &c)).abs() < 1e-13);
+    }
+}
