@@ -739,3 +739,48 @@ pub fn discover_reporting(
         note: String::new(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+    use std::sync::Mutex;
+
+    /// The progress line hears each round, each candidate of the screen with its replicates
+    /// done, and the searched forms' batches; the diagnosis is the same with or without it.
+    #[test]
+    fn the_progress_says_round_candidate_and_replicates() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/truths/null_small.toml");
+        let truth = crate::synth::Truth::parse(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let tables = crate::synth::synth_tables(&truth);
+        let mut files = BTreeMap::new();
+        files.insert("runs.csv".to_string(), tables.runs_csv.into_bytes());
+        files.insert(
+            "trajectories.csv".to_string(),
+            tables.trajectories_csv.into_bytes(),
+        );
+        let recs = crate::ingest::ingest(&files, &crate::ingest::IngestParams::default())
+            .unwrap()
+            .recordings;
+        let opts = Options {
+            bootstrap: 12,
+            folds: 4,
+            seed: 3,
+            ..Options::default()
+        };
+        let said = Mutex::new(Vec::<String>::new());
+        let d = discover_reporting(&recs, &opts, &|w: &str| {
+            said.lock().unwrap().push(w.to_string())
+        });
+        let said = said.into_inner().unwrap();
+        assert!(d.note.is_empty(), "discovery ran: {}", d.note);
+        let has = |s: &str| said.iter().any(|w| w.contains(s));
+        assert!(has("round 1: screening"), "{said:?}");
+        assert!(has("round 1: candidate 1/"), "{said:?}");
+        assert!(has("periodic in time: replicates 0/60 done"), "{said:?}");
+        assert!(has("groove tilt") || has("tilt: 60 replicates"), "{said:?}");
+        let again = serde_json::to_vec(&discover(&recs, &opts)).unwrap();
+        assert_eq!(serde_json::to_vec(&d).unwrap(), again);
+    }
+}
