@@ -148,6 +148,16 @@ fn quadratic_drag_is_named_and_sized() {
         "c_per_m",
         80.0,
     );
+    // a drag that grows with speed is no evidence for a saturating one, whose slope T' cannot go
+    // below 0: the screen's statistic is one-sided for a term that starts at its bound
+    let d = discover(&synthesize(&truth, &SMALL, 3), &fast_options(3));
+    let sat: Vec<f64> = d
+        .candidates
+        .iter()
+        .filter(|c| c.round == 1 && c.form.starts_with("saturating"))
+        .map(|c| c.evidence.lr)
+        .collect();
+    assert_eq!(sat, vec![0.0], "round-1 saturating drag LR {sat:?}");
 }
 
 #[test]

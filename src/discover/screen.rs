@@ -282,8 +282,16 @@ impl Sums {
     }
 
     /// LR per replicate of `reps`, the data's coefficients (zero when the data is not among
-    /// `reps`) and their variances (shared parameters profiled).
-    fn solve(&self, v: &Vectors) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    /// `reps`) and their variances (shared parameters profiled). `sign`, for a single column
+    /// whose parameter starts at a bound (a drag slope or a resistance that vanishes at 0 and
+    /// cannot go below), is the direction the coefficient may take: a fit pushed the other way
+    /// stays at the bound, so that replicate's statistic is 0 (the one-sided, χ̄² test), in the
+    /// data and in the null alike. Empty, or several columns: two-sided.
+    fn solve(&self, v: &Vectors, sign: &[f64]) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let one_sided = match sign {
+            [s] if *s != 0.0 && self.q == 1 => Some(*s),
+            _ => None,
+        };
         let (q, k) = (self.q, v.kept.len());
         // A = X'X − X'G (G'G)⁻¹ G'X
         let mut xg_ginv = vec![0.0; q * k];
@@ -339,9 +347,14 @@ impl Sums {
             let beta: Vec<f64> = (0..q)
                 .map(|a| (0..q).map(|b| inv[a * q + b] * c[b]).sum())
                 .collect();
-            lr.push(dot(&beta, &c).max(0.0));
+            let infeasible = one_sided.is_some_and(|s| beta[0] * s < 0.0);
+            lr.push(if infeasible {
+                0.0
+            } else {
+                dot(&beta, &c).max(0.0)
+            });
             if self.reps.start + bb == 0 {
-                beta0 = beta;
+                beta0 = if infeasible { vec![0.0] } else { beta };
             }
         }
         let var = (0..q)
@@ -376,6 +389,7 @@ fn coherent<F>(
     v: &Vectors,
     q: usize,
     reps: Range<usize>,
+    sign: &[f64],
     cols: F,
 ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)>
 where
@@ -387,7 +401,7 @@ where
             s.add(&c, p, v, yr);
         }
     }
-    s.solve(v)
+    s.solve(v, sign)
 }
 
 /// Secant columns of a named term: each parameter stepped from where the term vanishes.
@@ -428,7 +442,23 @@ fn secant(
                 .collect()
         })
         .collect();
-    let (lr, beta, var) = coherent(prep, v, q, 0..v.n_rep(), |p| Some(cols[p.run].clone()))?;
+    // a parameter starting at its bound may only move into its range
+    let ps = extra.params();
+    let sign: Vec<f64> = steps
+        .iter()
+        .map(|&(j, _)| {
+            if theta0[j] <= ps[j].lo {
+                1.0
+            } else if theta0[j] >= ps[j].hi {
+                -1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let (lr, beta, var) = coherent(prep, v, q, 0..v.n_rep(), &sign, |p| {
+        Some(cols[p.run].clone())
+    })?;
     let mut est = theta0.to_vec();
     let mut se = vec![f64::NAN; theta0.len()];
     for (a, &(j, _)) in steps.iter().enumerate() {
@@ -623,7 +653,7 @@ fn periodic_z(
     let trials: Vec<Option<Trial>> = ks
         .par_iter()
         .map(|&k| {
-            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), |p| {
+            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
                 let z = p.track.variable(crate::physics::Variable::Z);
                 let fs: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).sin()).collect();
                 let fc: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).cos()).collect();
@@ -659,7 +689,7 @@ fn localized(
     let out: Vec<Option<Trial>> = trials
         .par_iter()
         .map(|&(c, w)| {
-            let (lr, b, var) = coherent(prep, v, 1, reps.clone(), |p| {
+            let (lr, b, var) = coherent(prep, v, 1, reps.clone(), &[], |p| {
                 bump_column(p, c, w).map(|x| vec![x])
             })?;
             Some((
@@ -759,7 +789,7 @@ fn spline(
     reps: Range<usize>,
 ) -> Option<Trial> {
     let nb = spline_n_basis(segments);
-    let (lr, b, vv) = coherent(prep, v, nb, reps, |p| {
+    let (lr, b, vv) = coherent(prep, v, nb, reps, &[], |p| {
         let x = p.track.variable(var);
         Some(
             (0..nb)
