@@ -608,3 +608,49 @@ fn a_stage_stepping_through_two_per_item_inputs_reruns_only_the_changed_item() {
         .stdout(&["dag"])
         .contains("resid (command foreach runs, fits)"));
 }
+
+/// The store object a per-item output of one item names in the lock.
+fn item_object(p: &Project, stage: &str, output: &str, item: &str) -> std::path::PathBuf {
+    let lock: serde_json::Value = serde_json::from_str(&p.read("pipeline.lock")).unwrap();
+    let h = lock["stages"][stage]["outputs"][output]["items"][item]
+        .as_str()
+        .unwrap()
+        .to_string();
+    p.path(".groove/objects").join(&h[..2]).join(&h[2..])
+}
+
+#[test]
+fn a_per_item_stage_is_found_through_its_one_index_entry_and_a_damaged_item_reruns_alone() {
+    let p = Project::standard();
+    p.stdout(&["run"]);
+    p.take_trace();
+    let lock: serde_json::Value = serde_json::from_str(&p.read("pipeline.lock")).unwrap();
+    let fit = &lock["stages"]["fit"];
+    // the index: the stage key's entry names every item's output
+    let index: serde_json::Value = serde_json::from_str(&p.read(&format!(
+        ".groove/entries/{}.json",
+        fit["key"].as_str().unwrap()
+    )))
+    .unwrap();
+    assert_eq!(index["outputs"]["fit"], fit["outputs"]["fit"]);
+    assert_eq!(fit["outputs"]["fit"]["items"].as_object().unwrap().len(), 3);
+
+    // a damaged item object: the index is a miss, only that item runs again (same bytes, so
+    // the summary is reused) and the object is repaired
+    let object = item_object(&p, "fit", "fit", "run_b.csv");
+    let good = std::fs::read(&object).unwrap();
+    std::fs::write(&object, b"damaged\n").unwrap();
+    let out = p.stdout(&["run"]);
+    assert_eq!(p.take_trace(), strings(&["fit run_b.csv"]), "{out}");
+    assert_eq!(std::fs::read(&object).unwrap(), good);
+
+    // with the index sound, the items' own entries are not read: removing them reruns nothing
+    for item in fit["items"].as_object().unwrap().values() {
+        std::fs::remove_file(p.path(&format!(".groove/entries/{}.json", item.as_str().unwrap())))
+            .unwrap();
+    }
+    let out = p.stdout(&["run"]);
+    assert!(out.contains("0 stages run, 5 reused"), "{out}");
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert!(p.stale().is_empty());
+}

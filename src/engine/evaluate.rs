@@ -102,6 +102,43 @@ fn evaluate_stage(
     }
     bind_provenance(ctx, spec, done, &mut bound);
     let units = unit_keys(ctx, spec, &bound, seed)?;
+    let items: BTreeMap<String, String> = units
+        .iter()
+        .filter_map(|(item, k)| item.clone().map(|i| (i, k.clone())))
+        .collect();
+    let key = match &spec.foreach {
+        None => units[0].1.clone(),
+        Some(_) => items_digest(&items),
+    };
+    // a per-item stage whose every item was committed before: its one index entry (item keys
+    // → outputs) is read instead of one entry per item
+    let force = matches!(action, Action::Run { force: true });
+    let index = (spec.foreach.is_some() && !units.is_empty() && !force)
+        .then(|| ctx.store.entry_checked(&key, &ctx.hashes))
+        .flatten();
+    if let Some(index) = index {
+        let current = LockStage {
+            key,
+            outputs: index.outputs,
+            items,
+            ..key_parts(
+                ctx,
+                spec,
+                seed,
+                bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
+            )
+        };
+        let stale_outputs = write_or_check_outputs(ctx, spec, &current, action)?;
+        if let Action::Run { .. } = action {
+            report_finished(ctx, spec, started, 0, units.len());
+        }
+        return Ok(Evaluated {
+            current: Some(current),
+            complete: true,
+            stale_outputs,
+            ..Evaluated::default()
+        });
+    }
     let mut entries: Vec<Option<Entry>> = units
         .par_iter()
         .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
@@ -123,14 +160,13 @@ fn evaluate_stage(
     } else {
         BTreeMap::new()
     };
-    let items: BTreeMap<String, String> = units
-        .iter()
-        .filter_map(|(item, k)| item.clone().map(|i| (i, k.clone())))
-        .collect();
-    let key = match &spec.foreach {
-        None => units[0].1.clone(),
-        Some(_) => items_digest(&items),
-    };
+    // every item committed: write the stage's index entry (after the items' own entries, so a
+    // kill leaves either no index or a complete one)
+    if complete && spec.foreach.is_some() && !units.is_empty() {
+        if let Action::Run { .. } = action {
+            ctx.store.commit(&key, outputs.clone())?;
+        }
+    }
     let current = LockStage {
         key,
         outputs,

@@ -81,6 +81,28 @@ impl HashCache {
         Ok(sha256)
     }
 
+    /// Note the hash of a file whose bytes were just hashed (a store object just written or
+    /// compared byte for byte), so it is not read again while its stamp holds. A file that
+    /// cannot be `stat`ed is left out (the next check reads it).
+    pub fn record(&self, path: &Path, sha256: &str) {
+        let Ok(meta) = std::fs::metadata(path) else {
+            return;
+        };
+        let (size, mtime_ns, inode) = stamp_of(&meta);
+        let stamp = Stamp {
+            size,
+            mtime_ns,
+            inode,
+            sha256: sha256.to_string(),
+        };
+        let key = path.to_string_lossy().into_owned();
+        let mut entries = self.entries.lock().expect("hash cache lock");
+        if entries.get(&key) != Some(&stamp) {
+            entries.insert(key, stamp);
+            *self.dirty.lock().expect("hash cache lock") = true;
+        }
+    }
+
     /// Write the cache back if it changed (atomically; a lost update only costs a rehash).
     pub fn save(&self) -> Result<(), EngineError> {
         if !*self.dirty.lock().expect("hash cache lock") {

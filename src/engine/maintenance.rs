@@ -75,11 +75,9 @@ pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
     }
     let mut keep = BTreeSet::new();
     for stage in lock.stages.values() {
-        if stage.items.is_empty() {
-            keep.insert(stage.key.clone());
-        } else {
-            keep.extend(stage.items.values().cloned());
-        }
+        // a per-item stage's key is its index entry (item keys → outputs), kept with its items
+        keep.insert(stage.key.clone());
+        keep.extend(stage.items.values().cloned());
     }
     store.sweep_tmp()?;
     store.gc(&keep)

@@ -10,6 +10,7 @@ use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
 use super::hashing::{sha256_hex, HashCache};
 use super::stage::Artifact;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -127,11 +128,16 @@ impl Store {
     /// missing object makes the entry a miss: the stage runs again and stores the object anew.
     pub fn entry_checked(&self, key: &str, hashes: &HashCache) -> Option<Entry> {
         let entry = self.entry(key)?;
-        let sound = entry.outputs.values().all(|stored| {
-            stored_objects(stored).all(|h| {
-                let path = self.object_path(h);
-                path.is_file() && hashes.hash_file(&path).is_ok_and(|got| &got == h)
-            })
+        // one `stat` per object (a missing object fails it, a directory cannot be read), the
+        // objects of a large collection on every core
+        let sound_object = |h: &String| {
+            hashes
+                .hash_file(&self.object_path(h))
+                .is_ok_and(|got| &got == h)
+        };
+        let sound = entry.outputs.values().all(|stored| match stored {
+            Stored::File { sha256 } => sound_object(sha256),
+            Stored::Collection { items } => items.par_iter().all(|(_, h)| sound_object(h)),
         });
         sound.then_some(entry)
     }
@@ -153,8 +159,10 @@ impl Store {
     pub fn put_object(&self, bytes: &[u8]) -> Result<String, EngineError> {
         let sha256 = sha256_hex(bytes);
         let path = self.object_path(&sha256);
-        // an object already there is reused only if it is sound (a damaged one is replaced)
-        let sound = std::fs::read(&path).is_ok_and(|b| sha256_hex(&b) == sha256);
+        // an object already there is reused only if it is sound (a damaged one is replaced);
+        // these bytes were just hashed, so equal bytes are sound without hashing them again
+        let sound = std::fs::metadata(&path).is_ok_and(|m| m.len() == bytes.len() as u64)
+            && std::fs::read(&path).is_ok_and(|b| b == bytes);
         if !sound {
             let tmp = self.tmp_root();
             std::fs::create_dir_all(&tmp).at(&tmp)?;
