@@ -327,13 +327,34 @@ pub struct Round {
     pub probe_rows: Vec<CandidateRow>,
 }
 
-fn row(round: usize, e: &Extra, m: &Model, materials: &[String], ev: Evidence) -> CandidateRow {
+fn row(
+    round: usize,
+    e: &Extra,
+    m: &Model,
+    materials: &[String],
+    runs: &[RunData],
+    ev: Evidence,
+) -> CandidateRow {
+    let mut parameters = term_parameters(m, m.spec.extras.len() - 1, materials);
+    // a force in time: the amplitude with each run's phase integrated out, not fitted (the
+    // fitted phases also fit the noise and make it read high; timeforce.rs)
+    if matches!(e, Extra::TimePeriodic { .. }) {
+        if let Some(a) =
+            super::timeforce::amplitude_over_phases(&m.spec, &m.fit.global, &m.fit.local, runs)
+        {
+            for name in ["amplitude_mps2", "peak_accel_mps2"] {
+                if let Some(p) = parameters.get_mut(name) {
+                    p.value = a;
+                }
+            }
+        }
+    }
     CandidateRow {
         round,
         effect: e.effect().unwrap_or("probe").to_string(),
         form: e.form(),
         accepted: false,
-        parameters: term_parameters(m, m.spec.extras.len() - 1, materials),
+        parameters,
         evidence: ev,
     }
 }
@@ -542,7 +563,7 @@ pub fn run_round(
         } else {
             format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are fitted in full and none of those passed the held-out check")
         };
-        rows.push(row(round, e, &fitted[i], materials, ev));
+        rows.push(row(round, e, &fitted[i], materials, runs, ev));
     }
     let accepted = best.map(|(i, cv)| {
         rows[i].accepted = true;
