@@ -236,7 +236,12 @@ pub fn propose(
         .collect();
     let prep = prepare(
         spec,
-        if wanted.maps { params } else { &no_glob },
+        // the force maps and the periodogram in z refit the shared parameters alongside
+        if wanted.maps || wanted.z {
+            params
+        } else {
+            &no_glob
+        },
         global,
         local,
         runs,
