@@ -236,12 +236,7 @@ pub fn propose(
         .collect();
     let prep = prepare(
         spec,
-        // the force maps and the periodogram in z refit the shared parameters alongside
-        if wanted.maps || wanted.z {
-            params
-        } else {
-            &no_glob
-        },
+        if wanted.maps { params } else { &no_glob },
         global,
         local,
         runs,

@@ -55,59 +55,10 @@ fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Pe
     out
 }
 
-/// The runs' shared parameters (μ, T, and the terms already in the model), profiled out of the
-/// periodogram in z: the active columns, the Cholesky factor of their normal matrix and their
-/// products with the residuals, summed over runs. None when no shared column acts.
-struct Shared {
-    cols: Vec<usize>,
-    chol: Vec<f64>,
-    gty: Vec<f64>,
-}
-
-impl Shared {
-    fn of(prep: &[Prepared]) -> Option<Shared> {
-        let n = prep.first()?.glob.len();
-        let cols: Vec<usize> = (0..n)
-            .filter(|&j| prep.iter().any(|p| p.glob[j].iter().any(|x| *x != 0.0)))
-            .collect();
-        let m = cols.len();
-        if m == 0 {
-            return None;
-        }
-        let mut gg = vec![0.0; m * m];
-        let mut gty = vec![0.0; m];
-        for p in prep {
-            for (a, &ja) in cols.iter().enumerate() {
-                gty[a] += dot(&p.glob[ja], &p.y);
-                for (b, &jb) in cols.iter().enumerate().take(a + 1) {
-                    let v = dot(&p.glob[ja], &p.glob[jb]);
-                    gg[a * m + b] += v;
-                    if a != b {
-                        gg[b * m + a] += v;
-                    }
-                }
-            }
-        }
-        let chol = crate::lsq::dense::cholesky(&gg, m)?;
-        Some(Shared { cols, chol, gty })
-    }
-
-    fn solve(&self, b: &[f64]) -> Vec<f64> {
-        let mut x = b.to_vec();
-        crate::lsq::dense::chol_solve(&self.chol, self.cols.len(), &mut x);
-        x
-    }
-}
-
-/// The coherent fit at one wavenumber: the χ² drop and the (sin, cos) coefficients (m/s²), with
-/// the shared parameters refitted alongside when `shared` is given (as the screen does): a
-/// long wavelength pushes the runs of each end of the view one way, which μ and T partly absorb,
-/// and unprofiled, the periodogram's peak moves to where they cannot.
-fn z_power(prep: &[Prepared], shared: Option<&Shared>, z_ref: f64, kk: f64) -> (f64, [f64; 2]) {
+/// The coherent fit at one wavenumber: the χ² drop and the (sin, cos) coefficients (m/s²).
+fn z_power(prep: &[Prepared], z_ref: f64, kk: f64) -> (f64, [f64; 2]) {
     let mut a = [0.0; 3];
     let mut b = [0.0; 2];
-    let m = shared.map_or(0, |s| s.cols.len());
-    let mut xg = [vec![0.0; m], vec![0.0; m]];
     for p in prep {
         let z = p.track.variable(crate::physics::Variable::Z);
         let fs: Vec<f64> = z.iter().map(|z| (kk * (z - z_ref)).sin()).collect();
@@ -119,22 +70,6 @@ fn z_power(prep: &[Prepared], shared: Option<&Shared>, z_ref: f64, kk: f64) -> (
         a[2] += dot(&xc, &xc);
         b[0] += dot(&xs, &p.y);
         b[1] += dot(&xc, &p.y);
-        if let Some(sh) = shared {
-            for (c, &j) in sh.cols.iter().enumerate() {
-                xg[0][c] += dot(&xs, &p.glob[j]);
-                xg[1][c] += dot(&xc, &p.glob[j]);
-            }
-        }
-    }
-    if let Some(sh) = shared {
-        // Schur complement: A − X'G (G'G)⁻¹ G'X and b − X'G (G'G)⁻¹ G'y
-        let w0 = sh.solve(&xg[0]);
-        let w1 = sh.solve(&xg[1]);
-        a[0] -= dot(&xg[0], &w0);
-        a[1] -= dot(&xg[0], &w1);
-        a[2] -= dot(&xg[1], &w1);
-        b[0] -= dot(&w0, &sh.gty);
-        b[1] -= dot(&w1, &sh.gty);
     }
     solve2(a, b).map(|(x, d)| (d, x)).unwrap_or((0.0, [0.0; 2]))
 }
@@ -234,20 +169,15 @@ fn refined_peaks(
     out
 }
 
-/// The periodogram in lab z over wavenumbers `k` (rad/m), phases referred to `z_ref`, the shared
-/// parameters of `prep` (their columns) refitted at each; its peaks refined off the grid.
+/// The periodogram in lab z over wavenumbers `k` (rad/m), phases referred to `z_ref`; its peaks
+/// refined off the grid.
 pub fn z_spectrum(prep: &[Prepared], z_ref: f64, k: &[f64]) -> Spectrum {
-    let shared = Shared::of(prep);
-    let sh = shared.as_ref();
-    let rows: Vec<(f64, [f64; 2])> = k
-        .par_iter()
-        .map(|&kk| z_power(prep, sh, z_ref, kk))
-        .collect();
+    let rows: Vec<(f64, [f64; 2])> = k.par_iter().map(|&kk| z_power(prep, z_ref, kk)).collect();
     let power: Vec<f64> = rows.iter().map(|r| r.0).collect();
     Spectrum {
         variable: "z".into(),
         x: k.iter().map(|k| TAU / k).collect(),
-        peaks: refined_peaks(k, &power, 2, |kk| z_power(prep, sh, z_ref, kk)),
+        peaks: refined_peaks(k, &power, 2, |kk| z_power(prep, z_ref, kk)),
         power,
         noise_power: 2.0,
     }
