@@ -28,8 +28,11 @@
 //!   +3.6, +8.4, +5.2, +14.9 %), frequency within 0.5 %;
 //! - two effects (tilt 0.05°, waviness 0.05 m/s² at 2 mm): 5/5, tilt within 2.6 %, amplitude
 //!   within 6.9 %, wavelength within 0.5 %;
-//! - the fixed list in lab coordinates (seeds 2–4 or 2–3): see the report of this session;
-//!   quadratic drag 3/3 (c within 1.8 %), saturating drag 3/3 (T' within 0.4 %, T0 within 0.2 %);
+//! - the fixed list in lab coordinates (seeds 2–4 for the drags, 2–3 for the rest): quadratic
+//!   drag 3/3 (c within 1.8 %), saturating drag 3/3 (T' within 0.4 %, T0 within 0.2 %), rolling
+//!   resistance 2/2 (within 0.4 %), groove tilt 2/2 (within 0.3 %), velocity-dependent friction
+//!   2/2 (v_c within 3.8 %), periodic force at 8 mm 2/2 (amplitude within 0.2 %, wavelength
+//!   within 0.1 %);
 //! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
 //!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
 
