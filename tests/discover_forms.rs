@@ -5,11 +5,36 @@
 //!
 //! Each concealed effect must be named with the right effect and form, its magnitudes within
 //! 15 % of the truth, and no other term accepted; nulls must accept nothing and carry detection
-//! limits. The default run uses one seed per case; the multi-seed checks are `#[ignore]`d:
+//! limits. The default run uses one seed per case; the multi-seed sweeps are `#[ignore]`d (about
+//! a minute per 60-run seed in the dev profile on the shared 2-core machine; each prints a line
+//! per seed with the magnitudes found and their errors):
 //!
-//!     cargo test --release --test discover_forms -- --ignored
+//!     cargo test --locked --features s3 --test discover_forms -- --ignored --nocapture --test-threads=1
+//!     GROOVE_SWEEP_CASES="waviness_5mm" GROOVE_SWEEP_SEEDS="2" cargo test ... -- --ignored   # one
 //!
-//! (each seed of a 60-run set takes tens of seconds in the dev profile).
+//! Measured (2026-11-23, seeds 2–6 unless said; errors are found/truth − 1):
+//! - waviness 0.5 mm: 5/5 named, amplitude within 1.1 %, wavelength within 0.1 %;
+//! - waviness 0.8 mm: 5/5, amplitude within 0.2 %, wavelength within 0.1 %;
+//! - waviness 3 mm: 5/5, amplitude within 0.4 %, wavelength within 0.1 % (run before the
+//!   periodogram's peaks were refined, which only adds better starts to the full fit);
+//! - waviness 5 mm: FAILS (seeds 2–4 checked): the fit takes an alias wavelength (3.2 mm, or
+//!   10 mm), then rolling resistance or a bump and a spline in z take up what it leaves. The
+//!   slow runs, which carry most of the signal, sit in two clusters ~10 mm apart (near either
+//!   end of the view), so wavenumbers 2π/10 mm apart fit both clusters almost alike, and at 5 mm
+//!   no start of the full fit lands on the true lobe. Not solved;
+//! - a bump (0.3 m/s², z_c = 2 mm, w = 0.3 mm): 5/5, amplitude, centre and width within 0.3 %;
+//! - a vibration (0.3 m/s², 150 Hz, a phase per run): 5/5, amplitude −8.9, −2.2, +2.7, −0.8,
+//!   +9.8 % (mean +0.1 %; with each run's phase fitted instead of integrated out it read −2.3,
+//!   +3.6, +8.4, +5.2, +14.9 %), frequency within 0.5 %;
+//! - two effects (tilt 0.05°, waviness 0.05 m/s² at 2 mm): 5/5, tilt within 2.6 %, amplitude
+//!   within 6.9 %, wavelength within 0.5 %;
+//! - the fixed list in lab coordinates (seeds 2–4 for the drags, 2–3 for the rest): quadratic
+//!   drag 3/3 (c within 1.8 %), saturating drag 3/3 (T' within 0.4 %, T0 within 0.2 %), rolling
+//!   resistance 2/2 (within 0.4 %), groove tilt 2/2 (within 0.3 %), velocity-dependent friction
+//!   2/2 (v_c within 3.8 %), periodic force at 8 mm 2/2 (amplitude within 0.2 %, wavelength
+//!   within 0.1 %);
+//! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
+//!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
 
 use groove::discover::{discover, Diagnosis, Options};
 use groove::ingest::{ingest, IngestParams};
@@ -79,11 +104,13 @@ fn param(d: &Diagnosis, effect: &str, form: &str, name: &str) -> f64 {
         .value
 }
 
-fn within(got: f64, want: f64, what: &str) {
+/// Asserts `got` within 15 % of `want`; the found value and its error, for the sweeps' lines.
+fn within(got: f64, want: f64, what: &str) -> String {
     assert!(
         (got - want).abs() <= 0.15 * want.abs(),
         "{what}: found {got}, truth {want}"
     );
+    format!("{what} {got:.4e} ({:+.1} %)", 100.0 * (got / want - 1.0))
 }
 
 /// Every candidate tested, one line each, for a failing assertion's message.
@@ -103,6 +130,14 @@ fn table(d: &Diagnosis) -> String {
                 c.evidence.decision
             )
         })
+        .chain(d.findings.iter().filter(|f| f.accepted).map(|f| {
+            let ps: Vec<String> = f
+                .parameters
+                .iter()
+                .map(|(k, v)| format!("{k} {:.4e}", v.value))
+                .collect();
+            format!("accepted {}: {}", f.effect, ps.join(", "))
+        }))
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -132,19 +167,23 @@ fn exactly(d: &Diagnosis, want: &[(&str, &str)]) {
     }
 }
 
-fn check_waviness(name: &str, seed: Option<u64>, amp: f64, lambda: f64) {
+fn check_waviness(name: &str, seed: Option<u64>) -> String {
+    let Term::PositionForce {
+        amp_mps2,
+        wavelength_m,
+        ..
+    } = concealed(name)
+    else {
+        panic!("{name}.toml conceals a waviness");
+    };
     let d = run(name, seed);
     exactly(&d, &[("position_dependent_force", "periodic in z")]);
-    within(
-        param(&d, "position_dependent_force", "periodic", "amplitude_mps2"),
-        amp,
-        "amplitude",
-    );
-    within(
-        param(&d, "position_dependent_force", "periodic", "wavelength_m"),
-        lambda,
-        "wavelength",
-    );
+    let p = |n| param(&d, "position_dependent_force", "periodic", n);
+    [
+        within(p("amplitude_mps2"), amp_mps2, "amplitude"),
+        within(p("wavelength_m"), wavelength_m, "wavelength"),
+    ]
+    .join(", ")
 }
 
 /// The concealed term of a truth file (the first one that is not the baseline drag).
@@ -157,7 +196,7 @@ fn concealed(name: &str) -> Term {
         .unwrap_or_else(|| panic!("{name}: no concealed term"))
 }
 
-fn check_localized(seed: Option<u64>) {
+fn check_localized(seed: Option<u64>) -> String {
     let Term::LocalizedForce {
         amp_mps2,
         centre_m,
@@ -169,12 +208,15 @@ fn check_localized(seed: Option<u64>) {
     let d = run("localized_force", seed);
     exactly(&d, &[("position_dependent_force", "localized in z")]);
     let p = |n| param(&d, "position_dependent_force", "localized", n);
-    within(p("amplitude_mps2"), amp_mps2, "amplitude");
-    within(p("centre_m"), centre_m, "centre");
-    within(p("width_m"), width_m, "width");
+    [
+        within(p("amplitude_mps2"), amp_mps2, "amplitude"),
+        within(p("centre_m"), centre_m, "centre"),
+        within(p("width_m"), width_m, "width"),
+    ]
+    .join(", ")
 }
 
-fn check_time(seed: Option<u64>) {
+fn check_time(seed: Option<u64>) -> String {
     let Term::TimePeriodicForce {
         amp_mps2, freq_hz, ..
     } = concealed("time_force")
@@ -184,11 +226,14 @@ fn check_time(seed: Option<u64>) {
     let d = run("time_force", seed);
     exactly(&d, &[("time_dependent_force", "periodic in time")]);
     let p = |n| param(&d, "time_dependent_force", "periodic in time", n);
-    within(p("amplitude_mps2"), amp_mps2, "amplitude");
-    within(p("frequency_hz"), freq_hz, "frequency");
+    [
+        within(p("amplitude_mps2"), amp_mps2, "amplitude"),
+        within(p("frequency_hz"), freq_hz, "frequency"),
+    ]
+    .join(", ")
 }
 
-fn check_two(seed: Option<u64>) {
+fn check_two(seed: Option<u64>) -> String {
     let d = run("two_effects", seed);
     exactly(
         &d,
@@ -197,17 +242,72 @@ fn check_two(seed: Option<u64>) {
             ("position_dependent_force", "periodic in z"),
         ],
     );
-    within(param(&d, "groove_tilt", "tilt", "alpha_deg"), 0.05, "tilt");
-    within(
-        param(&d, "position_dependent_force", "periodic", "amplitude_mps2"),
-        0.05,
-        "amplitude",
-    );
-    within(
-        param(&d, "position_dependent_force", "periodic", "wavelength_m"),
-        2e-3,
-        "wavelength",
-    );
+    let p = |n| param(&d, "position_dependent_force", "periodic", n);
+    [
+        within(param(&d, "groove_tilt", "tilt", "alpha_deg"), 0.05, "tilt"),
+        within(p("amplitude_mps2"), 0.05, "amplitude"),
+        within(p("wavelength_m"), 2e-3, "wavelength"),
+    ]
+    .join(", ")
+}
+
+/// An effect of the fixed list (tests/fixtures/truths/<name>.toml, lab coordinates): named with
+/// its form, nothing else accepted, and each of `sizes` (parameter, truth) within 15 %.
+fn check_listed(
+    name: &str,
+    seed: Option<u64>,
+    effect: &str,
+    form: &str,
+    sizes: &[(&str, f64)],
+) -> String {
+    let d = run(name, seed);
+    exactly(&d, &[(effect, form)]);
+    sizes
+        .iter()
+        .map(|(p, want)| within(param(&d, effect, form, p), *want, p))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn check_existing(name: &str, seed: Option<u64>) -> String {
+    let g = groove::discover::G_MPS2;
+    match name {
+        "quadratic_drag" => check_listed(
+            name,
+            seed,
+            "velocity_dependent_drag",
+            "quadratic",
+            &[("c_per_m", 40.0)],
+        ),
+        "saturating_drag" => check_listed(
+            name,
+            seed,
+            "velocity_dependent_drag",
+            "saturating",
+            &[
+                ("tp_s_per_mps", 1.1),
+                ("t0_s_316", 0.052),
+                ("t0_s_440c", 0.052),
+            ],
+        ),
+        "rolling_resistance" => check_listed(
+            name,
+            seed,
+            "rolling_resistance",
+            "constant resistance",
+            &[("deceleration_mps2", 0.004 * g)],
+        ),
+        "groove_tilt" => check_listed(name, seed, "groove_tilt", "tilt", &[("alpha_deg", 0.2)]),
+        "velocity_dependent_friction" => check_listed(
+            name,
+            seed,
+            "velocity_dependent_friction",
+            "mu(u)",
+            &[("v_c_mps_316", 0.004), ("v_c_mps_440c", 0.004)],
+        ),
+        "position_force" => check_waviness(name, seed),
+        _ => panic!("no check for {name}"),
+    }
 }
 
 /// A null accepts nothing, and every candidate carries its detection limit.
@@ -229,17 +329,21 @@ fn check_null(name: &str, seed: Option<u64>) -> bool {
         tilt.value > 0.0 && tilt.value < 0.5 && tilt.text.contains("tilt above"),
         "{tilt:?}"
     );
-    accepted(&d).is_empty()
+    let found = accepted(&d);
+    if !found.is_empty() {
+        println!("{name} seed {seed:?}: accepted {found:?}\n{}", table(&d));
+    }
+    found.is_empty()
 }
 
 #[test]
 fn waviness_of_0_8_mm_is_a_periodic_force_in_z() {
-    check_waviness("waviness_0p8mm", None, 0.06, 0.8e-3);
+    check_waviness("waviness_0p8mm", None);
 }
 
 #[test]
 fn waviness_of_3_mm_is_a_periodic_force_in_z() {
-    check_waviness("waviness_3mm", None, 0.05, 3e-3);
+    check_waviness("waviness_3mm", None);
 }
 
 #[test]
@@ -267,23 +371,121 @@ fn a_small_set_gives_no_finding_and_states_its_limits() {
     assert!(check_null("null_small", None), "a finding on a null");
 }
 
-#[test]
-#[ignore = "heavy: 5 seeds per effect of 60-run sets"]
-fn every_effect_over_seeds() {
-    for seed in 2..7 {
-        check_waviness("waviness_0p8mm", Some(seed), 0.06, 0.8e-3);
-        check_waviness("waviness_3mm", Some(seed), 0.05, 3e-3);
-        check_localized(Some(seed));
-        check_time(Some(seed));
-        check_two(Some(seed));
+/// The seeds of the multi-seed sweeps (the default tests use each fixture's own seed, 1);
+/// `GROOVE_SWEEP_SEEDS="5 6"` and `GROOVE_SWEEP_CASES="waviness_0p5mm"` narrow a sweep down to
+/// reproduce one outcome.
+fn sweep_seeds() -> Vec<u64> {
+    match std::env::var("GROOVE_SWEEP_SEEDS") {
+        Ok(s) => s
+            .split_whitespace()
+            .map(|x| x.parse().expect("GROOVE_SWEEP_SEEDS: integers"))
+            .collect(),
+        Err(_) => (2..7).collect(),
     }
+}
+
+/// Runs `check` for every case and seed, prints one line per seed (what was found, the
+/// magnitudes and their errors, or why it failed) and a tally per case, then fails if any seed
+/// failed.
+fn sweep(cases: &[&str], check: impl Fn(&str, Option<u64>) -> String + std::panic::RefUnwindSafe) {
+    let only = std::env::var("GROOVE_SWEEP_CASES").ok();
+    let seeds = sweep_seeds();
+    let mut failed = Vec::new();
+    for case in cases {
+        if only
+            .as_ref()
+            .is_some_and(|o| !o.split_whitespace().any(|c| c == *case))
+        {
+            continue;
+        }
+        let mut ok = 0;
+        for &seed in &seeds {
+            match std::panic::catch_unwind(|| check(case, Some(seed))) {
+                Ok(line) => {
+                    ok += 1;
+                    println!("{case} seed {seed}: named; {line}");
+                }
+                Err(e) => {
+                    let why = e
+                        .downcast_ref::<String>()
+                        .cloned()
+                        .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                        .unwrap_or_default();
+                    println!("{case} seed {seed}: FAILED: {why}");
+                    failed.push(format!("{case} seed {seed}"));
+                }
+            }
+        }
+        println!("{case}: {ok}/{} seeds named and sized", seeds.len());
+    }
+    assert!(failed.is_empty(), "failed: {failed:?}");
+}
+
+#[test]
+#[ignore = "heavy: 5 seeds of each wavelength, 60-run sets"]
+fn waviness_from_half_a_millimetre_to_five_over_seeds() {
+    sweep(
+        &[
+            "waviness_0p5mm",
+            "waviness_0p8mm",
+            "waviness_3mm",
+            "waviness_5mm",
+        ],
+        check_waviness,
+    );
+}
+
+#[test]
+#[ignore = "heavy: 5 seeds each of the bump, the vibration and two effects at once"]
+fn bump_vibration_and_two_effects_over_seeds() {
+    sweep(
+        &["localized_force", "time_force", "two_effects"],
+        |case, seed| match case {
+            "localized_force" => check_localized(seed),
+            "time_force" => check_time(seed),
+            _ => check_two(seed),
+        },
+    );
+}
+
+#[test]
+#[ignore = "heavy: 5 seeds of each effect of the fixed list, 60-run sets in lab coordinates"]
+fn every_listed_effect_over_seeds() {
+    sweep(
+        &[
+            "quadratic_drag",
+            "saturating_drag",
+            "rolling_resistance",
+            "groove_tilt",
+            "velocity_dependent_friction",
+            "position_force",
+        ],
+        check_existing,
+    );
 }
 
 #[test]
 #[ignore = "heavy: 20 seeds of each null"]
 fn nulls_over_twenty_seeds() {
     for name in ["null_quantized", "null_small"] {
-        let false_findings: Vec<u64> = (100..120).filter(|s| !check_null(name, Some(*s))).collect();
+        let false_findings: Vec<u64> = (100..120)
+            .filter(|s| {
+                let clean = check_null(name, Some(*s));
+                println!(
+                    "{name} seed {s}: {}",
+                    if clean {
+                        "nothing accepted"
+                    } else {
+                        "A FINDING"
+                    }
+                );
+                !clean
+            })
+            .collect();
+        println!(
+            "{name}: {} of 20 seeds with a finding",
+            false_findings.len()
+        );
         assert!(
             false_findings.len() <= 1,
             "{name}: seeds with a finding {false_findings:?}"

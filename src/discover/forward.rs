@@ -328,13 +328,34 @@ pub struct Round {
     pub probe_rows: Vec<CandidateRow>,
 }
 
-fn row(round: usize, e: &Extra, m: &Model, materials: &[String], ev: Evidence) -> CandidateRow {
+fn row(
+    round: usize,
+    e: &Extra,
+    m: &Model,
+    materials: &[String],
+    runs: &[RunData],
+    ev: Evidence,
+) -> CandidateRow {
+    let mut parameters = term_parameters(m, m.spec.extras.len() - 1, materials);
+    // a force in time: the amplitude with each run's phase integrated out, not fitted (the
+    // fitted phases also fit the noise and make it read high; timeforce.rs)
+    if matches!(e, Extra::TimePeriodic { .. }) {
+        if let Some(a) =
+            super::timeforce::amplitude_over_phases(&m.spec, &m.fit.global, &m.fit.local, runs)
+        {
+            for name in ["amplitude_mps2", "peak_accel_mps2"] {
+                if let Some(p) = parameters.get_mut(name) {
+                    p.value = a;
+                }
+            }
+        }
+    }
     CandidateRow {
         round,
         effect: e.effect().unwrap_or("probe").to_string(),
         form: e.form(),
         accepted: false,
-        parameters: term_parameters(m, m.spec.extras.len() - 1, materials),
+        parameters,
         evidence: ev,
     }
 }
@@ -680,7 +701,7 @@ pub fn run_round(
             },
         };
         ev.decision = decide(i, ne, p_holm, &mut ev, &tr, opts.alpha);
-        rows.push(row(round, e, &tr.fitted[i], set.materials, ev));
+        rows.push(row(round, e, &tr.fitted[i], set.materials, set.runs, ev));
     }
     let accepted = tr.best.map(|(i, cv)| {
         rows[i].accepted = true;
