@@ -447,6 +447,35 @@ fn fresh_runs_in_two_folders_give_byte_identical_reports() {
     );
 }
 
+#[test]
+fn a_folder_without_pipeline_toml_runs_the_built_in_pipeline_to_the_same_report() {
+    let s = shared();
+    assert_success(&s.first, "the first groove run");
+    let other = new_project("no-pipeline", &s.dataset, true);
+    std::fs::remove_file(other.join("pipeline.toml")).unwrap();
+    // what a user types in a folder holding only a dataset
+    let out = groove(&other, &["run", "--data", "data", "--out", "reports"]);
+    assert_success(&out, "a run without pipeline.toml");
+    assert!(
+        text(&out.stderr).contains("running the built-in pipeline"),
+        "the user is told which pipeline ran: {}",
+        text(&out.stderr)
+    );
+    assert_eq!(
+        &tree_hashes(&other.join("reports")),
+        &s.reports_after_first,
+        "the built-in pipeline is the shipped one: same report, byte for byte"
+    );
+    // without --data there is nothing to run: the error says both ways out
+    let out = groove(&other, &["run"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("pass --config FILE") && err.contains("pass --data DIR"),
+        "{err}"
+    );
+}
+
 /// Breaks a copy of the shared project with `spoil`, runs it, and checks: exit 2, the previous
 /// reports and the store untouched. Returns the error text.
 fn bad_input(name: &str, spoil: impl FnOnce(&Path)) -> String {

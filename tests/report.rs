@@ -421,7 +421,7 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         "round",
         "Against the truth (this dataset is synthetic): concealed physics velocity dependent drag",
         "| velocity dependent drag | tp_s_per_mps | 1.120 ± 0.040 | 1.100 |",
-        "c0 = 1",
+        "saturating: c_inf = 1.000; v_ref_mps = 0.4000",
         "velocity dependent drag (saturating)",
         "0123456789abcdef0123456789abcdef01234567",
         "| data/runs.csv | c0ffee |",

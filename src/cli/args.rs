@@ -14,18 +14,31 @@ pub struct Cli {
     pub verb: Verb,
 }
 
+/// The pipeline file read when `--config` is not given.
+pub const DEFAULT_CONFIG: &str = "pipeline.toml";
+
 /// Which pipeline, on which dataset, writing which reports folder.
 #[derive(Debug, Args)]
 pub struct Project {
-    /// The pipeline file; relative paths inside it resolve against its folder.
-    #[arg(long, value_name = "FILE", default_value = "pipeline.toml")]
-    pub config: PathBuf,
+    /// The pipeline file (default: pipeline.toml); relative paths inside it resolve against its
+    /// folder. Without one here, `--data DIR` runs the built-in pipeline (the analysis as shipped).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     /// Use this dataset folder instead of the pipeline's `[project] data`.
     #[arg(long, value_name = "DIR")]
     pub data: Option<PathBuf>,
     /// Write reports here instead of the pipeline's `[project] reports`.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+}
+
+impl Project {
+    /// The pipeline file: `--config`, else `pipeline.toml`.
+    pub fn config_path(&self) -> PathBuf {
+        self.config
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_CONFIG))
+    }
 }
 
 /// The shared remote cache (see README, "Remote cache and Slurm").

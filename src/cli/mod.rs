@@ -2,19 +2,38 @@
 
 pub mod args;
 
-use args::{Cli, DagFormat, Executor, Project, RemoteArgs, Verb};
+use args::{Cli, DagFormat, Executor, Project, RemoteArgs, Verb, DEFAULT_CONFIG};
 use groove::engine::config::{self, Overrides};
 use groove::engine::publish::{publish, Published};
 use groove::engine::run::{run, RunOptions};
 use groove::engine::{dag, maintenance, status, Catalog, EngineError, Pipeline};
+use std::path::Path;
 use std::process::ExitCode;
+
+/// The analysis as shipped (the repository's `pipeline.toml`): what `groove run --data DIR`
+/// runs in a folder that has no pipeline file of its own.
+const BUILT_IN_PIPELINE: &str = include_str!("../../pipeline.toml");
 
 fn load(project: &Project, catalog: &Catalog) -> Result<Pipeline, EngineError> {
     let overrides = Overrides {
         data: project.data.clone(),
         reports: project.out.clone(),
     };
-    config::load(&project.config, &overrides, catalog)
+    if uses_built_in(project) {
+        eprintln!(
+            "groove: no {} here: running the built-in pipeline (the analysis as shipped) on {}; its cache goes to ./.groove",
+            DEFAULT_CONFIG,
+            project.data.as_deref().unwrap_or(Path::new("data")).display()
+        );
+        let bytes = BUILT_IN_PIPELINE.as_bytes().to_vec();
+        return config::load_bytes(&project.config_path(), bytes, &overrides, catalog);
+    }
+    config::load(&project.config_path(), &overrides, catalog)
+}
+
+/// A dataset given with `--data`, no `--config`, and no `pipeline.toml` in this folder.
+fn uses_built_in(project: &Project) -> bool {
+    project.data.is_some() && project.config.is_none() && !Path::new(DEFAULT_CONFIG).exists()
 }
 
 /// The remote settings from the flags, GROOVE_REMOTE and `[remote]`.
@@ -28,7 +47,7 @@ fn remote_settings(
         read_only: args.remote_read_only,
         required: args.remote_required,
     };
-    groove::engine::remote::settings::resolve(&project.config, &flags)
+    groove::engine::remote::settings::resolve(&project.config_path(), &flags)
 }
 
 /// Print the remote's closing line; with `--remote-required`, a remote error is exit 2.

@@ -12,10 +12,11 @@ use super::joint::{fit_joint, FitControl, Fitted};
 use super::null_distribution::{empirical_p, NullFit};
 use super::proposal::{needs_proposal, starts as proposal_starts, Proposals, Ranges};
 use super::response::prepare;
-use super::screen::{screen, Screened, REPLICATES};
+use super::screen::{screen, Control, Screened, REPLICATES};
 use super::{Options, G_MPS2};
 use crate::stats::dist::t_upper_quantile;
 use rayon::prelude::*;
+use std::cell::OnceCell;
 use std::collections::BTreeMap;
 
 /// Significant candidates fitted in full per round (strongest first, until one passes).
@@ -338,52 +339,80 @@ fn row(round: usize, e: &Extra, m: &Model, materials: &[String], ev: Evidence) -
     }
 }
 
-/// Test `entries` (candidate terms) and `probes` against `current`; `props` are the proposals
-/// of the current residuals (starts of the forms that need them) and `rg` the data's ranges.
-#[allow(clippy::too_many_arguments)]
-pub fn run_round(
-    round: usize,
-    current: &Model,
-    current_cv: &CvResult,
-    entries: &[Extra],
-    probes: &[Extra],
-    materials: &[String],
-    runs: &[RunData],
-    opts: &Options,
-    fold: &[usize],
-    props: &Proposals,
-    rg: &Ranges,
-) -> Round {
-    let all: Vec<&Extra> = entries.iter().chain(probes).collect();
-    let ne = entries.len();
-    let clock = std::time::Instant::now();
-    let trace = |what: &str| {
-        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
-            eprintln!(
-                "round {round}: {what} at {:.2} s",
-                clock.elapsed().as_secs_f64()
-            );
+/// The data and settings every round reads.
+pub struct Setting<'a> {
+    pub materials: &'a [String],
+    pub runs: &'a [RunData],
+    pub opts: &'a Options,
+    /// Fold of each run (leave-runs-out cross-validation).
+    pub fold: &'a [usize],
+    pub rg: &'a Ranges,
+    /// Where the step under way is said (the stage's progress line).
+    pub say: &'a (dyn Fn(&str) + Sync),
+}
+
+/// The proposals of a round's residuals, made when first asked for: only a proposed form fitted
+/// in full needs them, so a round whose screen finds nothing of that kind never makes them.
+pub struct LazyProposals<'a> {
+    cell: OnceCell<Proposals>,
+    make: Box<dyn Fn() -> Proposals + 'a>,
+}
+
+impl<'a> LazyProposals<'a> {
+    pub fn new(make: impl Fn() -> Proposals + 'a) -> LazyProposals<'a> {
+        LazyProposals {
+            cell: OnceCell::new(),
+            make: Box::new(make),
         }
-    };
-    let seed = opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+    }
+
+    /// Proposals already made.
+    pub fn ready(p: Proposals) -> LazyProposals<'a> {
+        LazyProposals {
+            cell: OnceCell::from(p),
+            make: Box::new(Proposals::default),
+        }
+    }
+
+    pub fn get(&self) -> &Proposals {
+        self.cell.get_or_init(|| (self.make)())
+    }
+}
+
+/// The screen of a round: every candidate's (and probe's) first-order statistic, its bootstrap
+/// null, p-value and the linear model it stands for.
+struct Screens {
+    screens: Vec<Option<Screened>>,
+    lr: Vec<f64>,
+    reps: Vec<Vec<f64>>,
+    nulls: Vec<NullFit>,
+    p: Vec<f64>,
+    linear: Vec<Model>,
+}
+
+fn screen_round(round: usize, current: &Model, all: &[&Extra], set: &Setting) -> Screens {
     let prep = prepare(
         &current.spec,
         &current.params,
         &current.fit.global,
         &current.fit.local,
-        runs,
+        set.runs,
     );
+    let say = |what: &str| (set.say)(&format!("round {round}: {what}"));
     let screens = screen(
-        &all,
+        all,
         current,
-        runs,
+        set.runs,
         &prep,
-        rg,
-        REPLICATES.max(opts.bootstrap),
-        seed,
+        set.rg,
+        &Control {
+            replicates: REPLICATES.max(set.opts.bootstrap),
+            seed: set.opts.seed ^ (round as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+            alpha: set.opts.alpha,
+            say: &say,
+        },
     );
     drop(prep);
-    trace("screened");
     let lr: Vec<f64> = screens
         .iter()
         .map(|s| s.as_ref().map(|s| s.lr).unwrap_or(0.0))
@@ -403,91 +432,221 @@ pub fn run_round(
     let linear: Vec<Model> = all
         .iter()
         .zip(&screens)
-        .map(|(e, s)| pseudo(current, e, s.as_ref(), materials))
+        .map(|(e, s)| pseudo(current, e, s.as_ref(), set.materials))
         .collect();
-    let p_holm_e = holm(&p[..ne]);
-    let p_holm_p = holm(&p[ne..]);
-    // the held-out check confirms a term the LR test already found; one-sided 5 % on the paired t
-    // over the runs: Student's t with (runs − 1) degrees of freedom
-    let t_cv = t_upper_quantile(CV_LEVEL, runs.len().saturating_sub(1) as f64);
-    // fit in full and cross-validate the significant candidates strongest first (at most
-    // FULL_TRIES of them); the first that also predicts held-out runs better is the one accepted.
-    // "Strongest" is the LR beyond its null (mean, and ln(n) per parameter) over the null spread: when a
-    // one-parameter term explains as much as a six-parameter series (rolling resistance against a
-    // position force when each direction of motion covers its own stretch of the groove), the
-    // simpler physics is named.
-    let n_obs: usize = runs
+    Screens {
+        screens,
+        lr,
+        reps,
+        nulls,
+        p,
+        linear,
+    }
+}
+
+/// The significant candidates (Holm-adjusted p below α), strongest first. "Strongest" is the
+/// statistic's excess over its own null (what noise alone gives this form, its search included;
+/// mean, and ln(n) per parameter) so that when a one-parameter term explains as much as a
+/// six-parameter series (rolling resistance against a position force when each direction of
+/// motion covers its own stretch of the groove), the simpler physics is named.
+fn ranked(all: &[&Extra], sc: &Screens, p_holm: &[f64], set: &Setting) -> Vec<usize> {
+    let n_obs: usize = set
+        .runs
         .iter()
         .map(|r| r.keep.iter().filter(|k| **k).count())
         .sum();
     let penalty = (n_obs.max(2) as f64).ln();
-    // ranked by the statistic's excess over its own null (what noise alone gives this form,
-    // its search included) less ln(n) per parameter
-    let strength: Vec<f64> = (0..ne)
+    let strength: Vec<f64> = (0..p_holm.len())
         .map(|i| {
             let df = all[i].params().len() as f64;
-            lr[i] - nulls[i].mean.max(df) - penalty * df
+            sc.lr[i] - sc.nulls[i].mean.max(df) - penalty * df
         })
         .collect();
-    let mut order: Vec<usize> = (0..ne).filter(|i| p_holm_e[*i] < opts.alpha).collect();
+    let mut order: Vec<usize> = (0..p_holm.len())
+        .filter(|i| p_holm[*i] < set.opts.alpha)
+        .collect();
     order.sort_by(|a, b| strength[*b].total_cmp(&strength[*a]).then(a.cmp(b)));
-    let mut fitted: Vec<Model> = linear.clone();
-    let full = |i: usize| -> Model {
+    order
+}
+
+/// The candidates fitted in full and cross-validated so far, and the one that passes both tests.
+struct Trials<'r> {
+    round: usize,
+    current: &'r Model,
+    current_cv: &'r CvResult,
+    all: &'r [&'r Extra],
+    props: &'r LazyProposals<'r>,
+    set: &'r Setting<'r>,
+    /// Critical value of the one-sided paired t over the runs.
+    t_cv: f64,
+    /// Each candidate's model: its linear estimate until it is fitted in full.
+    fitted: Vec<Model>,
+    cv_of: Vec<Option<(CvResult, f64)>>,
+    best: Option<(usize, CvResult)>,
+}
+
+impl Trials<'_> {
+    /// Candidate `i` fitted in full from the screen's estimate and the residuals' proposals.
+    fn full(&self, i: usize) -> Model {
+        let e = self.all[i];
         let mut starts = vec![clamp_to(
-            all[i],
-            &linear[i].fit.global[current.fit.global.len()..],
+            e,
+            &self.fitted[i].fit.global[self.current.fit.global.len()..],
         )];
-        starts.extend(data_starts(all[i], props));
+        if needs_proposal(e) || matches!(e, Extra::Spline { .. }) {
+            starts.extend(data_starts(e, self.props.get()));
+        } else {
+            starts.extend(data_starts(e, &Proposals::default()));
+        }
         starts.dedup();
-        current.extend(all[i], &starts, materials, runs, FULL_ITERATIONS)
-    };
-    let mut cv_of: Vec<Option<(CvResult, f64)>> = vec![None; ne];
-    let mut best: Option<(usize, CvResult)> = None;
-    let check = |i: usize, fitted: &mut Vec<Model>, cv_of: &mut Vec<Option<(CvResult, f64)>>| {
-        if cv_of[i].is_none() {
-            fitted[i] = full(i);
-            let cv = cross_validate(
-                &fitted[i].spec,
-                &fitted[i].params,
-                runs,
-                &fitted[i].fit,
-                fold,
-                opts.folds,
-            );
-            let t = paired_t(current_cv, &cv);
-            cv_of[i] = Some((cv, t));
-        }
-        let (cv, t) = cv_of[i].clone().expect("just set");
-        let passes = cv.cv_rms_m < current_cv.cv_rms_m && t > t_cv;
-        (passes, cv)
-    };
-    for &i in order.iter().take(FULL_TRIES) {
-        let (passes, cv) = check(i, &mut fitted, &mut cv_of);
-        if passes {
-            best = Some((i, cv));
-            break;
-        }
+        self.current.extend(
+            e,
+            &starts,
+            self.set.materials,
+            self.set.runs,
+            FULL_ITERATIONS,
+        )
     }
-    trace("fitted and cross-validated the strongest");
-    // of two representations that predict held-out runs equally well, the simpler is named; a
-    // representation explains as much only if its statistic is comparable
-    if let Some((b, b_cv)) = best.clone() {
-        let nb = all[b].params().len();
-        let mut simpler: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&j| all[j].params().len() < nb && lr[j] >= 0.5 * lr[b])
-            .collect();
-        simpler.sort_by_key(|&j| (all[j].params().len(), j));
-        for j in simpler {
-            let (passes, cv) = check(j, &mut fitted, &mut cv_of);
-            if passes && paired_t(&cv, &b_cv) <= t_cv {
-                best = Some((j, cv));
-                break;
+
+    /// Whether candidate `i`, fitted in full (once), predicts held-out runs better than the
+    /// current model, with its CV.
+    fn check(&mut self, i: usize) -> (bool, CvResult) {
+        if self.cv_of[i].is_none() {
+            (self.set.say)(&format!(
+                "round {}: fitting {} in full and cross-validating it",
+                self.round,
+                self.all[i].effect().unwrap_or("probe")
+            ));
+            self.fitted[i] = self.full(i);
+            let m = &self.fitted[i];
+            let cv = cross_validate(
+                &m.spec,
+                &m.params,
+                self.set.runs,
+                &m.fit,
+                self.set.fold,
+                self.set.opts.folds,
+            );
+            let t = paired_t(self.current_cv, &cv);
+            self.cv_of[i] = Some((cv, t));
+        }
+        let (cv, t) = self.cv_of[i].clone().expect("just set");
+        let passes = cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv;
+        (passes, cv)
+    }
+
+    /// Fit in full and cross-validate the significant candidates strongest first (at most
+    /// FULL_TRIES of them); the first that also predicts held-out runs better is the best.
+    fn strongest(&mut self, order: &[usize]) {
+        for &i in order.iter().take(FULL_TRIES) {
+            let (passes, cv) = self.check(i);
+            if passes {
+                self.best = Some((i, cv));
+                return;
             }
         }
     }
+
+    /// Of two representations that predict held-out runs equally well, the simpler is named; a
+    /// representation explains as much only if its statistic is comparable.
+    fn prefer_simpler(&mut self, order: &[usize], lr: &[f64]) {
+        let Some((b, b_cv)) = self.best.clone() else {
+            return;
+        };
+        let nb = self.all[b].params().len();
+        let mut simpler: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&j| self.all[j].params().len() < nb && lr[j] >= 0.5 * lr[b])
+            .collect();
+        simpler.sort_by_key(|&j| (self.all[j].params().len(), j));
+        for j in simpler {
+            let (passes, cv) = self.check(j);
+            if passes && paired_t(&cv, &b_cv) <= self.t_cv {
+                self.best = Some((j, cv));
+                return;
+            }
+        }
+    }
+}
+
+/// The decision of candidate or probe `i` in words (and its CV in `ev`).
+fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alpha: f64) -> String {
+    if i >= ne {
+        return if p_holm < alpha {
+            "probe flags a mismatch"
+        } else {
+            "probe: no drift"
+        }
+        .into();
+    }
+    if p_holm >= alpha {
+        return "rejected: likelihood ratio (first order) within its bootstrap null".into();
+    }
+    if let Some((cv, t)) = &tr.cv_of[i] {
+        ev.cv_paired_t = Some(*t);
+        ev.cv_rms_m = Some(cv.cv_rms_m);
+        return if tr.best.as_ref().map(|(b, _)| *b == i).unwrap_or(false) {
+            "passes: bootstrap LR test and held-out runs".into()
+        } else {
+            "rejected: held-out runs do not improve".into()
+        };
+    }
+    if tr.best.is_some() {
+        "significant, not fitted in full: a stronger term passed both tests".into()
+    } else {
+        format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are fitted in full and none of those passed the held-out check")
+    }
+}
+
+/// Test `entries` (candidate terms) and `probes` against `current`: screen all, fit the
+/// strongest significant candidates in full, cross-validate, prefer the simpler of equals, and
+/// write every row. `props` are the proposals of the current residuals (starts of the forms
+/// that need them), made only if such a form is fitted in full.
+pub fn run_round(
+    round: usize,
+    current: &Model,
+    current_cv: &CvResult,
+    entries: &[Extra],
+    probes: &[Extra],
+    props: &LazyProposals,
+    set: &Setting,
+) -> Round {
+    let all: Vec<&Extra> = entries.iter().chain(probes).collect();
+    let ne = entries.len();
+    let clock = std::time::Instant::now();
+    let trace = |what: &str| {
+        if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+            eprintln!(
+                "round {round}: {what} at {:.2} s",
+                clock.elapsed().as_secs_f64()
+            );
+        }
+    };
+    let sc = screen_round(round, current, &all, set);
+    trace("screened");
+    let p_holm_e = holm(&sc.p[..ne]);
+    let p_holm_p = holm(&sc.p[ne..]);
+    let order = ranked(&all, &sc, &p_holm_e, set);
+    let mut tr = Trials {
+        round,
+        current,
+        current_cv,
+        all: &all,
+        props,
+        set,
+        // the held-out check confirms a term the LR test already found; one-sided 5 % on the
+        // paired t over the runs: Student's t with (runs − 1) degrees of freedom
+        t_cv: t_upper_quantile(CV_LEVEL, set.runs.len().saturating_sub(1) as f64),
+        fitted: sc.linear.clone(),
+        cv_of: vec![None; ne],
+        best: None,
+    };
+    tr.strongest(&order);
+    trace("fitted and cross-validated the strongest");
+    tr.prefer_simpler(&order, &sc.lr);
     trace("cross-validated");
+    let opts = set.opts;
     let mut rows = Vec::new();
     for (i, e) in all.iter().enumerate() {
         let is_probe = i >= ne;
@@ -498,12 +657,12 @@ pub fn run_round(
         };
         let mut ev = Evidence {
             round,
-            lr: lr[i],
+            lr: sc.lr[i],
             extra_params: e.params().len(),
-            bootstrap_replicates: reps[i].len(),
-            null_mean_lr: nulls[i].mean,
-            p_value: p[i],
-            p_empirical: empirical_p(&reps[i], lr[i]),
+            bootstrap_replicates: sc.reps[i].len(),
+            null_mean_lr: sc.nulls[i].mean,
+            p_value: sc.p[i],
+            p_empirical: empirical_p(&sc.reps[i], sc.lr[i]),
             p_holm,
             cv_paired_t: None,
             cv_rms_m: None,
@@ -513,41 +672,20 @@ pub fn run_round(
             } else {
                 detection_limit(
                     e,
-                    &linear[i],
-                    screens[i].as_ref().and_then(|s| s.typical.as_ref()),
-                    &nulls[i],
+                    &sc.linear[i],
+                    sc.screens[i].as_ref().and_then(|s| s.typical.as_ref()),
+                    &sc.nulls[i],
                     opts.alpha / ne.max(1) as f64,
                 )
             },
         };
-        ev.decision = if is_probe {
-            if p_holm < opts.alpha {
-                "probe flags a mismatch"
-            } else {
-                "probe: no drift"
-            }
-            .into()
-        } else if p_holm >= opts.alpha {
-            "rejected: likelihood ratio (first order) within its bootstrap null".into()
-        } else if let Some((cv, t)) = &cv_of[i] {
-            ev.cv_paired_t = Some(*t);
-            ev.cv_rms_m = Some(cv.cv_rms_m);
-            if best.as_ref().map(|(b, _)| *b == i).unwrap_or(false) {
-                "passes: bootstrap LR test and held-out runs".into()
-            } else {
-                "rejected: held-out runs do not improve".into()
-            }
-        } else if best.is_some() {
-            "significant, not fitted in full: a stronger term passed both tests".into()
-        } else {
-            format!("significant, not fitted in full: only the {FULL_TRIES} strongest significant terms of a round are fitted in full and none of those passed the held-out check")
-        };
-        rows.push(row(round, e, &fitted[i], materials, ev));
+        ev.decision = decide(i, ne, p_holm, &mut ev, &tr, opts.alpha);
+        rows.push(row(round, e, &tr.fitted[i], set.materials, ev));
     }
-    let accepted = best.map(|(i, cv)| {
+    let accepted = tr.best.map(|(i, cv)| {
         rows[i].accepted = true;
         rows[i].evidence.decision = "accepted: strongest term passing both tests".into();
-        (i, fitted[i].clone(), cv)
+        (i, tr.fitted[i].clone(), cv)
     });
     let probe_rows: Vec<CandidateRow> = rows[ne..].to_vec();
     let flagged_probes = probe_rows
@@ -557,7 +695,7 @@ pub fn run_round(
         .collect();
     rows.truncate(ne);
     Round {
-        nulls: nulls[..ne].to_vec(),
+        nulls: sc.nulls[..ne].to_vec(),
         rows,
         accepted,
         flagged_probes,

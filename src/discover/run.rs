@@ -8,7 +8,9 @@ use super::diagnosis::{
 };
 use super::drift::line;
 use super::forcemap::ForceMap;
-use super::forward::{finding, fold_of, median_speed, run_round, Model, Round};
+use super::forward::{
+    finding, fold_of, median_speed, run_round, LazyProposals, Model, Round, Setting,
+};
 use super::locate::locate;
 use super::null_distribution::NullFit;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
@@ -247,6 +249,18 @@ impl Ctx<'_> {
         )
     }
 
+    /// What every round reads.
+    fn setting(&self) -> Setting<'_> {
+        Setting {
+            materials: self.materials,
+            runs: self.runs,
+            opts: self.opts,
+            fold: self.fold,
+            rg: self.rg,
+            say: self.say,
+        }
+    }
+
     fn cross_validate(&self, model: &Model) -> CvResult {
         cross_validate(
             &model.spec,
@@ -403,25 +417,28 @@ fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
             entries.len(),
             super::screen::REPLICATES.max(ctx.opts.bootstrap)
         ));
-        let props = ctx.proposals(&sel.current, wanted);
-        if sel.round == 1 {
+        // the first round's spectra and maps are reported, so they are made at once; a later
+        // round's proposals only start a proposed form fitted in full, if any
+        let props = if sel.round == 1 {
+            let props = ctx.proposals(&sel.current, wanted);
             sel.maps_before = props.maps.clone();
             sel.spectra = props.z.iter().chain(props.t.iter()).cloned().collect();
-        }
-        ctx.trace("proposed");
+            ctx.trace("proposed");
+            LazyProposals::ready(props)
+        } else {
+            let current = &sel.current;
+            LazyProposals::new(move || ctx.proposals(current, wanted))
+        };
         let mut r = run_round(
             sel.round,
             &sel.current,
             &sel.current_cv,
             &entries,
             &probes,
-            ctx.materials,
-            ctx.runs,
-            ctx.opts,
-            ctx.fold,
             &props,
-            ctx.rg,
+            &ctx.setting(),
         );
+        drop(props);
         sel.table.extend(r.rows.iter().cloned());
         sel.table.extend(r.probe_rows.iter().cloned());
         if let Some(last) = sel.accepted.last_mut() {
@@ -459,7 +476,8 @@ fn model_what_is_left(sel: &mut Selection, ctx: &Ctx) -> (Option<Accepted>, Vec<
         .maps
         .iter()
         .filter(|m| m.spline.is_some() && m.cv_gain > 0.0)
-        .max_by(|a, b| a.cv_gain.total_cmp(&b.cv_gain));
+        .max_by(|a, b| a.cv_gain.total_cmp(&b.cv_gain))
+        .cloned();
     let Some(map) = strongest else {
         return (None, props.maps);
     };
@@ -468,26 +486,23 @@ fn model_what_is_left(sel: &mut Selection, ctx: &Ctx) -> (Option<Accepted>, Vec<
         "v" => Variable::V,
         _ => Variable::T,
     };
-    let Some(spline) = ctx.rg.spline(map, var) else {
+    let Some(spline) = ctx.rg.spline(&map, var) else {
         return (None, props.maps);
     };
     sel.round += 1;
+    let maps = props.maps.clone();
     let r = run_round(
         sel.round,
         &sel.current,
         &sel.current_cv,
         std::slice::from_ref(&spline),
         &[],
-        ctx.materials,
-        ctx.runs,
-        ctx.opts,
-        ctx.fold,
-        &props,
-        ctx.rg,
+        &LazyProposals::ready(props),
+        &ctx.setting(),
     );
     sel.table.extend(r.rows.iter().cloned());
     let Some((i, model, cv)) = r.accepted else {
-        return (None, props.maps);
+        return (None, maps);
     };
     let before = sel.current.score(ctx.runs, Some(&sel.current_cv));
     let after = model.score(ctx.runs, Some(&cv));
@@ -722,5 +737,50 @@ pub fn discover_reporting(
         materials,
         settings: settings(opts),
         note: String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+    use std::sync::Mutex;
+
+    /// The progress line hears each round, each candidate of the screen with its replicates
+    /// done, and the searched forms' batches; the diagnosis is the same with or without it.
+    #[test]
+    fn the_progress_says_round_candidate_and_replicates() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/truths/null_small.toml");
+        let truth = crate::synth::Truth::parse(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let tables = crate::synth::synth_tables(&truth);
+        let mut files = BTreeMap::new();
+        files.insert("runs.csv".to_string(), tables.runs_csv.into_bytes());
+        files.insert(
+            "trajectories.csv".to_string(),
+            tables.trajectories_csv.into_bytes(),
+        );
+        let recs = crate::ingest::ingest(&files, &crate::ingest::IngestParams::default())
+            .unwrap()
+            .recordings;
+        let opts = Options {
+            bootstrap: 12,
+            folds: 4,
+            seed: 3,
+            ..Options::default()
+        };
+        let said = Mutex::new(Vec::<String>::new());
+        let d = discover_reporting(&recs, &opts, &|w: &str| {
+            said.lock().unwrap().push(w.to_string())
+        });
+        let said = said.into_inner().unwrap();
+        assert!(d.note.is_empty(), "discovery ran: {}", d.note);
+        let has = |s: &str| said.iter().any(|w| w.contains(s));
+        assert!(has("round 1: screening"), "{said:?}");
+        assert!(has("round 1: candidate 1/"), "{said:?}");
+        assert!(has("periodic in time: replicates 0/60 done"), "{said:?}");
+        assert!(has("groove tilt") || has("tilt: 60 replicates"), "{said:?}");
+        let again = serde_json::to_vec(&discover(&recs, &opts)).unwrap();
+        assert_eq!(serde_json::to_vec(&d).unwrap(), again);
     }
 }

@@ -12,11 +12,16 @@
 //! lag-1 correlation) pushed through the same projections: the null of a searched form carries
 //! its look-elsewhere effect, for a few dot products per trial instead of a nonlinear refit per
 //! replicate. Only the candidates the screen finds significant are fitted in full.
+//!
+//! A searched form's replicates come in two batches (sequential testing): the first
+//! `FIRST_BATCH`, and the rest only when those leave its decision open (`clearly_null`). The
+//! named terms cost a few dot products and always take every replicate.
 
 use super::candidate::{Extra, N_LOCAL};
 use super::data::RunData;
 use super::forward::Model;
 use super::joint::predict;
+use super::null_distribution::NullFit;
 use super::proposal::{bump_column, bump_trials, Ranges};
 use super::response::Prepared;
 use super::spectral::{f_grid, k_grid};
@@ -27,9 +32,49 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
+use std::ops::Range;
 
 /// Noise replicates drawn for each screen (the data is replicate 0).
 pub const REPLICATES: usize = 60;
+
+/// Replicates of a searched form's first batch (sequential testing).
+pub const FIRST_BATCH: usize = 20;
+
+/// Chance, were a form's true p-value below α, that its first batch stops it as clearly null.
+pub const STOP_ERROR: f64 = 1e-3;
+
+/// The fewest of `b` replicates reaching the data's statistic that a true p-value below `alpha`
+/// gives with probability at most `STOP_ERROR` (binomial tail); `b + 1` when no count does.
+pub fn stop_count(b: usize, alpha: f64) -> usize {
+    // P(X = j) for X ~ Bin(b, alpha), summed from the top
+    let mut pmf = vec![0.0f64; b + 1];
+    pmf[0] = (1.0 - alpha).powi(b as i32);
+    for j in 1..=b {
+        pmf[j] = pmf[j - 1] * (b - j + 1) as f64 / j as f64 * alpha / (1.0 - alpha);
+    }
+    let mut tail = 0.0;
+    let mut k = b + 1;
+    for j in (0..=b).rev() {
+        tail += pmf[j];
+        if tail > STOP_ERROR {
+            break;
+        }
+        k = j;
+    }
+    k
+}
+
+/// True when the first replicates settle a form's decision: at least `stop_count` of them reach
+/// the data's statistic (`lr[0]`) and the p-value of their gamma law is at least `alpha`, so the
+/// form is not significant whatever Holm's step; its null is then those replicates.
+pub fn clearly_null(lr: &[f64], df: f64, alpha: f64) -> bool {
+    let Some((&data, reps)) = lr.split_first() else {
+        return false;
+    };
+    let reached = reps.iter().filter(|x| **x >= data).count();
+    reached >= stop_count(reps.len(), alpha)
+        && NullFit::from_replicates(reps, df).p_value(data) >= alpha
+}
 
 /// What the screen found for one candidate.
 #[derive(Clone, Debug)]
@@ -146,25 +191,64 @@ impl Vectors {
     }
 }
 
+/// Σ aᵢbᵢ in four interleaved partial sums (a fixed order, so the same bits every time; four
+/// chains instead of one keep the additions from waiting on each other).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut s = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        s[0] += x[0] * y[0];
+        s[1] += x[1] * y[1];
+        s[2] += x[2] * y[2];
+        s[3] += x[3] * y[3];
+    }
+    for (x, y) in ra.iter().zip(rb) {
+        s[0] += x * y;
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
 }
 
-/// Sums over runs for a set of q columns shared by every run (coherent).
+/// (Σ aᵢcᵢ, Σ bᵢcᵢ) in one pass over `c`, each in two interleaved partial sums.
+fn dot2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
+    let n = a.len().min(b.len()).min(c.len());
+    let (a, b, c) = (&a[..n], &b[..n], &c[..n]);
+    let mut s = [0.0f64; 4];
+    let (ca, cb, cc) = (a.chunks_exact(2), b.chunks_exact(2), c.chunks_exact(2));
+    let (ra, rb, rc) = (ca.remainder(), cb.remainder(), cc.remainder());
+    for ((x, y), z) in ca.zip(cb).zip(cc) {
+        s[0] += x[0] * z[0];
+        s[1] += x[1] * z[1];
+        s[2] += y[0] * z[0];
+        s[3] += y[1] * z[1];
+    }
+    for ((x, y), z) in ra.iter().zip(rb).zip(rc) {
+        s[0] += x * z;
+        s[2] += y * z;
+    }
+    (s[0] + s[1], s[2] + s[3])
+}
+
+/// Sums over runs for a set of q columns shared by every run (coherent), against the
+/// replicates `reps` (indices into `Vectors::y`; 0 is the data).
 struct Sums {
     q: usize,
+    reps: Range<usize>,
     xtx: Vec<f64>,
     xtg: Vec<f64>,
     xty: Vec<Vec<f64>>,
 }
 
 impl Sums {
-    fn new(q: usize, k: usize, nrep: usize) -> Sums {
+    fn new(q: usize, k: usize, reps: Range<usize>) -> Sums {
         Sums {
             q,
             xtx: vec![0.0; q * q],
             xtg: vec![0.0; q * k],
-            xty: vec![vec![0.0; q]; nrep],
+            xty: vec![vec![0.0; q]; reps.len()],
+            reps,
         }
     }
 
@@ -181,13 +265,24 @@ impl Sums {
             for (g, &jg) in v.kept.iter().enumerate() {
                 self.xtg[a * k + g] += dot(&cols[a], &p.glob[jg]);
             }
-            for (bb, yb) in yr.iter().enumerate() {
-                self.xty[bb][a] += dot(&cols[a], yb);
+        }
+        // one pass over each replicate for two columns at a time
+        for (xty, yb) in self.xty.iter_mut().zip(&yr[self.reps.clone()]) {
+            let mut a = 0;
+            while a + 1 < q {
+                let (s0, s1) = dot2(&cols[a], &cols[a + 1], yb);
+                xty[a] += s0;
+                xty[a + 1] += s1;
+                a += 2;
+            }
+            if a < q {
+                xty[a] += dot(&cols[a], yb);
             }
         }
     }
 
-    /// LR per replicate, the data's coefficients and their variances (shared parameters profiled).
+    /// LR per replicate of `reps`, the data's coefficients (zero when the data is not among
+    /// `reps`) and their variances (shared parameters profiled).
     fn solve(&self, v: &Vectors) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
         let (q, k) = (self.q, v.kept.len());
         // A = X'X − X'G (G'G)⁻¹ G'X
@@ -236,7 +331,7 @@ impl Sums {
                     } else {
                         xty[a]
                             - (0..k)
-                                .map(|d| xg_ginv[a * k + d] * v.gty[bb][d])
+                                .map(|d| xg_ginv[a * k + d] * v.gty[self.reps.start + bb][d])
                                 .sum::<f64>()
                     }
                 })
@@ -245,7 +340,7 @@ impl Sums {
                 .map(|a| (0..q).map(|b| inv[a * q + b] * c[b]).sum())
                 .collect();
             lr.push(dot(&beta, &c).max(0.0));
-            if bb == 0 {
+            if self.reps.start + bb == 0 {
                 beta0 = beta;
             }
         }
@@ -280,12 +375,13 @@ fn coherent<F>(
     prep: &[Prepared],
     v: &Vectors,
     q: usize,
+    reps: Range<usize>,
     cols: F,
 ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)>
 where
     F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
 {
-    let mut s = Sums::new(q, v.kept.len(), v.n_rep());
+    let mut s = Sums::new(q, v.kept.len(), reps);
     for (p, yr) in prep.iter().zip(&v.y) {
         if let Some(c) = cols(p) {
             s.add(&c, p, v, yr);
@@ -307,28 +403,32 @@ fn secant(
 ) -> Option<Trial> {
     let spec = current.spec.with(extra.clone());
     let q = steps.len();
-    let (lr, beta, var) = coherent(prep, v, q, |p| {
-        let run = &runs[p.run];
-        let l: &[f64; N_LOCAL] = &current.fit.local[p.run];
-        let cols = steps
-            .iter()
-            .map(|&(j, to)| {
-                let mut g = current.fit.global.clone();
-                g.extend_from_slice(theta0);
-                let n0 = current.fit.global.len();
-                let d = to - theta0[j];
-                g[n0 + j] = to;
-                let mut z = vec![0.0; run.t_s.len()];
-                predict(&spec, &g, l, run, &mut z);
-                let kept: Vec<f64> = (0..run.t_s.len())
-                    .filter(|&i| run.keep[i])
-                    .map(|i| (z[i] - null_pred[p.run][i]) / d)
-                    .collect();
-                p.column(kept)
-            })
-            .collect();
-        Some(cols)
-    })?;
+    // each run's columns (an integration per parameter) in parallel, summed in run order
+    let cols: Vec<Vec<Vec<f64>>> = prep
+        .par_iter()
+        .map(|p| {
+            let run = &runs[p.run];
+            let l: &[f64; N_LOCAL] = &current.fit.local[p.run];
+            steps
+                .iter()
+                .map(|&(j, to)| {
+                    let mut g = current.fit.global.clone();
+                    g.extend_from_slice(theta0);
+                    let n0 = current.fit.global.len();
+                    let d = to - theta0[j];
+                    g[n0 + j] = to;
+                    let mut z = vec![0.0; run.t_s.len()];
+                    predict(&spec, &g, l, run, &mut z);
+                    let kept: Vec<f64> = (0..run.t_s.len())
+                        .filter(|&i| run.keep[i])
+                        .map(|i| (z[i] - null_pred[p.run][i]) / d)
+                        .collect();
+                    p.column(kept)
+                })
+                .collect()
+        })
+        .collect();
+    let (lr, beta, var) = coherent(prep, v, q, 0..v.n_rep(), |p| Some(cols[p.run].clone()))?;
     let mut est = theta0.to_vec();
     let mut se = vec![f64::NAN; theta0.len()];
     for (a, &(j, _)) in steps.iter().enumerate() {
@@ -338,18 +438,114 @@ fn secant(
     Some((lr, est, se))
 }
 
-/// Screen `extras` against `current` (prepared in `prep`) with `replicates` noise draws.
-#[allow(clippy::too_many_arguments)]
+/// How a screen runs: the replicates drawn, their seed, the level of the decisions the first
+/// batch may settle, and where progress is said.
+pub struct Control<'a> {
+    pub replicates: usize,
+    pub seed: u64,
+    pub alpha: f64,
+    pub say: &'a (dyn Fn(&str) + Sync),
+}
+
+/// True for a form searched over a grid of trials (its screen costs a pass over every trial and
+/// run per replicate, so its replicates come in batches).
+fn searched(e: &Extra) -> bool {
+    matches!(
+        e,
+        Extra::PeriodicZ { .. }
+            | Extra::Localized { .. }
+            | Extra::TimePeriodic { .. }
+            | Extra::Spline { .. }
+    )
+}
+
+/// The statistic of searched form `e` on the replicates `reps` (0 is the data).
+fn searched_trial(
+    e: &Extra,
+    prep: &[Prepared],
+    v: &Vectors,
+    rg: &Ranges,
+    reps: Range<usize>,
+) -> (Option<Trial>, Option<Typical>) {
+    match e {
+        Extra::PeriodicZ {
+            k_lo,
+            k_hi,
+            z_ref_m,
+        } => periodic_z(prep, v, rg, *z_ref_m, *k_lo, *k_hi, reps),
+        Extra::Localized { w_lo, w_hi, .. } => localized(prep, v, rg, *w_lo, *w_hi, reps),
+        Extra::TimePeriodic { f_lo, f_hi } => time_periodic(prep, v, rg, *f_lo, *f_hi, reps),
+        Extra::Spline {
+            variable,
+            lo,
+            dx,
+            segments,
+        } => (spline(prep, v, *variable, *lo, *dx, *segments, reps), None),
+        _ => (None, None),
+    }
+}
+
+/// A named term's statistic on every replicate: along its secant (the friction law at a few
+/// trial scales, the best kept).
+fn named_trial(
+    e: &Extra,
+    current: &Model,
+    runs: &[RunData],
+    prep: &[Prepared],
+    null_pred: &[Vec<f64>],
+    v: &Vectors,
+) -> Option<Trial> {
+    if let Extra::VelocityFriction { materials } = e {
+        let lo = e.params()[0].lo;
+        let theta0 = vec![lo; *materials];
+        let trials: Vec<Option<Trial>> = [1e-3f64, 3e-3, 1e-2, 3e-2]
+            .par_iter()
+            .map(|vc| {
+                let steps: Vec<(usize, f64)> = (0..*materials).map(|m| (m, vc.ln())).collect();
+                secant(current, e, &theta0, &steps, runs, prep, null_pred, v)
+                    .map(|(lr, _, se)| (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()]))
+            })
+            .collect();
+        return best_of(trials, v.n_rep());
+    }
+    let ps = e.params();
+    let theta0: Vec<f64> = ps.iter().map(|p| p.start).collect();
+    let steps: Vec<(usize, f64)> = ps
+        .iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let up = p.start + 100.0 * p.step;
+            (
+                j,
+                if up <= p.hi {
+                    up
+                } else {
+                    p.start - 100.0 * p.step
+                },
+            )
+        })
+        .collect();
+    secant(current, e, &theta0, &steps, runs, prep, null_pred, v)
+}
+
+/// A form's short name for the progress line (its form up to the formula).
+fn short(e: &Extra) -> String {
+    let f = e.form();
+    f.split(':').next().unwrap_or(&f).to_string()
+}
+
+/// Screen `extras` against `current` (prepared in `prep`). A searched form first gets
+/// `FIRST_BATCH` replicates and the rest only when `clearly_null` does not settle it; a named
+/// term gets every replicate. Each candidate and batch is said through `ctl.say`.
 pub fn screen(
     extras: &[&Extra],
     current: &Model,
     runs: &[RunData],
     prep: &[Prepared],
     rg: &Ranges,
-    replicates: usize,
-    seed: u64,
+    ctl: &Control,
 ) -> Vec<Option<Screened>> {
-    let v = Vectors::new(prep, runs, replicates, seed);
+    let v = Vectors::new(prep, runs, ctl.replicates, ctl.seed);
     let nrep = v.n_rep();
     let null_pred: Vec<Vec<f64>> = runs
         .par_iter()
@@ -360,65 +556,46 @@ pub fn screen(
             z
         })
         .collect();
+    let first = 0..(FIRST_BATCH + 1).min(nrep);
+    let n = extras.len();
     extras
         .iter()
-        .map(|e| {
-            let t = match e {
-                Extra::PeriodicZ {
-                    k_lo,
-                    k_hi,
-                    z_ref_m,
-                } => periodic_z(prep, &v, rg, *z_ref_m, *k_lo, *k_hi),
-                Extra::Localized { w_lo, w_hi, .. } => localized(prep, &v, rg, *w_lo, *w_hi),
-                Extra::TimePeriodic { f_lo, f_hi } => time_periodic(prep, &v, rg, *f_lo, *f_hi),
-                Extra::Spline {
-                    variable,
-                    lo,
-                    dx,
-                    segments,
-                } => (spline(prep, &v, *variable, *lo, *dx, *segments), None),
-                Extra::VelocityFriction { materials } => {
-                    let lo = e.params()[0].lo;
-                    let theta0 = vec![lo; *materials];
-                    let trials: Vec<Option<Trial>> = [1e-3f64, 3e-3, 1e-2, 3e-2]
-                        .par_iter()
-                        .map(|vc| {
-                            let steps: Vec<(usize, f64)> =
-                                (0..*materials).map(|m| (m, vc.ln())).collect();
-                            secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v).map(
-                                |(lr, _, se)| {
-                                    (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()])
-                                },
-                            )
-                        })
-                        .collect();
-                    (best_of(trials, nrep), None)
-                }
-                _ => {
-                    let ps = e.params();
-                    let theta0: Vec<f64> = ps.iter().map(|p| p.start).collect();
-                    let steps: Vec<(usize, f64)> = ps
-                        .iter()
-                        .enumerate()
-                        .map(|(j, p)| {
-                            let up = p.start + 100.0 * p.step;
-                            (
-                                j,
-                                if up <= p.hi {
-                                    up
-                                } else {
-                                    p.start - 100.0 * p.step
-                                },
-                            )
-                        })
-                        .collect();
-                    (
-                        secant(current, e, &theta0, &steps, runs, prep, &null_pred, &v),
-                        None,
-                    )
-                }
+        .enumerate()
+        .map(|(i, e)| {
+            let name = short(e);
+            let (t, typical) = if searched(e) {
+                (ctl.say)(&format!(
+                    "candidate {}/{n} {name}: replicates 0/{} done",
+                    i + 1,
+                    nrep - 1
+                ));
+                let (t, typical) = searched_trial(e, prep, &v, rg, first.clone());
+                let t = t.map(|(mut lr, est, se)| {
+                    let df = e.params().len() as f64;
+                    if first.end < nrep && !clearly_null(&lr, df, ctl.alpha) {
+                        (ctl.say)(&format!(
+                            "candidate {}/{n} {name}: replicates {}/{} done, not yet decided",
+                            i + 1,
+                            first.end - 1,
+                            nrep - 1
+                        ));
+                        if let (Some((more, _, _)), _) =
+                            searched_trial(e, prep, &v, rg, first.end..nrep)
+                        {
+                            lr.extend(more);
+                        }
+                    }
+                    (lr, est, se)
+                });
+                (t, typical)
+            } else {
+                (ctl.say)(&format!(
+                    "candidate {}/{n} {name}: {} replicates",
+                    i + 1,
+                    nrep - 1
+                ));
+                (named_trial(e, current, runs, prep, &null_pred, &v), None)
             };
-            let (t, typical) = t;
             t.map(|(lr, estimate, se)| Screened {
                 lr: lr[0],
                 replicates: lr[1..].to_vec(),
@@ -437,6 +614,7 @@ fn periodic_z(
     z_ref: f64,
     k_lo: f64,
     k_hi: f64,
+    reps: Range<usize>,
 ) -> (Option<Trial>, Option<Typical>) {
     let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
         .into_iter()
@@ -445,7 +623,7 @@ fn periodic_z(
     let trials: Vec<Option<Trial>> = ks
         .par_iter()
         .map(|&k| {
-            let (lr, b, var) = coherent(prep, v, 2, |p| {
+            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), |p| {
                 let z = p.track.variable(crate::physics::Variable::Z);
                 let fs: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).sin()).collect();
                 let fc: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).cos()).collect();
@@ -466,7 +644,7 @@ fn periodic_z(
             se,
             at: format!("at a wavelength of {:.3} mm", 1e3 * TAU / t.1[0]),
         });
-    (best_of(trials, v.n_rep()), typical)
+    (best_of(trials, reps.len()), typical)
 }
 
 fn localized(
@@ -475,12 +653,15 @@ fn localized(
     rg: &Ranges,
     w_lo: f64,
     w_hi: f64,
+    reps: Range<usize>,
 ) -> (Option<Trial>, Option<Typical>) {
     let trials = bump_trials(rg, w_lo, w_hi);
     let out: Vec<Option<Trial>> = trials
         .par_iter()
         .map(|&(c, w)| {
-            let (lr, b, var) = coherent(prep, v, 1, |p| bump_column(p, c, w).map(|x| vec![x]))?;
+            let (lr, b, var) = coherent(prep, v, 1, reps.clone(), |p| {
+                bump_column(p, c, w).map(|x| vec![x])
+            })?;
             Some((
                 lr,
                 vec![b[0], c, w],
@@ -496,7 +677,7 @@ fn localized(
             1e3 * t.1[1]
         ),
     });
-    (best_of(out, v.n_rep()), typical)
+    (best_of(out, reps.len()), typical)
 }
 
 /// A force periodic in time with one amplitude and each run's own phase. Per run the (sin, cos)
@@ -510,12 +691,13 @@ fn time_periodic(
     rg: &Ranges,
     f_lo: f64,
     f_hi: f64,
+    reps: Range<usize>,
 ) -> (Option<Trial>, Option<Typical>) {
     let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
         .into_iter()
         .filter(|f| *f >= f_lo && *f <= f_hi)
         .collect();
-    let nrep = v.n_rep();
+    let nrep = reps.len();
     let out: Vec<(Option<Trial>, Vec<f64>)> = fs
         .par_iter()
         .map(|&f| {
@@ -530,8 +712,9 @@ fn time_periodic(
                     continue;
                 }
                 info.push(a);
-                for (bb, yb) in yr.iter().enumerate() {
-                    sb[bb] += dot(&xs, yb).hypot(dot(&xc, yb));
+                for (s, yb) in sb.iter_mut().zip(&yr[reps.clone()]) {
+                    let (bs, bc) = dot2(&xs, &xc, yb);
+                    *s += bs.hypot(bc);
                 }
             }
             let sa: f64 = info.iter().sum();
@@ -573,9 +756,10 @@ fn spline(
     lo: f64,
     dx: f64,
     segments: usize,
+    reps: Range<usize>,
 ) -> Option<Trial> {
     let nb = spline_n_basis(segments);
-    let (lr, b, vv) = coherent(prep, v, nb, |p| {
+    let (lr, b, vv) = coherent(prep, v, nb, reps, |p| {
         let x = p.track.variable(var);
         Some(
             (0..nb)
@@ -590,4 +774,68 @@ fn spline(
         )
     })?;
     Some((lr, b, vv.iter().map(|x| x.sqrt()).collect()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Binomial tail P(X ≥ k), X ~ Bin(b, p), summed term by term from the definition.
+    fn tail(b: usize, p: f64, k: usize) -> f64 {
+        let choose = |n: usize, r: usize| -> f64 {
+            (0..r).map(|i| (n - i) as f64 / (i + 1) as f64).product()
+        };
+        (k..=b)
+            .map(|j| choose(b, j) * p.powi(j as i32) * (1.0 - p).powi((b - j) as i32))
+            .sum()
+    }
+
+    #[test]
+    fn the_stop_count_is_the_smallest_with_a_tail_below_the_stated_error() {
+        for (b, alpha) in [(20, 0.01), (20, 0.05), (30, 0.01), (12, 0.2)] {
+            let k = stop_count(b, alpha);
+            assert!(k <= b, "b {b} alpha {alpha}: some count must stop");
+            assert!(tail(b, alpha, k) <= STOP_ERROR, "b {b} alpha {alpha} k {k}");
+            assert!(
+                tail(b, alpha, k - 1) > STOP_ERROR,
+                "b {b} alpha {alpha} k {k}"
+            );
+        }
+        // four of twenty at α = 0.01 (P(X ≥ 3) = 0.0010 is just above 0.1 %)
+        assert_eq!(stop_count(20, 0.01), 4);
+        // too few replicates for a lax level: never stop early
+        assert_eq!(stop_count(5, 0.45), 6);
+    }
+
+    #[test]
+    fn only_a_statistic_inside_its_null_stops_early() {
+        // twenty replicates spread like a χ²₂ (quantiles at (i + 0.5)/20)
+        let reps: Vec<f64> = (0..20)
+            .map(|i| -2.0 * (1.0 - (i as f64 + 0.5) / 20.0).ln())
+            .collect();
+        let with = |data: f64| {
+            let mut lr = vec![data];
+            lr.extend(&reps);
+            lr
+        };
+        // at the null's median: half the replicates reach it
+        assert!(clearly_null(&with(1.4), 2.0, 0.01));
+        // beyond all but three replicates: open, the second batch is drawn
+        let third_largest = reps[17];
+        assert!(!clearly_null(&with(third_largest + 1e-9), 2.0, 0.01));
+        // far beyond every replicate
+        assert!(!clearly_null(&with(40.0), 2.0, 0.01));
+    }
+
+    #[test]
+    fn the_four_chain_dot_products_agree_with_the_plain_sums() {
+        let a: Vec<f64> = (0..37).map(|i| (i as f64 * 0.7).sin()).collect();
+        let b: Vec<f64> = (0..37).map(|i| (i as f64 * 0.3).cos()).collect();
+        let c: Vec<f64> = (0..37).map(|i| 1.0 / (1.0 + i as f64)).collect();
+        let plain = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        assert!((dot(&a, &c) - plain(&a, &c)).abs() < 1e-13);
+        let (s, t) = dot2(&a, &b, &c);
+        assert!((s - plain(&a, &c)).abs() < 1e-13);
+        assert!((t - plain(&b, &c)).abs() < 1e-13);
+    }
 }

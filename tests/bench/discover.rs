@@ -1,117 +1,129 @@
-//! Bench: the whole discovery on 60 synthesized runs (a concealed rolling resistance), with the
-//! time of each part and of each candidate's joint fit. Prints times; asserts nothing.
+//! Bench: the whole discovery (and the discover stage's pair check) on the shipped data and on
+//! two 60-run `groove synth` datasets, with wall and CPU time beside the figures before issue 11's
+//! speed work. Prints; asserts nothing. Run it in the dev profile (no release build of polars):
+//!
+//!     RAYON_NUM_THREADS=2 cargo test --locked --features s3 --bench discover
 
-use groove::discover::candidate::{Extra, Spec};
-use groove::discover::data::prepare_runs;
-use groove::discover::forward::{extra_starts, Model};
-use groove::discover::perrun::measure_noise;
-use groove::discover::{discover, Options};
+use groove::discover::pairs::add_pair_findings;
+use groove::discover::{discover, Diagnosis, Options};
+use groove::ingest::{ingest, IngestParams};
+use groove::recording::Recording;
+use groove::synth::{synth_tables, Truth};
+use std::collections::BTreeMap;
+use std::path::Path;
 use std::time::Instant;
 
-#[path = "../discover_data/mod.rs"]
-mod discover_data;
-use discover_data::{synthesize, Shape, Truth, S};
+/// Seed of the shipped pipeline (`[project] seed` of pipeline.toml).
+const SHIPPED_SEED: u64 = 20261122;
 
-fn main() {
-    let shape = Shape {
-        runs: 60,
-        frames: 600,
-        outliers: true,
-        shuffle: false,
+/// The figures before (main at f6c06e9, the same 2-core machine under a load average of ≈ 10,
+/// `groove run discover --force discover` with RAYON_NUM_THREADS=2): (CPU s, wall s) of the
+/// discover stage.
+const BEFORE: [(&str, f64, f64); 3] = [
+    ("shipped data (pair check included)", 31.8, 64.8),
+    ("60 runs, tilt + waviness", 22.8, 47.0),
+    ("60 runs, nothing missing", 8.6, 17.6),
+];
+
+/// CPU time (user + system) of this process so far, from /proc/self/stat (clock ticks of
+/// 1/100 s); NaN where that file does not exist.
+fn cpu_s() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
     };
-    let truth = Truth {
-        roll_c: 0.004,
-        ..Truth::baseline()
+    let Some(rest) = stat.rsplit(')').next() else {
+        return f64::NAN;
     };
-    let recs = synthesize(&truth, &shape, 7);
-    println!(
-        "discovery bench: {} runs x {} frames, {} rayon threads",
-        shape.runs,
-        shape.frames,
-        rayon::current_num_threads()
-    );
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // after the command: state is field 3, utime 14 and stime 15 (1-based over the whole line)
+    let tick = |i: usize| f.get(i - 3).and_then(|x| x.parse::<f64>().ok());
+    match (tick(14), tick(15)) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
+}
 
-    let t = Instant::now();
-    let (mut runs, materials) = prepare_runs(&recs, 20);
-    let spec = Spec {
-        n_materials: materials.len(),
-        s: S,
-        k: 2.5,
-        extras: vec![],
-    };
-    let params = spec.global_params(&materials);
-    let per_run = measure_noise(&mut runs, &spec, &params);
-    println!(
-        "per-run baseline fits + noise: {:8.3} s",
-        t.elapsed().as_secs_f64()
-    );
-
-    let t = Instant::now();
-    let mut g = vec![0.3; materials.len()];
-    g.extend(vec![0.06; materials.len()]);
-    let l: Vec<_> = per_run.iter().map(|f| f.local).collect();
-    let base = Model::fit(spec.clone(), &materials, &runs, &g, &l, 80);
-    println!(
-        "joint baseline fit:            {:8.3} s ({} iterations)",
-        t.elapsed().as_secs_f64(),
-        base.fit.iterations
-    );
-
-    let zmin = runs
-        .iter()
-        .flat_map(|r| r.z_m.iter().copied())
-        .fold(f64::INFINITY, f64::min);
-    let zmax = runs
-        .iter()
-        .flat_map(|r| r.z_m.iter().copied())
-        .fold(f64::NEG_INFINITY, f64::max);
-    for extra in [
-        Extra::QuadraticDrag,
-        Extra::SaturatingDrag,
-        Extra::RollingResistance,
-        Extra::GrooveTilt,
-        Extra::VelocityFriction {
-            materials: materials.len(),
-        },
-        Extra::PositionForce {
-            harmonics: 2,
-            z_min_m: zmin,
-            span_m: zmax - zmin,
-        },
-    ] {
-        let t = Instant::now();
-        let m = base.extend(&extra, &extra_starts(&extra), &materials, &runs, 40);
-        println!(
-            "candidate {:<55} joint fit {:8.3} s, LR {:12.1}",
-            extra.form(),
-            t.elapsed().as_secs_f64(),
-            base.fit.chi2 - m.fit.chi2
+fn read_dataset(dir: &Path) -> Vec<Recording> {
+    let mut files = BTreeMap::new();
+    for name in ["runs.csv", "trajectories.csv"] {
+        files.insert(
+            name.to_string(),
+            std::fs::read(dir.join(name)).expect("the dataset's CSV files"),
         );
     }
+    ingest(&files, &IngestParams::default())
+        .expect("the dataset ingests")
+        .recordings
+}
 
-    let t = Instant::now();
-    let d = discover(
-        &recs,
-        &Options {
-            seed: 7,
-            ..Options::default()
-        },
+fn synthesized(name: &str) -> (Vec<Recording>, u64) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/truths")
+        .join(format!("{name}.toml"));
+    let truth = Truth::parse(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let tables = synth_tables(&truth);
+    let mut files = BTreeMap::new();
+    files.insert("runs.csv".to_string(), tables.runs_csv.into_bytes());
+    files.insert(
+        "trajectories.csv".to_string(),
+        tables.trajectories_csv.into_bytes(),
     );
+    let recs = ingest(&files, &IngestParams::default())
+        .expect("a synthesized dataset ingests")
+        .recordings;
+    (recs, truth.seed)
+}
+
+/// Discovery as the stage runs it (default options, the pair check after); prints its times.
+fn bench(label: &str, recs: &[Recording], seed: u64, before: (f64, f64)) {
+    let opts = Options {
+        seed,
+        ..Options::default()
+    };
+    let (c0, t0) = (cpu_s(), Instant::now());
+    let mut d: Diagnosis = discover(recs, &opts);
+    let (c1, t1) = (cpu_s(), t0.elapsed().as_secs_f64());
+    add_pair_findings(&mut d, recs);
+    let (c2, t2) = (cpu_s(), t0.elapsed().as_secs_f64());
     let accepted: Vec<&str> = d
         .findings
         .iter()
         .filter(|f| f.accepted)
         .map(|f| f.effect.as_str())
         .collect();
-    let secs = t.elapsed().as_secs_f64();
+    let replicates: Vec<usize> = d
+        .candidates
+        .iter()
+        .map(|c| c.evidence.bootstrap_replicates)
+        .collect();
+    println!("{label}: {} runs used, accepted {accepted:?}", d.runs_used);
     println!(
-        "whole discovery:               {:8.3} s, accepted {:?}",
-        secs, accepted
+        "  discovery {:6.1} s CPU {:6.1} s wall; with the pair check {:6.1} s CPU {:6.1} s wall (before: {:.1} s CPU, {:.1} s wall)",
+        c1 - c0,
+        t1,
+        c2 - c0,
+        t2,
+        before.0,
+        before.1
     );
-    // the figures before issue 11 (five named forms, fixed 24 replicates) on this machine class
+    println!("  replicates per candidate row: {replicates:?}");
+}
+
+fn main() {
     println!(
-        "before issue 11: 6-150 s on 60 runs, 27 s on the shipped data; target <= 10 s / <= 15 s; now {:.1} s ({:.2}x of 10 s)",
-        secs,
-        secs / 10.0
+        "discovery bench, {} rayon threads; target: the whole discovery <= 15 s on the shipped data and <= 10 s on 60 runs (wall, 2 idle cores)",
+        rayon::current_num_threads()
     );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shipped = read_dataset(&root.join("data"));
+    bench(
+        BEFORE[0].0,
+        &shipped,
+        SHIPPED_SEED,
+        (BEFORE[0].1, BEFORE[0].2),
+    );
+    for (i, name) in [(1, "two_effects"), (2, "null")] {
+        let (recs, seed) = synthesized(name);
+        bench(BEFORE[i].0, &recs, seed, (BEFORE[i].1, BEFORE[i].2));
+    }
 }

@@ -24,10 +24,21 @@ pub fn load(
 ) -> Result<Pipeline, EngineError> {
     let bytes = std::fs::read(path).map_err(|e| {
         EngineError::Usage(format!(
-            "cannot read {}: {e}; pass --config FILE or run in the folder of pipeline.toml",
+            "cannot read {}: {e}; pass --config FILE, run in the folder of pipeline.toml, or pass --data DIR to run the built-in pipeline on a dataset",
             path.display()
         ))
     })?;
+    load_bytes(path, bytes, overrides, catalog)
+}
+
+/// Parse and validate pipeline text as if it were the file `path` (relative paths inside it
+/// resolve against `path`'s folder, which need not hold a file).
+pub fn load_bytes(
+    path: &Path,
+    bytes: Vec<u8>,
+    overrides: &Overrides,
+    catalog: &Catalog,
+) -> Result<Pipeline, EngineError> {
     let abs = validate::normalize(&std::path::absolute(path).at(path)?);
     let text = match String::from_utf8(bytes) {
         Ok(text) => text,

@@ -4,10 +4,12 @@ use super::chapter::{headers, row};
 use super::summary::agg_text;
 use super::{Block, Table};
 use crate::physics::Groove;
+use crate::physics::Restitution;
 use crate::report::chapter as ch;
 use crate::report::figures::{fig_4_3, fig_4_4, restitution_name, secondary};
 use crate::report::inputs::ReportData;
 use crate::report::summary::mu_pp;
+use crate::report::value::sig;
 use std::collections::BTreeMap;
 
 const NO_COLLISIONS: &str = "no collision runs in this dataset";
@@ -120,8 +122,29 @@ fn truth_law(d: &ReportData, material: &str, setup: &str) -> Option<String> {
         } if m == material && *quantity == q => Some(truth_law),
         _ => None,
     })?;
-    let parsed: serde_json::Value = serde_json::from_str(law).ok()?;
-    Some(super::discovery::short(&parsed, 4))
+    Some(match serde_json::from_str::<Restitution>(law) {
+        Ok(r) => law_words(&r),
+        // a law this build does not know: its JSON, flattened
+        Err(_) => super::discovery::short(&serde_json::from_str(law).ok()?, 4),
+    })
+}
+
+/// A truth law in the words and parameter names of the fitted laws (the whole-run table's
+/// `constant`, `linear`, `saturating`), so the two can be read side by side.
+fn law_words(r: &Restitution) -> String {
+    match *r {
+        Restitution::Constant(c) => format!("constant: c = {}", sig(c, 4)),
+        Restitution::SpeedDependent { c0, v_ref_mps } => format!(
+            "saturating: c_inf = {}; v_ref_mps = {}",
+            sig(c0, 4),
+            sig(v_ref_mps, 4)
+        ),
+        Restitution::Linear { c0, slope_per_mps } => format!(
+            "linear: c0 = {}; slope_per_mps = {}",
+            sig(c0, 4),
+            sig(slope_per_mps, 4)
+        ),
+    }
 }
 
 fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {

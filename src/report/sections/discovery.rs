@@ -402,8 +402,9 @@ fn where_text(w: &BTreeMap<String, Value>) -> String {
         }
     }
     for (key, when) in [
-        ("drift_probes_before", "before"),
-        ("drift_probes_after", "after"),
+        ("drift_probes", ""),
+        ("drift_probes_before", " before the accepted physics"),
+        ("drift_probes_after", " after the accepted physics"),
     ] {
         let Some(list) = w.get(key).and_then(|l| Vec::<Probe>::deserialize(l).ok()) else {
             continue;
@@ -421,10 +422,7 @@ fn where_text(w: &BTreeMap<String, Value>) -> String {
             })
             .collect();
         if !probes.is_empty() {
-            parts.push(format!(
-                "drift probes {when} the accepted physics: {}",
-                probes.join("; ")
-            ));
+            parts.push(format!("drift probes{when}: {}", probes.join("; ")));
         }
     }
     if parts.is_empty() {
@@ -539,8 +537,13 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         ));
     }
     if let Some(f) = diag.findings.iter().find(|f| !f.where_.is_empty()) {
-        let effect = f.effect.replace('_', " ");
-        b.para(format!("Where ({effect}): {}.", where_text(&f.where_)));
+        if mismatch {
+            let effect = f.effect.replace('_', " ");
+            b.para(format!("Where ({effect}): {}.", where_text(&f.where_)));
+        } else {
+            // no mismatch: `where` holds only the drift probes, which flagged nothing
+            b.para(format!("{}.", capitalize(&where_text(&f.where_))));
+        }
     }
     // every candidate tested (diagnosis.candidates, by round), else the findings
     let rows: Vec<CandidateView> = if diag.candidates.is_empty() {
@@ -654,6 +657,15 @@ fn detection_limits(diag: &Diagnosis) -> Vec<String> {
         .collect()
 }
 
+/// `text` with its first letter upper case (a sentence made of a clause).
+fn capitalize(text: &str) -> String {
+    let mut c = text.chars();
+    match c.next() {
+        Some(first) => first.to_uppercase().chain(c).collect(),
+        None => String::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -667,6 +679,22 @@ mod tests {
         .unwrap();
         let text = where_text(&w);
         assert!(text.contains("dT_dv_s_per_mps = 1.101 ± 0.0024"), "{text}");
+    }
+
+    #[test]
+    fn without_a_mismatch_the_drift_probes_are_read_not_counted() {
+        // discover writes `drift_probes` (no before/after) when nothing was accepted
+        let w: BTreeMap<String, Value> = serde_json::from_str(
+            r#"{"drift_probes": [{"probe": "probe: T drifts with |v0|", "p_holm": 1.0,
+                "parameters": {"dT_dv_s_per_mps": {"stderr": 0.0098, "value": -0.0065}}}]}"#,
+        )
+        .unwrap();
+        let text = where_text(&w);
+        assert_eq!(
+            text,
+            "drift probes: T drifts with |v0| [dT_dv_s_per_mps = -0.006500 ± 0.0098, p (Holm) = 1.0]"
+        );
+        assert_eq!(capitalize(&text)[..12], *"Drift probes");
     }
 
     #[test]

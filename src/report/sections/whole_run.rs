@@ -31,11 +31,10 @@ fn fmt_param((name, p): (&str, &Estimate)) -> String {
     format!("{name} = {:.4} [{:.4}, {:.4}]", p.value, p.lo(), p.hi())
 }
 
+/// A best-fit value with its standard error, digits set by the error (a μ_pg known to 1e-5 is
+/// not printed as `± 0.0000`).
 fn fmt_est(e: &Estimate) -> String {
-    match e.se {
-        Some(se) => format!("{:.4} ± {se:.4}", e.value),
-        None => format!("{:.4}", e.value),
-    }
+    crate::report::value::pm(*e)
 }
 
 /// How the profile's deviance was scaled: by the residuals' scale and serial correlation, by
