@@ -131,16 +131,9 @@ fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ((f64, usize), (f64, usi
     (mean(near), mean(far))
 }
 
-/// Test the collision runs of `recordings` against the single-run physics `physics` (per
-/// material); materials without collision runs or without physics are skipped with a note.
-pub fn check_pairs(
-    recordings: &[Recording],
-    physics: &BTreeMap<String, (Model, [f64; 3])>,
-    groove: Groove,
-    max_iter: usize,
-) -> (Vec<Finding>, Vec<String>) {
+/// The collision runs of `recordings` that read as pair runs, by material.
+fn pair_runs_by_material(recordings: &[Recording]) -> BTreeMap<String, Vec<PairRun>> {
     let mut by_material: BTreeMap<String, Vec<PairRun>> = BTreeMap::new();
-    let mut notes = Vec::new();
     for rec in recordings
         .iter()
         .filter(|r| r.info.experiment == Experiment::Collision)
@@ -152,188 +145,258 @@ pub fn check_pairs(
                 .push(run);
         }
     }
+    by_material
+}
+
+/// One material's two tests before Holm: the fits and their statistics.
+struct Draft {
+    material: String,
+    n_runs: usize,
+    n_pts: usize,
+    sigma: f64,
+    free: GroupFit,
+    held: GroupFit,
+    lr: f64,
+    p: f64,
+    ratio: f64,
+    p_impact: f64,
+    n_near: usize,
+}
+
+impl Draft {
+    /// A fit's score with `n_global` shared parameters, its terms named `terms`.
+    fn score(&self, f: &GroupFit, n_global: usize, terms: &str) -> ModelScore {
+        ModelScore {
+            cv_rms_m: f64::NAN,
+            rms_m: (f.cost() / self.n_pts.max(1) as f64).sqrt() * self.sigma,
+            chi2: f.cost(),
+            n_global_params: n_global,
+            terms: vec![terms.to_string()],
+        }
+    }
+}
+
+/// The pair fit of `runs` with μ_pg and the drag held at the single runs' `model` (started from
+/// the free fit, and again from its own optimum when that start did worse than the free fit).
+fn held_fit(
+    runs: &[PairRun],
+    model: &Model,
+    free: &GroupFit,
+    groove: Groove,
+    max_iter: usize,
+) -> GroupFit {
+    let mut start = free.clone();
+    start.result.shared[MU_PG] = match model.friction {
+        Friction::Constant { mu } => mu,
+        Friction::VelocityDependent { mu_inf, .. } => mu_inf,
+    };
+    let held_spec = FitSpec {
+        drag: DragSpec::Held(model.terms.clone()),
+        ..FitSpec::new(groove)
+    };
+    // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
+    let mut held = crate::fit::collision::wholerun::fit_group_with(
+        runs,
+        &held_spec,
+        &start.result.shared,
+        Some(free.result.own.as_slice()),
+        &|i| i != MU_PG && i != LN_T0 && i != TP,
+        max_iter,
+    );
+    if held.cost() > free.cost() {
+        // a second start from the held physics' own optimum of the per-run parameters
+        let again = crate::fit::collision::wholerun::fit_group_with(
+            runs,
+            &held_spec,
+            &held.result.shared,
+            Some(held.result.own.as_slice()),
+            &|i| i != MU_PG && i != LN_T0 && i != TP,
+            max_iter,
+        );
+        if again.cost() < held.cost() {
+            held = again;
+        }
+    }
+    held
+}
+
+/// Both tests of one material's collision `runs` against its single-run physics.
+fn test_material(
+    material: &str,
+    runs: &[PairRun],
+    (model, single_se): &(Model, [f64; 3]),
+    groove: Groove,
+    max_iter: usize,
+) -> Draft {
+    let free_spec = FitSpec::new(groove);
+    let free = fit_group(runs, &free_spec, None, max_iter);
+    let held = held_fit(runs, model, &free, groove, max_iter);
+    let deviance_gain = held.cost() - free.cost();
+    // the single runs' values carry their own errors: compare them with the pairs' by a
+    // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
+    // treat the single runs' values as exact
+    let lr = wald(&free, model, single_se).unwrap_or(deviance_gain);
+    let extra = 3;
+    let p = chi2_sf(lr.max(0.0), extra as f64);
+    let ((near, n_near), (far, n_far)) = split_by_impact(runs, &free);
+    let ratio = near / far.max(1e-12);
+    // F-like ratio of two mean squares: sd of ln ratio ≈ √(2/n1 + 2/n2)
+    let z = ratio.ln() / (2.0 / n_near.max(1) as f64 + 2.0 / n_far.max(1) as f64).sqrt();
+    let p_impact = normal_sf(z);
+    let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
+    let sigma = runs.iter().map(|r| r.sigma_m).sum::<f64>() / runs.len() as f64;
+    Draft {
+        material: material.to_string(),
+        n_runs: runs.len(),
+        n_pts,
+        sigma,
+        free,
+        held,
+        lr,
+        p,
+        ratio,
+        p_impact,
+        n_near,
+    }
+}
+
+/// The finding of the physics test (held against free μ_pg and drag) with its Holm p-value.
+fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
+    let (free, held) = (&d.free, &d.held);
+    let sh = &free.result.shared;
+    let v = Value::new;
+    let mut parameters = BTreeMap::new();
+    parameters.insert(
+        "mu_pg_pairs".to_string(),
+        v(sh[MU_PG], free.result.shared_se(MU_PG)),
+    );
+    parameters.insert(
+        "t0_s_pairs".to_string(),
+        v(
+            sh[LN_T0].exp(),
+            sh[LN_T0].exp() * free.result.shared_se(LN_T0),
+        ),
+    );
+    parameters.insert(
+        "tp_s_per_mps_pairs".to_string(),
+        v(sh[TP], free.result.shared_se(TP)),
+    );
+    let accepted = p_holm < ALPHA && d.lr > 0.0;
+    let n_pts = d.n_pts;
+    let mut where_ = BTreeMap::new();
+    where_.insert("experiment".to_string(), serde_json::json!("collision"));
+    where_.insert("material".to_string(), serde_json::json!(d.material));
+    where_.insert("n_runs".to_string(), serde_json::json!(d.n_runs));
+    where_.insert(
+        "deviance_gain".to_string(),
+        serde_json::json!(held.cost() - free.cost()),
+    );
+    where_.insert(
+        "rms_noise_held".to_string(),
+        serde_json::json!((held.cost() / n_pts.max(1) as f64).sqrt()),
+    );
+    where_.insert(
+        "rms_noise_free".to_string(),
+        serde_json::json!((free.cost() / n_pts.max(1) as f64).sqrt()),
+    );
+    let status = |f: &GroupFit| {
+        if f.result.termination == Termination::MaxIterations {
+            "stopped at its iteration limit"
+        } else {
+            "converged"
+        }
+    };
+    Finding {
+        effect: Effect::PairPhysicsMismatch.id().into(),
+        accepted,
+        form: "μ_pg and drag of the collision runs fitted (saturating drag) vs held at the single runs' accepted physics".into(),
+        parameters,
+        evidence: Evidence {
+            lr: d.lr,
+            extra_params: 3,
+            p_value: d.p,
+            p_holm,
+            decision: format!(
+                "{} (held fit {}, free fit {})",
+                if accepted {
+                    "the pairs move under friction or drag the single runs do not share"
+                } else {
+                    "the single runs' physics explains the pair motion"
+                },
+                status(held),
+                status(free)
+            ),
+            ..Evidence::default()
+        },
+        where_,
+        baseline: d.score(held, 0, "single runs' physics held"),
+        extended: d.score(free, 3, "μ_pg, T0, T' of the pairs"),
+    }
+}
+
+/// The finding of the impact-specific test (residuals after impacts) with its Holm p-value.
+fn impact_finding(d: &Draft, p_holm: f64) -> Finding {
+    let (ratio, n_near) = (d.ratio, d.n_near);
+    let (accepted_imp, impact_words) = impact_decision(ratio, p_holm);
+    let mut where_ = BTreeMap::new();
+    where_.insert("experiment".to_string(), serde_json::json!("collision"));
+    where_.insert("material".to_string(), serde_json::json!(d.material));
+    where_.insert(
+        "window_after_impact_s".to_string(),
+        serde_json::json!(IMPACT_WINDOW_S),
+    );
+    where_.insert(
+        "samples_after_impacts".to_string(),
+        serde_json::json!(n_near),
+    );
+    let mut parameters = BTreeMap::new();
+    parameters.insert(
+        "mean_square_ratio".to_string(),
+        Value::new(ratio, ratio * (2.0 / n_near.max(1) as f64).sqrt()),
+    );
+    Finding {
+        effect: Effect::ImpactSpecificMismatch.id().into(),
+        accepted: accepted_imp,
+        form: "mean squared residual within 5 ms after impacts against the rest of the run (impulse rule, restitution law)".into(),
+        parameters,
+        evidence: Evidence {
+            lr: ratio,
+            p_value: d.p_impact,
+            p_holm,
+            decision: impact_words,
+            ..Evidence::default()
+        },
+        where_,
+        baseline: d.score(&d.free, 3, "whole-run pair model"),
+        extended: ModelScore::default(),
+    }
+}
+
+/// Test the collision runs of `recordings` against the single-run physics `physics` (per
+/// material); materials without collision runs or without physics are skipped with a note.
+pub fn check_pairs(
+    recordings: &[Recording],
+    physics: &BTreeMap<String, (Model, [f64; 3])>,
+    groove: Groove,
+    max_iter: usize,
+) -> (Vec<Finding>, Vec<String>) {
+    let mut notes = Vec::new();
     let mut drafts = Vec::new();
-    for (material, runs) in &by_material {
-        let Some((model, single_se)) = physics.get(material) else {
+    for (material, runs) in &pair_runs_by_material(recordings) {
+        let Some(single) = physics.get(material) else {
             notes.push(format!(
                 "collision runs of {material}: no single-run physics of this material to test"
             ));
             continue;
         };
-        let free_spec = FitSpec::new(groove);
-        let free = fit_group(runs, &free_spec, None, max_iter);
-        let mut start = free.clone();
-        start.result.shared[MU_PG] = match model.friction {
-            Friction::Constant { mu } => mu,
-            Friction::VelocityDependent { mu_inf, .. } => mu_inf,
-        };
-        let held_spec = FitSpec {
-            drag: DragSpec::Held(model.terms.clone()),
-            ..FitSpec::new(groove)
-        };
-        // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
-        let mut held = crate::fit::collision::wholerun::fit_group_with(
-            runs,
-            &held_spec,
-            &start.result.shared,
-            Some(free.result.own.as_slice()),
-            &|i| i != MU_PG && i != LN_T0 && i != TP,
-            max_iter,
-        );
-        if held.cost() > free.cost() {
-            // a second start from the held physics' own optimum of the per-run parameters
-            let again = crate::fit::collision::wholerun::fit_group_with(
-                runs,
-                &held_spec,
-                &held.result.shared,
-                Some(held.result.own.as_slice()),
-                &|i| i != MU_PG && i != LN_T0 && i != TP,
-                max_iter,
-            );
-            if again.cost() < held.cost() {
-                held = again;
-            }
-        }
-        let deviance_gain = held.cost() - free.cost();
-        // the single runs' values carry their own errors: compare them with the pairs' by a
-        // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
-        // treat the single runs' values as exact
-        let lr = wald(&free, model, single_se).unwrap_or(deviance_gain);
-        let extra = 3;
-        let p = chi2_sf(lr.max(0.0), extra as f64);
-        let ((near, n_near), (far, n_far)) = split_by_impact(runs, &free);
-        let ratio = near / far.max(1e-12);
-        // F-like ratio of two mean squares: sd of ln ratio ≈ √(2/n1 + 2/n2)
-        let z = ratio.ln() / (2.0 / n_near.max(1) as f64 + 2.0 / n_far.max(1) as f64).sqrt();
-        let p_impact = normal_sf(z);
-        let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
-        let sigma = runs.iter().map(|r| r.sigma_m).sum::<f64>() / runs.len() as f64;
-        drafts.push((
-            material.clone(),
-            (runs.len(), n_pts, sigma),
-            free,
-            held,
-            lr,
-            p,
-            ratio,
-            p_impact,
-            n_near,
-        ));
+        drafts.push(test_material(material, runs, single, groove, max_iter));
     }
-    let p_phys = holm(&drafts.iter().map(|d| d.5).collect::<Vec<_>>());
-    let p_imp = holm(&drafts.iter().map(|d| d.7).collect::<Vec<_>>());
+    let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
+    let p_imp = holm(&drafts.iter().map(|d| d.p_impact).collect::<Vec<_>>());
     let mut findings = Vec::new();
-    for (k, (material, (n_runs, n_pts, sigma), free, held, lr, p, ratio, p_impact, n_near)) in
-        drafts.into_iter().enumerate()
-    {
-        let sh = &free.result.shared;
-        let v = Value::new;
-        let mut parameters = BTreeMap::new();
-        parameters.insert(
-            "mu_pg_pairs".to_string(),
-            v(sh[MU_PG], free.result.shared_se(MU_PG)),
-        );
-        parameters.insert(
-            "t0_s_pairs".to_string(),
-            v(
-                sh[LN_T0].exp(),
-                sh[LN_T0].exp() * free.result.shared_se(LN_T0),
-            ),
-        );
-        parameters.insert(
-            "tp_s_per_mps_pairs".to_string(),
-            v(sh[TP], free.result.shared_se(TP)),
-        );
-        let accepted = p_phys[k] < ALPHA && lr > 0.0;
-        let mut where_ = BTreeMap::new();
-        where_.insert("experiment".to_string(), serde_json::json!("collision"));
-        where_.insert("material".to_string(), serde_json::json!(material));
-        where_.insert("n_runs".to_string(), serde_json::json!(n_runs));
-        where_.insert(
-            "deviance_gain".to_string(),
-            serde_json::json!(held.cost() - free.cost()),
-        );
-        where_.insert(
-            "rms_noise_held".to_string(),
-            serde_json::json!((held.cost() / n_pts.max(1) as f64).sqrt()),
-        );
-        where_.insert(
-            "rms_noise_free".to_string(),
-            serde_json::json!((free.cost() / n_pts.max(1) as f64).sqrt()),
-        );
-        let status = |f: &GroupFit| {
-            if f.result.termination == Termination::MaxIterations {
-                "stopped at its iteration limit"
-            } else {
-                "converged"
-            }
-        };
-        let score = |f: &GroupFit, n_global: usize, terms: &str| ModelScore {
-            cv_rms_m: f64::NAN,
-            rms_m: (f.cost() / n_pts.max(1) as f64).sqrt() * sigma,
-            chi2: f.cost(),
-            n_global_params: n_global,
-            terms: vec![terms.to_string()],
-        };
-        findings.push(Finding {
-            effect: Effect::PairPhysicsMismatch.id().into(),
-            accepted,
-            form: "μ_pg and drag of the collision runs fitted (saturating drag) vs held at the single runs' accepted physics".into(),
-            parameters,
-            evidence: Evidence {
-                lr,
-                extra_params: 3,
-                p_value: p,
-                p_holm: p_phys[k],
-                decision: format!(
-                    "{} (held fit {}, free fit {})",
-                    if accepted {
-                        "the pairs move under friction or drag the single runs do not share"
-                    } else {
-                        "the single runs' physics explains the pair motion"
-                    },
-                    status(&held),
-                    status(&free)
-                ),
-                ..Evidence::default()
-            },
-            where_,
-            baseline: score(&held, 0, "single runs' physics held"),
-            extended: score(&free, 3, "μ_pg, T0, T' of the pairs"),
-        });
-        let (accepted_imp, impact_words) = impact_decision(ratio, p_imp[k]);
-        let mut where_ = BTreeMap::new();
-        where_.insert("experiment".to_string(), serde_json::json!("collision"));
-        where_.insert("material".to_string(), serde_json::json!(material));
-        where_.insert(
-            "window_after_impact_s".to_string(),
-            serde_json::json!(IMPACT_WINDOW_S),
-        );
-        where_.insert(
-            "samples_after_impacts".to_string(),
-            serde_json::json!(n_near),
-        );
-        let mut parameters = BTreeMap::new();
-        parameters.insert(
-            "mean_square_ratio".to_string(),
-            v(ratio, ratio * (2.0 / n_near.max(1) as f64).sqrt()),
-        );
-        findings.push(Finding {
-            effect: Effect::ImpactSpecificMismatch.id().into(),
-            accepted: accepted_imp,
-            form: "mean squared residual within 5 ms after impacts against the rest of the run (impulse rule, restitution law)".into(),
-            parameters,
-            evidence: Evidence {
-                lr: ratio,
-                p_value: p_impact,
-                p_holm: p_imp[k],
-                decision: impact_words,
-                ..Evidence::default()
-            },
-            where_,
-            baseline: score(&free, 3, "whole-run pair model"),
-            extended: ModelScore::default(),
-        });
+    for (k, d) in drafts.iter().enumerate() {
+        findings.push(physics_finding(d, p_phys[k]));
+        findings.push(impact_finding(d, p_imp[k]));
     }
     (findings, notes)
 }

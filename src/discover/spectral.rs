@@ -10,21 +10,20 @@
 //! every replicate (so the look-elsewhere effect is in the null).
 
 use super::response::{dot, Prepared};
+use crate::lsq::dense::ScaledCholesky;
 use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 pub use crate::artifacts::diagnosis::{Peak, Spectrum};
 
-fn solve2(a: [f64; 3], b: [f64; 2]) -> Option<([f64; 2], f64)> {
-    let det = a[0] * a[2] - a[1] * a[1];
-    if det <= 1e-12 * (a[0] * a[2]).max(1e-300) {
-        return None;
-    }
-    let x = [
-        (a[2] * b[0] - a[1] * b[1]) / det,
-        (a[0] * b[1] - a[1] * b[0]) / det,
-    ];
-    Some((x, x[0] * b[0] + x[1] * b[1]))
+/// The least-squares (sin, cos) amplitudes for the normal matrix `a` = [ss, sc, cc] and right
+/// side `b`, the χ² drop x·b, and the trace of the inverse normal matrix (the noise part of
+/// |x|²), by the shared dense back-end; None when the two columns are collinear to 1e-12.
+fn solve_pair(a: [f64; 3], b: [f64; 2]) -> Option<([f64; 2], f64, f64)> {
+    let f = ScaledCholesky::new(&[a[0], a[1], a[1], a[2]], 2, 0.0, 1e-12)?;
+    let x = f.solve(&b);
+    let inv = f.inverse();
+    Some(([x[0], x[1]], x[0] * b[0] + x[1] * b[1], inv[0] + inv[3]))
 }
 
 /// The `n` highest local maxima, at least `min_sep` grid steps apart.
@@ -71,7 +70,9 @@ fn z_power(prep: &[Prepared], z_ref: f64, kk: f64) -> (f64, [f64; 2]) {
         b[0] += dot(&xs, &p.y);
         b[1] += dot(&xc, &p.y);
     }
-    solve2(a, b).map(|(x, d)| (d, x)).unwrap_or((0.0, [0.0; 2]))
+    solve_pair(a, b)
+        .map(|(x, d, _)| (d, x))
+        .unwrap_or((0.0, [0.0; 2]))
 }
 
 /// Grid maxima refined before they are ranked (the strongest by their grid power).
@@ -196,12 +197,11 @@ pub fn t_spectrum(prep: &[Prepared], f_hz: &[f64]) -> Spectrum {
                 let xc = p.column(rc);
                 let a = [dot(&xs, &xs), dot(&xs, &xc), dot(&xc, &xc)];
                 let b = [dot(&xs, &p.y), dot(&xc, &p.y)];
-                if let Some((x, d)) = solve2(a, b) {
-                    let det = a[0] * a[2] - a[1] * a[1];
+                if let Some((x, d, trace_inv)) = solve_pair(a, b) {
                     power += d;
                     amp2 += x[0] * x[0] + x[1] * x[1];
                     // the noise part of |x|²: trace of the inverse normal matrix
-                    bias += (a[0] + a[2]) / det;
+                    bias += trace_inv;
                     n += 1.0;
                 }
             }

@@ -17,7 +17,7 @@ const WINDOW: usize = 15;
 /// `the_structure_threshold_flags_under_one_percent_of_clean_runs`): of the right fits of 1500
 /// clean synthesized runs (|v0| 5–100 mm/s), those with white noise of 1 or 3 µm stay below 2;
 /// those with pixel-locked positions (1–4 µm, correlated from frame to frame, which the
-/// frame-to-frame scatter understates) have a median of 1.4 and a tail: 12 of 463 above 20, 4
+/// frame-to-frame scatter understates) have a median of 1.4 and a tail: 16 of 467 above 20, 5
 /// above 25, 1 above 30, none above 35. At 30 the false-suspect rate is 0.2 % with locked errors
 /// and 0 with white noise (the bar: at most 1 % with each). Wrong-basin fits of pixel-locked slow
 /// runs give 25–40; they also sit at a bound or switch to rolling after the recording.

@@ -8,6 +8,7 @@
 //! i.e. structure the model misses).
 
 use super::residuals::RunResiduals;
+use crate::artifacts::residuals::Phase;
 use crate::recording::Experiment;
 use std::collections::BTreeMap;
 
@@ -136,8 +137,8 @@ fn speed_bin(v: f64) -> usize {
         .unwrap_or(SPEED_EDGES_MPS.len())
 }
 
-/// Pool the residuals of many runs (any order; runs are taken sorted by id).
-pub fn compare(all: &[RunResiduals]) -> Comparison {
+/// The runs whose residuals are usable (status ok), sorted by id, and the others with their status.
+fn usable_runs(all: &[RunResiduals]) -> (Vec<&RunResiduals>, BTreeMap<String, String>) {
     let mut runs: Vec<&RunResiduals> = all.iter().collect();
     runs.sort_by(|a, b| a.run.cmp(&b.run));
     let mut skipped = BTreeMap::new();
@@ -152,8 +153,13 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
             ok
         })
         .collect();
+    (used, skipped)
+}
+
+/// The lowest and highest observed position over the frames that are not outliers.
+fn position_range(used: &[&RunResiduals]) -> (f64, f64) {
     let (mut z_lo, mut z_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for r in &used {
+    for r in used {
         for (i, &z) in r.z_obs_m.iter().enumerate() {
             if !r.outlier[i] {
                 z_lo = z_lo.min(z);
@@ -161,6 +167,39 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
             }
         }
     }
+    (z_lo, z_hi)
+}
+
+/// The collision runs' pools by phase and by time since the last impact (bin 0: before the first).
+fn pair_residuals(
+    n_pair_runs: usize,
+    pair_phase: BTreeMap<Phase, Acc>,
+    pair_time: BTreeMap<usize, Acc>,
+) -> Option<PairResiduals> {
+    (n_pair_runs > 0).then(|| PairResiduals {
+        n_runs: n_pair_runs,
+        by_phase: finish(pair_phase),
+        before_first_impact: pair_time.get(&0).map(Acc::stats).unwrap_or_default(),
+        by_time_since_impact: pair_time
+            .iter()
+            .filter(|(b, _)| **b > 0)
+            .map(|(&b, a)| Bin {
+                lo: if b == 1 {
+                    0.0
+                } else {
+                    SINCE_IMPACT_EDGES_S[b - 2]
+                },
+                hi: SINCE_IMPACT_EDGES_S.get(b - 1).copied(),
+                stats: a.stats(),
+            })
+            .collect(),
+    })
+}
+
+/// Pool the residuals of many runs (any order; runs are taken sorted by id).
+pub fn compare(all: &[RunResiduals]) -> Comparison {
+    let (used, skipped) = usable_runs(all);
+    let (z_lo, z_hi) = position_range(&used);
     let width = (z_hi - z_lo) / POSITION_BINS as f64;
     let pos_bin = |z: f64| {
         ((z - z_lo) / width)
@@ -224,24 +263,7 @@ pub fn compare(all: &[RunResiduals]) -> Comparison {
             );
         }
     }
-    let pairs = (n_pair_runs > 0).then(|| PairResiduals {
-        n_runs: n_pair_runs,
-        by_phase: finish(pair_phase),
-        before_first_impact: pair_time.get(&0).map(Acc::stats).unwrap_or_default(),
-        by_time_since_impact: pair_time
-            .iter()
-            .filter(|(b, _)| **b > 0)
-            .map(|(&b, a)| Bin {
-                lo: if b == 1 {
-                    0.0
-                } else {
-                    SINCE_IMPACT_EDGES_S[b - 2]
-                },
-                hi: SINCE_IMPACT_EDGES_S.get(b - 1).copied(),
-                stats: a.stats(),
-            })
-            .collect(),
-    });
+    let pairs = pair_residuals(n_pair_runs, pair_phase, pair_time);
     Comparison {
         n_runs: used.len(),
         skipped,

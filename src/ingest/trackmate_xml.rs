@@ -80,26 +80,138 @@ struct RawSpot {
     line: usize,
 }
 
-/// Reads one TrackMate XML file into the spots of one run named after the file. Spots with
-/// problems are returned as problems of the run; tracks TrackMate's filters removed and spots it
-/// hid are left out and listed in the file's notes.
-pub fn read(
-    file: &str,
-    bytes: &[u8],
-    axis: Axis,
-    run: &str,
-) -> Result<(SpotFile, Vec<Problem>), Problem> {
+/// One element's attributes, where it stands, and the problems they can raise.
+struct Element<'a> {
+    file: &'a str,
+    run: &'a str,
+    line: usize,
+    attrs: BTreeMap<String, String>,
+}
+
+impl Element<'_> {
+    fn bad(&self, column: &str, message: String, fix: &str) -> Problem {
+        Problem::at(self.file, self.line, column, message, fix).in_run(self.run)
+    }
+
+    /// The attribute `key` as a finite number.
+    fn number(&self, key: &str) -> Result<f64, Problem> {
+        let text = self.attrs.get(key).ok_or_else(|| {
+            self.bad(
+                key,
+                format!("the element has no {key} attribute"),
+                "save the TrackMate file again from Fiji",
+            )
+        })?;
+        match text.trim().parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => Err(self.bad(
+                key,
+                format!("{text:?} is not a finite number"),
+                "write a finite number, e.g. 12.5 or 1.25E1",
+            )),
+        }
+    }
+
+    /// The attribute `key` as a whole number.
+    fn whole(&self, key: &str) -> Result<i64, Problem> {
+        let x = self.number(key)?;
+        if x.fract() != 0.0 || x.abs() > 9.0e15 {
+            return Err(self.bad(
+                key,
+                format!("{x} is not a whole number"),
+                "write a whole number",
+            ));
+        }
+        Ok(x as i64)
+    }
+}
+
+/// What one pass over the file's elements found.
+#[derive(Default)]
+struct Scan {
+    problems: Vec<Problem>,
+    spots: Vec<RawSpot>,
+    track_of: BTreeMap<i64, i64>,
+    tracks: BTreeSet<i64>,
+    filtered: Option<BTreeSet<i64>>,
+    current_track: Option<i64>,
+    spatial_units: String,
+    time_units: String,
+    interval: Option<f64>,
+    root_seen: bool,
+}
+
+impl Scan {
+    /// Takes in one opening (or empty) element named `name`.
+    fn element(&mut self, name: &[u8], empty: bool, el: &Element) {
+        match name {
+            b"TrackMate" => self.root_seen = true,
+            b"Model" => {
+                self.spatial_units = el.attrs.get("spatialunits").cloned().unwrap_or_default();
+                self.time_units = el.attrs.get("timeunits").cloned().unwrap_or_default();
+            }
+            b"ImageData" => {
+                self.interval = el
+                    .attrs
+                    .get("timeinterval")
+                    .and_then(|t| t.trim().parse().ok())
+            }
+            b"Spot" => {
+                let spot = (|| {
+                    Ok::<RawSpot, Problem>(RawSpot {
+                        id: el.whole("ID")?,
+                        frame: el.whole("FRAME")?,
+                        x: el.number("POSITION_X")?,
+                        y: el.number("POSITION_Y")?,
+                        visible: el
+                            .attrs
+                            .get("VISIBILITY")
+                            .is_none_or(|v| v.trim().parse::<f64>() != Ok(0.0)),
+                        line: el.line,
+                    })
+                })();
+                match spot {
+                    Ok(s) => self.spots.push(s),
+                    Err(p) => self.problems.push(p),
+                }
+            }
+            b"Track" if !empty => match el.whole("TRACK_ID") {
+                Ok(id) => {
+                    self.tracks.insert(id);
+                    self.current_track = Some(id);
+                }
+                Err(p) => self.problems.push(p),
+            },
+            b"Edge" => {
+                if let Some(track) = self.current_track {
+                    for key in ["SPOT_SOURCE_ID", "SPOT_TARGET_ID"] {
+                        match el.whole(key) {
+                            Ok(id) => {
+                                self.track_of.insert(id, track);
+                            }
+                            Err(p) => self.problems.push(p),
+                        }
+                    }
+                }
+            }
+            b"FilteredTracks" => {
+                self.filtered.get_or_insert_with(BTreeSet::new);
+            }
+            b"TrackID" => match el.whole("TRACK_ID") {
+                Ok(id) => {
+                    self.filtered.get_or_insert_with(BTreeSet::new).insert(id);
+                }
+                Err(p) => self.problems.push(p),
+            },
+            _ => {}
+        }
+    }
+}
+
+/// Every element of the file, read in one pass; an unreadable file or attribute is an error.
+fn scan(file: &str, bytes: &[u8], run: &str) -> Result<Scan, Problem> {
     let mut reader = Reader::from_reader(bytes);
-    let mut problems = Vec::new();
-    let mut spots: Vec<RawSpot> = Vec::new();
-    let mut track_of: BTreeMap<i64, i64> = BTreeMap::new();
-    let mut tracks: BTreeSet<i64> = BTreeSet::new();
-    let mut filtered: Option<BTreeSet<i64>> = None;
-    let mut current_track: Option<i64> = None;
-    let mut spatial_units = String::new();
-    let mut time_units = String::new();
-    let mut interval: Option<f64> = None;
-    let mut root_seen = false;
+    let mut found = Scan::default();
     loop {
         let at = reader.buffer_position() as usize;
         let event = reader.read_event().map_err(|e| {
@@ -116,7 +228,7 @@ pub fn read(
             Event::Empty(e) => (e, true),
             Event::End(e) => {
                 if e.name().as_ref() == b"Track" {
-                    current_track = None;
+                    found.current_track = None;
                 }
                 continue;
             }
@@ -124,9 +236,6 @@ pub fn read(
             _ => continue,
         };
         let line = line_of(bytes, at);
-        let bad = |column: &str, message: String, fix: &str| {
-            Problem::at(file, line, column, message, fix).in_run(run)
-        };
         let attrs = attributes(e, &reader).map_err(|m| {
             Problem::at(
                 file,
@@ -136,118 +245,66 @@ pub fn read(
                 "save the TrackMate file again from Fiji",
             )
         })?;
-        let number = |key: &str| -> Result<f64, Problem> {
-            let text = attrs.get(key).ok_or_else(|| {
-                bad(
-                    key,
-                    format!("the element has no {key} attribute"),
-                    "save the TrackMate file again from Fiji",
-                )
-            })?;
-            match text.trim().parse::<f64>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => Err(bad(
-                    key,
-                    format!("{text:?} is not a finite number"),
-                    "write a finite number, e.g. 12.5 or 1.25E1",
-                )),
-            }
+        let el = Element {
+            file,
+            run,
+            line,
+            attrs,
         };
-        let whole = |key: &str| -> Result<i64, Problem> {
-            let x = number(key)?;
-            if x.fract() != 0.0 || x.abs() > 9.0e15 {
-                return Err(bad(
-                    key,
-                    format!("{x} is not a whole number"),
-                    "write a whole number",
-                ));
-            }
-            Ok(x as i64)
-        };
-        match e.name().as_ref() {
-            b"TrackMate" => root_seen = true,
-            b"Model" => {
-                spatial_units = attrs.get("spatialunits").cloned().unwrap_or_default();
-                time_units = attrs.get("timeunits").cloned().unwrap_or_default();
-            }
-            b"ImageData" => {
-                interval = attrs
-                    .get("timeinterval")
-                    .and_then(|t| t.trim().parse().ok())
-            }
-            b"Spot" => {
-                let spot = (|| {
-                    Ok::<RawSpot, Problem>(RawSpot {
-                        id: whole("ID")?,
-                        frame: whole("FRAME")?,
-                        x: number("POSITION_X")?,
-                        y: number("POSITION_Y")?,
-                        visible: attrs
-                            .get("VISIBILITY")
-                            .is_none_or(|v| v.trim().parse::<f64>() != Ok(0.0)),
-                        line,
-                    })
-                })();
-                match spot {
-                    Ok(s) => spots.push(s),
-                    Err(p) => problems.push(p),
-                }
-            }
-            b"Track" if !empty => match whole("TRACK_ID") {
-                Ok(id) => {
-                    tracks.insert(id);
-                    current_track = Some(id);
-                }
-                Err(p) => problems.push(p),
-            },
-            b"Edge" => {
-                if let Some(track) = current_track {
-                    for key in ["SPOT_SOURCE_ID", "SPOT_TARGET_ID"] {
-                        match whole(key) {
-                            Ok(id) => {
-                                track_of.insert(id, track);
-                            }
-                            Err(p) => problems.push(p),
-                        }
-                    }
-                }
-            }
-            b"FilteredTracks" => {
-                filtered.get_or_insert_with(BTreeSet::new);
-            }
-            b"TrackID" => match whole("TRACK_ID") {
-                Ok(id) => {
-                    filtered.get_or_insert_with(BTreeSet::new).insert(id);
-                }
-                Err(p) => problems.push(p),
-            },
-            _ => {}
-        }
+        found.element(e.name().as_ref(), empty, &el);
     }
-    if !root_seen {
+    Ok(found)
+}
+
+/// The tracks TrackMate's filters kept, and the notes on what its filters left out.
+fn kept_and_notes(found: &Scan) -> (BTreeSet<i64>, Vec<String>) {
+    let mut notes = Vec::new();
+    let kept_tracks: BTreeSet<i64> = match &found.filtered {
+        Some(f) => found.tracks.intersection(f).copied().collect(),
+        None => found.tracks.clone(),
+    };
+    for id in found.tracks.difference(&kept_tracks) {
+        let n = found.track_of.values().filter(|t| *t == id).count();
+        notes.push(format!(
+            "track {id} ({n} spots) left out: TrackMate's track filters removed it (it is not in FilteredTracks)"
+        ));
+    }
+    let hidden = found.spots.iter().filter(|s| !s.visible).count();
+    if hidden > 0 {
+        notes.push(format!(
+            "{hidden} spots left out: TrackMate's spot filters hid them (VISIBILITY = 0)"
+        ));
+    }
+    (kept_tracks, notes)
+}
+
+/// Reads one TrackMate XML file into the spots of one run named after the file. Spots with
+/// problems are returned as problems of the run; tracks TrackMate's filters removed and spots it
+/// hid are left out and listed in the file's notes.
+pub fn read(
+    file: &str,
+    bytes: &[u8],
+    axis: Axis,
+    run: &str,
+) -> Result<(SpotFile, Vec<Problem>), Problem> {
+    let found = scan(file, bytes, run)?;
+    if !found.root_seen {
         return Err(Problem::file(
             file,
             "is not a TrackMate file (its root element is not TrackMate)",
             "save the tracks from Fiji TrackMate (File > Save), or move the file out of the dataset folder",
         ));
     }
-    let mut notes = Vec::new();
-    let kept_tracks: BTreeSet<i64> = match &filtered {
-        Some(f) => tracks.intersection(f).copied().collect(),
-        None => tracks.clone(),
-    };
-    for id in tracks.difference(&kept_tracks) {
-        let n = track_of.values().filter(|t| *t == id).count();
-        notes.push(format!(
-            "track {id} ({n} spots) left out: TrackMate's track filters removed it (it is not in FilteredTracks)"
-        ));
-    }
-    let hidden = spots.iter().filter(|s| !s.visible).count();
-    if hidden > 0 {
-        notes.push(format!(
-            "{hidden} spots left out: TrackMate's spot filters hid them (VISIBILITY = 0)"
-        ));
-    }
+    let (kept_tracks, notes) = kept_and_notes(&found);
+    let Scan {
+        problems,
+        spots,
+        track_of,
+        spatial_units,
+        time_units,
+        interval,
+        ..
+    } = found;
     let m_per_unit = metres_per(&spatial_units);
     let fps = match (interval, seconds_per(&time_units)) {
         (Some(dt), Some(s)) if dt > 0.0 => Some(1.0 / (dt * s)),

@@ -57,25 +57,59 @@ pub fn chol_inverse(l: &[f64], n: usize) -> Vec<f64> {
     inv
 }
 
+/// A symmetric positive-definite matrix factored on its scaling to unit diagonal (plus `ridge`
+/// on that diagonal), so that the test for a singular system is relative: the system is singular
+/// when a pivot of the scaled matrix is at or below `min_pivot` (for two columns, 1 − ρ² of
+/// their correlation ρ). Solves and the inverse undo the scaling.
+pub struct ScaledCholesky {
+    n: usize,
+    d: Vec<f64>,
+    l: Vec<f64>,
+}
+
+impl ScaledCholesky {
+    /// The factor of `a` (n×n row-major, both triangles), or None when singular.
+    pub fn new(a: &[f64], n: usize, ridge: f64, min_pivot: f64) -> Option<Self> {
+        let d: Vec<f64> = (0..n).map(|i| a[i * n + i].max(1e-300).sqrt()).collect();
+        let mut scaled = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                scaled[i * n + j] = a[i * n + j] / (d[i] * d[j]) + if i == j { ridge } else { 0.0 };
+            }
+        }
+        let l = cholesky(&scaled, n)?;
+        if min_pivot > 0.0 && (0..n).any(|i| l[i * n + i] * l[i * n + i] <= min_pivot) {
+            return None;
+        }
+        Some(Self { n, d, l })
+    }
+
+    /// x with A x = b.
+    pub fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let mut x: Vec<f64> = b.iter().zip(&self.d).map(|(b, d)| b / d).collect();
+        chol_solve(&self.l, self.n, &mut x);
+        x.iter_mut().zip(&self.d).for_each(|(x, d)| *x /= d);
+        x
+    }
+
+    /// A⁻¹ (row-major).
+    pub fn inverse(&self) -> Vec<f64> {
+        let n = self.n;
+        let mut inv = chol_inverse(&self.l, n);
+        for i in 0..n {
+            for j in 0..n {
+                inv[i * n + j] /= self.d[i] * self.d[j];
+            }
+        }
+        inv
+    }
+}
+
 /// Inverse of a symmetric positive-definite matrix, computed on the matrix scaled to unit
 /// diagonal plus `ridge` on that diagonal (so a parameter the data barely constrain does not
 /// spoil the others' errors); None when not positive definite.
 pub fn invert_spd_scaled(a: &[f64], n: usize, ridge: f64) -> Option<Vec<f64>> {
-    let d: Vec<f64> = (0..n).map(|i| a[i * n + i].max(1e-300).sqrt()).collect();
-    let mut scaled = vec![0.0; n * n];
-    for i in 0..n {
-        for j in 0..n {
-            scaled[i * n + j] = a[i * n + j] / (d[i] * d[j]) + if i == j { ridge } else { 0.0 };
-        }
-    }
-    let l = cholesky(&scaled, n)?;
-    let mut inv = chol_inverse(&l, n);
-    for i in 0..n {
-        for j in 0..n {
-            inv[i * n + j] /= d[i] * d[j];
-        }
-    }
-    Some(inv)
+    ScaledCholesky::new(a, n, ridge, 0.0).map(|f| f.inverse())
 }
 
 /// Cholesky of a matrix that may be only semi-definite: with a diagonal jitter growing from
@@ -150,6 +184,28 @@ mod tests {
                 assert!((p - f64::from(u8::from(i == j))).abs() < 1e-12);
             }
         }
+    }
+
+    #[test]
+    fn the_scaled_factor_solves_and_flags_collinear_columns() {
+        // badly scaled but well conditioned: a time column of ~1e-3 s beside a constant
+        let a = [10.0, 0.01, 0.01, 2e-5];
+        let f = ScaledCholesky::new(&a, 2, 0.0, 1e-12).unwrap();
+        let x = f.solve(&[1.0, 1e-3]);
+        for i in 0..2 {
+            let r: f64 = (0..2).map(|j| a[i * 2 + j] * x[j]).sum();
+            assert!((r - [1.0, 1e-3][i]).abs() < 1e-12 * [1.0, 1e-3][i]);
+        }
+        let inv = f.inverse();
+        let det = a[0] * a[3] - a[1] * a[1];
+        assert!((inv[0] - a[3] / det).abs() < 1e-9 * (a[3] / det));
+        assert!((inv[3] - a[0] / det).abs() < 1e-9 * (a[0] / det));
+        // correlation 1 − 1e-14: positive definite in exact arithmetic, singular at 1e-12
+        let c = (1.0f64 - 1e-14).sqrt();
+        let near = [1.0, c, c, 1.0];
+        assert!(ScaledCholesky::new(&near, 2, 0.0, 1e-12).is_none());
+        assert!(ScaledCholesky::new(&[1.0, 0.5, 0.5, 1.0], 2, 0.0, 1e-12).is_some());
+        assert!(ScaledCholesky::new(&[0.0; 4], 2, 0.0, 1e-12).is_none());
     }
 
     #[test]

@@ -255,18 +255,13 @@ fn bounded_step<const N: usize>(
                 step[j] = d;
             }
         }
-        let mut hit = false;
-        for i in 0..N {
-            if !on[i] {
-                continue;
-            }
-            let Some(d) = super::step_to_bound(x[i], step[i], bounds.lo[i], bounds.hi[i]) else {
-                continue;
-            };
-            on[i] = false;
-            pinned[i] = Some(d);
-            hit = true;
-        }
+        let hit = super::pin_crossings(
+            x,
+            &step,
+            |i| (bounds.lo[i], bounds.hi[i]),
+            &mut on,
+            &mut pinned,
+        );
         if !hit {
             return Some(step);
         }

@@ -154,24 +154,20 @@ fn bounded_step<N: Normal>(
         };
         let rhs: Vec<f64> = (0..m).map(|i| -g[i] - ad[i]).collect();
         let mut step = normal.solve(lambda, &on, &rhs)?;
-        let mut hit = false;
         for i in 0..m {
             if let Some(di) = pinned[i] {
                 step[i] = di;
-                continue;
-            }
-            if !on[i] {
+            } else if !on[i] {
                 step[i] = 0.0;
-                continue;
             }
-            let Some(d) = super::step_to_bound(x[i], step[i], specs[i].lower, specs[i].upper)
-            else {
-                continue;
-            };
-            on[i] = false;
-            pinned[i] = Some(d);
-            hit = true;
         }
+        let hit = super::pin_crossings(
+            x,
+            &step,
+            |i| (specs[i].lower, specs[i].upper),
+            &mut on,
+            &mut pinned,
+        );
         if !hit {
             return Some(step);
         }

@@ -32,3 +32,31 @@ pub fn step_to_bound(x: f64, step: f64, lo: f64, hi: f64) -> Option<f64> {
         None
     }
 }
+
+/// The active set's pinning, one round: each parameter still `on` whose `step` from `x` leaves
+/// its box `bounds(i)` = (lo, hi) is moved exactly onto the bound it crosses (that step kept in
+/// `pinned`, the parameter taken off `on`); true when any was. The bounded steps of `fixed` and
+/// `lm` both pin through it, so the two back-ends share one bound strategy.
+#[inline]
+pub fn pin_crossings(
+    x: &[f64],
+    step: &[f64],
+    bounds: impl Fn(usize) -> (f64, f64),
+    on: &mut [bool],
+    pinned: &mut [Option<f64>],
+) -> bool {
+    let mut hit = false;
+    for i in 0..x.len() {
+        if !on[i] {
+            continue;
+        }
+        let (lo, hi) = bounds(i);
+        let Some(d) = step_to_bound(x[i], step[i], lo, hi) else {
+            continue;
+        };
+        on[i] = false;
+        pinned[i] = Some(d);
+        hit = true;
+    }
+    hit
+}

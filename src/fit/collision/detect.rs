@@ -7,6 +7,7 @@
 //! that rare tracking outliers and dropped frames do not create or hide impacts.
 
 use super::model::TrackData;
+use crate::lsq::dense::ScaledCholesky;
 
 /// Robust position noise (m) from second differences: for equally spaced samples
 /// var(z[i+1] − 2 z[i] + z[i−1]) = 6 σ²; uneven spacing uses the interpolating form.
@@ -147,31 +148,11 @@ pub fn quadratic_slope(
     if n < 6 {
         return None;
     }
-    let inv = invert3(&xtx)?;
-    let slope: f64 = (0..3).map(|b| inv[1][b] * xty[b]).sum();
-    Some((slope, sigma_m * inv[1][1].max(0.0).sqrt()))
-}
-
-fn invert3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
-    // scale rows/columns by the diagonal for conditioning (times are ~1e-3 s)
-    let d: Vec<f64> = (0..3).map(|i| m[i][i].max(1e-300).sqrt()).collect();
-    let ms = |i: usize, j: usize| m[i][j] / (d[i] * d[j]);
-    let c = |i: usize, j: usize| {
-        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-        let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-        ms(i1, j1) * ms(i2, j2) - ms(i1, j2) * ms(i2, j1)
-    };
-    let det = ms(0, 0) * c(0, 0) + ms(0, 1) * c(0, 1) + ms(0, 2) * c(0, 2);
-    if det.abs() < 1e-14 || !det.is_finite() {
-        return None;
-    }
-    let mut inv = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            inv[j][i] = c(i, j) / det / (d[i] * d[j]);
-        }
-    }
-    Some(inv)
+    // scaled to unit diagonal for conditioning (times are ~1e-3 s)
+    let flat: Vec<f64> = xtx.iter().flatten().copied().collect();
+    let f = ScaledCholesky::new(&flat, 3, 0.0, 1e-14)?;
+    let slope = f.solve(&xty)[1];
+    Some((slope, sigma_m * f.inverse()[4].max(0.0).sqrt()))
 }
 
 /// Contacts after `after_s`: samples where the gap is within `tol_m` of the contact distance

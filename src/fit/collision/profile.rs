@@ -164,16 +164,29 @@ pub fn default_grid() -> Vec<f64> {
         .collect()
 }
 
-/// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
-/// from the grid value nearest the best estimate, each starting from its neighbour's solution,
-/// and stop in a direction after a fit beyond the estimate whose deviance passes
-/// `STOP_DEVIANCE`.
-pub fn profile_mu_pp(
+/// The pair fit of `runs` with μ_pp held at `mu`, started from `from`.
+fn fit_held(
+    runs: &[PairRun],
+    best: &GroupFit,
+    mu: f64,
+    from: &GroupFit,
+    max_iter: usize,
+) -> GroupFit {
+    let spec = FitSpec {
+        mu_pp_held: Some(mu),
+        ..best.spec.clone()
+    };
+    fit_group(runs, &spec, Some(from), max_iter)
+}
+
+/// The fits at the grid values, walking outward from the value nearest the estimate, each from
+/// its neighbour's solution, and the grid values the walk did not reach.
+fn walk_grid(
     runs: &[PairRun],
     best: &GroupFit,
     grid: &[f64],
     max_iter: usize,
-) -> MuPpProfile {
+) -> (Vec<(f64, GroupFit)>, Vec<f64>) {
     let mu_best = best.result.shared[MU_PP];
     let n = grid.len();
     let centre = (0..n)
@@ -184,13 +197,7 @@ pub fn profile_mu_pp(
         })
         .unwrap_or(0);
     let mut fits: Vec<Option<GroupFit>> = vec![None; n];
-    let solve = |mu: f64, from: &GroupFit| {
-        let spec = FitSpec {
-            mu_pp_held: Some(mu),
-            ..best.spec.clone()
-        };
-        fit_group(runs, &spec, Some(from), max_iter)
-    };
+    let solve = |mu: f64, from: &GroupFit| fit_held(runs, best, mu, from, max_iter);
     if n > 0 {
         fits[centre] = Some(solve(grid[centre], best));
     }
@@ -218,14 +225,25 @@ pub fn profile_mu_pp(
         .filter(|(_, f)| f.is_none())
         .map(|(mu, _)| *mu)
         .collect();
-    let mut fits: Vec<(f64, GroupFit)> = grid
+    let fits: Vec<(f64, GroupFit)> = grid
         .iter()
         .copied()
         .zip(fits)
         .filter_map(|(mu, f)| f.map(|f| (mu, f)))
         .collect();
-    // the grid may be coarser than the interval: add values ±1 and ±2 half-widths of the
-    // covariance interval (in ln μ_pp) around the estimate, each started from the best fit
+    (fits, not_fitted)
+}
+
+/// Adds fits at ±1 and ±2 half-widths of the covariance interval (in ln μ_pp) around the
+/// estimate (the grid may be coarser than the interval) and returns the runs' dispersion of the
+/// deviance's slope against its curvature (1 when the interval is unknown).
+fn refine_near_estimate(
+    runs: &[PairRun],
+    best: &GroupFit,
+    fits: &mut Vec<(f64, GroupFit)>,
+    max_iter: usize,
+) -> f64 {
+    let mu_best = best.result.shared[MU_PP];
     let se_ln = best.result.shared_se(MU_PP) / mu_best;
     let mut dispersion = 1.0;
     if se_ln.is_finite() && se_ln > 0.0 {
@@ -244,7 +262,7 @@ pub fn profile_mu_pp(
             } else {
                 best.clone()
             };
-            fits.push((mu, solve(mu, &from)));
+            fits.push((mu, fit_held(runs, best, mu, &from, max_iter)));
         }
         // runs are the independent units: per-run slopes of the deviance at the estimate
         // against its curvature (sandwich / model variance of ln μ_pp)
@@ -262,6 +280,22 @@ pub fn profile_mu_pp(
             dispersion = (spread / (2.0 * curv)).max(1.0);
         }
     }
+    dispersion
+}
+
+/// Profile μ_pp over `grid` starting from the best fit `best` (μ_pp free). Fits walk outward
+/// from the grid value nearest the best estimate, each starting from its neighbour's solution,
+/// and stop in a direction after a fit beyond the estimate whose deviance passes
+/// `STOP_DEVIANCE`.
+pub fn profile_mu_pp(
+    runs: &[PairRun],
+    best: &GroupFit,
+    grid: &[f64],
+    max_iter: usize,
+) -> MuPpProfile {
+    let mu_best = best.result.shared[MU_PP];
+    let (mut fits, not_fitted) = walk_grid(runs, best, grid, max_iter);
+    let dispersion = refine_near_estimate(runs, best, &mut fits, max_iter);
     let checks = residual_checks(runs, best);
     let serial_factor = ar1_inflation(checks.score_lag1);
     let inflation = dispersion.max(checks.scale * serial_factor);

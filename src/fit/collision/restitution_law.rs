@@ -56,6 +56,83 @@ impl LawChoice {
 /// A simpler form is kept unless a richer one lowers the held-out deviance by more than this.
 const PREFER_SIMPLER: f64 = 4.0;
 
+/// The fitted law's parameters (slots `ia`, `ib` of `all`), each with its standard error and
+/// 95 % interval (v_ref's through its logarithm, the fitted slot).
+fn law_parameters(
+    form: LawForm,
+    all: &GroupFit,
+    ia: usize,
+    ib: usize,
+) -> BTreeMap<String, Estimate> {
+    let cov = &all.result.shared_cov;
+    let se = |i: usize| cov[i][i].max(0.0).sqrt();
+    let (a, b) = (all.result.shared[ia], all.result.shared[ib]);
+    let names = form.parameter_names();
+    let linear = |x: f64, s: f64| Estimate {
+        value: x,
+        se: s.is_finite().then_some(s),
+        interval: Some(Interval {
+            lo: x - 1.96 * s,
+            hi: x + 1.96 * s,
+        }),
+    };
+    let mut parameters = BTreeMap::from([(names[0].to_string(), linear(a, se(ia)))]);
+    match form {
+        LawForm::Constant => {}
+        LawForm::Linear => {
+            parameters.insert(names[1].into(), linear(b, se(ib)));
+        }
+        LawForm::Saturating => {
+            let v = b.exp();
+            let s = se(ib);
+            parameters.insert(
+                names[1].into(),
+                Estimate {
+                    value: v,
+                    se: (v * s).is_finite().then_some(v * s),
+                    interval: Some(Interval {
+                        lo: (b - 1.96 * s).exp(),
+                        hi: (b + 1.96 * s).exp(),
+                    }),
+                },
+            );
+        }
+    }
+    parameters
+}
+
+/// The held-out deviance of `spec` over `k` folds of the runs `sub` (every k-th run held out,
+/// the law fitted on the rest from `all`), and the number of held-out samples.
+fn heldout_deviance(
+    sub: &[PairRun],
+    spec: &FitSpec,
+    all: &GroupFit,
+    k: usize,
+    free: &dyn Fn(usize) -> bool,
+    max_iter: usize,
+) -> (f64, usize) {
+    let (mut dev, mut n) = (0.0, 0usize);
+    for f in 0..k {
+        let train: Vec<usize> = (0..sub.len()).filter(|i| i % k != f).collect();
+        let test: Vec<usize> = (0..sub.len()).filter(|i| i % k == f).collect();
+        let pick = |ix: &[usize]| ix.iter().map(|&i| sub[i].clone()).collect::<Vec<_>>();
+        let own_train: Vec<Vec<f64>> = train.iter().map(|&i| all.result.own[i].clone()).collect();
+        let fitted = fit_group_with(
+            &pick(&train),
+            spec,
+            &all.result.shared,
+            Some(own_train.as_slice()),
+            free,
+            max_iter,
+        );
+        let held = pick(&test);
+        let out = fit_own_only(&held, spec, &fitted.result.shared, max_iter);
+        dev += out.cost();
+        n += held.iter().map(PairRun::n_samples).sum::<usize>();
+    }
+    (dev, n)
+}
+
 /// Choose the law of `setup` among `runs` (one material) around the material's fit `best`.
 /// None when fewer than 3 runs have this setup.
 pub fn choose_law(
@@ -102,62 +179,9 @@ pub fn choose_law(
             &free,
             max_iter,
         );
-        let cov = &all.result.shared_cov;
-        let se = |i: usize| cov[i][i].max(0.0).sqrt();
-        let (a, b) = (all.result.shared[ia], all.result.shared[ib]);
-        let names = form.parameter_names();
-        // value, standard error and 95 % interval (v_ref's through its logarithm, the fitted slot)
-        let linear = |x: f64, s: f64| Estimate {
-            value: x,
-            se: s.is_finite().then_some(s),
-            interval: Some(Interval {
-                lo: x - 1.96 * s,
-                hi: x + 1.96 * s,
-            }),
-        };
-        let mut parameters = BTreeMap::from([(names[0].to_string(), linear(a, se(ia)))]);
-        match form {
-            LawForm::Constant => {}
-            LawForm::Linear => {
-                parameters.insert(names[1].into(), linear(b, se(ib)));
-            }
-            LawForm::Saturating => {
-                let v = b.exp();
-                let s = se(ib);
-                parameters.insert(
-                    names[1].into(),
-                    Estimate {
-                        value: v,
-                        se: (v * s).is_finite().then_some(v * s),
-                        interval: Some(Interval {
-                            lo: (b - 1.96 * s).exp(),
-                            hi: (b + 1.96 * s).exp(),
-                        }),
-                    },
-                );
-            }
-        }
+        let parameters = law_parameters(form, &all, ia, ib);
         // k-fold over runs
-        let (mut dev, mut n) = (0.0, 0usize);
-        for f in 0..k {
-            let train: Vec<usize> = (0..sub.len()).filter(|i| i % k != f).collect();
-            let test: Vec<usize> = (0..sub.len()).filter(|i| i % k == f).collect();
-            let pick = |ix: &[usize]| ix.iter().map(|&i| sub[i].clone()).collect::<Vec<_>>();
-            let own_train: Vec<Vec<f64>> =
-                train.iter().map(|&i| all.result.own[i].clone()).collect();
-            let fitted = fit_group_with(
-                &pick(&train),
-                &spec,
-                &all.result.shared,
-                Some(own_train.as_slice()),
-                &free,
-                max_iter,
-            );
-            let held = pick(&test);
-            let out = fit_own_only(&held, &spec, &fitted.result.shared, max_iter);
-            dev += out.cost();
-            n += held.iter().map(PairRun::n_samples).sum::<usize>();
-        }
+        let (dev, n) = heldout_deviance(&sub, &spec, &all, k, &free, max_iter);
         candidates.push(LawCandidate {
             form,
             parameters,

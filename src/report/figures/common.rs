@@ -224,7 +224,7 @@ pub fn robust_span(values: impl IntoIterator<Item = f64>, q: f64, pad: f64) -> (
         return span(v, pad);
     }
     v.sort_by(f64::total_cmp);
-    let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    let at = |p: f64| crate::stats::quantile_nearest(&v, p);
     span([at(q), at(1.0 - q)], pad)
 }
 

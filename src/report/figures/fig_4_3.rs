@@ -80,36 +80,24 @@ fn pts(t: &Track, z_ref: f64, keep: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Render Figs. 4.3c and 4.3d, or None without a collision run that has both tracks.
-pub fn render_figs(
-    d: &ReportData,
-    wanted: Option<&str>,
-) -> Result<Option<(String, String)>, String> {
-    let Some(c) = choose(d, wanted) else {
-        return Ok(None);
-    };
-    let Some(rec) = d.recordings.get(&c.run) else {
-        return Ok(None);
-    };
-    let (Some(s), Some(t)) = (rec.track(0), rec.track(1)) else {
-        return Ok(None);
-    };
-    let z_ref = s.z_m.first().copied().unwrap_or(0.0);
+/// Fig. 4.3c: both particles' positions of collision run `c`, the fitted pieces and the impacts
+/// (`impacts`, ms).
+fn render_fig_c(
+    c: &CollisionRun,
+    s: &Track,
+    t: &Track,
+    z_ref: f64,
+    impacts: &[f64],
+) -> Result<String, String> {
     let all_t = s.t_s.iter().chain(&t.t_s).map(|x| x * 1e3);
     let xr = span(all_t, 0.02);
     let yr = span(s.z_m.iter().chain(&t.z_m).map(|z| (z - z_ref) * 1e3), 0.05);
-    let impacts: Vec<f64> = c
-        .impacts
-        .iter()
-        .filter_map(|i| i.t_s)
-        .map(|t| t * 1e3)
-        .collect();
     let setup = if c.contact { "contact" } else { "rolling" };
     let cap_c = format!(
         "Fig. 4.3c: collision run {} ({}, {setup})",
         c.run, c.material
     );
-    let fig_c = render(|root| {
+    render(|root| {
         let mut ch = linear_chart(
             root,
             &cap_c,
@@ -160,8 +148,17 @@ pub fn render_figs(
             )?;
         }
         legend(&mut ch, SeriesLabelPosition::LowerRight)
-    })?;
-    // Fig. 4.3d: the striker alone, each sample coloured by its segment's phase.
+    })
+}
+
+/// Fig. 4.3d: the striker `s` alone, each sample coloured by its segment's phase and marked by
+/// whether it comes before the first impact.
+fn render_fig_d(
+    c: &CollisionRun,
+    s: &Track,
+    z_ref: f64,
+    impacts: &[f64],
+) -> Result<String, String> {
     let segs: Vec<_> = c.segments.iter().filter(|g| g.particle == 0).collect();
     let rolling_at = |t: f64| {
         segs.iter()
@@ -174,7 +171,7 @@ pub fn render_figs(
     let sx = span(s.t_s.iter().map(|x| x * 1e3), 0.02);
     let sy = span(s.z_m.iter().map(|z| (z - z_ref) * 1e3), 0.05);
     let cap_d = format!("Fig. 4.3d: striker's motion segments, run {}", c.run);
-    let fig_d = render(|root| {
+    render(|root| {
         let mut ch = linear_chart(
             root,
             &cap_d,
@@ -227,7 +224,7 @@ pub fn render_figs(
             STRIKER_FIT,
             "fitted segments",
         )?;
-        for ti in &impacts {
+        for ti in impacts {
             line(
                 &mut ch,
                 vec![(*ti, sy.0), (*ti, sy.1)],
@@ -238,6 +235,31 @@ pub fn render_figs(
             )?;
         }
         legend(&mut ch, SeriesLabelPosition::LowerRight)
-    })?;
+    })
+}
+
+/// Render Figs. 4.3c and 4.3d, or None without a collision run that has both tracks.
+pub fn render_figs(
+    d: &ReportData,
+    wanted: Option<&str>,
+) -> Result<Option<(String, String)>, String> {
+    let Some(c) = choose(d, wanted) else {
+        return Ok(None);
+    };
+    let Some(rec) = d.recordings.get(&c.run) else {
+        return Ok(None);
+    };
+    let (Some(s), Some(t)) = (rec.track(0), rec.track(1)) else {
+        return Ok(None);
+    };
+    let z_ref = s.z_m.first().copied().unwrap_or(0.0);
+    let impacts: Vec<f64> = c
+        .impacts
+        .iter()
+        .filter_map(|i| i.t_s)
+        .map(|t| t * 1e3)
+        .collect();
+    let fig_c = render_fig_c(c, s, t, z_ref, &impacts)?;
+    let fig_d = render_fig_d(c, s, z_ref, &impacts)?;
     Ok(Some((fig_c, fig_d)))
 }

@@ -24,10 +24,11 @@ fn summary_notes(s: &Summary) -> Vec<String> {
     out
 }
 
-pub fn block(d: &ReportData) -> Block {
-    let mut b = Block::new("data", "2. The data");
-    // (experiment, material, setup) -> (runs, fps values, frames per run, duration per run, +z runs)
-    type Group = (usize, Vec<f64>, Vec<f64>, Vec<f64>);
+/// Per (experiment, material, setup): runs, frame rates, samples per run, duration per run.
+type Group = (usize, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The recordings grouped by experiment, material and setup.
+fn run_groups(d: &ReportData) -> BTreeMap<(String, String, String), Group> {
     let mut groups: BTreeMap<(String, String, String), Group> = BTreeMap::new();
     for r in d.recordings.values() {
         let exp = match r.info.experiment {
@@ -53,11 +54,11 @@ pub fn block(d: &ReportData) -> Block {
             .fold(0.0, f64::max);
         g.3.push(dur);
     }
-    if groups.is_empty() {
-        b.missing =
-            Some("no recordings reached the report (the ingest stage's runs are empty)".into());
-        return b;
-    }
+    groups
+}
+
+/// The table of runs per experiment, material and setup.
+fn runs_table(groups: &BTreeMap<(String, String, String), Group>) -> Table {
     let mut t = Table::new(
         "Runs per experiment, material and setup",
         &[
@@ -70,7 +71,7 @@ pub fn block(d: &ReportData) -> Block {
             "duration (ms, median)",
         ],
     );
-    for ((exp, mat, setup), (n, fps, frames, dur)) in &groups {
+    for ((exp, mat, setup), (n, fps, frames, dur)) in groups {
         let (lo, hi) = fps
             .iter()
             .fold((f64::INFINITY, 0.0_f64), |(a, b), &x| (a.min(x), b.max(x)));
@@ -89,7 +90,44 @@ pub fn block(d: &ReportData) -> Block {
             median(dur.clone()).map_or("—".into(), |x| format!("{:.1}", x * 1e3)),
         ]);
     }
-    b.table(t);
+    t
+}
+
+/// The single runs whose fit is not converged, each with why it is left out of the aggregates
+/// (the aggregate stage lists the runs it left out with the reason, `left_out` per material).
+fn failed_singles(d: &ReportData) -> Vec<(String, String)> {
+    let left_out_why = |run: &str| -> Option<String> {
+        let single = d.summary.as_ref()?.single.as_ref()?;
+        single
+            .materials
+            .values()
+            .flat_map(|m| &m.left_out)
+            .find(|l| l.run == run)
+            .map(|l| l.why.clone())
+    };
+    d.singles
+        .iter()
+        .filter(|r| !r.converged())
+        .map(|r| {
+            let why = match (r.status.as_str(), left_out_why(&r.run)) {
+                ("suspect", Some(w)) => format!("fit suspect: {w}; excluded from the aggregates"),
+                ("suspect", None) => "fit suspect; excluded from the aggregates".into(),
+                _ => "fit did not converge; excluded from the aggregates".into(),
+            };
+            (format!("{} ({})", r.run, r.status), why)
+        })
+        .collect()
+}
+
+pub fn block(d: &ReportData) -> Block {
+    let mut b = Block::new("data", "2. The data");
+    let groups = run_groups(d);
+    if groups.is_empty() {
+        b.missing =
+            Some("no recordings reached the report (the ingest stage's runs are empty)".into());
+        return b;
+    }
+    b.table(runs_table(&groups));
     let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
     if !d.singles.is_empty() {
         b.para(format!(
@@ -104,29 +142,7 @@ pub fn block(d: &ReportData) -> Block {
             rms * 1e6
         ));
     }
-    // The aggregate stage lists the runs it left out with the reason (`left_out` per material).
-    let left_out_why = |run: &str| -> Option<String> {
-        let single = d.summary.as_ref()?.single.as_ref()?;
-        single
-            .materials
-            .values()
-            .flat_map(|m| &m.left_out)
-            .find(|l| l.run == run)
-            .map(|l| l.why.clone())
-    };
-    let failed: Vec<(String, String)> = d
-        .singles
-        .iter()
-        .filter(|r| !r.converged())
-        .map(|r| {
-            let why = match (r.status.as_str(), left_out_why(&r.run)) {
-                ("suspect", Some(w)) => format!("fit suspect: {w}; excluded from the aggregates"),
-                ("suspect", None) => "fit suspect; excluded from the aggregates".into(),
-                _ => "fit did not converge; excluded from the aggregates".into(),
-            };
-            (format!("{} ({})", r.run, r.status), why)
-        })
-        .collect();
+    let failed = failed_singles(d);
     let coll_failed: Vec<String> = d
         .collisions
         .iter()
