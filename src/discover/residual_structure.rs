@@ -109,7 +109,7 @@ pub fn structure(runs: &[RunResiduals]) -> Structure {
         if speeds.is_empty() {
             0.0
         } else {
-            speeds[((speeds.len() - 1) as f64 * p).round() as usize]
+            crate::stats::quantile_nearest(&speeds, p)
         }
     };
     let sedges: Vec<f64> = (0..=5).map(|i| q(i as f64 / 5.0)).collect();
