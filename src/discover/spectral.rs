@@ -26,8 +26,8 @@ fn solve_pair(a: [f64; 3], b: [f64; 2]) -> Option<([f64; 2], f64, f64)> {
     Some(([x[0], x[1]], x[0] * b[0] + x[1] * b[1], inv[0] + inv[3]))
 }
 
-/// The `n` highest local maxima, at least `min_sep` grid steps apart.
-fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Peak> {
+/// The grid's local maxima (ends included), strongest first (ties by index).
+fn local_maxima(power: &[f64]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..power.len())
         .filter(|&i| {
             (i == 0 || power[i] >= power[i - 1])
@@ -35,6 +35,12 @@ fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Pe
         })
         .collect();
     idx.sort_by(|a, b| power[*b].total_cmp(&power[*a]).then(a.cmp(b)));
+    idx
+}
+
+/// The `n` highest local maxima, at least 2.5 grid steps apart.
+fn peaks_of(omega: &[f64], power: &[f64], coef: &[[f64; 2]], n: usize) -> Vec<Peak> {
+    let idx = local_maxima(power);
     let mut out: Vec<Peak> = Vec::new();
     for i in idx {
         if out.len() >= n {
@@ -93,13 +99,7 @@ fn refined_peaks(
     n: usize,
     f: impl Fn(f64) -> (f64, [f64; 2]) + Sync,
 ) -> Vec<Peak> {
-    let mut idx: Vec<usize> = (0..power.len())
-        .filter(|&i| {
-            (i == 0 || power[i] >= power[i - 1])
-                && (i + 1 == power.len() || power[i] >= power[i + 1])
-        })
-        .collect();
-    idx.sort_by(|a, b| power[*b].total_cmp(&power[*a]).then(a.cmp(b)));
+    let mut idx = local_maxima(power);
     idx.truncate(REFINED);
     if omega.is_empty() {
         return vec![];
@@ -113,27 +113,8 @@ fn refined_peaks(
     let mut found: Vec<Peak> = idx
         .par_iter()
         .map(|&i| {
-            let (mut a, mut b) = (omega[i.saturating_sub(1)], omega[(i + 1).min(last)]);
-            let r = 0.5 * (5f64.sqrt() - 1.0);
-            let mut x1 = b - r * (b - a);
-            let mut x2 = a + r * (b - a);
-            let (mut f1, mut f2) = (f(x1).0, f(x2).0);
-            for _ in 0..16 {
-                if f1 > f2 {
-                    b = x2;
-                    x2 = x1;
-                    f2 = f1;
-                    x1 = b - r * (b - a);
-                    f1 = f(x1).0;
-                } else {
-                    a = x1;
-                    x1 = x2;
-                    f1 = f2;
-                    x2 = a + r * (b - a);
-                    f2 = f(x2).0;
-                }
-            }
-            let x = 0.5 * (a + b);
+            let (a, b) = (omega[i.saturating_sub(1)], omega[(i + 1).min(last)]);
+            let x = crate::lsq::golden::minimize(|w| -f(w).0, a, b, 16);
             let (p, coef) = f(x);
             // never below the grid point it started from
             if p >= power[i] {

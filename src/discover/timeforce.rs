@@ -76,27 +76,8 @@ pub fn best_phase(k: &[f64; 5]) -> f64 {
             best = (phi, v);
         }
     }
-    let (mut a, mut b) = (best.0 - step, best.0 + step);
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let mut x1 = b - r * (b - a);
-    let mut x2 = a + r * (b - a);
-    let (mut f1, mut f2) = (objective(x1, k), objective(x2, k));
-    for _ in 0..40 {
-        if f1 < f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - r * (b - a);
-            f1 = objective(x1, k);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + r * (b - a);
-            f2 = objective(x2, k);
-        }
-    }
-    (0.5 * (a + b)).rem_euclid(TAU)
+    crate::lsq::golden::minimize(|phi| objective(phi, k), best.0 - step, best.0 + step, 40)
+        .rem_euclid(TAU)
 }
 
 /// The index, amplitude and frequency of the time-periodic force of `m`, if it has one.
@@ -239,28 +220,8 @@ pub fn amplitude_over_phases(
             .map(|(k, var)| log_marginal(k, scale, *var))
             .sum()
     };
-    // golden section for the scale in [0, 2] (the profiled amplitude is scale 1, and above)
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut a, mut b) = (0.0, 2.0);
-    let mut x1 = b - r * (b - a);
-    let mut x2 = a + r * (b - a);
-    let (mut f1, mut f2) = (total(x1), total(x2));
-    for _ in 0..50 {
-        if f1 > f2 {
-            b = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = b - r * (b - a);
-            f1 = total(x1);
-        } else {
-            a = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = a + r * (b - a);
-            f2 = total(x2);
-        }
-    }
-    Some(0.5 * (a + b) * amp)
+    // the scale in [0, 2] that maximises it (the profiled amplitude is scale 1, and above)
+    Some(crate::lsq::golden::minimize(|x| -total(x), 0.0, 2.0, 50) * amp)
 }
 
 #[cfg(test)]

@@ -3,8 +3,9 @@
 //! `robust`; `lm`, the Levenberg–Marquardt driver (Huber IRLS rounds, the same active-set bound
 //! strategy) of `dense_fit` (a collision run) and `block` (shared plus per-run parameters through
 //! a Schur complement: the whole-run pair fits and discovery's joint fit); `dense` (Cholesky
-//! solves and inverses of small dense systems), and `fd` (forward-difference Jacobian
-//! columns that step inward at an upper bound). A singular system is `None` or
+//! solves and inverses of small dense systems), `fd` (forward-difference Jacobian
+//! columns that step inward at an upper bound), and `golden` (a one-dimensional golden-section
+//! search). A singular system is `None` or
 //! [`Termination::Singular`], never a made-up factor.
 
 pub mod block;
@@ -12,6 +13,7 @@ pub mod dense;
 pub mod dense_fit;
 pub mod fd;
 pub mod fixed;
+pub mod golden;
 pub mod lm;
 pub mod loss;
 pub mod robust;
