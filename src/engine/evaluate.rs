@@ -116,57 +116,20 @@ fn evaluate_stage(
     let index = (spec.foreach.is_some() && !units.is_empty() && !force)
         .then(|| ctx.store.entry_checked(&key, &ctx.hashes))
         .flatten();
-    if let Some(index) = index {
-        let current = LockStage {
-            key,
+    let Units {
+        outputs,
+        executed,
+        complete,
+        missing,
+    } = match index {
+        Some(index) => Units {
             outputs: index.outputs,
-            items,
-            ..key_parts(
-                ctx,
-                spec,
-                seed,
-                bound.into_iter().map(|(n, b)| (n, b.stored)).collect(),
-            )
-        };
-        let stale_outputs = write_or_check_outputs(ctx, spec, &current, action)?;
-        if let Action::Run { .. } = action {
-            report_finished(ctx, spec, started, 0, units.len());
-        }
-        return Ok(Evaluated {
-            current: Some(current),
+            executed: 0,
             complete: true,
-            stale_outputs,
-            ..Evaluated::default()
-        });
-    }
-    let mut entries: Vec<Option<Entry>> = units
-        .par_iter()
-        .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
-        .collect();
-    let missing: Vec<Option<String>> = units
-        .iter()
-        .zip(&entries)
-        .filter(|(_, e)| e.is_none())
-        .map(|((item, _), _)| item.clone())
-        .collect();
-    let executed = match action {
-        Action::Run { force } => run_units(ctx, spec, &bound, &units, &mut entries, force, seed)?,
-        Action::Check => 0,
+            missing: Vec::new(),
+        },
+        None => lookup_or_run(ctx, spec, &bound, &units, &key, action, seed)?,
     };
-    let complete = entries.iter().all(Option::is_some);
-    let outputs = if complete {
-        let entries: Vec<&Entry> = entries.iter().flatten().collect();
-        gather_outputs(spec, &units, &entries)?
-    } else {
-        BTreeMap::new()
-    };
-    // every item committed: write the stage's index entry (after the items' own entries, so a
-    // kill leaves either no index or a complete one)
-    if complete && spec.foreach.is_some() && !units.is_empty() {
-        if let Action::Run { .. } = action {
-            ctx.store.commit(&key, outputs.clone())?;
-        }
-    }
     let current = LockStage {
         key,
         outputs,
@@ -195,6 +158,61 @@ fn evaluate_stage(
         executed,
         stale_outputs,
         failed: false,
+    })
+}
+
+/// What a stage's units came to: the stage's outputs (when every unit has an entry), how many
+/// ran, and the items still without an entry.
+struct Units {
+    outputs: BTreeMap<String, Stored>,
+    executed: usize,
+    complete: bool,
+    missing: Vec<Option<String>>,
+}
+
+/// Look every unit up (store, then remote), run the missing ones (all with `force`), and, once
+/// every item of a per-item stage is committed, write the stage's index entry under `key` —
+/// after the items' own entries, so a kill leaves either no index or a complete one.
+fn lookup_or_run(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    units: &[(Option<String>, String)],
+    key: &str,
+    action: Action,
+    seed: u64,
+) -> Result<Units, EngineError> {
+    let mut entries: Vec<Option<Entry>> = units
+        .par_iter()
+        .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
+        .collect();
+    let missing: Vec<Option<String>> = units
+        .iter()
+        .zip(&entries)
+        .filter(|(_, e)| e.is_none())
+        .map(|((item, _), _)| item.clone())
+        .collect();
+    let executed = match action {
+        Action::Run { force } => run_units(ctx, spec, bound, units, &mut entries, force, seed)?,
+        Action::Check => 0,
+    };
+    let complete = entries.iter().all(Option::is_some);
+    let outputs = if complete {
+        let entries: Vec<&Entry> = entries.iter().flatten().collect();
+        gather_outputs(spec, units, &entries)?
+    } else {
+        BTreeMap::new()
+    };
+    if complete && spec.foreach.is_some() && !units.is_empty() {
+        if let Action::Run { .. } = action {
+            ctx.store.commit(key, outputs.clone())?;
+        }
+    }
+    Ok(Units {
+        outputs,
+        executed,
+        complete,
+        missing,
     })
 }
 
