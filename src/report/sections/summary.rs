@@ -27,11 +27,17 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
         .iter()
         .filter(|f| f.accepted)
         .map(|f| {
+            let bounds = super::discovery::at_bound(&f.where_);
             format!(
-                "{} ({}): {}",
+                "{} ({}): {}{}",
                 f.effect.replace('_', " "),
                 f.form,
-                super::discovery::params_text(&f.parameters)
+                super::discovery::params_text(&f.parameters),
+                if bounds.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (at a bound: {})", bounds.join("; "))
+                }
             )
         })
         .collect()
