@@ -557,7 +557,7 @@ fn screen_round(round: usize, current: &Model, all: &[&Extra], set: &Setting) ->
     let nulls: Vec<NullFit> = all
         .iter()
         .zip(&reps)
-        .map(|(e, r)| NullFit::from_replicates(r, e.params().len() as f64))
+        .map(|(e, r)| NullFit::from_replicates(r, e.null_df(set.runs.len())))
         .collect();
     let p: Vec<f64> = nulls.iter().zip(&lr).map(|(n, l)| n.p_value(*l)).collect();
     // the linear estimates stand for every candidate; only the significant ones are fitted in

@@ -619,6 +619,13 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     if let Some(t) = collision_table(diag) {
         b.table(t);
     }
+    if !diag.note.is_empty() {
+        // e.g. collision runs left untested because the pair fit cannot carry an accepted term
+        b.para(format!(
+            "Notes of the discover stage: {}.",
+            diag.note.trim_end_matches('.')
+        ));
+    }
     b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");
     if let Some(t) = structure_table(diag) {
         b.table(t);

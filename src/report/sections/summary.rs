@@ -107,8 +107,13 @@ pub fn block(d: &ReportData) -> Block {
             ProfileVerdict::UpperBound { hi } => format!("< {hi:.2}"),
             ProfileVerdict::Unconstrained => "not constrained".into(),
         };
+        let caveat = if super::whole_run::speed_dependent_friction(d, name).is_some() {
+            "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
+        } else {
+            ""
+        };
         t.push(vec![
-            format!("μ_pp of {name} (whole-run profile, 95 %)"),
+            format!("μ_pp of {name} (whole-run profile, 95 %{caveat})"),
             text,
             "1.4".into(),
             "summary.json".into(),
