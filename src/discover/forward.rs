@@ -446,6 +446,67 @@ pub fn scale_at_bound(m: &Model) -> Option<String> {
     ))
 }
 
+/// A spline force's size where the runs go: its peak (and where), RMS and the fraction of its
+/// range that holds data, over the points of its range within half a knot spacing of a sample.
+/// Over a gap between the runs the spline is held by its penalty alone and may swing far (13
+/// m/s² at 6–7.4 mm on the shipped data, where no run went): that is no size of the data.
+struct SplineSize {
+    peak: f64,
+    at: f64,
+    rms: f64,
+    covered: f64,
+}
+
+fn spline_size_where_runs_go(
+    sp: &crate::physics::SplineForce,
+    hi: f64,
+    runs: &[RunData],
+) -> SplineSize {
+    use crate::physics::Variable;
+    let mut xs: Vec<f64> = Vec::new();
+    for r in runs {
+        let kept = |j: usize| r.keep[j];
+        match sp.variable {
+            Variable::Z => xs.extend((0..r.z_m.len()).filter(|&j| kept(j)).map(|j| r.z_m[j])),
+            Variable::T => xs.extend((0..r.t_s.len()).filter(|&j| kept(j)).map(|j| r.t_s[j])),
+            Variable::V => {
+                // a velocity over four frames: its noise is far below a knot spacing
+                let h = 4;
+                xs.extend((0..r.z_m.len().saturating_sub(h)).filter_map(|j| {
+                    let dt = r.t_s[j + h] - r.t_s[j];
+                    (kept(j) && kept(j + h) && dt > 0.0).then(|| (r.z_m[j + h] - r.z_m[j]) / dt)
+                }))
+            }
+        }
+    }
+    xs.retain(|x| x.is_finite());
+    xs.sort_by(f64::total_cmp);
+    let near = |x: f64| {
+        let k = xs.partition_point(|s| *s < x - 0.5 * sp.dx);
+        k < xs.len() && xs[k] <= x + 0.5 * sp.dx
+    };
+    let (mut peak, mut at, mut ss, mut n) = (0.0f64, sp.lo_x, 0.0, 0usize);
+    for j in 0..=200 {
+        let x = sp.lo_x + (hi - sp.lo_x) * j as f64 / 200.0;
+        if !near(x) {
+            continue;
+        }
+        let a = sp.at(x);
+        n += 1;
+        ss += a * a;
+        if a.abs() > peak {
+            peak = a.abs();
+            at = x;
+        }
+    }
+    SplineSize {
+        peak,
+        at,
+        rms: (ss / n.max(1) as f64).sqrt(),
+        covered: n as f64 / 201.0,
+    }
+}
+
 /// The parameters of extra term `i` of `m` as reported: `term_parameters`, with a force in
 /// time's amplitude taken with each run's phase integrated out, not fitted (the fitted phases
 /// also fit the noise and make it read high; timeforce.rs).
@@ -456,6 +517,27 @@ pub fn reported_parameters(
     runs: &[RunData],
 ) -> BTreeMap<String, Estimate> {
     let mut parameters = term_parameters(m, i, materials);
+    if let Extra::Spline {
+        variable,
+        lo,
+        dx,
+        segments,
+    } = m.spec.extras[i]
+    {
+        let off = m.spec.extra_offset(i);
+        let sp = crate::physics::SplineForce {
+            variable,
+            lo_x: lo,
+            dx,
+            coefs_mps2: m.fit.global[off..off + segments + 3].to_vec(),
+        };
+        let size = spline_size_where_runs_go(&sp, lo + dx * segments as f64, runs);
+        let est = |v: f64| Estimate::new(v, f64::NAN);
+        parameters.insert("peak_accel_mps2".into(), est(size.peak));
+        parameters.insert("rms_accel_mps2".into(), est(size.rms));
+        parameters.insert("x_at_peak".into(), Estimate::new(size.at, 0.0));
+        parameters.insert("covered_fraction".into(), Estimate::new(size.covered, 0.0));
+    }
     if matches!(m.spec.extras[i], Extra::TimePeriodic { .. }) {
         if let Some(a) =
             super::timeforce::amplitude_over_phases(&m.spec, &m.fit.global, &m.fit.local, runs)
