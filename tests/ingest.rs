@@ -485,7 +485,7 @@ fn stage_outputs_hold_recordings_and_an_empty_skipped_list() {
         panic!("runs is not a collection")
     };
     assert_eq!(runs.keys().collect::<Vec<_>>(), ["c01", "s01", "s02"]);
-    let c01: Recording = serde_json::from_slice(&runs["c01"]).unwrap();
+    let c01 = groove::recording::item::decode(&runs["c01"]).unwrap();
     assert_eq!(c01, expected()[0]);
     assert_eq!(out["skipped"], Artifact::File(b"[]\n".to_vec()));
     assert_eq!(
@@ -543,7 +543,7 @@ fn item_names_are_file_name_safe_and_distinct() {
     let Artifact::Collection(runs) = &out["runs"] else {
         panic!()
     };
-    let rec: Recording = serde_json::from_slice(&runs[&item_name("day 2/s01")]).unwrap();
+    let rec = groove::recording::item::decode(&runs[&item_name("day 2/s01")]).unwrap();
     assert_eq!(rec.info.run, "day 2/s01");
 }
 
@@ -1138,7 +1138,7 @@ fn columnar_ingest_gives_the_row_by_row_items_on_the_shipped_data() {
     };
     let expected: BTreeMap<String, Vec<u8>> = row_by_row(&files)
         .iter()
-        .map(|r| (item_name(&r.info.run), serde_json::to_vec(r).unwrap()))
+        .map(|r| (item_name(&r.info.run), groove::recording::item::encode(r)))
         .collect();
     assert_eq!(items, &expected);
 }

@@ -4,10 +4,11 @@ use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::ingest::{self, IngestParams};
+use crate::recording::item;
 use std::collections::BTreeMap;
 
-/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → JSON
-/// `Recording`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
+/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → `Recording` in
+/// the binary format of `recording::item`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
 /// was an output too; no stage read it, and writing it cost as much as reading the CSV typed.)
 pub struct Ingest;
 
@@ -53,9 +54,7 @@ impl StageKind for Ingest {
         let mut runs = BTreeMap::new();
         // Each recording is freed as soon as its item is made, so both are not held whole.
         for r in ingested.recordings {
-            let json = serde_json::to_vec(&r)
-                .map_err(|e| StageError(format!("cannot serialize run {:?} ({e})", r.info.run)))?;
-            runs.insert(ingest::item_name(&r.info.run), json);
+            runs.insert(ingest::item_name(&r.info.run), item::encode(&r));
         }
         let mut out = StageOutputs::new();
         out.insert("runs".into(), Artifact::Collection(runs));
