@@ -321,6 +321,8 @@ pub struct Round {
     pub rows: Vec<CandidateRow>,
     /// (index into rows, extended model, its CV) of the accepted term, if any.
     pub accepted: Option<(usize, Model, CvResult)>,
+    /// The row of a second term accepted with it (both in the extended model), if any.
+    pub partner: Option<usize>,
     /// The bootstrap null of each candidate (same order as `rows`).
     pub nulls: Vec<NullFit>,
     /// Probe rows significant after Holm over the probes.
@@ -336,10 +338,125 @@ fn row(
     runs: &[RunData],
     ev: Evidence,
 ) -> CandidateRow {
-    let mut parameters = term_parameters(m, m.spec.extras.len() - 1, materials);
-    // a force in time: the amplitude with each run's phase integrated out, not fitted (the
-    // fitted phases also fit the noise and make it read high; timeforce.rs)
-    if matches!(e, Extra::TimePeriodic { .. }) {
+    CandidateRow {
+        round,
+        effect: e.effect().unwrap_or("probe").to_string(),
+        form: e.form(),
+        accepted: false,
+        parameters: reported_parameters(m, m.spec.extras.len() - 1, materials, runs),
+        evidence: ev,
+    }
+}
+
+/// The parameters of extra term `i` of `m` that ended at a bound of their search, in words: such a
+/// value is a limit the data pushed against, not an estimate (a velocity-dependent friction
+/// fitted to two materials of which one has none ends with that material's v_c at its floor).
+pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
+    let off = m.spec.extra_offset(i);
+    let n = m.spec.extras[i].params().len();
+    let mut notes = Vec::new();
+    for k in 0..n {
+        let (x, info) = (m.fit.global[off + k], &m.params[off + k]);
+        let Some(lower) = side_of_bound(x, info, 1e-6) else {
+            continue;
+        };
+        // a term that starts where it vanishes, at its bound, is not reported as pinned there
+        if lower
+            && info.start == info.lo
+            && !matches!(m.spec.extras[i], Extra::VelocityFriction { .. })
+        {
+            continue;
+        }
+        notes.push(match &m.spec.extras[i] {
+            Extra::VelocityFriction { .. } => {
+                let name = materials.get(k).map_or("?", |s| s.as_str());
+                if lower {
+                    format!(
+                        "v_c of {name} at the search's floor ({:.1e} m/s): no speed dependence of {name}'s friction is resolved (its μ is constant, mu_inf_{name})",
+                        x.exp()
+                    )
+                } else {
+                    format!(
+                        "v_c of {name} at the search's ceiling ({:.2} m/s): {name}'s friction still rises at the highest slip speeds; no plateau is resolved",
+                        x.exp()
+                    )
+                }
+            }
+            Extra::PeriodicZ { .. } if info.name == "k_per_m" => format!(
+                "the wavelength ({:.3} mm) is the {} the search allows: the data resolve no {} period, so wavelength and amplitude describe the observed stretch rather than a period",
+                1e3 * std::f64::consts::TAU / x,
+                if lower { "longest" } else { "shortest" },
+                if lower { "longer" } else { "shorter" }
+            ),
+            _ => format!(
+                "{} = {x:.4e} at its {} bound: a limit the fit pushed against, not an estimate",
+                info.name,
+                if lower { "lower" } else { "upper" }
+            ),
+        });
+    }
+    notes
+}
+
+/// Which bound `x` sits at (`Some(true)` the lower), within `rel` of the parameter's range.
+fn side_of_bound(x: f64, info: &ParamInfo, rel: f64) -> Option<bool> {
+    let tol = rel * (info.hi - info.lo);
+    if x <= info.lo + tol {
+        Some(true)
+    } else if x >= info.hi - tol {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// Why a searched form's scale (a wavelength, a width, a frequency) fitted in full is not a
+/// finding: it ran to the end of its search, so the data hold no such feature inside the range
+/// the search can resolve (on two speed effects at once, a wave at the shortest wavelength
+/// allowed soaked up what neither effect alone explained). `None` when the scale is inside.
+pub fn scale_at_bound(m: &Model) -> Option<String> {
+    let i = m.spec.extras.len().checked_sub(1)?;
+    let off = m.spec.extra_offset(i);
+    let (idx, what) = match m.spec.extras[i] {
+        Extra::PeriodicZ { .. } => (0, "wavelength"),
+        Extra::Localized { .. } => (2, "width"),
+        Extra::TimePeriodic { .. } => (0, "frequency"),
+        _ => return None,
+    };
+    let x = m.fit.global[off + idx];
+    let lower = side_of_bound(x, &m.params[off + idx], 1e-2)?;
+    // only the fine end: a wave longer, a bump wider or a vibration slower than the search
+    // reaches is still a slow variation the data show (bound_notes says so in words)
+    let text = match (&m.spec.extras[i], lower) {
+        (Extra::PeriodicZ { .. }, false) => format!(
+            "its wavelength ran to the shortest the search allows ({:.3} mm)",
+            1e3 * std::f64::consts::TAU / x
+        ),
+        (Extra::Localized { .. }, true) => format!(
+            "its width ran to the narrowest the search allows ({:.3} mm)",
+            1e3 * x
+        ),
+        (Extra::TimePeriodic { .. }, false) => {
+            format!("its frequency ran to the highest the search allows ({x:.1} Hz)")
+        }
+        _ => return None,
+    };
+    Some(format!(
+        "rejected: {text}; a {what} at the end of the search is no feature the data resolve"
+    ))
+}
+
+/// The parameters of extra term `i` of `m` as reported: `term_parameters`, with a force in
+/// time's amplitude taken with each run's phase integrated out, not fitted (the fitted phases
+/// also fit the noise and make it read high; timeforce.rs).
+pub fn reported_parameters(
+    m: &Model,
+    i: usize,
+    materials: &[String],
+    runs: &[RunData],
+) -> BTreeMap<String, Estimate> {
+    let mut parameters = term_parameters(m, i, materials);
+    if matches!(m.spec.extras[i], Extra::TimePeriodic { .. }) {
         if let Some(a) =
             super::timeforce::amplitude_over_phases(&m.spec, &m.fit.global, &m.fit.local, runs)
         {
@@ -350,14 +467,7 @@ fn row(
             }
         }
     }
-    CandidateRow {
-        round,
-        effect: e.effect().unwrap_or("probe").to_string(),
-        form: e.form(),
-        accepted: false,
-        parameters,
-        evidence: ev,
-    }
+    parameters
 }
 
 /// The data and settings every round reads.
@@ -370,6 +480,8 @@ pub struct Setting<'a> {
     pub rg: &'a Ranges,
     /// Where the step under way is said (the stage's progress line).
     pub say: &'a (dyn Fn(&str) + Sync),
+    /// Whether two terms may be accepted together (room for two more under `max_terms`).
+    pub pairs_allowed: bool,
 }
 
 /// The proposals of a round's residuals, made when first asked for: only a proposed form fitted
@@ -445,7 +557,7 @@ fn screen_round(round: usize, current: &Model, all: &[&Extra], set: &Setting) ->
     let nulls: Vec<NullFit> = all
         .iter()
         .zip(&reps)
-        .map(|(e, r)| NullFit::from_replicates(r, e.params().len() as f64))
+        .map(|(e, r)| NullFit::from_replicates(r, e.null_df(set.runs.len())))
         .collect();
     let p: Vec<f64> = nulls.iter().zip(&lr).map(|(n, l)| n.p_value(*l)).collect();
     // the linear estimates stand for every candidate; only the significant ones are fitted in
@@ -503,29 +615,58 @@ struct Trials<'r> {
     /// Each candidate's model: its linear estimate until it is fitted in full.
     fitted: Vec<Model>,
     cv_of: Vec<Option<(CvResult, f64)>>,
+    /// Why a candidate fitted in full is no finding although it predicts held-out runs better.
+    refused: Vec<Option<String>>,
     best: Option<(usize, CvResult)>,
+    /// A second term accepted with `best`: neither alone passed the held-out check, both did.
+    pair: Option<(usize, Model, f64)>,
+    /// A searched form that passed alone and gave way to the pair.
+    displaced: Option<usize>,
 }
 
 impl Trials<'_> {
     /// Candidate `i` fitted in full from the screen's estimate and the residuals' proposals.
     fn full(&self, i: usize) -> Model {
+        self.current.extend(
+            self.all[i],
+            &self.starts(i),
+            self.set.materials,
+            self.set.runs,
+            FULL_ITERATIONS,
+        )
+    }
+
+    /// Starting values of candidate `i`'s parameters: the screen's estimate, then the data's.
+    fn starts(&self, i: usize) -> Vec<Vec<f64>> {
         let e = self.all[i];
-        let mut starts = vec![clamp_to(
-            e,
-            &self.fitted[i].fit.global[self.current.fit.global.len()..],
-        )];
+        let n = e.params().len();
+        let fitted = &self.fitted[i].fit.global;
+        let mut starts = vec![clamp_to(e, &fitted[fitted.len() - n..])];
         if needs_proposal(e) || matches!(e, Extra::Spline { .. }) {
             starts.extend(data_starts(e, self.props.get()));
         } else {
             starts.extend(data_starts(e, &Proposals::default()));
         }
         starts.dedup();
-        self.current.extend(
-            e,
-            &starts,
-            self.set.materials,
+        starts
+    }
+
+    /// Cross-validate `m` against the current model: (held-out RMS better and paired t above
+    /// its critical value, the CV, the paired t).
+    fn held_out(&self, m: &Model) -> (bool, CvResult, f64) {
+        let cv = cross_validate(
+            &m.spec,
+            &m.params,
             self.set.runs,
-            FULL_ITERATIONS,
+            &m.fit,
+            self.set.fold,
+            self.set.opts.folds,
+        );
+        let t = paired_t(self.current_cv, &cv);
+        (
+            cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv,
+            cv,
+            t,
         )
     }
 
@@ -539,21 +680,100 @@ impl Trials<'_> {
                 self.all[i].effect().unwrap_or("probe")
             ));
             self.fitted[i] = self.full(i);
-            let m = &self.fitted[i];
-            let cv = cross_validate(
-                &m.spec,
-                &m.params,
-                self.set.runs,
-                &m.fit,
-                self.set.fold,
-                self.set.opts.folds,
-            );
-            let t = paired_t(self.current_cv, &cv);
+            self.refused[i] = scale_at_bound(&self.fitted[i]);
+            let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
         }
         let (cv, t) = self.cv_of[i].clone().expect("just set");
-        let passes = cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv;
+        let passes =
+            cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv && self.refused[i].is_none();
         (passes, cv)
+    }
+
+    /// When no significant candidate passes the held-out check alone, two of the strongest
+    /// (of different effects) fitted together may: two speed effects at once (a rolling
+    /// resistance and a quadratic drag) each misdescribe the other's share alone. The first
+    /// pair, strongest first, whose joint fit predicts held-out runs better is accepted;
+    /// backward elimination then re-tests each of the two given the other.
+    ///
+    /// A searched form that passed alone (a wave, a bump, a force in time) is no reason to stop:
+    /// a wave whose wells trap a particle as a rolling resistance stops it can stand in for a
+    /// resistance and a drag together. A pair of named terms that predicts held-out runs as well
+    /// (paired t of the form over the pair within its critical value) is named instead: fewer
+    /// parameters, fixed shapes.
+    fn pairs(&mut self, order: &[usize]) {
+        let incumbent = self.best.clone();
+        if incumbent
+            .as_ref()
+            .is_some_and(|(b, _)| !needs_proposal(self.all[*b]))
+        {
+            return;
+        }
+        // the searched forms are flexible enough to absorb part of anything: pairs are of the
+        // named forms with fixed shapes only, every form of the three strongest significant
+        // effects (alone, a quadratic drag beside a missing resistance may fit with the wrong
+        // sign and rank below the saturating form of the same effect)
+        let named: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&i| {
+                !needs_proposal(self.all[i]) && !matches!(self.all[i], Extra::Spline { .. })
+            })
+            .collect();
+        let mut effects: Vec<Option<&str>> = Vec::new();
+        for &i in &named {
+            let e = self.all[i].effect();
+            if !effects.contains(&e) && effects.len() < FULL_TRIES {
+                effects.push(e);
+            }
+        }
+        let top: Vec<usize> = named
+            .into_iter()
+            .filter(|&i| effects.contains(&self.all[i].effect()))
+            .collect();
+        if incumbent.is_none() {
+            for &i in &top {
+                let (passes, cv) = self.check(i);
+                if passes {
+                    self.best = Some((i, cv));
+                    return;
+                }
+            }
+        }
+        for (n, &a) in top.iter().enumerate() {
+            for &b in &top[n + 1..] {
+                let (ea, eb) = (self.all[a], self.all[b]);
+                if ea.effect() == eb.effect() {
+                    continue;
+                }
+                (self.set.say)(&format!(
+                    "round {}: fitting {} and {} together and cross-validating them",
+                    self.round,
+                    ea.effect().unwrap_or("probe"),
+                    eb.effect().unwrap_or("probe")
+                ));
+                let m = self.fitted[a].extend(
+                    eb,
+                    &self.starts(b),
+                    self.set.materials,
+                    self.set.runs,
+                    FULL_ITERATIONS,
+                );
+                if scale_at_bound(&m).is_some() {
+                    continue;
+                }
+                let (passes, cv, t) = self.held_out(&m);
+                let as_good = incumbent
+                    .as_ref()
+                    .is_none_or(|(_, inc)| paired_t(&cv, inc) <= self.t_cv);
+                if passes && as_good {
+                    self.displaced = incumbent.map(|(i, _)| i);
+                    self.best = Some((a, cv));
+                    self.pair = Some((b, m, t));
+                    return;
+                }
+            }
+        }
     }
 
     /// Fit in full and cross-validate the significant candidates strongest first (at most
@@ -607,6 +827,12 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
     if let Some((cv, t)) = &tr.cv_of[i] {
         ev.cv_paired_t = Some(*t);
         ev.cv_rms_m = Some(cv.cv_rms_m);
+        if let Some(why) = &tr.refused[i] {
+            return why.clone();
+        }
+        if tr.displaced == Some(i) {
+            return "passes both tests, but two named terms fitted together predict held-out runs as well with fixed shapes: they are named instead".into();
+        }
         return if tr.best.as_ref().map(|(b, _)| *b == i).unwrap_or(false) {
             "passes: bootstrap LR test and held-out runs".into()
         } else {
@@ -661,12 +887,19 @@ pub fn run_round(
         t_cv: t_upper_quantile(CV_LEVEL, set.runs.len().saturating_sub(1) as f64),
         fitted: sc.linear.clone(),
         cv_of: vec![None; ne],
+        refused: vec![None; ne],
         best: None,
+        pair: None,
+        displaced: None,
     };
     tr.strongest(&order);
     trace("fitted and cross-validated the strongest");
     tr.prefer_simpler(&order, &sc.lr);
     trace("cross-validated");
+    if set.pairs_allowed {
+        tr.pairs(&order);
+        trace("pairs tried");
+    }
     let opts = set.opts;
     let mut rows = Vec::new();
     for (i, e) in all.iter().enumerate() {
@@ -703,10 +936,24 @@ pub fn run_round(
         ev.decision = decide(i, ne, p_holm, &mut ev, &tr, opts.alpha);
         rows.push(row(round, e, &tr.fitted[i], set.materials, set.runs, ev));
     }
+    let partner = tr.pair.as_ref().map(|(b, _, _)| *b);
     let accepted = tr.best.map(|(i, cv)| {
         rows[i].accepted = true;
-        rows[i].evidence.decision = "accepted: strongest term passing both tests".into();
-        (i, tr.fitted[i].clone(), cv)
+        let Some((b, m, t)) = tr.pair else {
+            rows[i].evidence.decision = "accepted: strongest term passing both tests".into();
+            return (i, tr.fitted[i].clone(), cv);
+        };
+        let effect = |k: usize| all[k].effect().unwrap_or("probe").replace('_', " ");
+        for (k, other) in [(i, b), (b, i)] {
+            rows[k].accepted = true;
+            rows[k].evidence.cv_paired_t = Some(t);
+            rows[k].evidence.cv_rms_m = Some(cv.cv_rms_m);
+            rows[k].evidence.decision = format!(
+                "accepted together with {}: neither alone predicts held-out runs better, both fitted together do (paired t = {t:.2})",
+                effect(other)
+            );
+        }
+        (i, m, cv)
     });
     let probe_rows: Vec<CandidateRow> = rows[ne..].to_vec();
     let flagged_probes = probe_rows
@@ -719,6 +966,7 @@ pub fn run_round(
         nulls: sc.nulls[..ne].to_vec(),
         rows,
         accepted,
+        partner,
         flagged_probes,
         probe_rows,
     }

@@ -29,9 +29,11 @@ const MIN_RATIO: f64 = 1.3;
 
 /// The one-particle physics the single runs support, per material, from a diagnosis' final
 /// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`). None for a material whose physics cannot be expressed as `physics` terms.
+/// `alpha_deg`) and its accepted position forces (a wave or a bump fixed in the lab, from their
+/// findings). Err, saying why, for a material whose physics the pair fit cannot carry.
 pub fn single_run_physics(
     params: &BTreeMap<String, f64>,
+    position_findings: &[&Finding],
     material: &str,
     groove: Groove,
 ) -> Result<Model, String> {
@@ -58,14 +60,50 @@ pub fn single_run_physics(
     if let Some(a) = get("alpha_deg") {
         terms.push(Term::GrooveTilt { alpha_deg: a });
     }
-    if params
-        .keys()
-        .any(|k| k.starts_with("ln_vc_mps_") || k.starts_with("sin1") || k.starts_with("cos1"))
-    {
-        return Err(
-            "the accepted model has a term (velocity-dependent friction or a position force) the pair fit does not carry"
-                .into(),
-        );
+    let has = |prefix: &str| params.keys().any(|k| k.starts_with(prefix));
+    for (prefix, what) in [
+        ("ln_vc_mps_", "a velocity-dependent friction"),
+        ("sin1", "a Fourier series in z"),
+        (
+            "frequency_hz",
+            "a force in time with its own phase in each run",
+        ),
+        ("coef0_mps2", "a spline force (no named form)"),
+    ] {
+        if has(prefix) {
+            return Err(format!(
+                "the accepted model has {what}, which the pair fit does not carry"
+            ));
+        }
+    }
+    // forces fixed in the lab act on the pairs as on the single runs: held at the findings'
+    // values (the same z, so the same force)
+    for f in position_findings {
+        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
+        if let (Some(amp), Some(centre), Some(width)) =
+            (value("amplitude_mps2"), value("centre_m"), value("width_m"))
+        {
+            terms.push(Term::LocalizedForce {
+                amp_mps2: amp,
+                centre_m: centre,
+                width_m: width,
+            });
+        } else if let (Some(amp), Some(wavelength), Some(phase)) = (
+            value("amplitude_mps2"),
+            value("wavelength_m"),
+            value("phase_rad"),
+        ) {
+            terms.push(Term::PositionForce {
+                amp_mps2: amp,
+                wavelength_m: wavelength,
+                phase_rad: phase,
+            });
+        } else {
+            return Err(format!(
+                "the accepted model has a position force ({}) the pair fit does not carry",
+                f.form
+            ));
+        }
     }
     Ok(Model {
         groove,
@@ -443,10 +481,15 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
             .and_then(|e| e.se)
             .unwrap_or(0.0)
     };
+    let position_findings: Vec<&Finding> = diagnosis
+        .findings
+        .iter()
+        .filter(|f| f.accepted && f.effect == "position_dependent_force")
+        .collect();
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
-        match single_run_physics(&params, m, groove) {
+        match single_run_physics(&params, &position_findings, m, groove) {
             Ok(model) => {
                 let t_key = if params.contains_key(&format!("t0_s_{m}")) {
                     format!("t0_s_{m}")
@@ -461,7 +504,17 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
     }
     let (findings, more) = check_pairs(recordings, &physics, groove, 80);
     diagnosis.findings.extend(findings);
-    notes.extend(more);
+    // a material already said to be untested needs no second note
+    let untested: Vec<String> = diagnosis
+        .materials
+        .iter()
+        .filter(|m| !physics.contains_key(*m))
+        .map(|m| format!("collision runs of {m}:"))
+        .collect();
+    notes.extend(
+        more.into_iter()
+            .filter(|n| !untested.iter().any(|u| n.starts_with(u.as_str()))),
+    );
     if diagnosis
         .findings
         .iter()
@@ -479,7 +532,60 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
 
 #[cfg(test)]
 mod tests {
-    use super::impact_decision;
+    use super::{impact_decision, single_run_physics};
+    use crate::discover::diagnosis::{Estimate, Evidence, Finding, ModelScore};
+    use crate::physics::{Groove, Term};
+    use std::collections::BTreeMap;
+
+    fn wave_finding() -> Finding {
+        let p: BTreeMap<String, Estimate> = [
+            ("amplitude_mps2", 0.05),
+            ("wavelength_m", 2e-3),
+            ("phase_rad", 1.0),
+            ("peak_accel_mps2", 0.05),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), Estimate::new(v, 0.001)))
+        .collect();
+        Finding {
+            effect: "position_dependent_force".into(),
+            accepted: true,
+            form: "periodic in z".into(),
+            parameters: p,
+            evidence: Evidence::default(),
+            where_: BTreeMap::new(),
+            baseline: ModelScore::default(),
+            extended: ModelScore::default(),
+        }
+    }
+
+    /// A wave fixed in the lab acts on the pairs too: the held physics carries it (a pair fit
+    /// without it would blame the pairs for the groove); a force in time with a phase per run
+    /// cannot be carried, and the reason says so.
+    #[test]
+    fn the_pairs_are_held_at_the_accepted_position_force_or_told_why_not() {
+        let mut params: BTreeMap<String, f64> = [
+            ("mu_316", 0.337),
+            ("t_s_316", 0.07),
+            ("k_per_m", 3141.6),
+            ("sin_mps2", 0.03),
+            ("cos_mps2", 0.04),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        let wave = wave_finding();
+        let model = single_run_physics(&params, &[&wave], "316", Groove::CHAPTER).unwrap();
+        assert!(model.terms.contains(&Term::PositionForce {
+            amp_mps2: 0.05,
+            wavelength_m: 2e-3,
+            phase_rad: 1.0
+        }));
+        assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
+        params.insert("frequency_hz".into(), 120.0);
+        let why = single_run_physics(&params, &[&wave], "316", Groove::CHAPTER).unwrap_err();
+        assert!(why.contains("force in time"), "{why}");
+    }
 
     #[test]
     fn the_impact_decision_says_significant_but_small_when_it_is() {

@@ -9,7 +9,8 @@ use super::diagnosis::{
 use super::drift::line;
 use super::forcemap::ForceMap;
 use super::forward::{
-    finding, fold_of, median_speed, run_round, LazyProposals, Model, Round, Setting,
+    bound_notes, finding, fold_of, median_speed, reported_parameters, run_round, LazyProposals,
+    Model, Round, Setting,
 };
 use super::locate::locate;
 use super::null_distribution::NullFit;
@@ -268,6 +269,7 @@ impl Ctx<'_> {
             fold: self.fold,
             rg: self.rg,
             say: self.say,
+            pairs_allowed: false,
         }
     }
 
@@ -355,6 +357,27 @@ impl Selection {
         });
         self.current = model;
         self.current_cv = cv;
+    }
+
+    /// Accept row `j` of round `r` as `extra`, fitted together with the term just accepted
+    /// (already in the current model): the two share their scores.
+    fn accept_partner(&mut self, r: &Round, j: usize, extra: Extra) {
+        let first = self.accepted.last().expect("the pair's first term");
+        let (before, after) = (first.before.clone(), first.after.clone());
+        let mut row = r.rows[j].clone();
+        row.evidence.decision = format!(
+            "{} (flagged by {} probe(s))",
+            row.evidence.decision,
+            r.flagged_probes.len()
+        );
+        self.accepted.push(Accepted {
+            row,
+            before,
+            after,
+            probes_after: vec![],
+            null: r.nulls[j].clone(),
+            extra,
+        });
     }
 
     /// Backward elimination: drop the weakest earlier term whose likelihood ratio, given the
@@ -446,7 +469,10 @@ fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
             &entries,
             &probes,
             &props,
-            &ctx.setting(),
+            &Setting {
+                pairs_allowed: sel.accepted.len() + 2 <= ctx.opts.max_terms,
+                ..ctx.setting()
+            },
         );
         drop(props);
         sel.table.extend(r.rows.iter().cloned());
@@ -457,6 +483,9 @@ fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
         match r.accepted.take() {
             Some((i, model, cv)) if sel.accepted.len() < ctx.opts.max_terms => {
                 sel.accept(&r, i, entries[i].clone(), model, cv, ctx);
+                if let Some(j) = r.partner {
+                    sel.accept_partner(&r, j, entries[j].clone());
+                }
                 sel.last_probes = r.probe_rows;
                 sel.eliminate(ctx);
             }
@@ -558,17 +587,29 @@ fn drift_of(current: &Model, per_run: &[PerRunFit], ctx: &Ctx) -> Drift {
 }
 
 /// The findings: the accepted terms (and the fallback), a mismatch left unexplained, the terms
-/// removed by backward elimination, and the candidates of the last round.
+/// removed by backward elimination, and the candidates of the last round. An accepted term's
+/// parameters are those of the final model, where every accepted term is fitted jointly (the
+/// round that accepted it fitted it without the terms accepted later, which may share its
+/// signature: a rolling resistance accepted before a quadratic drag reads 40 % low there).
 fn findings_of(
     sel: &Selection,
     fallback: Option<&Accepted>,
-    residuals_before: &Structure,
-    residuals_after: &Structure,
+    residuals: [&Structure; 2],
     final_score: &ModelScore,
+    ctx: &Ctx,
 ) -> Vec<Finding> {
+    let [residuals_before, residuals_after] = residuals;
     let mut findings: Vec<Finding> = Vec::new();
     for acc in sel.accepted.iter().chain(fallback) {
+        let mut row = acc.row.clone();
         let mut w = BTreeMap::new();
+        if let Some(i) = sel.current.spec.extras.iter().position(|e| *e == acc.extra) {
+            row.parameters = reported_parameters(&sel.current, i, ctx.materials, ctx.runs);
+            let notes = bound_notes(&sel.current, i, ctx.materials);
+            if !notes.is_empty() {
+                w.insert("at_bound".to_string(), serde_json::json!(notes));
+            }
+        }
         let flagged: Vec<CandidateRow> = sel
             .table
             .iter()
@@ -581,7 +622,7 @@ fn findings_of(
             probes_json(&acc.probes_after),
         );
         w.insert("residuals_before".to_string(), worst_bins(residuals_before));
-        findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));
+        findings.push(finding(&row, acc.before.clone(), acc.after.clone(), w));
     }
     if !sel.unexplained.is_empty() && fallback.is_none() {
         findings.push(unexplained_finding(
@@ -723,9 +764,9 @@ pub fn discover_reporting(
     let findings = findings_of(
         &sel,
         fallback.as_ref(),
-        &residuals_before,
-        &residuals_after,
+        [&residuals_before, &residuals_after],
         &final_score,
+        &ctx,
     );
     let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {

@@ -601,7 +601,7 @@ pub fn screen(
                 ));
                 let (t, typical) = searched_trial(e, prep, &v, rg, first.clone());
                 let t = t.map(|(mut lr, est, se)| {
-                    let df = e.params().len() as f64;
+                    let df = e.null_df(runs.len());
                     if first.end < nrep && !clearly_null(&lr, df, ctl.alpha) {
                         (ctl.say)(&format!(
                             "candidate {}/{n} {name}: replicates {}/{} done, not yet decided",

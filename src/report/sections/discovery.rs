@@ -372,6 +372,13 @@ struct Probe {
     p_holm: Option<f64>,
 }
 
+/// The parameters of a finding that ended at a bound of their search, in words (`where.at_bound`).
+pub fn at_bound(w: &BTreeMap<String, Value>) -> Vec<String> {
+    w.get("at_bound")
+        .and_then(|l| Vec::<String>::deserialize(l).ok())
+        .unwrap_or_default()
+}
+
 /// Where discovery located the mismatch, in words: the worst residual bins, the residual structure,
 /// and the drift probes before and after (a compact dump of `where` when it has none of them).
 fn where_text(w: &BTreeMap<String, Value>) -> String {
@@ -424,6 +431,10 @@ fn where_text(w: &BTreeMap<String, Value>) -> String {
         if !probes.is_empty() {
             parts.push(format!("drift probes{when}: {}", probes.join("; ")));
         }
+    }
+    let bounds = at_bound(w);
+    if !bounds.is_empty() {
+        parts.push(format!("the fit ended at a bound: {}", bounds.join("; ")));
     }
     if parts.is_empty() {
         short(&serde_json::to_value(w).unwrap_or(Value::Null), 8)
@@ -607,6 +618,13 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     }
     if let Some(t) = collision_table(diag) {
         b.table(t);
+    }
+    if !diag.note.is_empty() {
+        // e.g. collision runs left untested because the pair fit cannot carry an accepted term
+        b.para(format!(
+            "Notes of the discover stage: {}.",
+            diag.note.trim_end_matches('.')
+        ));
     }
     b.figure(figs, "fig_discovery_cv.svg", "Held-out (leave-runs-out) RMS of the simulated trajectories: baseline against each candidate's extended model.");
     if let Some(t) = structure_table(diag) {

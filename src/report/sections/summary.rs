@@ -27,11 +27,17 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
         .iter()
         .filter(|f| f.accepted)
         .map(|f| {
+            let bounds = super::discovery::at_bound(&f.where_);
             format!(
-                "{} ({}): {}",
+                "{} ({}): {}{}",
                 f.effect.replace('_', " "),
                 f.form,
-                super::discovery::params_text(&f.parameters)
+                super::discovery::params_text(&f.parameters),
+                if bounds.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (at a bound: {})", bounds.join("; "))
+                }
             )
         })
         .collect()
@@ -101,8 +107,13 @@ pub fn block(d: &ReportData) -> Block {
             ProfileVerdict::UpperBound { hi } => format!("< {hi:.2}"),
             ProfileVerdict::Unconstrained => "not constrained".into(),
         };
+        let caveat = if super::whole_run::speed_dependent_friction(d, name).is_some() {
+            "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
+        } else {
+            ""
+        };
         t.push(vec![
-            format!("μ_pp of {name} (whole-run profile, 95 %)"),
+            format!("μ_pp of {name} (whole-run profile, 95 %{caveat})"),
             text,
             "1.4".into(),
             "summary.json".into(),

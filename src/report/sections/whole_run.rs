@@ -27,6 +27,30 @@ pub fn mu_pp_words(material: &str, verdict: &ProfileVerdict) -> String {
     }
 }
 
+/// Whether discovery accepted a friction that depends on the slip speed for `material` (its v_c
+/// not at the search's floor): the whole-run fit holds μ_pg constant, so its μ_pp of that
+/// material rests on a friction law the single runs reject. The words, or None.
+pub fn speed_dependent_friction(d: &ReportData, material: &str) -> Option<String> {
+    let f = d
+        .diagnosis
+        .as_ref()?
+        .findings
+        .iter()
+        .find(|f| f.accepted && f.effect == "velocity_dependent_friction")?;
+    let floor = format!("v_c of {material} at the search's floor");
+    if super::discovery::at_bound(&f.where_)
+        .iter()
+        .any(|n| n.starts_with(&floor))
+    {
+        return None;
+    }
+    let vc = f.parameters.get(&format!("v_c_mps_{material}"))?.value;
+    Some(format!(
+        "{material}: discovery found this material's friction to depend on the slip speed (v_c = {} m/s); the whole-run model holds μ_pg constant, so its μ_pp of {material} rests on a friction law the single runs reject and is not a measurement of μ_pp.",
+        crate::report::value::sig(vc, 3)
+    ))
+}
+
 fn fmt_param((name, p): (&str, &Estimate)) -> String {
     format!("{name} = {:.4} [{:.4}, {:.4}]", p.value, p.lo(), p.hi())
 }
@@ -111,6 +135,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             format!("{:.2}", m.profile.dispersion),
         ]);
         b.para(mu_pp_words(name, &m.profile.verdict));
+        if let Some(words) = speed_dependent_friction(d, name) {
+            b.para(words);
+        }
         if let Some(w) = not_fitted_words(&m.profile) {
             b.para(format!("{name}: {w}."));
         }
