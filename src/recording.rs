@@ -1,9 +1,11 @@
 //! One recorded run, as the analysis stages see it after ingest: run metadata plus one track per particle.
 //!
-//! This is the per-run item that `ingest` emits (serialized as JSON) and that `fit`, `simulate`,
+//! This is the per-run item that `ingest` emits (as the binary format of `item`) and that `fit`, `simulate`,
 //! `compare` and `discover` read. Units are SI and in the field names. Ingest guarantees every
 //! number is finite, |z_m| ≤ `Z_MAX_M`, |t_s| ≤ `T_MAX_S`, and t_s strictly increases along a
 //! track and agrees with frame/fps (see `ingest::sanity`).
+
+pub mod item;
 
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -475,7 +475,7 @@ fn stage_writes_the_contract_deterministically() {
     );
     let items: BTreeMap<String, Vec<u8>> = recs
         .iter()
-        .map(|r| (r.info.run.clone(), serde_json::to_vec(r).unwrap()))
+        .map(|r| (r.info.run.clone(), groove::recording::item::encode(r)))
         .collect();
     let runs = Artifact::Collection(items);
     let fits = Artifact::Collection(BTreeMap::new());

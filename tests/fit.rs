@@ -380,7 +380,7 @@ fn stages_fit_aggregate_simulate_compare_run_end_to_end() {
     let synth = runs(17, 4, (0.01, 0.1), 0.3, Camera::CHAPTER);
     for (i, run) in synth.iter().enumerate() {
         let id = format!("run{}", 4 - i); // not in sorted order
-        let rec = Artifact::File(serde_json::to_vec(&recording(&id, "316", run)).unwrap());
+        let rec = Artifact::File(groove::recording::item::encode(&recording(&id, "316", run)));
         let out = groove::stages::fit::Fit
             .run(&stage_input(&params, [("runs", &rec)].into(), Some(&id)))
             .unwrap();

@@ -222,6 +222,31 @@ fn ingest_bounded(files: &Files, params: &IngestParams) -> Result<(), TestCaseEr
         (Err(a), Err(b)) => prop_assert_eq!(a.to_string(), b.to_string()),
         (a, b) => prop_assert!(false, "columnar {a:?} but row by row {b:?}"),
     }
+    // The stage's streamed items, in chunks small enough that runs span them, are the items of
+    // the same recordings (or the same error).
+    let streamed = ingest::ingest_items_in_chunks(files, params, 64);
+    match (&result, &streamed) {
+        (Ok(a), Ok(b)) => {
+            let items: std::collections::BTreeMap<String, Vec<u8>> = a
+                .recordings
+                .iter()
+                .map(|r| {
+                    (
+                        ingest::item_name(&r.info.run),
+                        groove::recording::item::encode(r),
+                    )
+                })
+                .collect();
+            prop_assert!(items == b.runs, "streamed items differ ({})", b.how);
+            prop_assert_eq!(&a.skipped, &b.skipped);
+        }
+        (Err(a), Err(b)) => prop_assert_eq!(a.to_string(), b.to_string()),
+        (a, b) => prop_assert!(
+            false,
+            "whole {a:?} but streamed {:?}",
+            b.as_ref().map(|i| &i.how)
+        ),
+    }
     if let Err(e) = result {
         let message = e.to_string();
         prop_assert!(

@@ -485,7 +485,7 @@ fn stage_outputs_hold_recordings_and_an_empty_skipped_list() {
         panic!("runs is not a collection")
     };
     assert_eq!(runs.keys().collect::<Vec<_>>(), ["c01", "s01", "s02"]);
-    let c01: Recording = serde_json::from_slice(&runs["c01"]).unwrap();
+    let c01 = groove::recording::item::decode(&runs["c01"]).unwrap();
     assert_eq!(c01, expected()[0]);
     assert_eq!(out["skipped"], Artifact::File(b"[]\n".to_vec()));
     assert_eq!(
@@ -543,7 +543,7 @@ fn item_names_are_file_name_safe_and_distinct() {
     let Artifact::Collection(runs) = &out["runs"] else {
         panic!()
     };
-    let rec: Recording = serde_json::from_slice(&runs[&item_name("day 2/s01")]).unwrap();
+    let rec = groove::recording::item::decode(&runs[&item_name("day 2/s01")]).unwrap();
     assert_eq!(rec.info.run, "day 2/s01");
 }
 
@@ -1138,7 +1138,7 @@ fn columnar_ingest_gives_the_row_by_row_items_on_the_shipped_data() {
     };
     let expected: BTreeMap<String, Vec<u8>> = row_by_row(&files)
         .iter()
-        .map(|r| (item_name(&r.info.run), serde_json::to_vec(r).unwrap()))
+        .map(|r| (item_name(&r.info.run), groove::recording::item::encode(r)))
         .collect();
     assert_eq!(items, &expected);
 }
@@ -1330,4 +1330,90 @@ fn campaign_ingests_within_its_memory_bound() {
         peak <= bound,
         "peak RSS {peak} bytes is above {bound} (5 × the CSV + 512 MB)"
     );
+}
+
+/// The items of the whole-file path (`ingest`'s recordings, encoded), by item name.
+fn whole_file_items(files: &Files) -> BTreeMap<String, Vec<u8>> {
+    ingest::ingest(files, &params())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .recordings
+        .iter()
+        .map(|r| (item_name(&r.info.run), groove::recording::item::encode(r)))
+        .collect()
+}
+
+#[test]
+fn streamed_items_are_the_whole_file_items_in_any_chunk_size() {
+    let files = shipped_files();
+    let whole = whole_file_items(&files);
+    assert!(whole.len() > 100, "{} runs", whole.len());
+    // 1 KB chunks: most runs span several; 100 KB: a few runs cross each boundary; 8 MB: one chunk.
+    for chunk in [1_000, 100_000, 8 << 20] {
+        let items = ingest::ingest_items_in_chunks(&files, &params(), chunk).unwrap();
+        assert!(items.how.starts_with("read in"), "{chunk}: {}", items.how);
+        let want = files["trajectories.csv"].len() / chunk;
+        let chunks: usize = items.how["read in ".len()..]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        // Each chunk is `chunk` bytes and the rest of the line it ends in.
+        assert!(
+            (want * 9 / 10..=want + 1).contains(&chunks),
+            "{chunk}: {}",
+            items.how
+        );
+        assert_eq!(items.runs, whole, "chunks of {chunk} bytes");
+        assert!(items.skipped.is_empty());
+    }
+}
+
+#[test]
+fn streamed_items_of_shuffled_rows_fall_back_to_the_whole_file_with_the_same_items() {
+    let files = shipped_files();
+    let whole = whole_file_items(&files);
+    let shuffled = shuffled_trajectories(&files, 11);
+    let items = ingest::ingest_items_in_chunks(&shuffled, &params(), 100_000).unwrap();
+    assert!(
+        items.how.starts_with("read whole") && items.how.contains("not together"),
+        "{}",
+        items.how
+    );
+    assert_eq!(items.runs, whole);
+    // Runs whose blocks are whole but not in runs.csv's order stream.
+    let text = String::from_utf8(files["trajectories.csv"].clone()).unwrap();
+    let (header, body) = text.split_once('\n').unwrap();
+    let mut blocks: Vec<Vec<&str>> = Vec::new();
+    for line in body.lines() {
+        let run = line.split(',').next().unwrap();
+        match blocks.last_mut() {
+            Some(b) if b[0].split(',').next() == Some(run) => b.push(line),
+            _ => blocks.push(vec![line]),
+        }
+    }
+    blocks.reverse();
+    let reversed: Vec<&str> = blocks.concat();
+    let mut files_rev = files.clone();
+    files_rev.insert(
+        "trajectories.csv".into(),
+        format!("{header}\n{}\n", reversed.join("\n")).into_bytes(),
+    );
+    let items = ingest::ingest_items_in_chunks(&files_rev, &params(), 100_000).unwrap();
+    assert!(items.how.starts_with("read in"), "{}", items.how);
+    assert_eq!(items.runs, whole);
+}
+
+#[test]
+fn streamed_items_of_parquet_are_the_csv_items() {
+    let recs = known_recordings();
+    let csv = ingest::ingest_items(&interchange_csv(&recs), &params()).unwrap();
+    let parquet = ingest::ingest_items(&interchange_parquet(&recs), &params()).unwrap();
+    assert!(
+        parquet.how.starts_with("read in 1 chunk "),
+        "{}",
+        parquet.how
+    );
+    assert_eq!(csv.runs, parquet.runs);
+    assert_eq!(csv.runs, whole_file_items(&interchange_csv(&recs)));
 }

@@ -120,7 +120,7 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
     ];
     for (run, m, v0, mu, t) in singles {
         let (rec, fit, line) = single(run, m, v0, mu, t);
-        runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+        runs.insert(format!("{run}.json"), item_bytes(&rec));
         fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
         csv.push_str(&line);
     }
@@ -138,7 +138,7 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
         ];
         for (run, m, setup, sp) in sets {
             let (rec, fit) = collision(run, m, setup, &sp);
-            runs.insert(format!("{run}.json"), serde_json::to_vec(&rec).unwrap());
+            runs.insert(format!("{run}.json"), item_bytes(&rec));
             fits.insert(format!("{run}.json"), serde_json::to_vec(&fit).unwrap());
         }
     }
@@ -550,4 +550,10 @@ fn the_checker_catches_broken_nesting() {
     assert!(well_formed("<div><p>x</div></p>").is_err());
     assert!(well_formed("<div><br></div>").is_ok());
     assert!(well_formed("<div>").is_err());
+}
+
+/// A recording given as its JSON fields, as the `ingest:runs` item bytes.
+fn item_bytes(rec: &serde_json::Value) -> Vec<u8> {
+    let rec: groove::recording::Recording = serde_json::from_value(rec.clone()).unwrap();
+    groove::recording::item::encode(&rec)
 }

@@ -65,6 +65,14 @@ pub fn recordings(files: &BTreeMap<String, Vec<u8>>, min_frames: usize) -> Optio
 /// read might take differently from the row-by-row path: text that is not UTF-8, a double quote,
 /// a row with another number of fields than the header, a header that is not exactly the names.
 fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
+    let (bytes, data_lines) = check_csv(bytes)?;
+    let df = parse_csv(bytes)?;
+    (df.height() == data_lines).then_some(df)
+}
+
+/// The CSV without a byte-order mark and its number of data lines, if the typed read takes every
+/// line as the row-by-row path does (see `read_csv`).
+fn check_csv(bytes: &[u8]) -> Option<(&[u8], usize)> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     std::str::from_utf8(bytes).ok()?;
     if bytes.contains(&b'"') {
@@ -92,6 +100,11 @@ fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
             return None;
         }
     }
+    Some((bytes, data_lines))
+}
+
+/// The five columns of CSV text with its header line, typed; `None` if polars refuses it.
+fn parse_csv(bytes: &[u8]) -> Option<DataFrame> {
     let schema: Schema = COLUMNS
         .iter()
         .map(|(n, t)| Field::new((*n).into(), t.clone()))
@@ -106,10 +119,9 @@ fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
             .into_reader_with_file_handle(Cursor::new(bytes))
             .finish()
     };
-    let df = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
         .ok()?
-        .ok()?;
-    (df.height() == data_lines).then_some(df)
+        .ok()
 }
 
 /// Reads trajectories.parquet: `run` text, `particle` and `frame` integers, `t_s` and `z_m`
@@ -153,6 +165,29 @@ struct Columns {
 }
 
 impl Columns {
+    /// The rows sorted by (particle, frame) (of a one-run `Columns`; `runs` is left empty).
+    fn sorted(&self) -> Columns {
+        let mut order: Vec<usize> = (0..self.particle.len()).collect();
+        order.sort_by_key(|&k| (self.particle[k], self.frame[k]));
+        Columns {
+            runs: Vec::new(),
+            particle: order.iter().map(|&k| self.particle[k]).collect(),
+            frame: order.iter().map(|&k| self.frame[k]).collect(),
+            t_s: order.iter().map(|&k| self.t_s[k]).collect(),
+            z_m: order.iter().map(|&k| self.z_m[k]).collect(),
+        }
+    }
+
+    fn empty() -> Columns {
+        Columns {
+            runs: Vec::new(),
+            particle: Vec::new(),
+            frame: Vec::new(),
+            t_s: Vec::new(),
+            z_m: Vec::new(),
+        }
+    }
+
     /// The columns as they come when each run's rows are one block sorted by (particle, frame),
     /// as `groove synth` and most trackers write them; otherwise after polars sorted the rows by
     /// (run, particle, frame).
@@ -307,4 +342,198 @@ fn clock_holds(fps: f64, tracks: &[Track]) -> bool {
             (elapsed - expected).abs() <= 0.5 / fps + sanity::CLOCK_TOLERANCE * expected.abs()
         })
     })
+}
+
+/// Bytes of trajectories.csv read at a time by `stream` (plus the header line, and up to the end
+/// of the line the chunk ends in).
+pub const CHUNK_BYTES: usize = 8 << 20;
+
+/// Why `stream` gave up on a run's rows not coming together: the dataset is read whole and sorted
+/// instead.
+pub const NOT_GROUPED: &str = "the rows of a run are not together";
+
+/// The recordings of a clean interchange dataset handed to `each` one run at a time, as soon as a
+/// run's last row is read, in file order: trajectories.csv is read `chunk_bytes` at a time (a
+/// Parquet file whole), so neither the whole table nor all recordings are held. Gives the number
+/// of chunks read. It needs each run's rows to be one block (in any order within it), as
+/// `groove synth` and most trackers write them. At anything else, or anything `recordings` would
+/// give `None` for, it stops with the reason: the caller then forgets what `each` received and
+/// reads the dataset whole (`ingest::ingest`), which sorts the rows or names the problems. On
+/// clean grouped data it gives the runs `recordings` gives.
+pub fn stream(
+    files: &BTreeMap<String, Vec<u8>>,
+    min_frames: usize,
+    chunk_bytes: usize,
+    each: &mut dyn FnMut(Recording),
+) -> Result<usize, &'static str> {
+    const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
+    let (runs_name, runs_bytes) = interchange::pick(files, "runs", "").map_err(|_| PROBLEM)?;
+    let (traj_name, traj_bytes) =
+        interchange::pick(files, "trajectories", "").map_err(|_| PROBLEM)?;
+    let runs_table = Table::from_bytes(runs_name, runs_bytes).map_err(|_| PROBLEM)?;
+    let (runs, problems) = interchange::read_runs(&runs_table).map_err(|_| PROBLEM)?;
+    if !problems.is_empty() {
+        return Err(PROBLEM);
+    }
+    let mut infos: BTreeMap<&str, &RunInfo> = BTreeMap::new();
+    for r in &runs {
+        if infos.insert(&r.info.run, &r.info).is_some() {
+            return Err(PROBLEM);
+        }
+    }
+    let mut stream = Stream {
+        infos,
+        done: std::collections::HashSet::new(),
+        pending: None,
+        failed: false,
+        min_frames,
+        each,
+    };
+    let mut chunks = 0;
+    if traj_name.to_ascii_lowercase().ends_with(".parquet") {
+        stream.chunk(&read_parquet(traj_bytes).ok_or(PROBLEM)?)?;
+        chunks = 1;
+    } else {
+        let (bytes, data_lines) = check_csv(traj_bytes).ok_or(PROBLEM)?;
+        let header_end = bytes.iter().position(|&b| b == b'\n').ok_or(PROBLEM)? + 1;
+        let mut rows = 0;
+        let mut at = header_end;
+        let mut text = Vec::new();
+        while at < bytes.len() {
+            let from = (at + chunk_bytes.max(1)).min(bytes.len());
+            let end = match bytes[from..].iter().position(|&b| b == b'\n') {
+                Some(k) => from + k + 1,
+                None => bytes.len(),
+            };
+            text.clear();
+            text.extend_from_slice(&bytes[..header_end]);
+            text.extend_from_slice(&bytes[at..end]);
+            let df = parse_csv(&text).ok_or(PROBLEM)?;
+            rows += df.height();
+            stream.chunk(&df)?;
+            chunks += 1;
+            at = end;
+        }
+        if rows != data_lines {
+            return Err(PROBLEM);
+        }
+    }
+    stream.finish()?;
+    Ok(chunks)
+}
+
+/// A chunk's typed columns, borrowed from its data frame.
+struct Block<'c> {
+    particle: &'c [i64],
+    frame: &'c [i64],
+    t_s: &'c [f64],
+    z_m: &'c [f64],
+}
+
+fn ints(c: &Column) -> Option<&[i64]> {
+    c.i64().ok()?.cont_slice().ok()
+}
+
+fn floats(c: &Column) -> Option<&[f64]> {
+    c.f64().ok()?.cont_slice().ok()
+}
+
+/// The state of `stream` between chunks: the runs not yet read, the runs done, and the rows so
+/// far of the run being read (as one-run `Columns`).
+struct Stream<'a, 'e> {
+    infos: BTreeMap<&'a str, &'a RunInfo>,
+    done: std::collections::HashSet<String>,
+    pending: Option<(String, Columns)>,
+    /// A run whose recording `recordings` would not give: the dataset is read whole at the end.
+    failed: bool,
+    min_frames: usize,
+    each: &'e mut dyn FnMut(Recording),
+}
+
+impl Stream<'_, '_> {
+    /// Adds a chunk's rows to their runs, handing on each run whose rows end inside it.
+    fn chunk(&mut self, df: &DataFrame) -> Result<(), &'static str> {
+        const PROBLEM: &str = "a null, a column of another type or an untrimmed run id";
+        if df.columns().iter().any(|c| c.null_count() > 0) {
+            return Err(PROBLEM);
+        }
+        let column = |name: &str| -> Result<Column, &'static str> {
+            Ok(df.column(name).map_err(|_| PROBLEM)?.rechunk())
+        };
+        let (particle, frame) = (column("particle")?, column("frame")?);
+        let (t_s, z_m, run) = (column("t_s")?, column("z_m")?, column("run")?);
+        let block = Block {
+            particle: ints(&particle).ok_or(PROBLEM)?,
+            frame: ints(&frame).ok_or(PROBLEM)?,
+            t_s: floats(&t_s).ok_or(PROBLEM)?,
+            z_m: floats(&z_m).ok_or(PROBLEM)?,
+        };
+        let mut start = 0;
+        let mut i = 0;
+        for arr in run.str().map_err(|_| PROBLEM)?.downcast_iter() {
+            for id in arr.values_iter() {
+                if self.pending.as_ref().map(|(r, _)| r.as_str()) != Some(id) {
+                    self.extend(&block, start..i);
+                    self.hand_on()?;
+                    if id.is_empty() || id.trim() != id {
+                        return Err(PROBLEM);
+                    }
+                    if self.done.contains(id) {
+                        return Err(NOT_GROUPED);
+                    }
+                    self.pending = Some((id.to_string(), Columns::empty()));
+                    start = i;
+                }
+                i += 1;
+            }
+        }
+        self.extend(&block, start..i);
+        Ok(())
+    }
+
+    fn extend(&mut self, block: &Block, rows: Range<usize>) {
+        if let Some((_, c)) = &mut self.pending {
+            c.particle.extend_from_slice(&block.particle[rows.clone()]);
+            c.frame.extend_from_slice(&block.frame[rows.clone()]);
+            c.t_s.extend_from_slice(&block.t_s[rows.clone()]);
+            c.z_m.extend_from_slice(&block.z_m[rows]);
+        }
+    }
+
+    /// The run being read is complete: its recording goes to `each`.
+    fn hand_on(&mut self) -> Result<(), &'static str> {
+        let Some((id, cols)) = self.pending.take() else {
+            return Ok(());
+        };
+        let n = cols.particle.len();
+        let sorted = (1..n).all(|k| {
+            (cols.particle[k - 1], cols.frame[k - 1]) <= (cols.particle[k], cols.frame[k])
+        });
+        // A collision run's rows often come frame by frame (both particles at each frame): its
+        // rows are sorted here, as the whole-file path sorts them.
+        let cols = if sorted { cols } else { cols.sorted() };
+        let rec = match self.infos.remove(id.as_str()) {
+            Some(info) => recording(info, &cols, 0..n, self.min_frames),
+            None => None,
+        };
+        self.done.insert(id);
+        match rec {
+            Some(rec) => (self.each)(rec),
+            // Read on: the reason may yet turn out to be rows of runs interleaved.
+            None => self.failed = true,
+        }
+        Ok(())
+    }
+
+    /// The last run is complete; every run of runs.csv had rows.
+    fn finish(mut self) -> Result<(), &'static str> {
+        self.hand_on()?;
+        if self.failed {
+            Err("a run with a problem to name, or one runs.csv does not list")
+        } else if self.infos.is_empty() {
+            Ok(())
+        } else {
+            Err("a run of runs.csv without rows")
+        }
+    }
 }

@@ -29,7 +29,7 @@ pub use error::{IngestError, Problem};
 pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
-use crate::recording::Recording;
+use crate::recording::{item, Recording};
 use samples::{RunRow, SampleFile};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -172,6 +172,94 @@ pub fn ingest_row_by_row(
         recordings,
         skipped,
     })
+}
+
+/// A dataset ingested into the `ingest:runs` items (item name → `recording::item` bytes), the
+/// runs and parts left out, and how the dataset was read (for the stage's progress line).
+pub struct Items {
+    pub runs: BTreeMap<String, Vec<u8>>,
+    pub skipped: Vec<Skipped>,
+    pub how: String,
+}
+
+/// `ingest`, as the stage's items. A clean interchange dataset whose runs' rows come grouped is
+/// streamed (`columnar::stream`): each run's item is made as its last row is read, so the whole
+/// table and all recordings are never held at once. Otherwise (rows of runs interleaved, another
+/// format, a problem to name) the items of `ingest`'s recordings, and `how` says why. Same items
+/// either way.
+pub fn ingest_items(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+) -> Result<Items, IngestError> {
+    ingest_items_in_chunks(files, params, columnar::CHUNK_BYTES)
+}
+
+/// `ingest_items` reading trajectories.csv `chunk_bytes` at a time (tests try small chunks, so
+/// that runs span chunks).
+pub fn ingest_items_in_chunks(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+    chunk_bytes: usize,
+) -> Result<Items, IngestError> {
+    check_params(params)?;
+    let mut why = "the dataset is not in the interchange format";
+    if reads_interchange(files, params.format) {
+        let mut runs = BTreeMap::new();
+        let mut clash = false;
+        let streamed = columnar::stream(
+            files,
+            params.min_frames,
+            chunk_bytes,
+            &mut |r: Recording| {
+                clash |= runs
+                    .insert(item_name(&r.info.run), item::encode(&r))
+                    .is_some();
+            },
+        );
+        match streamed {
+            Ok(chunks) if !clash && !runs.is_empty() => {
+                let how = format!(
+                    "read in {chunks} chunk{} of trajectories, each run's item made as its last row was read",
+                    if chunks == 1 { "" } else { "s" }
+                );
+                return Ok(Items {
+                    runs,
+                    skipped: Vec::new(),
+                    how,
+                });
+            }
+            Ok(_) if clash => why = "two runs share an item name",
+            Ok(_) => why = "the dataset has no runs",
+            Err(e) => why = e,
+        }
+    }
+    let ingested = ingest(files, params)?;
+    let runs = ingested
+        .recordings
+        .into_iter()
+        .map(|r| (item_name(&r.info.run), item::encode(&r)))
+        .collect();
+    Ok(Items {
+        runs,
+        skipped: ingested.skipped,
+        how: format!("read whole ({why})"),
+    })
+}
+
+/// The recordings of a clean interchange dataset whose runs' rows come grouped, handed to `each`
+/// one run at a time as `columnar::stream` reads them (`chunk_bytes` of CSV at a time); the number
+/// of chunks, or why it stopped (then `each` has seen only some runs: forget them and use
+/// `ingest`). For callers that keep no item in memory (the 100,000-run memory test).
+pub fn stream_recordings(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+    chunk_bytes: usize,
+    each: &mut dyn FnMut(Recording),
+) -> Result<usize, &'static str> {
+    if check_params(params).is_err() || !reads_interchange(files, params.format) {
+        return Err("not a clean interchange dataset");
+    }
+    columnar::stream(files, params.min_frames, chunk_bytes, each)
 }
 
 /// Reads the folder's top-level regular files and ingests them; the recordings sorted by run.

@@ -78,8 +78,8 @@ impl ReportData {
     pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {
         let mut d = ReportData::default();
         for (name, bytes) in items(inputs, "runs")? {
-            let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
-                format!("runs item `{name}` is not a recording ({e}); rerun the ingest stage")
+            let rec = crate::recording::item::decode(bytes).map_err(|e| {
+                format!("runs item `{name}` is not a recording: {e}; rerun the ingest stage")
             })?;
             d.recordings.insert(rec.info.run.clone(), rec);
         }

@@ -1,6 +1,6 @@
 //! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out.
 
-use super::fit_io::{collection_input, json_pretty, param_error, parse_item, run_info};
+use super::fit_io::{collection_input, json_pretty, param_error, parse_item, recording, run_info};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
@@ -44,11 +44,7 @@ impl StageKind for Aggregate {
                         ))
                     })?;
                     collisions.push((run_info(item, rec)?, c));
-                    pair_recordings.push(parse_item::<crate::recording::Recording>(
-                        item,
-                        rec,
-                        "the recording",
-                    )?);
+                    pair_recordings.push(recording(item, rec)?);
                 }
             }
         }

@@ -4,7 +4,7 @@ use crate::discover::{discover_reporting, Options};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
-use crate::recording::Recording;
+use crate::recording::item;
 
 /// Finds missing physics over all single runs (issue 5).
 pub struct Discover;
@@ -39,12 +39,11 @@ impl StageKind for Discover {
         };
         let mut recordings = Vec::with_capacity(items.len());
         for (name, bytes) in items {
-            let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
+            recordings.push(item::decode(bytes).map_err(|e| {
                 StageError(format!(
-                    "run `{name}`: not a recording ({e}); re-run ingest"
+                    "run `{name}`: the item is not a recording: {e}; rerun the ingest stage"
                 ))
-            })?;
-            recordings.push(rec);
+            })?);
         }
         // discovery refits every run with its own integrator (to measure noise and flag outliers
         // consistently), so it reads no per-run fit and a change to `fit` does not rerun it

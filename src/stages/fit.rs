@@ -1,11 +1,11 @@
 //! The `fit` stage kind (per run): a Recording in, its `fit::RunFit` JSON out.
 
-use super::fit_io::{file_input, json_bytes, param_error};
+use super::fit_io::{file_input, json_bytes, param_error, recording};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::{collision, single, FitOptions, RunFit};
-use crate::recording::{Experiment, Recording};
+use crate::recording::Experiment;
 
 /// `kind = "fit"`, `foreach = "runs"`: fit one run.
 pub struct Fit;
@@ -29,12 +29,7 @@ impl StageKind for Fit {
         let (opts, _) =
             typed_params::<FitOptions>(input.params).map_err(|e| StageError(e.to_string()))?;
         let bytes = file_input(input, "runs", "fit")?;
-        let rec: Recording = serde_json::from_slice(bytes).map_err(|e| {
-            StageError(format!(
-                "run {}: the recording is not valid JSON ({e}); rerun the ingest stage",
-                input.item.unwrap_or("?")
-            ))
-        })?;
+        let rec = recording(input.item.unwrap_or("?"), bytes)?;
         let fit = match rec.info.experiment {
             Experiment::Single => RunFit::Single(single::fit_single(&rec, &opts)),
             Experiment::Collision => {

@@ -1,8 +1,7 @@
 //! Helpers shared by the fit-side stage kinds (fit, aggregate, simulate, compare): reading inputs out of artifacts, writing JSON bytes.
 
 use crate::engine::stage::{Artifact, ParamError, StageError, StageInput};
-use crate::recording::RunInfo;
-use serde::Deserialize;
+use crate::recording::{self, Recording, RunInfo};
 use std::collections::BTreeMap;
 
 /// A validation failure `(key, message)` as a [`ParamError`].
@@ -57,13 +56,20 @@ pub fn parse_item<T: serde::de::DeserializeOwned>(
     })
 }
 
-/// The run metadata of a Recording JSON, without keeping its tracks.
+/// The recording of one `ingest:runs` item (`recording::item`), naming the item on failure.
+pub fn recording(item: &str, bytes: &[u8]) -> Result<Recording, StageError> {
+    recording::item::decode(bytes).map_err(|e| not_a_recording(item, &e))
+}
+
+/// The run metadata of a recording item, without decoding its tracks.
 pub fn run_info(item: &str, bytes: &[u8]) -> Result<RunInfo, StageError> {
-    #[derive(Deserialize)]
-    struct InfoOnly {
-        info: RunInfo,
-    }
-    Ok(parse_item::<InfoOnly>(item, bytes, "the recording")?.info)
+    recording::item::decode_info(bytes).map_err(|e| not_a_recording(item, &e))
+}
+
+fn not_a_recording(item: &str, why: &str) -> StageError {
+    StageError(format!(
+        "run `{item}`: the item is not a recording: {why}; rerun the ingest stage"
+    ))
 }
 
 /// Compact, deterministic JSON bytes (per-run artifacts).

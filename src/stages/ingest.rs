@@ -4,10 +4,9 @@ use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::ingest::{self, IngestParams};
-use std::collections::BTreeMap;
 
-/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → JSON
-/// `Recording`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
+/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → `Recording` in
+/// the binary format of `recording::item`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
 /// was an output too; no stage read it, and writing it cost as much as reading the CSV typed.)
 pub struct Ingest;
 
@@ -49,19 +48,13 @@ impl StageKind for Ingest {
                 ))
             }
         };
-        let ingested = ingest::ingest(files, &params).map_err(|e| StageError(e.to_string()))?;
-        let mut runs = BTreeMap::new();
-        // Each recording is freed as soon as its item is made, so both are not held whole.
-        for r in ingested.recordings {
-            let json = serde_json::to_vec(&r)
-                .map_err(|e| StageError(format!("cannot serialize run {:?} ({e})", r.info.run)))?;
-            runs.insert(ingest::item_name(&r.info.run), json);
-        }
+        let items = ingest::ingest_items(files, &params).map_err(|e| StageError(e.to_string()))?;
+        input.report(&format!("{} runs, {}", items.runs.len(), items.how));
         let mut out = StageOutputs::new();
-        out.insert("runs".into(), Artifact::Collection(runs));
+        out.insert("runs".into(), Artifact::Collection(items.runs));
         out.insert(
             "skipped".into(),
-            Artifact::File(ingest::skipped_json(&ingested.skipped)),
+            Artifact::File(ingest::skipped_json(&items.skipped)),
         );
         Ok(out)
     }

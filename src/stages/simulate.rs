@@ -1,12 +1,11 @@
 //! The `simulate` stage kind (per run): re-simulate the run with its fitted parameters, residuals out.
 
-use super::fit_io::{collection_input, file_input, json_bytes, param_error, parse_item};
+use super::fit_io::{collection_input, file_input, json_bytes, param_error, parse_item, recording};
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::residuals::residuals;
 use crate::fit::{FitOptions, RunFit};
-use crate::recording::Recording;
 use serde::{Deserialize, Serialize};
 
 /// `kind = "simulate"`, `foreach = "runs"`.
@@ -60,11 +59,7 @@ impl StageKind for Simulate {
         let (params, _) =
             typed_params::<SimulateParams>(input.params).map_err(|e| StageError(e.to_string()))?;
         let item = input.item.unwrap_or("?");
-        let rec: Recording = parse_item(
-            item,
-            file_input(input, "runs", "simulate")?,
-            "the recording",
-        )?;
+        let rec = recording(item, file_input(input, "runs", "simulate")?)?;
         // `foreach = ["runs", "fits"]` passes this run's fit alone (its key then depends on no
         // other run); `foreach = "runs"` passes every fit and this run's is looked up.
         let bytes = match input.inputs.get("fits") {

@@ -1,0 +1,208 @@
+//! Synthetic campaigns (ignored: minutes, disk and memory): a 100,000-run campaign (≈ 2.6 GB of
+//! CSV, ≈ 4 GB of memory) that ingest streams with memory bounded by a chunk, not by the data;
+//! and a 10,000-run campaign as CSV and as Parquet, same items, both times printed.
+//!
+//! Run alone: `cargo test --locked --features s3 --test ingest_campaign -- --ignored --test-threads=1 --nocapture`.
+//! `GROOVE_100K_DIR` names the scratch folder (default: the system's temporary folder); the
+//! dataset is deleted afterwards unless `GROOVE_100K_KEEP` is set.
+
+use groove::ingest::{self, IngestParams};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs in the campaign.
+const RUNS: usize = 100_000;
+/// What ingest may add to the process's peak beyond the input bytes (and, for the stage's items,
+/// beyond the items): a chunk of CSV (8 MB) and its typed columns, one run being assembled and
+/// the set of run ids done, with room to spare. Far below the issue's 1 GB; the input bytes
+/// themselves (held by the engine today) are not ingest's to bound.
+const BOUND_BYTES: u64 = 256 << 20;
+
+/// A line of /proc/self/status in bytes (`VmHWM`: peak resident set; `VmRSS`: now).
+fn status_bytes(key: &str) -> u64 {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap();
+    let line = status
+        .lines()
+        .find(|l| l.starts_with(key))
+        .unwrap_or_else(|| panic!("no {key} in /proc/self/status"));
+    let kb: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    kb * 1024
+}
+
+/// Starts a new peak: the kernel sets VmHWM to the current resident set (`5` to clear_refs).
+fn reset_peak() {
+    std::fs::write("/proc/self/clear_refs", "5").expect("cannot reset the peak RSS (Linux only)");
+}
+
+/// `groove synth` of a campaign of `runs` single runs, 600 frames each (as tests/bench/campaign.sh
+/// makes its datasets), in `dir`/data.
+fn synthesize(dir: &Path, runs: usize) -> PathBuf {
+    let data = dir.join("data");
+    let _ = std::fs::remove_dir_all(&data);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let truth = std::fs::read_to_string(root.join("data/truth/truth.toml")).unwrap();
+    let mut toml = truth.split("[[runs]]").next().unwrap().to_string();
+    for (material, count) in [("316", runs / 2), ("440c", runs - runs / 2)] {
+        toml.push_str(&format!(
+            "\n[[runs]]\nexperiment = \"single\"\nmaterial = \"{material}\"\ncount = {count}\nv0_mps = [0.005, 0.1]\ndirections = \"both\"\nduration_s = 0.06\n"
+        ));
+    }
+    let truth_file = dir.join("truth.toml");
+    std::fs::write(&truth_file, toml).unwrap();
+    let status = Command::new(env!("CARGO_BIN_EXE_groove"))
+        .arg("synth")
+        .arg("--truth")
+        .arg(&truth_file)
+        .arg("--out")
+        .arg(&data)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "groove synth failed");
+    data
+}
+
+#[test]
+#[ignore]
+fn a_100k_run_campaign_streams_with_memory_bounded_by_a_chunk() {
+    let dir = scratch("groove-100k");
+    let data = synthesize(&dir, RUNS);
+    let mut files = BTreeMap::new();
+    for name in ["runs.csv", "trajectories.csv"] {
+        files.insert(name.to_string(), std::fs::read(data.join(name)).unwrap());
+    }
+    if std::env::var_os("GROOVE_100K_KEEP").is_none() {
+        std::fs::remove_dir_all(&data).unwrap();
+    }
+    let input: u64 = files.values().map(|b| b.len() as u64).sum();
+    let params = IngestParams::default();
+
+    // 1. Streamed, each item made and dropped (as a store writing items as they come would).
+    reset_peak();
+    let before = status_bytes("VmRSS");
+    let (mut runs, mut item_bytes) = (0usize, 0u64);
+    let started = std::time::Instant::now();
+    let chunks = ingest::stream_recordings(&files, &params, 8 << 20, &mut |r| {
+        runs += 1;
+        item_bytes += groove::recording::item::encode(&r).len() as u64;
+    })
+    .unwrap_or_else(|why| panic!("the campaign did not stream: {why}"));
+    let streamed_s = started.elapsed().as_secs_f64();
+    let grew = status_bytes("VmHWM").saturating_sub(before);
+    println!(
+        "100k streamed: {runs} runs in {chunks} chunks, {streamed_s:.1} s; input {:.0} MB held, \
+         items {:.0} MB ({} B per run) made and dropped; peak grew {:.0} MB",
+        input as f64 / 1e6,
+        item_bytes as f64 / 1e6,
+        item_bytes / runs as u64,
+        grew as f64 / 1e6
+    );
+    assert_eq!(runs, RUNS);
+    assert!(chunks as u64 >= input / (8 << 20), "{chunks} chunks");
+    assert!(
+        grew <= BOUND_BYTES,
+        "streaming ingest grew the peak by {grew} bytes (bound {BOUND_BYTES})"
+    );
+
+    // 2. The stage's items, all held (the engine takes the collection whole today).
+    reset_peak();
+    let before = status_bytes("VmRSS");
+    let items = ingest::ingest_items(&files, &params).unwrap();
+    let held: u64 = items.runs.values().map(|b| b.len() as u64).sum();
+    let grew = status_bytes("VmHWM").saturating_sub(before);
+    println!(
+        "100k items: {} ({}); items {:.0} MB held; peak grew {:.0} MB",
+        items.runs.len(),
+        items.how,
+        held as f64 / 1e6,
+        grew as f64 / 1e6
+    );
+    assert_eq!(items.runs.len(), RUNS);
+    assert_eq!(held, item_bytes);
+    // Holding 100,000 items among the chunks' allocations costs more than the streamed case
+    // (measured: 394 MB beyond the items, against 156 MB streamed; likely the allocator's
+    // per-thread arenas of polars' parser threads keeping freed chunk memory, not verified).
+    assert!(
+        grew <= held + 2 * BOUND_BYTES,
+        "ingest_items grew the peak by {grew} bytes, beyond its items ({held}) by more than {}",
+        2 * BOUND_BYTES
+    );
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::var_os("GROOVE_100K_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir)
+        .join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// CPU seconds (user + system) of this process so far, from /proc/self/stat (clock ticks of 10 ms).
+fn cpu_s() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap();
+    let after = &stat[stat.rfind(')').unwrap() + 2..];
+    let fields: Vec<&str> = after.split(' ').collect();
+    // utime and stime are fields 14 and 15 of the line; `after` starts at field 3.
+    let ticks: f64 = fields[11].parse::<f64>().unwrap() + fields[12].parse::<f64>().unwrap();
+    ticks / 100.0
+}
+
+/// The best of three (wall s, CPU s) of `ingest_items` on `files`, and its items.
+fn time_ingest(files: &BTreeMap<String, Vec<u8>>) -> (f64, f64, ingest::Items) {
+    let mut best = (f64::MAX, f64::MAX);
+    let mut last = None;
+    for _ in 0..3 {
+        drop(last.take());
+        let (wall, cpu) = (std::time::Instant::now(), cpu_s());
+        let items = ingest::ingest_items(files, &IngestParams::default()).unwrap();
+        best.0 = best.0.min(wall.elapsed().as_secs_f64());
+        best.1 = best.1.min(cpu_s() - cpu);
+        last = Some(items);
+    }
+    (best.0, best.1, last.unwrap())
+}
+
+#[test]
+#[ignore]
+fn a_campaign_as_parquet_gives_the_csv_items_and_prints_both_times() {
+    use polars::prelude::*;
+    let runs = 10_000;
+    let dir = scratch("groove-parquet");
+    let data = synthesize(&dir, runs);
+    let mut csv = BTreeMap::new();
+    for name in ["runs.csv", "trajectories.csv"] {
+        csv.insert(name.to_string(), std::fs::read(data.join(name)).unwrap());
+    }
+    let mut df = CsvReadOptions::default()
+        .with_has_header(true)
+        .into_reader_with_file_handle(std::io::Cursor::new(&csv["trajectories.csv"]))
+        .finish()
+        .unwrap();
+    let mut bytes = Vec::new();
+    ParquetWriter::new(&mut bytes).finish(&mut df).unwrap();
+    drop(df);
+    let parquet = BTreeMap::from([
+        ("runs.csv".to_string(), csv["runs.csv"].clone()),
+        ("trajectories.parquet".to_string(), bytes),
+    ]);
+    std::fs::remove_dir_all(&data).unwrap();
+    let (csv_wall, csv_cpu, from_csv) = time_ingest(&csv);
+    let (pq_wall, pq_cpu, from_parquet) = time_ingest(&parquet);
+    println!(
+        "{runs} runs: CSV {:.0} MB: ingest {csv_wall:.2} s wall, {csv_cpu:.2} s CPU ({}); \
+         Parquet {:.0} MB: {pq_wall:.2} s wall, {pq_cpu:.2} s CPU ({}); Parquet {:.1}× faster by CPU, {:.1}× by wall",
+        csv["trajectories.csv"].len() as f64 / 1e6,
+        from_csv.how,
+        parquet["trajectories.parquet"].len() as f64 / 1e6,
+        from_parquet.how,
+        csv_cpu / pq_cpu,
+        csv_wall / pq_wall
+    );
+    assert_eq!(from_csv.runs.len(), runs);
+    assert!(
+        from_csv.runs == from_parquet.runs,
+        "Parquet gives other items than CSV"
+    );
+}
