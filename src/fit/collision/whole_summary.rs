@@ -210,7 +210,7 @@ pub fn analyze_material(
         iterations: best.result.iterations,
         max_iter: opts.max_iter,
         drag: match best.spec.drag {
-            DragSpec::Saturating => "saturating".into(),
+            DragSpec::Saturating | DragSpec::SaturatingWith(_) => "saturating".into(),
             DragSpec::Linear => "linear".into(),
             DragSpec::Held(_) => "held".into(),
         },

@@ -87,6 +87,9 @@ pub enum DragSpec {
     Linear,
     /// These terms, held (the physics the single runs were found to follow); μ_pg stays fitted.
     Held(Vec<Term>),
+    /// −v/(T0 + T'|v|) fitted, beside these terms held (the single runs' forces other than
+    /// drag: a tilt, a resistance, a wave or a bump act on the pairs whatever their drag).
+    SaturatingWith(Vec<Term>),
 }
 
 /// One collision run prepared for the whole-run fit (lab frame).
@@ -307,6 +310,14 @@ impl FitSpec {
                 t_s: p[LN_T0].exp(),
             }],
             DragSpec::Held(t) => t.clone(),
+            DragSpec::SaturatingWith(t) => {
+                let mut all = vec![Term::SaturatingDrag {
+                    t0_s: p[LN_T0].exp(),
+                    tp_s_per_mps: p[TP],
+                }];
+                all.extend(t.iter().cloned());
+                all
+            }
         };
         Model {
             groove: self.groove,
@@ -349,7 +360,7 @@ impl FitSpec {
             out.extend(form.specs());
         }
         match self.drag {
-            DragSpec::Saturating => {}
+            DragSpec::Saturating | DragSpec::SaturatingWith(_) => {}
             DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
             DragSpec::Held(_) => {
                 out[LN_T0] = hold(out[LN_T0], out[LN_T0].start);
