@@ -10,6 +10,10 @@
 //! the dataset row by row, which names the file, row and column of every problem. So messages on
 //! bad input are the row-by-row path's, and a clean dataset gives the same recordings either way
 //! (tests/ingest.rs checks both on the shipped data, on shuffled rows and on damaged files).
+//!
+//! `stream` reads a CSV in pieces of a few megabytes cut at line ends and hands each run on as
+//! its last row is read, so memory is bounded by a piece, not the file; it needs each run's rows
+//! to be one block and otherwise says why, and the caller reads the file whole as above.
 
 use super::interchange;
 use super::sanity;
