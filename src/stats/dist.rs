@@ -1,6 +1,6 @@
 //! Tail probabilities and quantiles for the tests, from `statrs`: the χ² and gamma tails of the
 //! likelihood-ratio nulls, the normal tail of the runs test, and the Student t quantile of the
-//! paired cross-validation test.
+//! paired cross-validation test and of the impact test over runs.
 
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 use statrs::function::gamma::checked_gamma_ur;
@@ -35,6 +35,14 @@ pub fn t_upper_quantile(p: f64, df: f64) -> f64 {
     }
 }
 
+/// P(T_df > t) for Student's t with `df` degrees of freedom (df > 0); NaN otherwise.
+pub fn t_sf(t: f64, df: f64) -> f64 {
+    match StudentsT::new(0.0, 1.0, df) {
+        Ok(d) => d.sf(t),
+        _ => f64::NAN,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -52,5 +60,8 @@ mod tests {
         assert!((t_upper_quantile(0.05, 5.0) - 2.015_048).abs() < 1e-5);
         assert!((t_upper_quantile(0.05, 30.0) - 1.697_261).abs() < 1e-5);
         assert!(t_upper_quantile(0.05, 0.0).is_nan());
+        assert!((t_sf(2.015_048, 5.0) - 0.05).abs() < 1e-6);
+        assert!((t_sf(0.0, 11.0) - 0.5).abs() < 1e-12);
+        assert!(t_sf(1.0, 0.0).is_nan());
     }
 }

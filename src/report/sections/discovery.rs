@@ -149,7 +149,7 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
 }
 
 /// What decided a finding when no bootstrap null was simulated (`bootstrap_replicates` = 0): the
-/// collision-run tests of `discover/pairs.rs`, decided by a χ² or a normal law. The statistic's
+/// collision-run tests of `discover/pairs.rs`, decided by a χ² or Student's t over runs. The statistic's
 /// name and the law, or None for a bootstrap-decided candidate.
 fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
     if e.bootstrap_replicates > 0 {
@@ -158,14 +158,14 @@ fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
     let stat = finite(e.lr).map_or("—".into(), |x| sig(x, 3));
     Some(match Effect::from_id(effect) {
         Some(Effect::ImpactSpecificMismatch) => format!(
-            "normal test: mean-square residual within 5 ms of an impact over the rest = {stat}"
+            "t test over runs: mean-square residual within 5 ms of an impact over the rest, typical run = {stat}"
         ),
         _ => format!("χ² test: χ²({}) = {stat}", e.extra_params),
     })
 }
 
 /// The decisive statistics of a candidate's evidence: LR, p-values, CV, decision. A finding
-/// decided by a χ² or normal test (no bootstrap) names that test and shows no empirical p.
+/// decided by a χ² or t test (no bootstrap) names that test and shows no empirical p.
 pub fn evidence_text(effect: &str, e: &Evidence) -> String {
     let closed = closed_form_test(effect, e);
     let bootstrap = closed.is_none();
@@ -741,7 +741,7 @@ mod tests {
         };
         let text = evidence_text("impact_specific_mismatch", &impact);
         assert!(
-            text.starts_with("normal test: ") && text.contains("= 1.07"),
+            text.starts_with("t test over runs: ") && text.contains("= 1.07"),
             "{text}"
         );
         assert!(!text.contains("empirical"), "{text}");
