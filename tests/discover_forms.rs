@@ -25,11 +25,12 @@
 //!   +3.6, +8.4, +5.2, +14.9 %), frequency within 0.5 %;
 //! - two effects (tilt 0.05°, waviness 0.05 m/s² at 2 mm): 5/5, tilt within 2.6 %, amplitude
 //!   within 6.9 %, wavelength within 0.5 %;
-//! - the fixed list in lab coordinates, seeds 2–6: quadratic drag, saturating drag, rolling
-//!   resistance, groove tilt and velocity-dependent friction 5/5 each; the periodic force at
-//!   8 mm 4/5 (within 0.3 %): seed 6 FAILS (never run before; not known whether older code
-//!   passed it): a tilt is accepted first (the 8 mm wave over the 12 mm view looks like one),
-//!   then the wave, then a bump, and backward elimination keeps all three;
+//! - the fixed list in lab coordinates, seeds 2–6 (rerun 2026-11-24 morning on e803d33, 18.7
+//!   min): quadratic drag, saturating drag (T' and T0 within 0.4 %), rolling resistance, groove
+//!   tilt, velocity-dependent friction and the periodic force at 8 mm (amplitude within 0.3 %,
+//!   λ within 0.1 %) 5/5 each. Seed 6 of the 8 mm force had failed on a build of the night
+//!   before (a tilt accepted first, then the wave, then a bump, all kept); now the tilt accepted
+//!   in round 1 is removed by backward elimination once the wave is in (LR 0.4, p 0.51);
 //! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
 //!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
 
