@@ -18,6 +18,8 @@ pub struct Context<'a> {
     pub hashes: HashCache,
     /// `pipeline.lock` as it was before this evaluation.
     pub lock: PipelineLock,
+    /// `pipeline.lock` was there and read (an unreadable or missing one is rewritten).
+    pub lock_file_read: bool,
     pub progress: Progress,
     /// The shared remote cache, looked up after the local store (`None`: local only).
     pub remote: Option<std::sync::Arc<super::remote::RemoteCache>>,
@@ -31,12 +33,14 @@ impl<'a> Context<'a> {
     pub fn new(catalog: &'a Catalog, pipeline: &'a Pipeline, progress: Progress) -> Context<'a> {
         let store = Store::at(&pipeline.root);
         let hashes = HashCache::load(&store.dir.join("hashes.json"));
+        let lock = PipelineLock::read(&lock_path(pipeline));
         Context {
             catalog,
             pipeline,
             store,
             hashes,
-            lock: PipelineLock::load(&lock_path(pipeline)),
+            lock_file_read: lock.is_some(),
+            lock: lock.unwrap_or_default(),
             progress,
             remote: None,
             pusher: None,

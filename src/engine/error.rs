@@ -19,6 +19,14 @@ pub enum EngineError {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// A store object a stage needed is missing or its bytes have another hash. `groove run`
+    /// answers it by checking every object the run names and running again what made it.
+    #[error("the store's object {sha256} is {} ({why}); run `groove verify` to drop it, then `groove run` again", if *.missing { "missing" } else { "damaged" })]
+    DamagedObject {
+        sha256: String,
+        missing: bool,
+        why: String,
+    },
     /// A stage (or one item of a per-item stage) failed.
     #[error("stage `{stage}`{}: {message}", item.as_deref().map(|i| format!(" item `{i}`")).unwrap_or_default())]
     StageFailed {

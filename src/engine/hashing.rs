@@ -42,16 +42,23 @@ pub struct HashCache {
 }
 
 impl HashCache {
-    /// Load the cache (an unreadable or missing cache is empty).
+    /// Load the cache (an unreadable or missing cache is empty). Stamps of store objects (files
+    /// under `objects/` beside the cache), which earlier versions kept, are dropped: an object is
+    /// named by its hash and checked when read, and 10,000 such stamps made a no-op parse 5 MB.
     pub fn load(path: &Path) -> HashCache {
-        let entries = std::fs::read(path)
+        let mut entries: BTreeMap<String, Stamp> = std::fs::read(path)
             .ok()
             .and_then(|b| serde_json::from_slice(&b).ok())
             .unwrap_or_default();
+        let objects = path.with_file_name("objects");
+        let objects = objects.to_string_lossy();
+        let before = entries.len();
+        entries.retain(|k, _| !k.starts_with(&*objects));
+        let dirty = entries.len() != before;
         HashCache {
             path: path.to_path_buf(),
             entries: Mutex::new(entries),
-            dirty: Mutex::new(false),
+            dirty: Mutex::new(dirty),
         }
     }
 
@@ -79,28 +86,6 @@ impl HashCache {
             .insert(key, stamp);
         *self.dirty.lock().expect("hash cache lock") = true;
         Ok(sha256)
-    }
-
-    /// Note the hash of a file whose bytes were just hashed (a store object just written or
-    /// compared byte for byte), so it is not read again while its stamp holds. A file that
-    /// cannot be `stat`ed is left out (the next check reads it).
-    pub fn record(&self, path: &Path, sha256: &str) {
-        let Ok(meta) = std::fs::metadata(path) else {
-            return;
-        };
-        let (size, mtime_ns, inode) = stamp_of(&meta);
-        let stamp = Stamp {
-            size,
-            mtime_ns,
-            inode,
-            sha256: sha256.to_string(),
-        };
-        let key = path.to_string_lossy().into_owned();
-        let mut entries = self.entries.lock().expect("hash cache lock");
-        if entries.get(&key) != Some(&stamp) {
-            entries.insert(key, stamp);
-            *self.dirty.lock().expect("hash cache lock") = true;
-        }
     }
 
     /// Write the cache back if it changed (atomically; a lost update only costs a rehash).

@@ -50,11 +50,15 @@ pub struct LockStage {
 impl PipelineLock {
     /// Read `pipeline.lock`; a missing or unreadable lock is empty (everything is stale).
     pub fn load(path: &Path) -> PipelineLock {
+        Self::read(path).unwrap_or_default()
+    }
+
+    /// Read `pipeline.lock`: None when it is missing, unreadable or of another version.
+    pub fn read(path: &Path) -> Option<PipelineLock> {
         std::fs::read(path)
             .ok()
             .and_then(|b| serde_json::from_slice::<PipelineLock>(&b).ok())
             .filter(|l| l.version == LOCK_VERSION)
-            .unwrap_or_default()
     }
 
     pub fn to_bytes(&self) -> Vec<u8> {

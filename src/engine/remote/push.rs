@@ -55,6 +55,7 @@ impl Pusher {
         let shared = Arc::new(Shared {
             cache,
             store: Store {
+                trust_objects: false,
                 dir: store.dir.clone(),
             },
             queue: Mutex::new(Queue {
