@@ -8,7 +8,7 @@ use super::bootstrap::percentile_intervals;
 use super::regression::{mean_where, robust_weighted_mean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::theil_sen_indexed;
+use crate::stats::theil_sen_many;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -104,9 +104,8 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let t: Vec<f64> = ok.iter().map(|f| f.t_drag_s).collect();
     let fast = |i: usize| speed[i] > opts.fast_min_speed_mps;
     let stats_capped = |idx: &[usize], max_pairs: usize| {
-        let buf = &mut Vec::new();
-        let (ta, tb) = theil_sen_indexed(&speed, &t, idx, buf, max_pairs);
-        let (ma, mb) = theil_sen_indexed(&speed, &mu, idx, buf, max_pairs);
+        let (b1, b2) = (&mut Vec::new(), &mut Vec::new());
+        let [(ta, tb), (ma, mb)] = theil_sen_many(&speed, [&t, &mu], idx, [b1, b2], max_pairs);
         [
             robust_weighted_mean(&mu, &mu_se, idx),
             mean_where(&mu, idx, fast),

@@ -61,11 +61,12 @@ pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
     let typical_var = median(ok.iter().map(|&i| se[i] * se[i]).collect());
     let tau2 = (mad * mad - typical_var).max(0.0);
     let var: Vec<f64> = ok.iter().map(|&i| se[i] * se[i] + tau2).collect();
+    let sd: Vec<f64> = var.iter().map(|v| v.sqrt()).collect();
     let mut mean = mid;
     for _ in 0..20 {
         let (mut s, mut w) = (0.0, 0.0);
         for (j, &i) in ok.iter().enumerate() {
-            let z = (y[i] - mean).abs() / var[j].sqrt();
+            let z = (y[i] - mean).abs() / sd[j];
             let h = huber_weight(z, HUBER_K);
             s += h * y[i] / var[j];
             w += h / var[j];

@@ -109,38 +109,57 @@ pub fn theil_sen_indexed(
     buf: &mut Vec<f64>,
     max_pairs: usize,
 ) -> (f64, f64) {
-    buf.clear();
+    let [line] = theil_sen_many(x, [y], idx, [buf], max_pairs);
+    line
+}
+
+/// `theil_sen_indexed` of several y over the same x and picks: the pairs are enumerated (or
+/// drawn) once for all of them, so each line is the one `theil_sen_indexed` gives.
+pub fn theil_sen_many<const K: usize>(
+    x: &[f64],
+    ys: [&[f64]; K],
+    idx: &[usize],
+    mut bufs: [&mut Vec<f64>; K],
+    max_pairs: usize,
+) -> [(f64, f64); K] {
+    for b in bufs.iter_mut() {
+        b.clear();
+    }
+    let mut push = |i: usize, j: usize| {
+        let dx = x[j] - x[i];
+        if dx != 0.0 {
+            for (b, y) in bufs.iter_mut().zip(&ys) {
+                b.push((y[j] - y[i]) / dx);
+            }
+        }
+    };
     let m = idx.len();
     if m * m.saturating_sub(1) / 2 <= max_pairs {
         for (k, &i) in idx.iter().enumerate() {
             for &j in &idx[k + 1..] {
-                let dx = x[j] - x[i];
-                if dx != 0.0 {
-                    buf.push((y[j] - y[i]) / dx);
-                }
+                push(i, j);
             }
         }
     } else {
         let mut state = idx.iter().fold(m as u64, |h, &i| splitmix(h ^ i as u64));
-        let mut draws = 0;
-        while draws < max_pairs {
+        for _ in 0..max_pairs {
             state = splitmix(state);
             let i = idx[(state % m as u64) as usize];
             let j = idx[((state >> 32) % m as u64) as usize];
-            draws += 1;
-            let dx = x[j] - x[i];
-            if dx != 0.0 {
-                buf.push((y[j] - y[i]) / dx);
-            }
+            push(i, j);
         }
     }
-    let b = median_of(buf);
-    if b.is_nan() {
-        return (f64::NAN, f64::NAN);
-    }
-    buf.clear();
-    buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
-    (median_of(buf), b)
+    std::array::from_fn(|k| {
+        let buf = &mut *bufs[k];
+        let b = median_of(buf);
+        if b.is_nan() {
+            return (f64::NAN, f64::NAN);
+        }
+        let y = ys[k];
+        buf.clear();
+        buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
+        (median_of(buf), b)
+    })
 }
 
 /// One step of SplitMix64: a well-mixed 64-bit value from the last.
