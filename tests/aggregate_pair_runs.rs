@@ -109,14 +109,13 @@ fn aggregate_from_pair_runs_equals_aggregate_from_every_recording() {
     let gone = gone.clone();
     pair_runs.insert(gone.clone(), Vec::new());
     let broken = Artifact::Collection(pair_runs);
-    let err = Aggregate
-        .run(&input(
-            &params,
-            [("fits", &fits), ("runs", &broken)].into(),
-            None,
-        ))
-        .err()
-        .expect("a missing collision recording fails the stage");
+    let Err(err) = Aggregate.run(&input(
+        &params,
+        [("fits", &fits), ("runs", &broken)].into(),
+        None,
+    )) else {
+        panic!("a missing collision recording fails the stage");
+    };
     assert!(
         err.0.contains(&gone) && err.0.contains("fit:pair_runs"),
         "{}",
