@@ -1,4 +1,4 @@
-//! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out.
+//! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out; `runs` needs only the collision recordings (`fit:pair_runs`).
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, recording, run_info};
 use crate::engine::stage::{
@@ -38,9 +38,9 @@ impl StageKind for Aggregate {
             match parse_item::<RunFit>(item, bytes, "the fit")? {
                 RunFit::Single(f) => singles.push(f),
                 RunFit::Collision(c) => {
-                    let rec = runs.get(item).ok_or_else(|| {
+                    let rec = runs.get(item).filter(|b| !b.is_empty()).ok_or_else(|| {
                         StageError(format!(
-                            "the fit of `{item}` has no run in `runs`; bind `runs` to the same ingest output the fit stage read"
+                            "the fit of `{item}` has no recording in `runs`; bind `runs` to \"fit:pair_runs\" (or the ingest output the fit stage read)"
                         ))
                     })?;
                     collisions.push((run_info(item, rec)?, c));
