@@ -671,3 +671,34 @@ fn a_per_item_stage_is_found_through_its_one_index_entry_and_a_damaged_item_reru
     assert_eq!(p.take_trace(), Vec::<String>::new());
     assert!(p.stale().is_empty());
 }
+
+#[test]
+fn a_no_op_rewrites_neither_lock_nor_hash_cache_and_the_cache_stamps_no_store_object() {
+    let p = Project::standard();
+    p.stdout(&["run"]);
+    p.stdout(&["run"]);
+    p.take_trace();
+    let mtime = |rel: &str| std::fs::metadata(p.path(rel)).unwrap().modified().unwrap();
+    let (lock, lock_t) = (p.read("pipeline.lock"), mtime("pipeline.lock"));
+    let (cache, cache_t) = (p.read(".groove/hashes.json"), mtime(".groove/hashes.json"));
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let out = p.stdout(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert_eq!(
+        (p.read("pipeline.lock"), mtime("pipeline.lock")),
+        (lock, lock_t)
+    );
+    assert_eq!(
+        (p.read(".groove/hashes.json"), mtime(".groove/hashes.json")),
+        (cache.clone(), cache_t)
+    );
+    // the hash cache stamps the project's files (here the input recordings), never the
+    // store's objects: those are named by their hash and checked when read
+    let stamps: serde_json::Map<String, serde_json::Value> = serde_json::from_str(&cache).unwrap();
+    assert!(
+        stamps.keys().any(|k| k.ends_with("run_b.csv")),
+        "{stamps:?}"
+    );
+    assert!(stamps.keys().all(|k| !k.contains(".groove")), "{stamps:?}");
+}
