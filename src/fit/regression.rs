@@ -2,7 +2,7 @@
 //! and the medians are in `stats`).
 
 use crate::lsq::loss::{huber_weight, HUBER_K};
-use crate::stats::{median_in_place, MAD_TO_SIGMA};
+use crate::stats::MAD_TO_SIGMA;
 
 /// Mean of y over `idx` restricted to the entries where `keep` holds; NaN if none.
 pub fn mean_where(y: &[f64], idx: &[usize], keep: impl Fn(usize) -> bool) -> f64 {
@@ -43,42 +43,142 @@ pub fn weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
 /// median se²), then Huber weights on the runs' standardised deviations (reweighted from the
 /// median until it settles), so a run far from the others with a tiny error counts like an
 /// ordinary run at most, and less the further out it lies. Entries with a non-positive or unknown
-/// error are left out; NaN if none.
+/// error are left out; NaN if none. (`RobustMean` computes it for many resamples.)
 pub fn robust_weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
-    let ok: Vec<usize> = idx
-        .iter()
-        .copied()
-        .filter(|&i| se[i] > 0.0 && se[i].is_finite() && y[i].is_finite())
-        .collect();
-    if ok.is_empty() {
-        return f64::NAN;
+    let mut w = vec![0u16; y.len()];
+    for &i in idx {
+        w[i] = w[i].saturating_add(1);
     }
-    // Between-run scatter from the spread of the runs (1.4826·MAD) less their typical own
-    // variance, so that a wild run does not inflate it.
-    let median = |mut v: Vec<f64>| median_in_place(&mut v);
-    let mid = median(ok.iter().map(|&i| y[i]).collect());
-    let mad = MAD_TO_SIGMA * median(ok.iter().map(|&i| (y[i] - mid).abs()).collect());
-    let typical_var = median(ok.iter().map(|&i| se[i] * se[i]).collect());
-    let tau2 = (mad * mad - typical_var).max(0.0);
-    let var: Vec<f64> = ok.iter().map(|&i| se[i] * se[i] + tau2).collect();
-    let sd: Vec<f64> = var.iter().map(|v| v.sqrt()).collect();
-    let mut mean = mid;
-    for _ in 0..20 {
-        let (mut s, mut w) = (0.0, 0.0);
-        for (j, &i) in ok.iter().enumerate() {
-            let z = (y[i] - mean).abs() / sd[j];
-            let h = huber_weight(z, HUBER_K);
-            s += h * y[i] / var[j];
-            w += h / var[j];
-        }
-        let next = s / w;
-        let done = (next - mean).abs() <= 1e-12 * mean.abs().max(1e-12);
-        mean = next;
-        if done {
-            break;
+    RobustMean::new(y, se).of(&w)
+}
+
+/// `robust_weighted_mean` of the runs counted with multiplicities (a bootstrap resample): the
+/// runs are sorted by y and by se² once, so each resample's medians are walks along those
+/// orders weighted by its counts (no selection), and its reweighting visits each drawn run once.
+pub struct RobustMean<'a> {
+    y: &'a [f64],
+    se: &'a [f64],
+    /// The usable runs (finite y, positive finite se) in ascending order of y, and of se².
+    by_y: Vec<u32>,
+    by_var: Vec<u32>,
+}
+
+impl<'a> RobustMean<'a> {
+    pub fn new(y: &'a [f64], se: &'a [f64]) -> Self {
+        let ok: Vec<u32> = (0..y.len())
+            .filter(|&i| se[i] > 0.0 && se[i].is_finite() && y[i].is_finite())
+            .map(|i| i as u32)
+            .collect();
+        let mut by_y = ok.clone();
+        by_y.sort_by(|&a, &b| y[a as usize].total_cmp(&y[b as usize]).then(a.cmp(&b)));
+        let mut by_var = ok;
+        let var = |i: u32| se[i as usize] * se[i as usize];
+        by_var.sort_by(|&a, &b| var(a).total_cmp(&var(b)).then(a.cmp(&b)));
+        RobustMean {
+            y,
+            se,
+            by_y,
+            by_var,
         }
     }
-    mean
+
+    /// The robust weighted mean when run i counts `w[i]` times; NaN if no usable run is drawn.
+    pub fn of(&self, w: &[u16]) -> f64 {
+        let (y, se) = (self.y, self.se);
+        let total: u64 = self.by_y.iter().map(|&i| w[i as usize] as u64).sum();
+        if total == 0 {
+            return f64::NAN;
+        }
+        let weighted = |i: &u32| (*i as usize, w[*i as usize] as u64);
+        let mid = weighted_median(
+            self.by_y.iter().map(weighted).map(|(i, c)| (y[i], c)),
+            total,
+        );
+        // |y − mid| in ascending order: walk outwards from mid along the y order
+        let split = self.by_y.partition_point(|&i| y[i as usize] < mid);
+        let (mut lo, mut hi) = (split, split);
+        let outwards = std::iter::from_fn(|| {
+            let left = (lo > 0).then(|| mid - y[self.by_y[lo - 1] as usize]);
+            let right = (hi < self.by_y.len()).then(|| y[self.by_y[hi] as usize] - mid);
+            let i = match (left, right) {
+                (Some(l), Some(r)) if l <= r => {
+                    lo -= 1;
+                    self.by_y[lo]
+                }
+                (Some(_), None) => {
+                    lo -= 1;
+                    self.by_y[lo]
+                }
+                (_, Some(_)) => {
+                    hi += 1;
+                    self.by_y[hi - 1]
+                }
+                (None, None) => return None,
+            };
+            Some(((y[i as usize] - mid).abs(), w[i as usize] as u64))
+        });
+        let mad = MAD_TO_SIGMA * weighted_median(outwards, total);
+        let typical_var = weighted_median(
+            self.by_var
+                .iter()
+                .map(weighted)
+                .map(|(i, c)| (se[i] * se[i], c)),
+            total,
+        );
+        let tau2 = (mad * mad - typical_var).max(0.0);
+        // (y, count/variance, 1/sd) of each drawn run, contiguous for the reweighting passes
+        let runs: Vec<[f64; 3]> = self
+            .by_y
+            .iter()
+            .filter(|&&i| w[i as usize] > 0)
+            .map(|&i| {
+                let i = i as usize;
+                let var = se[i] * se[i] + tau2;
+                [y[i], w[i] as f64 / var, 1.0 / var.sqrt()]
+            })
+            .collect();
+        let mut mean = mid;
+        for _ in 0..20 {
+            let (mut s, mut sw) = (0.0, 0.0);
+            for &[yi, count_over_var, inv_sd] in &runs {
+                let z = (yi - mean).abs() * inv_sd;
+                let h = huber_weight(z, HUBER_K) * count_over_var;
+                s += h * yi;
+                sw += h;
+            }
+            let next = s / sw;
+            let done = (next - mean).abs() <= 1e-12 * mean.abs().max(1e-12);
+            mean = next;
+            if done {
+                break;
+            }
+        }
+        mean
+    }
+}
+
+/// The median of a multiset given as (value, count) in ascending order of value with `total`
+/// counts in all: the middle value, or the mean of the two middle ones for an even total (as
+/// `stats::median_in_place` of the values written out).
+fn weighted_median(sorted: impl Iterator<Item = (f64, u64)>, total: u64) -> f64 {
+    let (r_lo, r_hi) = match total % 2 {
+        1 => (total / 2, total / 2),
+        _ => (total / 2 - 1, total / 2),
+    };
+    let (mut seen, mut lo) = (0u64, f64::NAN);
+    for (v, c) in sorted {
+        if c == 0 {
+            continue;
+        }
+        if seen <= r_lo && r_lo < seen + c {
+            lo = v;
+        }
+        seen += c;
+        if r_hi < seen {
+            return 0.5 * (lo + v);
+        }
+    }
+    f64::NAN
 }
 
 #[cfg(test)]
@@ -109,6 +209,23 @@ mod tests {
         assert!(fixed < 0.05, "{fixed}");
         // its share (1/10 of its 0.28 offset) would be 0.028; it moves the mean by far less
         assert!((robust - 0.30).abs() < 0.01, "{robust}");
+        // counts are the same as the runs written out (a resample with repeats)
+        let picks = [0, 0, 3, 5, 5, 5, 9, 2];
+        let mut w = vec![0u16; 10];
+        for &i in &picks {
+            w[i] += 1;
+        }
+        let written: Vec<f64> = picks.iter().map(|&i| y[i]).collect();
+        let written_se: Vec<f64> = picks.iter().map(|&i| se[i]).collect();
+        let all: Vec<usize> = (0..picks.len()).collect();
+        let by_counts = RobustMean::new(&y, &se).of(&w);
+        assert!(
+            (by_counts - robust_weighted_mean(&written, &written_se, &all)).abs() < 1e-14,
+            "{by_counts}"
+        );
+        let mut even = w.clone();
+        even[1] = 1;
+        assert!(RobustMean::new(&y, &se).of(&even).is_finite());
         // without a wild run it is the ordinary weighted mean
         let calm = robust_weighted_mean(&y[..9], &se[..9], &idx[..9]);
         assert!(

@@ -163,7 +163,7 @@ pub fn theil_sen_many<const K: usize>(
 }
 
 /// One step of SplitMix64: a well-mixed 64-bit value from the last.
-fn splitmix(z: u64) -> u64 {
+pub(super) fn splitmix(z: u64) -> u64 {
     let mut z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);

@@ -1,12 +1,14 @@
 //! Small statistics shared by the fits, the collision fits and the discoverer: medians and robust
-//! scales (each convention named once), straight-line fits, quantiles of bootstrap draws, and the
+//! scales (each convention named once), straight-line fits (and Theil–Sen slopes of resamples), quantiles of bootstrap draws, and the
 //! distributions behind p-values (from `statrs`).
 
 pub mod dist;
 pub mod line;
 pub mod median;
 pub mod quantile;
+pub mod slope_order;
 
 pub use line::{ols_indexed, ols_line, theil_sen_indexed, theil_sen_many, weighted_line, Line};
 pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
 pub use quantile::{quantile_interpolated, quantile_nearest};
+pub use slope_order::SlopeOrder;
