@@ -702,3 +702,46 @@ fn a_no_op_rewrites_neither_lock_nor_hash_cache_and_the_cache_stamps_no_store_ob
     );
     assert!(stamps.keys().all(|k| !k.contains(".groove")), "{stamps:?}");
 }
+
+#[test]
+fn a_hand_edited_lock_is_noticed_though_a_no_op_trusts_the_lock_digests() {
+    let p = Project::standard();
+    p.stdout(&["run"]);
+    p.take_trace();
+    let lock = p.read("pipeline.lock");
+    let digests = p.read(".groove/lock-digests.json");
+    assert!(digests.contains("\"lock_stamp\"") && digests.contains("\"summary\""));
+    // a stage's record taken out of the lock by hand: the lock's stamp no longer matches the
+    // digests, so the run reads the lock, sees the missing record and writes it back
+    let mut edited: serde_json::Value = serde_json::from_str(&lock).unwrap();
+    edited["stages"].as_object_mut().unwrap().remove("summary");
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    p.write(
+        "pipeline.lock",
+        &(serde_json::to_string_pretty(&edited).unwrap() + "\n"),
+    );
+    let out = p.stdout(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    assert_eq!(p.take_trace(), Vec::<String>::new());
+    assert_eq!(p.read("pipeline.lock"), lock);
+    // digests missing or garbled: the run reads the lock, changes nothing and takes them again
+    for sidecar in ["", "not json"] {
+        p.write(".groove/lock-digests.json", sidecar);
+        let out = p.stdout(&["run"]);
+        assert!(out.contains("0 stages run"), "{out}");
+        assert_eq!(p.read("pipeline.lock"), lock);
+        assert!(p
+            .read(".groove/lock-digests.json")
+            .contains("\"lock_stamp\""));
+    }
+    // a param change still reruns its stage and rewrites the lock and its digests
+    let before = p.read(".groove/lock-digests.json");
+    p.write(
+        "pipeline.toml",
+        &p.read("pipeline.toml")
+            .replacen("scale = 1", "scale = 3", 1),
+    );
+    p.stdout(&["run"]);
+    assert_ne!(p.read("pipeline.lock"), lock);
+    assert_ne!(p.read(".groove/lock-digests.json"), before);
+}

@@ -16,9 +16,12 @@ pub struct Context<'a> {
     pub pipeline: &'a Pipeline,
     pub store: Store,
     pub hashes: HashCache,
-    /// `pipeline.lock` as it was before this evaluation.
-    pub lock: PipelineLock,
-    /// `pipeline.lock` was there and read (an unreadable or missing one is rewritten).
+    /// `pipeline.lock` as it was before this evaluation, read when first asked for (`lock()`).
+    lock: std::sync::OnceLock<PipelineLock>,
+    /// Its stages' digests, when `.groove/lock-digests.json` was taken of the lock as it is:
+    /// then a run that changes nothing need not read the lock (`lock_digests`).
+    pub lock_digests: Option<std::collections::BTreeMap<String, String>>,
+    /// `pipeline.lock` was there and readable (an unreadable or missing one is rewritten).
     pub lock_file_read: bool,
     pub progress: Progress,
     /// The shared remote cache, looked up after the local store (`None`: local only).
@@ -33,20 +36,44 @@ impl<'a> Context<'a> {
     pub fn new(catalog: &'a Catalog, pipeline: &'a Pipeline, progress: Progress) -> Context<'a> {
         let store = Store::at(&pipeline.root);
         let hashes = HashCache::load(&store.dir.join("hashes.json"));
-        let lock = PipelineLock::read(&lock_path(pipeline));
+        let lock_digests =
+            super::lock_digests::load(&lock_digests_path(pipeline), &lock_path(pipeline));
+        // with digests the lock is there (its stamp matched) and is read only when needed
+        let (lock, lock_file_read) = match lock_digests {
+            Some(_) => (std::sync::OnceLock::new(), true),
+            None => {
+                let read = PipelineLock::read(&lock_path(pipeline));
+                let found = read.is_some();
+                (std::sync::OnceLock::from(read.unwrap_or_default()), found)
+            }
+        };
         Context {
             catalog,
             pipeline,
             store,
             hashes,
-            lock_file_read: lock.is_some(),
-            lock: lock.unwrap_or_default(),
+            lock_file_read,
+            lock,
+            lock_digests,
             progress,
             remote: None,
             pusher: None,
             steps: None,
         }
     }
+}
+
+impl Context<'_> {
+    /// `pipeline.lock` as it was before this evaluation (read now if it was not yet).
+    pub fn lock(&self) -> &PipelineLock {
+        self.lock
+            .get_or_init(|| PipelineLock::load(&lock_path(self.pipeline)))
+    }
+}
+
+/// `.groove/lock-digests.json`: the digests of `pipeline.lock`'s stages.
+pub fn lock_digests_path(pipeline: &Pipeline) -> std::path::PathBuf {
+    pipeline.root.join(".groove").join("lock-digests.json")
 }
 
 /// `pipeline.lock`, beside `pipeline.toml`.

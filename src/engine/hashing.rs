@@ -100,14 +100,14 @@ impl HashCache {
 }
 
 #[cfg(unix)]
-fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
+pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
     use std::os::unix::fs::MetadataExt;
     let mtime_ns = meta.mtime() as i128 * 1_000_000_000 + meta.mtime_nsec() as i128;
     (meta.size(), mtime_ns, meta.ino())
 }
 
 #[cfg(not(unix))]
-fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
+pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
     let mtime_ns = meta
         .modified()
         .ok()

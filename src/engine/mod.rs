@@ -17,6 +17,7 @@ pub mod hashing;
 pub mod identity;
 pub mod inputs;
 pub mod key;
+pub mod lock_digests;
 pub mod lockfile;
 pub mod maintenance;
 pub mod materialize;

@@ -52,7 +52,7 @@ pub fn describe(ctx: &Context, done: &BTreeMap<String, Evaluated>) -> Vec<StageS
         .filter_map(|name| {
             let ev = done.get(&name)?;
             let spec = &ctx.pipeline.stages[&name];
-            let reasons = reasons(ctx.pipeline, spec, ev, ctx.lock.stages.get(&name));
+            let reasons = reasons(ctx.pipeline, spec, ev, ctx.lock().stages.get(&name));
             let state = if reasons.is_empty() {
                 State::Fresh
             } else {
