@@ -6,9 +6,11 @@
 //! and the run then reads the lock itself, as it always could.
 
 use super::atomic::write_atomic;
-use super::hashing::{sha256_hex, stamp_of};
+use super::hashing::stamp_of;
 use super::lockfile::{LockStage, PipelineLock};
+use super::store::Stored;
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -20,10 +22,62 @@ struct Sidecar {
     stages: BTreeMap<String, String>,
 }
 
-/// The digest of one stage's record: sha256 of its compact JSON (maps sorted, so the same
-/// record always gives the same bytes).
+/// The digest of one stage's record: sha256 over every field, each string fed with its length
+/// so that no two records feed the same bytes (maps in their sorted order). Every field is
+/// named below, so a field added to `LockStage` does not compile until it is digested too.
 pub fn stage_digest(stage: &LockStage) -> String {
-    sha256_hex(&serde_json::to_vec(stage).expect("a lock stage serializes"))
+    let LockStage {
+        kind,
+        key,
+        code,
+        groove_version,
+        seed,
+        params,
+        cmd,
+        inputs,
+        outputs,
+        items,
+    } = stage;
+    let mut h = Sha256::new();
+    let mut put = |s: &str| {
+        h.update((s.len() as u64).to_le_bytes());
+        h.update(s.as_bytes());
+    };
+    put(kind);
+    put(key);
+    put(code);
+    put(groove_version);
+    put(&seed.to_string());
+    put(&serde_json::to_string(params).expect("params serialize"));
+    put(cmd.as_deref().unwrap_or("\0none"));
+    for (label, map) in [("inputs", inputs), ("outputs", outputs)] {
+        put(label);
+        put(&map.len().to_string());
+        for (name, stored) in map {
+            put(name);
+            match stored {
+                Stored::File { sha256 } => {
+                    put("file");
+                    put(sha256);
+                }
+                Stored::Collection { items } => {
+                    put("collection");
+                    put(&items.len().to_string());
+                    for (item, sha256) in items {
+                        put(item);
+                        put(sha256);
+                    }
+                }
+            }
+        }
+    }
+    put("items");
+    put(&items.len().to_string());
+    for (item, item_key) in items {
+        put(item);
+        put(item_key);
+    }
+    super::hashing::hex(&h.finalize())
 }
 
 /// The digests of the lock at `lock_file`, when the sidecar at `path` was taken of it as it is
@@ -49,4 +103,56 @@ pub fn save(path: &Path, lock_file: &Path, lock: &PipelineLock) -> Result<(), su
         path,
         &serde_json::to_vec(&sidecar).expect("lock digests serialize"),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_record_and_its_copy_share_a_digest_and_any_change_moves_it() {
+        let items: BTreeMap<String, String> = [
+            ("a".to_string(), "1".repeat(64)),
+            ("b".to_string(), "2".repeat(64)),
+        ]
+        .into();
+        let stage = LockStage {
+            kind: "fit".into(),
+            key: "k".repeat(64),
+            code: "c".into(),
+            groove_version: "0.1.0".into(),
+            seed: 7,
+            params: serde_json::json!({"x": 1}),
+            cmd: None,
+            inputs: [(
+                "runs".to_string(),
+                Stored::Collection {
+                    items: items.clone(),
+                },
+            )]
+            .into(),
+            outputs: [(
+                "fits".to_string(),
+                Stored::Collection {
+                    items: items.clone(),
+                },
+            )]
+            .into(),
+            items: items.clone(),
+        };
+        let d = stage_digest(&stage);
+        assert_eq!(d, stage_digest(&stage.clone()));
+        let mut changed = vec![stage.clone(), stage.clone(), stage.clone(), stage.clone()];
+        if let Stored::Collection { items } = changed[0].outputs.get_mut("fits").unwrap() {
+            items.insert("b".into(), "3".repeat(64));
+        }
+        changed[1].items.remove("a");
+        changed[2].params = serde_json::json!({"x": 2});
+        // the same bytes split differently between two fields
+        changed[3].kind = "fitk".into();
+        changed[3].key = "k".repeat(63);
+        for c in &changed {
+            assert_ne!(stage_digest(c), d);
+        }
+    }
 }
