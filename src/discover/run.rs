@@ -690,14 +690,43 @@ fn unexplained_finding(
     }
 }
 
-/// The final model's global parameters with their standard errors, by name.
+/// The final model's global parameters with their standard errors, by name. Two terms may
+/// name a parameter alike (a bump's and a vibration's `amplitude_mps2`, two waves' `k_per_m`):
+/// the first keeps the name, a later one is named `name.effect` (`name.effect.i` with the
+/// term's index if that is taken too), so that no parameter is lost.
 fn model_parameters(current: &Model) -> BTreeMap<String, Estimate> {
-    current
-        .params
-        .iter()
+    let names: Vec<&str> = current.params.iter().map(|p| p.name.as_str()).collect();
+    unique_parameter_names(&current.spec, &names)
+        .into_iter()
         .zip(current.fit.global.iter().zip(&current.fit.global_se))
-        .map(|(p, (v, se))| (p.name.clone(), Estimate::new(*v, *se)))
+        .map(|(name, (v, se))| (name, Estimate::new(*v, *se)))
         .collect()
+}
+
+/// `names` (the global parameters of `spec`, in layout order) made unique as
+/// `model_parameters` says.
+fn unique_parameter_names(spec: &Spec, names: &[&str]) -> Vec<String> {
+    // which extra term each global parameter belongs to (None: μ and T of a material)
+    let mut owner: Vec<Option<usize>> = vec![None; 2 * spec.n_materials];
+    for (i, e) in spec.extras.iter().enumerate() {
+        owner.extend(std::iter::repeat_n(Some(i), e.params().len()));
+    }
+    let mut taken = std::collections::BTreeSet::new();
+    let mut out = Vec::with_capacity(names.len());
+    for (j, base) in names.iter().enumerate() {
+        let mut name = base.to_string();
+        if taken.contains(&name) {
+            let term = owner.get(j).copied().flatten();
+            let effect = term.and_then(|i| spec.extras[i].effect()).unwrap_or("term");
+            name = format!("{base}.{effect}");
+            if taken.contains(&name) {
+                name = format!("{base}.{effect}.{}", term.unwrap_or(j));
+            }
+        }
+        taken.insert(name.clone());
+        out.push(name);
+    }
+    out
 }
 
 /// Run the whole discovery on `recordings` (single runs are used; collision runs are skipped):
@@ -796,6 +825,57 @@ mod tests {
     use super::*;
     use std::collections::BTreeMap;
     use std::sync::Mutex;
+
+    /// A bump and a vibration both have `amplitude_mps2`, two bumps all three names: every
+    /// parameter keeps a name of its own, the first the plain one.
+    #[test]
+    fn parameters_named_alike_by_two_terms_all_keep_a_name() {
+        let bump = Extra::Localized {
+            z_lo: 0.0,
+            z_hi: 0.01,
+            w_lo: 1e-4,
+            w_hi: 1e-3,
+        };
+        let spec = Spec {
+            n_materials: 1,
+            s: 1.0,
+            k: 2.5,
+            extras: vec![
+                bump.clone(),
+                Extra::TimePeriodic {
+                    f_lo: 10.0,
+                    f_hi: 500.0,
+                },
+                bump,
+            ],
+        };
+        let params = spec.global_params(&["316".to_string()]);
+        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+        let unique = unique_parameter_names(&spec, &names);
+        assert_eq!(
+            unique,
+            [
+                "mu_316",
+                "t_s_316",
+                "amplitude_mps2",
+                "centre_m",
+                "width_m",
+                "frequency_hz",
+                "amplitude_mps2.time_dependent_force",
+                "amplitude_mps2.position_dependent_force",
+                "centre_m.position_dependent_force",
+                "width_m.position_dependent_force",
+            ]
+        );
+        // without a clash the names are the terms' own
+        let one = Spec {
+            extras: spec.extras[..2].to_vec(),
+            ..spec.clone()
+        };
+        let params = one.global_params(&["316".to_string()]);
+        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(unique_parameter_names(&one, &names)[..6], names[..6]);
+    }
 
     /// The progress line hears each round, each candidate of the screen with its replicates
     /// done, and the searched forms' batches; the diagnosis is the same with or without it.
