@@ -79,15 +79,16 @@ fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
 fn check_csv(bytes: &[u8]) -> Option<(&[u8], usize)> {
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     std::str::from_utf8(bytes).ok()?;
-    if bytes.contains(&b'"') {
-        return None;
-    }
-    // Every line is blank or has the header's number of fields, so the projection hides no
-    // ragged row (the row-by-row path refuses one with too many fields).
-    let mut lines = bytes.split(|&b| b == b'\n');
-    let header = std::str::from_utf8(lines.next()?)
+    let header_len = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .unwrap_or(bytes.len());
+    let header = std::str::from_utf8(&bytes[..header_len])
         .ok()?
         .trim_end_matches('\r');
+    if header.contains('"') {
+        return None;
+    }
     let names: Vec<&str> = header.split(',').collect();
     let mut unique: Vec<&str> = names.iter().map(|n| n.trim()).collect();
     unique.sort_unstable();
@@ -95,12 +96,34 @@ fn check_csv(bytes: &[u8]) -> Option<(&[u8], usize)> {
     if unique.len() != names.len() || COLUMNS.iter().any(|(c, _)| !names.contains(c)) {
         return None;
     }
-    let mut data_lines = 0;
-    for line in lines {
-        let commas = line.iter().filter(|&&b| b == b',').count();
-        if commas == names.len() - 1 {
+    // Every line is blank or has the header's number of fields, so the projection hides no
+    // ragged row (the row-by-row path refuses one with too many fields); no quoted cell. One
+    // pass over the bytes.
+    let fields_less_one = names.len() - 1;
+    let (mut data_lines, mut commas, mut blank) = (0, 0, true);
+    let mut line_ends = |commas: usize, blank: bool| {
+        if commas == fields_less_one {
             data_lines += 1;
-        } else if commas != 0 || !line.iter().all(u8::is_ascii_whitespace) {
+            true
+        } else {
+            commas == 0 && blank
+        }
+    };
+    if header_len < bytes.len() {
+        for &b in &bytes[header_len + 1..] {
+            match b {
+                b',' => commas += 1,
+                b'\n' => {
+                    if !line_ends(commas, blank) {
+                        return None;
+                    }
+                    (commas, blank) = (0, true);
+                }
+                b'"' => return None,
+                _ => blank &= b.is_ascii_whitespace(),
+            }
+        }
+        if !line_ends(commas, blank) {
             return None;
         }
     }
@@ -538,6 +561,32 @@ impl Stream<'_, '_> {
             Ok(())
         } else {
             Err("a run of runs.csv without rows")
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::check_csv;
+
+    #[test]
+    fn the_csv_check_counts_data_lines_and_refuses_ragged_or_quoted_ones() {
+        let head = "run,particle,frame,t_s,z_m,note\n";
+        let ok = format!("{head}a,0,0,0.0,1e-3,x\r\n\n  \na,0,1,1e-4,2e-3,\n");
+        assert_eq!(check_csv(ok.as_bytes()).map(|c| c.1), Some(2));
+        // no newline at the end, and a byte-order mark
+        let bom = format!("\u{feff}{head}a,0,0,0.0,1e-3,x");
+        assert_eq!(check_csv(bom.as_bytes()).map(|c| c.1), Some(1));
+        assert_eq!(check_csv(head.trim_end().as_bytes()).map(|c| c.1), Some(0));
+        for bad in [
+            format!("{head}a,0,0,0.0,1e-3\n"),
+            format!("{head}a,0,0,0.0,1e-3,x,y\n"),
+            format!("{head}a,0,0,0.0,1e-3,x\nstray\n"),
+            format!("{head}\"a\",0,0,0.0,1e-3,x\n"),
+            "run,particle,frame,t_s\na,0,0,0.0\n".to_string(),
+            "run,run,particle,frame,t_s,z_m\n".to_string(),
+        ] {
+            assert_eq!(check_csv(bad.as_bytes()), None, "{bad:?}");
         }
     }
 }
