@@ -101,9 +101,9 @@ pub fn aggregate_single(fits: &[SingleFit], opts: &AggregateOptions, seed: u64) 
 const POINT_PAIRS: usize = 2_000_000;
 /// Run pairs behind the slopes of the bootstrap resamples (`stats::SlopeOrder`): every pair up to
 /// `max(RESAMPLE_PAIRS, RESAMPLE_PAIRS_PER_RUN · n)` (every pair up to about 320 runs), a fixed
-/// uniform draw of that many above, so each run sits in about 40 drawn pairs; the draw then
-/// widens the line intervals by about 15 % (never narrows them), against ≈ 35 % at 10,000 runs
-/// for the 20,000 pairs drawn anew for each resample before.
+/// uniform draw of that many above, so each run sits in at least about 40 drawn pairs; the
+/// draw then widens the line intervals by at most about 15 % (never narrows them), against
+/// ≈ 35 % at 10,000 runs for the 20,000 pairs drawn anew for each resample before.
 const RESAMPLE_PAIRS: usize = 50_000;
 const RESAMPLE_PAIRS_PER_RUN: usize = 20;
 
