@@ -18,13 +18,14 @@ fn input<'a>(
         item,
         seed: 11,
         progress: None,
+        put_item: None,
     }
 }
 
 fn file(out: &BTreeMap<String, Artifact>, name: &str) -> Vec<u8> {
     match &out[name] {
         Artifact::File(b) => b.clone(),
-        Artifact::Collection(_) => panic!("`{name}` should be a file"),
+        Artifact::Collection(_) | Artifact::InStore(_) => panic!("`{name}` should be a file"),
     }
 }
 

@@ -70,6 +70,7 @@ fn run(
         item,
         seed: SEED,
         progress: None,
+        put_item: None,
     })
     .unwrap_or_else(|e| panic!("stage {} failed: {}", kind.kind(), e.0))
 }
@@ -77,14 +78,14 @@ fn run(
 fn file(a: &Artifact) -> &[u8] {
     match a {
         Artifact::File(b) => b,
-        Artifact::Collection(_) => panic!("a file was expected"),
+        Artifact::Collection(_) | Artifact::InStore(_) => panic!("a file was expected"),
     }
 }
 
 fn items(a: &Artifact) -> &BTreeMap<String, Vec<u8>> {
     match a {
         Artifact::Collection(m) => m,
-        Artifact::File(_) => panic!("a collection was expected"),
+        Artifact::File(_) | Artifact::InStore(_) => panic!("a collection was expected"),
     }
 }
 

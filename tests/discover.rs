@@ -495,6 +495,7 @@ fn stage_writes_the_contract_deterministically() {
             item: None,
             seed: 5,
             progress: None,
+            put_item: None,
         };
         match kind.run(&input).unwrap().remove("diagnosis") {
             Some(Artifact::File(bytes)) => bytes,

@@ -368,6 +368,7 @@ fn stage_input<'a>(
         item,
         seed: 3,
         progress: None,
+        put_item: None,
     }
 }
 

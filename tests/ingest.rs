@@ -405,6 +405,7 @@ fn stage_outputs(files: &Files, params: &toml::Table) -> BTreeMap<String, Artifa
         item: None,
         seed: 1,
         progress: None,
+        put_item: None,
     };
     Ingest
         .run(&input)
@@ -443,6 +444,53 @@ fn csv_and_parquet_read_identically() {
         interchange_parquet(&recs)["trajectories.parquet"].clone(),
     );
     assert_eq!(run_ok(&mixed, &params()), from_csv);
+}
+
+/// With a store to put items in, the stage returns each run's item hash (`Artifact::InStore`)
+/// and has put exactly the bytes it returns without one: on grouped rows (streamed) and on
+/// shuffled rows (read whole).
+#[test]
+fn with_a_store_the_stage_puts_each_item_and_returns_its_hash() {
+    let recs = known_recordings();
+    let grouped = interchange_csv(&recs);
+    let mut lines = trajectory_lines(&recs);
+    lines.shuffle(&mut ChaCha8Rng::seed_from_u64(4));
+    let mut shuffled = grouped.clone();
+    shuffled.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    for files in [grouped, shuffled] {
+        let Artifact::Collection(want) = &stage_outputs(&files, &toml::Table::new())["runs"] else {
+            panic!("without a store the runs are a collection")
+        };
+        let put: std::sync::Mutex<BTreeMap<String, Vec<u8>>> = Default::default();
+        let put_item = |bytes: &[u8]| {
+            let sha = groove::engine::hashing::sha256_hex(bytes);
+            put.lock().unwrap().insert(sha.clone(), bytes.to_vec());
+            Ok(sha)
+        };
+        let dataset = Artifact::Collection(files.clone());
+        let params = toml::Table::new();
+        let input = StageInput {
+            params: &params,
+            inputs: BTreeMap::from([("dataset", &dataset)]),
+            item: None,
+            seed: 1,
+            progress: None,
+            put_item: Some(&put_item),
+        };
+        let out = Ingest.run(&input).unwrap();
+        let Artifact::InStore(got) = &out["runs"] else {
+            panic!("with a store the runs are put there")
+        };
+        let put = put.lock().unwrap();
+        assert_eq!(got.len(), want.len());
+        for (item, bytes) in want {
+            assert_eq!(&put[&got[item]], bytes, "{item}");
+        }
+        assert_eq!(put.len(), want.len());
+    }
 }
 
 #[test]

@@ -502,6 +502,7 @@ fn stage_kinds_run_through_the_contract() {
         item: None,
         seed: 1,
         progress: None,
+        put_item: None,
     };
     let out = figures.run(&input).expect("figures stage runs");
     let Artifact::Collection(items) = &out["figures"] else {
@@ -517,6 +518,7 @@ fn stage_kinds_run_through_the_contract() {
         item: None,
         seed: 1,
         progress: None,
+        put_item: None,
     };
     let pages = report.run(&input).expect("report stage runs");
     let Artifact::File(md) = &pages["md"] else {

@@ -129,6 +129,10 @@ fn write_artifact(path: &Path, artifact: &Artifact) -> Result<(), String> {
             }
             Ok(())
         }
+        Artifact::InStore(_) => Err(format!(
+            "{}: an input is never an item list in the store (a bug in groove, please report it)",
+            path.display()
+        )),
     }
 }
 

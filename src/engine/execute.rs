@@ -7,7 +7,7 @@ use super::error::EngineError;
 use super::hashing::sha256_hex;
 use super::inputs::load_path;
 use super::pipeline::StageSpec;
-use super::stage::{Artifact, StageInput, StageOutputs};
+use super::stage::{Artifact, StageError, StageInput, StageOutputs};
 use super::store::{Entry, Stored};
 use std::collections::BTreeMap;
 
@@ -94,12 +94,18 @@ pub fn execute(
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
         // per-item stages already show `done/total items`
         let detail = |what: &str| ctx.progress.detail(&spec.name, what);
+        let put = |bytes: &[u8]| {
+            ctx.store
+                .put_object(bytes)
+                .map_err(|e| StageError(e.to_string()))
+        };
         let input = StageInput {
             params: &spec.params,
             inputs,
             item,
             seed,
             progress: item.is_none().then_some(&detail as &(dyn Fn(&str) + Sync)),
+            put_item: Some(&put),
         };
         // a panicking kind fails its stage; the other stages and the store are unaffected
         match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
@@ -125,10 +131,15 @@ pub fn execute(
                     spec.kind
                 )))
             }
-            Some(Artifact::Collection(_)) if spec.foreach.is_some() => {
+            Some(Artifact::Collection(_) | Artifact::InStore(_)) if spec.foreach.is_some() => {
                 return Err(failed(format!(
                     "output `{name}` of a per-item stage must be one file per item, not a folder"
                 )))
+            }
+            Some(Artifact::InStore(items)) => {
+                if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {
+                    return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));
+                }
             }
             Some(Artifact::Collection(items)) => {
                 if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {

@@ -12,7 +12,15 @@ use std::collections::BTreeMap;
 pub enum Artifact {
     File(Vec<u8>),
     Collection(BTreeMap<String, Vec<u8>>),
+    /// A collection whose items the stage already put in the store (`StageInput::put_item`) as
+    /// it made them, so that they were never all held at once: item → sha256. Only ever an
+    /// output; a stage reading it as an input gets a `Collection`.
+    InStore(BTreeMap<String, String>),
 }
+
+/// What a stage says when an input came as `Artifact::InStore`, which the engine never gives.
+pub const IN_STORE_INPUT: &str =
+    "an input came as a list of stored items, which the engine never passes (a bug in groove, please report it)";
 
 /// What a stage receives.
 pub struct StageInput<'a> {
@@ -28,6 +36,10 @@ pub struct StageInput<'a> {
     /// Where a long stage says what it is doing (the engine's progress line); `None` when nobody
     /// listens (tests, a Slurm job step).
     pub progress: Option<&'a (dyn Fn(&str) + Sync)>,
+    /// Puts one item's bytes in the store now and gives its sha256, for a stage that makes many
+    /// items and need not hold them all (it returns them as `Artifact::InStore`); `None` when
+    /// there is no store (tests): the stage then returns a `Collection`.
+    pub put_item: Option<&'a (dyn Fn(&[u8]) -> Result<String, StageError> + Sync)>,
 }
 
 impl StageInput<'_> {

@@ -228,6 +228,10 @@ impl Store {
                     .map(|(name, bytes)| Ok((name.clone(), self.put_object(bytes)?)))
                     .collect::<Result<_, EngineError>>()?,
             },
+            // put by the stage as it ran (`StageInput::put_item`)
+            Artifact::InStore(items) => Stored::Collection {
+                items: items.clone(),
+            },
         })
     }
 

@@ -11,6 +11,7 @@
 mod assemble;
 mod axis;
 mod columnar;
+pub use columnar::CHUNK_BYTES;
 mod csv_check;
 pub mod error;
 mod interchange;
@@ -174,10 +175,11 @@ pub fn ingest_row_by_row(
     })
 }
 
-/// A dataset ingested into the `ingest:runs` items (item name → `recording::item` bytes), the
-/// runs and parts left out, and how the dataset was read (for the stage's progress line).
-pub struct Items {
-    pub runs: BTreeMap<String, Vec<u8>>,
+/// A dataset ingested into the `ingest:runs` items (item name → `recording::item` bytes, or what
+/// `keep` made of them), the runs and parts left out, and how the dataset was read (for the
+/// stage's progress line).
+pub struct Items<T = Vec<u8>> {
+    pub runs: BTreeMap<String, T>,
     pub skipped: Vec<Skipped>,
     pub how: String,
 }
@@ -201,6 +203,19 @@ pub fn ingest_items_in_chunks(
     params: &IngestParams,
     chunk_bytes: usize,
 ) -> Result<Items, IngestError> {
+    ingest_items_kept(files, params, chunk_bytes, &mut |bytes| bytes)
+}
+
+/// `ingest_items_in_chunks` handing each item's bytes to `keep` as soon as it is made and keeping
+/// what `keep` returns instead (the stage puts each item in the store and keeps its hash, so
+/// that no more than a chunk's items are held). If the stream stops and the dataset is read
+/// whole, `keep` sees the streamed runs again.
+pub fn ingest_items_kept<T>(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+    chunk_bytes: usize,
+    keep: &mut dyn FnMut(Vec<u8>) -> T,
+) -> Result<Items<T>, IngestError> {
     check_params(params)?;
     let mut why = "the dataset is not in the interchange format";
     if reads_interchange(files, params.format) {
@@ -212,7 +227,7 @@ pub fn ingest_items_in_chunks(
             chunk_bytes,
             &mut |r: Recording| {
                 clash |= runs
-                    .insert(item_name(&r.info.run), item::encode(&r))
+                    .insert(item_name(&r.info.run), keep(item::encode(&r)))
                     .is_some();
             },
         );
@@ -237,7 +252,7 @@ pub fn ingest_items_in_chunks(
     let runs = ingested
         .recordings
         .into_iter()
-        .map(|r| (item_name(&r.info.run), item::encode(&r)))
+        .map(|r| (item_name(&r.info.run), keep(item::encode(&r))))
         .collect();
     Ok(Items {
         runs,

@@ -2,6 +2,7 @@
 
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+    IN_STORE_INPUT,
 };
 use crate::ingest::{self, IngestParams};
 
@@ -37,6 +38,7 @@ impl StageKind for Ingest {
             typed_params::<IngestParams>(input.params).map_err(|e| StageError(e.to_string()))?;
         let files = match input.inputs.get("dataset") {
             Some(Artifact::Collection(files)) => files,
+            Some(Artifact::InStore(_)) => return Err(StageError(IN_STORE_INPUT.into())),
             Some(Artifact::File(_)) => {
                 return Err(StageError(
                     "input dataset is a single file; bind it to the dataset folder (inputs = { dataset = \"${data}\" })".into(),
@@ -48,13 +50,34 @@ impl StageKind for Ingest {
                 ))
             }
         };
-        let items = ingest::ingest_items(files, &params).map_err(|e| StageError(e.to_string()))?;
-        input.report(&format!("{} runs, {}", items.runs.len(), items.how));
         let mut out = StageOutputs::new();
-        out.insert("runs".into(), Artifact::Collection(items.runs));
+        let (runs, skipped) = match input.put_item {
+            // each item into the store as it is made: never all items at once
+            Some(put) => {
+                let items =
+                    ingest::ingest_items_kept(files, &params, ingest::CHUNK_BYTES, &mut |bytes| {
+                        put(&bytes)
+                    })
+                    .map_err(|e| StageError(e.to_string()))?;
+                input.report(&format!("{} runs, {}", items.runs.len(), items.how));
+                let runs = items
+                    .runs
+                    .into_iter()
+                    .map(|(name, sha)| sha.map(|sha| (name, sha)))
+                    .collect::<Result<_, _>>()?;
+                (Artifact::InStore(runs), items.skipped)
+            }
+            None => {
+                let items =
+                    ingest::ingest_items(files, &params).map_err(|e| StageError(e.to_string()))?;
+                input.report(&format!("{} runs, {}", items.runs.len(), items.how));
+                (Artifact::Collection(items.runs), items.skipped)
+            }
+        };
+        out.insert("runs".into(), runs);
         out.insert(
             "skipped".into(),
-            Artifact::File(ingest::skipped_json(&items.skipped)),
+            Artifact::File(ingest::skipped_json(&skipped)),
         );
         Ok(out)
     }

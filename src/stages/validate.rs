@@ -7,6 +7,7 @@ use crate::artifacts::validation::{
 };
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+    IN_STORE_INPUT,
 };
 use crate::physics::{Friction, Restitution, Term};
 use crate::synth::Truth;
@@ -75,6 +76,7 @@ fn file<'a>(artifact: &'a Artifact, name: &str) -> Result<&'a [u8], StageError> 
         Artifact::Collection(_) => Err(StageError(format!(
             "input `{name}` must be a single file, not a collection; bind it to a file"
         ))),
+        Artifact::InStore(_) => Err(StageError(IN_STORE_INPUT.into())),
     }
 }
 
