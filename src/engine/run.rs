@@ -243,10 +243,13 @@ fn publish(
                 .all(|name| ctx.pipeline.stages.contains_key(name)),
         };
     let (lock_file, digests) = (lock_path(ctx.pipeline), lock_digests_path(ctx.pipeline));
+    // The digests only spare a later run the lock's parse: a failure to write them (a full
+    // disk, a read-only store) costs that run the parse, never a result, so it is not an error;
+    // digests left from before name another stamp of the lock and are not used.
     if unchanged {
         // digests taken once, so that the next run that changes nothing reads no lock
         if ctx.lock_digests.is_none() {
-            super::lock_digests::save(&digests, &lock_file, ctx.lock())?;
+            let _ = super::lock_digests::save(&digests, &lock_file, ctx.lock());
         }
         return Ok(());
     }
@@ -255,7 +258,8 @@ fn publish(
     lock.stages
         .retain(|name, _| ctx.pipeline.stages.contains_key(name));
     lock.save(&lock_file)?;
-    super::lock_digests::save(&digests, &lock_file, &lock)
+    let _ = super::lock_digests::save(&digests, &lock_file, &lock);
+    Ok(())
 }
 
 /// Which completed stages ran and which were reused.
