@@ -130,8 +130,9 @@ fn write_artifact(path: &Path, artifact: &Artifact) -> Result<(), String> {
             Ok(())
         }
         Artifact::InStore(_) => Err(format!(
-            "{}: an input is never an item list in the store (a bug in groove, please report it)",
-            path.display()
+            "{}: {}",
+            path.display(),
+            super::stage::IN_STORE_INPUT
         )),
     }
 }

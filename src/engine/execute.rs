@@ -136,17 +136,17 @@ pub fn execute(
                     "output `{name}` of a per-item stage must be one file per item, not a folder"
                 )))
             }
-            Some(Artifact::InStore(items)) => {
-                if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {
+            // a collection's item names, whether its bytes came back or went to the store
+            Some(artifact) => {
+                let names: Vec<&String> = match artifact {
+                    Artifact::File(_) => Vec::new(),
+                    Artifact::Collection(items) => items.keys().collect(),
+                    Artifact::InStore(items) => items.keys().collect(),
+                };
+                if let Some(bad) = names.into_iter().find(|n| !super::inputs::item_name_ok(n)) {
                     return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));
                 }
             }
-            Some(Artifact::Collection(items)) => {
-                if let Some(bad) = items.keys().find(|n| !super::inputs::item_name_ok(n)) {
-                    return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));
-                }
-            }
-            Some(Artifact::File(_)) => {}
         }
     }
     if let Some(extra) = outputs.keys().find(|n| !spec.outputs.contains_key(*n)) {

@@ -8,7 +8,7 @@ use super::bootstrap::percentile_intervals;
 use super::regression::{mean_where, RobustMean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::{median_in_place, theil_sen_many, SlopeOrder};
+use crate::stats::{theil_sen_intercept, theil_sen_many, SlopeOrder};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -149,12 +149,10 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
             let mut buf = Vec::with_capacity(idx.len());
             let mut line = |k: usize, y: &[f64]| {
                 let b = slopes[k] + shift[k];
-                if b.is_nan() {
-                    return (f64::NAN, f64::NAN);
+                match b.is_nan() {
+                    true => (f64::NAN, f64::NAN),
+                    false => (theil_sen_intercept(&speed, y, idx, b, &mut buf), b),
                 }
-                buf.clear();
-                buf.extend(idx.iter().map(|&i| y[i] - b * speed[i]));
-                (median_in_place(&mut buf), b)
             };
             let ((ta, tb), (ma, mb)) = (line(0, &t), line(1, &mu));
             [

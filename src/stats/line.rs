@@ -155,11 +155,16 @@ pub fn theil_sen_many<const K: usize>(
         if b.is_nan() {
             return (f64::NAN, f64::NAN);
         }
-        let y = ys[k];
-        buf.clear();
-        buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
-        (median_of(buf), b)
+        (theil_sen_intercept(x, ys[k], idx, b, buf), b)
     })
+}
+
+/// The Theil–Sen intercept for slope `b`: the median of y − b·x over the picks (`buf` reused);
+/// NaN if a value is NaN.
+pub fn theil_sen_intercept(x: &[f64], y: &[f64], idx: &[usize], b: f64, buf: &mut Vec<f64>) -> f64 {
+    buf.clear();
+    buf.extend(idx.iter().map(|&i| y[i] - b * x[i]));
+    median_of(buf)
 }
 
 /// One step of SplitMix64: a well-mixed 64-bit value from the last.

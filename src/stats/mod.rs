@@ -8,7 +8,10 @@ pub mod median;
 pub mod quantile;
 pub mod slope_order;
 
-pub use line::{ols_indexed, ols_line, theil_sen_indexed, theil_sen_many, weighted_line, Line};
+pub use line::{
+    ols_indexed, ols_line, theil_sen_indexed, theil_sen_intercept, theil_sen_many, weighted_line,
+    Line,
+};
 pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
 pub use quantile::{quantile_interpolated, quantile_nearest};
 pub use slope_order::SlopeOrder;

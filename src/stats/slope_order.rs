@@ -89,9 +89,9 @@ impl<const K: usize> SlopeOrder<K> {
     }
 
     /// The Theil–Sen slope of series `k` when point i counts `w[i]` times (a resample's
-    /// multiplicities, saturating at 65,535; all ones for the points themselves): the median of the ordered slopes
-    /// weighted by w_i·w_j (the mean of the two middle ones for an even total). NaN when no
-    /// pair has weight or a point of non-finite y is drawn.
+    /// multiplicities, saturating at 65,535; all ones for the points themselves): the median of
+    /// the ordered slopes weighted by w_i·w_j (the mean of the two middle ones for an even
+    /// total). NaN when no pair has weight or a point of non-finite y is drawn.
     pub fn slope(&self, k: usize, w: &[u16]) -> f64 {
         self.slope_given_total(k, w, None).0
     }
