@@ -25,7 +25,9 @@ fn input<'a>(
 fn file(out: &BTreeMap<String, Artifact>, name: &str) -> Vec<u8> {
     match &out[name] {
         Artifact::File(b) => b.clone(),
-        Artifact::Collection(_) | Artifact::InStore(_) => panic!("`{name}` should be a file"),
+        Artifact::Collection(_) | Artifact::InStore(_) | Artifact::OnDisk(_) => {
+            panic!("`{name}` should be a file")
+        }
     }
 }
 

@@ -78,14 +78,18 @@ fn run(
 fn file(a: &Artifact) -> &[u8] {
     match a {
         Artifact::File(b) => b,
-        Artifact::Collection(_) | Artifact::InStore(_) => panic!("a file was expected"),
+        Artifact::Collection(_) | Artifact::InStore(_) | Artifact::OnDisk(_) => {
+            panic!("a file was expected")
+        }
     }
 }
 
 fn items(a: &Artifact) -> &BTreeMap<String, Vec<u8>> {
     match a {
         Artifact::Collection(m) => m,
-        Artifact::File(_) | Artifact::InStore(_) => panic!("a collection was expected"),
+        Artifact::File(_) | Artifact::InStore(_) | Artifact::OnDisk(_) => {
+            panic!("a collection was expected")
+        }
     }
 }
 

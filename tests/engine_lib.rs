@@ -40,7 +40,9 @@ impl Calls {
 fn text(a: &Artifact) -> String {
     match a {
         Artifact::File(b) => String::from_utf8(b.clone()).unwrap(),
-        Artifact::Collection(_) | Artifact::InStore(_) => panic!("expected a file"),
+        Artifact::Collection(_) | Artifact::InStore(_) | Artifact::OnDisk(_) => {
+            panic!("expected a file")
+        }
     }
 }
 

@@ -129,7 +129,7 @@ fn write_artifact(path: &Path, artifact: &Artifact) -> Result<(), String> {
             }
             Ok(())
         }
-        Artifact::InStore(_) => Err(format!(
+        Artifact::InStore(_) | Artifact::OnDisk(_) => Err(format!(
             "{}: {}",
             path.display(),
             super::stage::IN_STORE_INPUT

@@ -5,7 +5,7 @@ use super::command;
 use super::context::Context;
 use super::error::EngineError;
 use super::hashing::sha256_hex;
-use super::inputs::load_path;
+use super::inputs::{load_path, on_disk};
 use super::pipeline::StageSpec;
 use super::stage::{Artifact, StageError, StageInput, StageOutputs};
 use super::store::{Entry, Stored};
@@ -29,12 +29,17 @@ pub fn load_shared(
     spec: &StageSpec,
     bound: &BTreeMap<String, Bound>,
 ) -> Result<BTreeMap<String, Artifact>, EngineError> {
+    let streamed = match ctx.catalog.kind(&spec.kind) {
+        Some(kind) => kind.streamed_inputs(),
+        None => &[],
+    };
     let mut out = BTreeMap::new();
     for (name, b) in bound {
         if spec.is_item_input(name) {
             continue;
         }
         let artifact = match &b.source {
+            Source::Path(p) if streamed.contains(&name.as_str()) => on_disk(p, &b.stored),
             Source::Path(p) => load_path(p, &b.stored)?,
             Source::Store => ctx.store.load(&b.stored)?,
             Source::Memory(bytes) => Artifact::File(bytes.clone()),
@@ -131,6 +136,12 @@ pub fn execute(
                     spec.kind
                 )))
             }
+            Some(Artifact::OnDisk(_)) => {
+                return Err(failed(format!(
+                    "output `{name}` is a list of files on disk (a bug in kind `{}`)",
+                    spec.kind
+                )))
+            }
             Some(Artifact::Collection(_) | Artifact::InStore(_)) if spec.foreach.is_some() => {
                 return Err(failed(format!(
                     "output `{name}` of a per-item stage must be one file per item, not a folder"
@@ -142,6 +153,7 @@ pub fn execute(
                     Artifact::File(_) => Vec::new(),
                     Artifact::Collection(items) => items.keys().collect(),
                     Artifact::InStore(items) => items.keys().collect(),
+                    Artifact::OnDisk(_) => unreachable!("refused above"),
                 };
                 if let Some(bad) = names.into_iter().find(|n| !super::inputs::item_name_ok(n)) {
                     return Err(failed(format!("output `{name}` has an item named `{bad}`; item names use only letters, digits, `.`, `_` and `-`")));

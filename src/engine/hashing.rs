@@ -16,6 +16,21 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     hex(&Sha256::digest(bytes))
 }
 
+/// Lowercase hex sha256 of everything a reader gives, read a megabyte at a time (a 2.6 GB
+/// recording is never held whole).
+pub fn hash_reader(mut read: impl std::io::Read) -> std::io::Result<String> {
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    loop {
+        match read.read(&mut buf) {
+            Ok(0) => return Ok(hex(&hasher.finalize())),
+            Ok(n) => hasher.update(&buf[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+}
+
 pub fn hex(bytes: &[u8]) -> String {
     const DIGITS: &[u8; 16] = b"0123456789abcdef";
     let mut s = String::with_capacity(bytes.len() * 2);
@@ -72,8 +87,7 @@ impl HashCache {
                 return Ok(s.sha256.clone());
             }
         }
-        let bytes = std::fs::read(path).at(path)?;
-        let sha256 = sha256_hex(&bytes);
+        let sha256 = hash_reader(std::fs::File::open(path).at(path)?).at(path)?;
         let stamp = Stamp {
             size,
             mtime_ns,

@@ -1,8 +1,9 @@
-//! Path inputs: a file, or a directory meaning its top-level regular files (not subfolders, not dotfiles).
+//! Path inputs: a file, or a directory meaning its top-level regular files (not subfolders, not
+//! dotfiles); read whole, or left on disk for a kind that reads them in pieces, checked either way.
 
 use super::error::{EngineError, IoContext};
 use super::hashing::{sha256_hex, HashCache};
-use super::stage::Artifact;
+use super::stage::{Artifact, InputFile};
 use super::store::Stored;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -105,4 +106,25 @@ pub fn load_path(path: &Path, expected: &Stored) -> Result<Artifact, EngineError
             Ok(Artifact::Collection(out))
         }
     }
+}
+
+/// A path input as files left on disk (`Artifact::OnDisk`), each with the sha256 its key was made
+/// from; a single-file input is one entry named by its file name.
+pub fn on_disk(path: &Path, expected: &Stored) -> Artifact {
+    let file = |path: PathBuf, sha256: &String| InputFile {
+        path,
+        sha256: sha256.clone(),
+    };
+    Artifact::OnDisk(match expected {
+        Stored::File { sha256 } => {
+            let name = path
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            BTreeMap::from([(name, file(path.to_path_buf(), sha256))])
+        }
+        Stored::Collection { items } => items
+            .iter()
+            .map(|(name, sha256)| (name.clone(), file(path.join(name), sha256)))
+            .collect(),
+    })
 }

@@ -1,10 +1,13 @@
 //! The contract between the engine and a stage kind: typed params in, artifacts (bytes) out.
 //!
 //! A stage is a pure function of its params and input artifacts. It never touches the file
-//! system: the engine reads inputs into memory, calls `run`, checks every declared output is
+//! system: the engine reads inputs into memory (or, for an input the kind streams, hands it a
+//! reader that checks the content against the key), calls `run`, checks every declared output is
 //! present, and writes the outputs into the store atomically.
 
+use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 
 /// One artifact: a single file's bytes, or a collection of named items (e.g. one per run).
 /// Collection item names are file-name safe (`[A-Za-z0-9._-]`), and iterate in sorted order.
@@ -16,11 +19,100 @@ pub enum Artifact {
     /// it made them, so that they were never all held at once: item → sha256. Only ever an
     /// output; a stage reading it as an input gets a `Collection`.
     InStore(BTreeMap<String, String>),
+    /// A path input left on disk, for a kind that reads it in pieces (`StageKind::streamed_inputs`):
+    /// file name → the file and the sha256 its key was made from (a single-file input is one
+    /// entry). Reading it checks that content (`InputFile`). Only ever an input.
+    OnDisk(BTreeMap<String, InputFile>),
 }
 
-/// What a stage says when an input came as `Artifact::InStore`, which the engine never gives.
+/// What a stage says when an input came as `Artifact::InStore` (never an input) or as
+/// `Artifact::OnDisk` (given only to a kind that asks for it).
 pub const IN_STORE_INPUT: &str =
-    "an input came as a list of stored items, which the engine never passes (a bug in groove, please report it)";
+    "an input came as stored items or as files left on disk, which the engine never passes to this kind (a bug in groove, please report it)";
+
+/// One file of a path input that a kind reads itself (`StageKind::streamed_inputs`), with the
+/// sha256 its key was made from. Whichever way it is read, the bytes are checked against it: a
+/// file edited while groove runs is an error, never a result under the wrong key.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputFile {
+    pub path: PathBuf,
+    pub sha256: String,
+}
+
+impl InputFile {
+    /// The whole file, checked.
+    pub fn read(&self) -> Result<Vec<u8>, StageError> {
+        let bytes = std::fs::read(&self.path).map_err(|e| self.unreadable(e))?;
+        if hex_digest(Sha256::digest(&bytes).as_slice()) != self.sha256 {
+            return Err(StageError(self.changed()));
+        }
+        Ok(bytes)
+    }
+
+    /// The file as a reader that hashes what it gives and, at the end of the file, fails with
+    /// an error (kind `InvalidData`) if the content is not the one the key was made from. A
+    /// caller that stops early has checked nothing, and must not keep what it read.
+    pub fn open(&self) -> Result<CheckedRead, StageError> {
+        let file = std::fs::File::open(&self.path).map_err(|e| self.unreadable(e))?;
+        Ok(CheckedRead {
+            file,
+            hasher: Some(Sha256::new()),
+            expected: self.sha256.clone(),
+            changed: self.changed(),
+        })
+    }
+
+    fn unreadable(&self, e: std::io::Error) -> StageError {
+        StageError(format!(
+            "{} cannot be read ({e}); check that it exists and is readable",
+            self.path.display()
+        ))
+    }
+
+    fn changed(&self) -> String {
+        format!(
+            "{} changed while groove was running; run again",
+            self.path.display()
+        )
+    }
+}
+
+/// `InputFile::open`'s reader.
+pub struct CheckedRead {
+    file: std::fs::File,
+    /// `None` once the end was reached and the content checked.
+    hasher: Option<Sha256>,
+    expected: String,
+    changed: String,
+}
+
+impl std::io::Read for CheckedRead {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = std::io::Read::read(&mut self.file, buf)?;
+        match (n, self.hasher.take()) {
+            (0, Some(hasher)) => {
+                if hex_digest(hasher.finalize().as_slice()) != self.expected {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        self.changed.clone(),
+                    ));
+                }
+            }
+            (_, Some(mut hasher)) => {
+                hasher.update(&buf[..n]);
+                self.hasher = Some(hasher);
+            }
+            (_, None) => {}
+        }
+        Ok(n)
+    }
+}
+
+/// Lowercase hex of a digest (as `engine::hashing` writes hashes; repeated here so that the
+/// contract stays one file kinds may use).
+fn hex_digest(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
 
 /// What a stage receives.
 pub struct StageInput<'a> {
@@ -74,6 +166,11 @@ pub trait StageKind: Sync + Send {
     /// Input names this kind needs (each bound in `pipeline.toml`), and those it may take.
     fn inputs(&self) -> &'static [&'static str];
     fn optional_inputs(&self) -> &'static [&'static str] {
+        &[]
+    }
+    /// Path inputs this kind reads from disk itself, in pieces, so that a file larger than memory
+    /// is never held whole: the engine gives them as `Artifact::OnDisk`.
+    fn streamed_inputs(&self) -> &'static [&'static str] {
         &[]
     }
     /// Output names this kind produces.

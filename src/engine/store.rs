@@ -232,6 +232,9 @@ impl Store {
             Artifact::InStore(items) => Stored::Collection {
                 items: items.clone(),
             },
+            Artifact::OnDisk(_) => {
+                return Err(EngineError::Usage(super::stage::IN_STORE_INPUT.into()))
+            }
         })
     }
 

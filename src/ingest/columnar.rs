@@ -15,6 +15,7 @@
 //! its last row is read, so memory is bounded by a piece, not the file; it needs each run's rows
 //! to be one block and otherwise says why, and the caller reads the file whole as above.
 
+use super::csv_pieces::{for_each_piece, Stop};
 use super::interchange;
 use super::sanity;
 use super::table::Table;
@@ -381,18 +382,20 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 
 /// The recordings of a clean interchange dataset handed to `each` one run at a time, as soon as a
 /// run's last row is read, in file order: trajectories.csv is read `chunk_bytes` at a time (a
-/// Parquet file whole), so neither the whole table nor all recordings are held. Gives the number
-/// of chunks read. It needs each run's rows to be one block (in any order within it), as
-/// `groove synth` and most trackers write them. At anything else, or anything `recordings` would
-/// give `None` for, it stops with the reason: the caller then forgets what `each` received and
-/// reads the dataset whole (`ingest::ingest`), which sorts the rows or names the problems. On
-/// clean grouped data it gives the runs `recordings` gives.
+/// Parquet file whole), so neither the whole table nor all recordings are held. The CSV comes
+/// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
+/// read), else from `files`. Gives the number of chunks read. It needs each run's rows to be one
+/// block (in any order within it), as `groove synth` and most trackers write them. At anything
+/// else, or anything `recordings` would give `None` for, it stops with the reason: the caller then
+/// forgets what `each` received and reads the dataset whole (`ingest::ingest`), which sorts the
+/// rows or names the problems. On clean grouped data it gives the runs `recordings` gives.
 pub fn stream(
     files: &BTreeMap<String, Vec<u8>>,
+    csv: Option<&mut dyn std::io::Read>,
     min_frames: usize,
     chunk_bytes: usize,
     each: &mut dyn FnMut(Recording),
-) -> Result<usize, &'static str> {
+) -> Result<usize, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     let (runs_name, runs_bytes) = interchange::pick(files, "runs", "").map_err(|_| PROBLEM)?;
     let (traj_name, traj_bytes) =
@@ -400,12 +403,12 @@ pub fn stream(
     let runs_table = Table::from_bytes(runs_name, runs_bytes).map_err(|_| PROBLEM)?;
     let (runs, problems) = interchange::read_runs(&runs_table).map_err(|_| PROBLEM)?;
     if !problems.is_empty() {
-        return Err(PROBLEM);
+        return Err(PROBLEM.into());
     }
     let mut infos: BTreeMap<&str, &RunInfo> = BTreeMap::new();
     for r in &runs {
         if infos.insert(&r.info.run, &r.info).is_some() {
-            return Err(PROBLEM);
+            return Err(PROBLEM.into());
         }
     }
     let mut stream = Stream {
@@ -416,37 +419,34 @@ pub fn stream(
         min_frames,
         each,
     };
-    let mut chunks = 0;
-    if traj_name.to_ascii_lowercase().ends_with(".parquet") {
-        stream.chunk(&read_parquet(traj_bytes).ok_or(PROBLEM)?)?;
-        chunks = 1;
-    } else {
-        let (bytes, data_lines) = check_csv(traj_bytes).ok_or(PROBLEM)?;
-        let header_end = bytes.iter().position(|&b| b == b'\n').ok_or(PROBLEM)? + 1;
-        let mut rows = 0;
-        let mut at = header_end;
-        let mut text = Vec::new();
-        while at < bytes.len() {
-            let from = (at + chunk_bytes.max(1)).min(bytes.len());
-            let end = match bytes[from..].iter().position(|&b| b == b'\n') {
-                Some(k) => from + k + 1,
-                None => bytes.len(),
-            };
-            text.clear();
-            text.extend_from_slice(&bytes[..header_end]);
-            text.extend_from_slice(&bytes[at..end]);
-            let df = parse_csv(&text).ok_or(PROBLEM)?;
-            rows += df.height();
-            stream.chunk(&df)?;
-            chunks += 1;
-            at = end;
+    let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
+    let chunks = match csv {
+        _ if parquet => {
+            stream.chunk(&read_parquet(traj_bytes).ok_or(PROBLEM)?)?;
+            1
         }
-        if rows != data_lines {
-            return Err(PROBLEM);
-        }
-    }
+        Some(read) => csv_chunks(read, chunk_bytes, &mut stream)?,
+        None => csv_chunks(&mut &traj_bytes[..], chunk_bytes, &mut stream)?,
+    };
     stream.finish()?;
     Ok(chunks)
+}
+
+/// Reads CSV text in pieces into `stream`, each checked as `read_csv` checks a whole file.
+fn csv_chunks(
+    read: &mut dyn std::io::Read,
+    chunk_bytes: usize,
+    stream: &mut Stream,
+) -> Result<usize, Stop> {
+    const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
+    for_each_piece(read, chunk_bytes, &mut |text| {
+        let (text, data_lines) = check_csv(text).ok_or(PROBLEM)?;
+        let df = parse_csv(text).ok_or(PROBLEM)?;
+        if df.height() != data_lines {
+            return Err(PROBLEM.into());
+        }
+        Ok(stream.chunk(&df)?)
+    })
 }
 
 /// A chunk's typed columns, borrowed from its data frame.

@@ -1,8 +1,9 @@
 //! Ingest: reads a dataset folder (interchange CSV/Parquet, trackpy or TrackMate exports), checks
 //! every bad-input class of data-format.md, and returns one `Recording` per run.
 //!
-//! Everything here works on bytes in memory (file name → bytes), so the stage never touches the
-//! file system; `read_dataset_dir` is the one helper that reads a folder, for tests and tools.
+//! Everything here works on bytes in memory (file name → bytes), or, for trajectories.csv, on a
+//! reader the stage is given, so the stage never opens a file itself; `read_dataset_dir` is the
+//! one helper that reads a folder, for tests and tools.
 
 // A `Problem` carries file, row, column, run, message and fix; it is returned only for bad
 // input, so its size on the error path is not worth boxing.
@@ -13,6 +14,7 @@ mod axis;
 mod columnar;
 pub use columnar::CHUNK_BYTES;
 mod csv_check;
+mod csv_pieces;
 pub mod error;
 mod interchange;
 mod manifest;
@@ -31,6 +33,7 @@ pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
 use crate::recording::{item, Recording};
+use csv_pieces::Stop;
 use samples::{RunRow, SampleFile};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -216,38 +219,77 @@ pub fn ingest_items_kept<T>(
     chunk_bytes: usize,
     keep: &mut dyn FnMut(Vec<u8>) -> T,
 ) -> Result<Items<T>, IngestError> {
-    check_params(params)?;
-    let mut why = "the dataset is not in the interchange format";
-    if reads_interchange(files, params.format) {
-        let mut runs = BTreeMap::new();
-        let mut clash = false;
-        let streamed = columnar::stream(
-            files,
-            params.min_frames,
-            chunk_bytes,
-            &mut |r: Recording| {
-                clash |= runs
-                    .insert(item_name(&r.info.run), keep(item::encode(&r)))
-                    .is_some();
-            },
-        );
-        match streamed {
-            Ok(chunks) if !clash && !runs.is_empty() => {
-                let how = format!(
-                    "read in {chunks} chunk{} of trajectories, each run's item made as its last row was read",
-                    if chunks == 1 { "" } else { "s" }
-                );
-                return Ok(Items {
-                    runs,
-                    skipped: Vec::new(),
-                    how,
-                });
-            }
-            Ok(_) if clash => why = "two runs share an item name",
-            Ok(_) => why = "the dataset has no runs",
-            Err(e) => why = e,
-        }
+    match stream_items(files, None, params, chunk_bytes, keep) {
+        Ok(Streamed::Done(items)) => Ok(items),
+        Ok(Streamed::ReadWhole(why)) => ingest_items_whole(files, params, why, keep),
+        Err(_) => unreachable!("bytes in memory are always readable"),
     }
+}
+
+/// What `stream_items` did: the items, or why the dataset must be read whole
+/// (`ingest_items_whole`).
+pub enum Streamed<T> {
+    Done(Items<T>),
+    ReadWhole(&'static str),
+}
+
+/// The items of a clean interchange dataset whose runs' rows come grouped, streamed
+/// (`columnar::stream`): each run's item is made as its last row is read and handed to `keep`.
+/// trajectories.csv comes from `csv` if given (then it stands in `files` with no bytes, for its
+/// name), a piece at a time, so a file larger than memory is never held. The error is a failure
+/// to read `csv` (or its content changing, as `InputFile` checks).
+pub fn stream_items<T>(
+    files: &BTreeMap<String, Vec<u8>>,
+    csv: Option<&mut dyn std::io::Read>,
+    params: &IngestParams,
+    chunk_bytes: usize,
+    keep: &mut dyn FnMut(Vec<u8>) -> T,
+) -> Result<Streamed<T>, std::io::Error> {
+    if check_params(params).is_err() || !reads_interchange(files, params.format) {
+        return Ok(Streamed::ReadWhole(
+            "the dataset is not in the interchange format",
+        ));
+    }
+    let mut runs = BTreeMap::new();
+    let mut clash = false;
+    let streamed = columnar::stream(
+        files,
+        csv,
+        params.min_frames,
+        chunk_bytes,
+        &mut |r: Recording| {
+            clash |= runs
+                .insert(item_name(&r.info.run), keep(item::encode(&r)))
+                .is_some();
+        },
+    );
+    let why = match streamed {
+        Ok(chunks) if !clash && !runs.is_empty() => {
+            let how = format!(
+                "read in {chunks} chunk{} of trajectories, each run's item made as its last row was read",
+                if chunks == 1 { "" } else { "s" }
+            );
+            return Ok(Streamed::Done(Items {
+                runs,
+                skipped: Vec::new(),
+                how,
+            }));
+        }
+        Ok(_) if clash => "two runs share an item name",
+        Ok(_) => "the dataset has no runs",
+        Err(Stop::Reason(why)) => why,
+        Err(Stop::Read(e)) => return Err(e),
+    };
+    Ok(Streamed::ReadWhole(why))
+}
+
+/// `ingest`'s recordings as items (each through `keep`), with `why` the dataset was read whole.
+pub fn ingest_items_whole<T>(
+    files: &BTreeMap<String, Vec<u8>>,
+    params: &IngestParams,
+    why: &str,
+    keep: &mut dyn FnMut(Vec<u8>) -> T,
+) -> Result<Items<T>, IngestError> {
     let ingested = ingest(files, params)?;
     let runs = ingested
         .recordings
@@ -274,7 +316,11 @@ pub fn stream_recordings(
     if check_params(params).is_err() || !reads_interchange(files, params.format) {
         return Err("not a clean interchange dataset");
     }
-    columnar::stream(files, params.min_frames, chunk_bytes, each)
+    match columnar::stream(files, None, params.min_frames, chunk_bytes, each) {
+        Ok(chunks) => Ok(chunks),
+        Err(Stop::Reason(why)) => Err(why),
+        Err(Stop::Read(_)) => unreachable!("bytes in memory are always readable"),
+    }
 }
 
 /// Reads the folder's top-level regular files and ingests them; the recordings sorted by run.

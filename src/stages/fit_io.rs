@@ -20,7 +20,7 @@ pub fn file_input<'a>(
         Some(Artifact::Collection(_)) => Err(StageError(format!(
             "the {kind} stage runs once per run: add `foreach = \"{name}\"` to its section in pipeline.toml"
         ))),
-        Some(Artifact::InStore(_)) => Err(StageError(IN_STORE_INPUT.into())),
+        Some(Artifact::InStore(_) | Artifact::OnDisk(_)) => Err(StageError(IN_STORE_INPUT.into())),
         None => Err(StageError(format!(
             "the {kind} stage needs the input `{name}`: bind it in pipeline.toml, e.g. {name} = \"ingest:runs\""
         ))),
@@ -35,7 +35,7 @@ pub fn collection_input<'a>(
 ) -> Result<&'a BTreeMap<String, Vec<u8>>, StageError> {
     match input.inputs.get(name) {
         Some(Artifact::Collection(items)) => Ok(items),
-        Some(Artifact::InStore(_)) => Err(StageError(IN_STORE_INPUT.into())),
+        Some(Artifact::InStore(_) | Artifact::OnDisk(_)) => Err(StageError(IN_STORE_INPUT.into())),
         Some(Artifact::File(_)) => Err(StageError(format!(
             "the {kind} stage needs `{name}` whole: bind it to a per-run output (e.g. \"fit:fits\") and do not list it in `foreach`"
         ))),

@@ -1,12 +1,14 @@
 //! The `ingest` stage kind: the dataset folder's files in, checked recordings and the list of skipped runs out.
 
 use crate::engine::stage::{
-    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+    typed_params, Artifact, InputFile, ParamError, StageError, StageInput, StageKind, StageOutputs,
     IN_STORE_INPUT,
 };
-use crate::ingest::{self, IngestParams};
+use crate::ingest::{self, IngestParams, Items, Streamed};
+use std::collections::BTreeMap;
 
-/// `kind = "ingest"`: input `dataset` (a folder's top-level files), outputs `runs` (run → `Recording` in
+/// `kind = "ingest"`: input `dataset` (a folder's top-level files; trajectories.csv is read from
+/// disk in pieces, so it may be larger than memory), outputs `runs` (run → `Recording` in
 /// the binary format of `recording::item`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
 /// was an output too; no stage read it, and writing it cost as much as reading the CSV typed.)
 pub struct Ingest;
@@ -33,11 +35,16 @@ impl StageKind for Ingest {
         Ok(json)
     }
 
+    fn streamed_inputs(&self) -> &'static [&'static str] {
+        &["dataset"]
+    }
+
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let (params, _) =
             typed_params::<IngestParams>(input.params).map_err(|e| StageError(e.to_string()))?;
-        let files = match input.inputs.get("dataset") {
-            Some(Artifact::Collection(files)) => files,
+        let dataset = match input.inputs.get("dataset") {
+            Some(Artifact::OnDisk(files)) => Dataset::OnDisk(files),
+            Some(Artifact::Collection(files)) => Dataset::InMemory(files),
             Some(Artifact::InStore(_)) => return Err(StageError(IN_STORE_INPUT.into())),
             Some(Artifact::File(_)) => {
                 return Err(StageError(
@@ -50,15 +57,10 @@ impl StageKind for Ingest {
                 ))
             }
         };
-        let mut out = StageOutputs::new();
         let (runs, skipped) = match input.put_item {
             // each item into the store as it is made: never all items at once
             Some(put) => {
-                let items =
-                    ingest::ingest_items_kept(files, &params, ingest::CHUNK_BYTES, &mut |bytes| {
-                        put(&bytes)
-                    })
-                    .map_err(|e| StageError(e.to_string()))?;
+                let items = items_of(dataset, &params, &mut |bytes| put(&bytes))?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
                 let runs = items
                     .runs
@@ -68,12 +70,12 @@ impl StageKind for Ingest {
                 (Artifact::InStore(runs), items.skipped)
             }
             None => {
-                let items =
-                    ingest::ingest_items(files, &params).map_err(|e| StageError(e.to_string()))?;
+                let items = items_of(dataset, &params, &mut |bytes| bytes)?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
                 (Artifact::Collection(items.runs), items.skipped)
             }
         };
+        let mut out = StageOutputs::new();
         out.insert("runs".into(), runs);
         out.insert(
             "skipped".into(),
@@ -81,4 +83,64 @@ impl StageKind for Ingest {
         );
         Ok(out)
     }
+}
+
+/// The dataset folder as the stage gets it.
+#[derive(Clone, Copy)]
+enum Dataset<'a> {
+    /// Left on disk by the engine: trajectories.csv is read in pieces, the rest whole.
+    OnDisk(&'a BTreeMap<String, InputFile>),
+    /// Read whole (tests, and callers without an engine).
+    InMemory(&'a BTreeMap<String, Vec<u8>>),
+}
+
+/// The items of the dataset, each handed to `keep` as it is made.
+fn items_of<T>(
+    dataset: Dataset,
+    params: &IngestParams,
+    keep: &mut dyn FnMut(Vec<u8>) -> T,
+) -> Result<Items<T>, StageError> {
+    let failed = |e: ingest::IngestError| StageError(e.to_string());
+    let files = match dataset {
+        Dataset::InMemory(files) => {
+            return ingest::ingest_items_kept(files, params, ingest::CHUNK_BYTES, keep)
+                .map_err(failed)
+        }
+        Dataset::OnDisk(files) => files,
+    };
+    const STREAMED: &str = "trajectories.csv";
+    let mut bytes = BTreeMap::new();
+    for (name, file) in files {
+        // trajectories.csv stands in the map with no bytes, for its name
+        let read = if name == STREAMED {
+            Vec::new()
+        } else {
+            file.read()?
+        };
+        bytes.insert(name.clone(), read);
+    }
+    let Some(csv) = files.get(STREAMED) else {
+        return ingest::ingest_items_kept(&bytes, params, ingest::CHUNK_BYTES, keep)
+            .map_err(failed);
+    };
+    let streamed = ingest::stream_items(
+        &bytes,
+        Some(&mut csv.open()?),
+        params,
+        ingest::CHUNK_BYTES,
+        keep,
+    );
+    let why = match streamed {
+        Ok(Streamed::Done(items)) => return Ok(items),
+        Ok(Streamed::ReadWhole(why)) => why,
+        Err(e) => {
+            return Err(StageError(format!(
+                "{} could not be read: {e}",
+                csv.path.display()
+            )))
+        }
+    };
+    // not for the fast path: read whole, which sorts the rows or names every problem
+    bytes.insert(STREAMED.into(), csv.read()?);
+    ingest::ingest_items_whole(&bytes, params, why, keep).map_err(failed)
 }

@@ -88,7 +88,9 @@ pub fn unpack<'a>(inputs: &BTreeMap<&'a str, &'a Artifact>) -> Inputs<'a> {
                 Artifact::Collection(m) => {
                     Input::Items(m.iter().map(|(k, v)| (k.as_str(), v.as_slice())).collect())
                 }
-                Artifact::InStore(_) => unreachable!("{}", crate::engine::stage::IN_STORE_INPUT),
+                Artifact::InStore(_) | Artifact::OnDisk(_) => {
+                    unreachable!("{}", crate::engine::stage::IN_STORE_INPUT)
+                }
             };
             (*name, input)
         })

@@ -76,7 +76,7 @@ fn file<'a>(artifact: &'a Artifact, name: &str) -> Result<&'a [u8], StageError> 
         Artifact::Collection(_) => Err(StageError(format!(
             "input `{name}` must be a single file, not a collection; bind it to a file"
         ))),
-        Artifact::InStore(_) => Err(StageError(IN_STORE_INPUT.into())),
+        Artifact::InStore(_) | Artifact::OnDisk(_) => Err(StageError(IN_STORE_INPUT.into())),
     }
 }
 
