@@ -15,6 +15,7 @@
 //! its last row is read, so memory is bounded by a piece, not the file; it needs each run's rows
 //! to be one block and otherwise says why, and the caller reads the file whole as above.
 
+use super::csv_fast;
 use super::csv_pieces::{for_each_piece, Stop};
 use super::interchange;
 use super::sanity;
@@ -440,6 +441,15 @@ fn csv_chunks(
 ) -> Result<usize, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     for_each_piece(read, chunk_bytes, &mut |text| {
+        if let Some(rows) = csv_fast::parse(text) {
+            let block = Block {
+                particle: &rows.particle,
+                frame: &rows.frame,
+                t_s: &rows.t_s,
+                z_m: &rows.z_m,
+            };
+            return Ok(stream.rows(rows.ids.iter().copied(), &block)?);
+        }
         let (text, data_lines) = check_csv(text).ok_or(PROBLEM)?;
         let df = parse_csv(text).ok_or(PROBLEM)?;
         if df.height() != data_lines {
@@ -495,26 +505,35 @@ impl Stream<'_, '_> {
             t_s: floats(&t_s).ok_or(PROBLEM)?,
             z_m: floats(&z_m).ok_or(PROBLEM)?,
         };
+        let ids = run.str().map_err(|_| PROBLEM)?;
+        self.rows(ids.downcast_iter().flat_map(|a| a.values_iter()), &block)
+    }
+
+    /// Adds rows (their run ids, and their other columns in `block`) to their runs, handing on
+    /// each run whose rows end among them.
+    fn rows<'i>(
+        &mut self,
+        ids: impl Iterator<Item = &'i str>,
+        block: &Block,
+    ) -> Result<(), &'static str> {
         let mut start = 0;
         let mut i = 0;
-        for arr in run.str().map_err(|_| PROBLEM)?.downcast_iter() {
-            for id in arr.values_iter() {
-                if self.pending.as_ref().map(|(r, _)| r.as_str()) != Some(id) {
-                    self.extend(&block, start..i);
-                    self.hand_on()?;
-                    if id.is_empty() || id.trim() != id {
-                        return Err(PROBLEM);
-                    }
-                    if self.done.contains(id) {
-                        return Err(NOT_GROUPED);
-                    }
-                    self.pending = Some((id.to_string(), Columns::empty()));
-                    start = i;
+        for id in ids {
+            if self.pending.as_ref().map(|(r, _)| r.as_str()) != Some(id) {
+                self.extend(block, start..i);
+                self.hand_on()?;
+                if id.is_empty() || id.trim() != id {
+                    return Err("an untrimmed run id");
                 }
-                i += 1;
+                if self.done.contains(id) {
+                    return Err(NOT_GROUPED);
+                }
+                self.pending = Some((id.to_string(), Columns::empty()));
+                start = i;
             }
+            i += 1;
         }
-        self.extend(&block, start..i);
+        self.extend(block, start..i);
         Ok(())
     }
 

@@ -14,6 +14,7 @@ mod axis;
 mod columnar;
 pub use columnar::CHUNK_BYTES;
 mod csv_check;
+mod csv_fast;
 mod csv_pieces;
 pub mod error;
 mod interchange;
