@@ -381,9 +381,9 @@ pub const CHUNK_BYTES: usize = 8 << 20;
 /// instead.
 pub const NOT_GROUPED: &str = "the rows of a run are not together";
 
-/// The recordings of a clean interchange dataset handed to `each` one run at a time, as soon as a
-/// run's last row is read, in file order: trajectories.csv is read `chunk_bytes` at a time (a
-/// Parquet file whole), so neither the whole table nor all recordings are held. The CSV comes
+/// The recordings of a clean interchange dataset handed to `each` in file order, a piece's worth
+/// at a time (the runs whose last row was in the piece just read): trajectories.csv is read
+/// `chunk_bytes` at a time (a Parquet file whole), so neither the whole table nor all recordings are held. The CSV comes
 /// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
 /// read), else from `files`. Gives the number of chunks read. It needs each run's rows to be one
 /// block (in any order within it), as `groove synth` and most trackers write them. At anything
@@ -392,10 +392,10 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 /// rows or names the problems. On clean grouped data it gives the runs `recordings` gives.
 pub fn stream(
     files: &BTreeMap<String, Vec<u8>>,
-    csv: Option<&mut dyn std::io::Read>,
+    csv: Option<&mut (dyn std::io::Read + Send)>,
     min_frames: usize,
     chunk_bytes: usize,
-    each: &mut dyn FnMut(Recording),
+    each: &mut dyn FnMut(Vec<Recording>),
 ) -> Result<usize, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     let (runs_name, runs_bytes) = interchange::pick(files, "runs", "").map_err(|_| PROBLEM)?;
@@ -418,12 +418,14 @@ pub fn stream(
         pending: None,
         failed: false,
         min_frames,
+        ready: Vec::new(),
         each,
     };
     let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
     let chunks = match csv {
         _ if parquet => {
             stream.chunk(&read_parquet(traj_bytes).ok_or(PROBLEM)?)?;
+            stream.hand_over();
             1
         }
         Some(read) => csv_chunks(read, chunk_bytes, &mut stream)?,
@@ -435,7 +437,7 @@ pub fn stream(
 
 /// Reads CSV text in pieces into `stream`, each checked as `read_csv` checks a whole file.
 fn csv_chunks(
-    read: &mut dyn std::io::Read,
+    read: &mut (dyn std::io::Read + Send),
     chunk_bytes: usize,
     stream: &mut Stream,
 ) -> Result<usize, Stop> {
@@ -448,14 +450,18 @@ fn csv_chunks(
                 t_s: &rows.t_s,
                 z_m: &rows.z_m,
             };
-            return Ok(stream.rows(rows.ids.iter().copied(), &block)?);
+            stream.rows(rows.ids.iter().copied(), &block)?;
+            stream.hand_over();
+            return Ok(());
         }
         let (text, data_lines) = check_csv(text).ok_or(PROBLEM)?;
         let df = parse_csv(text).ok_or(PROBLEM)?;
         if df.height() != data_lines {
             return Err(PROBLEM.into());
         }
-        Ok(stream.chunk(&df)?)
+        stream.chunk(&df)?;
+        stream.hand_over();
+        Ok(())
     })
 }
 
@@ -484,7 +490,9 @@ struct Stream<'a, 'e> {
     /// A run whose recording `recordings` would not give: the dataset is read whole at the end.
     failed: bool,
     min_frames: usize,
-    each: &'e mut dyn FnMut(Recording),
+    /// The runs completed in the piece being read, handed over together after it.
+    ready: Vec<Recording>,
+    each: &'e mut dyn FnMut(Vec<Recording>),
 }
 
 impl Stream<'_, '_> {
@@ -537,6 +545,13 @@ impl Stream<'_, '_> {
         Ok(())
     }
 
+    /// The recordings ready go to `each`, all at once (it may work on them in parallel).
+    fn hand_over(&mut self) {
+        if !self.ready.is_empty() {
+            (self.each)(std::mem::take(&mut self.ready));
+        }
+    }
+
     fn extend(&mut self, block: &Block, rows: Range<usize>) {
         if let Some((_, c)) = &mut self.pending {
             c.particle.extend_from_slice(&block.particle[rows.clone()]);
@@ -546,7 +561,7 @@ impl Stream<'_, '_> {
         }
     }
 
-    /// The run being read is complete: its recording goes to `each`.
+    /// The run being read is complete: its recording is ready.
     fn hand_on(&mut self) -> Result<(), &'static str> {
         let Some((id, cols)) = self.pending.take() else {
             return Ok(());
@@ -564,7 +579,7 @@ impl Stream<'_, '_> {
         };
         self.done.insert(id);
         match rec {
-            Some(rec) => (self.each)(rec),
+            Some(rec) => self.ready.push(rec),
             // Read on: the reason may yet turn out to be rows of runs interleaved.
             None => self.failed = true,
         }
@@ -574,6 +589,7 @@ impl Stream<'_, '_> {
     /// The last run is complete; every run of runs.csv had rows.
     fn finish(mut self) -> Result<(), &'static str> {
         self.hand_on()?;
+        self.hand_over();
         if self.failed {
             Err("a run with a problem to name, or one runs.csv does not list")
         } else if self.infos.is_empty() {

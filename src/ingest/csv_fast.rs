@@ -46,6 +46,8 @@ pub fn parse(text: &[u8]) -> Option<Rows<'_>> {
 
 /// Every line of `body`; the last may lack its newline.
 fn lines(body: &[u8]) -> Option<Rows<'_>> {
+    // one check of the text, so that fields are `str` slices with no check each
+    let body = std::str::from_utf8(body).ok()?;
     let guess = body.len() / 40 + 1;
     let mut rows = Rows {
         ids: Vec::with_capacity(guess),
@@ -56,12 +58,12 @@ fn lines(body: &[u8]) -> Option<Rows<'_>> {
     };
     let mut rest = body;
     while !rest.is_empty() {
-        let (line, next) = match memchr::memchr(b'\n', rest) {
+        let (line, next) = match memchr::memchr(b'\n', rest.as_bytes()) {
             Some(k) => (&rest[..k], &rest[k + 1..]),
             None => (rest, &rest[rest.len()..]),
         };
-        let line = line.strip_suffix(b"\r").unwrap_or(line);
-        let mut fields = line.split(|&b| b == b',');
+        let line = line.strip_suffix('\r').unwrap_or(line);
+        let mut fields = line.split(',');
         let id = run_id(fields.next()?)?;
         let particle = int(fields.next()?)?;
         let frame = int(fields.next()?)?;
@@ -81,16 +83,17 @@ fn lines(body: &[u8]) -> Option<Rows<'_>> {
 }
 
 /// A run id of letters, digits, `.`, `_` and `-`.
-fn run_id(field: &[u8]) -> Option<&str> {
+fn run_id(field: &str) -> Option<&str> {
     let ok = !field.is_empty()
         && field
-            .iter()
-            .all(|&b| b.is_ascii_alphanumeric() || matches!(b, b'.' | b'_' | b'-'));
-    ok.then(|| std::str::from_utf8(field).ok()).flatten()
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'.' | b'_' | b'-'));
+    ok.then_some(field)
 }
 
 /// `-?[0-9]{1,18}`.
-fn int(field: &[u8]) -> Option<i64> {
+fn int(field: &str) -> Option<i64> {
+    let field = field.as_bytes();
     let (negative, digits) = match field.strip_prefix(b"-") {
         Some(d) => (true, d),
         None => (false, field),
@@ -105,7 +108,8 @@ fn int(field: &[u8]) -> Option<i64> {
 }
 
 /// `-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?`, parsed by `str::parse`.
-fn float(field: &[u8]) -> Option<f64> {
+fn float(text: &str) -> Option<f64> {
+    let field = text.as_bytes();
     let digits = |s: &[u8]| s.iter().take_while(|b| b.is_ascii_digit()).count();
     let mut at = usize::from(field.first() == Some(&b'-'));
     let whole = digits(&field[at..]);
@@ -134,7 +138,7 @@ fn float(field: &[u8]) -> Option<f64> {
     if at != field.len() {
         return None;
     }
-    std::str::from_utf8(field).ok()?.parse().ok()
+    text.parse().ok()
 }
 
 #[cfg(test)]

@@ -23,7 +23,65 @@ impl From<&'static str> for Stop {
 /// only where one line is longer), until the reader is empty; a byte-order mark before the header
 /// is dropped. The last line need not end in a newline. Gives the number of pieces (none for a
 /// header without data); a file without a line end is refused.
+///
+/// The reader is read on a thread of its own a megabyte at a time, a few megabytes ahead of the
+/// pieces (so that reading, and the hashing `InputFile`'s reader does, overlap the parsing).
 pub fn for_each_piece(
+    read: &mut (dyn Read + Send),
+    chunk_bytes: usize,
+    piece: &mut dyn FnMut(&[u8]) -> Result<(), Stop>,
+) -> Result<usize, Stop> {
+    const BLOCK: u64 = 1 << 20;
+    std::thread::scope(|scope| {
+        let (blocks, received) = std::sync::mpsc::sync_channel(8);
+        scope.spawn(move || loop {
+            let mut block = Vec::with_capacity(BLOCK as usize);
+            match read.take(BLOCK).read_to_end(&mut block) {
+                Ok(0) => return,
+                Ok(_) => {
+                    if blocks.send(Ok(block)).is_err() {
+                        return; // the pieces stopped early
+                    }
+                }
+                Err(e) => {
+                    let _ = blocks.send(Err(e));
+                    return;
+                }
+            }
+        });
+        let mut ahead = Ahead {
+            received,
+            block: Vec::new(),
+            at: 0,
+        };
+        pieces(&mut ahead, chunk_bytes, piece)
+    })
+}
+
+/// The blocks the reading thread sent, as a reader.
+struct Ahead {
+    received: std::sync::mpsc::Receiver<std::io::Result<Vec<u8>>>,
+    block: Vec<u8>,
+    at: usize,
+}
+
+impl Read for Ahead {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.at == self.block.len() {
+            match self.received.recv() {
+                Ok(block) => (self.block, self.at) = (block?, 0),
+                Err(_) => return Ok(0), // the reading thread is done: the end
+            }
+        }
+        let n = buf.len().min(self.block.len() - self.at);
+        buf[..n].copy_from_slice(&self.block[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
+
+/// `for_each_piece` on the reader itself.
+fn pieces(
     read: &mut dyn Read,
     chunk_bytes: usize,
     piece: &mut dyn FnMut(&[u8]) -> Result<(), Stop>,

@@ -35,6 +35,7 @@ pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
 
 use crate::recording::{item, Recording};
 use csv_pieces::Stop;
+use rayon::prelude::*;
 use samples::{RunRow, SampleFile};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -207,18 +208,18 @@ pub fn ingest_items_in_chunks(
     params: &IngestParams,
     chunk_bytes: usize,
 ) -> Result<Items, IngestError> {
-    ingest_items_kept(files, params, chunk_bytes, &mut |bytes| bytes)
+    ingest_items_kept(files, params, chunk_bytes, &|bytes| bytes)
 }
 
 /// `ingest_items_in_chunks` handing each item's bytes to `keep` as soon as it is made and keeping
 /// what `keep` returns instead (the stage puts each item in the store and keeps its hash, so
 /// that no more than a chunk's items are held). If the stream stops and the dataset is read
 /// whole, `keep` sees the streamed runs again.
-pub fn ingest_items_kept<T>(
+pub fn ingest_items_kept<T: Send>(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
     chunk_bytes: usize,
-    keep: &mut dyn FnMut(Vec<u8>) -> T,
+    keep: &(dyn Fn(Vec<u8>) -> T + Sync),
 ) -> Result<Items<T>, IngestError> {
     match stream_items(files, None, params, chunk_bytes, keep) {
         Ok(Streamed::Done(items)) => Ok(items),
@@ -239,12 +240,12 @@ pub enum Streamed<T> {
 /// trajectories.csv comes from `csv` if given (then it stands in `files` with no bytes, for its
 /// name), a piece at a time, so a file larger than memory is never held. The error is a failure
 /// to read `csv` (or its content changing, as `InputFile` checks).
-pub fn stream_items<T>(
+pub fn stream_items<T: Send>(
     files: &BTreeMap<String, Vec<u8>>,
-    csv: Option<&mut dyn std::io::Read>,
+    csv: Option<&mut (dyn std::io::Read + Send)>,
     params: &IngestParams,
     chunk_bytes: usize,
-    keep: &mut dyn FnMut(Vec<u8>) -> T,
+    keep: &(dyn Fn(Vec<u8>) -> T + Sync),
 ) -> Result<Streamed<T>, std::io::Error> {
     if check_params(params).is_err() || !reads_interchange(files, params.format) {
         return Ok(Streamed::ReadWhole(
@@ -258,10 +259,15 @@ pub fn stream_items<T>(
         csv,
         params.min_frames,
         chunk_bytes,
-        &mut |r: Recording| {
-            clash |= runs
-                .insert(item_name(&r.info.run), keep(item::encode(&r)))
-                .is_some();
+        &mut |ready: Vec<Recording>| {
+            // the runs of a piece encoded and kept (stored) in parallel
+            let kept: Vec<(String, T)> = ready
+                .par_iter()
+                .map(|r| (item_name(&r.info.run), keep(item::encode(r))))
+                .collect();
+            for (name, k) in kept {
+                clash |= runs.insert(name, k).is_some();
+            }
         },
     );
     let why = match streamed {
@@ -285,11 +291,11 @@ pub fn stream_items<T>(
 }
 
 /// `ingest`'s recordings as items (each through `keep`), with `why` the dataset was read whole.
-pub fn ingest_items_whole<T>(
+pub fn ingest_items_whole<T: Send>(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
     why: &str,
-    keep: &mut dyn FnMut(Vec<u8>) -> T,
+    keep: &(dyn Fn(Vec<u8>) -> T + Sync),
 ) -> Result<Items<T>, IngestError> {
     let ingested = ingest(files, params)?;
     let runs = ingested
@@ -317,7 +323,8 @@ pub fn stream_recordings(
     if check_params(params).is_err() || !reads_interchange(files, params.format) {
         return Err("not a clean interchange dataset");
     }
-    match columnar::stream(files, None, params.min_frames, chunk_bytes, each) {
+    let mut each_of = |ready: Vec<Recording>| ready.into_iter().for_each(&mut *each);
+    match columnar::stream(files, None, params.min_frames, chunk_bytes, &mut each_of) {
         Ok(chunks) => Ok(chunks),
         Err(Stop::Reason(why)) => Err(why),
         Err(Stop::Read(_)) => unreachable!("bytes in memory are always readable"),

@@ -60,7 +60,7 @@ impl StageKind for Ingest {
         let (runs, skipped) = match input.put_item {
             // each item into the store as it is made: never all items at once
             Some(put) => {
-                let items = items_of(dataset, &params, &mut |bytes| put(&bytes))?;
+                let items = items_of(dataset, &params, &|bytes| put(&bytes))?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
                 let runs = items
                     .runs
@@ -70,7 +70,7 @@ impl StageKind for Ingest {
                 (Artifact::InStore(runs), items.skipped)
             }
             None => {
-                let items = items_of(dataset, &params, &mut |bytes| bytes)?;
+                let items = items_of(dataset, &params, &|bytes| bytes)?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
                 (Artifact::Collection(items.runs), items.skipped)
             }
@@ -95,10 +95,10 @@ enum Dataset<'a> {
 }
 
 /// The items of the dataset, each handed to `keep` as it is made.
-fn items_of<T>(
+fn items_of<T: Send>(
     dataset: Dataset,
     params: &IngestParams,
-    keep: &mut dyn FnMut(Vec<u8>) -> T,
+    keep: &(dyn Fn(Vec<u8>) -> T + Sync),
 ) -> Result<Items<T>, StageError> {
     let failed = |e: ingest::IngestError| StageError(e.to_string());
     let files = match dataset {
