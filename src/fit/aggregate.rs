@@ -4,11 +4,11 @@
 //! estimate is one that a single wild run cannot capture: the robust weighted mean of μ and
 //! Theil–Sen lines.
 
-use super::bootstrap::percentile_intervals;
+use super::bootstrap::percentile_intervals_in_groups;
 use super::regression::{mean_where, RobustMean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::{theil_sen_intercept, theil_sen_many, SlopeOrder};
+use crate::stats::{theil_sen_intercept, theil_sen_many, SlopeOrder, SLOPE_LANES};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -135,34 +135,50 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         true => 0.0,
         false => point[3 + 2 * k] - order.slope(k, &vec![1; ok.len()]),
     });
-    let ci = percentile_intervals(
+    // Resamples in groups of SLOPE_LANES, whose slopes share one pass over the slope order.
+    let ci = percentile_intervals_in_groups(
         ok.len(),
         opts.bootstrap_resamples,
         seed,
         opts.level,
-        |idx| {
-            let mut w = vec![0u16; ok.len()];
-            for &i in idx {
-                w[i] = w[i].saturating_add(1);
-            }
-            let slopes = order.slopes(&w);
-            let mut buf = Vec::with_capacity(idx.len());
-            let mut line = |k: usize, y: &[f64]| {
-                let b = slopes[k] + shift[k];
-                match b.is_nan() {
-                    true => (f64::NAN, f64::NAN),
-                    false => (theil_sen_intercept(&speed, y, idx, b, &mut buf), b),
+        SLOPE_LANES,
+        |group| {
+            let n = ok.len();
+            let mut lanes = vec![[0u16; SLOPE_LANES]; n];
+            let mut weights = vec![vec![0u16; n]; group.len()];
+            for (l, (idx, w)) in group.iter().zip(&mut weights).enumerate() {
+                for &i in idx {
+                    w[i] = w[i].saturating_add(1);
                 }
-            };
-            let ((ta, tb), (ma, mb)) = (line(0, &t), line(1, &mu));
-            [
-                robust_mean.of(&w),
-                mean_where(&mu, idx, fast),
-                ta,
-                tb,
-                ma,
-                mb,
-            ]
+                for i in 0..n {
+                    lanes[i][l] = w[i];
+                }
+            }
+            let slopes = order.slopes_lanes(&lanes);
+            let mut buf = Vec::with_capacity(n);
+            group
+                .iter()
+                .zip(&weights)
+                .zip(slopes)
+                .map(|((idx, w), slopes)| {
+                    let mut line = |k: usize, y: &[f64]| {
+                        let b = slopes[k] + shift[k];
+                        match b.is_nan() {
+                            true => (f64::NAN, f64::NAN),
+                            false => (theil_sen_intercept(&speed, y, idx, b, &mut buf), b),
+                        }
+                    };
+                    let ((ta, tb), (ma, mb)) = (line(0, &t), line(1, &mu));
+                    [
+                        robust_mean.of(w),
+                        mean_where(&mu, idx, fast),
+                        ta,
+                        tb,
+                        ma,
+                        mb,
+                    ]
+                })
+                .collect()
         },
     );
     let est = |k: usize| {

@@ -21,13 +21,31 @@ pub fn percentile_intervals<const K: usize>(
     level: f64,
     stat: impl Fn(&[usize]) -> [f64; K] + Sync,
 ) -> [Option<Interval>; K] {
+    percentile_intervals_in_groups(n, resamples, seed, level, 1, |group| {
+        group.iter().map(|idx| stat(idx)).collect()
+    })
+}
+
+/// `percentile_intervals` with the statistics computed `group` resamples at a time (`stats` gets
+/// up to `group` resamples, in draw order, and gives their statistics in that order), for
+/// statistics that share work across resamples (`stats::SlopeOrder::slopes_lanes`). The same
+/// draws, so the same intervals as `percentile_intervals` of the same statistic.
+pub fn percentile_intervals_in_groups<const K: usize>(
+    n: usize,
+    resamples: usize,
+    seed: u64,
+    level: f64,
+    group: usize,
+    stats: impl Fn(&[Vec<usize>]) -> Vec<[f64; K]> + Sync,
+) -> [Option<Interval>; K] {
+    let group = group.max(1);
     let mut out = [None; K];
     if n == 0 || resamples == 0 {
         return out;
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    // At most about 8 MB of drawn indices at a time.
-    let batch = ((1 << 20) / n).clamp(2, 64);
+    // About 8 MB of drawn indices at a time, in whole groups.
+    let batch = ((1 << 20) / n).clamp(2, 64).div_ceil(group) * group;
     let mut draws: Vec<Vec<f64>> = vec![Vec::with_capacity(resamples); K];
     let mut done = 0;
     while done < resamples {
@@ -35,8 +53,8 @@ pub fn percentile_intervals<const K: usize>(
         let idx: Vec<Vec<usize>> = (0..b)
             .map(|_| (0..n).map(|_| rng.random_range(0..n)).collect())
             .collect();
-        let stats: Vec<[f64; K]> = idx.par_iter().map(|idx| stat(idx)).collect();
-        for s in stats {
+        let groups: Vec<Vec<[f64; K]>> = idx.par_chunks(group).map(&stats).collect();
+        for s in groups.into_iter().flatten() {
             for k in 0..K {
                 if s[k].is_finite() {
                     draws[k].push(s[k]);

@@ -14,4 +14,4 @@ pub use line::{
 };
 pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
 pub use quantile::{quantile_interpolated, quantile_nearest};
-pub use slope_order::SlopeOrder;
+pub use slope_order::{SlopeOrder, LANES as SLOPE_LANES};

@@ -20,6 +20,10 @@ pub struct SlopeOrder<const K: usize> {
     /// Per series: the pairs (i, j) in ascending order of slope, and those slopes.
     pairs: [Vec<[u32; 2]>; K],
     slopes: [Vec<f64>; K],
+    /// Per series: the first and the second half of its ordered pairs, each sorted by point,
+    /// for sums of weights, which need no order (reading the weights in point order is kinder
+    /// to the cache than reading them in slope order).
+    halves: [[Vec<[u32; 2]>; 2]; K],
     /// Points whose y is not finite in some series (a resample holding one has no line).
     bad: [Vec<u32>; K],
     /// Whether every pair of distinct x is kept (exact), or a draw.
@@ -80,9 +84,19 @@ impl<const K: usize> SlopeOrder<K> {
             slopes[k] = keyed.iter().map(|p| p.0).collect();
             pairs[k] = keyed.into_iter().map(|p| p.1).collect();
         }
+        let halves = std::array::from_fn(|k| {
+            let mid = pairs[k].len() / 2;
+            let by_point = |part: &[[u32; 2]]| {
+                let mut part = part.to_vec();
+                part.sort_unstable();
+                part
+            };
+            [by_point(&pairs[k][..mid]), by_point(&pairs[k][mid..])]
+        });
         SlopeOrder {
             pairs,
             slopes,
+            halves,
             bad,
             every_pair,
         }
@@ -109,12 +123,52 @@ impl<const K: usize> SlopeOrder<K> {
         })
     }
 
+    /// `slopes` of `LANES` resamples at once: `w[i][l]` is how often point i was drawn in
+    /// resample l (a lane of zeros gives NaN). The pass over the pairs is shared: each pair's
+    /// two points' weights are read once for every lane, so eight resamples cost little more
+    /// than one. Lane l gives exactly `slopes` of its weights.
+    pub fn slopes_lanes(&self, w: &[[u16; LANES]]) -> [[f64; K]; LANES] {
+        if K == 0 || self.bad.iter().any(|b| !b.is_empty()) {
+            return std::array::from_fn(|l| {
+                let lane: Vec<u16> = w.iter().map(|v| v[l]).collect();
+                self.slopes(&lane)
+            });
+        }
+        // with no bad point every series holds the same pairs (in its own order)
+        let sums = |k: usize, half: usize| -> [u64; LANES] {
+            let mut acc = [0u64; LANES];
+            for &[i, j] in &self.halves[k][half] {
+                let (a, b) = (&w[i as usize], &w[j as usize]);
+                for l in 0..LANES {
+                    acc[l] += u64::from(a[l]) * u64::from(b[l]);
+                }
+            }
+            acc
+        };
+        let below_first = sums(0, 0);
+        let above_first = sums(0, 1);
+        let mut out = [[f64::NAN; K]; LANES];
+        for k in 0..K {
+            let below = if k == 0 { below_first } else { sums(k, 0) };
+            for (l, slopes) in out.iter_mut().enumerate() {
+                let pairs = &self.pairs[k];
+                let wt = |p: usize| {
+                    let [i, j] = pairs[p];
+                    u64::from(w[i as usize][l]) * u64::from(w[j as usize][l])
+                };
+                let total = below_first[l] + above_first[l];
+                slopes[k] = self.weighted_median(k, wt, below[l], total);
+            }
+        }
+        out
+    }
+
     /// The slope and the total weight of the pairs (summed unless given).
     fn slope_given_total(&self, k: usize, w: &[u16], total: Option<u64>) -> (f64, u64) {
         if self.bad[k].iter().any(|&i| w[i as usize] > 0) {
             return (f64::NAN, 0);
         }
-        let (pairs, slopes) = (&self.pairs[k], &self.slopes[k]);
+        let pairs = &self.pairs[k];
         let wt = |p: usize| {
             let [i, j] = pairs[p];
             w[i as usize] as u64 * w[j as usize] as u64
@@ -122,9 +176,18 @@ impl<const K: usize> SlopeOrder<K> {
         let mid = pairs.len() / 2;
         let below: u64 = (0..mid).map(wt).sum();
         let total = total.unwrap_or_else(|| below + (mid..pairs.len()).map(wt).sum::<u64>());
+        (self.weighted_median(k, wt, below, total), total)
+    }
+
+    /// The median of series k's ordered slopes, pair p weighing `wt(p)`, given the weight
+    /// `below` of the first half of the pairs and the `total`: NaN for no weight; the mean of the
+    /// two middle ones for an even total.
+    fn weighted_median(&self, k: usize, wt: impl Fn(usize) -> u64, below: u64, total: u64) -> f64 {
         if total == 0 {
-            return (f64::NAN, 0);
+            return f64::NAN;
         }
+        let slopes = &self.slopes[k];
+        let mid = slopes.len() / 2;
         // The slope of 0-based rank r in the weighted order, walking from the middle (the
         // weighted median lies near it, so the walk is short).
         let at = |r: u64| -> f64 {
@@ -147,14 +210,16 @@ impl<const K: usize> SlopeOrder<K> {
                 p += 1;
             }
         };
-        let slope = if total % 2 == 1 {
+        if total % 2 == 1 {
             at(total / 2)
         } else {
             0.5 * (at(total / 2 - 1) + at(total / 2))
-        };
-        (slope, total)
+        }
     }
 }
+
+/// Resamples `SlopeOrder::slopes_lanes` takes at once.
+pub const LANES: usize = 8;
 
 #[cfg(test)]
 mod tests {
@@ -199,6 +264,51 @@ mod tests {
         let mut w = vec![0u16; x.len()];
         w[7] = 9;
         assert!(order.slope(0, &w).is_nan());
+    }
+
+    #[test]
+    fn eight_lanes_give_each_resamples_own_slopes_exactly() {
+        use rand::{Rng, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+        let (x, y) = points();
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let bad_y: Vec<f64> = y
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i == 5 { f64::NAN } else { *v })
+            .collect();
+        for (ys, max_pairs) in [
+            ([&y, &x], usize::MAX),
+            ([&y, &x], 500),
+            ([&bad_y, &y], usize::MAX),
+        ] {
+            let order = SlopeOrder::new(&x, [ys[0].as_slice(), ys[1].as_slice()], max_pairs, 2);
+            let mut lanes = vec![[0u16; LANES]; x.len()];
+            let mut each = Vec::new();
+            for l in 0..LANES - 1 {
+                // lane 7 stays empty; lane 0 draws few points
+                let draws = if l == 0 { 3 } else { x.len() };
+                let mut w = vec![0u16; x.len()];
+                for _ in 0..draws {
+                    w[rng.random_range(0..x.len())] += 1;
+                }
+                for i in 0..x.len() {
+                    lanes[i][l] = w[i];
+                }
+                each.push(order.slopes(&w));
+            }
+            let got = order.slopes_lanes(&lanes);
+            for l in 0..LANES - 1 {
+                for k in 0..2 {
+                    assert_eq!(
+                        got[l][k].to_bits(),
+                        each[l][k].to_bits(),
+                        "lane {l} series {k}"
+                    );
+                }
+            }
+            assert!(got[LANES - 1].iter().all(|s| s.is_nan()));
+        }
     }
 
     #[test]
