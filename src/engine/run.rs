@@ -253,10 +253,19 @@ fn publish(
         }
         return Ok(());
     }
-    let mut lock = ctx.lock().clone();
-    record(&mut lock, done, done.keys());
-    lock.stages
-        .retain(|name, _| ctx.pipeline.stages.contains_key(name));
+    // each stage of the pipeline: its record of this run if it completed, else the lock's (the
+    // lock's records that are replaced are not copied: at 100,000 runs each is tens of MB)
+    let old = ctx.lock();
+    let mut lock = super::lockfile::PipelineLock::default();
+    for name in ctx.pipeline.stages.keys() {
+        let now = done
+            .get(name)
+            .filter(|ev| ev.complete)
+            .and_then(|ev| ev.current.as_ref());
+        if let Some(stage) = now.or_else(|| old.stages.get(name)) {
+            lock.stages.insert(name.clone(), stage.clone());
+        }
+    }
     lock.save(&lock_file)?;
     let _ = super::lock_digests::save(&digests, &lock_file, &lock);
     Ok(())
@@ -352,25 +361,6 @@ fn materialize_all(
         s.commit()?;
     }
     Ok(())
-}
-
-/// Put the named completed stages into the lock; true when one of them ran something.
-fn record<'a>(
-    lock: &mut super::lockfile::PipelineLock,
-    done: &std::collections::BTreeMap<String, super::context::Evaluated>,
-    names: impl Iterator<Item = &'a String>,
-) -> bool {
-    let mut ran = false;
-    for name in names {
-        let Some(ev) = done.get(name) else { continue };
-        if let (true, Some(current)) = (ev.complete, &ev.current) {
-            if lock.stages.get(name) != Some(current) {
-                lock.stages.insert(name.clone(), current.clone());
-                ran |= ev.executed > 0;
-            }
-        }
-    }
-    ran
 }
 
 fn append_log(path: &std::path::Path, lines: &[String]) -> Result<(), EngineError> {
