@@ -16,7 +16,8 @@ const RUNS: usize = 100_000;
 /// What ingest may add to the process's peak beyond the input bytes (and, for the stage's items,
 /// beyond the items): a chunk of CSV (8 MB) and its typed columns, one run being assembled and
 /// the set of run ids done, with room to spare. Far below the 1 GB; the input bytes
-/// themselves (held by the engine today) are not ingest's to bound.
+/// themselves (held here by the test, which gives the entry point bytes; the engine leaves the
+/// file on disk, see the engine test below) are not counted.
 const BOUND_BYTES: u64 = 256 << 20;
 
 /// A line of /proc/self/status in bytes (`VmHWM`: peak resident set; `VmRSS`: now).
@@ -105,7 +106,7 @@ fn a_100k_run_campaign_streams_with_memory_bounded_by_a_chunk() {
         "streaming ingest grew the peak by {grew} bytes (bound {BOUND_BYTES})"
     );
 
-    // 2. The stage's items, all held (the engine takes the collection whole today).
+    // 2. The stage's items, all held (the in-memory entry point, without a store).
     reset_peak();
     let before = status_bytes("VmRSS");
     let items = ingest::ingest_items(&files, &params).unwrap();
