@@ -11,7 +11,7 @@ use super::error::EngineError;
 use super::execute::{execute, load_shared, Bound, Source};
 use super::hashing::sha256_hex;
 use super::inputs::hash_path;
-use super::key::{items_digest, StageKey};
+use super::key::{items_digest, ItemKeys, StageKey};
 use super::lockfile::LockStage;
 use super::materialize::is_current;
 use super::pipeline::{InputSpec, StageSpec};
@@ -342,9 +342,20 @@ fn unit_keys(
     let Some((_, items)) = per_item.first().filter(|(first, _)| *first == f) else {
         return Ok(Vec::new());
     };
-    let mut units = Vec::new();
+    let item_keys = ItemKeys::new(&StageKey {
+        kind: &spec.kind,
+        params: &spec.canonical_params,
+        cmd: spec.cmd.as_deref(),
+        inputs: &digests,
+        outputs: spec.outputs.keys().map(String::as_str).collect(),
+        item: None,
+        seed,
+        groove_version: &ctx.catalog.version,
+        code: ctx.catalog.fingerprint(&spec.kind),
+    });
+    let mut units = Vec::with_capacity(items.len());
+    let mut d = digests.clone();
     for item in items.keys() {
-        let mut d = digests.clone();
         for (name, items) in &per_item {
             let Some(h) = items.get(item) else {
                 return Err(EngineError::StageFailed {
@@ -357,7 +368,7 @@ fn unit_keys(
             };
             d.insert((*name).clone(), h.clone());
         }
-        units.push((Some(item.clone()), key_of(&d, Some(item))));
+        units.push((Some(item.clone()), item_keys.digest(&d, Some(item))));
     }
     Ok(units)
 }
