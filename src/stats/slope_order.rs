@@ -20,10 +20,6 @@ pub struct SlopeOrder<const K: usize> {
     /// Per series: the pairs (i, j) in ascending order of slope, and those slopes.
     pairs: [Vec<[u32; 2]>; K],
     slopes: [Vec<f64>; K],
-    /// Per series: the first and the second half of its ordered pairs, each sorted by point,
-    /// for sums of weights, which need no order (reading the weights in point order is kinder
-    /// to the cache than reading them in slope order).
-    halves: [[Vec<[u32; 2]>; 2]; K],
     /// Points whose y is not finite in some series (a resample holding one has no line).
     bad: [Vec<u32>; K],
     /// Whether every pair of distinct x is kept (exact), or a draw.
@@ -84,19 +80,9 @@ impl<const K: usize> SlopeOrder<K> {
             slopes[k] = keyed.iter().map(|p| p.0).collect();
             pairs[k] = keyed.into_iter().map(|p| p.1).collect();
         }
-        let halves = std::array::from_fn(|k| {
-            let mid = pairs[k].len() / 2;
-            let by_point = |part: &[[u32; 2]]| {
-                let mut part = part.to_vec();
-                part.sort_unstable();
-                part
-            };
-            [by_point(&pairs[k][..mid]), by_point(&pairs[k][mid..])]
-        });
         SlopeOrder {
             pairs,
             slopes,
-            halves,
             bad,
             every_pair,
         }
@@ -135,9 +121,9 @@ impl<const K: usize> SlopeOrder<K> {
             });
         }
         // with no bad point every series holds the same pairs (in its own order)
-        let sums = |k: usize, half: usize| -> [u64; LANES] {
+        let sums = |k: usize, range: std::ops::Range<usize>| -> [u64; LANES] {
             let mut acc = [0u64; LANES];
-            for &[i, j] in &self.halves[k][half] {
+            for &[i, j] in &self.pairs[k][range] {
                 let (a, b) = (&w[i as usize], &w[j as usize]);
                 for l in 0..LANES {
                     acc[l] += u64::from(a[l]) * u64::from(b[l]);
@@ -145,11 +131,12 @@ impl<const K: usize> SlopeOrder<K> {
             }
             acc
         };
-        let below_first = sums(0, 0);
-        let above_first = sums(0, 1);
+        let (len, mid) = (self.pairs[0].len(), self.pairs[0].len() / 2);
+        let below_first = sums(0, 0..mid);
+        let above_first = sums(0, mid..len);
         let mut out = [[f64::NAN; K]; LANES];
         for k in 0..K {
-            let below = if k == 0 { below_first } else { sums(k, 0) };
+            let below = if k == 0 { below_first } else { sums(k, 0..mid) };
             for (l, slopes) in out.iter_mut().enumerate() {
                 let pairs = &self.pairs[k];
                 let wt = |p: usize| {
