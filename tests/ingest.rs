@@ -513,16 +513,20 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
         format!("{}\n", lines.join("\n")).into_bytes(),
     );
     let params = toml::Table::new();
+    // the outputs, and what the stage said of how it read the dataset
     let run = |dataset: &Artifact| {
+        let said = std::sync::Mutex::new(String::new());
+        let progress = |what: &str| *said.lock().unwrap() = what.to_string();
         let input = StageInput {
             params: &params,
             inputs: BTreeMap::from([("dataset", dataset)]),
             item: None,
             seed: 1,
-            progress: None,
+            progress: Some(&progress),
             put_item: None,
         };
-        Ingest.run(&input).map_err(|e| e.to_string())
+        let out = Ingest.run(&input).map_err(|e| e.to_string());
+        (out, said.into_inner().unwrap())
     };
     for (what, files) in [("grouped", grouped), ("shuffled", shuffled), ("bad", bad)] {
         let dir = tempfile::tempdir().unwrap();
@@ -536,16 +540,20 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
                 groove::engine::stage::InputFile { path, sha256 },
             );
         }
-        let in_memory = run(&Artifact::Collection(files.clone()));
-        assert_eq!(run(&Artifact::OnDisk(on_disk.clone())), in_memory, "{what}");
-        if what == "bad" {
-            assert!(in_memory.unwrap_err().contains("row"), "a bad row is named");
+        let (in_memory, _) = run(&Artifact::Collection(files.clone()));
+        let (from_disk, how) = run(&Artifact::OnDisk(on_disk.clone()));
+        assert_eq!(from_disk, in_memory, "{what}");
+        match what {
+            // streamed from the file, not read whole
+            "grouped" => assert!(how.contains("runs, read in 1 chunk of"), "{how}"),
+            "shuffled" => assert!(how.contains("read whole (the rows of a run"), "{how}"),
+            _ => assert!(in_memory.unwrap_err().contains("row"), "a bad row is named"),
         }
         // a stale hash: the content changed after the key was made
         for name in ["runs.csv", "trajectories.csv"] {
             let mut stale = on_disk.clone();
             stale.get_mut(name).unwrap().sha256 = "0".repeat(64);
-            let err = run(&Artifact::OnDisk(stale)).unwrap_err();
+            let err = run(&Artifact::OnDisk(stale)).0.unwrap_err();
             assert!(
                 err.contains(name) && err.contains("changed while groove was running"),
                 "{what} {name}: {err}"
