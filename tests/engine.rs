@@ -742,3 +742,70 @@ fn a_hand_edited_lock_is_noticed_though_a_no_op_trusts_the_lock_digests() {
     assert_ne!(p.read("pipeline.lock"), lock);
     assert_ne!(p.read(".groove/lock-digests.json"), before);
 }
+
+/// Files of a folder with an extension.
+fn count_ext(dir: &std::path::Path, ext: &str) -> usize {
+    std::fs::read_dir(dir).map_or(0, |d| {
+        d.filter_map(|e| e.ok())
+            .filter(|e| e.path().extension().is_some_and(|x| x == ext))
+            .count()
+    })
+}
+
+#[test]
+fn a_stage_of_many_items_is_stored_in_packs_that_serve_edits_verify_and_gc() {
+    let p = Project::new(PER_ITEM_PIPELINE);
+    let runs: Vec<String> = (0..100).map(|i| format!("run_{i:03}.csv")).collect();
+    for (i, r) in runs.iter().enumerate() {
+        p.write(&format!("data/{r}"), &format!("t,z\n0,{i}\n"));
+    }
+    p.stdout(&["run"]);
+    assert_eq!(p.take_trace().len(), 102, "ingest, 100 fits, summary");
+    // the 100 copied runs and the 100 fits went into packs, the fits' entries into one entry
+    // pack: loose entries are only ingest's, fit's index and summary's
+    assert_eq!(count_ext(&p.path(".groove/objects/packs"), "idx"), 2);
+    assert_eq!(count_ext(&p.path(".groove/objects/packs"), "pack"), 2);
+    assert_eq!(count_ext(&p.path(".groove/entries/packs"), "json"), 1);
+    assert_eq!(count_ext(&p.path(".groove/entries"), "json"), 3);
+    let fits_before = p.read("reports/fits/run_042.csv");
+    let table = p.read("reports/table.txt");
+    assert_eq!(table.lines().count(), 101, "{table}");
+
+    // one edit, then another: the second run finds the 98 untouched items in the entry pack
+    p.write("data/run_005.csv", "t,z\n0,edited\n");
+    p.stdout(&["run"]);
+    assert_eq!(p.take_trace(), strings(&["fit run_005.csv", "ingest", "summary"]));
+    p.write("data/run_007.csv", "t,z\n0,edited\n");
+    p.stdout(&["run"]);
+    assert_eq!(p.take_trace(), strings(&["fit run_007.csv", "ingest", "summary"]));
+    assert_eq!(p.read("reports/fits/run_042.csv"), fits_before);
+
+    // gc keeps what the lock names (the packs stay readable); a no-op after it runs nothing
+    p.stdout(&["gc"]);
+    let out = p.stdout(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    assert!(p.stale().is_empty());
+
+    // a damaged pack: verify drops it and the entries naming its blobs; the next run makes
+    // them again, with the same bytes
+    let pack = std::fs::read_dir(p.path(".groove/objects/packs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|f| f.extension().is_some_and(|x| x == "pack"))
+        .max_by_key(|f| std::fs::metadata(f).unwrap().len())
+        .unwrap();
+    let mut bytes = std::fs::read(&pack).unwrap();
+    bytes[3] ^= 0x20;
+    std::fs::write(&pack, bytes).unwrap();
+    let out = p.groove(&["verify"]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(!pack.exists(), "verify removes a damaged pack: {said}");
+    assert_eq!(said.matches("dropped damaged object").count(), 1, "{said}");
+    p.stdout(&["run", "--force", "summary"]);
+    let trace = p.take_trace();
+    assert!(trace.len() >= 3 && trace.contains(&"summary".to_string()), "{trace:?}");
+    assert_eq!(p.read("reports/fits/run_042.csv"), fits_before);
+    assert_eq!(p.read("reports/table.txt").lines().count(), 101);
+    let out = p.stdout(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+}

@@ -8,12 +8,13 @@
 use super::context::{Context, Evaluated};
 use super::dag;
 use super::error::EngineError;
-use super::execute::{execute, load_shared, Bound, Source};
+use super::execute::{execute, load_shared, run_key, store_outputs, Bound, Source};
 use super::hashing::sha256_hex;
 use super::inputs::hash_path;
 use super::key::{items_digest, ItemKeys, StageKey};
 use super::lockfile::LockStage;
 use super::materialize::is_current;
+use super::pack_writer::PackWriter;
 use super::pipeline::{InputSpec, StageSpec};
 use super::provenance;
 use super::store::{Entry, Stored};
@@ -448,7 +449,9 @@ fn run_units(
     }
 }
 
-/// Run keys in this process, items in parallel on the rayon pool.
+/// Run keys in this process, items in parallel on the rayon pool. Many items of a per-item
+/// stage are run in chunks of `ITEM_CHUNK`: each chunk's blobs go into one pack and its entries
+/// into one entry pack (`engine::pack`), so a kill loses at most the chunk being run.
 fn run_here(
     ctx: &Context,
     spec: &StageSpec,
@@ -459,19 +462,53 @@ fn run_here(
 ) -> Result<Vec<Result<Entry, EngineError>>, EngineError> {
     let shared = load_shared(ctx, spec, bound)?;
     let finished = std::sync::atomic::AtomicUsize::new(0);
-    Ok(todo
-        .par_iter()
-        .map(|&i| {
-            let (item, key) = (units[i].0.as_deref(), &units[i].1);
-            let result = execute(ctx, spec, bound, &shared, item, key, seed);
-            if spec.foreach.is_some() {
-                let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                ctx.progress.item_done(&spec.name, n, todo.len());
-            }
-            result
-        })
-        .collect())
+    let done_one = || {
+        if spec.foreach.is_some() {
+            let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            ctx.progress.item_done(&spec.name, n, todo.len());
+        }
+    };
+    if spec.foreach.is_none() || todo.len() < super::pack::PACK_MIN {
+        return Ok(todo
+            .par_iter()
+            .map(|&i| {
+                let (item, key) = (units[i].0.as_deref(), &units[i].1);
+                let result = execute(ctx, spec, bound, &shared, item, key, seed);
+                done_one();
+                result
+            })
+            .collect());
+    }
+    let mut results = Vec::with_capacity(todo.len());
+    for chunk in todo.chunks(ITEM_CHUNK) {
+        let writer = PackWriter::new(&ctx.store);
+        let stored: Vec<Result<BTreeMap<String, Stored>, EngineError>> = chunk
+            .par_iter()
+            .map(|&i| {
+                let item = units[i].0.as_deref();
+                let outputs = run_key(ctx, spec, bound, &shared, item, seed, &writer);
+                done_one();
+                store_outputs(&writer, &outputs?)
+            })
+            .collect();
+        writer.finish()?;
+        let batch: Vec<(String, BTreeMap<String, Stored>)> = chunk
+            .iter()
+            .zip(&stored)
+            .filter_map(|(&i, r)| r.as_ref().ok().map(|s| (units[i].1.clone(), s.clone())))
+            .collect();
+        let mut committed = ctx.store.commit_many(batch)?.into_iter();
+        results.extend(
+            stored
+                .into_iter()
+                .map(|r| r.map(|_| committed.next().expect("one entry per stored unit"))),
+        );
+    }
+    Ok(results)
 }
+
+/// Items of a per-item stage run (and packed) together.
+const ITEM_CHUNK: usize = 4096;
 
 /// The stage's outputs from its complete entries: a per-item stage's files gathered into
 /// Collections named by item.

@@ -6,6 +6,7 @@ use super::context::Context;
 use super::error::EngineError;
 use super::hashing::sha256_hex;
 use super::inputs::{load_path, on_disk};
+use super::pack_writer::PackWriter;
 use super::pipeline::StageSpec;
 use super::stage::{Artifact, StageError, StageInput, StageOutputs};
 use super::store::{Entry, Stored};
@@ -59,6 +60,52 @@ pub fn execute(
     key: &str,
     seed: u64,
 ) -> Result<Entry, EngineError> {
+    let writer = PackWriter::new(&ctx.store);
+    let outputs = run_key(ctx, spec, bound, shared, item, seed, &writer)?;
+    let stored = store_outputs(&writer, &outputs)?;
+    writer.finish()?;
+    ctx.store.commit(key, stored)
+}
+
+/// Store a key's checked outputs through `writer` (the caller finishes it before committing).
+pub fn store_outputs(
+    writer: &PackWriter,
+    outputs: &StageOutputs,
+) -> Result<BTreeMap<String, Stored>, EngineError> {
+    let mut stored = BTreeMap::new();
+    for (name, artifact) in outputs {
+        let record = match artifact {
+            Artifact::File(bytes) => Stored::File {
+                sha256: writer.add(bytes)?,
+            },
+            Artifact::Collection(items) => Stored::Collection {
+                items: items
+                    .iter()
+                    .map(|(item, bytes)| Ok((item.clone(), writer.add(bytes)?)))
+                    .collect::<Result<_, EngineError>>()?,
+            },
+            // put by the stage as it ran (`StageInput::put_item`), through the same writer
+            Artifact::InStore(items) => Stored::Collection {
+                items: items.clone(),
+            },
+            Artifact::OnDisk(_) => unreachable!("refused by run_key"),
+        };
+        stored.insert(name.clone(), record);
+    }
+    Ok(stored)
+}
+
+/// Run one key and check its outputs (not stored yet). Blobs the kind puts as it runs go
+/// through `writer`.
+pub fn run_key(
+    ctx: &Context,
+    spec: &StageSpec,
+    bound: &BTreeMap<String, Bound>,
+    shared: &BTreeMap<String, Artifact>,
+    item: Option<&str>,
+    seed: u64,
+    writer: &PackWriter,
+) -> Result<StageOutputs, EngineError> {
     let failed = |message: String| EngineError::StageFailed {
         stage: spec.name.clone(),
         item: item.map(str::to_string),
@@ -99,11 +146,7 @@ pub fn execute(
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
         // per-item stages already show `done/total items`
         let detail = |what: &str| ctx.progress.detail(&spec.name, what);
-        let put = |bytes: &[u8]| {
-            ctx.store
-                .put_object(bytes)
-                .map_err(|e| StageError(e.to_string()))
-        };
+        let put = |bytes: &[u8]| writer.add(bytes).map_err(|e| StageError(e.to_string()));
         let input = StageInput {
             params: &spec.params,
             inputs,
@@ -167,9 +210,5 @@ pub fn execute(
             spec.kind
         )));
     }
-    let mut stored = BTreeMap::new();
-    for (name, artifact) in &outputs {
-        stored.insert(name.clone(), ctx.store.put(artifact)?);
-    }
-    ctx.store.commit(key, stored)
+    Ok(outputs)
 }

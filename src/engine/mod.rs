@@ -21,6 +21,8 @@ pub mod lock_digests;
 pub mod lockfile;
 pub mod maintenance;
 pub mod materialize;
+pub mod pack;
+pub mod pack_writer;
 pub mod pipeline;
 pub mod progress;
 pub mod project_lock;

@@ -129,7 +129,7 @@ pub fn run(
         // run names at lookup, and run again what made the damaged ones (what the first pass
         // committed is reused)
         for h in &damaged {
-            let _ = std::fs::remove_file(ctx.store.object_path(h));
+            ctx.store.remove_object(h);
         }
         ctx.progress.note(&format!(
             "the store's object {} was missing or damaged: checking every stored object this run names and running again what made it",

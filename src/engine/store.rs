@@ -5,15 +5,18 @@
 //! writes every blob to `tmp/` and renames it into `objects/`, then writes the entry the same
 //! way: the entry appears (one rename) only after all its blobs exist, so a kill at any moment
 //! leaves either no entry or a complete one. Leftovers in `tmp/` are removed by the next run.
+//! Batches of many blobs or entries go into packs instead (`engine::pack`), under the same rule.
 
 use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
 use super::hashing::{sha256_hex, HashCache};
+use super::pack::{self, PackIndex, PACK_MIN};
 use super::stage::Artifact;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::RwLock;
 
 /// An artifact as the store records it: object hashes instead of bytes.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -77,6 +80,26 @@ pub struct Store {
     /// against its name, so a damaged object is found when a stage needs it; `groove run` then
     /// checks every object and reruns what made the damaged one (`engine::run`). Off by default.
     pub trust_objects: bool,
+    /// What the packs hold, read when first needed (`None` until then).
+    packs: RwLock<Option<PackIndex>>,
+    entry_packs: RwLock<Option<EntryPacks>>,
+}
+
+/// The entries of the entry packs, as read so far.
+#[derive(Default)]
+struct EntryPacks {
+    read: std::collections::HashSet<PathBuf>,
+    entries: std::collections::HashMap<String, Entry>,
+}
+
+impl EntryPacks {
+    fn refresh(&mut self, store_dir: &Path) {
+        for file in pack::files_with(&pack::entry_packs(store_dir), "json") {
+            if self.read.insert(file.clone()) {
+                self.entries.extend(read_entry_pack(&file));
+            }
+        }
+    }
 }
 
 /// What `Store::verify` checked and dropped.
@@ -101,9 +124,86 @@ fn remove_any(path: &Path) -> Result<(), EngineError> {
 impl Store {
     /// The store of a project (folders are created when first written).
     pub fn at(project_root: &Path) -> Store {
+        Store::in_dir(project_root.join(".groove"))
+    }
+
+    /// The store kept in `dir` (the `.groove` folder itself).
+    pub fn in_dir(dir: PathBuf) -> Store {
         Store {
-            dir: project_root.join(".groove"),
+            dir,
             trust_objects: false,
+            packs: RwLock::new(None),
+            entry_packs: RwLock::new(None),
+        }
+    }
+
+    /// Run `f` on the pack index, reading the packs first if they were never read, or again
+    /// (only new files) when `refresh`.
+    fn with_packs<T>(&self, refresh: bool, f: impl Fn(&PackIndex) -> T) -> T {
+        if !refresh {
+            if let Some(index) = &*self.packs.read().expect("pack index lock") {
+                return f(index);
+            }
+        }
+        let mut guard = self.packs.write().expect("pack index lock");
+        let index = guard.get_or_insert_with(PackIndex::default);
+        index.refresh(&self.dir);
+        f(index)
+    }
+
+    /// A packed blob's bytes (read from the packs written since, if it is not known yet).
+    fn packed_object(&self, sha256: &str) -> Option<std::io::Result<Vec<u8>>> {
+        let read = |i: &PackIndex| {
+            i.objects
+                .get(sha256)
+                .map(|loc| loc.pack.read(loc.offset, loc.len))
+        };
+        self.with_packs(false, read)
+            .or_else(|| self.with_packs(true, read))
+    }
+
+    /// Whether the store holds a blob (loose or packed).
+    pub fn has_object(&self, sha256: &str) -> bool {
+        self.object_path(sha256).is_file()
+            || self.with_packs(false, |i| i.objects.contains_key(sha256))
+            || self.with_packs(true, |i| i.objects.contains_key(sha256))
+    }
+
+    /// Whether these bytes (of this hash) are already stored soundly: a loose object of the same
+    /// bytes, or a packed one (packs are checked on read and by `groove verify`).
+    pub(super) fn holds_sound(&self, sha256: &str, bytes: &[u8]) -> bool {
+        let path = self.object_path(sha256);
+        (std::fs::metadata(&path).is_ok_and(|m| m.len() == bytes.len() as u64)
+            && std::fs::read(&path).is_ok_and(|b| b == bytes))
+            || self.with_packs(false, |i| i.objects.contains_key(sha256))
+    }
+
+    /// Record a pack this process wrote.
+    pub(super) fn packs_written(
+        &self,
+        idx: PathBuf,
+        blobs: std::collections::HashMap<String, super::pack::Loc>,
+    ) {
+        let mut guard = self.packs.write().expect("pack index lock");
+        let index = guard.get_or_insert_with(|| {
+            let mut i = PackIndex::default();
+            i.refresh(&self.dir);
+            i
+        });
+        index.add_objects(idx, blobs);
+    }
+
+    /// Forget a damaged or missing blob: its loose file, or the whole pack holding it (the other
+    /// blobs of that pack become misses too, and what made them runs again when needed).
+    pub fn remove_object(&self, sha256: &str) {
+        let _ = std::fs::remove_file(self.object_path(sha256));
+        let pack = self.with_packs(false, |i| {
+            i.objects.get(sha256).map(|l| l.pack.path.clone())
+        });
+        if let Some(pack) = pack {
+            let _ = std::fs::remove_file(pack.with_extension("idx"));
+            let _ = std::fs::remove_file(&pack);
+            *self.packs.write().expect("pack index lock") = None;
         }
     }
 
@@ -138,14 +238,30 @@ impl Store {
 
     /// The entry of a key, if a complete one was committed.
     pub fn entry(&self, key: &str) -> Option<Entry> {
-        let bytes = std::fs::read(self.entry_path(key)).ok()?;
-        serde_json::from_slice(&bytes).ok()
+        match std::fs::read(self.entry_path(key)) {
+            Ok(bytes) => serde_json::from_slice(&bytes).ok(),
+            Err(_) => {
+                if let Some(packs) = &*self.entry_packs.read().expect("entry pack lock") {
+                    return packs.entries.get(key).cloned();
+                }
+                let mut guard = self.entry_packs.write().expect("entry pack lock");
+                let packs = guard.get_or_insert_with(EntryPacks::default);
+                packs.refresh(&self.dir);
+                packs.entries.get(key).cloned()
+            }
+        }
     }
 
     /// An object's bytes, checked against its name: a damaged object is an error, never data.
     pub fn read_object(&self, sha256: &str) -> Result<Vec<u8>, EngineError> {
         let path = self.object_path(sha256);
-        let bytes = std::fs::read(&path).map_err(|e| EngineError::DamagedObject {
+        let bytes = match std::fs::read(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                self.packed_object(sha256).unwrap_or(Err(e))
+            }
+            read => read,
+        }
+        .map_err(|e| EngineError::DamagedObject {
             sha256: sha256.to_string(),
             missing: true,
             why: e.to_string(),
@@ -171,9 +287,11 @@ impl Store {
             return Some(entry);
         }
         let sound_object = |h: &String| {
-            hashes
-                .hash_file(&self.object_path(h))
-                .is_ok_and(|got| &got == h)
+            let path = self.object_path(h);
+            match path.is_file() {
+                true => hashes.hash_file(&path).is_ok_and(|got| &got == h),
+                false => self.read_object(h).is_ok(),
+            }
         };
         let sound_item = |h: &String| self.read_object(h).is_ok();
         let sound = entry.outputs.values().all(|stored| match stored {
@@ -216,28 +334,6 @@ impl Store {
         Ok(sha256)
     }
 
-    /// Store an artifact's blobs and return its record.
-    pub fn put(&self, artifact: &Artifact) -> Result<Stored, EngineError> {
-        Ok(match artifact {
-            Artifact::File(bytes) => Stored::File {
-                sha256: self.put_object(bytes)?,
-            },
-            Artifact::Collection(items) => Stored::Collection {
-                items: items
-                    .iter()
-                    .map(|(name, bytes)| Ok((name.clone(), self.put_object(bytes)?)))
-                    .collect::<Result<_, EngineError>>()?,
-            },
-            // put by the stage as it ran (`StageInput::put_item`)
-            Artifact::InStore(items) => Stored::Collection {
-                items: items.clone(),
-            },
-            Artifact::OnDisk(_) => {
-                return Err(EngineError::Usage(super::stage::IN_STORE_INPUT.into()))
-            }
-        })
-    }
-
     /// Record a key's outputs (their blobs must already be stored): one atomic rename.
     pub fn commit(
         &self,
@@ -257,97 +353,254 @@ impl Store {
         Ok(entry)
     }
 
+    /// Record many keys' outputs (their blobs must already be stored): one entry pack by one
+    /// rename when there are at least `PACK_MIN`, else one loose entry each.
+    pub fn commit_many(
+        &self,
+        batch: Vec<(String, BTreeMap<String, Stored>)>,
+    ) -> Result<Vec<Entry>, EngineError> {
+        if batch.len() < PACK_MIN {
+            return batch
+                .into_iter()
+                .map(|(key, outputs)| self.commit(&key, outputs))
+                .collect();
+        }
+        let entries: Vec<(String, Entry)> = batch
+            .into_iter()
+            .map(|(key, outputs)| (key, Entry { outputs }))
+            .collect();
+        let map: BTreeMap<&str, &Entry> = entries.iter().map(|(k, e)| (k.as_str(), e)).collect();
+        let path = self.write_entry_pack(&map)?;
+        let mut guard = self.entry_packs.write().expect("entry pack lock");
+        let packs = guard.get_or_insert_with(|| {
+            let mut p = EntryPacks::default();
+            p.refresh(&self.dir);
+            p
+        });
+        packs.read.insert(path);
+        packs.entries.extend(entries.iter().cloned());
+        Ok(entries.into_iter().map(|(_, e)| e).collect())
+    }
+
     /// Check every object against its name and every entry against its objects; remove damaged
-    /// objects, unreadable entries and entries naming a missing object (call while holding the
-    /// project lock). Returns what was checked and what was dropped.
+    /// objects (a pack holding one goes whole), unreadable entries and entries naming a missing
+    /// object (call while holding the project lock). Returns what was checked and dropped.
     pub fn verify(&self) -> Result<Verified, EngineError> {
         let mut report = Verified::default();
-        for sub in read_dir_sorted(&self.dir.join("objects"))? {
-            let prefix = sub
-                .file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            for obj in read_dir_sorted(&sub)? {
-                let rest = obj
-                    .file_name()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                report.objects += 1;
-                let name = format!("{prefix}{rest}");
-                let sound = std::fs::read(&obj).is_ok_and(|b| sha256_hex(&b) == name);
-                if !sound {
-                    remove_any(&obj)?;
-                    report.dropped_objects.push(name);
-                }
+        for (name, obj) in self.loose_objects()? {
+            report.objects += 1;
+            let sound = std::fs::read(&obj).is_ok_and(|b| sha256_hex(&b) == name);
+            if !sound {
+                remove_any(&obj)?;
+                report.dropped_objects.push(name);
             }
         }
-        for e in read_dir_sorted(&self.dir.join("entries"))? {
-            let key = e
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
+        for idx in pack::files_with(&pack::object_packs(&self.dir), "idx") {
+            let blobs = pack::read_idx(&idx).unwrap_or_default();
+            report.objects += blobs.len();
+            let mut damaged: Vec<String> = blobs
+                .iter()
+                .filter(|(h, loc)| {
+                    !loc.pack
+                        .read(loc.offset, loc.len)
+                        .is_ok_and(|b| &sha256_hex(&b) == *h)
+                })
+                .map(|(h, _)| h.clone())
+                .collect();
+            if blobs.is_empty() || !damaged.is_empty() {
+                damaged.sort();
+                remove_pack(&idx)?;
+                report.dropped_objects.extend(damaged);
+            }
+        }
+        self.forget_packs();
+        for (key, e) in self.loose_entries()? {
             report.entries += 1;
-            let sound = self.entry(&key).is_some_and(|entry| {
-                entry
-                    .outputs
-                    .values()
-                    .all(|s| stored_objects(s).all(|h| self.object_path(h).is_file()))
-            });
+            let sound = self
+                .entry(&key)
+                .is_some_and(|entry| self.names_only_held(&entry));
             if !sound {
                 remove_any(&e)?;
                 report.dropped_entries.push(key);
             }
         }
+        for file in pack::files_with(&pack::entry_packs(&self.dir), "json") {
+            let entries = read_entry_pack(&file);
+            report.entries += entries.len();
+            let (sound, bad): (Vec<_>, Vec<_>) = entries
+                .iter()
+                .partition(|(_, entry)| self.names_only_held(entry));
+            if !bad.is_empty() {
+                report
+                    .dropped_entries
+                    .extend(bad.iter().map(|(k, _)| (*k).clone()));
+                self.rewrite_entry_pack(&file, sound.into_iter().map(|(k, e)| (k.as_str(), e)))?;
+            }
+        }
+        self.forget_packs();
         Ok(report)
     }
 
-    /// Keep only the given keys and the objects they reference. Returns (entries, objects) removed.
+    /// Keep only the given keys and the objects they reference (a pack stays whole while any of
+    /// its objects is referenced). Returns (entries, objects) removed.
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,
     ) -> Result<(usize, usize), EngineError> {
         let mut live = std::collections::BTreeSet::new();
         let mut removed_entries = 0;
-        let entries_dir = self.dir.join("entries");
-        for e in read_dir_sorted(&entries_dir)? {
-            let key = e
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
+        let mut hold = |entry: &Entry| {
+            for stored in entry.outputs.values() {
+                live.extend(stored_objects(stored).cloned());
+            }
+        };
+        for (key, e) in self.loose_entries()? {
             if keep.contains(&key) {
                 if let Some(entry) = self.entry(&key) {
-                    for stored in entry.outputs.values() {
-                        match stored {
-                            Stored::File { sha256 } => {
-                                live.insert(sha256.clone());
-                            }
-                            Stored::Collection { items } => live.extend(items.values().cloned()),
-                        }
-                    }
+                    hold(&entry);
                 }
             } else {
                 std::fs::remove_file(&e).at(&e)?;
                 removed_entries += 1;
             }
         }
+        for file in pack::files_with(&pack::entry_packs(&self.dir), "json") {
+            let entries = read_entry_pack(&file);
+            let kept: Vec<(&str, &Entry)> = entries
+                .iter()
+                .filter(|(k, _)| keep.contains(*k))
+                .map(|(k, e)| (k.as_str(), e))
+                .collect();
+            kept.iter().for_each(|(_, e)| hold(e));
+            if kept.len() < entries.len() {
+                removed_entries += entries.len() - kept.len();
+                self.rewrite_entry_pack(&file, kept.into_iter())?;
+            }
+        }
         let mut removed_objects = 0;
-        for sub in read_dir_sorted(&self.dir.join("objects"))? {
-            let prefix = sub
-                .file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            for obj in read_dir_sorted(&sub)? {
-                let rest = obj
-                    .file_name()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                if !live.contains(&format!("{prefix}{rest}")) {
-                    std::fs::remove_file(&obj).at(&obj)?;
-                    removed_objects += 1;
+        for (name, obj) in self.loose_objects()? {
+            if !live.contains(&name) {
+                std::fs::remove_file(&obj).at(&obj)?;
+                removed_objects += 1;
+            }
+        }
+        let packs = pack::object_packs(&self.dir);
+        for idx in pack::files_with(&packs, "idx") {
+            let blobs = pack::read_idx(&idx).unwrap_or_default();
+            if !blobs.keys().any(|h| live.contains(h)) {
+                removed_objects += blobs.len();
+                remove_pack(&idx)?;
+            }
+        }
+        // what a kill left: a pack whose idx was never written, a half-written file
+        for dir in [packs, pack::entry_packs(&self.dir)] {
+            for f in read_dir_sorted(&dir)? {
+                let orphan = match f.extension().and_then(|e| e.to_str()) {
+                    Some("pack") => !f.with_extension("idx").exists(),
+                    Some("idx" | "json") => false,
+                    _ => true,
+                };
+                if orphan {
+                    remove_any(&f)?;
                 }
             }
         }
+        self.forget_packs();
         Ok((removed_entries, removed_objects))
+    }
+
+    /// Whether every object an entry names is held.
+    fn names_only_held(&self, entry: &Entry) -> bool {
+        entry
+            .outputs
+            .values()
+            .all(|s| stored_objects(s).all(|h| self.has_object(h)))
+    }
+
+    /// Replace an entry pack by one of the given entries (none: just remove it).
+    fn rewrite_entry_pack<'e>(
+        &self,
+        file: &Path,
+        entries: impl Iterator<Item = (&'e str, &'e Entry)>,
+    ) -> Result<(), EngineError> {
+        let map: BTreeMap<&str, &Entry> = entries.collect();
+        if !map.is_empty() {
+            let new = self.write_entry_pack(&map)?;
+            if new == file {
+                return Ok(());
+            }
+        }
+        std::fs::remove_file(file).at(file)
+    }
+
+    /// Read the packs again when next needed.
+    fn forget_packs(&self) {
+        *self.packs.write().expect("pack index lock") = None;
+        *self.entry_packs.write().expect("entry pack lock") = None;
+    }
+
+    /// Write entries as one entry pack (the blobs they name must be in place). Returns its path.
+    fn write_entry_pack(&self, entries: &BTreeMap<&str, &Entry>) -> Result<PathBuf, EngineError> {
+        let bytes = serde_json::to_vec(entries).expect("entries serialize");
+        let dir = pack::entry_packs(&self.dir);
+        std::fs::create_dir_all(&dir).at(&dir)?;
+        let path = dir.join(format!("{}.json", sha256_hex(&bytes)));
+        super::atomic::write_atomic(&path, &bytes)?;
+        Ok(path)
+    }
+
+    /// The loose objects: (hash, path), sorted.
+    fn loose_objects(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
+        let mut out = Vec::new();
+        for sub in read_dir_sorted(&self.dir.join("objects"))? {
+            let prefix = file_name(&sub);
+            if prefix.len() != 2 {
+                continue; // `packs/`
+            }
+            for obj in read_dir_sorted(&sub)? {
+                out.push((format!("{prefix}{}", file_name(&obj)), obj));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The loose entries: (key, path), sorted.
+    fn loose_entries(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
+        Ok(read_dir_sorted(&self.dir.join("entries"))?
+            .into_iter()
+            .filter(|e| e.is_file())
+            .map(|e| {
+                let key = e
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                (key, e)
+            })
+            .collect())
+    }
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// An entry pack's entries (none if it cannot be read).
+fn read_entry_pack(file: &Path) -> BTreeMap<String, Entry> {
+    std::fs::read(file)
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok())
+        .unwrap_or_default()
+}
+
+/// Remove a pack: its idx first (so it is never named without its blobs), then its blobs.
+fn remove_pack(idx: &Path) -> Result<(), EngineError> {
+    std::fs::remove_file(idx).at(idx)?;
+    let pack = idx.with_extension("pack");
+    match std::fs::remove_file(&pack) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(EngineError::io(&pack, e)),
+        _ => Ok(()),
     }
 }
 

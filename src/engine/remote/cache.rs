@@ -161,7 +161,7 @@ impl RemoteCache {
             if !is_sha256(sha) {
                 return Ok(None);
             }
-            if store.object_path(sha).exists() {
+            if store.has_object(sha) {
                 continue;
             }
             let Some(blob) = self.backend.get(&blob_name(sha))? else {

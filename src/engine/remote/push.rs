@@ -54,10 +54,7 @@ impl Pusher {
     pub fn start(cache: Arc<RemoteCache>, store: &Store, concurrency: usize) -> Pusher {
         let shared = Arc::new(Shared {
             cache,
-            store: Store {
-                trust_objects: false,
-                dir: store.dir.clone(),
-            },
+            store: Store::in_dir(store.dir.clone()),
             queue: Mutex::new(Queue {
                 tasks: VecDeque::new(),
                 busy: 0,
