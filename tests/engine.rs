@@ -774,10 +774,16 @@ fn a_stage_of_many_items_is_stored_in_packs_that_serve_edits_verify_and_gc() {
     // one edit, then another: the second run finds the 98 untouched items in the entry pack
     p.write("data/run_005.csv", "t,z\n0,edited\n");
     p.stdout(&["run"]);
-    assert_eq!(p.take_trace(), strings(&["fit run_005.csv", "ingest", "summary"]));
+    assert_eq!(
+        p.take_trace(),
+        strings(&["fit run_005.csv", "ingest", "summary"])
+    );
     p.write("data/run_007.csv", "t,z\n0,edited\n");
     p.stdout(&["run"]);
-    assert_eq!(p.take_trace(), strings(&["fit run_007.csv", "ingest", "summary"]));
+    assert_eq!(
+        p.take_trace(),
+        strings(&["fit run_007.csv", "ingest", "summary"])
+    );
     assert_eq!(p.read("reports/fits/run_042.csv"), fits_before);
 
     // gc keeps what the lock names (the packs stay readable); a no-op after it runs nothing
@@ -803,7 +809,10 @@ fn a_stage_of_many_items_is_stored_in_packs_that_serve_edits_verify_and_gc() {
     assert_eq!(said.matches("dropped damaged object").count(), 1, "{said}");
     p.stdout(&["run", "--force", "summary"]);
     let trace = p.take_trace();
-    assert!(trace.len() >= 3 && trace.contains(&"summary".to_string()), "{trace:?}");
+    assert!(
+        trace.len() >= 3 && trace.contains(&"summary".to_string()),
+        "{trace:?}"
+    );
     assert_eq!(p.read("reports/fits/run_042.csv"), fits_before);
     assert_eq!(p.read("reports/table.txt").lines().count(), 101);
     let out = p.stdout(&["run"]);
