@@ -187,6 +187,8 @@ fn lookup_or_run(
         .par_iter()
         .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
         .collect();
+    // the entry packs read for these lookups are not needed while the stage runs
+    ctx.store.forget_entry_packs();
     let missing: Vec<Option<String>> = units
         .iter()
         .zip(&entries)
