@@ -144,17 +144,26 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         SLOPE_LANES,
         |group| {
             let n = ok.len();
-            let mut lanes = vec![[0u16; SLOPE_LANES]; n];
             let mut weights = vec![vec![0u16; n]; group.len()];
-            for (l, (idx, w)) in group.iter().zip(&mut weights).enumerate() {
+            for (idx, w) in group.iter().zip(&mut weights) {
                 for &i in idx {
                     w[i] = w[i].saturating_add(1);
                 }
-                for i in 0..n {
-                    lanes[i][l] = w[i];
-                }
             }
-            let slopes = order.slopes_lanes(&lanes);
+            // a run drawn more than 255 times (only in tiny or freak resamples) does not fit
+            // a lane: such a group's slopes are read one resample at a time
+            let slopes: Vec<[f64; 2]> = match weights.iter().flatten().all(|&c| c <= 255) {
+                true => {
+                    let mut lanes = vec![[0u8; SLOPE_LANES]; n];
+                    for (l, w) in weights.iter().enumerate() {
+                        for i in 0..n {
+                            lanes[i][l] = w[i] as u8;
+                        }
+                    }
+                    order.slopes_lanes(&lanes)[..group.len()].to_vec()
+                }
+                false => weights.iter().map(|w| order.slopes(w)).collect(),
+            };
             let mut buf = Vec::with_capacity(n);
             group
                 .iter()
