@@ -8,7 +8,9 @@ use super::bootstrap::percentile_intervals_in_groups;
 use super::regression::{mean_where, RobustMean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::{theil_sen_intercept, theil_sen_many, SlopeOrder, SLOPE_LANES};
+use crate::stats::{
+    theil_sen_intercept, theil_sen_many, InterceptOrder, SlopeOrder, SLOPE_LANES,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -135,6 +137,11 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         true => 0.0,
         false => point[3 + 2 * k] - order.slope(k, &vec![1; ok.len()]),
     });
+    // The resamples' intercepts, read near the estimate's line where they can be.
+    let intercepts = [
+        InterceptOrder::new(&speed, &t, point[3]),
+        InterceptOrder::new(&speed, &mu, point[5]),
+    ];
     // Resamples in groups of SLOPE_LANES, whose slopes share one pass over the slope order.
     let ci = percentile_intervals_in_groups(
         ok.len(),
@@ -164,7 +171,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
                 }
                 false => weights.iter().map(|w| order.slopes(w)).collect(),
             };
-            let mut buf = Vec::with_capacity(n);
+            let (mut buf, mut near) = (Vec::new(), Vec::new());
             group
                 .iter()
                 .zip(&weights)
@@ -172,10 +179,13 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
                 .map(|((idx, w), slopes)| {
                     let mut line = |k: usize, y: &[f64]| {
                         let b = slopes[k] + shift[k];
-                        match b.is_nan() {
-                            true => (f64::NAN, f64::NAN),
-                            false => (theil_sen_intercept(&speed, y, idx, b, &mut buf), b),
+                        if b.is_nan() {
+                            return (f64::NAN, f64::NAN);
                         }
+                        let a = intercepts[k]
+                            .median((&speed, y), w, idx.len(), b, &mut near)
+                            .unwrap_or_else(|| theil_sen_intercept(&speed, y, idx, b, &mut buf));
+                        (a, b)
                     };
                     let ((ta, tb), (ma, mb)) = (line(0, &t), line(1, &mu));
                     [

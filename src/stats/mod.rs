@@ -3,6 +3,7 @@
 //! distributions behind p-values (from `statrs`).
 
 pub mod dist;
+pub mod intercept_order;
 pub mod line;
 pub mod median;
 pub mod quantile;
@@ -12,6 +13,7 @@ pub use line::{
     ols_indexed, ols_line, theil_sen_indexed, theil_sen_intercept, theil_sen_many, weighted_line,
     Line,
 };
+pub use intercept_order::InterceptOrder;
 pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
 pub use quantile::{quantile_interpolated, quantile_nearest};
 pub use slope_order::{SlopeOrder, LANES as SLOPE_LANES};
