@@ -8,9 +8,7 @@ use super::bootstrap::percentile_intervals_in_groups;
 use super::regression::{mean_where, RobustMean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
-use crate::stats::{
-    theil_sen_intercept, theil_sen_many, InterceptOrder, SlopeOrder, SLOPE_LANES,
-};
+use crate::stats::{theil_sen_intercept, theil_sen_many, InterceptOrder, SlopeOrder, SLOPE_LANES};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -85,39 +85,52 @@ impl<'a> RobustMean<'a> {
     /// The robust weighted mean when run i counts `w[i]` times; NaN if no usable run is drawn.
     pub fn of(&self, w: &[u16]) -> f64 {
         let (y, se) = (self.y, self.se);
-        let total: u64 = self.by_y.iter().map(|&i| w[i as usize] as u64).sum();
+        let n = self.by_y.len();
+        // running counts along the y order, and the drawn runs (y, se², count) in that order
+        let mut cum: Vec<u64> = Vec::with_capacity(n + 1);
+        let mut drawn: Vec<[f64; 3]> = Vec::with_capacity(n);
+        cum.push(0);
+        let mut total = 0u64;
+        for &i in &self.by_y {
+            let i = i as usize;
+            let c = w[i];
+            if c > 0 {
+                drawn.push([y[i], se[i] * se[i], c as f64]);
+            }
+            total += u64::from(c);
+            cum.push(total);
+        }
         if total == 0 {
             return f64::NAN;
         }
-        let weighted = |i: &u32| (*i as usize, w[*i as usize] as u64);
-        let mid = weighted_median(
-            self.by_y.iter().map(weighted).map(|(i, c)| (y[i], c)),
-            total,
-        );
-        // |y − mid| in ascending order: walk outwards from mid along the y order
+        let (r_lo, r_hi) = middle_ranks(total);
+        let y_at = |p: usize| y[self.by_y[p] as usize];
+        // the value of rank r: at the first position whose running count passes r
+        let rank = |r: u64| y_at(cum[1..].partition_point(|&c| c <= r));
+        let mid = 0.5 * (rank(r_lo) + rank(r_hi));
+        // the distances |y − mid| rise from `split` outwards on either side, so how many drawn
+        // runs lie within d of mid is a difference of two running counts
         let split = self.by_y.partition_point(|&i| y[i as usize] < mid);
-        let (mut lo, mut hi) = (split, split);
-        let outwards = std::iter::from_fn(|| {
-            let left = (lo > 0).then(|| mid - y[self.by_y[lo - 1] as usize]);
-            let right = (hi < self.by_y.len()).then(|| y[self.by_y[hi] as usize] - mid);
-            let i = match (left, right) {
-                (Some(l), Some(r)) if l <= r => {
-                    lo -= 1;
-                    self.by_y[lo]
-                }
-                (Some(_), None) => {
-                    lo -= 1;
-                    self.by_y[lo]
-                }
-                (_, Some(_)) => {
-                    hi += 1;
-                    self.by_y[hi - 1]
-                }
-                (None, None) => return None,
-            };
-            Some(((y[i as usize] - mid).abs(), w[i as usize] as u64))
-        });
-        let mad = MAD_TO_SIGMA * weighted_median(outwards, total);
+        let dist = |p: usize| (y_at(p) - mid).abs();
+        let within = |d: f64| {
+            let first = first_where(0, split, |p| dist(p) <= d);
+            let last = first_where(split, n, |p| dist(p) > d);
+            cum[last] - cum[first]
+        };
+        // the distance of rank r: the least distance (of any run, drawn or not) with more than
+        // r drawn runs within it, on either side
+        let dist_rank = |r: u64| {
+            let left = first_where(0, split, |j| within(dist(split - 1 - j)) > r);
+            let right = first_where(split, n, |p| within(dist(p)) > r);
+            let from_left = (left < split).then(|| dist(split - 1 - left));
+            let from_right = (right < n).then(|| dist(right));
+            match (from_left, from_right) {
+                (Some(a), Some(b)) => a.min(b),
+                (a, b) => a.or(b).expect("every drawn run is within its own distance"),
+            }
+        };
+        let mad = MAD_TO_SIGMA * (0.5 * (dist_rank(r_lo) + dist_rank(r_hi)));
+        let weighted = |i: &u32| (*i as usize, w[*i as usize] as u64);
         let typical_var = weighted_median(
             self.by_var
                 .iter()
@@ -127,14 +140,11 @@ impl<'a> RobustMean<'a> {
         );
         let tau2 = (mad * mad - typical_var).max(0.0);
         // (y, count/variance, 1/sd) of each drawn run, contiguous for the reweighting passes
-        let runs: Vec<[f64; 3]> = self
-            .by_y
+        let runs: Vec<[f64; 3]> = drawn
             .iter()
-            .filter(|&&i| w[i as usize] > 0)
-            .map(|&i| {
-                let i = i as usize;
-                let var = se[i] * se[i] + tau2;
-                [y[i], w[i] as f64 / var, 1.0 / var.sqrt()]
+            .map(|&[y, se2, c]| {
+                let var = se2 + tau2;
+                [y, c / var, 1.0 / var.sqrt()]
             })
             .collect();
         let mut mean = mid;
@@ -157,14 +167,32 @@ impl<'a> RobustMean<'a> {
     }
 }
 
+/// The ranks of the two middle values of `total` (the same rank twice for an odd total).
+fn middle_ranks(total: u64) -> (u64, u64) {
+    match total % 2 {
+        1 => (total / 2, total / 2),
+        _ => (total / 2 - 1, total / 2),
+    }
+}
+
+/// The first index in lo..hi where `pred` holds (it must hold from some index on), or hi.
+fn first_where(mut lo: usize, mut hi: usize, pred: impl Fn(usize) -> bool) -> usize {
+    while lo < hi {
+        let m = lo + (hi - lo) / 2;
+        if pred(m) {
+            hi = m;
+        } else {
+            lo = m + 1;
+        }
+    }
+    lo
+}
+
 /// The median of a multiset given as (value, count) in ascending order of value with `total`
 /// counts in all: the middle value, or the mean of the two middle ones for an even total (as
 /// `stats::median_in_place` of the values written out).
 fn weighted_median(sorted: impl Iterator<Item = (f64, u64)>, total: u64) -> f64 {
-    let (r_lo, r_hi) = match total % 2 {
-        1 => (total / 2, total / 2),
-        _ => (total / 2 - 1, total / 2),
-    };
+    let (r_lo, r_hi) = middle_ranks(total);
     let (mut seen, mut lo) = (0u64, f64::NAN);
     for (v, c) in sorted {
         if c == 0 {
@@ -257,5 +285,41 @@ mod tests {
             (calm - weighted_mean(&y[..9], &se[..9], &idx[..9])).abs() < 2e-3,
             "{calm}"
         );
+    }
+
+    #[test]
+    fn counts_give_the_medians_of_the_runs_written_out_with_ties_and_outliers() {
+        // 300 runs on a coarse grid (many equal values and distances), some far out, and
+        // resamples of every size parity; the reference takes every median by selection
+        let mut state = 99u64;
+        let mut next = |m: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % m
+        };
+        let n = 300;
+        let y: Vec<f64> = (0..n)
+            .map(|i| match i % 25 {
+                0 => 0.9,
+                _ => 0.3 + 0.001 * next(20) as f64,
+            })
+            .collect();
+        let se: Vec<f64> = (0..n).map(|_| 0.001 * (1 + next(5)) as f64).collect();
+        let robust = RobustMean::new(&y, &se);
+        for picks in [n, n - 1, 7, 8, 1, 2] {
+            let idx: Vec<usize> = (0..picks).map(|_| next(n as u64) as usize).collect();
+            let mut w = vec![0u16; n];
+            for &i in &idx {
+                w[i] += 1;
+            }
+            let written: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
+            let written_se: Vec<f64> = idx.iter().map(|&i| se[i]).collect();
+            let (got, want) = (robust.of(&w), by_selection(&written, &written_se));
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs(),
+                "{picks} picks: {got} {want}"
+            );
+        }
     }
 }

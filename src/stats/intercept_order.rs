@@ -205,7 +205,9 @@ mod tests {
         let y = [0.1, f64::NAN, 0.12, 0.13];
         let order = InterceptOrder::new(&x, &y, 1.0);
         let mut buf = Vec::new();
-        assert!(order.median((&x, &y), &[1, 1, 1, 1], 4, 1.0, &mut buf).is_none());
+        assert!(order
+            .median((&x, &y), &[1, 1, 1, 1], 4, 1.0, &mut buf)
+            .is_none());
         let got = order.median((&x, &y), &[1, 0, 1, 1], 3, 1.0, &mut buf);
         assert_eq!(got, Some(0.12 - 0.03));
     }

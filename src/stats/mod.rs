@@ -9,11 +9,11 @@ pub mod median;
 pub mod quantile;
 pub mod slope_order;
 
+pub use intercept_order::InterceptOrder;
 pub use line::{
     ols_indexed, ols_line, theil_sen_indexed, theil_sen_intercept, theil_sen_many, weighted_line,
     Line,
 };
-pub use intercept_order::InterceptOrder;
 pub use median::{abs_scale, mad_scale, median_in_place, upper_median, MAD_TO_SIGMA};
 pub use quantile::{quantile_interpolated, quantile_nearest};
 pub use slope_order::{SlopeOrder, LANES as SLOPE_LANES};
