@@ -56,28 +56,33 @@ fn lines(body: &[u8]) -> Option<Rows<'_>> {
         t_s: Vec::with_capacity(guess),
         z_m: Vec::with_capacity(guess),
     };
-    let mut rest = body;
-    while !rest.is_empty() {
-        let (line, next) = match memchr::memchr(b'\n', rest.as_bytes()) {
-            Some(k) => (&rest[..k], &rest[k + 1..]),
-            None => (rest, &rest[rest.len()..]),
-        };
-        let line = line.strip_suffix('\r').unwrap_or(line);
-        let mut fields = line.split(',');
-        let id = run_id(fields.next()?)?;
-        let particle = int(fields.next()?)?;
-        let frame = int(fields.next()?)?;
-        let t_s = float(fields.next()?)?;
-        let z_m = float(fields.next()?)?;
-        if fields.next().is_some() {
-            return None;
+    // the commas and newlines in one vectorized scan: each line is exactly four commas, then a
+    // newline (or the end of the text)
+    let bytes = body.as_bytes();
+    let mut marks = memchr::memchr2_iter(b',', b'\n', bytes);
+    let mut start = 0;
+    while start < bytes.len() {
+        let mut cut = [0usize; 4];
+        for c in &mut cut {
+            let at = marks.next()?;
+            if bytes[at] != b',' {
+                return None;
+            }
+            *c = at;
         }
-        rows.ids.push(id);
-        rows.particle.push(particle);
-        rows.frame.push(frame);
-        rows.t_s.push(t_s);
-        rows.z_m.push(z_m);
-        rest = next;
+        let end = match marks.next() {
+            Some(at) if bytes[at] == b'\n' => at,
+            Some(_) => return None,
+            None => bytes.len(),
+        };
+        let last = &body[cut[3] + 1..end];
+        let last = last.strip_suffix('\r').unwrap_or(last);
+        rows.ids.push(run_id(&body[start..cut[0]])?);
+        rows.particle.push(int(&body[cut[0] + 1..cut[1]])?);
+        rows.frame.push(int(&body[cut[1] + 1..cut[2]])?);
+        rows.t_s.push(float(&body[cut[2] + 1..cut[3]])?);
+        rows.z_m.push(float(last)?);
+        start = end + 1;
     }
     Some(rows)
 }

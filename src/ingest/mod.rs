@@ -252,24 +252,39 @@ pub fn stream_items<T: Send>(
             "the dataset is not in the interchange format",
         ));
     }
-    let mut runs = BTreeMap::new();
-    let mut clash = false;
-    let streamed = columnar::stream(
-        files,
-        csv,
-        params.min_frames,
-        chunk_bytes,
-        &mut |ready: Vec<Recording>| {
-            // the runs of a piece encoded and kept (stored) in parallel
-            let kept: Vec<(String, T)> = ready
-                .par_iter()
-                .map(|r| (item_name(&r.info.run), keep(item::encode(r))))
-                .collect();
-            for (name, k) in kept {
-                clash |= runs.insert(name, k).is_some();
+    // the runs of a piece are encoded and kept (stored) in parallel on a thread of their own,
+    // while the next piece is parsed; at most two pieces wait for it
+    let (streamed, runs, clash) = std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Recording>>(2);
+        let writer = scope.spawn(move || {
+            let (mut runs, mut clash) = (BTreeMap::new(), false);
+            for ready in rx {
+                let kept: Vec<(String, T)> = ready
+                    .par_iter()
+                    .map(|r| (item_name(&r.info.run), keep(item::encode(r))))
+                    .collect();
+                for (name, k) in kept {
+                    clash |= runs.insert(name, k).is_some();
+                }
             }
-        },
-    );
+            (runs, clash)
+        });
+        let streamed = columnar::stream(
+            files,
+            csv,
+            params.min_frames,
+            chunk_bytes,
+            &mut |ready: Vec<Recording>| {
+                // the writer ends only when this sender is dropped, so the send succeeds
+                let _ = tx.send(ready);
+            },
+        );
+        drop(tx);
+        let (runs, clash) = writer
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        (streamed, runs, clash)
+    });
     let why = match streamed {
         Ok(chunks) if !clash && !runs.is_empty() => {
             let how = format!(
