@@ -80,5 +80,7 @@ pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
         keep.extend(stage.items.values().cloned());
     }
     store.sweep_tmp()?;
-    store.gc(&keep)
+    let (entries, objects, sparse) = store.gc(&keep)?;
+    super::pack_writer::rewrite(&store, &sparse)?;
+    Ok((entries, objects))
 }

@@ -16,6 +16,8 @@ use std::sync::Mutex;
 pub struct PackWriter<'a> {
     store: &'a Store,
     state: Mutex<Writing>,
+    /// Write every blob, even one a pack already holds (`rewrite` copies blobs out of a pack).
+    fresh: bool,
 }
 
 #[derive(Default)]
@@ -34,13 +36,14 @@ impl<'a> PackWriter<'a> {
         PackWriter {
             store,
             state: Mutex::new(Writing::default()),
+            fresh: false,
         }
     }
 
     /// Put a blob; returns its hash. Callable from many threads.
     pub fn add(&self, bytes: &[u8]) -> Result<String, EngineError> {
         let h = sha256_hex(bytes);
-        if self.store.holds_sound(&h, bytes) {
+        if !self.fresh && self.store.holds_sound(&h, bytes) {
             return Ok(h);
         }
         let mut st = self.state.lock().expect("pack writer lock");
@@ -125,4 +128,28 @@ fn append(st: &mut Writing, h: String, bytes: &[u8]) -> Result<(), EngineError> 
     st.index.push((h, st.offset, len));
     st.offset += len;
     Ok(())
+}
+
+/// Copy the still referenced blobs of mostly unreferenced packs (`Store::gc`) into a new pack
+/// (or loose, if few), then remove the old packs: a blob is in place again before its old copy
+/// goes. Returns how many blobs were copied.
+pub fn rewrite(store: &Store, sparse: &[(PathBuf, Vec<String>)]) -> Result<usize, EngineError> {
+    if sparse.is_empty() {
+        return Ok(0);
+    }
+    let mut writer = PackWriter::new(store);
+    writer.fresh = true;
+    let mut copied = 0;
+    for (_, held) in sparse {
+        for h in held {
+            writer.add(&store.read_object(h)?)?;
+            copied += 1;
+        }
+    }
+    writer.finish()?;
+    for (idx, _) in sparse {
+        super::store::remove_pack(idx)?;
+    }
+    store.forget_packs();
+    Ok(copied)
 }

@@ -455,12 +455,14 @@ impl Store {
         Ok(report)
     }
 
-    /// Keep only the given keys and the objects they reference (a pack stays whole while any of
-    /// its objects is referenced). Returns (entries, objects) removed.
+    /// Keep only the given keys and the objects they reference. A pack none of whose objects is
+    /// referenced is removed; one mostly unreferenced (more than half its bytes) is returned with
+    /// the objects still referenced, for `pack_writer::rewrite` to copy out before it goes.
+    /// Returns (entries, objects) removed, and those packs.
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,
-    ) -> Result<(usize, usize), EngineError> {
+    ) -> Result<(usize, usize, Vec<(PathBuf, Vec<String>)>), EngineError> {
         let mut live = std::collections::BTreeSet::new();
         let mut removed_entries = 0;
         let mut hold = |entry: &Entry| {
@@ -499,11 +501,25 @@ impl Store {
             }
         }
         let packs = pack::object_packs(&self.dir);
+        let mut sparse = Vec::new();
         for idx in pack::files_with(&packs, "idx") {
             let blobs = pack::read_idx(&idx).unwrap_or_default();
-            if !blobs.keys().any(|h| live.contains(h)) {
+            let mut held: Vec<String> = blobs
+                .keys()
+                .filter(|h| live.contains(*h))
+                .cloned()
+                .collect();
+            if held.is_empty() {
                 removed_objects += blobs.len();
                 remove_pack(&idx)?;
+                continue;
+            }
+            let bytes =
+                |hs: &mut dyn Iterator<Item = &String>| -> u64 { hs.map(|h| blobs[h].len).sum() };
+            if 2 * bytes(&mut held.iter()) < bytes(&mut blobs.keys()) {
+                removed_objects += blobs.len() - held.len();
+                held.sort();
+                sparse.push((idx, held));
             }
         }
         // what a kill left: a pack whose idx was never written, a half-written file
@@ -520,7 +536,7 @@ impl Store {
             }
         }
         self.forget_packs();
-        Ok((removed_entries, removed_objects))
+        Ok((removed_entries, removed_objects, sparse))
     }
 
     /// Whether every object an entry names is held.
@@ -548,7 +564,7 @@ impl Store {
     }
 
     /// Read the packs again when next needed.
-    fn forget_packs(&self) {
+    pub(super) fn forget_packs(&self) {
         *self.packs.write().expect("pack index lock") = None;
         self.forget_entry_packs();
     }
@@ -614,7 +630,7 @@ fn read_entry_pack(file: &Path) -> BTreeMap<String, Entry> {
 }
 
 /// Remove a pack: its idx first (so it is never named without its blobs), then its blobs.
-fn remove_pack(idx: &Path) -> Result<(), EngineError> {
+pub(super) fn remove_pack(idx: &Path) -> Result<(), EngineError> {
     std::fs::remove_file(idx).at(idx)?;
     let pack = idx.with_extension("pack");
     match std::fs::remove_file(&pack) {
