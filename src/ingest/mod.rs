@@ -253,9 +253,9 @@ pub fn stream_items<T: Send>(
         ));
     }
     // the runs of a piece are encoded and kept (stored) in parallel on a thread of their own,
-    // while the next piece is parsed; at most two pieces wait for it
+    // while the next piece is parsed; at most one piece waits for it
     let (streamed, runs, clash) = std::thread::scope(|scope| {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Recording>>(2);
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Recording>>(1);
         let writer = scope.spawn(move || {
             let (mut runs, mut clash) = (BTreeMap::new(), false);
             for ready in rx {

@@ -37,15 +37,24 @@ pub const VERSION: u32 = 1;
 pub fn encode(rec: &Recording) -> Vec<u8> {
     // RunInfo holds strings, numbers and a map of strings: serializing it cannot fail.
     let meta = serde_json::to_vec(&rec.info).unwrap_or_default();
-    let samples: usize = rec.tracks.iter().map(|t| t.frame.len()).sum();
-    let mut out = Vec::with_capacity(24 + meta.len() + 28 * rec.tracks.len() + 16 * samples);
+    let segs: Vec<Vec<(i64, i64)>> = rec.tracks.iter().map(|t| segments(&t.frame)).collect();
+    // the exact size: an item kept in memory (100,000 of them) holds no spare capacity
+    let size = MAGIC.len()
+        + 12
+        + meta.len()
+        + rec
+            .tracks
+            .iter()
+            .zip(&segs)
+            .map(|(t, s)| 12 + 16 * s.len() + 16 * t.frame.len())
+            .sum::<usize>();
+    let mut out = Vec::with_capacity(size);
     out.extend_from_slice(MAGIC);
     put_u32(&mut out, VERSION);
     put_u32(&mut out, meta.len() as u32);
     out.extend_from_slice(&meta);
     put_u32(&mut out, rec.tracks.len() as u32);
-    for t in &rec.tracks {
-        let segments = segments(&t.frame);
+    for (t, segments) in rec.tracks.iter().zip(segs) {
         put_u32(&mut out, t.particle);
         put_u32(&mut out, t.frame.len() as u32);
         put_u32(&mut out, segments.len() as u32);
@@ -59,6 +68,7 @@ pub fn encode(rec: &Recording) -> Vec<u8> {
             out.extend_from_slice(&v.to_le_bytes());
         }
     }
+    debug_assert_eq!(out.len(), size, "the item's size was computed exactly");
     out
 }
 
