@@ -38,10 +38,10 @@ pub fn clean(pipeline: &Pipeline) -> Result<usize, EngineError> {
 
 /// Check the store: drop damaged objects and entries that name a missing object (the stages
 /// they belong to run again). Takes the project lock.
-pub fn verify(pipeline: &Pipeline) -> Result<super::store::Verified, EngineError> {
+pub fn verify(pipeline: &Pipeline) -> Result<super::store_upkeep::Verified, EngineError> {
     let store = Store::at(&pipeline.root);
     if !store.dir.exists() {
-        return Ok(super::store::Verified::default());
+        return Ok(super::store_upkeep::Verified::default());
     }
     let _lock = project_lock::acquire(&store.dir, |holder| {
         eprintln!(

@@ -35,6 +35,7 @@ pub mod slurm;
 pub mod stage;
 pub mod status;
 pub mod store;
+pub mod store_upkeep;
 
 pub use catalog::Catalog;
 pub use error::EngineError;

@@ -123,25 +123,6 @@ impl EntryPacks {
     }
 }
 
-/// What `Store::verify` checked and dropped.
-#[derive(Debug, Default)]
-pub struct Verified {
-    pub objects: usize,
-    pub entries: usize,
-    /// Objects whose bytes did not match their name (removed).
-    pub dropped_objects: Vec<String>,
-    /// Entries that could not be read or named a missing object (removed).
-    pub dropped_entries: Vec<String>,
-}
-
-fn remove_any(path: &Path) -> Result<(), EngineError> {
-    if path.is_dir() {
-        std::fs::remove_dir_all(path).at(path)
-    } else {
-        std::fs::remove_file(path).at(path)
-    }
-}
-
 impl Store {
     /// The store of a project (folders are created when first written).
     pub fn at(project_root: &Path) -> Store {
@@ -396,173 +377,6 @@ impl Store {
         Ok(entries.into_iter().map(|(_, e)| e).collect())
     }
 
-    /// Check every object against its name and every entry against its objects; remove damaged
-    /// objects (a pack holding one goes whole), unreadable entries and entries naming a missing
-    /// object (call while holding the project lock). Returns what was checked and dropped.
-    pub fn verify(&self) -> Result<Verified, EngineError> {
-        let mut report = Verified::default();
-        for (name, obj) in self.loose_objects()? {
-            report.objects += 1;
-            let sound = std::fs::read(&obj).is_ok_and(|b| sha256_hex(&b) == name);
-            if !sound {
-                remove_any(&obj)?;
-                report.dropped_objects.push(name);
-            }
-        }
-        for idx in pack::files_with(&pack::object_packs(&self.dir), "idx") {
-            let blobs = pack::read_idx(&idx).unwrap_or_default();
-            report.objects += blobs.len();
-            let mut damaged: Vec<String> = blobs
-                .iter()
-                .filter(|(h, loc)| {
-                    !loc.pack
-                        .read(loc.offset, loc.len)
-                        .is_ok_and(|b| &sha256_hex(&b) == *h)
-                })
-                .map(|(h, _)| h.clone())
-                .collect();
-            if blobs.is_empty() || !damaged.is_empty() {
-                damaged.sort();
-                remove_pack(&idx)?;
-                report.dropped_objects.extend(damaged);
-            }
-        }
-        self.forget_packs();
-        for (key, e) in self.loose_entries()? {
-            report.entries += 1;
-            let sound = self
-                .entry(&key)
-                .is_some_and(|entry| self.names_only_held(&entry));
-            if !sound {
-                remove_any(&e)?;
-                report.dropped_entries.push(key);
-            }
-        }
-        for file in pack::files_with(&pack::entry_packs(&self.dir), "json") {
-            let entries = read_entry_pack(&file);
-            report.entries += entries.len();
-            let (sound, bad): (Vec<_>, Vec<_>) = entries
-                .iter()
-                .partition(|(_, entry)| self.names_only_held(entry));
-            if !bad.is_empty() {
-                report
-                    .dropped_entries
-                    .extend(bad.iter().map(|(k, _)| (*k).clone()));
-                self.rewrite_entry_pack(&file, sound.into_iter().map(|(k, e)| (k.as_str(), e)))?;
-            }
-        }
-        self.forget_packs();
-        Ok(report)
-    }
-
-    /// Keep only the given keys and the objects they reference. A pack none of whose objects is
-    /// referenced is removed; one mostly unreferenced (more than half its bytes) is returned with
-    /// the objects still referenced, for `pack_writer::rewrite` to copy out before it goes.
-    /// Returns (entries, objects) removed, and those packs.
-    pub fn gc(
-        &self,
-        keep: &std::collections::BTreeSet<String>,
-    ) -> Result<(usize, usize, Vec<(PathBuf, Vec<String>)>), EngineError> {
-        let mut live = std::collections::BTreeSet::new();
-        let mut removed_entries = 0;
-        let mut hold = |entry: &Entry| {
-            for stored in entry.outputs.values() {
-                live.extend(stored_objects(stored).cloned());
-            }
-        };
-        for (key, e) in self.loose_entries()? {
-            if keep.contains(&key) {
-                if let Some(entry) = self.entry(&key) {
-                    hold(&entry);
-                }
-            } else {
-                std::fs::remove_file(&e).at(&e)?;
-                removed_entries += 1;
-            }
-        }
-        for file in pack::files_with(&pack::entry_packs(&self.dir), "json") {
-            let entries = read_entry_pack(&file);
-            let kept: Vec<(&str, &Entry)> = entries
-                .iter()
-                .filter(|(k, _)| keep.contains(*k))
-                .map(|(k, e)| (k.as_str(), e))
-                .collect();
-            kept.iter().for_each(|(_, e)| hold(e));
-            if kept.len() < entries.len() {
-                removed_entries += entries.len() - kept.len();
-                self.rewrite_entry_pack(&file, kept.into_iter())?;
-            }
-        }
-        let mut removed_objects = 0;
-        for (name, obj) in self.loose_objects()? {
-            if !live.contains(&name) {
-                std::fs::remove_file(&obj).at(&obj)?;
-                removed_objects += 1;
-            }
-        }
-        let packs = pack::object_packs(&self.dir);
-        let mut sparse = Vec::new();
-        for idx in pack::files_with(&packs, "idx") {
-            let blobs = pack::read_idx(&idx).unwrap_or_default();
-            let mut held: Vec<String> = blobs
-                .keys()
-                .filter(|h| live.contains(*h))
-                .cloned()
-                .collect();
-            if held.is_empty() {
-                removed_objects += blobs.len();
-                remove_pack(&idx)?;
-                continue;
-            }
-            let bytes =
-                |hs: &mut dyn Iterator<Item = &String>| -> u64 { hs.map(|h| blobs[h].len).sum() };
-            if 2 * bytes(&mut held.iter()) < bytes(&mut blobs.keys()) {
-                removed_objects += blobs.len() - held.len();
-                held.sort();
-                sparse.push((idx, held));
-            }
-        }
-        // what a kill left: a pack whose idx was never written, a half-written file
-        for dir in [packs, pack::entry_packs(&self.dir)] {
-            for f in read_dir_sorted(&dir)? {
-                let orphan = match f.extension().and_then(|e| e.to_str()) {
-                    Some("pack") => !f.with_extension("idx").exists(),
-                    Some("idx" | "json") => false,
-                    _ => true,
-                };
-                if orphan {
-                    remove_any(&f)?;
-                }
-            }
-        }
-        self.forget_packs();
-        Ok((removed_entries, removed_objects, sparse))
-    }
-
-    /// Whether every object an entry names is held.
-    fn names_only_held(&self, entry: &Entry) -> bool {
-        entry
-            .outputs
-            .values()
-            .all(|s| stored_objects(s).all(|h| self.has_object(h)))
-    }
-
-    /// Replace an entry pack by one of the given entries (none: just remove it).
-    fn rewrite_entry_pack<'e>(
-        &self,
-        file: &Path,
-        entries: impl Iterator<Item = (&'e str, &'e Entry)>,
-    ) -> Result<(), EngineError> {
-        let map: BTreeMap<&str, &Entry> = entries.collect();
-        if !map.is_empty() {
-            let new = self.write_entry_pack(&map)?;
-            if new == file {
-                return Ok(());
-            }
-        }
-        std::fs::remove_file(file).at(file)
-    }
-
     /// Read the packs again when next needed.
     pub(super) fn forget_packs(&self) {
         *self.packs.write().expect("pack index lock") = None;
@@ -575,67 +389,16 @@ impl Store {
     }
 
     /// Write entries as one entry pack (the blobs they name must be in place). Returns its path.
-    fn write_entry_pack(&self, entries: &BTreeMap<&str, &Entry>) -> Result<PathBuf, EngineError> {
+    pub(super) fn write_entry_pack(
+        &self,
+        entries: &BTreeMap<&str, &Entry>,
+    ) -> Result<PathBuf, EngineError> {
         let bytes = serde_json::to_vec(entries).expect("entries serialize");
         let dir = pack::entry_packs(&self.dir);
         std::fs::create_dir_all(&dir).at(&dir)?;
         let path = dir.join(format!("{}.json", sha256_hex(&bytes)));
         super::atomic::write_atomic(&path, &bytes)?;
         Ok(path)
-    }
-
-    /// The loose objects: (hash, path), sorted.
-    fn loose_objects(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
-        let mut out = Vec::new();
-        for sub in read_dir_sorted(&self.dir.join("objects"))? {
-            let prefix = file_name(&sub);
-            if prefix.len() != 2 {
-                continue; // `packs/`
-            }
-            for obj in read_dir_sorted(&sub)? {
-                out.push((format!("{prefix}{}", file_name(&obj)), obj));
-            }
-        }
-        Ok(out)
-    }
-
-    /// The loose entries: (key, path), sorted.
-    fn loose_entries(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
-        Ok(read_dir_sorted(&self.dir.join("entries"))?
-            .into_iter()
-            .filter(|e| e.is_file())
-            .map(|e| {
-                let key = e
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                (key, e)
-            })
-            .collect())
-    }
-}
-
-fn file_name(p: &Path) -> String {
-    p.file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
-/// An entry pack's entries (none if it cannot be read).
-fn read_entry_pack(file: &Path) -> BTreeMap<String, Entry> {
-    std::fs::read(file)
-        .ok()
-        .and_then(|b| serde_json::from_slice(&b).ok())
-        .unwrap_or_default()
-}
-
-/// Remove a pack: its idx first (so it is never named without its blobs), then its blobs.
-pub(super) fn remove_pack(idx: &Path) -> Result<(), EngineError> {
-    std::fs::remove_file(idx).at(idx)?;
-    let pack = idx.with_extension("pack");
-    match std::fs::remove_file(&pack) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(EngineError::io(&pack, e)),
-        _ => Ok(()),
     }
 }
 
@@ -645,16 +408,4 @@ pub fn stored_objects(stored: &Stored) -> Box<dyn Iterator<Item = &String> + '_>
         Stored::File { sha256 } => Box::new(std::iter::once(sha256)),
         Stored::Collection { items } => Box::new(items.values()),
     }
-}
-
-fn read_dir_sorted(dir: &Path) -> Result<Vec<PathBuf>, EngineError> {
-    if !dir.exists() {
-        return Ok(Vec::new());
-    }
-    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
-        .at(dir)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    out.sort();
-    Ok(out)
 }
