@@ -16,6 +16,7 @@
 //!
 //! `PackWriter` (`engine::pack_writer`) writes packs; `Store` reads them.
 
+use super::error::{EngineError, IoContext};
 use std::collections::{HashMap, HashSet};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
@@ -116,4 +117,14 @@ pub fn read_idx(idx: &Path) -> Option<HashMap<String, Loc>> {
         out.insert(h.to_string(), Loc { pack, offset, len });
     }
     Some(out)
+}
+
+/// Remove a pack: its idx first (so it is never named without its blobs), then its blobs.
+pub fn remove_pack(idx: &Path) -> Result<(), EngineError> {
+    std::fs::remove_file(idx).at(idx)?;
+    let pack = idx.with_extension("pack");
+    match std::fs::remove_file(&pack) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(EngineError::io(&pack, e)),
+        _ => Ok(()),
+    }
 }

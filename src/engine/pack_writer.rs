@@ -148,7 +148,7 @@ pub fn rewrite(store: &Store, sparse: &[(PathBuf, Vec<String>)]) -> Result<usize
     }
     writer.finish()?;
     for (idx, _) in sparse {
-        super::store_upkeep::remove_pack(idx)?;
+        super::pack::remove_pack(idx)?;
     }
     store.forget_packs();
     Ok(copied)

@@ -174,25 +174,28 @@ impl Store {
     /// Whether these bytes (of this hash) are already stored soundly: a loose object of the same
     /// bytes, or a packed one (packs are checked on read and by `groove verify`).
     pub(super) fn holds_sound(&self, sha256: &str, bytes: &[u8]) -> bool {
-        let path = self.object_path(sha256);
-        (std::fs::metadata(&path).is_ok_and(|m| m.len() == bytes.len() as u64)
-            && std::fs::read(&path).is_ok_and(|b| b == bytes))
+        self.loose_sound(sha256, bytes)
             || self.with_packs(false, |i| i.objects.contains_key(sha256))
     }
 
-    /// Record a pack this process wrote.
+    /// Whether a loose object of these bytes is there. The bytes were just hashed, so equal
+    /// bytes are sound without hashing the file again; a damaged one is not (it is replaced).
+    fn loose_sound(&self, sha256: &str, bytes: &[u8]) -> bool {
+        let path = self.object_path(sha256);
+        std::fs::metadata(&path).is_ok_and(|m| m.len() == bytes.len() as u64)
+            && std::fs::read(&path).is_ok_and(|b| b == bytes)
+    }
+
+    /// Record a pack this process wrote (packs not read yet are read, this one with them, when
+    /// first needed).
     pub(super) fn packs_written(
         &self,
         idx: PathBuf,
         blobs: std::collections::HashMap<String, super::pack::Loc>,
     ) {
-        let mut guard = self.packs.write().expect("pack index lock");
-        let index = guard.get_or_insert_with(|| {
-            let mut i = PackIndex::default();
-            i.refresh(&self.dir);
-            i
-        });
-        index.add_objects(idx, blobs);
+        if let Some(index) = &mut *self.packs.write().expect("pack index lock") {
+            index.add_objects(idx, blobs);
+        }
     }
 
     /// Forget a damaged or missing blob: its loose file, or the whole pack holding it (the other
@@ -203,9 +206,8 @@ impl Store {
             i.objects.get(sha256).map(|l| l.pack.path.clone())
         });
         if let Some(pack) = pack {
-            let _ = std::fs::remove_file(pack.with_extension("idx"));
-            let _ = std::fs::remove_file(&pack);
-            *self.packs.write().expect("pack index lock") = None;
+            let _ = pack::remove_pack(&pack.with_extension("idx"));
+            self.forget_packs();
         }
     }
 
@@ -320,11 +322,7 @@ impl Store {
     pub fn put_object(&self, bytes: &[u8]) -> Result<String, EngineError> {
         let sha256 = sha256_hex(bytes);
         let path = self.object_path(&sha256);
-        // an object already there is reused only if it is sound (a damaged one is replaced);
-        // these bytes were just hashed, so equal bytes are sound without hashing them again
-        let sound = std::fs::metadata(&path).is_ok_and(|m| m.len() == bytes.len() as u64)
-            && std::fs::read(&path).is_ok_and(|b| b == bytes);
-        if !sound {
+        if !self.loose_sound(&sha256, bytes) {
             let tmp = self.tmp_root();
             std::fs::create_dir_all(&tmp).at(&tmp)?;
             let staged = tmp.join(unique_name("object"));

@@ -55,7 +55,7 @@ impl Store {
                 .collect();
             if blobs.is_empty() || !damaged.is_empty() {
                 damaged.sort();
-                remove_pack(&idx)?;
+                pack::remove_pack(&idx)?;
                 report.dropped_objects.extend(damaged);
             }
         }
@@ -143,7 +143,7 @@ impl Store {
                 .collect();
             if held.is_empty() {
                 removed_objects += blobs.len();
-                remove_pack(&idx)?;
+                pack::remove_pack(&idx)?;
                 continue;
             }
             let bytes =
@@ -238,16 +238,6 @@ fn read_entry_pack(file: &Path) -> BTreeMap<String, Entry> {
         .ok()
         .and_then(|b| serde_json::from_slice(&b).ok())
         .unwrap_or_default()
-}
-
-/// Remove a pack: its idx first (so it is never named without its blobs), then its blobs.
-pub(super) fn remove_pack(idx: &Path) -> Result<(), EngineError> {
-    std::fs::remove_file(idx).at(idx)?;
-    let pack = idx.with_extension("pack");
-    match std::fs::remove_file(&pack) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(EngineError::io(&pack, e)),
-        _ => Ok(()),
-    }
 }
 
 fn read_dir_sorted(dir: &Path) -> Result<Vec<PathBuf>, EngineError> {
