@@ -155,20 +155,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
                     w[i] = w[i].saturating_add(1);
                 }
             }
-            // a run drawn more than 255 times (only in tiny or freak resamples) does not fit
-            // a lane: such a group's slopes are read one resample at a time
-            let slopes: Vec<[f64; 2]> = match weights.iter().flatten().all(|&c| c <= 255) {
-                true => {
-                    let mut lanes = vec![[0u8; SLOPE_LANES]; n];
-                    for (l, w) in weights.iter().enumerate() {
-                        for i in 0..n {
-                            lanes[i][l] = w[i] as u8;
-                        }
-                    }
-                    order.slopes_lanes(&lanes)[..group.len()].to_vec()
-                }
-                false => weights.iter().map(|w| order.slopes(w)).collect(),
-            };
+            let slopes = order.slopes_many(&weights);
             let (mut buf, mut near) = (Vec::new(), Vec::new());
             group
                 .iter()

@@ -109,6 +109,29 @@ impl<const K: usize> SlopeOrder<K> {
         })
     }
 
+    /// `slopes` of each resample's counts (`w[r][i]`: how often point i was drawn in resample
+    /// r), `LANES` resamples per pass (`slopes_lanes`); resamples whose counts do not fit a lane
+    /// (one above 255: only tiny or freak resamples) are read one at a time. The same bits as
+    /// `slopes` of each.
+    pub fn slopes_many(&self, w: &[Vec<u16>]) -> Vec<[f64; K]> {
+        let mut out = Vec::with_capacity(w.len());
+        for group in w.chunks(LANES) {
+            if group.iter().flatten().any(|&c| c > 255) {
+                out.extend(group.iter().map(|w| self.slopes(w)));
+                continue;
+            }
+            let n = group.first().map_or(0, Vec::len);
+            let mut lanes = vec![[0u8; LANES]; n];
+            for (l, w) in group.iter().enumerate() {
+                for (lane, &c) in lanes.iter_mut().zip(w) {
+                    lane[l] = c as u8;
+                }
+            }
+            out.extend_from_slice(&self.slopes_lanes(&lanes)[..group.len()]);
+        }
+        out
+    }
+
     /// `slopes` of `LANES` resamples at once: `w[i][l]` is how often point i was drawn in
     /// resample l (a lane of zeros gives NaN; a count above 255 does not fit: use `slopes`).
     /// The pass over the pairs is shared: each pair's two points' counts are read once for
@@ -307,6 +330,37 @@ mod tests {
                 }
             }
             assert!(got[LANES - 1].iter().all(|s| s.is_nan()));
+        }
+    }
+
+    #[test]
+    fn many_resamples_give_each_ones_slopes_lanes_or_not() {
+        use rand::{Rng, SeedableRng};
+        use rand_chacha::ChaCha8Rng;
+        let (x, y) = points();
+        let order = SlopeOrder::new(&x, [&y, &x], usize::MAX, 2);
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        // 40 resamples: two full groups and a part; one resample of the second group has a
+        // point drawn 300 times, so that group is read one resample at a time
+        let w: Vec<Vec<u16>> = (0..40)
+            .map(|r| {
+                let mut w = vec![0u16; x.len()];
+                for _ in 0..x.len() {
+                    w[rng.random_range(0..x.len())] += 1;
+                }
+                if r == 20 {
+                    w[3] += 300;
+                }
+                w
+            })
+            .collect();
+        let got = order.slopes_many(&w);
+        assert_eq!(got.len(), w.len());
+        for (r, (g, w)) in got.iter().zip(&w).enumerate() {
+            let want = order.slopes(w);
+            for k in 0..2 {
+                assert_eq!(g[k].to_bits(), want[k].to_bits(), "resample {r} series {k}");
+            }
         }
     }
 
