@@ -31,6 +31,92 @@ pub fn hash_reader(mut read: impl std::io::Read) -> std::io::Result<String> {
     }
 }
 
+/// A sha256 fed through a small buffer: many short writes (item names and hashes) cost one
+/// hasher update per 16 KB, and nothing the size of the input is allocated.
+pub struct BufHasher {
+    hasher: Sha256,
+    buf: Vec<u8>,
+}
+
+impl Default for BufHasher {
+    fn default() -> Self {
+        BufHasher::from(Sha256::new())
+    }
+}
+
+impl From<Sha256> for BufHasher {
+    /// Continue a hasher already fed.
+    fn from(hasher: Sha256) -> Self {
+        BufHasher {
+            hasher,
+            buf: Vec::with_capacity(1 << 14),
+        }
+    }
+}
+
+impl BufHasher {
+    pub fn put(&mut self, bytes: &[u8]) {
+        if self.buf.len() + bytes.len() > self.buf.capacity() {
+            self.hasher.update(&self.buf);
+            self.buf.clear();
+            if bytes.len() > self.buf.capacity() {
+                self.hasher.update(bytes);
+                return;
+            }
+        }
+        self.buf.extend_from_slice(bytes);
+    }
+
+    /// Lowercase hex of the digest of everything put.
+    pub fn hex(mut self) -> String {
+        self.hasher.update(&self.buf);
+        hex(&self.hasher.finalize())
+    }
+}
+
+impl std::io::Write for BufHasher {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        self.put(bytes);
+        Ok(bytes.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Puts `map` as compact JSON, the bytes `serde_json::to_vec` gives (keys in the map's order),
+/// without serde's per-string machinery: keys and digests on a 10,000-item no-op.
+pub fn put_json_map(h: &mut BufHasher, map: &BTreeMap<String, String>) {
+    h.put(b"{");
+    for (i, (k, v)) in map.iter().enumerate() {
+        if i > 0 {
+            h.put(b",");
+        }
+        put_json_str(h, k);
+        h.put(b":");
+        put_json_str(h, v);
+    }
+    h.put(b"}");
+}
+
+/// Puts `s` as a JSON string, as `serde_json` writes it.
+pub fn put_json_str(h: &mut BufHasher, s: &str) {
+    if s.bytes().any(|b| b < 0x20 || b == b'"' || b == b'\\') {
+        serde_json::to_writer(&mut *h, s).expect("a string serializes");
+        return;
+    }
+    h.put(b"\"");
+    h.put(s.as_bytes());
+    h.put(b"\"");
+}
+
+/// sha256 of `map` as compact JSON (`put_json_map`).
+pub fn json_map_sha256(map: &BTreeMap<String, String>) -> String {
+    let mut h = BufHasher::default();
+    put_json_map(&mut h, map);
+    h.hex()
+}
+
 pub fn hex(bytes: &[u8]) -> String {
     const DIGITS: &[u8; 16] = b"0123456789abcdef";
     let mut s = String::with_capacity(bytes.len() * 2);
@@ -129,4 +215,51 @@ pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
         .map(|d| d.as_nanos() as i128)
         .unwrap_or(0);
     (meta.len(), mtime_ns, 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_maps_are_the_bytes_serde_json_writes() {
+        let odd = [
+            "",
+            "a\"b",
+            "back\\slash",
+            "tab\there",
+            "nl\n",
+            "\u{1}\u{1f}",
+            "é ✓ /",
+            "\u{7f}",
+        ];
+        let mut map: BTreeMap<String, String> = odd
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (format!("{s}{i}"), s.to_string()))
+            .collect();
+        map.insert("single-316-001".into(), "ab".repeat(32));
+        for (k, v) in &map {
+            let mut h = BufHasher::default();
+            put_json_str(&mut h, k);
+            put_json_str(&mut h, v);
+            let mut want = serde_json::to_vec(k).unwrap();
+            want.extend(serde_json::to_vec(v).unwrap());
+            assert_eq!(h.hex(), sha256_hex(&want), "{k:?}");
+        }
+        // more than the buffer holds, in writes of every size
+        let long: BTreeMap<String, String> = (0..2000)
+            .map(|i| (format!("item-{i:05}"), "x".repeat(i % 70_000)))
+            .collect();
+        assert_eq!(
+            json_map_sha256(&long),
+            sha256_hex(&serde_json::to_vec(&long).unwrap())
+        );
+        assert_eq!(
+            json_map_sha256(&map),
+            sha256_hex(&serde_json::to_vec(&map).unwrap())
+        );
+        let empty = BTreeMap::new();
+        assert_eq!(json_map_sha256(&empty), sha256_hex(b"{}"));
+    }
 }

@@ -1,6 +1,6 @@
 //! The cache key of a stage (or of one item of a per-item stage): exactly what can change its output.
 
-use super::hashing::{hex, sha256_hex};
+use super::hashing::{json_map_sha256, put_json_map, put_json_str, sha256_hex, BufHasher};
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
@@ -73,12 +73,15 @@ impl ItemKeys {
 
     /// The key of the item with these inputs.
     pub fn digest(&self, inputs: &BTreeMap<String, String>, item: Option<&str>) -> String {
-        let mut h = self.before_inputs.clone();
-        h.update(serde_json::to_vec(inputs).expect("digests serialize"));
-        h.update(&self.middle);
-        h.update(serde_json::to_vec(&item).expect("an item name serializes"));
-        h.update(&self.after_item);
-        hex(&h.finalize())
+        let mut h = BufHasher::from(self.before_inputs.clone());
+        put_json_map(&mut h, inputs);
+        h.put(&self.middle);
+        match item {
+            Some(item) => put_json_str(&mut h, item),
+            None => h.put(b"null"),
+        }
+        h.put(&self.after_item);
+        h.hex()
     }
 }
 
@@ -106,7 +109,7 @@ pub fn canonical_json(value: serde_json::Value) -> serde_json::Value {
 
 /// Hash of a per-item stage: its item keys in item order.
 pub fn items_digest(items: &BTreeMap<String, String>) -> String {
-    sha256_hex(&serde_json::to_vec(items).expect("item keys serialize"))
+    json_map_sha256(items)
 }
 
 #[cfg(test)]

@@ -10,7 +10,6 @@ use super::hashing::stamp_of;
 use super::lockfile::{LockStage, PipelineLock};
 use super::store::Stored;
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -38,10 +37,11 @@ pub fn stage_digest(stage: &LockStage) -> String {
         outputs,
         items,
     } = stage;
-    let mut h = Sha256::new();
+    // through a buffer: 60,000 small hasher updates cost more than the hashing
+    let mut h = super::hashing::BufHasher::default();
     let mut put = |s: &str| {
-        h.update((s.len() as u64).to_le_bytes());
-        h.update(s.as_bytes());
+        h.put(&(s.len() as u64).to_le_bytes());
+        h.put(s.as_bytes());
     };
     put(kind);
     put(key);
@@ -77,7 +77,7 @@ pub fn stage_digest(stage: &LockStage) -> String {
         put(item);
         put(item_key);
     }
-    super::hashing::hex(&h.finalize())
+    h.hex()
 }
 
 /// The digests of the lock at `lock_file`, when the sidecar at `path` was taken of it as it is

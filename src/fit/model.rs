@@ -54,6 +54,14 @@ pub struct Prepared {
     groove: Groove,
 }
 
+/// Where a time after the kick falls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    Before,
+    Sliding,
+    Rolling,
+}
+
 /// (e^{−x}, 1 − e^{−x}) from one `exp_m1`: the second stays accurate for small x.
 #[inline]
 fn decay(x: f64) -> (f64, f64) {
@@ -177,35 +185,116 @@ impl Prepared {
     #[inline]
     pub fn eval_grad(&self, t_s: f64, t_ref_s: f64, grad: &mut [f64; NP]) -> f64 {
         let tau = t_s - t_ref_s + self.p[T0];
+        match self.phase(tau) {
+            Phase::Before => self.before(grad),
+            Phase::Sliding => {
+                let (e, om) = decay(tau / self.p[TD]);
+                self.sliding(tau, e, om, grad)
+            }
+            Phase::Rolling => {
+                let x = (tau - self.t1_s) / self.te_s;
+                let (f, om) = decay(x);
+                self.rolling(x, f, om, grad)
+            }
+        }
+    }
+
+    /// `eval_grad` at every time of `t_s` into `z` and `grad`. Between frames one interval
+    /// apart in the same phase, the exponential is carried forward by one multiplication
+    /// (e' = e·q, 1 − e' = (1 − e) + e·(1 − q), both terms positive, so 1 − e keeps its relative
+    /// accuracy); it is computed afresh every `REFRESH` frames, after a gap or any other
+    /// interval, and at the switch. The values agree with `eval_grad` to about 1e-13 relative.
+    pub fn eval_grad_many(&self, t_s: &[f64], t_ref_s: f64, z: &mut [f64], grad: &mut [[f64; NP]]) {
+        const REFRESH: u32 = 32;
+        // the series: phase, τ of the last frame, its (e, 1 − e), the interval h of the step
+        // factor q = e^{−h/scale} with 1 − q, and the frames since the last fresh value
+        let mut last: Option<(Phase, f64, f64, f64)> = None;
+        let (mut h_q, mut q_phase, mut q, mut omq) = (f64::NAN, Phase::Before, 0.0, 0.0);
+        let mut since = 0u32;
+        let (t, te) = (self.p[TD], self.te_s);
+        for ((&ti, zi), gi) in t_s.iter().zip(z.iter_mut()).zip(grad.iter_mut()) {
+            let tau = ti - t_ref_s + self.p[T0];
+            let phase = self.phase(tau);
+            let (x, scale) = match phase {
+                Phase::Before => {
+                    *zi = self.before(gi);
+                    last = None;
+                    continue;
+                }
+                Phase::Sliding => (tau / t, t),
+                Phase::Rolling => ((tau - self.t1_s) / te, te),
+            };
+            let (e, om) = match last {
+                Some((p, tau0, e0, om0)) if p == phase && since < REFRESH => {
+                    let h = tau - tau0;
+                    // the same interval up to the rounding of decimal times, or a new factor
+                    if q_phase != phase || !((h - h_q).abs() <= 1e-12 * h_q) {
+                        (h_q, q_phase, (q, omq)) = (h, phase, decay(h / scale));
+                    }
+                    since += 1;
+                    (e0 * q, om0 + e0 * omq)
+                }
+                _ => {
+                    since = 0;
+                    decay(x)
+                }
+            };
+            *zi = match phase {
+                Phase::Rolling => self.rolling(x, e, om, gi),
+                _ => self.sliding(tau, e, om, gi),
+            };
+            last = Some((phase, tau, e, om));
+        }
+    }
+
+    #[inline]
+    fn phase(&self, tau: f64) -> Phase {
+        if tau < 0.0 {
+            Phase::Before
+        } else if tau < self.t1_s {
+            Phase::Sliding
+        } else {
+            Phase::Rolling
+        }
+    }
+
+    /// Before the kick: at rest at z0.
+    #[inline]
+    fn before(&self, grad: &mut [f64; NP]) -> f64 {
         *grad = [0.0; NP];
         grad[Z0] = 1.0;
-        if tau < 0.0 {
-            return self.p[Z0];
-        }
+        self.p[Z0]
+    }
+
+    /// Sliding, at τ after the kick with (e, om) = (e^{−τ/T}, 1 − e^{−τ/T}).
+    #[inline]
+    fn sliding(&self, tau: f64, e: f64, om: f64, grad: &mut [f64; NP]) -> f64 {
         let (v0, t) = (self.p[V0], self.p[TD]);
         let (s, dir, da) = (self.groove.s, self.dir, self.da);
-        if tau < self.t1_s {
-            let (e, om) = decay(tau / t);
-            let c = G_MPS2 * self.p[MU] / s;
-            grad[T0] = slide_v(v0, da, e);
-            grad[V0] = t * om;
-            grad[MU] = dir * (G_MPS2 * t / s) * (t * om - tau);
-            grad[TD] = v0 * (om - e * tau / t) + dir * c * (2.0 * t * om - e * tau - tau);
-            self.p[Z0] + t * (v0 + da) * om - da * tau
-        } else {
-            let te = self.te_s;
-            let v1 = self.v1_mps;
-            let x = (tau - self.t1_s) / te;
-            let (f, om) = decay(x);
-            grad[T0] = v1 * f;
-            // ∂R/∂Te · ∂Te/∂T with R = v1 Te (1 − F)
-            let dr_dte = v1 * (om - f * x);
-            for (i, g) in grad.iter_mut().enumerate().take(TD + 1).skip(V0) {
-                *g = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
-            }
-            grad[TD] += dr_dte * te / t;
-            self.p[Z0] + self.z1_m + v1 * te * om
+        let c = G_MPS2 * self.p[MU] / s;
+        grad[Z0] = 1.0;
+        grad[T0] = slide_v(v0, da, e);
+        grad[V0] = t * om;
+        grad[VA0] = 0.0;
+        grad[MU] = dir * (G_MPS2 * t / s) * (t * om - tau);
+        grad[TD] = v0 * (om - e * tau / t) + dir * c * (2.0 * t * om - e * tau - tau);
+        self.p[Z0] + t * (v0 + da) * om - da * tau
+    }
+
+    /// Rolling, x = (τ − t1)/Te after the switch with (f, om) = (e^{−x}, 1 − e^{−x}).
+    #[inline]
+    fn rolling(&self, x: f64, f: f64, om: f64, grad: &mut [f64; NP]) -> f64 {
+        let te = self.te_s;
+        let v1 = self.v1_mps;
+        grad[Z0] = 1.0;
+        grad[T0] = v1 * f;
+        // ∂R/∂Te · ∂Te/∂T with R = v1 Te (1 − F)
+        let dr_dte = v1 * (om - f * x);
+        for (i, g) in grad.iter_mut().enumerate().take(TD + 1).skip(V0) {
+            *g = self.dz1[i] + te * om * self.dv1[i] - v1 * f * self.dt1[i];
         }
+        grad[TD] += dr_dte * te / self.p[TD];
+        self.p[Z0] + self.z1_m + v1 * te * om
     }
 
     /// Model position at data time `t_s` (no derivatives).
@@ -299,6 +388,45 @@ mod tests {
                         "param {} at t={t}, p={p:?}: analytic {} vs numeric {fd}",
                         NAMES[i],
                         g[i]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_series_agrees_with_each_frame_computed_alone() {
+        // 10 kHz frames with decimal times, a dropped frame, a jittered one, frames before the
+        // kick and after the switch; three parameter sets (sliding then rolling, rolling from
+        // the start, backwards)
+        let mut t: Vec<f64> = (0..700)
+            .map(|k| format!("{:.7}", k as f64 * 1e-4).parse().unwrap())
+            .collect();
+        t.remove(300);
+        t[400] += 3.3e-6;
+        let cases = [
+            [1e-3, -2e-4, 0.05, 0.0, 0.33, 0.06],
+            [0.0, 3e-5, 0.02, 0.02 / Groove::CHAPTER.s, 0.3, 0.05],
+            [-2e-3, 1e-5, -0.03, 0.0, 0.29, 0.09],
+        ];
+        for p in cases {
+            let m = Prepared::new(&p, groove()).unwrap();
+            let (mut z, mut g) = (vec![0.0; t.len()], vec![[0.0; NP]; t.len()]);
+            m.eval_grad_many(&t, 0.0, &mut z, &mut g);
+            let rolled = t.iter().filter(|&&ti| ti + p[T0] > m.t1_s).count();
+            assert!(rolled > 100, "{p:?}: {rolled} frames after the switch");
+            for (i, &ti) in t.iter().enumerate() {
+                let mut want = [0.0; NP];
+                let zw = m.eval_grad(ti, 0.0, &mut want);
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * (a.abs() + b.abs()) + 1e-18;
+                assert!(close(z[i], zw), "{p:?} frame {i}: z {} vs {zw}", z[i]);
+                for k in 0..NP {
+                    assert!(
+                        close(g[i][k], want[k]),
+                        "{p:?} frame {i}, {}: {} vs {}",
+                        NAMES[k],
+                        g[i][k],
+                        want[k]
                     );
                 }
             }

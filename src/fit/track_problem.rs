@@ -24,10 +24,11 @@ impl Problem<NP> for TrackProblem<'_> {
         let mut finite = true;
         match jac {
             Some(jac) => {
-                for i in 0..self.t_s.len() {
-                    let zi = m.eval_grad(self.t_s[i], self.t_ref_s, &mut jac[i]);
-                    r[i] = zi - self.z_m[i];
-                    finite &= r[i].is_finite();
+                let n = self.t_s.len();
+                m.eval_grad_many(self.t_s, self.t_ref_s, &mut r[..n], &mut jac[..n]);
+                for (ri, &z) in r[..n].iter_mut().zip(self.z_m) {
+                    *ri -= z;
+                    finite &= ri.is_finite();
                 }
             }
             None => {
