@@ -377,6 +377,9 @@ fn clock_holds(fps: f64, tracks: &[Track]) -> bool {
 /// of the line the chunk ends in).
 pub const CHUNK_BYTES: usize = 8 << 20;
 
+/// Rows of a decoded Parquet table grouped into runs at a time (about 8 MB of columns).
+const PARQUET_SLICE_ROWS: usize = 1 << 18;
+
 /// Why `stream` gave up on a run's rows not coming together: the dataset is read whole and sorted
 /// instead.
 pub const NOT_GROUPED: &str = "the rows of a run are not together";
@@ -424,9 +427,15 @@ pub fn stream(
     let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
     let chunks = match csv {
         _ if parquet => {
-            stream.chunk(&read_parquet(traj_bytes).ok_or(PROBLEM)?)?;
-            stream.hand_over();
-            1
+            // decoded whole (it is compressed), then handed on in slices, so that the runs of
+            // one slice are encoded and kept while the next is grouped
+            let df = read_parquet(traj_bytes).ok_or(PROBLEM)?;
+            let slices = df.height().div_ceil(PARQUET_SLICE_ROWS).max(1);
+            for k in 0..slices {
+                stream.chunk(&df.slice((k * PARQUET_SLICE_ROWS) as i64, PARQUET_SLICE_ROWS))?;
+                stream.hand_over();
+            }
+            slices
         }
         Some(read) => csv_chunks(read, chunk_bytes, &mut stream)?,
         None => csv_chunks(&mut &traj_bytes[..], chunk_bytes, &mut stream)?,
