@@ -203,7 +203,8 @@ impl Prepared {
     /// apart in the same phase, the exponential is carried forward by one multiplication
     /// (e' = e·q, 1 − e' = (1 − e) + e·(1 − q), both terms positive, so 1 − e keeps its relative
     /// accuracy); it is computed afresh every `REFRESH` frames, after a gap or any other
-    /// interval, and at the switch. The values agree with `eval_grad` to about 1e-13 relative.
+    /// interval, and at the switch. The values agree with `eval_grad` within 1e-12 relative
+    /// (unit test).
     pub fn eval_grad_many(&self, t_s: &[f64], t_ref_s: f64, z: &mut [f64], grad: &mut [[f64; NP]]) {
         const REFRESH: u32 = 32;
         // the series: phase, τ of the last frame, its (e, 1 − e), the interval h of the step
