@@ -247,10 +247,12 @@ mod tests {
             want.extend(serde_json::to_vec(v).unwrap());
             assert_eq!(h.hex(), sha256_hex(&want), "{k:?}");
         }
-        // more than the buffer holds, in writes of every size
+        // more than the buffer holds, in writes from empty to over the buffer's size (those
+        // go to the hasher directly)
         let long: BTreeMap<String, String> = (0..2000)
-            .map(|i| (format!("item-{i:05}"), "x".repeat(i % 70_000)))
+            .map(|i| (format!("item-{i:05}"), "x".repeat(i * 7919 % 40_000)))
             .collect();
+        assert!(long.values().any(|v| v.len() > 1 << 14));
         assert_eq!(
             json_map_sha256(&long),
             sha256_hex(&serde_json::to_vec(&long).unwrap())

@@ -60,7 +60,8 @@ thread_local! {
 
 /// `robust_weighted_mean` of the runs counted with multiplicities (a bootstrap resample): the
 /// runs are sorted by y and by se² once, so each resample's medians are walks along those
-/// orders weighted by its counts (no selection), and its reweighting visits each drawn run once.
+/// orders weighted by its counts (no selection), and its Huber step (`huber_root`) visits each
+/// drawn run once per Newton pass.
 pub struct RobustMean {
     /// The usable runs (finite y, positive finite se) in ascending order of y, and of se².
     by_y: Vec<u32>,
@@ -180,9 +181,8 @@ impl RobustMean {
 /// leave the bracket the signs of F give is a bisection instead. Stops at a step of 1e-12
 /// relative, as the reweighting did.
 fn huber_root(runs: &[[f64; 3]], start: f64) -> f64 {
-    let reach = runs.iter().fold(0.0_f64, |r, &[_, _, b]| r.max(b));
-    // below every y − b, F > 0; above every y + b, F < 0 (`runs` is in ascending order of y)
-    let (mut lo, mut hi) = (runs[0][0] - reach, runs[runs.len() - 1][0] + reach);
+    // the bracket: where F > 0 and where F < 0 was seen; open until a bisection needs it
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     let mut m = start;
     for _ in 0..100 {
         let (mut f, mut slope) = (0.0, 0.0);
@@ -207,7 +207,15 @@ fn huber_root(runs: &[[f64; 3]], start: f64) -> f64 {
         }
         if newton > lo && newton < hi {
             m = newton;
-        } else if hi - lo <= 1e-12 * m.abs().max(f64::MIN_POSITIVE) {
+            continue;
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            // below every y − b, F > 0; above every y + b, F < 0 (`runs` ascend in y)
+            let reach = runs.iter().fold(0.0_f64, |r, &[_, _, b]| r.max(b));
+            lo = lo.max(runs[0][0] - reach);
+            hi = hi.min(runs[runs.len() - 1][0] + reach);
+        }
+        if hi - lo <= 1e-12 * m.abs().max(f64::MIN_POSITIVE) {
             return m; // at a kink where no run is within its band
         } else {
             m = 0.5 * (lo + hi);
@@ -337,8 +345,8 @@ mod tests {
 
     #[test]
     fn the_huber_root_is_where_the_reweighting_settles() {
-        // (y, a, b): ordinary runs, a far one, and a set where no run lies within its band at
-        // the root (F is flat there: bisection, not Newton)
+        // (y, a, b) and a start: ordinary runs, a far one, and a start where no run lies within
+        // its band (F is flat there, its slope 0: the first steps are bisections)
         let reweighted = |runs: &[[f64; 3]], start: f64| {
             let mut m = start;
             for _ in 0..2000 {
@@ -352,23 +360,30 @@ mod tests {
             }
             m
         };
-        let sets: [&[[f64; 3]]; 3] = [
-            &[
-                [0.30, 1.0, 0.02],
-                [0.31, 2.0, 0.01],
-                [0.33, 1.0, 0.03],
-                [0.34, 0.5, 0.02],
-            ],
-            &[
-                [0.02, 100.0, 0.001],
-                [0.29, 1.0, 0.02],
-                [0.30, 1.0, 0.02],
-                [0.31, 1.0, 0.02],
-            ],
-            &[[0.0, 1.0, 0.1], [1.0, 3.0, 0.1]],
+        let sets: [(&[[f64; 3]], f64); 3] = [
+            (
+                &[
+                    [0.30, 1.0, 0.02],
+                    [0.31, 2.0, 0.01],
+                    [0.33, 1.0, 0.03],
+                    [0.34, 0.5, 0.02],
+                ],
+                0.31,
+            ),
+            (
+                &[
+                    [0.02, 100.0, 0.001],
+                    [0.29, 1.0, 0.02],
+                    [0.30, 1.0, 0.02],
+                    [0.31, 1.0, 0.02],
+                ],
+                0.30,
+            ),
+            (&[[0.0, 1.0, 0.1], [1.0, 3.0, 0.1]], 0.5),
         ];
-        for runs in sets {
-            let start = runs[runs.len() / 2][0];
+        for (runs, start) in sets {
+            // at the third set's start both runs are outside their bands
+            assert!(start != 0.5 || runs.iter().all(|&[y, _, b]| (y - start).abs() >= b));
             let (got, want) = (huber_root(runs, start), reweighted(runs, start));
             assert!((got - want).abs() <= 1e-13, "{runs:?}: {got} vs {want}");
             // F(got) = 0 up to rounding

@@ -386,9 +386,10 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 
 /// The recordings of a clean interchange dataset handed to `each` in file order, a piece's worth
 /// at a time (the runs whose last row was in the piece just read): trajectories.csv is read
-/// `chunk_bytes` at a time (a Parquet file whole), so neither the whole table nor all recordings are held. The CSV comes
+/// `chunk_bytes` at a time, so neither the whole table nor all recordings are held (a Parquet
+/// file is decoded whole, then handed on in slices of `PARQUET_SLICE_ROWS` rows). The CSV comes
 /// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
-/// read), else from `files`. Gives the number of chunks read. It needs each run's rows to be one
+/// read), else from `files`. Gives the number of pieces (CSV chunks or Parquet slices). It needs each run's rows to be one
 /// block (in any order within it), as `groove synth` and most trackers write them. At anything
 /// else, or anything `recordings` would give `None` for, it stops with the reason: the caller then
 /// forgets what `each` received and reads the dataset whole (`ingest::ingest`), which sorts the

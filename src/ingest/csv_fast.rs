@@ -5,8 +5,9 @@
 //! It takes a piece only when every line matches that strict grammar; at the first thing it does
 //! not know (another header, a quote, a space, an empty field, `1.`, `+1`, `inf`, a run id with
 //! other characters) it gives `None` and the piece goes to polars (`columnar`), which reads what
-//! this refuses. Numbers are parsed by Rust's correctly rounded `str::parse`, as the row-by-row
-//! path parses them, so an accepted piece gives the values polars gives.
+//! this refuses. Numbers get the values Rust's correctly rounded `str::parse` gives (a plain
+//! decimal by one exact division, anything else by `str::parse`), as the row-by-row path parses
+//! them, so an accepted piece gives the values polars gives.
 
 /// The one header this parser takes.
 const HEADER: &[u8] = b"run,particle,frame,t_s,z_m";
@@ -115,17 +116,24 @@ fn int(field: &str) -> Option<i64> {
 /// `-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?`, valued as `str::parse` values it.
 fn float(text: &str) -> Option<f64> {
     let field = text.as_bytes();
-    let digits = |s: &[u8]| s.iter().take_while(|b| b.is_ascii_digit()).count();
+    // the digits from `at` on, their count, and the integer they make (wrapping past 19 digits,
+    // when it is not used)
+    let digits = |at: usize, m: u64| {
+        let run = field[at..].iter().take_while(|b| b.is_ascii_digit());
+        run.fold((0, m), |(n, m), &d| {
+            (n + 1, m.wrapping_mul(10).wrapping_add(u64::from(d - b'0')))
+        })
+    };
     let negative = field.first() == Some(&b'-');
     let mut at = usize::from(negative);
-    let whole = digits(&field[at..]);
+    let (whole, mut m) = digits(at, 0);
     if whole == 0 {
         return None;
     }
     at += whole;
     let mut frac = 0;
     if field.get(at) == Some(&b'.') {
-        frac = digits(&field[at + 1..]);
+        (frac, m) = digits(at + 1, m);
         if frac == 0 {
             return None;
         }
@@ -137,7 +145,7 @@ fn float(text: &str) -> Option<f64> {
         if matches!(field.get(at), Some(b'-' | b'+')) {
             at += 1;
         }
-        let exp = digits(&field[at..]);
+        let (exp, _) = digits(at, 0);
         if exp == 0 {
             return None;
         }
@@ -149,15 +157,9 @@ fn float(text: &str) -> Option<f64> {
     // a plain decimal of at most 19 digits whose digits make an integer below 2^53, over a
     // power of ten up to 10^22: both exact in f64, so one correctly rounded division gives what
     // `str::parse` gives, at a fraction of its cost; anything else goes to `str::parse`
-    if !exponent && whole + frac <= 19 && frac < POW10.len() {
-        let m = field
-            .iter()
-            .filter(|b| b.is_ascii_digit())
-            .fold(0u64, |m, &d| m * 10 + u64::from(d - b'0'));
-        if m < 1 << 53 {
-            let v = m as f64 / POW10[frac];
-            return Some(if negative { -v } else { v });
-        }
+    if !exponent && whole + frac <= 19 && frac < POW10.len() && m < 1 << 53 {
+        let v = m as f64 / POW10[frac];
+        return Some(if negative { -v } else { v });
     }
     text.parse().ok()
 }
