@@ -427,6 +427,68 @@ fn a_second_run_executes_no_stage_and_changes_nothing() {
     }
 }
 
+/// A dataset groove has never seen is read once: ingest hashes it as it reads it, and the key
+/// made from those digests is the one hashing first gives (`engine::hash_on_read`); once the
+/// stage has run, a touched file is hashed first, so a touch still reruns nothing.
+#[test]
+fn a_dataset_seen_first_is_hashed_as_ingest_reads_it_under_the_same_key() {
+    let project = new_project("hash-on-read", &repo().join("data"), false);
+    let ingest = |args: &[&str]| {
+        let out = run(&project, &[&["ingest"], args].concat());
+        assert_success(&out, "groove run ingest");
+        text(&out.stdout)
+    };
+    assert!(ingest(&[]).contains("1 stage run"));
+    let lock = json(&project, "pipeline.lock");
+    let items = &lock["stages"]["ingest"]["inputs"]["dataset"]["items"];
+    for name in ["runs.csv", "trajectories.csv"] {
+        let bytes = std::fs::read(project.join("data").join(name)).unwrap();
+        assert_eq!(
+            items[name].as_str(),
+            Some(groove::engine::hashing::sha256_hex(&bytes).as_str()),
+            "{name}: the key names the content read"
+        );
+    }
+    let key = lock["stages"]["ingest"]["key"].clone();
+    let cache = read(&project, ".groove/hashes.json");
+    assert!(
+        cache.contains("trajectories.csv"),
+        "the digest is remembered: {cache}"
+    );
+    // the engine hashing first (no cache) finds the entry the first run made
+    std::fs::remove_file(project.join(".groove/hashes.json")).unwrap();
+    let status = groove(&project, &["status", "--data", "data", "--out", "reports"]);
+    assert_success(&status, "groove status");
+    assert!(
+        text(&status.stdout).contains("fresh  ingest"),
+        "{}",
+        text(&status.stdout)
+    );
+    assert!(ingest(&[]).contains("0 stages run"));
+    assert_eq!(
+        json(&project, "pipeline.lock")["stages"]["ingest"]["key"],
+        key
+    );
+    // a touched file is hashed first: nothing reruns
+    let file = std::fs::File::options()
+        .append(true)
+        .open(project.join("data/trajectories.csv"))
+        .unwrap();
+    file.set_modified(std::time::SystemTime::now() + std::time::Duration::from_secs(3600))
+        .unwrap();
+    drop(file);
+    assert!(ingest(&[]).contains("0 stages run"));
+    // a project that forgot the run (no lock, no hash cache) reads the dataset once again,
+    // under the same key: the run before it is what it finds in the store downstream
+    std::fs::remove_file(project.join("pipeline.lock")).unwrap();
+    std::fs::remove_file(project.join(".groove/hashes.json")).unwrap();
+    assert!(ingest(&[]).contains("1 stage run"));
+    assert_eq!(
+        json(&project, "pipeline.lock")["stages"]["ingest"]["key"],
+        key
+    );
+}
+
 #[test]
 fn fresh_runs_in_two_folders_give_byte_identical_reports() {
     let s = shared();

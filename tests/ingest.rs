@@ -2,7 +2,7 @@
 //! error naming file, row and column, and trackpy / TrackMate exports of the same trajectories give
 //! the same recordings as the interchange format.
 
-use groove::engine::stage::{Artifact, StageInput, StageKind};
+use groove::engine::stage::{Artifact, InputFile, Seen, StageInput, StageKind};
 use groove::ingest::{self, item_name, Axis, Format, IngestParams};
 use groove::recording::{Experiment, Recording, RunInfo, Setup, Track};
 use groove::stages::ingest::Ingest;
@@ -535,10 +535,7 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
             let path = dir.path().join(name);
             std::fs::write(&path, bytes).unwrap();
             let sha256 = groove::engine::hashing::sha256_hex(bytes);
-            on_disk.insert(
-                name.clone(),
-                groove::engine::stage::InputFile { path, sha256 },
-            );
+            on_disk.insert(name.clone(), InputFile::checked(path, sha256));
         }
         let (in_memory, _) = run(&Artifact::Collection(files.clone()));
         let (from_disk, how) = run(&Artifact::OnDisk(on_disk.clone()));
@@ -549,10 +546,35 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
             "shuffled" => assert!(how.contains("read whole (the rows of a run"), "{how}"),
             _ => assert!(in_memory.unwrap_err().contains("row"), "a bad row is named"),
         }
+        // not hashed yet (the engine's first run over a dataset): the same outputs, and each
+        // file's digest recorded from what the stage read
+        let seen: BTreeMap<String, Seen> =
+            files.keys().map(|n| (n.clone(), Seen::default())).collect();
+        let recorded = on_disk
+            .iter()
+            .map(|(n, f)| {
+                (
+                    n.clone(),
+                    InputFile::recorded(f.path.clone(), seen[n].clone()),
+                )
+            })
+            .collect();
+        assert_eq!(run(&Artifact::OnDisk(recorded)).0, from_disk, "{what}");
+        // (a bad row stops the read before the end: nothing is recorded, the stage fails)
+        for (name, bytes) in files.iter().filter(|_| what != "bad") {
+            let digests = seen[name].digests();
+            let sha256 = groove::engine::hashing::sha256_hex(bytes);
+            assert!(!digests.is_empty(), "{what} {name}: no digest recorded");
+            assert!(
+                digests.iter().all(|d| *d == sha256),
+                "{what} {name}: {digests:?}"
+            );
+        }
         // a stale hash: the content changed after the key was made
         for name in ["runs.csv", "trajectories.csv"] {
             let mut stale = on_disk.clone();
-            stale.get_mut(name).unwrap().sha256 = "0".repeat(64);
+            let path = stale[name].path.clone();
+            stale.insert(name.to_string(), InputFile::checked(path, "0".repeat(64)));
             let err = run(&Artifact::OnDisk(stale)).0.unwrap_err();
             assert!(
                 err.contains(name) && err.contains("changed while groove was running"),

@@ -9,6 +9,7 @@ use super::context::{Context, Evaluated};
 use super::dag;
 use super::error::EngineError;
 use super::execute::{execute, load_shared, run_key, store_outputs, Bound, Source};
+use super::hash_on_read;
 use super::hashing::sha256_hex;
 use super::inputs::hash_path;
 use super::key::{items_digest, ItemKeys, StageKey};
@@ -93,7 +94,8 @@ fn evaluate_stage(
 ) -> Result<Evaluated, EngineError> {
     let started = Instant::now();
     let seed = stage_seed(ctx.pipeline.seed, &spec.name);
-    let (mut bound, waiting) = bind_inputs(ctx, spec, done)?;
+    let defer = matches!(action, Action::Run { .. }) && hash_on_read::allowed(ctx, spec);
+    let (mut bound, waiting, unhashed) = bind_inputs(ctx, spec, done, defer)?;
     if !waiting.is_empty() {
         return Ok(Evaluated {
             waiting_on: waiting.into_iter().collect(),
@@ -102,7 +104,22 @@ fn evaluate_stage(
         });
     }
     bind_provenance(ctx, spec, done, &mut bound);
+    // a streamed input new to the hash cache: the stage runs first and hashes it as it reads
+    let ran_first = match unhashed.is_empty() {
+        true => None,
+        false => Some(hash_on_read::run_first(
+            ctx, spec, &mut bound, unhashed, seed,
+        )?),
+    };
     let units = unit_keys(ctx, spec, &bound, seed)?;
+    // ...and its outputs are committed under the key made from what it read
+    let (action, ran_first) = match ran_first {
+        Some(outputs) => {
+            ctx.store.commit(&units[0].1, outputs)?;
+            (Action::Run { force: false }, 1)
+        }
+        None => (action, 0),
+    };
     let items: BTreeMap<String, String> = units
         .iter()
         .filter_map(|(item, k)| item.clone().map(|i| (i, k.clone())))
@@ -131,6 +148,7 @@ fn evaluate_stage(
         },
         None => lookup_or_run(ctx, spec, &bound, &units, &key, action, seed)?,
     };
+    let executed = executed + ran_first;
     let current = LockStage {
         key,
         outputs,
@@ -220,14 +238,17 @@ fn lookup_or_run(
 }
 
 /// Bind every path input (hashed) and every upstream output that is known; the second value
-/// names the upstream stages whose outputs are not known yet.
+/// names the upstream stages whose outputs are not known yet, the third the streamed path
+/// inputs left unhashed for the stage to hash as it reads them (only if `defer`).
 fn bind_inputs(
     ctx: &Context,
     spec: &StageSpec,
     done: &BTreeMap<String, Evaluated>,
-) -> Result<(BTreeMap<String, Bound>, BTreeSet<String>), EngineError> {
+    defer: bool,
+) -> Result<BoundInputs, EngineError> {
     let mut bound: BTreeMap<String, Bound> = BTreeMap::new();
     let mut waiting = BTreeSet::new();
+    let mut unhashed = Vec::new();
     for (name, input) in &spec.inputs {
         match input {
             InputSpec::Path { path, optional } => {
@@ -240,6 +261,12 @@ fn bind_inputs(
                         spec.name,
                         ctx.pipeline.show(path)
                     )));
+                }
+                if defer && hash_on_read::streamed(ctx, spec, name) {
+                    if let Some(u) = hash_on_read::unhashed(ctx, name, path)? {
+                        unhashed.push(u);
+                        continue;
+                    }
                 }
                 let stored = hash_path(path, &ctx.hashes)?;
                 let source = Source::Path(path.clone());
@@ -269,8 +296,15 @@ fn bind_inputs(
             InputSpec::Provenance => {}
         }
     }
-    Ok((bound, waiting))
+    Ok((bound, waiting, unhashed))
 }
+
+/// `bind_inputs`' answer: the bound inputs, the stages waited on, the inputs left unhashed.
+type BoundInputs = (
+    BTreeMap<String, Bound>,
+    BTreeSet<String>,
+    Vec<hash_on_read::Unhashed>,
+);
 
 /// Bind the `engine:provenance` inputs (made once every upstream stage is known).
 fn bind_provenance(

@@ -127,6 +127,26 @@ pub fn hex(bytes: &[u8]) -> String {
     s
 }
 
+/// What the cache trusts to say a file is unchanged: its size, mtime and inode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileStat {
+    size: u64,
+    mtime_ns: i128,
+    inode: u64,
+}
+
+impl FileStat {
+    /// The stat of the file at `path` (a symlink followed).
+    pub fn of(path: &Path) -> Result<FileStat, EngineError> {
+        let (size, mtime_ns, inode) = stamp_of(&std::fs::metadata(path).at(path)?);
+        Ok(FileStat {
+            size,
+            mtime_ns,
+            inode,
+        })
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 struct Stamp {
     size: u64,
@@ -165,27 +185,50 @@ impl HashCache {
 
     /// The sha256 of a regular file, from the cache when its stamp is unchanged.
     pub fn hash_file(&self, path: &Path) -> Result<String, EngineError> {
-        let meta = std::fs::metadata(path).at(path)?;
-        let (size, mtime_ns, inode) = stamp_of(&meta);
-        let key = path.to_string_lossy().into_owned();
-        if let Some(s) = self.entries.lock().expect("hash cache lock").get(&key) {
-            if s.size == size && s.mtime_ns == mtime_ns && s.inode == inode {
-                return Ok(s.sha256.clone());
-            }
+        let stat = FileStat::of(path)?;
+        if let Some(sha256) = self.cached(path, stat) {
+            return Ok(sha256);
         }
         let sha256 = hash_reader(std::fs::File::open(path).at(path)?).at(path)?;
+        self.remember(path, stat, sha256.clone());
+        Ok(sha256)
+    }
+
+    /// The sha256 the cache holds for `path` as `stat` describes it (`None`: not hashed since).
+    pub fn cached(&self, path: &Path, stat: FileStat) -> Option<String> {
+        let key = path.to_string_lossy();
+        let entries = self.entries.lock().expect("hash cache lock");
+        let s = entries.get(&*key)?;
+        (FileStat {
+            size: s.size,
+            mtime_ns: s.mtime_ns,
+            inode: s.inode,
+        } == stat)
+            .then(|| s.sha256.clone())
+    }
+
+    /// Whether the cache has ever hashed `path` (whatever its content now).
+    pub fn knows(&self, path: &Path) -> bool {
+        let key = path.to_string_lossy();
+        self.entries
+            .lock()
+            .expect("hash cache lock")
+            .contains_key(&*key)
+    }
+
+    /// Remember that `path`, as `stat` describes it, has content `sha256`.
+    pub fn remember(&self, path: &Path, stat: FileStat, sha256: String) {
         let stamp = Stamp {
-            size,
-            mtime_ns,
-            inode,
-            sha256: sha256.clone(),
+            size: stat.size,
+            mtime_ns: stat.mtime_ns,
+            inode: stat.inode,
+            sha256,
         };
         self.entries
             .lock()
             .expect("hash cache lock")
-            .insert(key, stamp);
+            .insert(path.to_string_lossy().into_owned(), stamp);
         *self.dirty.lock().expect("hash cache lock") = true;
-        Ok(sha256)
     }
 
     /// Write the cache back if it changed (atomically; a lost update only costs a rehash).

@@ -111,10 +111,7 @@ pub fn load_path(path: &Path, expected: &Stored) -> Result<Artifact, EngineError
 /// A path input as files left on disk (`Artifact::OnDisk`), each with the sha256 its key was made
 /// from; a single-file input is one entry named by its file name.
 pub fn on_disk(path: &Path, expected: &Stored) -> Artifact {
-    let file = |path: PathBuf, sha256: &String| InputFile {
-        path,
-        sha256: sha256.clone(),
-    };
+    let file = |path: PathBuf, sha256: &String| InputFile::checked(path, sha256.clone());
     Artifact::OnDisk(match expected {
         Stored::File { sha256 } => {
             let name = path

@@ -13,6 +13,7 @@ pub mod dag;
 pub mod error;
 pub mod evaluate;
 pub mod execute;
+pub mod hash_on_read;
 pub mod hashing;
 pub mod identity;
 pub mod inputs;

@@ -20,8 +20,9 @@ pub enum Artifact {
     /// output; a stage reading it as an input gets a `Collection`.
     InStore(BTreeMap<String, String>),
     /// A path input left on disk, for a kind that reads it in pieces (`StageKind::streamed_inputs`):
-    /// file name → the file and the sha256 its key was made from (a single-file input is one
-    /// entry). Reading it checks that content (`InputFile`). Only ever an input.
+    /// file name → the file, with the sha256 its key was made from or, on the first run over it,
+    /// where to record the digest of what was read (a single-file input is one entry). Reading
+    /// it checks the content (`InputFile`). Only ever an input.
     OnDisk(BTreeMap<String, InputFile>),
 }
 
@@ -30,34 +31,88 @@ pub enum Artifact {
 pub const IN_STORE_INPUT: &str =
     "an input came as stored items or as files left on disk, which the engine never passes to this kind (a bug in groove, please report it)";
 
-/// One file of a path input that a kind reads itself (`StageKind::streamed_inputs`), with the
-/// sha256 its key was made from. Whichever way it is read, the bytes are checked against it: a
-/// file edited while groove runs is an error, never a result under the wrong key.
+/// One file of a path input that a kind reads itself (`StageKind::streamed_inputs`). Whichever
+/// way it is read, the bytes are checked: against the sha256 its key was made from, or, for a
+/// file the engine has not hashed yet (the first run over it), by recording the digest of what
+/// was read, from which the engine then makes the key (`engine::hash_on_read`). A file edited
+/// while groove runs is an error, never a result under the wrong key.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputFile {
     pub path: PathBuf,
-    pub sha256: String,
+    check: Check,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Check {
+    /// What is read must have this sha256.
+    Against(String),
+    /// Not hashed yet: each read to the end adds its digest here.
+    Record(Seen),
+}
+
+/// The digests of every read of an `InputFile` that reached the end of the file, shared with
+/// the engine (two different ones mean the file changed between reads).
+#[derive(Debug, Clone, Default)]
+pub struct Seen(std::sync::Arc<std::sync::Mutex<Vec<String>>>);
+
+impl PartialEq for Seen {
+    fn eq(&self, other: &Self) -> bool {
+        std::sync::Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+impl Eq for Seen {}
+
+impl Seen {
+    /// The digests recorded so far, in the order the reads ended.
+    pub fn digests(&self) -> Vec<String> {
+        self.0.lock().map(|d| d.clone()).unwrap_or_default()
+    }
+    fn push(&self, digest: String) {
+        if let Ok(mut d) = self.0.lock() {
+            d.push(digest);
+        }
+    }
 }
 
 impl InputFile {
+    /// A file whose content must have `sha256`.
+    pub fn checked(path: PathBuf, sha256: String) -> InputFile {
+        InputFile {
+            path,
+            check: Check::Against(sha256),
+        }
+    }
+
+    /// A file not hashed yet: every read of it to the end records its digest in `seen`.
+    pub fn recorded(path: PathBuf, seen: Seen) -> InputFile {
+        InputFile {
+            path,
+            check: Check::Record(seen),
+        }
+    }
+
     /// The whole file, checked.
     pub fn read(&self) -> Result<Vec<u8>, StageError> {
         let bytes = std::fs::read(&self.path).map_err(|e| self.unreadable(e))?;
-        if hex_digest(Sha256::digest(&bytes).as_slice()) != self.sha256 {
-            return Err(StageError(self.changed()));
+        let digest = hex_digest(Sha256::digest(&bytes).as_slice());
+        match &self.check {
+            Check::Against(sha256) if digest != *sha256 => return Err(StageError(self.changed())),
+            Check::Against(_) => {}
+            Check::Record(seen) => seen.push(digest),
         }
         Ok(bytes)
     }
 
     /// The file as a reader that hashes what it gives and, at the end of the file, fails with
-    /// an error (kind `InvalidData`) if the content is not the one the key was made from. A
-    /// caller that stops early has checked nothing, and must not keep what it read.
+    /// an error (kind `InvalidData`) if the content is not the one the key was made from (or
+    /// records the digest, for a file not hashed yet). A caller that stops early has checked
+    /// nothing, and must not keep what it read.
     pub fn open(&self) -> Result<CheckedRead, StageError> {
         let file = std::fs::File::open(&self.path).map_err(|e| self.unreadable(e))?;
         Ok(CheckedRead {
             file,
             hasher: Some(Sha256::new()),
-            expected: self.sha256.clone(),
+            check: self.check.clone(),
             changed: self.changed(),
         })
     }
@@ -82,7 +137,7 @@ pub struct CheckedRead {
     file: std::fs::File,
     /// `None` once the end was reached and the content checked.
     hasher: Option<Sha256>,
-    expected: String,
+    check: Check,
     changed: String,
 }
 
@@ -91,11 +146,16 @@ impl std::io::Read for CheckedRead {
         let n = std::io::Read::read(&mut self.file, buf)?;
         match (n, self.hasher.take()) {
             (0, Some(hasher)) => {
-                if hex_digest(hasher.finalize().as_slice()) != self.expected {
-                    return Err(std::io::Error::new(
-                        std::io::ErrorKind::InvalidData,
-                        self.changed.clone(),
-                    ));
+                let digest = hex_digest(hasher.finalize().as_slice());
+                match &self.check {
+                    Check::Against(sha256) if digest != *sha256 => {
+                        return Err(std::io::Error::new(
+                            std::io::ErrorKind::InvalidData,
+                            self.changed.clone(),
+                        ));
+                    }
+                    Check::Against(_) => {}
+                    Check::Record(seen) => seen.push(digest),
                 }
             }
             (_, Some(mut hasher)) => {
