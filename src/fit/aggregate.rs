@@ -5,7 +5,7 @@
 //! Theil–Sen lines.
 
 use super::bootstrap::percentile_intervals_in_groups;
-use super::regression::{mean_where, RobustMean};
+use super::regression::{kept_table, mean_kept, mean_where, RobustMean};
 use super::single::SingleFit;
 use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
 use crate::stats::{theil_sen_intercept, theil_sen_many, InterceptOrder, SlopeOrder, SLOPE_LANES};
@@ -118,6 +118,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
     let (b1, b2) = (&mut Vec::new(), &mut Vec::new());
     let [(ta, tb), (ma, mb)] = theil_sen_many(&speed, [&t, &mu], &all, [b1, b2], POINT_PAIRS);
     let robust_mean = RobustMean::new(&mu, &mu_se);
+    let mu_if_fast = kept_table(&mu, fast);
     let point = [
         robust_mean.of(&vec![1; ok.len()]),
         mean_where(&mu, &all, fast),
@@ -175,7 +176,7 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
                     let ((ta, tb), (ma, mb)) = (line(0, &t), line(1, &mu));
                     [
                         robust_mean.of(w),
-                        mean_where(&mu, idx, fast),
+                        mean_kept(&mu_if_fast, idx),
                         ta,
                         tb,
                         ma,

@@ -20,6 +20,30 @@ pub fn mean_where(y: &[f64], idx: &[usize], keep: impl Fn(usize) -> bool) -> f64
     }
 }
 
+/// Each entry's part in a `mean_where`: (y, 1) where `keep` holds, (0, 0) where not.
+pub fn kept_table(y: &[f64], keep: impl Fn(usize) -> bool) -> Vec<(f64, u64)> {
+    (0..y.len())
+        .map(|i| if keep(i) { (y[i], 1) } else { (0.0, 0) })
+        .collect()
+}
+
+/// `mean_where` from its `kept_table`: one read per index and no branch on `keep` (a
+/// resample's indices come at random, and so would its branches). The same terms added in the
+/// same order (adding 0.0 to a sum that starts at +0.0 leaves it as it is), so the same bits.
+pub fn mean_kept(kept: &[(f64, u64)], idx: &[usize]) -> f64 {
+    let (mut s, mut m) = (0.0, 0u64);
+    for &i in idx {
+        let (y, k) = kept[i];
+        s += y;
+        m += k;
+    }
+    if m == 0 {
+        f64::NAN
+    } else {
+        s / m as f64
+    }
+}
+
 /// Inverse-variance weighted mean of y over `idx` (entries with a non-positive or unknown
 /// error are left out); NaN if none.
 pub fn weighted_mean(y: &[f64], se: &[f64], idx: &[usize]) -> f64 {
@@ -277,6 +301,37 @@ mod tests {
         // weights 1 and 1/4: (1·1 + 0.25·7)/1.25
         let w = weighted_mean(&y, &[1.0, f64::NAN, 0.0, 2.0], &[0, 1, 2, 3]);
         assert!((w - (1.0 + 0.25 * 7.0) / 1.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_kept_table_gives_mean_where_bit_for_bit() {
+        // values of both signs, a NaN and an infinity where not kept, ±0, drawn with repeats
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut next = || rng.random::<u64>();
+        let n = 500;
+        let x: Vec<f64> = (0..n).map(|_| (next() % 1000) as f64 / 1000.0).collect();
+        let mut y: Vec<f64> = (0..n)
+            .map(|_| (next() % 2_000_001) as f64 * 1e-7 - 0.1)
+            .collect();
+        let keep = |i: usize| x[i] > 0.3;
+        let dropped: Vec<usize> = (0..n).filter(|&i| !keep(i)).take(3).collect();
+        y[dropped[0]] = f64::NAN;
+        y[dropped[1]] = f64::INFINITY;
+        y[dropped[2]] = -0.0;
+        let kept = kept_table(&y, keep);
+        for draw in 0..200 {
+            let idx: Vec<usize> = (0..(draw % 50) * 10)
+                .map(|_| (next() % n as u64) as usize)
+                .collect();
+            let (a, b) = (mean_where(&y, &idx, keep), mean_kept(&kept, &idx));
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "{draw}: {a} against {b}"
+            );
+        }
+        assert!(mean_kept(&kept, &[]).is_nan());
+        assert!(mean_kept(&kept, &dropped).is_nan(), "none kept");
     }
 
     /// The definition of `robust_weighted_mean` computed directly: medians by selection over the

@@ -20,6 +20,10 @@ pub struct SlopeOrder<const K: usize> {
     /// Per series: the pairs (i, j) in ascending order of slope, and those slopes.
     pairs: [Vec<[u32; 2]>; K],
     slopes: [Vec<f64>; K],
+    /// Per series: the pairs below the middle of that order and those from it on, each sorted
+    /// by point (i, then j), for the sums of weights, which need no order: read in point order,
+    /// a resample's counts are met nearly in memory order, not at random.
+    halves: [[Vec<[u32; 2]>; 2]; K],
     /// Points whose y is not finite in some series (a resample holding one has no line).
     bad: [Vec<u32>; K],
     /// Whether every pair of distinct x is kept (exact), or a draw.
@@ -80,9 +84,18 @@ impl<const K: usize> SlopeOrder<K> {
             slopes[k] = keyed.iter().map(|p| p.0).collect();
             pairs[k] = keyed.into_iter().map(|p| p.1).collect();
         }
+        let halves = std::array::from_fn(|k| {
+            let (below, above) = pairs[k].split_at(pairs[k].len() / 2);
+            [below, above].map(|half| {
+                let mut half = half.to_vec();
+                half.sort_unstable();
+                half
+            })
+        });
         SlopeOrder {
             pairs,
             slopes,
+            halves,
             bad,
             every_pair,
         }
@@ -146,9 +159,9 @@ impl<const K: usize> SlopeOrder<K> {
             });
         }
         // with no bad point every series holds the same pairs (in its own order)
-        let sums = |k: usize, range: std::ops::Range<usize>| -> [u64; LANES] {
+        let sums = |pairs: &[[u32; 2]]| -> [u64; LANES] {
             let mut acc = [0u64; LANES];
-            for chunk in self.pairs[k][range].chunks(1 << 16) {
+            for chunk in pairs.chunks(1 << 16) {
                 let mut part = [0u32; LANES];
                 for &[i, j] in chunk {
                     let (a, b) = (&w[i as usize], &w[j as usize]);
@@ -162,12 +175,14 @@ impl<const K: usize> SlopeOrder<K> {
             }
             acc
         };
-        let (len, mid) = (self.pairs[0].len(), self.pairs[0].len() / 2);
-        let below_first = sums(0, 0..mid);
-        let above_first = sums(0, mid..len);
+        let [below_first, above_first] = self.halves[0].each_ref().map(|h| sums(h));
         let mut out = [[f64::NAN; K]; LANES];
         for k in 0..K {
-            let below = if k == 0 { below_first } else { sums(k, 0..mid) };
+            let below = if k == 0 {
+                below_first
+            } else {
+                sums(&self.halves[k][0])
+            };
             for (l, slopes) in out.iter_mut().enumerate() {
                 let pairs = &self.pairs[k];
                 let wt = |p: usize| {
