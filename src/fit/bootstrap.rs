@@ -50,9 +50,7 @@ pub fn percentile_intervals_in_groups<const K: usize>(
     let mut done = 0;
     while done < resamples {
         let b = batch.min(resamples - done);
-        let idx: Vec<Vec<usize>> = (0..b)
-            .map(|_| indices.resample())
-            .collect();
+        let idx: Vec<Vec<usize>> = (0..b).map(|_| indices.resample()).collect();
         let groups: Vec<Vec<[f64; K]>> = idx.par_chunks(group).map(&stats).collect();
         for s in groups.into_iter().flatten() {
             for k in 0..K {

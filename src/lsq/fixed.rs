@@ -132,7 +132,20 @@ fn robust_cost(r: &[f64], excluded: &[bool], loss: Loss, scale: f64) -> f64 {
 }
 
 /// Weighted normal equations H = Σ wh JᵀJ (upper and lower filled) and gradient g = Σ w J r.
+/// Compiled twice (`lsq::wide`): for the baseline x86-64 and for AVX2, chosen by the CPU; the
+/// same sums in the same order either way, so the same bits.
 pub fn normal_equations<const N: usize>(
+    jac: &[[f64; N]],
+    r: &[f64],
+    w: &[f64],
+    wh: &[f64],
+) -> ([[f64; N]; N], [f64; N]) {
+    super::wide::normal_equations(jac, r, w, wh)
+}
+
+/// `normal_equations`' body, inlined into each of its compilations.
+#[inline(always)]
+pub(super) fn normal_equations_body<const N: usize>(
     jac: &[[f64; N]],
     r: &[f64],
     w: &[f64],

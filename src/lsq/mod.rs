@@ -18,6 +18,7 @@ pub mod lm;
 pub mod loss;
 pub mod robust;
 pub mod termination;
+pub mod wide;
 
 pub use termination::Termination;
 
