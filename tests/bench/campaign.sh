@@ -8,6 +8,9 @@
 #   --no-scipy     skip the SciPy least_squares comparison (needs python3 with numpy + scipy)
 #   --stage S      run `groove run S` instead of `groove run aggregate` (e.g. `fit`: ingest and
 #                  the fits only, where aggregate's Theil–Sen bootstrap, O(runs²), dominates)
+#   --repeat R     measure each size below 100,000 R times (default 3; 100,000 once): each
+#                  round a fresh project, cold, edit, no-op; the table gives each row's median
+#                  over the rounds with its range (a shared host varies by 10–15 % run to run)
 # Environment:
 #   GROOVE_BIN            the binary (default target/release/groove if built, else target/debug/groove)
 #   GROOVE_CAMPAIGN_DIR   scratch folder (default target/campaign); datasets are kept and reused
@@ -36,12 +39,14 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 sizes="1000 10000"
 scipy=1
 stage=aggregate
+repeat=3
 while [ $# -gt 0 ]; do
     case "$1" in
         --100k) sizes="$sizes 100000" ;;
         --sizes) sizes="$2"; shift ;;
         --no-scipy) scipy=0 ;;
         --stage) stage="$2"; shift ;;
+        --repeat) repeat="$2"; shift ;;
         -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
         *) echo "campaign.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
@@ -166,20 +171,27 @@ PY
     rows=$(($(wc -l < "$data/trajectories.csv") - 1))
     echo "campaign $n: $rows rows, $(du -b "$data/trajectories.csv" | cut -f1) bytes of trajectories.csv"
     proj=$work/proj-$n
-    rm -rf "$proj"
-    mkdir -p "$proj"
-    cp "$root/pipeline.toml" "$proj/"
-    run=("$GROOVE_BIN" run "$stage" --config "$proj/pipeline.toml" --data "$data" --out "$proj/reports")
-    measure "$n cold" "$proj/.groove" "${run[@]}"
-    store=$(du -sb "$proj/.groove" | cut -f1)
-    objects=$(du -sb "$proj/.groove/objects" | cut -f1)
-    files=$(find "$proj/.groove" -type f | wc -l)
-    echo "  store after cold run: $store bytes ($((store / n)) per run; objects $((objects / n)) per run), $files files"
-    printf '%s\tstore\t%s\t%s\t%s\n' "$n" "$((store / n))" "$((objects / n))" "$files" >> "$table"
-    edit_one "$data"
-    measure "$n edit" "$proj/.groove" "${run[@]}"
-    measure "$n no-op" "$proj/.groove" "${run[@]}"
-    restore_edit "$data"
+    rounds=$repeat
+    [ "$n" -ge 100000 ] && rounds=1
+    for round in $(seq 1 "$rounds"); do
+        [ "$rounds" -gt 1 ] && echo "  round $round of $rounds"
+        rm -rf "$proj"
+        mkdir -p "$proj"
+        cp "$root/pipeline.toml" "$proj/"
+        run=("$GROOVE_BIN" run "$stage" --config "$proj/pipeline.toml" --data "$data" --out "$proj/reports")
+        measure "$n cold" "$proj/.groove" "${run[@]}"
+        if [ "$round" = 1 ]; then
+            store=$(du -sb "$proj/.groove" | cut -f1)
+            objects=$(du -sb "$proj/.groove/objects" | cut -f1)
+            files=$(find "$proj/.groove" -type f | wc -l)
+            echo "  store after cold run: $store bytes ($((store / n)) per run; objects $((objects / n)) per run), $files files"
+            printf '%s\tstore\t%s\t%s\t%s\n' "$n" "$((store / n))" "$((objects / n))" "$files" >> "$table"
+        fi
+        edit_one "$data"
+        measure "$n edit" "$proj/.groove" "${run[@]}"
+        measure "$n no-op" "$proj/.groove" "${run[@]}"
+        restore_edit "$data"
+    done
 done
 
 scipy_s=
@@ -204,18 +216,30 @@ import os
 load = os.getloadavg()[0]
 if load > os.cpu_count():
     print(f"note: load average {load:.1f} on {os.cpu_count()} cores: wall times are inflated by waiting for a core; compare CPU times")
-print("| campaign | wall s | cpu s (user+sys) | peak RSS MB | load 1-min (before/after) |")
-print("| --- | --- | --- | --- | --- |")
+print("| campaign | rounds | wall s (median, range) | cpu s (user+sys) of that round | peak RSS MB, max | load 1-min (before/after), first round |")
+print("| --- | --- | --- | --- | --- | --- |")
+from statistics import median
+labels = []
 for r in rows:
-    if r[1] != "store":
-        print(f"| {r[0]} | {float(r[1]):.2f} | {float(r[2]):.2f} ({float(r[3]):.2f}+{float(r[4]):.2f}) | {r[5]} | {r[6]} |")
+    if r[1] != "store" and r[0] not in labels:
+        labels.append(r[0])
+def summary(label):
+    rs = [r for r in rows if r[0] == label]
+    walls = sorted(float(r[1]) for r in rs)
+    mid = min(rs, key=lambda r: abs(float(r[1]) - median(walls)))  # the round of median wall
+    return rs, walls, mid
+for label in labels:
+    rs, walls, mid = summary(label)
+    spread = f" ({walls[0]:.2f}–{walls[-1]:.2f})" if len(walls) > 1 else ""
+    print(f"| {label} | {len(rs)} | {median(walls):.2f}{spread} | {float(mid[2]):.2f} ({float(mid[3]):.2f}+{float(mid[4]):.2f}) "
+          f"| {max(int(r[5]) for r in rs)} | {rs[0][6]} |")
 print()
 for r in rows:
     if r[1] == "store":
         print(f"{r[0]} runs: {r[2]} bytes stored per run (.groove/), {r[3]} in objects/, {r[4]} files")
-cold = [r for r in rows if r[0] == "1000 cold"]
-if scipy_s and cold:
-    wall, cpu = float(cold[0][1]), float(cold[0][2])
-    print(f"scipy least_squares, 1000 runs on one core: {scipy_s:.1f} s → groove 1000-run cold run is "
+if scipy_s and "1000 cold" in labels:
+    rs, walls, mid = summary("1000 cold")
+    wall, cpu = median(walls), float(mid[2])
+    print(f"scipy least_squares, 1000 runs on one core: {scipy_s:.1f} s → groove 1000-run cold run (median of {len(rs)}) is "
           f"{scipy_s / wall:.1f}x SciPy by wall time ({scipy_s / cpu:.1f}x by CPU time); target >= 50x")
 PY
