@@ -1549,7 +1549,9 @@ fn streamed_items_of_parquet_are_the_csv_items() {
     let csv = ingest::ingest_items(&interchange_csv(&recs), &params()).unwrap();
     let parquet = ingest::ingest_items(&interchange_parquet(&recs), &params()).unwrap();
     assert!(
-        parquet.how.starts_with("read in 1 chunk "),
+        parquet
+            .how
+            .starts_with("decoded whole from Parquet, then handed on in 1 slice of up to"),
         "{}",
         parquet.how
     );

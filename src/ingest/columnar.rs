@@ -389,7 +389,7 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 /// `chunk_bytes` at a time, so neither the whole table nor all recordings are held (a Parquet
 /// file is decoded whole, then handed on in slices of `PARQUET_SLICE_ROWS` rows). The CSV comes
 /// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
-/// read), else from `files`. Gives the number of pieces (CSV chunks or Parquet slices). It needs each run's rows to be one
+/// read), else from `files`. Says how it read (`Pieces`). It needs each run's rows to be one
 /// block (in any order within it), as `groove synth` and most trackers write them. At anything
 /// else, or anything `recordings` would give `None` for, it stops with the reason: the caller then
 /// forgets what `each` received and reads the dataset whole (`ingest::ingest`), which sorts the
@@ -400,7 +400,7 @@ pub fn stream(
     min_frames: usize,
     chunk_bytes: usize,
     each: &mut dyn FnMut(Vec<Recording>),
-) -> Result<usize, Stop> {
+) -> Result<Pieces, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     let (runs_name, runs_bytes) = interchange::pick(files, "runs", "").map_err(|_| PROBLEM)?;
     let (traj_name, traj_bytes) =
@@ -436,13 +436,43 @@ pub fn stream(
                 stream.chunk(&df.slice((k * PARQUET_SLICE_ROWS) as i64, PARQUET_SLICE_ROWS))?;
                 stream.hand_over();
             }
-            slices
+            Pieces::ParquetSlices(slices)
         }
-        Some(read) => csv_chunks(read, chunk_bytes, &mut stream)?,
-        None => csv_chunks(&mut &traj_bytes[..], chunk_bytes, &mut stream)?,
+        Some(read) => Pieces::CsvChunks(csv_chunks(read, chunk_bytes, &mut stream)?),
+        None => Pieces::CsvChunks(csv_chunks(&mut &traj_bytes[..], chunk_bytes, &mut stream)?),
     };
     stream.finish()?;
     Ok(chunks)
+}
+
+/// How `stream` read the trajectories: CSV chunks as they were read, or a Parquet file decoded
+/// whole and handed on in slices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pieces {
+    CsvChunks(usize),
+    ParquetSlices(usize),
+}
+
+impl Pieces {
+    pub fn count(self) -> usize {
+        match self {
+            Pieces::CsvChunks(n) | Pieces::ParquetSlices(n) => n,
+        }
+    }
+}
+
+impl std::fmt::Display for Pieces {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        let s = |n: usize| if n == 1 { "" } else { "s" };
+        match *self {
+            Pieces::CsvChunks(n) => write!(f, "read in {n} chunk{} of trajectories", s(n)),
+            Pieces::ParquetSlices(n) => write!(
+                f,
+                "decoded whole from Parquet, then handed on in {n} slice{} of up to {PARQUET_SLICE_ROWS} rows",
+                s(n)
+            ),
+        }
+    }
 }
 
 /// Reads CSV text in pieces into `stream`, each checked as `read_csv` checks a whole file.

@@ -286,11 +286,8 @@ pub fn stream_items<T: Send>(
         (streamed, runs, clash)
     });
     let why = match streamed {
-        Ok(chunks) if !clash && !runs.is_empty() => {
-            let how = format!(
-                "read in {chunks} chunk{} of trajectories, each run's item made as its last row was read",
-                if chunks == 1 { "" } else { "s" }
-            );
+        Ok(pieces) if !clash && !runs.is_empty() => {
+            let how = format!("{pieces}, each run's item made as its last row was read");
             return Ok(Streamed::Done(Items {
                 runs,
                 skipped: Vec::new(),
@@ -327,7 +324,7 @@ pub fn ingest_items_whole<T: Send>(
 
 /// The recordings of a clean interchange dataset whose runs' rows come grouped, handed to `each`
 /// one run at a time as `columnar::stream` reads them (`chunk_bytes` of CSV at a time); the number
-/// of chunks, or why it stopped (then `each` has seen only some runs: forget them and use
+/// of pieces (CSV chunks or Parquet slices), or why it stopped (then `each` has seen only some runs: forget them and use
 /// `ingest`). For callers that keep no item in memory (the 100,000-run memory test).
 pub fn stream_recordings(
     files: &BTreeMap<String, Vec<u8>>,
@@ -340,7 +337,7 @@ pub fn stream_recordings(
     }
     let mut each_of = |ready: Vec<Recording>| ready.into_iter().for_each(&mut *each);
     match columnar::stream(files, None, params.min_frames, chunk_bytes, &mut each_of) {
-        Ok(chunks) => Ok(chunks),
+        Ok(pieces) => Ok(pieces.count()),
         Err(Stop::Reason(why)) => Err(why),
         Err(Stop::Read(_)) => unreachable!("bytes in memory are always readable"),
     }
