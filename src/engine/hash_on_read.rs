@@ -6,9 +6,11 @@
 //! that `pipeline.lock` has no record of (the stage never ran in this project), run in this
 //! process with no remote cache, and only when a file of it is new to the hash cache. A stage
 //! that ran before may find its result in the store (a copied project, a touched file, an edit
-//! undone), so its inputs are hashed first as always, and a touch still reruns nothing. A file read and hashed by the stage must have the stat it had before the stage
-//! ran, and every read of it the same digest; a file the stage did not read to its end is
-//! hashed after the run under the same stat check. Either way the key names the content read.
+//! undone), so its inputs are hashed first as always, and a touch still reruns nothing.
+//!
+//! A file read and hashed by the stage must have the stat it had before the stage ran, and every
+//! read of it the same digest; a file the stage did not read to its end is hashed after the run
+//! under the same stat check. Either way the key names the content read.
 
 use super::context::Context;
 use super::error::{EngineError, IoContext};
