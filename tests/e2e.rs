@@ -427,9 +427,11 @@ fn a_second_run_executes_no_stage_and_changes_nothing() {
     }
 }
 
-/// A dataset groove has never seen is read once: ingest hashes it as it reads it, and the key
-/// made from those digests is the one hashing first gives (`engine::hash_on_read`); once the
-/// stage has run, a touched file is hashed first, so a touch still reruns nothing.
+/// A dataset groove has never seen is hashed by ingest's own read (`engine::hash_on_read`): the
+/// key made from those digests names the bytes and is the one hashing first gives; once the
+/// stage has run, a touched file is hashed first, so a touch still reruns nothing. (That the
+/// file is read once shows in the benchmark, not here; the recording reads are checked in
+/// tests/ingest.rs and the change checks in the module's unit test.)
 #[test]
 fn a_dataset_seen_first_is_hashed_as_ingest_reads_it_under_the_same_key() {
     let project = new_project("hash-on-read", &repo().join("data"), false);

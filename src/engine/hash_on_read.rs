@@ -16,7 +16,7 @@ use super::context::Context;
 use super::error::{EngineError, IoContext};
 use super::execute::{load_shared, run_key, store_outputs, Bound, Source};
 use super::hashing::{hash_reader, FileStat};
-use super::inputs::dir_files;
+use super::inputs::{dir_files, file_name};
 use super::pack_writer::PackWriter;
 use super::pipeline::StageSpec;
 use super::stage::{Artifact, InputFile, Seen};
@@ -72,12 +72,7 @@ pub fn unhashed(ctx: &Context, name: &str, path: &Path) -> Result<Option<Unhashe
     let is_dir = path.is_dir();
     let listed = match is_dir {
         true => dir_files(path)?,
-        false => {
-            let file_name = path
-                .file_name()
-                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            vec![(file_name, path.to_path_buf())]
-        }
+        false => vec![(file_name(path), path.to_path_buf())],
     };
     if listed.iter().all(|(_, p)| ctx.hashes.knows(p)) {
         return Ok(None);

@@ -147,12 +147,38 @@ impl FileStat {
     }
 }
 
+/// A cached hash and the stat it was taken at, as `hashes.json` holds them (the stat's fields
+/// flat: `#[serde(flatten)]` would lose the i128 mtime on reading).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 struct Stamp {
     size: u64,
     mtime_ns: i128,
     inode: u64,
     sha256: String,
+}
+
+impl Stamp {
+    fn new(stat: FileStat, sha256: String) -> Stamp {
+        let FileStat {
+            size,
+            mtime_ns,
+            inode,
+        } = stat;
+        Stamp {
+            size,
+            mtime_ns,
+            inode,
+            sha256,
+        }
+    }
+
+    fn stat(&self) -> FileStat {
+        FileStat {
+            size: self.size,
+            mtime_ns: self.mtime_ns,
+            inode: self.inode,
+        }
+    }
 }
 
 /// The file-hash cache, stored as `.groove/hashes.json`.
@@ -199,12 +225,7 @@ impl HashCache {
         let key = path.to_string_lossy();
         let entries = self.entries.lock().expect("hash cache lock");
         let s = entries.get(&*key)?;
-        (FileStat {
-            size: s.size,
-            mtime_ns: s.mtime_ns,
-            inode: s.inode,
-        } == stat)
-            .then(|| s.sha256.clone())
+        (s.stat() == stat).then(|| s.sha256.clone())
     }
 
     /// Whether the cache has ever hashed `path` (whatever its content now).
@@ -218,12 +239,7 @@ impl HashCache {
 
     /// Remember that `path`, as `stat` describes it, has content `sha256`.
     pub fn remember(&self, path: &Path, stat: FileStat, sha256: String) {
-        let stamp = Stamp {
-            size: stat.size,
-            mtime_ns: stat.mtime_ns,
-            inode: stat.inode,
-            sha256,
-        };
+        let stamp = Stamp::new(stat, sha256);
         self.entries
             .lock()
             .expect("hash cache lock")
@@ -306,5 +322,41 @@ mod tests {
         );
         let empty = BTreeMap::new();
         assert_eq!(json_map_sha256(&empty), sha256_hex(b"{}"));
+    }
+
+    #[test]
+    fn the_hash_cache_keeps_its_file_format_and_trusts_only_the_same_stat() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("a.csv");
+        std::fs::write(&file, "t,z\n").unwrap();
+        let stat = FileStat::of(&file).unwrap();
+        // a cache as earlier versions wrote it: one object per path, the stat's fields flat
+        let cache_path = dir.path().join("hashes.json");
+        let flat = serde_json::json!({
+            file.to_string_lossy(): {
+                "size": stat.size, "mtime_ns": stat.mtime_ns, "inode": stat.inode, "sha256": "ab"
+            }
+        });
+        std::fs::write(&cache_path, serde_json::to_vec(&flat).unwrap()).unwrap();
+        let cache = HashCache::load(&cache_path);
+        assert_eq!(cache.cached(&file, stat), Some("ab".to_string()));
+        let other = FileStat {
+            size: stat.size + 1,
+            ..stat
+        };
+        assert_eq!(cache.cached(&file, other), None);
+        // written back in the same form
+        cache.remember(&file, other, "cd".into());
+        cache.save().unwrap();
+        let back: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&cache_path).unwrap()).unwrap();
+        let entry = &back[file.to_string_lossy().as_ref()];
+        assert_eq!(entry["size"], stat.size + 1);
+        assert_eq!(entry["inode"], stat.inode);
+        assert_eq!(entry["sha256"], "cd");
+        assert_eq!(
+            HashCache::load(&cache_path).cached(&file, other),
+            Some("cd".into())
+        );
     }
 }

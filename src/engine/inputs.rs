@@ -108,16 +108,19 @@ pub fn load_path(path: &Path, expected: &Stored) -> Result<Artifact, EngineError
     }
 }
 
+/// The name a single-file input goes by in `Artifact::OnDisk`: its file name.
+pub fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+}
+
 /// A path input as files left on disk (`Artifact::OnDisk`), each with the sha256 its key was made
 /// from; a single-file input is one entry named by its file name.
 pub fn on_disk(path: &Path, expected: &Stored) -> Artifact {
     let file = |path: PathBuf, sha256: &String| InputFile::checked(path, sha256.clone());
     Artifact::OnDisk(match expected {
         Stored::File { sha256 } => {
-            let name = path
-                .file_name()
-                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            BTreeMap::from([(name, file(path.to_path_buf(), sha256))])
+            BTreeMap::from([(file_name(path), file(path.to_path_buf(), sha256))])
         }
         Stored::Collection { items } => items
             .iter()

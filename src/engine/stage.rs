@@ -50,6 +50,20 @@ enum Check {
     Record(Seen),
 }
 
+impl Check {
+    /// Settle a read that reached the end with `digest`: whether it is the content expected (a
+    /// file not hashed yet records it and is always so).
+    fn settle(&self, digest: String) -> bool {
+        match self {
+            Check::Against(sha256) => digest == *sha256,
+            Check::Record(seen) => {
+                seen.push(digest);
+                true
+            }
+        }
+    }
+}
+
 /// The digests of every read of an `InputFile` that reached the end of the file, shared with
 /// the engine (two different ones mean the file changed between reads).
 #[derive(Debug, Clone, Default)]
@@ -94,11 +108,11 @@ impl InputFile {
     /// The whole file, checked.
     pub fn read(&self) -> Result<Vec<u8>, StageError> {
         let bytes = std::fs::read(&self.path).map_err(|e| self.unreadable(e))?;
-        let digest = hex_digest(Sha256::digest(&bytes).as_slice());
-        match &self.check {
-            Check::Against(sha256) if digest != *sha256 => return Err(StageError(self.changed())),
-            Check::Against(_) => {}
-            Check::Record(seen) => seen.push(digest),
+        if !self
+            .check
+            .settle(hex_digest(Sha256::digest(&bytes).as_slice()))
+        {
+            return Err(StageError(self.changed()));
         }
         Ok(bytes)
     }
@@ -146,16 +160,11 @@ impl std::io::Read for CheckedRead {
         let n = std::io::Read::read(&mut self.file, buf)?;
         match (n, self.hasher.take()) {
             (0, Some(hasher)) => {
-                let digest = hex_digest(hasher.finalize().as_slice());
-                match &self.check {
-                    Check::Against(sha256) if digest != *sha256 => {
-                        return Err(std::io::Error::new(
-                            std::io::ErrorKind::InvalidData,
-                            self.changed.clone(),
-                        ));
-                    }
-                    Check::Against(_) => {}
-                    Check::Record(seen) => seen.push(digest),
+                if !self.check.settle(hex_digest(hasher.finalize().as_slice())) {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        self.changed.clone(),
+                    ));
                 }
             }
             (_, Some(mut hasher)) => {

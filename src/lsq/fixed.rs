@@ -131,47 +131,8 @@ fn robust_cost(r: &[f64], excluded: &[bool], loss: Loss, scale: f64) -> f64 {
     cost * scale * scale
 }
 
-/// Weighted normal equations H = Σ wh JᵀJ (upper and lower filled) and gradient g = Σ w J r.
-/// Compiled twice (`lsq::wide`): for the baseline x86-64 and for AVX2, chosen by the CPU; the
-/// same sums in the same order either way, so the same bits.
-pub fn normal_equations<const N: usize>(
-    jac: &[[f64; N]],
-    r: &[f64],
-    w: &[f64],
-    wh: &[f64],
-) -> ([[f64; N]; N], [f64; N]) {
-    super::wide::normal_equations(jac, r, w, wh)
-}
-
-/// `normal_equations`' body, inlined into each of its compilations.
-#[inline(always)]
-pub(super) fn normal_equations_body<const N: usize>(
-    jac: &[[f64; N]],
-    r: &[f64],
-    w: &[f64],
-    wh: &[f64],
-) -> ([[f64; N]; N], [f64; N]) {
-    let mut h = [[0.0; N]; N];
-    let mut g = [0.0; N];
-    for (((row, &ri), &wi), &whi) in jac.iter().zip(r).zip(w).zip(wh) {
-        if wi == 0.0 {
-            continue;
-        }
-        for a in 0..N {
-            g[a] += wi * ri * row[a];
-            let wa = whi * row[a];
-            for b in a..N {
-                h[a][b] += wa * row[b];
-            }
-        }
-    }
-    for a in 0..N {
-        for b in 0..a {
-            h[a][b] = h[b][a];
-        }
-    }
-    (h, g)
-}
+/// Weighted normal equations H = Σ wh JᵀJ and g = Σ w J r (`lsq::wide`: compiled for AVX2 too).
+pub use super::wide::normal_equations;
 
 /// Solve A δ = b for the parameters in `on` (others get δ = 0) by Cholesky on the matrix scaled
 /// to unit diagonal. Returns `None` if A restricted to `on` is not positive definite.

@@ -1,13 +1,12 @@
 //! The fit's hottest loop compiled for wider vectors where the CPU has them: the build targets
 //! baseline x86-64 (2 doubles per SSE2 instruction), and AVX2 takes 4. The body is one function
-//! (`fixed::normal_equations_body`), inlined into both compilations; Rust never fuses a multiply
-//! and an add unless asked, and the loop's sums keep their order, so the two give the same bits.
+//! (`body`), inlined into both compilations; Rust never fuses a multiply and an add unless
+//! asked, and the loop's sums keep their order, so the two give the same bits.
 //! The only `unsafe` in groove: calling the AVX2 compilation, after checking the CPU has AVX2.
 #![allow(unsafe_code)]
 
-use super::fixed::normal_equations_body;
-
-/// `fixed::normal_equations`, by the widest compilation this CPU runs.
+/// Weighted normal equations H = Σ wh JᵀJ (upper and lower filled) and gradient g = Σ w J r,
+/// by the widest compilation this CPU runs (the same bits either way).
 pub fn normal_equations<const N: usize>(
     jac: &[[f64; N]],
     r: &[f64],
@@ -19,7 +18,7 @@ pub fn normal_equations<const N: usize>(
         // SAFETY: the CPU has AVX2 (checked just above), the one requirement of the call.
         return unsafe { normal_equations_avx2(jac, r, w, wh) };
     }
-    normal_equations_body(jac, r, w, wh)
+    body(jac, r, w, wh)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -30,7 +29,37 @@ fn normal_equations_avx2<const N: usize>(
     w: &[f64],
     wh: &[f64],
 ) -> ([[f64; N]; N], [f64; N]) {
-    normal_equations_body(jac, r, w, wh)
+    body(jac, r, w, wh)
+}
+
+/// The one body of both compilations.
+#[inline(always)]
+fn body<const N: usize>(
+    jac: &[[f64; N]],
+    r: &[f64],
+    w: &[f64],
+    wh: &[f64],
+) -> ([[f64; N]; N], [f64; N]) {
+    let mut h = [[0.0; N]; N];
+    let mut g = [0.0; N];
+    for (((row, &ri), &wi), &whi) in jac.iter().zip(r).zip(w).zip(wh) {
+        if wi == 0.0 {
+            continue;
+        }
+        for a in 0..N {
+            g[a] += wi * ri * row[a];
+            let wa = whi * row[a];
+            for b in a..N {
+                h[a][b] += wa * row[b];
+            }
+        }
+    }
+    for a in 0..N {
+        for b in 0..a {
+            h[a][b] = h[b][a];
+        }
+    }
+    (h, g)
 }
 
 #[cfg(test)]
@@ -58,7 +87,7 @@ mod tests {
                 .collect();
             let wh: Vec<f64> = w.iter().map(|x| x * 0.5).collect();
             let (h, g) = normal_equations(&jac, &r, &w, &wh);
-            let (h0, g0) = normal_equations_body(&jac, &r, &w, &wh);
+            let (h0, g0) = body(&jac, &r, &w, &wh);
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&g), bits(&g0), "{rows} rows");
             assert_eq!(
