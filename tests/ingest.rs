@@ -2,7 +2,7 @@
 //! error naming file, row and column, and trackpy / TrackMate exports of the same trajectories give
 //! the same recordings as the interchange format.
 
-use groove::engine::stage::{Artifact, InputFile, Seen, StageInput, StageKind};
+use groove::engine::stage::{Artifact, FileStamp, InputFile, Seen, StageInput, StageKind};
 use groove::ingest::{self, item_name, Axis, Format, IngestParams};
 use groove::recording::{Experiment, Recording, RunInfo, Setup, Track};
 use groove::stages::ingest::Ingest;
@@ -570,6 +570,22 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
                 "{what} {name}: {digests:?}"
             );
         }
+        // vouched for by the file-hash cache's stat (an edit's rerun): the same outputs without
+        // hashing again; a stat the file no longer has is a change
+        let vouched = |bump: u64| {
+            let files = on_disk.iter().map(|(n, f)| {
+                let mut stamp = FileStamp::of(&std::fs::metadata(&f.path).unwrap());
+                stamp.size += bump;
+                (n.clone(), InputFile::vouched(f.path.clone(), stamp))
+            });
+            Artifact::OnDisk(files.collect())
+        };
+        assert_eq!(run(&vouched(0)).0, from_disk, "{what}");
+        let err = run(&vouched(1)).0.unwrap_err();
+        assert!(
+            err.contains("changed while groove was running"),
+            "{what}: {err}"
+        );
         // a stale hash: the content changed after the key was made
         for name in ["runs.csv", "trajectories.csv"] {
             let mut stale = on_disk.clone();

@@ -40,7 +40,9 @@ pub fn load_shared(
             continue;
         }
         let artifact = match &b.source {
-            Source::Path(p) if streamed.contains(&name.as_str()) => on_disk(p, &b.stored),
+            Source::Path(p) if streamed.contains(&name.as_str()) => {
+                on_disk(p, &b.stored, &ctx.hashes)
+            }
             Source::Path(p) => load_path(p, &b.stored)?,
             Source::Store => ctx.store.load(&b.stored)?,
             Source::Memory(bytes) => Artifact::File(bytes.clone()),

@@ -15,7 +15,7 @@
 use super::context::Context;
 use super::error::{EngineError, IoContext};
 use super::execute::{load_shared, run_key, store_outputs, Bound, Source};
-use super::hashing::{hash_reader, FileStat};
+use super::hashing::{hash_reader, stat_of, FileStamp};
 use super::inputs::{dir_files, file_name};
 use super::pack_writer::PackWriter;
 use super::pipeline::StageSpec;
@@ -62,7 +62,7 @@ pub struct Unhashed {
 struct File {
     name: String,
     path: PathBuf,
-    stat: FileStat,
+    stat: FileStamp,
     known: Option<String>,
     seen: Seen,
 }
@@ -80,7 +80,7 @@ pub fn unhashed(ctx: &Context, name: &str, path: &Path) -> Result<Option<Unhashe
     let files = listed
         .into_iter()
         .map(|(name, path)| {
-            let stat = FileStat::of(&path)?;
+            let stat = stat_of(&path)?;
             let known = ctx.hashes.cached(&path, stat);
             Ok(File {
                 name,
@@ -107,7 +107,7 @@ impl Unhashed {
                 .iter()
                 .map(|f| {
                     let file = match &f.known {
-                        Some(sha256) => InputFile::checked(f.path.clone(), sha256.clone()),
+                        Some(_) => InputFile::vouched(f.path.clone(), f.stat),
                         None => InputFile::recorded(f.path.clone(), f.seen.clone()),
                     };
                     (f.name.clone(), file)
@@ -156,7 +156,7 @@ fn digest_of(f: &File) -> Result<String, EngineError> {
         Some(first) => first.clone(),
         None => hash_reader(std::fs::File::open(&f.path).at(&f.path)?).at(&f.path)?,
     };
-    if FileStat::of(&f.path)? != f.stat {
+    if stat_of(&f.path)? != f.stat {
         return Err(changed());
     }
     Ok(sha256)
@@ -196,7 +196,7 @@ mod tests {
         File {
             name: "a.csv".into(),
             path: path.to_path_buf(),
-            stat: FileStat::of(path).unwrap(),
+            stat: stat_of(path).unwrap(),
             known: None,
             seen: Seen::default(),
         }

@@ -5,6 +5,7 @@
 //! the hash is unchanged, and nothing downstream reruns.
 
 use super::error::{EngineError, IoContext};
+pub use super::stage::FileStamp;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
@@ -127,24 +128,10 @@ pub fn hex(bytes: &[u8]) -> String {
     s
 }
 
-/// What the cache trusts to say a file is unchanged: its size, mtime and inode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct FileStat {
-    size: u64,
-    mtime_ns: i128,
-    inode: u64,
-}
-
-impl FileStat {
-    /// The stat of the file at `path` (a symlink followed).
-    pub fn of(path: &Path) -> Result<FileStat, EngineError> {
-        let (size, mtime_ns, inode) = stamp_of(&std::fs::metadata(path).at(path)?);
-        Ok(FileStat {
-            size,
-            mtime_ns,
-            inode,
-        })
-    }
+/// The stat of the file at `path` (a symlink followed): what the cache trusts to say a file is
+/// unchanged.
+pub fn stat_of(path: &Path) -> Result<FileStamp, EngineError> {
+    Ok(FileStamp::of(&std::fs::metadata(path).at(path)?))
 }
 
 /// A cached hash and the stat it was taken at, as `hashes.json` holds them (the stat's fields
@@ -158,8 +145,8 @@ struct Stamp {
 }
 
 impl Stamp {
-    fn new(stat: FileStat, sha256: String) -> Stamp {
-        let FileStat {
+    fn new(stat: FileStamp, sha256: String) -> Stamp {
+        let FileStamp {
             size,
             mtime_ns,
             inode,
@@ -172,8 +159,8 @@ impl Stamp {
         }
     }
 
-    fn stat(&self) -> FileStat {
-        FileStat {
+    fn stat(&self) -> FileStamp {
+        FileStamp {
             size: self.size,
             mtime_ns: self.mtime_ns,
             inode: self.inode,
@@ -211,7 +198,7 @@ impl HashCache {
 
     /// The sha256 of a regular file, from the cache when its stamp is unchanged.
     pub fn hash_file(&self, path: &Path) -> Result<String, EngineError> {
-        let stat = FileStat::of(path)?;
+        let stat = stat_of(path)?;
         if let Some(sha256) = self.cached(path, stat) {
             return Ok(sha256);
         }
@@ -221,11 +208,20 @@ impl HashCache {
     }
 
     /// The sha256 the cache holds for `path` as `stat` describes it (`None`: not hashed since).
-    pub fn cached(&self, path: &Path, stat: FileStat) -> Option<String> {
+    pub fn cached(&self, path: &Path, stat: FileStamp) -> Option<String> {
         let key = path.to_string_lossy();
         let entries = self.entries.lock().expect("hash cache lock");
         let s = entries.get(&*key)?;
         (s.stat() == stat).then(|| s.sha256.clone())
+    }
+
+    /// The stat under which the cache holds `sha256` for `path` (`None`: it holds another digest
+    /// or none), so that a read may trust that stat instead of hashing again (`InputFile::vouched`).
+    pub fn vouched(&self, path: &Path, sha256: &str) -> Option<FileStamp> {
+        let key = path.to_string_lossy();
+        let entries = self.entries.lock().expect("hash cache lock");
+        let s = entries.get(&*key)?;
+        (s.sha256 == sha256).then(|| s.stat())
     }
 
     /// Whether the cache has ever hashed `path` (whatever its content now).
@@ -238,7 +234,7 @@ impl HashCache {
     }
 
     /// Remember that `path`, as `stat` describes it, has content `sha256`.
-    pub fn remember(&self, path: &Path, stat: FileStat, sha256: String) {
+    pub fn remember(&self, path: &Path, stat: FileStamp, sha256: String) {
         let stamp = Stamp::new(stat, sha256);
         self.entries
             .lock()
@@ -258,22 +254,14 @@ impl HashCache {
     }
 }
 
-#[cfg(unix)]
+/// A file's stamp as a tuple (size, mtime in ns, inode), as `lock_digests` stores it.
 pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
-    use std::os::unix::fs::MetadataExt;
-    let mtime_ns = meta.mtime() as i128 * 1_000_000_000 + meta.mtime_nsec() as i128;
-    (meta.size(), mtime_ns, meta.ino())
-}
-
-#[cfg(not(unix))]
-pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
-    let mtime_ns = meta
-        .modified()
-        .ok()
-        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
-        .map(|d| d.as_nanos() as i128)
-        .unwrap_or(0);
-    (meta.len(), mtime_ns, 0)
+    let FileStamp {
+        size,
+        mtime_ns,
+        inode,
+    } = FileStamp::of(meta);
+    (size, mtime_ns, inode)
 }
 
 #[cfg(test)]
@@ -329,7 +317,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("a.csv");
         std::fs::write(&file, "t,z\n").unwrap();
-        let stat = FileStat::of(&file).unwrap();
+        let stat = stat_of(&file).unwrap();
         // a cache as earlier versions wrote it: one object per path, the stat's fields flat
         let cache_path = dir.path().join("hashes.json");
         let flat = serde_json::json!({
@@ -340,7 +328,7 @@ mod tests {
         std::fs::write(&cache_path, serde_json::to_vec(&flat).unwrap()).unwrap();
         let cache = HashCache::load(&cache_path);
         assert_eq!(cache.cached(&file, stat), Some("ab".to_string()));
-        let other = FileStat {
+        let other = FileStamp {
             size: stat.size + 1,
             ..stat
         };

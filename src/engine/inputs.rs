@@ -115,9 +115,13 @@ pub fn file_name(path: &Path) -> String {
 }
 
 /// A path input as files left on disk (`Artifact::OnDisk`), each with the sha256 its key was made
-/// from; a single-file input is one entry named by its file name.
-pub fn on_disk(path: &Path, expected: &Stored) -> Artifact {
-    let file = |path: PathBuf, sha256: &String| InputFile::checked(path, sha256.clone());
+/// from, or the stat under which the file-hash cache holds that sha256 (the read then checks the
+/// stat instead of hashing again); a single-file input is one entry named by its file name.
+pub fn on_disk(path: &Path, expected: &Stored, cache: &HashCache) -> Artifact {
+    let file = |path: PathBuf, sha256: &String| match cache.vouched(&path, sha256) {
+        Some(stamp) => InputFile::vouched(path, stamp),
+        None => InputFile::checked(path, sha256.clone()),
+    };
     Artifact::OnDisk(match expected {
         Stored::File { sha256 } => {
             BTreeMap::from([(file_name(path), file(path.to_path_buf(), sha256))])

@@ -32,10 +32,13 @@ pub const IN_STORE_INPUT: &str =
     "an input came as stored items or as files left on disk, which the engine never passes to this kind (a bug in groove, please report it)";
 
 /// One file of a path input that a kind reads itself (`StageKind::streamed_inputs`). Whichever
-/// way it is read, the bytes are checked: against the sha256 its key was made from, or, for a
-/// file the engine has not hashed yet (the first run over it), by recording the digest of what
-/// was read, from which the engine then makes the key (`engine::hash_on_read`). A file edited
-/// while groove runs is an error, never a result under the wrong key.
+/// way it is read, the bytes are checked: against the sha256 its key was made from; or, when the
+/// engine's file-hash cache holds that sha256 under the file's stat (size, mtime, inode: the
+/// stamp a no-op already trusts), by that stat at the open and the same stat and change time at
+/// the end, without hashing again; or, for a file the engine has not hashed yet (the first run
+/// over it), by recording the digest of what was read, from which the engine then makes the key
+/// (`engine::hash_on_read`). A file edited while groove runs is an error, never a result under
+/// the wrong key.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputFile {
     pub path: PathBuf,
@@ -46,6 +49,9 @@ pub struct InputFile {
 enum Check {
     /// What is read must have this sha256.
     Against(String),
+    /// The engine's file-hash cache holds the sha256 the key was made from under this stat: the
+    /// file must have it when opened and keep it (and its change time) to the end of the read.
+    Vouched(FileStamp),
     /// Not hashed yet: each read to the end adds its digest here.
     Record(Seen),
 }
@@ -56,6 +62,7 @@ impl Check {
     fn settle(&self, digest: String) -> bool {
         match self {
             Check::Against(sha256) => digest == *sha256,
+            Check::Vouched(_) => unreachable!("a vouched read is checked by its stat, not hashed"),
             Check::Record(seen) => {
                 seen.push(digest);
                 true
@@ -97,6 +104,15 @@ impl InputFile {
         }
     }
 
+    /// A file whose content the engine's file-hash cache vouches for as long as it has `stamp`
+    /// (the key was made from the sha256 the cache holds under that stat).
+    pub fn vouched(path: PathBuf, stamp: FileStamp) -> InputFile {
+        InputFile {
+            path,
+            check: Check::Vouched(stamp),
+        }
+    }
+
     /// A file not hashed yet: every read of it to the end records its digest in `seen`.
     pub fn recorded(path: PathBuf, seen: Seen) -> InputFile {
         InputFile {
@@ -107,25 +123,37 @@ impl InputFile {
 
     /// The whole file, checked.
     pub fn read(&self) -> Result<Vec<u8>, StageError> {
-        let bytes = std::fs::read(&self.path).map_err(|e| self.unreadable(e))?;
-        if !self
-            .check
-            .settle(hex_digest(Sha256::digest(&bytes).as_slice()))
-        {
-            return Err(StageError(self.changed()));
-        }
+        use std::io::Read;
+        let mut reader = self.open()?;
+        // the whole file at once, as `std::fs::read` would (growing by doubling could hold twice it)
+        let size = reader.file.metadata().map_or(0, |m| m.len());
+        let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+        reader.read_to_end(&mut bytes).map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidData => StageError(self.changed()),
+            _ => self.unreadable(e),
+        })?;
         Ok(bytes)
     }
 
-    /// The file as a reader that hashes what it gives and, at the end of the file, fails with
-    /// an error (kind `InvalidData`) if the content is not the one the key was made from (or
-    /// records the digest, for a file not hashed yet). A caller that stops early has checked
-    /// nothing, and must not keep what it read.
+    /// The file as a reader that checks what it gives and, at the end of the file, fails with an
+    /// error (kind `InvalidData`) if the content is not the one the key was made from (hashed as
+    /// read, or its stat unchanged for a vouched file; a file not hashed yet records the
+    /// digest). A caller that stops early has checked nothing, and must not keep what it read.
     pub fn open(&self) -> Result<CheckedRead, StageError> {
         let file = std::fs::File::open(&self.path).map_err(|e| self.unreadable(e))?;
+        let state = match &self.check {
+            Check::Vouched(stamp) => {
+                let meta = file.metadata().map_err(|e| self.unreadable(e))?;
+                if FileStamp::of(&meta) != *stamp {
+                    return Err(StageError(self.changed()));
+                }
+                Reading::Stat(meta)
+            }
+            _ => Reading::Hashing(Sha256::new()),
+        };
         Ok(CheckedRead {
             file,
-            hasher: Some(Sha256::new()),
+            state,
             check: self.check.clone(),
             changed: self.changed(),
         })
@@ -149,32 +177,99 @@ impl InputFile {
 /// `InputFile::open`'s reader.
 pub struct CheckedRead {
     file: std::fs::File,
-    /// `None` once the end was reached and the content checked.
-    hasher: Option<Sha256>,
+    state: Reading,
     check: Check,
     changed: String,
+}
+
+/// Where a `CheckedRead` is.
+enum Reading {
+    /// Hashing what it gives, to check or record at the end.
+    Hashing(Sha256),
+    /// A vouched file: its stat when opened, to compare at the end.
+    Stat(std::fs::Metadata),
+    /// The end was reached and the content checked.
+    Done,
 }
 
 impl std::io::Read for CheckedRead {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = std::io::Read::read(&mut self.file, buf)?;
-        match (n, self.hasher.take()) {
-            (0, Some(hasher)) => {
-                if !self.check.settle(hex_digest(hasher.finalize().as_slice())) {
-                    return Err(std::io::Error::new(
-                        std::io::ErrorKind::InvalidData,
-                        self.changed.clone(),
-                    ));
-                }
+        let same = match (n, std::mem::replace(&mut self.state, Reading::Done)) {
+            (0, Reading::Hashing(hasher)) => {
+                self.check.settle(hex_digest(hasher.finalize().as_slice()))
             }
-            (_, Some(mut hasher)) => {
+            (0, Reading::Stat(at_open)) => {
+                let now = self.file.metadata()?;
+                FileStamp::of(&now) == FileStamp::of(&at_open)
+                    && change_time(&now) == change_time(&at_open)
+            }
+            (_, Reading::Hashing(mut hasher)) => {
                 hasher.update(&buf[..n]);
-                self.hasher = Some(hasher);
+                self.state = Reading::Hashing(hasher);
+                true
             }
-            (_, None) => {}
+            (_, state) => {
+                self.state = state;
+                true
+            }
+        };
+        if !same {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                self.changed.clone(),
+            ));
         }
         Ok(n)
     }
+}
+
+/// What says a file is unchanged without reading it: its size, mtime and inode (the engine's
+/// file-hash cache keys its digests by them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileStamp {
+    pub size: u64,
+    pub mtime_ns: i128,
+    pub inode: u64,
+}
+
+impl FileStamp {
+    #[cfg(unix)]
+    pub fn of(meta: &std::fs::Metadata) -> FileStamp {
+        use std::os::unix::fs::MetadataExt;
+        FileStamp {
+            size: meta.size(),
+            mtime_ns: i128::from(meta.mtime()) * 1_000_000_000 + i128::from(meta.mtime_nsec()),
+            inode: meta.ino(),
+        }
+    }
+
+    #[cfg(not(unix))]
+    pub fn of(meta: &std::fs::Metadata) -> FileStamp {
+        let mtime_ns = meta
+            .modified()
+            .ok()
+            .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+            .map(|d| d.as_nanos() as i128)
+            .unwrap_or(0);
+        FileStamp {
+            size: meta.len(),
+            mtime_ns,
+            inode: 0,
+        }
+    }
+}
+
+/// A file's status-change time (ns), which a write moves even when the mtime is set back.
+#[cfg(unix)]
+fn change_time(meta: &std::fs::Metadata) -> i128 {
+    use std::os::unix::fs::MetadataExt;
+    i128::from(meta.ctime()) * 1_000_000_000 + i128::from(meta.ctime_nsec())
+}
+
+#[cfg(not(unix))]
+fn change_time(_: &std::fs::Metadata) -> i128 {
+    0
 }
 
 /// Lowercase hex of a digest (as `engine::hashing` writes hashes; repeated here so that the
@@ -289,4 +384,51 @@ where
         message: e.to_string(),
     })?;
     Ok((typed, json))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read;
+
+    #[test]
+    fn a_vouched_file_is_read_unhashed_and_a_write_during_the_read_is_a_change() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        let content = vec![b'7'; 64 * 1024];
+        std::fs::write(&path, &content).unwrap();
+        let stamp = FileStamp::of(&std::fs::metadata(&path).unwrap());
+        let file = InputFile::vouched(path.clone(), stamp);
+        assert_eq!(file.read().unwrap(), content);
+        let mut whole = Vec::new();
+        file.open().unwrap().read_to_end(&mut whole).unwrap();
+        assert_eq!(whole, content);
+        // rewritten while read, same size, its mtime set back: the change time still moves
+        let mut reader = file.open().unwrap();
+        let mut head = [0u8; 1024];
+        reader.read_exact(&mut head).unwrap();
+        let mtime = std::fs::metadata(&path).unwrap().modified().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        std::fs::write(&path, vec![b'8'; 64 * 1024]).unwrap();
+        std::fs::File::options()
+            .write(true)
+            .open(&path)
+            .unwrap()
+            .set_modified(mtime)
+            .unwrap();
+        let err = reader.read_to_end(&mut Vec::new()).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidData);
+        assert!(err.to_string().contains("changed while groove was running"));
+        // the stat vouched for is not the file's any more: an error at the open
+        assert_eq!(FileStamp::of(&std::fs::metadata(&path).unwrap()), stamp);
+        let moved = InputFile::vouched(
+            path.clone(),
+            FileStamp {
+                mtime_ns: stamp.mtime_ns + 1,
+                ..stamp
+            },
+        );
+        let err = moved.read().unwrap_err().to_string();
+        assert!(err.contains("changed while groove was running"), "{err}");
+    }
 }

@@ -7,6 +7,7 @@ use crate::engine::stage::{
 use crate::fit::aggregate::{aggregate_single, restart_note, AggregateOptions};
 use crate::fit::summary::{BootstrapInfo, Summary};
 use crate::fit::{collision, fits_csv, RunFit};
+use rayon::prelude::*;
 
 /// `kind = "aggregate"`: per-material aggregates of the fits.
 pub struct Aggregate;
@@ -34,8 +35,13 @@ impl StageKind for Aggregate {
         let mut singles = Vec::new();
         let mut collisions = Vec::new();
         let mut pair_recordings = Vec::new();
-        for (item, bytes) in fits {
-            match parse_item::<RunFit>(item, bytes, "the fit")? {
+        // parsed on every core, then taken in item order (the first bad item is the error)
+        let parsed: Vec<Result<RunFit, StageError>> = fits
+            .par_iter()
+            .map(|(item, bytes)| parse_item::<RunFit>(item, bytes, "the fit"))
+            .collect();
+        for (item, fit) in fits.keys().zip(parsed) {
+            match fit? {
                 RunFit::Single(f) => singles.push(f),
                 RunFit::Collision(c) => {
                     let rec = runs.get(item).filter(|b| !b.is_empty()).ok_or_else(|| {
