@@ -22,6 +22,7 @@ use super::sanity;
 use super::table::Table;
 use crate::recording::{Experiment, Recording, RunInfo, Track};
 use polars::prelude::*;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::ops::Range;
@@ -204,6 +205,17 @@ impl Columns {
             frame: order.iter().map(|&k| self.frame[k]).collect(),
             t_s: order.iter().map(|&k| self.t_s[k]).collect(),
             z_m: order.iter().map(|&k| self.z_m[k]).collect(),
+        }
+    }
+
+    /// A copy of some rows (of one run), as a one-run `Columns`.
+    fn one_run(&self, rows: Range<usize>) -> Columns {
+        Columns {
+            runs: Vec::new(),
+            particle: self.particle[rows.clone()].to_vec(),
+            frame: self.frame[rows.clone()].to_vec(),
+            t_s: self.t_s[rows.clone()].to_vec(),
+            z_m: self.z_m[rows].to_vec(),
         }
     }
 
@@ -483,14 +495,10 @@ fn csv_chunks(
 ) -> Result<usize, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     for_each_piece(read, chunk_bytes, &mut |text| {
-        if let Some(rows) = csv_fast::parse(text) {
-            let block = Block {
-                particle: &rows.particle,
-                frame: &rows.frame,
-                t_s: &rows.t_s,
-                z_m: &rows.z_m,
-            };
-            stream.rows(rows.ids.iter().copied(), &block)?;
+        if let Some(parts) = csv_fast::parse_parts(text) {
+            for rows in parts {
+                stream.owned_rows(rows)?;
+            }
             stream.hand_over();
             return Ok(());
         }
@@ -535,7 +543,7 @@ struct Stream<'a, 'e> {
     each: &'e mut dyn FnMut(Vec<Recording>),
 }
 
-impl Stream<'_, '_> {
+impl<'a> Stream<'a, '_> {
     /// Adds a chunk's rows to their runs, handing on each run whose rows end inside it.
     fn chunk(&mut self, df: &DataFrame) -> Result<(), &'static str> {
         const PROBLEM: &str = "a null, a column of another type or an untrimmed run id";
@@ -583,6 +591,92 @@ impl Stream<'_, '_> {
         }
         self.extend(block, start..i);
         Ok(())
+    }
+
+    /// `rows`, with the rows given as owned columns (the strict-layout parser's): the runs that
+    /// both start and end among them are made into recordings on every core, straight from
+    /// those columns, with no copy per run; the run open at the start (pending) and the one open
+    /// at the end go through `rows`'s copy, so the outcome is `rows`'s.
+    fn owned_rows(&mut self, rows: csv_fast::Rows) -> Result<(), &'static str> {
+        let csv_fast::Rows {
+            ids,
+            particle,
+            frame,
+            t_s,
+            z_m,
+        } = rows;
+        let cols = Columns {
+            runs: Vec::new(),
+            particle,
+            frame,
+            t_s,
+            z_m,
+        };
+        let block = Block {
+            particle: &cols.particle,
+            frame: &cols.frame,
+            t_s: &cols.t_s,
+            z_m: &cols.z_m,
+        };
+        // blocks of consecutive rows of one run id
+        let mut blocks: Vec<(&str, Range<usize>)> = Vec::new();
+        for (i, &id) in ids.iter().enumerate() {
+            match blocks.last_mut() {
+                Some((last, rows)) if *last == id => rows.end = i + 1,
+                _ => blocks.push((id, i..i + 1)),
+            }
+        }
+        let n_blocks = blocks.len();
+        if n_blocks < 3 {
+            return self.rows(ids.iter().copied(), &block);
+        }
+        // the first block ends the pending run (or starts one), the last stays open: both as
+        // `rows` takes them; those between are whole runs, checked here in file order
+        let (first, middle, last) = (&blocks[0], &blocks[1..n_blocks - 1], &blocks[n_blocks - 1]);
+        self.rows(ids[first.1.clone()].iter().copied(), &block)?;
+        self.hand_on()?;
+        let mut whole: Vec<(Option<&'a RunInfo>, Range<usize>)> = Vec::with_capacity(middle.len());
+        for (id, rows) in middle {
+            if id.is_empty() || id.trim() != *id {
+                return Err("an untrimmed run id");
+            }
+            if !self.done.insert(id.to_string()) {
+                return Err(NOT_GROUPED);
+            }
+            whole.push((self.infos.remove::<str>(id), rows.clone()));
+        }
+        let min_frames = self.min_frames;
+        let made: Vec<Option<Recording>> = whole
+            .par_iter()
+            .map(|(info, rows)| {
+                let info = (*info)?;
+                let sorted = (rows.start + 1..rows.end).all(|k| {
+                    (cols.particle[k - 1], cols.frame[k - 1]) <= (cols.particle[k], cols.frame[k])
+                });
+                match sorted {
+                    true => recording(info, &cols, rows.clone(), min_frames),
+                    false => {
+                        let one = cols.one_run(rows.clone()).sorted();
+                        recording(info, &one, 0..rows.len(), min_frames)
+                    }
+                }
+            })
+            .collect();
+        for rec in made {
+            match rec {
+                Some(rec) => self.ready.push(rec),
+                None => self.failed = true,
+            }
+        }
+        self.rows(
+            ids[last.1.clone()].iter().copied(),
+            &Block {
+                particle: &cols.particle[last.1.clone()],
+                frame: &cols.frame[last.1.clone()],
+                t_s: &cols.t_s[last.1.clone()],
+                z_m: &cols.z_m[last.1.clone()],
+            },
+        )
     }
 
     /// The recordings ready go to `each`, all at once (it may work on them in parallel).

@@ -23,8 +23,24 @@ pub struct Rows<'a> {
 }
 
 /// The rows of `text` (the header line, then whole lines), or `None` if any line is not in the
-/// strict layout. Halves of a large piece are parsed on two threads.
+/// strict layout: `parse_parts` joined (for the tests).
+#[cfg(test)]
 pub fn parse(text: &[u8]) -> Option<Rows<'_>> {
+    let mut parts = parse_parts(text)?.into_iter();
+    let mut all = parts.next()?;
+    for b in parts {
+        all.ids.extend(b.ids);
+        all.particle.extend(b.particle);
+        all.frame.extend(b.frame);
+        all.t_s.extend(b.t_s);
+        all.z_m.extend(b.z_m);
+    }
+    Some(all)
+}
+
+/// `parse` in consecutive parts, not joined (a copy of every column saved): the two halves of
+/// a large piece, parsed on two threads, or one part for a small one.
+pub fn parse_parts(text: &[u8]) -> Option<Vec<Rows<'_>>> {
     let header_end = memchr::memchr(b'\n', text)?;
     let header = &text[..header_end];
     if header.strip_suffix(b"\r").unwrap_or(header) != HEADER {
@@ -32,17 +48,11 @@ pub fn parse(text: &[u8]) -> Option<Rows<'_>> {
     }
     let body = &text[header_end + 1..];
     if body.len() < 1 << 20 {
-        return lines(body);
+        return Some(vec![lines(body)?]);
     }
     let cut = body.len() / 2 + memchr::memchr(b'\n', &body[body.len() / 2..])? + 1;
     let (a, b) = rayon::join(|| lines(&body[..cut]), || lines(&body[cut..]));
-    let (mut a, b) = (a?, b?);
-    a.ids.extend(b.ids);
-    a.particle.extend(b.particle);
-    a.frame.extend(b.frame);
-    a.t_s.extend(b.t_s);
-    a.z_m.extend(b.z_m);
-    Some(a)
+    Some(vec![a?, b?])
 }
 
 /// Every line of `body`; the last may lack its newline.
@@ -268,6 +278,7 @@ mod tests {
             text.push_str(&line);
         }
         assert!(text.len() > 1 << 20, "two halves");
+        assert_eq!(parse_parts(text.as_bytes()).unwrap().len(), 2);
         let rows = parse(text.as_bytes()).unwrap();
         assert_eq!(rows.frame, (0..40_000).collect::<Vec<i64>>());
         for (k, line) in text.lines().skip(1).enumerate() {
