@@ -58,7 +58,7 @@ pub fn parse_parts(text: &[u8]) -> Option<Vec<Rows<'_>>> {
 /// Every line of `body`; the last may lack its newline.
 fn lines(body: &[u8]) -> Option<Rows<'_>> {
     // one check of the text, so that fields are `str` slices with no check each
-    let body = std::str::from_utf8(body).ok()?;
+    let text = std::str::from_utf8(body).ok()?;
     let guess = body.len() / 40 + 1;
     let mut rows = Rows {
         ids: Vec::with_capacity(guess),
@@ -67,35 +67,47 @@ fn lines(body: &[u8]) -> Option<Rows<'_>> {
         t_s: Vec::with_capacity(guess),
         z_m: Vec::with_capacity(guess),
     };
-    // the commas and newlines in one vectorized scan: each line is exactly four commas, then a
-    // newline (or the end of the text)
-    let bytes = body.as_bytes();
-    let mut marks = memchr::memchr2_iter(b',', b'\n', bytes);
-    let mut start = 0;
-    while start < bytes.len() {
-        let mut cut = [0usize; 4];
-        for c in &mut cut {
-            let at = marks.next()?;
-            if bytes[at] != b',' {
-                return None;
-            }
-            *c = at;
+    // One pass along each line: the run id up to the line's first comma (checked only when it
+    // differs from the line before's), then each number read as far as its grammar goes, which
+    // must be exactly to the next comma (the line's end after the last). A line with a field
+    // more or less, an empty one or a stray byte stops a number short of its separator.
+    let mut prev: Option<&str> = None;
+    let mut at = 0;
+    while at < body.len() {
+        let comma = at + memchr::memchr(b',', &body[at..])?;
+        let id = &text[at..comma];
+        if prev != Some(id) {
+            prev = Some(run_id(id)?);
         }
-        let end = match marks.next() {
-            Some(at) if bytes[at] == b'\n' => at,
-            Some(_) => return None,
-            None => bytes.len(),
-        };
-        let last = &body[cut[3] + 1..end];
-        let last = last.strip_suffix('\r').unwrap_or(last);
-        rows.ids.push(run_id(&body[start..cut[0]])?);
-        rows.particle.push(int(&body[cut[0] + 1..cut[1]])?);
-        rows.frame.push(int(&body[cut[1] + 1..cut[2]])?);
-        rows.t_s.push(float(&body[cut[2] + 1..cut[3]])?);
-        rows.z_m.push(float(last)?);
-        start = end + 1;
+        let (particle, end) = int_at(body, comma + 1)?;
+        let (frame, end) = int_at(body, after(body, end)?)?;
+        let (t_s, end) = float_at(text, after(body, end)?)?;
+        let (z_m, end) = float_at(text, after(body, end)?)?;
+        at = line_end(body, end)?;
+        rows.ids.push(id);
+        rows.particle.push(particle);
+        rows.frame.push(frame);
+        rows.t_s.push(t_s);
+        rows.z_m.push(z_m);
     }
     Some(rows)
+}
+
+/// Where the next field starts, if a comma ends this one at `end`.
+fn after(body: &[u8], end: usize) -> Option<usize> {
+    (body.get(end) == Some(&b',')).then_some(end + 1)
+}
+
+/// Where the next line starts, if this one ends at `end`: a newline, a carriage return and a
+/// newline, or the end of the text (after a carriage return or not).
+fn line_end(body: &[u8], end: usize) -> Option<usize> {
+    match (body.get(end), body.get(end + 1)) {
+        (None, _) => Some(end),
+        (Some(b'\n'), _) => Some(end + 1),
+        (Some(b'\r'), None) => Some(end + 1),
+        (Some(b'\r'), Some(b'\n')) => Some(end + 2),
+        _ => None,
+    }
 }
 
 /// A run id of letters, digits, `.`, `_` and `-`.
@@ -107,24 +119,30 @@ fn run_id(field: &str) -> Option<&str> {
     ok.then_some(field)
 }
 
-/// `-?[0-9]{1,18}`.
-fn int(field: &str) -> Option<i64> {
-    let field = field.as_bytes();
-    let (negative, digits) = match field.strip_prefix(b"-") {
-        Some(d) => (true, d),
-        None => (false, field),
-    };
-    if digits.is_empty() || digits.len() > 18 || !digits.iter().all(u8::is_ascii_digit) {
+/// `-?[0-9]{1,18}` from `start`, and where it ends.
+fn int_at(body: &[u8], start: usize) -> Option<(i64, usize)> {
+    let negative = body.get(start) == Some(&b'-');
+    let first = start + usize::from(negative);
+    let digits = body.get(first..)?.iter().take_while(|b| b.is_ascii_digit());
+    let (count, v) = digits.fold((0usize, 0i64), |(n, v), &d| {
+        (n + 1, v.wrapping_mul(10).wrapping_add(i64::from(d - b'0')))
+    });
+    if count == 0 || count > 18 {
         return None;
     }
-    let v = digits
-        .iter()
-        .fold(0i64, |v, &d| v * 10 + i64::from(d - b'0'));
-    Some(if negative { -v } else { v })
+    Some((if negative { -v } else { v }, first + count))
 }
 
-/// `-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?`, valued as `str::parse` values it.
+/// `-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?`, the whole of `text`, valued as `str::parse` values it.
+#[cfg(test)]
 fn float(text: &str) -> Option<f64> {
+    let (v, end) = float_at(text, 0)?;
+    (end == text.len()).then_some(v)
+}
+
+/// The number `-?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?` from `start` in `text`, valued as
+/// `str::parse` values it, and where it ends.
+fn float_at(text: &str, start: usize) -> Option<(f64, usize)> {
     let field = text.as_bytes();
     // the digits from `at` on, their count, and the integer they make (wrapping past 19 digits,
     // when it is not used)
@@ -134,8 +152,11 @@ fn float(text: &str) -> Option<f64> {
             (n + 1, m.wrapping_mul(10).wrapping_add(u64::from(d - b'0')))
         })
     };
-    let negative = field.first() == Some(&b'-');
-    let mut at = usize::from(negative);
+    let negative = field.get(start) == Some(&b'-');
+    let mut at = start + usize::from(negative);
+    if at > field.len() {
+        return None;
+    }
     let (whole, mut m) = digits(at, 0);
     if whole == 0 {
         return None;
@@ -161,17 +182,14 @@ fn float(text: &str) -> Option<f64> {
         }
         at += exp;
     }
-    if at != field.len() {
-        return None;
-    }
     // a plain decimal of at most 19 digits whose digits make an integer below 2^53, over a
     // power of ten up to 10^22: both exact in f64, so one correctly rounded division gives what
     // `str::parse` gives, at a fraction of its cost; anything else goes to `str::parse`
     if !exponent && whole + frac <= 19 && frac < POW10.len() && m < 1 << 53 {
         let v = m as f64 / POW10[frac];
-        return Some(if negative { -v } else { v });
+        return Some((if negative { -v } else { v }, at));
     }
-    text.parse().ok()
+    Some((text[start..at].parse().ok()?, at))
 }
 
 /// 10^0 ..= 10^22, each exact in f64.
@@ -197,6 +215,9 @@ mod tests {
             parse(b"run,particle,frame,t_s,z_m\n").unwrap(),
             Rows::default()
         );
+        // a carriage return at the very end, with no newline after it
+        let rows = parse(b"run,particle,frame,t_s,z_m\na,0,0,1.5,-2\r").unwrap();
+        assert_eq!((rows.t_s, rows.z_m), (vec![1.5], vec![-2.0]));
         let head = "run,particle,frame,t_s,z_m\n";
         for bad in [
             "run,frame,particle,t_s,z_m\na,0,0,0,0\n".to_string(),
@@ -216,6 +237,15 @@ mod tests {
             format!("{head}a,0,0,0, 1\n"),
             format!("{head}a,0,0,0,1\u{a0}\n"),
             format!("{head}a,1234567890123456789,0,0,0\n"),
+            // an id left empty after a good line (ids are checked only when they change)
+            format!("{head}a,0,0,0,0\n,0,0,0,0\n"),
+            format!("{head}\na,0,0,0,0\n"),
+            format!("{head}a,0\r,0,0,0\n"),
+            format!("{head}a,0,0,0,0\r\r\n"),
+            format!("{head}a,0,0,0,0\ra,0,1,0,0\n"),
+            format!("{head}a,0,0,0,-\n"),
+            format!("{head}a,0,0,0,1e+\n"),
+            format!("{head}a,0,0,0,0\nb\n"),
         ] {
             assert_eq!(parse(bad.as_bytes()), None, "{bad:?}");
         }
