@@ -507,6 +507,7 @@ fn run_here(
     if spec.foreach.is_none() || todo.len() < super::pack::PACK_MIN {
         return Ok(todo
             .par_iter()
+            .with_max_len(ITEM_GRAIN)
             .map(|&i| {
                 let (item, key) = (units[i].0.as_deref(), &units[i].1);
                 let result = execute(ctx, spec, bound, &shared, item, key, seed);
@@ -520,6 +521,7 @@ fn run_here(
         let writer = PackWriter::new(&ctx.store);
         let stored: Vec<Result<BTreeMap<String, Stored>, EngineError>> = chunk
             .par_iter()
+            .with_max_len(ITEM_GRAIN)
             .map(|&i| {
                 let item = units[i].0.as_deref();
                 let outputs = run_key(ctx, spec, bound, &shared, item, seed, &writer);
@@ -545,6 +547,12 @@ fn run_here(
 
 /// Items of a per-item stage run (and packed) together.
 const ITEM_CHUNK: usize = 4096;
+
+/// Items a thread takes at a time. Rayon otherwise splits a range only about as many times as
+/// there are threads, and a thread that has begun a quarter of a chunk goes through it alone
+/// while the others, out of work, sleep: at 10,000 fits, one core idled 0.15 s at the end of
+/// each chunk. A few items at a time leave every one to be stolen.
+const ITEM_GRAIN: usize = 4;
 
 /// The stage's outputs from its complete entries: a per-item stage's files gathered into
 /// Collections named by item.
