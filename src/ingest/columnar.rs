@@ -61,7 +61,7 @@ pub fn recordings(files: &BTreeMap<String, Vec<u8>>, min_frames: usize) -> Optio
     let mut recordings = Vec::with_capacity(infos.len());
     for (run, rows) in &cols.runs {
         let info = infos.remove(run.as_str())?;
-        recordings.push(recording(info, &cols, rows.clone(), min_frames)?);
+        recordings.push(recording(info, &cols.block(), rows.clone(), min_frames)?);
     }
     // Sorted by run as the row-by-row path's map sorts them; every run of runs.csv has rows.
     recordings.sort_by(|a, b| a.info.run.cmp(&b.info.run));
@@ -208,14 +208,13 @@ impl Columns {
         }
     }
 
-    /// A copy of some rows (of one run), as a one-run `Columns`.
-    fn one_run(&self, rows: Range<usize>) -> Columns {
-        Columns {
-            runs: Vec::new(),
-            particle: self.particle[rows.clone()].to_vec(),
-            frame: self.frame[rows.clone()].to_vec(),
-            t_s: self.t_s[rows.clone()].to_vec(),
-            z_m: self.z_m[rows].to_vec(),
+    /// The columns as a `Block`.
+    fn block(&self) -> Block<'_> {
+        Block {
+            particle: &self.particle,
+            frame: &self.frame,
+            t_s: &self.t_s,
+            z_m: &self.z_m,
         }
     }
 
@@ -300,7 +299,7 @@ impl Columns {
 /// path would name a problem in them.
 fn recording(
     info: &RunInfo,
-    cols: &Columns,
+    cols: &Block,
     rows: Range<usize>,
     min_frames: usize,
 ) -> Option<Recording> {
@@ -338,7 +337,7 @@ fn recording(
 /// One particle's track, or `None` on a duplicate frame, a time or position not finite or out of
 /// range, or
 /// time not growing with the frame.
-fn track(particle: u32, cols: &Columns, rows: Range<usize>) -> Option<Track> {
+fn track(particle: u32, cols: &Block, rows: Range<usize>) -> Option<Track> {
     let frame = &cols.frame[rows.clone()];
     let t_s = &cols.t_s[rows.clone()];
     let z_m = &cols.z_m[rows];
@@ -513,12 +512,35 @@ fn csv_chunks(
     })
 }
 
-/// A chunk's typed columns, borrowed from its data frame.
+/// A chunk's typed columns, borrowed from its data frame (or from `Columns`).
 struct Block<'c> {
     particle: &'c [i64],
     frame: &'c [i64],
     t_s: &'c [f64],
     z_m: &'c [f64],
+}
+
+impl<'c> Block<'c> {
+    /// Some of the rows.
+    fn slice(&self, rows: Range<usize>) -> Block<'c> {
+        Block {
+            particle: &self.particle[rows.clone()],
+            frame: &self.frame[rows.clone()],
+            t_s: &self.t_s[rows.clone()],
+            z_m: &self.z_m[rows],
+        }
+    }
+
+    /// A copy of some rows (of one run), as a one-run `Columns`.
+    fn one_run(&self, rows: Range<usize>) -> Columns {
+        Columns {
+            runs: Vec::new(),
+            particle: self.particle[rows.clone()].to_vec(),
+            frame: self.frame[rows.clone()].to_vec(),
+            t_s: self.t_s[rows.clone()].to_vec(),
+            z_m: self.z_m[rows].to_vec(),
+        }
+    }
 }
 
 fn ints(c: &Column) -> Option<&[i64]> {
@@ -562,7 +584,8 @@ impl<'a> Stream<'a, '_> {
             z_m: floats(&z_m).ok_or(PROBLEM)?,
         };
         let ids = run.str().map_err(|_| PROBLEM)?;
-        self.rows(ids.downcast_iter().flat_map(|a| a.values_iter()), &block)
+        let ids: Vec<&str> = ids.downcast_iter().flat_map(|a| a.values_iter()).collect();
+        self.blocks(&ids, &block)
     }
 
     /// Adds rows (their run ids, and their other columns in `block`) to their runs, handing on
@@ -593,10 +616,7 @@ impl<'a> Stream<'a, '_> {
         Ok(())
     }
 
-    /// `rows`, with the rows given as owned columns (the strict-layout parser's): the runs that
-    /// both start and end among them are made into recordings on every core, straight from
-    /// those columns, with no copy per run; the run open at the start (pending) and the one open
-    /// at the end go through `rows`'s copy, so the outcome is `rows`'s.
+    /// `rows` of a strict-layout piece (the parser's owned columns).
     fn owned_rows(&mut self, rows: csv_fast::Rows) -> Result<(), &'static str> {
         let csv_fast::Rows {
             ids,
@@ -612,28 +632,30 @@ impl<'a> Stream<'a, '_> {
             t_s,
             z_m,
         };
-        let block = Block {
-            particle: &cols.particle,
-            frame: &cols.frame,
-            t_s: &cols.t_s,
-            z_m: &cols.z_m,
-        };
+        self.blocks(&ids, &cols.block())
+    }
+
+    /// `rows`, with the run ids at hand: the runs that both start and end among the rows are
+    /// made into recordings on every core, straight from `block`, with no copy per run; the run
+    /// open at the start (pending) and the one open at the end go through `rows`'s copy, so the
+    /// outcome is `rows`'s.
+    fn blocks(&mut self, ids: &[&str], block: &Block) -> Result<(), &'static str> {
         // blocks of consecutive rows of one run id
-        let mut blocks: Vec<(&str, Range<usize>)> = Vec::new();
+        let mut runs: Vec<(&str, Range<usize>)> = Vec::new();
         for (i, &id) in ids.iter().enumerate() {
-            match blocks.last_mut() {
+            match runs.last_mut() {
                 Some((last, rows)) if *last == id => rows.end = i + 1,
-                _ => blocks.push((id, i..i + 1)),
+                _ => runs.push((id, i..i + 1)),
             }
         }
-        let n_blocks = blocks.len();
-        if n_blocks < 3 {
-            return self.rows(ids.iter().copied(), &block);
+        let n_runs = runs.len();
+        if n_runs < 3 {
+            return self.rows(ids.iter().copied(), block);
         }
         // the first block ends the pending run (or starts one), the last stays open: both as
         // `rows` takes them; those between are whole runs, checked here in file order
-        let (first, middle, last) = (&blocks[0], &blocks[1..n_blocks - 1], &blocks[n_blocks - 1]);
-        self.rows(ids[first.1.clone()].iter().copied(), &block)?;
+        let (first, middle, last) = (&runs[0], &runs[1..n_runs - 1], &runs[n_runs - 1]);
+        self.rows(ids[first.1.clone()].iter().copied(), block)?;
         self.hand_on()?;
         let mut whole: Vec<(Option<&'a RunInfo>, Range<usize>)> = Vec::with_capacity(middle.len());
         for (id, rows) in middle {
@@ -651,13 +673,14 @@ impl<'a> Stream<'a, '_> {
             .map(|(info, rows)| {
                 let info = (*info)?;
                 let sorted = (rows.start + 1..rows.end).all(|k| {
-                    (cols.particle[k - 1], cols.frame[k - 1]) <= (cols.particle[k], cols.frame[k])
+                    (block.particle[k - 1], block.frame[k - 1])
+                        <= (block.particle[k], block.frame[k])
                 });
                 match sorted {
-                    true => recording(info, &cols, rows.clone(), min_frames),
+                    true => recording(info, block, rows.clone(), min_frames),
                     false => {
-                        let one = cols.one_run(rows.clone()).sorted();
-                        recording(info, &one, 0..rows.len(), min_frames)
+                        let one = block.one_run(rows.clone()).sorted();
+                        recording(info, &one.block(), 0..rows.len(), min_frames)
                     }
                 }
             })
@@ -670,12 +693,7 @@ impl<'a> Stream<'a, '_> {
         }
         self.rows(
             ids[last.1.clone()].iter().copied(),
-            &Block {
-                particle: &cols.particle[last.1.clone()],
-                frame: &cols.frame[last.1.clone()],
-                t_s: &cols.t_s[last.1.clone()],
-                z_m: &cols.z_m[last.1.clone()],
-            },
+            &block.slice(last.1.clone()),
         )
     }
 
@@ -708,7 +726,7 @@ impl<'a> Stream<'a, '_> {
         // rows are sorted here, as the whole-file path sorts them.
         let cols = if sorted { cols } else { cols.sorted() };
         let rec = match self.infos.remove(id.as_str()) {
-            Some(info) => recording(info, &cols, 0..n, self.min_frames),
+            Some(info) => recording(info, &cols.block(), 0..n, self.min_frames),
             None => None,
         };
         self.done.insert(id);
