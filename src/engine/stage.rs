@@ -194,6 +194,9 @@ enum Reading {
 
 impl std::io::Read for CheckedRead {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0); // not the end of the file: nothing to check yet
+        }
         let n = std::io::Read::read(&mut self.file, buf)?;
         let same = match (n, std::mem::replace(&mut self.state, Reading::Done)) {
             (0, Reading::Hashing(hasher)) => {
@@ -401,7 +404,12 @@ mod tests {
         let file = InputFile::vouched(path.clone(), stamp);
         assert_eq!(file.read().unwrap(), content);
         let mut whole = Vec::new();
-        file.open().unwrap().read_to_end(&mut whole).unwrap();
+        let mut reader = file.open().unwrap();
+        // an empty buffer is not the end of the file: the check still waits for it
+        assert_eq!(reader.read(&mut []).unwrap(), 0);
+        assert!(matches!(reader.state, Reading::Stat(_)));
+        reader.read_to_end(&mut whole).unwrap();
+        assert!(matches!(reader.state, Reading::Done));
         assert_eq!(whole, content);
         // rewritten while read, same size, its mtime set back: the change time still moves
         let mut reader = file.open().unwrap();

@@ -285,8 +285,7 @@ impl Store {
     /// An object's bytes, checked against its name: a damaged object is an error, never data.
     pub fn read_object(&self, sha256: &str) -> Result<Vec<u8>, EngineError> {
         // a blob the pack index already knows is read from its pack first, with no failed open of
-        // a loose path (10,000 of them cost a fit stage's reader 40 ms); a damaged copy there
-        // falls through to the loose one
+        // a loose path per item; a damaged copy there falls through to the loose one
         let known = |i: &PackIndex| i.objects.get(sha256).map(|l| l.pack.read(l.offset, l.len));
         if let Some(Ok(bytes)) = self.with_packs(false, known) {
             if sha256_hex(&bytes) == sha256 {
