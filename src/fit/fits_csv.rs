@@ -11,7 +11,7 @@ pub fn render(fits: &[SingleFit]) -> String {
     let mut rows: Vec<&SingleFit> = fits.iter().collect();
     rows.sort_by(|a, b| a.run.cmp(&b.run));
     // the rows written a thousand at a time on every core, then joined in order
-    let parts: Vec<String> = rows.par_chunks(1024).map(|chunk| lines(chunk)).collect();
+    let parts: Vec<String> = rows.par_chunks(1024).map(lines).collect();
     let mut out = String::with_capacity(parts.iter().map(String::len).sum::<usize>() + 128);
     out.push_str(HEADER);
     out.push('\n');
@@ -82,7 +82,7 @@ mod tests {
             material: "316".into(),
             groove: FitOptions::default().groove(),
             v0_mps: 1e-3 * k as f64,
-            v0_se: (k % 3 != 0).then_some(1e-5),
+            v0_se: (!k.is_multiple_of(3)).then_some(1e-5),
             mu: 0.3,
             mu_se: Some(0.01),
             t_drag_s: 0.05,
