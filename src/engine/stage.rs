@@ -47,23 +47,29 @@ pub struct InputFile {
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Check {
-    /// What is read must have this sha256.
-    Against(String),
+    /// Hashed as read, the digest settled at the end.
+    Hashed(Expect),
     /// The engine's file-hash cache holds the sha256 the key was made from under this stat: the
     /// file must have it when opened and keep it (and its change time) to the end of the read.
     Vouched(FileStamp),
-    /// Not hashed yet: each read to the end adds its digest here.
+}
+
+/// What a hashed read's digest must be.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Expect {
+    /// This sha256.
+    Sha256(String),
+    /// Anything (not hashed yet): each read to the end adds its digest here.
     Record(Seen),
 }
 
-impl Check {
+impl Expect {
     /// Settle a read that reached the end with `digest`: whether it is the content expected (a
     /// file not hashed yet records it and is always so).
     fn settle(&self, digest: String) -> bool {
         match self {
-            Check::Against(sha256) => digest == *sha256,
-            Check::Vouched(_) => unreachable!("a vouched read is checked by its stat, not hashed"),
-            Check::Record(seen) => {
+            Expect::Sha256(sha256) => digest == *sha256,
+            Expect::Record(seen) => {
                 seen.push(digest);
                 true
             }
@@ -100,7 +106,7 @@ impl InputFile {
     pub fn checked(path: PathBuf, sha256: String) -> InputFile {
         InputFile {
             path,
-            check: Check::Against(sha256),
+            check: Check::Hashed(Expect::Sha256(sha256)),
         }
     }
 
@@ -117,7 +123,7 @@ impl InputFile {
     pub fn recorded(path: PathBuf, seen: Seen) -> InputFile {
         InputFile {
             path,
-            check: Check::Record(seen),
+            check: Check::Hashed(Expect::Record(seen)),
         }
     }
 
@@ -149,12 +155,11 @@ impl InputFile {
                 }
                 Reading::Stat(meta)
             }
-            _ => Reading::Hashing(Sha256::new()),
+            Check::Hashed(expect) => Reading::Hashing(Sha256::new(), expect.clone()),
         };
         Ok(CheckedRead {
             file,
             state,
-            check: self.check.clone(),
             changed: self.changed(),
         })
     }
@@ -178,14 +183,13 @@ impl InputFile {
 pub struct CheckedRead {
     file: std::fs::File,
     state: Reading,
-    check: Check,
     changed: String,
 }
 
 /// Where a `CheckedRead` is.
 enum Reading {
     /// Hashing what it gives, to check or record at the end.
-    Hashing(Sha256),
+    Hashing(Sha256, Expect),
     /// A vouched file: its stat when opened, to compare at the end.
     Stat(std::fs::Metadata),
     /// The end was reached and the content checked.
@@ -199,17 +203,17 @@ impl std::io::Read for CheckedRead {
         }
         let n = std::io::Read::read(&mut self.file, buf)?;
         let same = match (n, std::mem::replace(&mut self.state, Reading::Done)) {
-            (0, Reading::Hashing(hasher)) => {
-                self.check.settle(hex_digest(hasher.finalize().as_slice()))
+            (0, Reading::Hashing(hasher, expect)) => {
+                expect.settle(hex_digest(hasher.finalize().as_slice()))
             }
             (0, Reading::Stat(at_open)) => {
                 let now = self.file.metadata()?;
                 FileStamp::of(&now) == FileStamp::of(&at_open)
                     && change_time(&now) == change_time(&at_open)
             }
-            (_, Reading::Hashing(mut hasher)) => {
+            (_, Reading::Hashing(mut hasher, expect)) => {
                 hasher.update(&buf[..n]);
-                self.state = Reading::Hashing(hasher);
+                self.state = Reading::Hashing(hasher, expect);
                 true
             }
             (_, state) => {
