@@ -100,7 +100,8 @@ pub fn unhashed(ctx: &Context, name: &str, path: &Path) -> Result<Option<Unhashe
 }
 
 impl Unhashed {
-    /// The input as the stage gets it: files left on disk, each checked or recorded.
+    /// The input as the stage gets it: files left on disk, each vouched for by the stat the hash
+    /// cache knows it under, or recorded as read.
     fn artifact(&self) -> Artifact {
         Artifact::OnDisk(
             self.files

@@ -181,11 +181,7 @@ impl Store {
 
     /// A packed blob's bytes (read from the packs written since, if it is not known yet).
     fn packed_object(&self, sha256: &str) -> Option<std::io::Result<Vec<u8>>> {
-        let read = |i: &PackIndex| {
-            i.objects
-                .get(sha256)
-                .map(|loc| loc.pack.read(loc.offset, loc.len))
-        };
+        let read = |i: &PackIndex| packed_in(i, sha256);
         self.with_packs(false, read)
             .or_else(|| self.with_packs(true, read))
     }
@@ -286,8 +282,7 @@ impl Store {
     pub fn read_object(&self, sha256: &str) -> Result<Vec<u8>, EngineError> {
         // a blob the pack index already knows is read from its pack first, with no failed open of
         // a loose path per item; a damaged copy there falls through to the loose one
-        let known = |i: &PackIndex| i.objects.get(sha256).map(|l| l.pack.read(l.offset, l.len));
-        if let Some(Ok(bytes)) = self.with_packs(false, known) {
+        if let Some(Ok(bytes)) = self.with_packs(false, |i| packed_in(i, sha256)) {
             if sha256_hex(&bytes) == sha256 {
                 return Ok(bytes);
             }
@@ -448,6 +443,14 @@ pub fn stored_objects(stored: &Stored) -> Box<dyn Iterator<Item = &String> + '_>
     }
 }
 
+/// A blob's bytes from the pack that `index` says holds it (`None`: no pack it knows does).
+fn packed_in(index: &PackIndex, sha256: &str) -> Option<std::io::Result<Vec<u8>>> {
+    index
+        .objects
+        .get(sha256)
+        .map(|loc| loc.pack.read(loc.offset, loc.len))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -470,5 +473,37 @@ mod tests {
         );
         let both = br#"{"outputs": {"x": {"type": "file", "sha256": "ff", "items": {}}}}"#;
         assert!(serde_json::from_slice::<Entry>(both).is_err());
+    }
+
+    #[test]
+    fn a_packed_blob_is_read_from_its_pack_and_a_damaged_one_from_its_loose_copy() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::at(dir.path());
+        let blobs: Vec<Vec<u8>> = (0..PACK_MIN + 1)
+            .map(|k| format!("blob {k}").into_bytes())
+            .collect();
+        let writer = crate::engine::pack_writer::PackWriter::new(&store);
+        let hashes: Vec<String> = blobs.iter().map(|b| writer.add(b).unwrap()).collect();
+        writer.finish().unwrap();
+        for (b, h) in blobs.iter().zip(&hashes) {
+            assert!(!store.object_path(h).exists(), "packed, not loose");
+            assert_eq!(store.read_object(h).unwrap(), *b);
+        }
+        // damage the first blob inside its pack: an error while no loose copy exists, its
+        // bytes once one does
+        let pack = pack::files_with(&pack::object_packs(&store.dir), "pack").remove(0);
+        let mut bytes = std::fs::read(&pack).unwrap();
+        let at = bytes
+            .windows(blobs[0].len())
+            .position(|w| w == blobs[0].as_slice())
+            .unwrap();
+        bytes[at] ^= 0x20;
+        std::fs::write(&pack, bytes).unwrap();
+        let fresh = Store::at(dir.path());
+        assert!(fresh.read_object(&hashes[0]).is_err());
+        fresh.put_object(&blobs[0]).unwrap();
+        assert!(fresh.object_path(&hashes[0]).exists());
+        assert_eq!(fresh.read_object(&hashes[0]).unwrap(), blobs[0]);
+        assert_eq!(fresh.read_object(&hashes[1]).unwrap(), blobs[1]);
     }
 }

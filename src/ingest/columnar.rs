@@ -496,7 +496,13 @@ fn csv_chunks(
     for_each_piece(read, chunk_bytes, &mut |text| {
         if let Some(parts) = csv_fast::parse_parts(text) {
             for rows in parts {
-                stream.owned_rows(rows)?;
+                let block = Block {
+                    particle: &rows.particle,
+                    frame: &rows.frame,
+                    t_s: &rows.t_s,
+                    z_m: &rows.z_m,
+                };
+                stream.blocks(&rows.ids, &block)?;
             }
             stream.hand_over();
             return Ok(());
@@ -614,25 +620,6 @@ impl<'a> Stream<'a, '_> {
         }
         self.extend(block, start..i);
         Ok(())
-    }
-
-    /// `rows` of a strict-layout piece (the parser's owned columns).
-    fn owned_rows(&mut self, rows: csv_fast::Rows) -> Result<(), &'static str> {
-        let csv_fast::Rows {
-            ids,
-            particle,
-            frame,
-            t_s,
-            z_m,
-        } = rows;
-        let cols = Columns {
-            runs: Vec::new(),
-            particle,
-            frame,
-            t_s,
-            z_m,
-        };
-        self.blocks(&ids, &cols.block())
     }
 
     /// `rows`, with the run ids at hand: the runs that both start and end among the rows are
