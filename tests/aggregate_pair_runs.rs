@@ -19,6 +19,7 @@ fn input<'a>(
         seed: 11,
         progress: None,
         put_item: None,
+        memo: None,
     }
 }
 

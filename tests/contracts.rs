@@ -71,6 +71,7 @@ fn run(
         seed: SEED,
         progress: None,
         put_item: None,
+        memo: None,
     })
     .unwrap_or_else(|e| panic!("stage {} failed: {}", kind.kind(), e.0))
 }

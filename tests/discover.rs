@@ -496,6 +496,7 @@ fn stage_writes_the_contract_deterministically() {
             seed: 5,
             progress: None,
             put_item: None,
+            memo: None,
         };
         match kind.run(&input).unwrap().remove("diagnosis") {
             Some(Artifact::File(bytes)) => bytes,

@@ -369,6 +369,7 @@ fn stage_input<'a>(
         seed: 3,
         progress: None,
         put_item: None,
+        memo: None,
     }
 }
 

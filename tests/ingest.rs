@@ -2,7 +2,9 @@
 //! error naming file, row and column, and trackpy / TrackMate exports of the same trajectories give
 //! the same recordings as the interchange format.
 
-use groove::engine::stage::{Artifact, FileStamp, InputFile, Seen, StageInput, StageKind};
+use groove::engine::stage::{
+    Artifact, FileStamp, InputFile, ObjectMemo, Seen, StageInput, StageKind,
+};
 use groove::ingest::{self, item_name, Axis, Format, IngestParams};
 use groove::recording::{Experiment, Recording, RunInfo, Setup, Track};
 use groove::stages::ingest::Ingest;
@@ -406,6 +408,7 @@ fn stage_outputs(files: &Files, params: &toml::Table) -> BTreeMap<String, Artifa
         seed: 1,
         progress: None,
         put_item: None,
+        memo: None,
     };
     Ingest
         .run(&input)
@@ -479,6 +482,7 @@ fn with_a_store_the_stage_puts_each_item_and_returns_its_hash() {
             seed: 1,
             progress: None,
             put_item: Some(&put_item),
+            memo: None,
         };
         let out = Ingest.run(&input).unwrap();
         let Artifact::InStore(got) = &out["runs"] else {
@@ -491,6 +495,128 @@ fn with_a_store_the_stage_puts_each_item_and_returns_its_hash() {
         }
         assert_eq!(put.len(), want.len());
     }
+}
+
+/// The stage's memo as the engine keeps it (`ObjectMemo`), counting what is put.
+#[derive(Default)]
+struct TestMemo {
+    held: std::sync::Mutex<BTreeMap<[u8; 32], String>>,
+    puts: std::sync::atomic::AtomicUsize,
+}
+
+impl ObjectMemo for TestMemo {
+    fn get(&self, key: &[u8; 32]) -> Option<String> {
+        self.held.lock().unwrap().get(key).cloned()
+    }
+
+    fn put(&self, key: [u8; 32], sha256: &str) {
+        self.puts.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.held.lock().unwrap().insert(key, sha256.to_string());
+    }
+}
+
+/// With a memo of whole runs, the dataset left on disk: the first read remembers every run
+/// between the piece's first and last; a second read finds them all and gives the same items;
+/// an edit of one line makes that run again (and only it) and gives the items a read without a
+/// memo gives; a run whose rows come in two blocks sends the read whole, and nothing of that read
+/// is remembered.
+#[test]
+fn a_memo_of_whole_runs_finds_the_unchanged_ones_and_gives_the_items_of_a_read_without_it() {
+    let recs: Vec<Recording> = (0..8)
+        .map(|k| Recording {
+            info: info(&format!("s{k:02}"), Experiment::Single, "316", None),
+            tracks: vec![track(0, 0..60, 200.0, |t| {
+                0.01 * k as f64 + 0.2 * t - 0.3 * t * t
+            })],
+        })
+        .collect();
+    let files = interchange_csv(&recs);
+    let params = toml::Table::new();
+    let store: std::sync::Mutex<BTreeMap<String, Vec<u8>>> = Default::default();
+    // the items (name → sha256) and what the stage said of how it read the dataset
+    let run = |files: &Files, memo: Option<&TestMemo>| {
+        let dir = tempfile::tempdir().unwrap();
+        let mut on_disk = BTreeMap::new();
+        for (name, bytes) in files {
+            let path = dir.path().join(name);
+            std::fs::write(&path, bytes).unwrap();
+            let sha256 = groove::engine::hashing::sha256_hex(bytes);
+            on_disk.insert(name.clone(), InputFile::checked(path, sha256));
+        }
+        let dataset = Artifact::OnDisk(on_disk);
+        let put_item = |bytes: &[u8]| {
+            let sha = groove::engine::hashing::sha256_hex(bytes);
+            store.lock().unwrap().insert(sha.clone(), bytes.to_vec());
+            Ok(sha)
+        };
+        let said = std::sync::Mutex::new(String::new());
+        let progress = |what: &str| *said.lock().unwrap() = what.to_string();
+        let input = StageInput {
+            params: &params,
+            inputs: BTreeMap::from([("dataset", &dataset)]),
+            item: None,
+            seed: 1,
+            progress: Some(&progress),
+            put_item: Some(&put_item),
+            memo: memo.map(|m| m as &dyn ObjectMemo),
+        };
+        let out = Ingest.run(&input).unwrap();
+        let Artifact::InStore(items) = &out["runs"] else {
+            panic!("with a store the runs are put there")
+        };
+        (items.clone(), said.into_inner().unwrap())
+    };
+    let memo = TestMemo::default();
+    let puts = || memo.puts.load(std::sync::atomic::Ordering::Relaxed);
+    let (want, _) = run(&files, None);
+    assert_eq!(want.len(), 8);
+
+    let (first, how) = run(&files, Some(&memo));
+    assert_eq!(first, want);
+    assert!(!how.contains("found"), "{how}");
+    // s00 and s07 may go on in the pieces around this one: never remembered
+    let mut held: Vec<String> = memo.held.lock().unwrap().values().cloned().collect();
+    held.sort();
+    let mut middle: Vec<String> = (1..7)
+        .map(|k| want[&item_name(&format!("s{k:02}"))].clone())
+        .collect();
+    middle.sort();
+    assert_eq!(held, middle);
+    assert_eq!(puts(), 6);
+
+    let (second, how) = run(&files, Some(&memo));
+    assert_eq!(second, want);
+    assert!(how.contains("6 of 8 runs' items found"), "{how}");
+    assert_eq!(puts(), 6, "nothing new to remember");
+
+    // one z value of s03 changed (line 3·60 + 10 of the trajectories, after the header)
+    let edited = edit_trajectory(&recs, 3 * 60 + 10, |l| {
+        let z: f64 = l.split(',').nth(4).unwrap().parse().unwrap();
+        set_field(l, 4, &format!("{}", z + 1e-7))
+    });
+    let (want_edited, _) = run(&edited, None);
+    let s03 = item_name("s03");
+    assert_ne!(want_edited[&s03], want[&s03]);
+    let (got, how) = run(&edited, Some(&memo));
+    assert_eq!(got, want_edited);
+    assert!(how.contains("5 of 8 runs' items found"), "{how}");
+    assert_eq!(puts(), 7, "the edited run only");
+
+    // s04's first line moved to the end: its rows are two blocks, so the dataset is read whole
+    let mut lines = trajectory_lines(&recs);
+    let moved = lines.remove(4 * 60);
+    lines.push(moved);
+    let mut split = files.clone();
+    split.insert(
+        "trajectories.csv".into(),
+        format!("run,particle,frame,t_s,z_m\n{}\n", lines.join("\n")).into_bytes(),
+    );
+    let (want_split, _) = run(&split, None);
+    let (got, how) = run(&split, Some(&memo));
+    assert_eq!(got, want_split);
+    assert_eq!(got, want, "the same rows in another order");
+    assert!(how.contains("read whole"), "{how}");
+    assert_eq!(puts(), 7, "a read that stopped remembers nothing");
 }
 
 /// The dataset written to a folder and given as the engine gives it to the stage (left on disk,
@@ -524,6 +650,7 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
             seed: 1,
             progress: Some(&progress),
             put_item: None,
+            memo: None,
         };
         let out = Ingest.run(&input).map_err(|e| e.to_string());
         (out, said.into_inner().unwrap())

@@ -503,6 +503,7 @@ fn stage_kinds_run_through_the_contract() {
         seed: 1,
         progress: None,
         put_item: None,
+        memo: None,
     };
     let out = figures.run(&input).expect("figures stage runs");
     let Artifact::Collection(items) = &out["figures"] else {
@@ -519,6 +520,7 @@ fn stage_kinds_run_through_the_contract() {
         seed: 1,
         progress: None,
         put_item: None,
+        memo: None,
     };
     let pages = report.run(&input).expect("report stage runs");
     let Artifact::File(md) = &pages["md"] else {

@@ -6,9 +6,10 @@ use super::context::Context;
 use super::error::EngineError;
 use super::hashing::sha256_hex;
 use super::inputs::{load_path, on_disk};
+use super::memo::Memo;
 use super::pack_writer::PackWriter;
 use super::pipeline::StageSpec;
-use super::stage::{Artifact, StageError, StageInput, StageOutputs};
+use super::stage::{Artifact, ObjectMemo, StageError, StageInput, StageOutputs};
 use super::store::{Entry, Stored};
 use std::collections::BTreeMap;
 
@@ -142,6 +143,17 @@ pub fn run_key(
     for (name, artifact) in &item_artifacts {
         inputs.insert(name, artifact);
     }
+    // a whole stage keeps a memo of the objects it made (an item has nothing to share)
+    let memo = (item.is_none() && spec.kind != "command").then(|| {
+        let salt = serde_json::json!({
+            "kind": spec.kind,
+            "code": ctx.catalog.fingerprint(&spec.kind),
+            "groove_version": env!("CARGO_PKG_VERSION"),
+            "params": spec.params,
+            "seed": seed,
+        });
+        Memo::open(&ctx.store, &spec.name, salt.to_string().as_bytes())
+    });
     let outputs: StageOutputs = if spec.kind == "command" {
         command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
     } else {
@@ -156,6 +168,7 @@ pub fn run_key(
             seed,
             progress: item.is_none().then_some(&detail as &(dyn Fn(&str) + Sync)),
             put_item: Some(&put),
+            memo: memo.as_ref().map(|m| m as &dyn ObjectMemo),
         };
         // a panicking kind fails its stage; the other stages and the store are unaffected
         match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
@@ -211,6 +224,10 @@ pub fn run_key(
             "produced undeclared output `{extra}` (a bug in kind `{}`)",
             spec.kind
         )));
+    }
+    if let Some(memo) = memo {
+        // only a speed-up: a memo not written leaves the next run to make its objects again
+        let _ = memo.save();
     }
     Ok(outputs)
 }

@@ -22,6 +22,7 @@ pub mod lock_digests;
 pub mod lockfile;
 pub mod maintenance;
 pub mod materialize;
+pub mod memo;
 pub mod pack;
 pub mod pack_writer;
 pub mod pipeline;

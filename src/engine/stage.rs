@@ -303,6 +303,19 @@ pub struct StageInput<'a> {
     /// items and need not hold them all (it returns them as `Artifact::InStore`); `None` when
     /// there is no store (tests): the stage then returns a `Collection`.
     pub put_item: Option<&'a (dyn Fn(&[u8]) -> Result<String, StageError> + Sync)>,
+    /// The objects an earlier run of this stage (same kind, code, version and params) made from
+    /// the same bytes, for a stage that reads one big input and would rather not make again
+    /// what its unchanged parts made; `None` without a store.
+    pub memo: Option<&'a dyn ObjectMemo>,
+}
+
+/// A stage's memo of the objects it made, by a key the kind computes from everything an object
+/// is made of (a cryptographic digest of the bytes read and whatever else went in). What the
+/// kind puts is kept for the next run of the stage; a key found gives its object's sha256 only
+/// while the store holds the object. Never needed for a correct result: a miss is made again.
+pub trait ObjectMemo: Sync {
+    fn get(&self, key: &[u8; 32]) -> Option<String>;
+    fn put(&self, key: [u8; 32], sha256: &str);
 }
 
 impl StageInput<'_> {

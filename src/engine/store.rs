@@ -188,8 +188,8 @@ impl Store {
 
     /// Whether the store holds a blob (loose or packed).
     pub fn has_object(&self, sha256: &str) -> bool {
-        self.object_path(sha256).is_file()
-            || self.with_packs(false, |i| i.objects.contains_key(sha256))
+        self.with_packs(false, |i| i.objects.contains_key(sha256))
+            || self.object_path(sha256).is_file()
             || self.with_packs(true, |i| i.objects.contains_key(sha256))
     }
 

@@ -18,12 +18,13 @@
 use super::csv_fast;
 use super::csv_pieces::{for_each_piece, Stop};
 use super::interchange;
+use super::run_memo::{self, RunMemo, Step};
 use super::sanity;
 use super::table::Table;
 use crate::recording::{Experiment, Recording, RunInfo, Track};
 use polars::prelude::*;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::io::Cursor;
 use std::ops::Range;
 
@@ -410,7 +411,8 @@ pub fn stream(
     csv: Option<&mut (dyn std::io::Read + Send)>,
     min_frames: usize,
     chunk_bytes: usize,
-    each: &mut dyn FnMut(Vec<Recording>),
+    memo: Option<RunMemo>,
+    each: &mut dyn FnMut(Ready),
 ) -> Result<Pieces, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     let (runs_name, runs_bytes) = interchange::pick(files, "runs", "").map_err(|_| PROBLEM)?;
@@ -433,7 +435,8 @@ pub fn stream(
         pending: None,
         failed: false,
         min_frames,
-        ready: Vec::new(),
+        ready: Ready::default(),
+        piece_keys: HashMap::new(),
         each,
     };
     let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
@@ -449,8 +452,13 @@ pub fn stream(
             }
             Pieces::ParquetSlices(slices)
         }
-        Some(read) => Pieces::CsvChunks(csv_chunks(read, chunk_bytes, &mut stream)?),
-        None => Pieces::CsvChunks(csv_chunks(&mut &traj_bytes[..], chunk_bytes, &mut stream)?),
+        Some(read) => Pieces::CsvChunks(csv_chunks(read, chunk_bytes, memo, &mut stream)?),
+        None => Pieces::CsvChunks(csv_chunks(
+            &mut &traj_bytes[..],
+            chunk_bytes,
+            memo,
+            &mut stream,
+        )?),
     };
     stream.finish()?;
     Ok(chunks)
@@ -486,14 +494,38 @@ impl std::fmt::Display for Pieces {
     }
 }
 
-/// Reads CSV text in pieces into `stream`, each checked as `read_csv` checks a whole file.
+/// What `stream` hands on after each piece: the recordings made, each with the memo key of its
+/// lines when it was a whole run of a strict-layout piece (`run_memo::run_key`; the caller may
+/// remember the key with the item once the stream has ended well, not before: a stream that
+/// stops may have paired a key with rows it never saw whole), and the runs whose item the memo
+/// gave (run id, item sha256).
+#[derive(Default)]
+pub struct Ready {
+    pub made: Vec<(Recording, Option<[u8; 32]>)>,
+    pub found: Vec<(String, String)>,
+}
+
+impl Ready {
+    fn is_empty(&self) -> bool {
+        self.made.is_empty() && self.found.is_empty()
+    }
+}
+
+/// Reads CSV text in pieces into `stream`, each checked as `read_csv` checks a whole file;
+/// with a memo, a strict-layout piece's whole runs found in it are not parsed (`run_memo`).
 fn csv_chunks(
     read: &mut (dyn std::io::Read + Send),
     chunk_bytes: usize,
+    memo: Option<RunMemo>,
     stream: &mut Stream,
 ) -> Result<usize, Stop> {
     const PROBLEM: &str = "a problem to name, or a cell the typed read might take differently";
     for_each_piece(read, chunk_bytes, &mut |text| {
+        if let Some(memo) = memo {
+            if stream.piece_with_memo(text, memo)? {
+                return Ok(());
+            }
+        }
         if let Some(parts) = csv_fast::parse_parts(text) {
             for rows in parts {
                 let block = Block {
@@ -567,11 +599,58 @@ struct Stream<'a, 'e> {
     failed: bool,
     min_frames: usize,
     /// The runs completed in the piece being read, handed over together after it.
-    ready: Vec<Recording>,
-    each: &'e mut dyn FnMut(Vec<Recording>),
+    ready: Ready,
+    /// The memo keys of the whole runs among the piece's lines being parsed (run id → key).
+    piece_keys: HashMap<String, [u8; 32]>,
+    each: &'e mut dyn FnMut(Ready),
 }
 
 impl<'a> Stream<'a, '_> {
+    /// A strict-layout piece with the memo (`run_memo::plan`): its lines parsed but for the
+    /// whole runs found, every run taken in file order. False (nothing taken) when the piece is
+    /// not for that path.
+    fn piece_with_memo(&mut self, text: &[u8], memo: RunMemo) -> Result<bool, &'static str> {
+        let Some(body) = csv_fast::body(text) else {
+            return Ok(false);
+        };
+        let Some(plan) = run_memo::plan(body, &self.infos, self.min_frames, memo) else {
+            return Ok(false);
+        };
+        self.piece_keys = plan.keys;
+        for step in plan.steps {
+            match step {
+                Step::Parsed(parts) => {
+                    for rows in parts {
+                        let block = Block {
+                            particle: &rows.particle,
+                            frame: &rows.frame,
+                            t_s: &rows.t_s,
+                            z_m: &rows.z_m,
+                        };
+                        self.blocks(&rows.ids, &block)?;
+                    }
+                }
+                Step::Found { id, sha256 } => self.found(id, sha256)?,
+            }
+        }
+        self.piece_keys.clear();
+        self.hand_over();
+        Ok(true)
+    }
+
+    /// A whole run whose item the memo gave: the run before it is complete.
+    fn found(&mut self, id: &str, sha256: String) -> Result<(), &'static str> {
+        self.hand_on()?;
+        if !self.done.insert(id.to_string()) {
+            return Err(NOT_GROUPED);
+        }
+        match self.infos.remove(id) {
+            Some(_) => self.ready.found.push((id.to_string(), sha256)),
+            None => self.failed = true,
+        }
+        Ok(())
+    }
+
     /// Adds a chunk's rows to their runs, handing on each run whose rows end inside it.
     fn chunk(&mut self, df: &DataFrame) -> Result<(), &'static str> {
         const PROBLEM: &str = "a null, a column of another type or an untrimmed run id";
@@ -644,7 +723,8 @@ impl<'a> Stream<'a, '_> {
         let (first, middle, last) = (&runs[0], &runs[1..n_runs - 1], &runs[n_runs - 1]);
         self.rows(ids[first.1.clone()].iter().copied(), block)?;
         self.hand_on()?;
-        let mut whole: Vec<(Option<&'a RunInfo>, Range<usize>)> = Vec::with_capacity(middle.len());
+        let mut whole: Vec<(Option<&'a RunInfo>, Range<usize>, Option<[u8; 32]>)> =
+            Vec::with_capacity(middle.len());
         for (id, rows) in middle {
             if id.is_empty() || id.trim() != *id {
                 return Err("an untrimmed run id");
@@ -652,29 +732,31 @@ impl<'a> Stream<'a, '_> {
             if !self.done.insert(id.to_string()) {
                 return Err(NOT_GROUPED);
             }
-            whole.push((self.infos.remove::<str>(id), rows.clone()));
+            let key = self.piece_keys.get(*id).copied();
+            whole.push((self.infos.remove::<str>(id), rows.clone(), key));
         }
         let min_frames = self.min_frames;
-        let made: Vec<Option<Recording>> = whole
+        let made: Vec<Option<(Recording, Option<[u8; 32]>)>> = whole
             .par_iter()
-            .map(|(info, rows)| {
+            .map(|(info, rows, key)| {
                 let info = (*info)?;
                 let sorted = (rows.start + 1..rows.end).all(|k| {
                     (block.particle[k - 1], block.frame[k - 1])
                         <= (block.particle[k], block.frame[k])
                 });
-                match sorted {
+                let rec = match sorted {
                     true => recording(info, block, rows.clone(), min_frames),
                     false => {
                         let one = block.one_run(rows.clone()).sorted();
                         recording(info, &one.block(), 0..rows.len(), min_frames)
                     }
-                }
+                };
+                rec.map(|r| (r, *key))
             })
             .collect();
         for rec in made {
             match rec {
-                Some(rec) => self.ready.push(rec),
+                Some(rec) => self.ready.made.push(rec),
                 None => self.failed = true,
             }
         }
@@ -716,9 +798,10 @@ impl<'a> Stream<'a, '_> {
             Some(info) => recording(info, &cols.block(), 0..n, self.min_frames),
             None => None,
         };
+        let key = self.piece_keys.get(&id).copied();
         self.done.insert(id);
         match rec {
-            Some(rec) => self.ready.push(rec),
+            Some(rec) => self.ready.made.push((rec, key)),
             // Read on: the reason may yet turn out to be rows of runs interleaved.
             None => self.failed = true,
         }

@@ -41,18 +41,86 @@ pub fn parse(text: &[u8]) -> Option<Rows<'_>> {
 /// `parse` in consecutive parts, not joined (a copy of every column saved): the two halves of
 /// a large piece, parsed on two threads, or one part for a small one.
 pub fn parse_parts(text: &[u8]) -> Option<Vec<Rows<'_>>> {
+    parse_body(body(text)?)
+}
+
+/// The lines after the header, if the header is the one this parser takes.
+pub fn body(text: &[u8]) -> Option<&[u8]> {
     let header_end = memchr::memchr(b'\n', text)?;
     let header = &text[..header_end];
-    if header.strip_suffix(b"\r").unwrap_or(header) != HEADER {
-        return None;
-    }
-    let body = &text[header_end + 1..];
+    (header.strip_suffix(b"\r").unwrap_or(header) == HEADER).then(|| &text[header_end + 1..])
+}
+
+/// The rows of whole lines (no header), in two halves parsed on two threads when there are
+/// many, else in one part; `None` if any line is not in the strict layout.
+pub fn parse_body(body: &[u8]) -> Option<Vec<Rows<'_>>> {
     if body.len() < 1 << 20 {
         return Some(vec![lines(body)?]);
     }
     let cut = body.len() / 2 + memchr::memchr(b'\n', &body[body.len() / 2..])? + 1;
     let (a, b) = rayon::join(|| lines(&body[..cut]), || lines(&body[cut..]));
     Some(vec![a?, b?])
+}
+
+/// Whole lines (no header) in blocks of one run id (a line's bytes before its first comma),
+/// as byte ranges in order, each from its first line's start to its last line's end (after
+/// the newline, if there is one); `None` at a line with no comma. Only the ids are looked at:
+/// what else a line holds is `parse_body`'s to check.
+pub fn segments(body: &[u8]) -> Option<Vec<std::ops::Range<usize>>> {
+    if body.len() < 1 << 20 {
+        return segments_of(body, 0);
+    }
+    let cut = body.len() / 2 + memchr::memchr(b'\n', &body[body.len() / 2..])? + 1;
+    let (a, b) = rayon::join(
+        || segments_of(&body[..cut], 0),
+        || segments_of(&body[cut..], cut),
+    );
+    let (mut a, b) = (a?, b?);
+    let mut b = b.into_iter();
+    // the block open at the cut goes on after it when the id is the same
+    if let (Some(last), Some(first)) = (a.last_mut(), b.next()) {
+        match id_at(body, last.start) == id_at(body, first.start) {
+            true => last.end = first.end,
+            false => a.push(first),
+        }
+    }
+    a.extend(b);
+    Some(a)
+}
+
+/// `segments` of `part`, whose first byte is byte `offset` of the body (ranges are the body's).
+fn segments_of(part: &[u8], offset: usize) -> Option<Vec<std::ops::Range<usize>>> {
+    let mut out = Vec::new();
+    if part.is_empty() {
+        return Some(out);
+    }
+    let mut start = 0;
+    let mut id = id_at(part, 0)?;
+    for end in memchr::memchr_iter(b'\n', part) {
+        let next = end + 1;
+        if next >= part.len() {
+            break;
+        }
+        let rest = &part[next..];
+        if rest.starts_with(id) && rest.get(id.len()) == Some(&b',') {
+            continue;
+        }
+        out.push(offset + start..offset + next);
+        start = next;
+        id = id_at(part, next)?;
+    }
+    if start < part.len() {
+        out.push(offset + start..offset + part.len());
+    }
+    Some(out)
+}
+
+/// The run id of the line starting at `at`: its bytes before the first comma, which must come
+/// before the line's end.
+pub fn id_at(text: &[u8], at: usize) -> Option<&[u8]> {
+    let line = &text[at..];
+    let comma = memchr::memchr2(b',', b'\n', line)?;
+    (line[comma] == b',').then(|| &line[..comma])
 }
 
 /// Every line of `body`; the last may lack its newline.
@@ -201,6 +269,35 @@ const POW10: [f64; 23] = [
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn segments_are_the_blocks_of_one_run_id_on_either_side_of_the_cut() {
+        let body = b"a,1\r\na,2\nab,3\nb,4\na,5";
+        let got: Vec<&[u8]> = segments(body)
+            .unwrap()
+            .into_iter()
+            .map(|r| &body[r])
+            .collect();
+        let want: [&[u8]; 4] = [b"a,1\r\na,2\n", b"ab,3\n", b"b,4\n", b"a,5"];
+        assert_eq!(got, want);
+        assert_eq!(segments(b""), Some(Vec::new()));
+        // a line without a comma, or an empty line
+        assert_eq!(segments(b"a,1\nb\nc,2\n"), None);
+        assert_eq!(segments(b"a,1\n\nc,2\n"), None);
+        // a body of 2 MB cut in two halves: the same blocks as in one pass, whether a block
+        // goes on across the cut or ends there
+        for width in [3000usize, 7919] {
+            let mut big = Vec::new();
+            let mut k = 0usize;
+            while big.len() < 2 << 20 {
+                big.extend(format!("r{},{k}\n", k / width).as_bytes());
+                k += 1;
+            }
+            let one_pass = segments_of(&big, 0).unwrap();
+            assert_eq!(segments(&big).unwrap(), one_pass);
+            assert_eq!(one_pass.len(), k.div_ceil(width));
+        }
+    }
 
     #[test]
     fn the_strict_layout_is_parsed_and_anything_else_is_left_to_polars() {

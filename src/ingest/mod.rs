@@ -21,6 +21,7 @@ mod interchange;
 mod manifest;
 pub mod output;
 pub mod params;
+mod run_memo;
 mod samples;
 pub mod sanity;
 mod spots;
@@ -187,6 +188,16 @@ pub struct Items<T = Vec<u8>> {
     pub runs: BTreeMap<String, T>,
     pub skipped: Vec<Skipped>,
     pub how: String,
+    /// The memo keys of the runs made from their lines (key, item name), for the caller to
+    /// remember with the items (`RunMemo`); empty unless streamed with a memo.
+    pub memo_made: Vec<([u8; 32], String)>,
+}
+
+/// The items an earlier ingest made of whole runs' lines (by `run_memo::run_key`), and how an
+/// item found there is kept (as `keep` would keep it).
+pub struct ItemMemo<'m, T> {
+    pub get: run_memo::RunMemo<'m>,
+    pub kept: &'m (dyn Fn(String) -> T + Sync),
 }
 
 /// `ingest`, as the stage's items. A clean interchange dataset whose runs' rows come grouped is
@@ -221,7 +232,7 @@ pub fn ingest_items_kept<T: Send>(
     chunk_bytes: usize,
     keep: &(dyn Fn(Vec<u8>) -> T + Sync),
 ) -> Result<Items<T>, IngestError> {
-    match stream_items(files, None, params, chunk_bytes, keep) {
+    match stream_items(files, None, params, chunk_bytes, keep, None) {
         Ok(Streamed::Done(items)) => Ok(items),
         Ok(Streamed::ReadWhole(why)) => ingest_items_whole(files, params, why, keep),
         Err(_) => unreachable!("bytes in memory are always readable"),
@@ -246,6 +257,7 @@ pub fn stream_items<T: Send>(
     params: &IngestParams,
     chunk_bytes: usize,
     keep: &(dyn Fn(Vec<u8>) -> T + Sync),
+    memo: Option<ItemMemo<T>>,
 ) -> Result<Streamed<T>, std::io::Error> {
     if check_params(params).is_err() || !reads_interchange(files, params.format) {
         return Ok(Streamed::ReadWhole(
@@ -254,44 +266,63 @@ pub fn stream_items<T: Send>(
     }
     // the runs of a piece are encoded and kept (stored) in parallel on a thread of their own,
     // while the next piece is parsed; at most one piece waits for it
-    let (streamed, runs, clash) = std::thread::scope(|scope| {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Vec<Recording>>(1);
+    let kept_found = memo.as_ref().map(|m| m.kept);
+    let (streamed, (runs, clash, memo_made, found)) = std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<columnar::Ready>(1);
         let writer = scope.spawn(move || {
             let (mut runs, mut clash) = (BTreeMap::new(), false);
+            let (mut memo_made, mut found) = (Vec::new(), 0);
             for ready in rx {
-                let kept: Vec<(String, T)> = ready
+                let kept: Vec<(String, T, Option<[u8; 32]>)> = ready
+                    .made
                     .par_iter()
-                    .map(|r| (item_name(&r.info.run), keep(item::encode(r))))
+                    .map(|(r, key)| (item_name(&r.info.run), keep(item::encode(r)), *key))
                     .collect();
-                for (name, k) in kept {
+                for (name, k, key) in kept {
+                    if let Some(key) = key {
+                        memo_made.push((key, name.clone()));
+                    }
                     clash |= runs.insert(name, k).is_some();
                 }
+                for (run, sha256) in ready.found {
+                    let kept = kept_found.expect("runs are found only with a memo");
+                    clash |= runs.insert(item_name(&run), kept(sha256)).is_some();
+                    found += 1;
+                }
             }
-            (runs, clash)
+            (runs, clash, memo_made, found)
         });
         let streamed = columnar::stream(
             files,
             csv,
             params.min_frames,
             chunk_bytes,
-            &mut |ready: Vec<Recording>| {
+            memo.as_ref().map(|m| m.get),
+            &mut |ready: columnar::Ready| {
                 // the writer ends only when this sender is dropped, so the send succeeds
                 let _ = tx.send(ready);
             },
         );
         drop(tx);
-        let (runs, clash) = writer
+        let written = writer
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
-        (streamed, runs, clash)
+        (streamed, written)
     });
     let why = match streamed {
         Ok(pieces) if !clash && !runs.is_empty() => {
-            let how = format!("{pieces}, each run's item made as its last row was read");
+            let how = match found {
+                0 => format!("{pieces}, each run's item made as its last row was read"),
+                n => format!(
+                    "{pieces}; {n} of {} runs' items found by their lines' digest, the rest made as their last row was read",
+                    runs.len()
+                ),
+            };
             return Ok(Streamed::Done(Items {
                 runs,
                 skipped: Vec::new(),
                 how,
+                memo_made,
             }));
         }
         Ok(_) if clash => "two runs share an item name",
@@ -319,6 +350,7 @@ pub fn ingest_items_whole<T: Send>(
         runs,
         skipped: ingested.skipped,
         how: format!("read whole ({why})"),
+        memo_made: Vec::new(),
     })
 }
 
@@ -335,8 +367,15 @@ pub fn stream_recordings(
     if check_params(params).is_err() || !reads_interchange(files, params.format) {
         return Err("not a clean interchange dataset");
     }
-    let mut each_of = |ready: Vec<Recording>| ready.into_iter().for_each(&mut *each);
-    match columnar::stream(files, None, params.min_frames, chunk_bytes, &mut each_of) {
+    let mut each_of = |ready: columnar::Ready| ready.made.into_iter().for_each(|(r, _)| each(r));
+    match columnar::stream(
+        files,
+        None,
+        params.min_frames,
+        chunk_bytes,
+        None,
+        &mut each_of,
+    ) {
         Ok(pieces) => Ok(pieces.count()),
         Err(Stop::Reason(why)) => Err(why),
         Err(Stop::Read(_)) => unreachable!("bytes in memory are always readable"),

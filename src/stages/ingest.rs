@@ -60,8 +60,23 @@ impl StageKind for Ingest {
         let (runs, skipped) = match input.put_item {
             // each item into the store as it is made: never all items at once
             Some(put) => {
-                let items = items_of(dataset, &params, &|bytes| put(&bytes))?;
+                let get = |key: &[u8; 32]| input.memo.and_then(|m| m.get(key));
+                let kept = |sha256: String| Ok(sha256);
+                let memo = input.memo.map(|_| ingest::ItemMemo {
+                    get: &get,
+                    kept: &kept,
+                });
+                let items = items_of(dataset, &params, &|bytes| put(&bytes), memo)?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
+                // what was made from whole runs' lines, for the next run (only once the
+                // stream has ended well: `ingest::Items::memo_made`)
+                if let Some(memo) = input.memo {
+                    for (key, name) in &items.memo_made {
+                        if let Some(Ok(sha256)) = items.runs.get(name) {
+                            memo.put(*key, sha256);
+                        }
+                    }
+                }
                 let runs = items
                     .runs
                     .into_iter()
@@ -70,7 +85,7 @@ impl StageKind for Ingest {
                 (Artifact::InStore(runs), items.skipped)
             }
             None => {
-                let items = items_of(dataset, &params, &|bytes| bytes)?;
+                let items = items_of(dataset, &params, &|bytes| bytes, None)?;
                 input.report(&format!("{} runs, {}", items.runs.len(), items.how));
                 (Artifact::Collection(items.runs), items.skipped)
             }
@@ -99,6 +114,7 @@ fn items_of<T: Send>(
     dataset: Dataset,
     params: &IngestParams,
     keep: &(dyn Fn(Vec<u8>) -> T + Sync),
+    memo: Option<ingest::ItemMemo<T>>,
 ) -> Result<Items<T>, StageError> {
     let failed = |e: ingest::IngestError| StageError(e.to_string());
     let files = match dataset {
@@ -129,6 +145,7 @@ fn items_of<T: Send>(
         params,
         ingest::CHUNK_BYTES,
         keep,
+        memo,
     );
     let why = match streamed {
         Ok(Streamed::Done(items)) => return Ok(items),
