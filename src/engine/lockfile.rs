@@ -67,14 +67,9 @@ impl PipelineLock {
         bytes
     }
 
-    /// Write the lock when its content changed (the file on disk is read to compare only when
-    /// its size is that of the new content).
+    /// Write the lock (`publish` calls this only when a record changed, so the file on disk
+    /// is not read to compare).
     pub fn save(&self, path: &Path) -> Result<(), EngineError> {
-        let bytes = self.to_bytes();
-        let same_size = std::fs::metadata(path).is_ok_and(|m| m.len() == bytes.len() as u64);
-        if same_size && std::fs::read(path).ok().as_deref() == Some(&bytes[..]) {
-            return Ok(());
-        }
-        write_atomic(path, &bytes)
+        write_atomic(path, &self.to_bytes())
     }
 }

@@ -26,19 +26,25 @@ impl From<&'static str> for Stop {
 ///
 /// The reader is read on a thread of its own a megabyte at a time, a few megabytes ahead of the
 /// pieces (so that reading, and the hashing `InputFile`'s reader does, overlap the parsing).
+/// The blocks go back to that thread once their bytes are in a piece and are read into again:
+/// a `read_to_end` into fresh capacity zeroes it first (a reader behind `dyn Read` cannot take
+/// uninitialized memory), which cost as much as the read itself.
 pub fn for_each_piece(
     read: &mut (dyn Read + Send),
     chunk_bytes: usize,
     piece: &mut dyn FnMut(&[u8]) -> Result<(), Stop>,
 ) -> Result<usize, Stop> {
-    const BLOCK: u64 = 1 << 20;
+    const BLOCK: usize = 1 << 20;
     std::thread::scope(|scope| {
         let (blocks, received) = std::sync::mpsc::sync_channel(8);
+        let (spare, spares) = std::sync::mpsc::channel::<Vec<u8>>();
         scope.spawn(move || loop {
-            let mut block = Vec::with_capacity(BLOCK as usize);
-            match read.take(BLOCK).read_to_end(&mut block) {
+            let mut block = spares.try_recv().unwrap_or_default();
+            block.resize(BLOCK, 0);
+            match read_full(read, &mut block) {
                 Ok(0) => return,
-                Ok(_) => {
+                Ok(n) => {
+                    block.truncate(n);
                     if blocks.send(Ok(block)).is_err() {
                         return; // the pieces stopped early
                     }
@@ -51,6 +57,7 @@ pub fn for_each_piece(
         });
         let mut ahead = Ahead {
             received,
+            spare,
             block: Vec::new(),
             at: 0,
         };
@@ -58,31 +65,55 @@ pub fn for_each_piece(
     })
 }
 
-/// The blocks the reading thread sent, as a reader.
+/// Reads until `buf` is full or the reader is at its end; how many bytes.
+fn read_full(read: &mut dyn Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut filled = 0;
+    while filled < buf.len() {
+        match read.read(&mut buf[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(filled)
+}
+
+/// The blocks the reading thread sent, and the way back for those used up.
 struct Ahead {
     received: std::sync::mpsc::Receiver<std::io::Result<Vec<u8>>>,
+    spare: std::sync::mpsc::Sender<Vec<u8>>,
     block: Vec<u8>,
     at: usize,
 }
 
-impl Read for Ahead {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        if self.at == self.block.len() {
-            match self.received.recv() {
-                Ok(block) => (self.block, self.at) = (block?, 0),
-                Err(_) => return Ok(0), // the reading thread is done: the end
+impl Ahead {
+    /// Appends up to `n` bytes to `buf`; how many (0 at the end).
+    fn append(&mut self, buf: &mut Vec<u8>, n: usize) -> Result<usize, Stop> {
+        let mut added = 0;
+        while added < n {
+            if self.at == self.block.len() {
+                let next = match self.received.recv() {
+                    Ok(block) => block.map_err(Stop::Read)?,
+                    Err(_) => break, // the reading thread is done: the end
+                };
+                let used = std::mem::replace(&mut self.block, next);
+                // the reading thread is gone only when the pieces stopped early
+                let _ = self.spare.send(used);
+                self.at = 0;
             }
+            let k = (n - added).min(self.block.len() - self.at);
+            buf.extend_from_slice(&self.block[self.at..self.at + k]);
+            self.at += k;
+            added += k;
         }
-        let n = buf.len().min(self.block.len() - self.at);
-        buf[..n].copy_from_slice(&self.block[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
+        Ok(added)
     }
 }
 
-/// `for_each_piece` on the reader itself.
+/// `for_each_piece` on the blocks read ahead.
 fn pieces(
-    read: &mut dyn Read,
+    read: &mut Ahead,
     chunk_bytes: usize,
     piece: &mut dyn FnMut(&[u8]) -> Result<(), Stop>,
 ) -> Result<usize, Stop> {
@@ -98,7 +129,7 @@ fn pieces(
         if eof {
             return Err(Stop::Reason("the trajectories file has no line end"));
         }
-        eof = fill(read, &mut buf, 64 << 10)? == 0;
+        eof = read.append(&mut buf, 64 << 10)? == 0;
     };
     let header_end = match buf.strip_prefix(b"\xEF\xBB\xBF") {
         Some(_) => {
@@ -112,7 +143,7 @@ fn pieces(
     loop {
         while !eof && buf.len() - header_end < want {
             let more = want - (buf.len() - header_end);
-            eof = fill(read, &mut buf, more)? == 0;
+            eof = read.append(&mut buf, more)? == 0;
         }
         if buf.len() == header_end {
             return Ok(pieces);
@@ -140,11 +171,6 @@ fn pieces(
         buf.drain(header_end..cut);
         want = chunk;
     }
-}
-
-/// Appends up to `n` bytes from `read` to `buf`; how many (0 at the end).
-fn fill(read: &mut dyn Read, buf: &mut Vec<u8>, n: usize) -> Result<usize, Stop> {
-    read.take(n as u64).read_to_end(buf).map_err(Stop::Read)
 }
 
 #[cfg(test)]
