@@ -509,6 +509,10 @@ impl ObjectMemo for TestMemo {
         self.held.lock().unwrap().get(key).cloned()
     }
 
+    fn read(&self, _: &str) -> Option<Vec<u8>> {
+        None
+    }
+
     fn put(&self, key: [u8; 32], sha256: &str) {
         self.puts.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.held.lock().unwrap().insert(key, sha256.to_string());

@@ -93,6 +93,10 @@ impl ObjectMemo for Memo<'_> {
         Some(name)
     }
 
+    fn read(&self, sha256: &str) -> Option<Vec<u8>> {
+        self.store.read_object(sha256).ok()
+    }
+
     fn put(&self, key: [u8; 32], sha256: &str) {
         let Some(object) = unhex(sha256) else {
             return;

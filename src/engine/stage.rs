@@ -316,6 +316,9 @@ pub struct StageInput<'a> {
 pub trait ObjectMemo: Sync {
     fn get(&self, key: &[u8; 32]) -> Option<String>;
     fn put(&self, key: [u8; 32], sha256: &str);
+    /// The bytes of an object `get` gave, checked against its name; `None` if it is gone or
+    /// damaged (then it is made again).
+    fn read(&self, sha256: &str) -> Option<Vec<u8>>;
 }
 
 impl StageInput<'_> {

@@ -70,22 +70,64 @@ impl AggregateOptions {
 
 /// Aggregate the single-run fits (any order) per material and pooled. `seed` drives the bootstrap.
 pub fn aggregate_single(fits: &[SingleFit], opts: &AggregateOptions, seed: u64) -> SingleSummary {
-    let mut by_material: BTreeMap<&str, Vec<&SingleFit>> = BTreeMap::new();
-    let mut sorted: Vec<&SingleFit> = fits.iter().collect();
-    sorted.sort_by(|a, b| a.run.cmp(&b.run));
-    for f in &sorted {
-        by_material.entry(f.material.as_str()).or_default().push(f);
+    aggregate_single_memo(fits, opts, seed, None)
+}
+
+/// Material summaries an earlier run made, by a key of everything a summary is made of (the
+/// options, its seed and its fits: `fits[i].1` a digest of fit i, e.g. of its item's bytes).
+pub trait SummaryMemo: Sync {
+    fn get(&self, key: &[u8; 32]) -> Option<MaterialSummary>;
+    fn put(&self, key: [u8; 32], summary: &MaterialSummary);
+}
+
+/// `aggregate_single`, taking from `memo` each summary whose fits did not change (after an edit
+/// of one recording, every material but the edited run's) and giving it those it made. The
+/// same summaries as without a memo.
+pub fn aggregate_single_memo(
+    fits: &[SingleFit],
+    opts: &AggregateOptions,
+    seed: u64,
+    memo: Option<(&[[u8; 32]], &dyn SummaryMemo)>,
+) -> SingleSummary {
+    let mut by_material: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    let mut order: Vec<usize> = (0..fits.len()).collect();
+    order.sort_by(|&a, &b| fits[a].run.cmp(&fits[b].run));
+    for &i in &order {
+        by_material
+            .entry(fits[i].material.as_str())
+            .or_default()
+            .push(i);
     }
+    let summary = |picked: &[usize], seed: u64| {
+        let fs: Vec<&SingleFit> = picked.iter().map(|&i| &fits[i]).collect();
+        let Some((digests, memo)) = memo else {
+            return material_summary(&fs, opts, seed);
+        };
+        let mut h = blake3::Hasher::new();
+        h.update(b"groove material summary v1\0");
+        h.update(&serde_json::to_vec(opts).expect("options serialize"));
+        h.update(&seed.to_le_bytes());
+        h.update(&(picked.len() as u64).to_le_bytes());
+        for &i in picked {
+            h.update(&digests[i]);
+        }
+        let key = *h.finalize().as_bytes();
+        memo.get(&key).unwrap_or_else(|| {
+            let made = material_summary(&fs, opts, seed);
+            memo.put(key, &made);
+            made
+        })
+    };
     // Each summary's bootstrap is parallel, but its draws and its estimate are not: the
     // summaries run side by side so that those serial parts overlap.
     let (materials, pooled) = rayon::join(
         || {
             by_material
                 .par_iter()
-                .map(|(m, fs)| (m.to_string(), material_summary(fs, opts, seed ^ fnv1a(m))))
+                .map(|(m, picked)| (m.to_string(), summary(picked, seed ^ fnv1a(m))))
                 .collect()
         },
-        || material_summary(&sorted, opts, seed ^ fnv1a("\0pooled")),
+        || summary(&order, seed ^ fnv1a("\0pooled")),
     );
     SingleSummary {
         n_runs: fits.len(),

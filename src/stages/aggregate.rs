@@ -2,10 +2,10 @@
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, recording, run_info};
 use crate::engine::stage::{
-    typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
+    typed_params, Artifact, ObjectMemo, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
-use crate::fit::aggregate::{aggregate_single, restart_note, AggregateOptions};
-use crate::fit::summary::{BootstrapInfo, Summary};
+use crate::fit::aggregate::{aggregate_single_memo, restart_note, AggregateOptions, SummaryMemo};
+use crate::fit::summary::{BootstrapInfo, MaterialSummary, Summary};
 use crate::fit::{collision, fits_csv, RunFit};
 use rayon::prelude::*;
 
@@ -33,6 +33,8 @@ impl StageKind for Aggregate {
         let fits = collection_input(input, "fits", "aggregate")?;
         let runs = collection_input(input, "runs", "aggregate")?;
         let mut singles = Vec::new();
+        // each single fit's digest (of its item's bytes), for the memo of material summaries
+        let mut digests = Vec::new();
         let mut collisions = Vec::new();
         let mut pair_recordings = Vec::new();
         // parsed on every core, then taken in item order (the first bad item is the error)
@@ -40,9 +42,12 @@ impl StageKind for Aggregate {
             .par_iter()
             .map(|(item, bytes)| parse_item::<RunFit>(item, bytes, "the fit"))
             .collect();
-        for (item, fit) in fits.keys().zip(parsed) {
+        for ((item, bytes), fit) in fits.iter().zip(parsed) {
             match fit? {
-                RunFit::Single(f) => singles.push(f),
+                RunFit::Single(f) => {
+                    singles.push(f);
+                    digests.push(*blake3::hash(bytes).as_bytes());
+                }
                 RunFit::Collision(c) => {
                     let rec = runs.get(item).filter(|b| !b.is_empty()).ok_or_else(|| {
                         StageError(format!(
@@ -62,7 +67,16 @@ impl StageKind for Aggregate {
             None
         } else {
             notes.extend(restart_note(&singles));
-            Some(aggregate_single(&singles, &opts, input.seed))
+            let memo = input
+                .memo
+                .zip(input.put_item)
+                .map(|(memo, put)| Summaries { memo, put });
+            Some(aggregate_single_memo(
+                &singles,
+                &opts,
+                input.seed,
+                memo.as_ref().map(|m| (&digests[..], m as &dyn SummaryMemo)),
+            ))
         };
         let collisions = if collisions.is_empty() {
             notes.push(
@@ -104,5 +118,28 @@ impl StageKind for Aggregate {
             ),
         ]
         .into())
+    }
+}
+
+/// The material summaries an earlier run of the stage made, kept as objects in the store
+/// (`StageInput::memo`): the JSON of summary.json's own type, which reads back to the same
+/// output bytes.
+struct Summaries<'a> {
+    memo: &'a dyn ObjectMemo,
+    put: &'a (dyn Fn(&[u8]) -> Result<String, StageError> + Sync),
+}
+
+impl SummaryMemo for Summaries<'_> {
+    fn get(&self, key: &[u8; 32]) -> Option<MaterialSummary> {
+        let bytes = self.memo.read(&self.memo.get(key)?)?;
+        serde_json::from_slice(&bytes).ok()
+    }
+
+    fn put(&self, key: [u8; 32], summary: &MaterialSummary) {
+        let bytes = serde_json::to_vec(summary).expect("a summary serializes");
+        // only a speed-up: a summary not kept is made again next time
+        if let Ok(sha256) = (self.put)(&bytes) {
+            self.memo.put(key, &sha256);
+        }
     }
 }
