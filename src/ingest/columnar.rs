@@ -527,15 +527,7 @@ fn csv_chunks(
             }
         }
         if let Some(parts) = csv_fast::parse_parts(text) {
-            for rows in parts {
-                let block = Block {
-                    particle: &rows.particle,
-                    frame: &rows.frame,
-                    t_s: &rows.t_s,
-                    z_m: &rows.z_m,
-                };
-                stream.blocks(&rows.ids, &block)?;
-            }
+            stream.parsed(parts)?;
             stream.hand_over();
             return Ok(());
         }
@@ -619,23 +611,27 @@ impl<'a> Stream<'a, '_> {
         self.piece_keys = plan.keys;
         for step in plan.steps {
             match step {
-                Step::Parsed(parts) => {
-                    for rows in parts {
-                        let block = Block {
-                            particle: &rows.particle,
-                            frame: &rows.frame,
-                            t_s: &rows.t_s,
-                            z_m: &rows.z_m,
-                        };
-                        self.blocks(&rows.ids, &block)?;
-                    }
-                }
+                Step::Parsed(parts) => self.parsed(parts)?,
                 Step::Found { id, sha256 } => self.found(id, sha256)?,
             }
         }
         self.piece_keys.clear();
         self.hand_over();
         Ok(true)
+    }
+
+    /// Consecutive lines parsed by the strict-layout parser, in parts, into their runs.
+    fn parsed(&mut self, parts: Vec<csv_fast::Rows>) -> Result<(), &'static str> {
+        for rows in parts {
+            let block = Block {
+                particle: &rows.particle,
+                frame: &rows.frame,
+                t_s: &rows.t_s,
+                z_m: &rows.z_m,
+            };
+            self.blocks(&rows.ids, &block)?;
+        }
+        Ok(())
     }
 
     /// A whole run whose item the memo gave: the run before it is complete.
