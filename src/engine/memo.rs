@@ -86,7 +86,7 @@ impl ObjectMemo for Memo<'_> {
     fn get(&self, key: &[u8; 32]) -> Option<String> {
         let object = self.earlier.get(key)?;
         let name = hex(object);
-        if !self.store.has_object(&name) {
+        if !self.store.holds(&name) {
             return None;
         }
         self.used.lock().expect("memo lock").push((*key, *object));

@@ -193,6 +193,14 @@ impl Store {
             || self.with_packs(true, |i| i.objects.contains_key(sha256))
     }
 
+    /// Whether the store holds a blob by what this process knows: the pack index as read (no
+    /// reading of packs written since), or a loose file. For lookups a miss of which costs only
+    /// work made again (`engine::memo`), many of which must not each read the pack index anew.
+    pub fn holds(&self, sha256: &str) -> bool {
+        self.with_packs(false, |i| i.objects.contains_key(sha256))
+            || self.object_path(sha256).is_file()
+    }
+
     /// Whether these bytes (of this hash) are already stored soundly: a loose object of the same
     /// bytes, or a packed one (packs are checked on read and by `groove verify`).
     pub(super) fn holds_sound(&self, sha256: &str, bytes: &[u8]) -> bool {
