@@ -73,16 +73,17 @@ pub fn aggregate_single(fits: &[SingleFit], opts: &AggregateOptions, seed: u64) 
     aggregate_single_memo(fits, opts, seed, None)
 }
 
-/// Material summaries an earlier run made, by a key of everything a summary is made of (the
-/// options, its seed and its fits: `fits[i].1` a digest of fit i, e.g. of its item's bytes).
+/// Material summaries an earlier run made, by a key of everything a summary is made of: the
+/// options, its seed and the digests of its fits (`aggregate_single_memo`).
 pub trait SummaryMemo: Sync {
     fn get(&self, key: &[u8; 32]) -> Option<MaterialSummary>;
     fn put(&self, key: [u8; 32], summary: &MaterialSummary);
 }
 
 /// `aggregate_single`, taking from `memo` each summary whose fits did not change (after an edit
-/// of one recording, every material but the edited run's) and giving it those it made. The
-/// same summaries as without a memo.
+/// of one recording, every material but the edited run's) and giving it those it made;
+/// `digests[i]` is a digest of `fits[i]` (the stage's: of its item's bytes). The same summaries
+/// as without a memo.
 pub fn aggregate_single_memo(
     fits: &[SingleFit],
     opts: &AggregateOptions,
