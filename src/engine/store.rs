@@ -188,9 +188,7 @@ impl Store {
 
     /// Whether the store holds a blob (loose or packed).
     pub fn has_object(&self, sha256: &str) -> bool {
-        self.with_packs(false, |i| i.objects.contains_key(sha256))
-            || self.object_path(sha256).is_file()
-            || self.with_packs(true, |i| i.objects.contains_key(sha256))
+        self.holds(sha256) || self.with_packs(true, |i| i.objects.contains_key(sha256))
     }
 
     /// Whether the store holds a blob by what this process knows: the pack index as read (no

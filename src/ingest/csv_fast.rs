@@ -54,10 +54,9 @@ pub fn body(text: &[u8]) -> Option<&[u8]> {
 /// The rows of whole lines (no header), in two halves parsed on two threads when there are
 /// many, else in one part; `None` if any line is not in the strict layout.
 pub fn parse_body(body: &[u8]) -> Option<Vec<Rows<'_>>> {
-    if body.len() < 1 << 20 {
+    let Some(cut) = halves(body)? else {
         return Some(vec![lines(body)?]);
-    }
-    let cut = body.len() / 2 + memchr::memchr(b'\n', &body[body.len() / 2..])? + 1;
+    };
     let (a, b) = rayon::join(|| lines(&body[..cut]), || lines(&body[cut..]));
     Some(vec![a?, b?])
 }
@@ -67,10 +66,9 @@ pub fn parse_body(body: &[u8]) -> Option<Vec<Rows<'_>>> {
 /// the newline, if there is one); `None` at a line with no comma. Only the ids are looked at:
 /// what else a line holds is `parse_body`'s to check.
 pub fn segments(body: &[u8]) -> Option<Vec<std::ops::Range<usize>>> {
-    if body.len() < 1 << 20 {
+    let Some(cut) = halves(body)? else {
         return segments_of(body, 0);
-    }
-    let cut = body.len() / 2 + memchr::memchr(b'\n', &body[body.len() / 2..])? + 1;
+    };
     let (a, b) = rayon::join(
         || segments_of(&body[..cut], 0),
         || segments_of(&body[cut..], cut),
@@ -86,6 +84,17 @@ pub fn segments(body: &[u8]) -> Option<Vec<std::ops::Range<usize>>> {
     }
     a.extend(b);
     Some(a)
+}
+
+/// Where whole lines of a body of a megabyte or more are cut in two halves for two threads
+/// (after the first line end from the middle on); `Some(None)` for a smaller body, taken in one
+/// part, and `None` for a large one with no line end in its second half.
+fn halves(body: &[u8]) -> Option<Option<usize>> {
+    if body.len() < 1 << 20 {
+        return Some(None);
+    }
+    let middle = body.len() / 2;
+    Some(Some(middle + memchr::memchr(b'\n', &body[middle..])? + 1))
 }
 
 /// `segments` of `part`, whose first byte is byte `offset` of the body (ranges are the body's).
