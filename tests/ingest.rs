@@ -1698,10 +1698,74 @@ fn streamed_items_of_parquet_are_the_csv_items() {
     assert!(
         parquet
             .how
-            .starts_with("decoded whole from Parquet, then handed on in 1 slice of up to"),
+            .starts_with("decoded from Parquet in 1 batch of whole row groups (1 row group)"),
         "{}",
         parquet.how
     );
     assert_eq!(csv.runs, parquet.runs);
     assert_eq!(csv.runs, whole_file_items(&interchange_csv(&recs)));
+}
+
+/// trajectories.parquet rewritten with row groups of `rows` rows.
+fn with_row_groups(files: &Files, rows: usize) -> Files {
+    let mut df = ParquetReader::new(Cursor::new(files["trajectories.parquet"].clone()))
+        .finish()
+        .unwrap();
+    let mut bytes = Vec::new();
+    ParquetWriter::new(&mut bytes)
+        .with_row_group_size(Some(rows))
+        .finish(&mut df)
+        .unwrap();
+    let mut files = files.clone();
+    files.insert("trajectories.parquet".into(), bytes);
+    files
+}
+
+#[test]
+fn parquet_is_decoded_a_batch_of_row_groups_at_a_time_with_the_csv_items() {
+    let recs = known_recordings();
+    let csv = ingest::ingest_items(&interchange_csv(&recs), &params()).unwrap();
+    let parquet = interchange_parquet(&recs);
+    // row groups of about 7 rows, batches of at least 20 rows: about 3 row groups a batch, runs
+    // cut by both
+    let small = with_row_groups(&parquet, 7);
+    let groups = ParquetReader::new(Cursor::new(small["trajectories.parquet"].clone()))
+        .get_metadata()
+        .unwrap()
+        .row_groups
+        .clone();
+    let mut batches = 0;
+    let mut open = 20;
+    for g in &groups {
+        assert!(g.num_rows() < 20, "a row group of {} rows", g.num_rows());
+        if open >= 20 {
+            (batches, open) = (batches + 1, 0);
+        }
+        open += g.num_rows();
+    }
+    assert!(
+        groups.len() >= 30 && batches >= 10,
+        "{} groups",
+        groups.len()
+    );
+    let items = ingest::ingest_items_in_chunks(&small, &params(), 20 * 32).unwrap();
+    assert!(
+        items.how.starts_with(&format!(
+            "decoded from Parquet in {batches} batches of whole row groups ({} row groups)",
+            groups.len()
+        )),
+        "{}",
+        items.how
+    );
+    assert_eq!(items.runs, csv.runs);
+    // one row group larger than a batch: decoded alone, handed on in slices that cut runs
+    let items = ingest::ingest_items_in_chunks(&parquet, &params(), 10 * 32).unwrap();
+    assert!(
+        items
+            .how
+            .starts_with("decoded from Parquet in 1 batch of whole row groups (1 row group)"),
+        "{}",
+        items.how
+    );
+    assert_eq!(items.runs, csv.runs);
 }

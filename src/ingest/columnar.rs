@@ -11,13 +11,15 @@
 //! bad input are the row-by-row path's, and a clean dataset gives the same recordings either way
 //! (tests/ingest.rs checks both on the shipped data, on shuffled rows and on damaged files).
 //!
-//! `stream` reads a CSV in pieces of a few megabytes cut at line ends and hands each run on as
-//! its last row is read, so memory is bounded by a piece, not the file; it needs each run's rows
-//! to be one block and otherwise says why, and the caller reads the file whole as above.
+//! `stream` reads a CSV in pieces of a few megabytes cut at line ends (a Parquet file a batch of
+//! row groups at a time, `parquet_groups`) and hands each run on as its last row is read, so
+//! memory is bounded by a piece, not the file; it needs each run's rows to be one block and
+//! otherwise says why, and the caller reads the file whole as above.
 
 use super::csv_fast;
 use super::csv_pieces::{for_each_piece, Stop};
 use super::interchange;
+use super::parquet_groups::{self, Batches, COLUMNS};
 use super::run_memo::{self, RunMemo, Step};
 use super::sanity;
 use super::table::Table;
@@ -27,15 +29,6 @@ use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::io::Cursor;
 use std::ops::Range;
-
-/// The trajectory columns and their types.
-const COLUMNS: [(&str, DataType); 5] = [
-    ("run", DataType::String),
-    ("particle", DataType::Int64),
-    ("frame", DataType::Int64),
-    ("t_s", DataType::Float64),
-    ("z_m", DataType::Float64),
-];
 
 /// The recordings of a clean interchange dataset, sorted by run; `None` if anything would need
 /// a message (or might not read exactly as the row-by-row path reads it).
@@ -54,7 +47,7 @@ pub fn recordings(files: &BTreeMap<String, Vec<u8>>, min_frames: usize) -> Optio
         }
     }
     let df = if traj_name.to_ascii_lowercase().ends_with(".parquet") {
-        read_parquet(traj_bytes)?
+        parquet_groups::read_whole(traj_bytes)?
     } else {
         read_csv(traj_bytes)?
     };
@@ -153,36 +146,6 @@ fn parse_csv(bytes: &[u8]) -> Option<DataFrame> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
         .ok()?
         .ok()
-}
-
-/// Reads trajectories.parquet: `run` text, `particle` and `frame` integers, `t_s` and `z_m`
-/// floats (or integers, read as floats, as the row-by-row path does).
-fn read_parquet(bytes: &[u8]) -> Option<DataFrame> {
-    let projection: Vec<String> = COLUMNS.iter().map(|(n, _)| n.to_string()).collect();
-    let read = || {
-        ParquetReader::new(Cursor::new(bytes))
-            .with_columns(Some(projection))
-            .finish()
-    };
-    let df = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
-        .ok()?
-        .ok()?;
-    let mut columns = Vec::with_capacity(COLUMNS.len());
-    for (name, dtype) in &COLUMNS {
-        let c = df.column(name).ok()?;
-        let fits = match dtype {
-            DataType::String => c.dtype() == &DataType::String,
-            DataType::Int64 => c.dtype().is_integer(),
-            _ => {
-                c.dtype().is_integer() || matches!(c.dtype(), DataType::Float32 | DataType::Float64)
-            }
-        };
-        if !fits {
-            return None;
-        }
-        columns.push(c.cast(dtype).ok()?);
-    }
-    DataFrame::new(df.height(), columns).ok()
 }
 
 /// The five columns, each run's rows in one block sorted by (particle, frame), without nulls.
@@ -389,9 +352,6 @@ fn clock_holds(fps: f64, tracks: &[Track]) -> bool {
 /// of the line the chunk ends in).
 pub const CHUNK_BYTES: usize = 8 << 20;
 
-/// Rows of a decoded Parquet table grouped into runs at a time (about 8 MB of columns).
-const PARQUET_SLICE_ROWS: usize = 1 << 18;
-
 /// Why `stream` gave up on a run's rows not coming together: the dataset is read whole and sorted
 /// instead.
 pub const NOT_GROUPED: &str = "the rows of a run are not together";
@@ -399,7 +359,7 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 /// The recordings of a clean interchange dataset handed to `each` in file order, a piece's worth
 /// at a time (the runs whose last row was in the piece just read): trajectories.csv is read
 /// `chunk_bytes` at a time, so neither the whole table nor all recordings are held (a Parquet
-/// file is decoded whole, then handed on in slices of `PARQUET_SLICE_ROWS` rows). The CSV comes
+/// file is decoded a batch of whole row groups at a time, `parquet_groups::for_each_batch`). The CSV comes
 /// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
 /// read), else from `files`. Says how it read (`Pieces`). It needs each run's rows to be one
 /// block (in any order within it), as `groove synth` and most trackers write them. At anything
@@ -442,15 +402,17 @@ pub fn stream(
     let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
     let chunks = match csv {
         _ if parquet => {
-            // decoded whole (it is compressed), then handed on in slices, so that the runs of
-            // one slice are encoded and kept while the next is grouped
-            let df = read_parquet(traj_bytes).ok_or(PROBLEM)?;
-            let slices = df.height().div_ceil(PARQUET_SLICE_ROWS).max(1);
-            for k in 0..slices {
-                stream.chunk(&df.slice((k * PARQUET_SLICE_ROWS) as i64, PARQUET_SLICE_ROWS))?;
+            // a batch of row groups decoded on a thread of its own while the one before is
+            // grouped, and the runs of a slice encoded and kept while the next is grouped
+            let mut each = |df: &DataFrame| {
+                stream.chunk(df)?;
                 stream.hand_over();
-            }
-            Pieces::ParquetSlices(slices)
+                Ok(())
+            };
+            let rows = chunk_bytes / parquet_groups::ROW_BYTES;
+            Pieces::Parquet(parquet_groups::for_each_batch(
+                traj_bytes, rows, PROBLEM, &mut each,
+            )?)
         }
         Some(read) => Pieces::CsvChunks(csv_chunks(read, chunk_bytes, memo, &mut stream)?),
         None => Pieces::CsvChunks(csv_chunks(
@@ -469,13 +431,14 @@ pub fn stream(
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pieces {
     CsvChunks(usize),
-    ParquetSlices(usize),
+    Parquet(Batches),
 }
 
 impl Pieces {
     pub fn count(self) -> usize {
         match self {
-            Pieces::CsvChunks(n) | Pieces::ParquetSlices(n) => n,
+            Pieces::CsvChunks(n) => n,
+            Pieces::Parquet(b) => b.batches,
         }
     }
 }
@@ -485,10 +448,14 @@ impl std::fmt::Display for Pieces {
         let s = |n: usize| if n == 1 { "" } else { "s" };
         match *self {
             Pieces::CsvChunks(n) => write!(f, "read in {n} chunk{} of trajectories", s(n)),
-            Pieces::ParquetSlices(n) => write!(
+            Pieces::Parquet(b) => write!(
                 f,
-                "decoded whole from Parquet, then handed on in {n} slice{} of up to {PARQUET_SLICE_ROWS} rows",
-                s(n)
+                "decoded from Parquet in {} batch{} of whole row groups ({} row group{}), \
+                 each batch grouped while the next was decoded",
+                b.batches,
+                if b.batches == 1 { "" } else { "es" },
+                b.row_groups,
+                s(b.row_groups),
             ),
         }
     }
