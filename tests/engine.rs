@@ -193,6 +193,33 @@ fn touch_reruns_nothing() {
 }
 
 #[test]
+fn an_edit_that_keeps_size_and_sets_the_mtime_back_is_still_seen() {
+    // as `rsync --inplace --times` or `touch -r` leave a file: new bytes in place, the same
+    // size, inode and mtime; only the change time tells
+    let p = Project::standard();
+    p.stdout(&["run"]);
+    p.take_trace();
+    let path = p.path("data/run_a.csv");
+    let before = std::fs::read(&path).unwrap();
+    let mtime = std::fs::metadata(&path).unwrap().modified().unwrap();
+    let mut after = before.clone();
+    let last = after.iter().rposition(|b| b.is_ascii_digit()).unwrap();
+    after[last] = if after[last] == b'9' { b'8' } else { after[last] + 1 };
+    std::thread::sleep(Duration::from_millis(20));
+    let mut file = std::fs::File::options().write(true).open(&path).unwrap();
+    std::io::Write::write_all(&mut file, &after).unwrap();
+    file.set_modified(mtime).unwrap();
+    drop(file);
+    let meta = std::fs::metadata(&path).unwrap();
+    assert_eq!((meta.len(), meta.modified().unwrap()), (before.len() as u64, mtime));
+    assert_eq!(p.stale().first().map(String::as_str), Some("ingest"));
+    p.stdout(&["run"]);
+    let trace = p.take_trace();
+    assert!(trace.contains(&"fit run_a.csv".to_string()), "{trace:?}");
+    assert!(!trace.contains(&"fit run_b.csv".to_string()), "{trace:?}");
+}
+
+#[test]
 fn a_deleted_output_is_restored_from_the_store_without_running() {
     let p = Project::standard();
     p.stdout(&["run"]);

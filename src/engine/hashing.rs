@@ -1,6 +1,7 @@
-//! sha256 hex digests, and the file-hash cache keyed by (path, size, mtime, inode).
+//! sha256 hex digests, and the file-hash cache keyed by (path, size, mtime, inode, ctime).
 //!
-//! A file whose size, modification time and inode are unchanged is not read again, so an
+//! A file whose size, modification time, inode and change time are unchanged is not read
+//! again, so an
 //! unchanged large recording costs one `stat`; a `touch` changes the mtime, the file is rehashed,
 //! the hash is unchanged, and nothing downstream reruns.
 
@@ -141,6 +142,10 @@ struct Stamp {
     size: u64,
     mtime_ns: i128,
     inode: u64,
+    /// 0 in a cache written before the change time was kept: such a stamp matches no file, and
+    /// the file is hashed once more.
+    #[serde(default)]
+    ctime_ns: i128,
     sha256: String,
 }
 
@@ -150,11 +155,13 @@ impl Stamp {
             size,
             mtime_ns,
             inode,
+            ctime_ns,
         } = stat;
         Stamp {
             size,
             mtime_ns,
             inode,
+            ctime_ns,
             sha256,
         }
     }
@@ -164,6 +171,7 @@ impl Stamp {
             size: self.size,
             mtime_ns: self.mtime_ns,
             inode: self.inode,
+            ctime_ns: self.ctime_ns,
         }
     }
 }
@@ -254,14 +262,16 @@ impl HashCache {
     }
 }
 
-/// A file's stamp as a tuple (size, mtime in ns, inode), as `lock_digests` stores it.
-pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64) {
+/// A file's stamp as a tuple (size, mtime in ns, inode, ctime in ns), as `lock_digests` stores
+/// it.
+pub(super) fn stamp_of(meta: &std::fs::Metadata) -> (u64, i128, u64, i128) {
     let FileStamp {
         size,
         mtime_ns,
         inode,
+        ctime_ns,
     } = FileStamp::of(meta);
-    (size, mtime_ns, inode)
+    (size, mtime_ns, inode, ctime_ns)
 }
 
 #[cfg(test)]
@@ -318,11 +328,23 @@ mod tests {
         let file = dir.path().join("a.csv");
         std::fs::write(&file, "t,z\n").unwrap();
         let stat = stat_of(&file).unwrap();
-        // a cache as earlier versions wrote it: one object per path, the stat's fields flat
+        // a cache as earlier versions wrote it, without the change time: read, never trusted
         let cache_path = dir.path().join("hashes.json");
-        let flat = serde_json::json!({
+        let old = serde_json::json!({
             file.to_string_lossy(): {
                 "size": stat.size, "mtime_ns": stat.mtime_ns, "inode": stat.inode, "sha256": "ab"
+            }
+        });
+        std::fs::write(&cache_path, serde_json::to_vec(&old).unwrap()).unwrap();
+        let cache = HashCache::load(&cache_path);
+        assert!(cache.knows(&file));
+        assert_eq!(cache.cached(&file, stat), None);
+        assert_eq!(cache.hash_file(&file).unwrap(), sha256_hex(b"t,z\n"));
+        // one object per path, the stat's fields flat
+        let flat = serde_json::json!({
+            file.to_string_lossy(): {
+                "size": stat.size, "mtime_ns": stat.mtime_ns, "inode": stat.inode,
+                "ctime_ns": stat.ctime_ns, "sha256": "ab"
             }
         });
         std::fs::write(&cache_path, serde_json::to_vec(&flat).unwrap()).unwrap();
@@ -333,6 +355,11 @@ mod tests {
             ..stat
         };
         assert_eq!(cache.cached(&file, other), None);
+        let changed = FileStamp {
+            ctime_ns: stat.ctime_ns + 1,
+            ..stat
+        };
+        assert_eq!(cache.cached(&file, changed), None);
         // written back in the same form
         cache.remember(&file, other, "cd".into());
         cache.save().unwrap();
@@ -341,6 +368,7 @@ mod tests {
         let entry = &back[file.to_string_lossy().as_ref()];
         assert_eq!(entry["size"], stat.size + 1);
         assert_eq!(entry["inode"], stat.inode);
+        assert_eq!(entry["ctime_ns"].as_i64().map(i128::from), Some(stat.ctime_ns));
         assert_eq!(entry["sha256"], "cd");
         assert_eq!(
             HashCache::load(&cache_path).cached(&file, other),

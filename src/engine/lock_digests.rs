@@ -1,7 +1,7 @@
 //! `.groove/lock-digests.json`: one digest per stage of `pipeline.lock`, so that a run which
 //! changes nothing can tell without parsing the lock (6.9 MB at 10,000 runs).
 //!
-//! Written after the lock, with the lock file's stamp (size, mtime, inode); trusted only while
+//! Written after the lock, with the lock file's stamp (size, mtime, inode, ctime); trusted only while
 //! the lock still has that stamp. An edited, restored or half-replaced lock has another stamp,
 //! and the run then reads the lock itself, as it always could.
 
@@ -15,8 +15,9 @@ use std::path::Path;
 
 #[derive(Serialize, Deserialize)]
 struct Sidecar {
-    /// The lock file's (size, mtime in ns, inode) when the digests were taken.
-    lock_stamp: (u64, i128, u64),
+    /// The lock file's (size, mtime in ns, inode, ctime in ns) when the digests were taken (a
+    /// sidecar of three fields, from before the change time was kept, does not read: unused).
+    lock_stamp: (u64, i128, u64, i128),
     /// Stage name → `stage_digest` of its record in the lock.
     stages: BTreeMap<String, String>,
 }

@@ -209,7 +209,6 @@ impl std::io::Read for CheckedRead {
             (0, Reading::Stat(at_open)) => {
                 let now = self.file.metadata()?;
                 FileStamp::of(&now) == FileStamp::of(&at_open)
-                    && change_time(&now) == change_time(&at_open)
             }
             (_, Reading::Hashing(mut hasher, expect)) => {
                 hasher.update(&buf[..n]);
@@ -231,13 +230,17 @@ impl std::io::Read for CheckedRead {
     }
 }
 
-/// What says a file is unchanged without reading it: its size, mtime and inode (the engine's
-/// file-hash cache keys its digests by them).
+/// What says a file is unchanged without reading it: its size, mtime, inode and status-change
+/// time (the engine's file-hash cache keys its digests by them). The change time is there
+/// because a write moves it even when the mtime is set back (`rsync --inplace --times`,
+/// `touch -r`), as git's index trusts it; a `chmod` or a new hard link moves it too, which costs
+/// a rehash, never a rerun.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FileStamp {
     pub size: u64,
     pub mtime_ns: i128,
     pub inode: u64,
+    pub ctime_ns: i128,
 }
 
 impl FileStamp {
@@ -248,6 +251,7 @@ impl FileStamp {
             size: meta.size(),
             mtime_ns: i128::from(meta.mtime()) * 1_000_000_000 + i128::from(meta.mtime_nsec()),
             inode: meta.ino(),
+            ctime_ns: i128::from(meta.ctime()) * 1_000_000_000 + i128::from(meta.ctime_nsec()),
         }
     }
 
@@ -263,20 +267,9 @@ impl FileStamp {
             size: meta.len(),
             mtime_ns,
             inode: 0,
+            ctime_ns: 0,
         }
     }
-}
-
-/// A file's status-change time (ns), which a write moves even when the mtime is set back.
-#[cfg(unix)]
-fn change_time(meta: &std::fs::Metadata) -> i128 {
-    use std::os::unix::fs::MetadataExt;
-    i128::from(meta.ctime()) * 1_000_000_000 + i128::from(meta.ctime_nsec())
-}
-
-#[cfg(not(unix))]
-fn change_time(_: &std::fs::Metadata) -> i128 {
-    0
 }
 
 /// Lowercase hex of a digest (as `engine::hashing` writes hashes; repeated here so that the
@@ -447,13 +440,24 @@ mod tests {
         let err = reader.read_to_end(&mut Vec::new()).unwrap_err();
         assert_eq!(err.kind(), std::io::ErrorKind::InvalidData);
         assert!(err.to_string().contains("changed while groove was running"));
-        // the stat vouched for is not the file's any more: an error at the open
-        assert_eq!(FileStamp::of(&std::fs::metadata(&path).unwrap()), stamp);
+        // size, mtime and inode as vouched for; the change time tells the write: an error at
+        // the open
+        let now = FileStamp::of(&std::fs::metadata(&path).unwrap());
+        assert_ne!(now.ctime_ns, stamp.ctime_ns);
+        assert_eq!(
+            FileStamp {
+                ctime_ns: stamp.ctime_ns,
+                ..now
+            },
+            stamp
+        );
+        let err = file.read().unwrap_err().to_string();
+        assert!(err.contains("changed while groove was running"), "{err}");
         let moved = InputFile::vouched(
             path.clone(),
             FileStamp {
-                mtime_ns: stamp.mtime_ns + 1,
-                ..stamp
+                mtime_ns: now.mtime_ns + 1,
+                ..now
             },
         );
         let err = moved.read().unwrap_err().to_string();
