@@ -427,6 +427,41 @@ fn a_second_run_executes_no_stage_and_changes_nothing() {
     }
 }
 
+/// `groove gc` keeps what the memos of the lock's stages name (the aggregate's material
+/// summaries, which no entry names, so that the next edit takes them) and removes the memo of a
+/// stage the lock does not hold.
+#[test]
+fn gc_keeps_the_objects_of_the_stages_memos_and_drops_the_memo_of_a_stage_gone() {
+    use groove::engine::{memo, store::Store};
+    let project = copy_of_shared("gc-memo");
+    let store_dir = project.join(".groove");
+    let memos = memo::files(&store_dir);
+    let named: Vec<String> = memos.iter().flat_map(|(_, o)| o.clone()).collect();
+    assert!(memos.len() >= 2 && !named.is_empty(), "{memos:?}");
+    // a memo left by a stage since removed from pipeline.toml
+    let gone = store_dir
+        .join("memo")
+        .join(memo::file_name("a stage since removed"));
+    std::fs::copy(&memos[0].0, &gone).unwrap();
+    assert_success(&groove(&project, &["gc"]), "groove gc");
+    assert!(!gone.exists(), "the memo of a stage not in the lock stays");
+    assert_eq!(memo::files(&store_dir), memos);
+    let store = Store::in_dir(store_dir);
+    let lost: Vec<&String> = named.iter().filter(|o| !store.has_object(o)).collect();
+    assert!(
+        lost.is_empty(),
+        "gc removed objects the memos name: {lost:?}"
+    );
+    // and the project is still fresh: nothing reruns
+    let again = run(&project, &[]);
+    assert_success(&again, "a run after gc");
+    assert!(
+        text(&again.stdout).contains(" 0 stages run"),
+        "{}",
+        text(&again.stdout)
+    );
+}
+
 /// A dataset groove has never seen is hashed by ingest's own read (`engine::hash_on_read`): the
 /// key made from those digests names the bytes and is the one hashing first gives; once the
 /// stage has run, a touched file is hashed first, so a touch still reruns nothing. (That the

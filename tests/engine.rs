@@ -204,14 +204,21 @@ fn an_edit_that_keeps_size_and_sets_the_mtime_back_is_still_seen() {
     let mtime = std::fs::metadata(&path).unwrap().modified().unwrap();
     let mut after = before.clone();
     let last = after.iter().rposition(|b| b.is_ascii_digit()).unwrap();
-    after[last] = if after[last] == b'9' { b'8' } else { after[last] + 1 };
+    after[last] = if after[last] == b'9' {
+        b'8'
+    } else {
+        after[last] + 1
+    };
     std::thread::sleep(Duration::from_millis(20));
     let mut file = std::fs::File::options().write(true).open(&path).unwrap();
     std::io::Write::write_all(&mut file, &after).unwrap();
     file.set_modified(mtime).unwrap();
     drop(file);
     let meta = std::fs::metadata(&path).unwrap();
-    assert_eq!((meta.len(), meta.modified().unwrap()), (before.len() as u64, mtime));
+    assert_eq!(
+        (meta.len(), meta.modified().unwrap()),
+        (before.len() as u64, mtime)
+    );
     assert_eq!(p.stale().first().map(String::as_str), Some("ingest"));
     p.stdout(&["run"]);
     let trace = p.take_trace();

@@ -368,7 +368,10 @@ mod tests {
         let entry = &back[file.to_string_lossy().as_ref()];
         assert_eq!(entry["size"], stat.size + 1);
         assert_eq!(entry["inode"], stat.inode);
-        assert_eq!(entry["ctime_ns"].as_i64().map(i128::from), Some(stat.ctime_ns));
+        assert_eq!(
+            entry["ctime_ns"].as_i64().map(i128::from),
+            Some(stat.ctime_ns)
+        );
         assert_eq!(entry["sha256"], "cd");
         assert_eq!(
             HashCache::load(&cache_path).cached(&file, other),

@@ -3,6 +3,7 @@
 use super::context::lock_path;
 use super::error::{EngineError, IoContext};
 use super::lockfile::PipelineLock;
+use super::memo;
 use super::pipeline::Pipeline;
 use super::project_lock;
 use super::store::Store;
@@ -51,8 +52,9 @@ pub fn verify(pipeline: &Pipeline) -> Result<super::store_upkeep::Verified, Engi
     store.verify()
 }
 
-/// Drop store entries that `pipeline.lock` does not reference, then unreferenced objects.
-/// Returns (entries, objects) removed.
+/// Drop store entries that `pipeline.lock` does not reference, then objects that neither they
+/// nor the memos of its stages reference (and the memos of other stages). Returns (entries,
+/// objects) removed.
 pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
     let store = Store::at(&pipeline.root);
     if !store.dir.exists() {
@@ -79,8 +81,20 @@ pub fn gc(pipeline: &Pipeline) -> Result<(usize, usize), EngineError> {
         keep.insert(stage.key.clone());
         keep.extend(stage.items.values().cloned());
     }
+    // a memo's objects stay while its stage is in the lock (the next edit takes them instead
+    // of making them again); the memo of a stage no longer in it goes
+    let memos: BTreeSet<String> = lock.stages.keys().map(|s| memo::file_name(s)).collect();
+    let mut memo_objects = BTreeSet::new();
+    for (file, objects) in memo::files(&store.dir) {
+        let name = file.file_name().map(|n| n.to_string_lossy().into_owned());
+        if name.is_some_and(|n| memos.contains(&n)) {
+            memo_objects.extend(objects);
+        } else {
+            std::fs::remove_file(&file).at(&file)?;
+        }
+    }
     store.sweep_tmp()?;
-    let (entries, objects, sparse) = store.gc(&keep)?;
+    let (entries, objects, sparse) = store.gc(&keep, &memo_objects)?;
     super::pack_writer::rewrite(&store, &sparse)?;
     Ok((entries, objects))
 }

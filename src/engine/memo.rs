@@ -9,7 +9,9 @@
 //! it was written under (its salt); anything else, a damaged file included, reads as empty.
 //! A key found gives its object only while the store holds it. The memo is never needed for a
 //! correct result: every miss is made from the bytes again, and a crash at any moment leaves
-//! either the old file or the new one.
+//! either the old file or the new one. `groove gc` keeps the objects the memo files of the
+//! lock's stages name (an aggregate's summaries, which no entry names) and removes the files of
+//! stages no longer in it.
 
 use super::atomic::write_atomic;
 use super::hashing::hex;
@@ -17,7 +19,7 @@ use super::stage::ObjectMemo;
 use super::store::Store;
 use sha2::{Digest, Sha256};
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 const MAGIC: &[u8; 16] = b"groove-memo v1\n\0";
@@ -40,10 +42,7 @@ impl<'s> Memo<'s> {
     /// the kind names: kind, code, version, params).
     pub fn open(store: &'s Store, stage: &str, salt: &[u8]) -> Memo<'s> {
         let salt: [u8; 32] = Sha256::digest(salt).into();
-        let path = store
-            .dir
-            .join("memo")
-            .join(hex(&Sha256::digest(stage.as_bytes())[..16]));
+        let path = store.dir.join("memo").join(file_name(stage));
         let earlier = std::fs::read(&path)
             .ok()
             .and_then(|bytes| parse(&bytes, &salt))
@@ -104,6 +103,40 @@ impl ObjectMemo for Memo<'_> {
         self.made.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.used.lock().expect("memo lock").push((key, object));
     }
+}
+
+/// The name of stage `stage`'s memo file in `.groove/memo/`.
+pub fn file_name(stage: &str) -> String {
+    hex(&Sha256::digest(stage.as_bytes())[..16])
+}
+
+/// The memo files in the store at `store_dir` (by path, in name order), each with the objects
+/// it names in name order (under whatever salt it was written; none if it is damaged), for
+/// `groove gc`.
+pub fn files(store_dir: &Path) -> Vec<(PathBuf, Vec<String>)> {
+    let Ok(dir) = std::fs::read_dir(store_dir.join("memo")) else {
+        return Vec::new();
+    };
+    let mut files: Vec<PathBuf> = dir.flatten().map(|e| e.path()).collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|path| {
+            let objects = std::fs::read(&path)
+                .ok()
+                .and_then(|bytes| {
+                    let salt = bytes.get(MAGIC.len()..MAGIC.len() + 32)?.try_into().ok()?;
+                    parse(&bytes, &salt)
+                })
+                .map(|entries| {
+                    let mut objects: Vec<String> = entries.values().map(|o| hex(o)).collect();
+                    objects.sort_unstable();
+                    objects
+                })
+                .unwrap_or_default();
+            (path, objects)
+        })
+        .collect()
 }
 
 /// The entries of a memo file written under `salt`; `None` for another salt or a damaged file.

@@ -87,15 +87,17 @@ impl Store {
         Ok(report)
     }
 
-    /// Keep only the given keys and the objects they reference. A pack none of whose objects is
+    /// Keep only the given keys and the objects they reference, and the objects `also_live`
+    /// names. A pack none of whose objects is
     /// referenced is removed; one mostly unreferenced (more than half its bytes) is returned with
     /// the objects still referenced, for `pack_writer::rewrite` to copy out before it goes.
     /// Returns (entries, objects) removed, and those packs.
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,
+        also_live: &std::collections::BTreeSet<String>,
     ) -> Result<(usize, usize, Vec<(PathBuf, Vec<String>)>), EngineError> {
-        let mut live = std::collections::BTreeSet::new();
+        let mut live = also_live.clone();
         let mut removed_entries = 0;
         let mut hold = |entry: &Entry| {
             for stored in entry.outputs.values() {
