@@ -2,7 +2,7 @@
 //! chapter's fitted drag time T = 0.052 + 1.10 v0 when fitted with the linear-drag baseline.
 
 use groove::physics::{simulate, Baseline, Model, State};
-use groove::synth::{run_synth, synth_tables, Truth};
+use groove::synth::{run_synth, run_synth_as, synth_tables, Truth};
 use std::path::Path;
 
 fn shipped_truth_text() -> String {
@@ -61,6 +61,38 @@ fn run_synth_writes_the_dataset_and_a_copy_of_the_truth() {
         assert!(n0 > 100, "{id}: {n0} rows");
         assert_eq!(n1 > 0, !id.starts_with("single"), "{id}: {n1} target rows");
     }
+}
+
+/// `groove synth --format parquet`: the same dataset with trajectories.parquet, which ingests to
+/// the CSV's items byte for byte (streamed a row group batch at a time).
+#[test]
+fn synth_as_parquet_writes_the_values_of_the_csv() {
+    use groove::ingest::{ingest_items, IngestParams};
+    let dir = tempfile::tempdir().unwrap();
+    let truth_path = dir.path().join("t.toml");
+    std::fs::write(&truth_path, toml::to_string(&small_truth()).unwrap()).unwrap();
+    let (csv, parquet) = (dir.path().join("csv"), dir.path().join("parquet"));
+    run_synth(&truth_path, &csv).unwrap();
+    run_synth_as(&truth_path, &parquet, true).unwrap();
+    assert!(!parquet.join("trajectories.csv").exists());
+    let read = |d: &Path, names: [&str; 2]| {
+        names
+            .iter()
+            .map(|n| (n.to_string(), std::fs::read(d.join(n)).unwrap()))
+            .collect::<std::collections::BTreeMap<_, _>>()
+    };
+    let from_csv = read(&csv, ["runs.csv", "trajectories.csv"]);
+    let from_parquet = read(&parquet, ["runs.csv", "trajectories.parquet"]);
+    assert_eq!(from_csv["runs.csv"], from_parquet["runs.csv"]);
+    assert!(from_parquet["trajectories.parquet"].starts_with(b"PAR1"));
+    let params = IngestParams::default();
+    let (a, b) = (
+        ingest_items(&from_csv, &params).unwrap(),
+        ingest_items(&from_parquet, &params).unwrap(),
+    );
+    assert!(b.how.contains("decoded from Parquet"), "{}", b.how);
+    assert_eq!(a.runs.len(), 18);
+    assert!(a.runs == b.runs, "Parquet gives other items than the CSV");
 }
 
 #[test]

@@ -152,6 +152,10 @@ pub enum Verb {
         /// The dataset folder to write.
         #[arg(long, value_name = "DIR")]
         out: PathBuf,
+        /// The trajectories as trajectories.csv (the default) or trajectories.parquet (the same
+        /// values, typed, zstd-compressed; runs.csv stays CSV).
+        #[arg(long, value_enum, default_value = "csv")]
+        format: SynthFormat,
     },
     /// Copy the report bundle with pipeline.lock and a sha256 manifest to DIR; refuses (exit 1)
     /// while any stage is stale.
@@ -169,4 +173,11 @@ pub enum DagFormat {
     Text,
     Dot,
     Mermaid,
+}
+
+/// The file `groove synth` writes the trajectories to.
+#[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
+pub enum SynthFormat {
+    Csv,
+    Parquet,
 }

@@ -149,8 +149,9 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             Ok(ExitCode::SUCCESS)
         }
         Verb::Verify { project } => verify(&catalog, &project),
-        Verb::Synth { truth, out } => {
-            groove::synth::run_synth(&truth, &out)
+        Verb::Synth { truth, out, format } => {
+            let parquet = format == args::SynthFormat::Parquet;
+            groove::synth::run_synth_as(&truth, &out, parquet)
                 .map_err(|e| EngineError::Usage(format!("synth: {e}")))?;
             println!("groove: wrote a synthetic dataset to {}", out.display());
             Ok(ExitCode::SUCCESS)

@@ -21,6 +21,17 @@ pub fn run_synth(
     truth_toml: &Path,
     out_dir: &Path,
 ) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+    run_synth_as(truth_toml, out_dir, false)
+}
+
+/// `run_synth`, writing the trajectories as trajectories.parquet when `parquet` (the values of
+/// trajectories.csv, typed: `run` text, `particle` and `frame` Int64, `t_s` and `z_m` Float64,
+/// each number the one the CSV text reads as; zstd-compressed).
+pub fn run_synth_as(
+    truth_toml: &Path,
+    out_dir: &Path,
+    parquet: bool,
+) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let text = std::fs::read_to_string(truth_toml).map_err(|e| {
         format!(
             "cannot read truth file {}: {e}; pass an existing TOML file with --truth",
@@ -40,7 +51,14 @@ pub fn run_synth(
         std::fs::write(name, body).map_err(|e| format!("cannot write {}: {e}", name.display()))
     };
     write(&out_dir.join("runs.csv"), &tables.runs_csv)?;
-    write(&out_dir.join("trajectories.csv"), &tables.trajectories_csv)?;
+    if parquet {
+        let name = out_dir.join("trajectories.parquet");
+        let bytes = tables::parquet_of_csv(&tables.trajectories_csv)?;
+        std::fs::write(&name, bytes)
+            .map_err(|e| format!("cannot write {}: {e}", name.display()))?;
+    } else {
+        write(&out_dir.join("trajectories.csv"), &tables.trajectories_csv)?;
+    }
     write(&truth_dir.join("truth.toml"), &text)?;
     write(&truth_dir.join("runs_truth.csv"), &tables.runs_truth_csv)?;
     Ok(())

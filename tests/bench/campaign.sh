@@ -2,12 +2,15 @@
 # Campaign benchmark for issue 13: how `groove run aggregate` (ingest → fit → aggregate) scales
 # with the number of recordings. Prints, never asserts.
 #
-# Usage: tests/bench/campaign.sh [--100k] [--sizes "1000 10000"] [--no-scipy]
+# Usage: tests/bench/campaign.sh [--100k] [--sizes "1000 10000"] [--no-scipy] [--parquet]
 #   --sizes "N …"  campaign sizes in runs (default "1000 10000"); each is half 316, half 440c
 #   --100k         also the 100,000-run campaign (≈ 2.6 GB of CSV, minutes, several GB of disk)
 #   --no-scipy     skip the SciPy least_squares comparison (needs python3 with numpy + scipy)
 #   --stage S      run `groove run S` instead of `groove run aggregate` (e.g. `fit`: ingest and
 #                  the fits only, where aggregate's Theil–Sen bootstrap, O(runs²), dominates)
+#   --parquet      also write each campaign as trajectories.parquet (`groove synth --format
+#                  parquet`, the same values) and time `groove run ingest` on a fresh store for
+#                  the CSV and the Parquet form, alternated, each round; prints Parquet's speed-up
 #   --repeat R     measure each size below 100,000 R times (default 3; 100,000 once): each
 #                  round a fresh project, cold, edit, no-op; the table gives each row's median
 #                  over the rounds with its range (a shared host varies by 10–15 % run to run)
@@ -42,6 +45,7 @@ sizes="1000 10000"
 scipy=1
 stage=aggregate
 repeat=3
+parquet=0
 while [ $# -gt 0 ]; do
     case "$1" in
         --100k) sizes="$sizes 100000" ;;
@@ -49,6 +53,7 @@ while [ $# -gt 0 ]; do
         --no-scipy) scipy=0 ;;
         --stage) stage="$2"; shift ;;
         --repeat) repeat="$2"; shift ;;
+        --parquet) parquet=1 ;;
         -h|--help) sed -n '2,/^set -euo/p' "$0" | sed '$d'; exit 0 ;;
         *) echo "campaign.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
     esac
@@ -172,7 +177,7 @@ scipy_round() {
 
 for n in $sizes; do
     data=$work/data-$n
-    if [ ! -f "$data/runs.csv" ] || [ "$(($(wc -l < "$data/runs.csv") - 1))" != "$n" ] || [ -f "$data/.edit-undo.json" ] || [ -f "$data/.edited" ]; then
+    if [ ! -f "$data/runs.csv" ] || [ "$(($(wc -l < "$data/runs.csv") - 1))" != "$n" ] || [ -f "$data/.edit-undo.json" ] || [ -f "$data/.edited" ] || [ ! -f "$work/truth-$n.toml" ]; then
         rm -rf "$data"
         truth=$work/truth-$n.toml
         python3 - "$root/data/truth/truth.toml" "$truth" "$n" <<'PY'
@@ -221,6 +226,24 @@ PY
         measure "$n no-op" "$proj/.groove" "${run[@]}"
         restore_edit "$data"
     done
+    if [ "$parquet" = 1 ]; then
+        pq=$work/data-$n-parquet
+        if [ ! -f "$pq/trajectories.parquet" ] || ! cmp -s "$pq/runs.csv" "$data/runs.csv"; then
+            rm -rf "$pq"
+            "$GROOVE_BIN" synth --truth "$work/truth-$n.toml" --out "$pq" --format parquet > /dev/null
+        fi
+        echo "campaign $n: $(du -b "$pq/trajectories.parquet" | cut -f1) bytes of trajectories.parquet (the same values)"
+        for round in $(seq 1 "$rounds"); do
+            for form in csv parquet; do
+                from=$data
+                [ "$form" = parquet ] && from=$pq
+                rm -rf "$proj"
+                mkdir -p "$proj"
+                cp "$root/pipeline.toml" "$proj/"
+                measure "$n ingest $form" "$proj/.groove" "$GROOVE_BIN" run ingest --config "$proj/pipeline.toml" --data "$from" --out "$proj/reports"
+            done
+        done
+    fi
 done
 
 python3 - "$table" <<'PY'
@@ -252,6 +275,14 @@ print()
 for r in rows:
     if r[1] == "store":
         print(f"{r[0]} runs: {r[2]} bytes stored per run (.groove/), {r[3]} in objects/, {r[4]} files")
+for label in labels:
+    if label.endswith(" ingest csv") and label.replace("csv", "parquet") in labels:
+        csv = [r for r in rows if r[0] == label]
+        pq = [r for r in rows if r[0] == label.replace("csv", "parquet")]
+        wall = lambda rs: median(float(r[1]) for r in rs)
+        cpu = lambda rs: median(float(r[2]) for r in rs)
+        print(f"{label.split()[0]} runs, `groove run ingest` on a fresh store: Parquet {wall(csv) / wall(pq):.1f}x faster "
+              f"than CSV by wall ({wall(pq):.2f} against {wall(csv):.2f} s, medians), {cpu(csv) / cpu(pq):.1f}x by CPU; issue 13's target 3x")
 scipy = [float(r[2]) for r in rows if r[1] == "scipy"]
 if scipy and "1000 cold" in labels:
     colds = [float(r[1]) for r in rows if r[0] == "1000 cold"]
