@@ -359,10 +359,10 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 /// The recordings of a clean interchange dataset handed to `each` in file order, a piece's worth
 /// at a time (the runs whose last row was in the piece just read): trajectories.csv is read
 /// `chunk_bytes` at a time, so neither the whole table nor all recordings are held (a Parquet
-/// file is decoded a batch of whole row groups at a time, `parquet_groups::for_each_batch`). The CSV comes
-/// from `csv` if given (the file named trajectories.csv in `files`, whose bytes there are not
-/// read), else from `files`. Says how it read (`Pieces`). It needs each run's rows to be one
-/// block (in any order within it), as `groove synth` and most trackers write them. At anything
+/// file is decoded a batch of whole row groups at a time, `parquet_groups::for_each_batch`).
+/// The CSV comes from `csv` if given (the file named trajectories.csv in `files`, whose bytes there
+/// are not read), else from `files`. Says how it read (`Pieces`). It needs each run's rows to be
+/// one block (in any order within it), as `groove synth` and most trackers write them. At anything
 /// else, or anything `recordings` would give `None` for, it stops with the reason: the caller then
 /// forgets what `each` received and reads the dataset whole (`ingest::ingest`), which sorts the
 /// rows or names the problems. On clean grouped data it gives the runs `recordings` gives.

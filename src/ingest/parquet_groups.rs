@@ -36,9 +36,9 @@ pub struct Batches {
 
 /// Hands `each` the file's rows in order, a row group at a time (a larger one in slices of
 /// `batch_rows` rows), decoded a batch of consecutive row groups of at least `batch_rows` rows
-/// at a time: the next batch is decoded on another thread meanwhile, and at
-/// most one decoded batch waits. Stops at the first `Err` of `each` (returned) or at a file or
-/// batch that cannot be read or has a column of another type (`Err(unreadable)`).
+/// at a time: the next batch is decoded on another thread meanwhile, and at most one decoded
+/// batch waits. Stops at the first `Err` of `each` (returned) or at a file or batch that cannot
+/// be read or has a column of another type (`Err(unreadable)`).
 pub fn for_each_batch<E: Send>(
     bytes: &[u8],
     batch_rows: usize,
