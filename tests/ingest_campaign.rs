@@ -88,17 +88,13 @@ fn a_100k_run_campaign_streams_with_memory_bounded_by_a_chunk_as_csv_and_as_parq
     let params = IngestParams::default();
 
     // 1. Streamed, each item made and dropped (as a store writing items as they come would).
-    reset_peak();
-    let before = status_bytes("VmRSS");
-    let (mut runs, mut item_bytes) = (0usize, 0u64);
-    let started = std::time::Instant::now();
-    let chunks = ingest::stream_recordings(&files, &params, 8 << 20, &mut |r| {
-        runs += 1;
-        item_bytes += groove::recording::item::encode(&r).len() as u64;
-    })
-    .unwrap_or_else(|why| panic!("the campaign did not stream: {why}"));
-    let streamed_s = started.elapsed().as_secs_f64();
-    let grew = status_bytes("VmHWM").saturating_sub(before);
+    let Streamed {
+        runs,
+        item_bytes,
+        pieces: chunks,
+        seconds: streamed_s,
+        grew,
+    } = streamed(&files, &params);
     println!(
         "100k streamed: {runs} runs in {chunks} chunks, {streamed_s:.1} s; input {:.0} MB held, \
          items {:.0} MB ({} B per run) made and dropped; peak grew {:.0} MB",
@@ -148,29 +144,56 @@ fn a_100k_run_campaign_streams_with_memory_bounded_by_a_chunk_as_csv_and_as_parq
         files.insert(name.to_string(), std::fs::read(data.join(name)).unwrap());
     }
     std::fs::remove_dir_all(&data).unwrap();
+    let parquet = streamed(&files, &params);
+    println!(
+        "100k Parquet streamed: {} runs in {} batches of row groups, {:.1} s; input {:.0} MB \
+         held; peak grew {:.0} MB",
+        parquet.runs,
+        parquet.pieces,
+        parquet.seconds,
+        files["trajectories.parquet"].len() as f64 / 1e6,
+        parquet.grew as f64 / 1e6
+    );
+    assert_eq!((parquet.runs, parquet.item_bytes), (RUNS, item_bytes));
+    assert!(parquet.pieces > 1, "{} batches", parquet.pieces);
+    assert!(
+        parquet.grew <= BOUND_BYTES,
+        "streaming the Parquet campaign grew the peak by {} bytes (bound {BOUND_BYTES})",
+        parquet.grew
+    );
+}
+
+/// What `streamed` saw.
+struct Streamed {
+    runs: usize,
+    /// The bytes of every run's item, made and dropped.
+    item_bytes: u64,
+    /// CSV chunks or Parquet batches.
+    pieces: usize,
+    seconds: f64,
+    /// How much the process's peak resident memory grew.
+    grew: u64,
+}
+
+/// `ingest::stream_recordings` of `files` (8 MB pieces), each run's item made and dropped, with
+/// the peak memory it added.
+fn streamed(files: &BTreeMap<String, Vec<u8>>, params: &IngestParams) -> Streamed {
     reset_peak();
     let before = status_bytes("VmRSS");
-    let (mut parquet_runs, mut parquet_bytes) = (0usize, 0u64);
+    let (mut runs, mut item_bytes) = (0usize, 0u64);
     let started = std::time::Instant::now();
-    let batches = ingest::stream_recordings(&files, &params, 8 << 20, &mut |r| {
-        parquet_runs += 1;
-        parquet_bytes += groove::recording::item::encode(&r).len() as u64;
+    let pieces = ingest::stream_recordings(files, params, 8 << 20, &mut |r| {
+        runs += 1;
+        item_bytes += groove::recording::item::encode(&r).len() as u64;
     })
-    .unwrap_or_else(|why| panic!("the Parquet campaign did not stream: {why}"));
-    let grew = status_bytes("VmHWM").saturating_sub(before);
-    println!(
-        "100k Parquet streamed: {parquet_runs} runs in {batches} batches of row groups, {:.1} s; \
-         input {:.0} MB held; peak grew {:.0} MB",
-        started.elapsed().as_secs_f64(),
-        files["trajectories.parquet"].len() as f64 / 1e6,
-        grew as f64 / 1e6
-    );
-    assert_eq!((parquet_runs, parquet_bytes), (RUNS, item_bytes));
-    assert!(batches > 1, "{batches} batches");
-    assert!(
-        grew <= BOUND_BYTES,
-        "streaming the Parquet campaign grew the peak by {grew} bytes (bound {BOUND_BYTES})"
-    );
+    .unwrap_or_else(|why| panic!("the campaign did not stream: {why}"));
+    Streamed {
+        runs,
+        item_bytes,
+        pieces,
+        seconds: started.elapsed().as_secs_f64(),
+        grew: status_bytes("VmHWM").saturating_sub(before),
+    }
 }
 
 /// The issue's bound on a 100,000-run campaign's peak memory.
