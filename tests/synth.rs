@@ -73,6 +73,8 @@ fn synth_as_parquet_writes_the_values_of_the_csv() {
     std::fs::write(&truth_path, toml::to_string(&small_truth()).unwrap()).unwrap();
     let (csv, parquet) = (dir.path().join("csv"), dir.path().join("parquet"));
     run_synth(&truth_path, &csv).unwrap();
+    // into a folder an earlier synth wrote as CSV: the CSV form goes, so the folder is one dataset
+    run_synth(&truth_path, &parquet).unwrap();
     run_synth_as(&truth_path, &parquet, true).unwrap();
     assert!(!parquet.join("trajectories.csv").exists());
     let read = |d: &Path, names: [&str; 2]| {

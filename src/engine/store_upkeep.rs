@@ -88,10 +88,10 @@ impl Store {
     }
 
     /// Keep only the given keys and the objects they reference, and the objects `also_live`
-    /// names. A pack none of whose objects is
-    /// referenced is removed; one mostly unreferenced (more than half its bytes) is returned with
-    /// the objects still referenced, for `pack_writer::rewrite` to copy out before it goes.
-    /// Returns (entries, objects) removed, and those packs.
+    /// names. A pack none of whose objects is referenced is removed; one mostly unreferenced
+    /// (more than half its bytes) is returned with the objects still referenced, for
+    /// `pack_writer::rewrite` to copy out before it goes. Returns (entries, objects) removed, and
+    /// those packs.
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,

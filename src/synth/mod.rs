@@ -51,13 +51,24 @@ pub fn run_synth_as(
         std::fs::write(name, body).map_err(|e| format!("cannot write {}: {e}", name.display()))
     };
     write(&out_dir.join("runs.csv"), &tables.runs_csv)?;
+    let (csv, parquet_file) = (
+        out_dir.join("trajectories.csv"),
+        out_dir.join("trajectories.parquet"),
+    );
+    // the other form of an earlier synth into this folder goes: both would be ambiguous
+    let other = if parquet { &csv } else { &parquet_file };
+    match std::fs::remove_file(other) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(format!("cannot remove {}: {e}", other.display()).into())
+        }
+        _ => {}
+    }
     if parquet {
-        let name = out_dir.join("trajectories.parquet");
         let bytes = tables::parquet_of_csv(&tables.trajectories_csv)?;
-        std::fs::write(&name, bytes)
-            .map_err(|e| format!("cannot write {}: {e}", name.display()))?;
+        std::fs::write(&parquet_file, bytes)
+            .map_err(|e| format!("cannot write {}: {e}", parquet_file.display()))?;
     } else {
-        write(&out_dir.join("trajectories.csv"), &tables.trajectories_csv)?;
+        write(&csv, &tables.trajectories_csv)?;
     }
     write(&truth_dir.join("truth.toml"), &text)?;
     write(&truth_dir.join("runs_truth.csv"), &tables.runs_truth_csv)?;
