@@ -1,9 +1,8 @@
 //! sha256 hex digests, and the file-hash cache keyed by (path, size, mtime, inode, ctime).
 //!
 //! A file whose size, modification time, inode and change time are unchanged is not read
-//! again, so an
-//! unchanged large recording costs one `stat`; a `touch` changes the mtime, the file is rehashed,
-//! the hash is unchanged, and nothing downstream reruns.
+//! again, so an unchanged large recording costs one `stat`; a `touch` changes the mtime, the
+//! file is rehashed, the hash is unchanged, and nothing downstream reruns.
 
 use super::error::{EngineError, IoContext};
 pub use super::stage::FileStamp;

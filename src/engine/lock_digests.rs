@@ -1,9 +1,9 @@
 //! `.groove/lock-digests.json`: one digest per stage of `pipeline.lock`, so that a run which
 //! changes nothing can tell without parsing the lock (6.9 MB at 10,000 runs).
 //!
-//! Written after the lock, with the lock file's stamp (size, mtime, inode, ctime); trusted only while
-//! the lock still has that stamp. An edited, restored or half-replaced lock has another stamp,
-//! and the run then reads the lock itself, as it always could.
+//! Written after the lock, with the lock file's stamp (size, mtime, inode, ctime); trusted only
+//! while the lock still has that stamp. An edited, restored or half-replaced lock has another
+//! stamp, and the run then reads the lock itself, as it always could.
 
 use super::atomic::write_atomic;
 use super::hashing::stamp_of;
