@@ -356,9 +356,10 @@ pub fn ingest_items_whole<T: Send>(
 }
 
 /// The recordings of a clean interchange dataset whose runs' rows come grouped, handed to `each`
-/// one run at a time as `columnar::stream` reads them (`chunk_bytes` of CSV at a time); the number
-/// of pieces (CSV chunks or Parquet batches of row groups), or why it stopped (then `each` has seen only some runs: forget them and use
-/// `ingest`). For callers that keep no item in memory (the 100,000-run memory test).
+/// one run at a time as `columnar::stream` reads them (`chunk_bytes` of CSV at a time); the
+/// number of pieces (CSV chunks or Parquet batches of row groups), or why it stopped (then
+/// `each` has seen only some runs: forget them and use `ingest`). For callers that keep no item
+/// in memory (the 100,000-run memory test).
 pub fn stream_recordings(
     files: &BTreeMap<String, Vec<u8>>,
     params: &IngestParams,
