@@ -65,7 +65,7 @@ pub fn recordings(files: &BTreeMap<String, Vec<u8>>, min_frames: usize) -> Optio
 /// Reads trajectories.csv with the typed schema. `None` if the bytes hold anything the typed
 /// read might take differently from the row-by-row path: text that is not UTF-8, a double quote,
 /// a row with another number of fields than the header, a header that is not exactly the names.
-fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
+pub(crate) fn read_csv(bytes: &[u8]) -> Option<DataFrame> {
     let (bytes, data_lines) = check_csv(bytes)?;
     let df = parse_csv(bytes)?;
     (df.height() == data_lines).then_some(df)

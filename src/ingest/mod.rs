@@ -31,6 +31,9 @@ mod trackmate;
 mod trackmate_xml;
 mod trackpy;
 
+/// trajectories.csv read with the typed schema the fast path reads it with (`None` where the
+/// row-by-row path might read it otherwise); `groove synth --format parquet` writes it as is.
+pub(crate) use columnar::read_csv as typed_trajectories;
 pub use error::{IngestError, Problem};
 pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};

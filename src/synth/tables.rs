@@ -61,27 +61,13 @@ pub(crate) fn runs_truth_csv(runs: &[SynthRun]) -> String {
     out
 }
 
-/// trajectories.csv's text as a Parquet file: the same values, typed (`run` text, `particle`
-/// and `frame` Int64, `t_s` and `z_m` Float64, each number parsed from its text as the
-/// ingest parses it), zstd-compressed, in polars' row groups.
+/// trajectories.csv's text as a Parquet file: the same values, typed as ingest's fast path
+/// reads the CSV (`ingest::typed_trajectories`: `run` text, `particle` and `frame` Int64, `t_s`
+/// and `z_m` Float64), zstd-compressed, in polars' row groups.
 pub(crate) fn parquet_of_csv(csv: &str) -> Result<Vec<u8>, String> {
     use polars::prelude::*;
-    let schema: Schema = [
-        ("run", DataType::String),
-        ("particle", DataType::Int64),
-        ("frame", DataType::Int64),
-        ("t_s", DataType::Float64),
-        ("z_m", DataType::Float64),
-    ]
-    .into_iter()
-    .map(|(n, t)| Field::new(n.into(), t))
-    .collect();
-    let mut df = CsvReadOptions::default()
-        .with_has_header(true)
-        .with_schema(Some(Arc::new(schema)))
-        .into_reader_with_file_handle(std::io::Cursor::new(csv.as_bytes()))
-        .finish()
-        .map_err(|e| format!("the trajectories do not read back as a table ({e})"))?;
+    let mut df = crate::ingest::typed_trajectories(csv.as_bytes())
+        .ok_or("the trajectories do not read back as a typed table")?;
     let mut bytes = Vec::new();
     ParquetWriter::new(&mut bytes)
         .with_compression(ParquetCompression::Zstd(None))
