@@ -1696,9 +1696,9 @@ fn streamed_items_of_parquet_are_the_csv_items() {
     let csv = ingest::ingest_items(&interchange_csv(&recs), &params()).unwrap();
     let parquet = ingest::ingest_items(&interchange_parquet(&recs), &params()).unwrap();
     assert!(
-        parquet
-            .how
-            .starts_with("decoded from Parquet in 1 batch of whole row groups (1 row group)"),
+        parquet.how.starts_with(
+            "decoded from Parquet in 1 batch of whole row groups (1 row group), each run's item"
+        ),
         "{}",
         parquet.how
     );
@@ -1751,7 +1751,8 @@ fn parquet_is_decoded_a_batch_of_row_groups_at_a_time_with_the_csv_items() {
     let items = ingest::ingest_items_in_chunks(&small, &params(), 20 * 32).unwrap();
     assert!(
         items.how.starts_with(&format!(
-            "decoded from Parquet in {batches} batches of whole row groups ({} row groups)",
+            "decoded from Parquet in {batches} batches of whole row groups ({} row groups), \
+             each batch grouped while the next was decoded",
             groups.len()
         )),
         "{}",

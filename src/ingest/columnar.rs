@@ -450,12 +450,16 @@ impl std::fmt::Display for Pieces {
             Pieces::CsvChunks(n) => write!(f, "read in {n} chunk{} of trajectories", s(n)),
             Pieces::Parquet(b) => write!(
                 f,
-                "decoded from Parquet in {} batch{} of whole row groups ({} row group{}), \
-                 each batch grouped while the next was decoded",
+                "decoded from Parquet in {} batch{} of whole row groups ({} row group{}){}",
                 b.batches,
                 if b.batches == 1 { "" } else { "es" },
                 b.row_groups,
                 s(b.row_groups),
+                // with one batch there is no next one to decode meanwhile
+                match b.batches > 1 {
+                    true => ", each batch grouped while the next was decoded",
+                    false => "",
+                }
             ),
         }
     }
