@@ -250,6 +250,34 @@ fn fits_csv_has_exactly_the_contract_columns_and_one_row_per_single_run() {
     }
 }
 
+/// The closing line names the report as the user can open it from where they ran groove: a
+/// project run from its parent folder shows `<project>/reports/report.html`, not a path
+/// relative to the project that would not open from there.
+#[test]
+fn the_closing_line_names_the_report_as_seen_from_the_current_folder() {
+    let project = copy_of_shared("closing_line");
+    let parent = project.parent().unwrap();
+    let name = project.file_name().unwrap().to_str().unwrap();
+    let (config, data, out) = (
+        format!("{name}/pipeline.toml"),
+        format!("{name}/data"),
+        format!("{name}/reports"),
+    );
+    let args = ["run", "--config", &config, "--data", &data, "--out", &out];
+    let done = groove(parent, &args);
+    assert_success(&done, "a rerun from the project's parent folder");
+    let stdout = text(&done.stdout);
+    let shown = stdout
+        .lines()
+        .find_map(|l| l.split("; report: ").nth(1))
+        .unwrap_or_else(|| panic!("no report in the closing line:\n{stdout}"));
+    assert_eq!(shown, format!("{name}/reports/report.html"), "{stdout}");
+    assert!(
+        parent.join(shown).is_file(),
+        "{shown} does not open from {parent:?}"
+    );
+}
+
 #[test]
 fn summary_json_has_the_contract_keys() {
     let s = shared();

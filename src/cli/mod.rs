@@ -189,6 +189,20 @@ fn print_would_run(summary: &groove::engine::run::RunSummary) {
     }
 }
 
+/// A path as the user can open it from where they ran groove: relative to the current folder
+/// when it lies inside it, otherwise whole (a path relative to the project's folder would not
+/// open from elsewhere).
+fn openable(path: &std::path::Path) -> String {
+    let whole = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let cwd = std::env::current_dir().ok();
+    let shown = cwd
+        .as_deref()
+        .and_then(|cwd| whole.strip_prefix(cwd).ok())
+        .filter(|rel| !rel.as_os_str().is_empty())
+        .unwrap_or(&whole);
+    shown.to_string_lossy().replace('\\', "/")
+}
+
 /// The closing lines of `run`: stages run and reused, time, the report, Slurm and remote lines.
 fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSummary) {
     let report = pipeline.reports_dir.join("report.html");
@@ -203,7 +217,7 @@ fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSumm
         if summary.ran.len() == 1 { "" } else { "s" },
         summary.reused.len(),
         summary.elapsed_s,
-        pipeline.show(&shown)
+        openable(&shown)
     );
     if let Some(line) = &summary.slurm_line {
         println!("groove: {line}");

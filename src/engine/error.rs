@@ -14,7 +14,8 @@ pub enum EngineError {
     /// A problem with the command line or the project as a whole.
     #[error("{0}")]
     Usage(String),
-    #[error("{}: {source}", path.display())]
+    /// A file or folder groove could not read or write, with what to do about it.
+    #[error("{}: {source}; {}", path.display(), io_hint(source.kind()))]
     Io {
         path: PathBuf,
         source: std::io::Error,
@@ -45,6 +46,21 @@ impl EngineError {
     }
 }
 
+/// What to do about an IO error of this kind.
+fn io_hint(kind: std::io::ErrorKind) -> &'static str {
+    use std::io::ErrorKind as K;
+    match kind {
+        K::NotFound => "check that the path exists, or fix it in pipeline.toml or the command line",
+        K::PermissionDenied => "check the permissions of the file and of its folder",
+        K::StorageFull | K::QuotaExceeded => {
+            "free disk space (`groove gc` drops what the store no longer needs), then run again"
+        }
+        K::ReadOnlyFilesystem => "the file system is read-only: put the project on a writable one",
+        K::AlreadyExists => "move it out of the way, then run again",
+        _ => "check the file and its folder (disk, mount, permissions), then run again",
+    }
+}
+
 /// Attach a path to an IO result.
 pub trait IoContext<T> {
     fn at(self, path: &Path) -> Result<T, EngineError>;
@@ -53,5 +69,29 @@ pub trait IoContext<T> {
 impl<T> IoContext<T> for std::io::Result<T> {
     fn at(self, path: &Path) -> Result<T, EngineError> {
         self.map_err(|e| EngineError::io(path, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_io_error_names_the_path_and_says_what_to_do() {
+        let e = EngineError::io(
+            Path::new("/data/runs.csv"),
+            std::io::Error::from(std::io::ErrorKind::PermissionDenied),
+        );
+        let text = e.to_string();
+        assert!(text.starts_with("/data/runs.csv: "), "{text}");
+        assert!(
+            text.ends_with("check the permissions of the file and of its folder"),
+            "{text}"
+        );
+        let full = EngineError::io(
+            Path::new("store"),
+            std::io::Error::from(std::io::ErrorKind::StorageFull),
+        );
+        assert!(full.to_string().contains("free disk space"), "{full}");
     }
 }
