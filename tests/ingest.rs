@@ -659,7 +659,14 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
         let out = Ingest.run(&input).map_err(|e| e.to_string());
         (out, said.into_inner().unwrap())
     };
-    for (what, files) in [("grouped", grouped), ("shuffled", shuffled), ("bad", bad)] {
+    let parquet = interchange_parquet(&recs);
+    let cases = [
+        ("grouped", grouped),
+        ("shuffled", shuffled),
+        ("bad", bad),
+        ("parquet", parquet),
+    ];
+    for (what, files) in cases {
         let dir = tempfile::tempdir().unwrap();
         let mut on_disk = BTreeMap::new();
         for (name, bytes) in &files {
@@ -674,6 +681,10 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
         match what {
             // streamed from the file, not read whole
             "grouped" => assert!(how.contains("runs, read in 1 chunk of"), "{how}"),
+            "parquet" => assert!(
+                how.contains("runs, decoded from Parquet in 1 batch"),
+                "{how}"
+            ),
             "shuffled" => assert!(how.contains("read whole (the rows of a run"), "{how}"),
             _ => assert!(in_memory.unwrap_err().contains("row"), "a bad row is named"),
         }
@@ -718,7 +729,7 @@ fn a_dataset_left_on_disk_gives_the_outputs_of_its_bytes_in_memory() {
             "{what}: {err}"
         );
         // a stale hash: the content changed after the key was made
-        for name in ["runs.csv", "trajectories.csv"] {
+        for name in on_disk.keys() {
             let mut stale = on_disk.clone();
             let path = stale[name].path.clone();
             stale.insert(name.to_string(), InputFile::checked(path, "0".repeat(64)));
@@ -1769,4 +1780,84 @@ fn parquet_is_decoded_a_batch_of_row_groups_at_a_time_with_the_csv_items() {
         items.how
     );
     assert_eq!(items.runs, csv.runs);
+}
+
+/// A Parquet file read in order while its footer was read apart: `footer` stands for what a
+/// read at an offset finds, `stream` for what the pass in order finds.
+struct TwoViews {
+    footer: Vec<u8>,
+    stream: Cursor<Vec<u8>>,
+}
+
+impl std::io::Read for TwoViews {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.stream.read(buf)
+    }
+}
+
+impl ingest::Source for TwoViews {
+    fn file_len(&self) -> std::io::Result<u64> {
+        Ok(self.footer.len() as u64)
+    }
+
+    fn read_at(&self, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+        let at = offset as usize;
+        buf.copy_from_slice(&self.footer[at..at + buf.len()]);
+        Ok(())
+    }
+}
+
+/// Every byte decoded from a Parquet file on disk is a byte of the checked pass in order: a
+/// footer (read first, to plan the batches) that is not the one the pass meets at the end, or a
+/// file that ends early or goes on past the length it had, is a file that changed while it was
+/// read, an error (not a fallback to the whole read, and never items of a mixed file).
+#[test]
+fn a_parquet_file_that_changes_while_it_is_read_is_an_error() {
+    let recs = known_recordings();
+    let files = interchange_parquet(&recs);
+    let bytes = files["trajectories.parquet"].clone();
+    let mut in_map = files.clone();
+    in_map.insert("trajectories.parquet".into(), Vec::new());
+    let read = |stream: Vec<u8>| {
+        let mut source = TwoViews {
+            footer: bytes.clone(),
+            stream: Cursor::new(stream),
+        };
+        let keep = |b: Vec<u8>| b;
+        let got = ingest::stream_items(
+            &in_map,
+            Some(&mut source),
+            &params(),
+            ingest::CHUNK_BYTES,
+            &keep,
+            None,
+        );
+        got.map(|s| match s {
+            ingest::Streamed::Done(items) => items.runs,
+            ingest::Streamed::ReadWhole(why) => panic!("read whole: {why}"),
+        })
+    };
+    // the same bytes both ways: the items of the file in memory
+    let want = ingest::ingest_items(&files, &params()).unwrap().runs;
+    assert_eq!(read(bytes.clone()).unwrap(), want);
+    // a byte of the footer other in the pass in order
+    let mut other_footer = bytes.clone();
+    let n = other_footer.len();
+    other_footer[n - 9] ^= 1;
+    // shorter, longer
+    let shorter = bytes[..n - 1].to_vec();
+    let mut longer = bytes.clone();
+    longer.push(b'\n');
+    for (what, stream) in [
+        ("footer", other_footer),
+        ("shorter", shorter),
+        ("longer", longer),
+    ] {
+        let err = read(stream).expect_err(what);
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidData, "{what}: {err}");
+        assert!(
+            err.to_string().contains("changed while it was read"),
+            "{what}: {err}"
+        );
+    }
 }

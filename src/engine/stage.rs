@@ -196,6 +196,21 @@ enum Reading {
     Done,
 }
 
+impl CheckedRead {
+    /// The file's length now.
+    pub fn file_len(&self) -> std::io::Result<u64> {
+        Ok(self.file.metadata()?.len())
+    }
+
+    /// `buf.len()` bytes from `offset`, read apart from the pass in order (which this does not
+    /// move). Unchecked: a caller keeps what it reads here only if the same bytes come by in
+    /// the checked pass too (a Parquet reader's footer, read first to plan the pass).
+    pub fn read_at(&self, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+        use std::os::unix::fs::FileExt;
+        self.file.read_exact_at(buf, offset)
+    }
+}
+
 impl std::io::Read for CheckedRead {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         if buf.is_empty() {

@@ -19,7 +19,7 @@
 use super::csv_fast;
 use super::csv_pieces::{for_each_piece, Stop};
 use super::interchange;
-use super::parquet_groups::{self, Batches, COLUMNS};
+use super::parquet_groups::{self, Batches, InMemory, Source, COLUMNS};
 use super::run_memo::{self, RunMemo, Step};
 use super::sanity;
 use super::table::Table;
@@ -359,16 +359,17 @@ pub const NOT_GROUPED: &str = "the rows of a run are not together";
 /// The recordings of a clean interchange dataset handed to `each` in file order, a piece's worth
 /// at a time (the runs whose last row was in the piece just read): trajectories.csv is read
 /// `chunk_bytes` at a time, so neither the whole table nor all recordings are held (a Parquet
-/// file is decoded a batch of whole row groups at a time, `parquet_groups::for_each_batch`).
-/// The CSV comes from `csv` if given (the file named trajectories.csv in `files`, whose bytes there
-/// are not read), else from `files`. Says how it read (`Pieces`). It needs each run's rows to be
+/// file is read once and decoded a batch of whole row groups at a time,
+/// `parquet_groups::for_each_batch`). The trajectories come from `traj` if given (the file
+/// named trajectories.csv or .parquet in `files`, whose bytes there are not read), else from
+/// `files`. Says how it read (`Pieces`). It needs each run's rows to be
 /// one block (in any order within it), as `groove synth` and most trackers write them. At anything
 /// else, or anything `recordings` would give `None` for, it stops with the reason: the caller then
 /// forgets what `each` received and reads the dataset whole (`ingest::ingest`), which sorts the
 /// rows or names the problems. On clean grouped data it gives the runs `recordings` gives.
 pub fn stream(
     files: &BTreeMap<String, Vec<u8>>,
-    csv: Option<&mut (dyn std::io::Read + Send)>,
+    traj: Option<&mut dyn Source>,
     min_frames: usize,
     chunk_bytes: usize,
     memo: Option<RunMemo>,
@@ -400,27 +401,23 @@ pub fn stream(
         each,
     };
     let parquet = traj_name.to_ascii_lowercase().ends_with(".parquet");
-    let chunks = match csv {
-        _ if parquet => {
-            // a batch of row groups decoded on a thread of its own while the one before is
-            // grouped, and the runs of a slice encoded and kept while the next is grouped
-            let mut each = |df: &DataFrame| {
-                stream.chunk(df)?;
-                stream.hand_over();
-                Ok(())
-            };
-            let rows = chunk_bytes / parquet_groups::ROW_BYTES;
-            Pieces::Parquet(parquet_groups::for_each_batch(
-                traj_bytes, rows, PROBLEM, &mut each,
-            )?)
-        }
-        Some(read) => Pieces::CsvChunks(csv_chunks(read, chunk_bytes, memo, &mut stream)?),
-        None => Pieces::CsvChunks(csv_chunks(
-            &mut &traj_bytes[..],
-            chunk_bytes,
-            memo,
-            &mut stream,
-        )?),
+    let mut in_memory = InMemory::new(traj_bytes);
+    let traj: &mut dyn Source = match traj {
+        Some(traj) => traj,
+        None => &mut in_memory,
+    };
+    let chunks = if parquet {
+        // a batch of row groups read and decoded on a thread of its own while the one before
+        // is grouped, and the runs of a slice encoded and kept while the next is grouped
+        let mut each = |df: &DataFrame| {
+            stream.chunk(df)?;
+            stream.hand_over();
+            Ok(())
+        };
+        let rows = chunk_bytes / parquet_groups::ROW_BYTES;
+        Pieces::Parquet(parquet_groups::for_each_batch(traj, rows, &mut each)?)
+    } else {
+        Pieces::CsvChunks(csv_chunks(traj, chunk_bytes, memo, &mut stream)?)
     };
     stream.finish()?;
     Ok(chunks)

@@ -37,6 +37,7 @@ pub(crate) use columnar::read_csv as typed_trajectories;
 pub use error::{IngestError, Problem};
 pub use output::{item_name, skipped_json, Skipped};
 pub use params::{Axis, Calibration, Format, IngestParams, RunEntry};
+pub use parquet_groups::Source;
 
 use crate::recording::{item, Recording};
 use csv_pieces::Stop;
@@ -252,12 +253,13 @@ pub enum Streamed<T> {
 
 /// The items of a clean interchange dataset whose runs' rows come grouped, streamed
 /// (`columnar::stream`): each run's item is made as its last row is read and handed to `keep`.
-/// trajectories.csv comes from `csv` if given (then it stands in `files` with no bytes, for its
-/// name), a piece at a time, so a file larger than memory is never held. The error is a failure
-/// to read `csv` (or its content changing, as `InputFile` checks).
+/// The trajectories come from `traj` if given (then the file stands in `files` with no bytes,
+/// for its name), a piece or a batch of row groups at a time, so a file larger than memory is
+/// never held. The error is a failure to read `traj` (or its content changing, as `InputFile`
+/// checks).
 pub fn stream_items<T: Send>(
     files: &BTreeMap<String, Vec<u8>>,
-    csv: Option<&mut (dyn std::io::Read + Send)>,
+    traj: Option<&mut dyn Source>,
     params: &IngestParams,
     chunk_bytes: usize,
     keep: &(dyn Fn(Vec<u8>) -> T + Sync),
@@ -298,7 +300,7 @@ pub fn stream_items<T: Send>(
         });
         let streamed = columnar::stream(
             files,
-            csv,
+            traj,
             params.min_frames,
             chunk_bytes,
             memo.as_ref().map(|m| m.get),

@@ -1,14 +1,14 @@
 //! The `ingest` stage kind: the dataset folder's files in, checked recordings and the list of skipped runs out.
 
 use crate::engine::stage::{
-    typed_params, Artifact, InputFile, ParamError, StageError, StageInput, StageKind, StageOutputs,
-    IN_STORE_INPUT,
+    typed_params, Artifact, CheckedRead, InputFile, ParamError, StageError, StageInput, StageKind,
+    StageOutputs, IN_STORE_INPUT,
 };
 use crate::ingest::{self, IngestParams, Items, Streamed};
 use std::collections::BTreeMap;
 
-/// `kind = "ingest"`: input `dataset` (a folder's top-level files; trajectories.csv is read from
-/// disk in pieces, so it may be larger than memory), outputs `runs` (run → `Recording` in
+/// `kind = "ingest"`: input `dataset` (a folder's top-level files; trajectories.csv or .parquet
+/// is read from disk in pieces, so it may be larger than memory), outputs `runs` (run → `Recording` in
 /// the binary format of `recording::item`) and `skipped` (JSON list of `{run, reason}`). (A Parquet table of all samples
 /// was an output too; no stage read it, and writing it cost as much as reading the CSV typed.)
 pub struct Ingest;
@@ -124,40 +124,61 @@ fn items_of<T: Send>(
         }
         Dataset::OnDisk(files) => files,
     };
-    const STREAMED: &str = "trajectories.csv";
+    // the trajectories stand in the map with no bytes, for their name: read in pieces below
+    let streamed = ["trajectories.csv", "trajectories.parquet"]
+        .into_iter()
+        .find(|name| files.contains_key(*name));
     let mut bytes = BTreeMap::new();
     for (name, file) in files {
-        // trajectories.csv stands in the map with no bytes, for its name
-        let read = if name == STREAMED {
-            Vec::new()
-        } else {
-            file.read()?
+        let read = match Some(name.as_str()) == streamed {
+            true => Vec::new(),
+            false => file.read()?,
         };
         bytes.insert(name.clone(), read);
     }
-    let Some(csv) = files.get(STREAMED) else {
+    let Some((streamed, traj)) = streamed.and_then(|name| Some((name, files.get(name)?))) else {
         return ingest::ingest_items_kept(&bytes, params, ingest::CHUNK_BYTES, keep)
             .map_err(failed);
     };
-    let streamed = ingest::stream_items(
+    let streamed_items = ingest::stream_items(
         &bytes,
-        Some(&mut csv.open()?),
+        Some(&mut OnDisk(traj.open()?)),
         params,
         ingest::CHUNK_BYTES,
         keep,
         memo,
     );
-    let why = match streamed {
+    let why = match streamed_items {
         Ok(Streamed::Done(items)) => return Ok(items),
         Ok(Streamed::ReadWhole(why)) => why,
         Err(e) => {
             return Err(StageError(format!(
                 "{} could not be read: {e}",
-                csv.path.display()
+                traj.path.display()
             )))
         }
     };
     // not for the fast path: read whole, which sorts the rows or names every problem
-    bytes.insert(STREAMED.into(), csv.read()?);
+    bytes.insert(streamed.into(), traj.read()?);
     ingest::ingest_items_whole(&bytes, params, why, keep).map_err(failed)
+}
+
+/// A trajectories file on disk as the streamed read takes it: read in order through the
+/// engine's check, and at an offset for a Parquet footer.
+struct OnDisk(CheckedRead);
+
+impl std::io::Read for OnDisk {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.0.read(buf)
+    }
+}
+
+impl ingest::Source for OnDisk {
+    fn file_len(&self) -> std::io::Result<u64> {
+        self.0.file_len()
+    }
+
+    fn read_at(&self, buf: &mut [u8], offset: u64) -> std::io::Result<()> {
+        self.0.read_at(buf, offset)
+    }
 }
