@@ -249,6 +249,27 @@ fn check_two(seed: Option<u64>) -> String {
     .join(", ")
 }
 
+/// A rolling resistance beside a 3 mm waviness: both named (the wave alone had bent to stand
+/// in for both, and the resistance then scored nothing), each within 15 %.
+fn check_resistance_and_wave(seed: Option<u64>) -> String {
+    let d = run("resistance_and_waviness", seed);
+    exactly(
+        &d,
+        &[
+            ("rolling_resistance", "resistance"),
+            ("position_dependent_force", "periodic in z"),
+        ],
+    );
+    let p = |n| param(&d, "position_dependent_force", "periodic", n);
+    let c = param(&d, "rolling_resistance", "resistance", "coefficient");
+    [
+        within(c, 0.004, "resistance"),
+        within(p("amplitude_mps2"), 0.05, "amplitude"),
+        within(p("wavelength_m"), 3e-3, "wavelength"),
+    ]
+    .join(", ")
+}
+
 /// An effect of the fixed list (tests/fixtures/truths/<name>.toml, lab coordinates): named with
 /// its form, nothing else accepted, and each of `sizes` (parameter, truth) within 15 %.
 fn check_listed(
@@ -360,6 +381,11 @@ fn two_effects_at_once_are_both_named() {
 }
 
 #[test]
+fn a_rolling_resistance_beside_a_waviness_are_both_named() {
+    check_resistance_and_wave(None);
+}
+
+#[test]
 fn quantized_positions_with_outliers_give_no_finding() {
     assert!(check_null("null_quantized", None), "a finding on a null");
 }
@@ -434,14 +460,20 @@ fn waviness_from_half_a_millimetre_to_five_over_seeds() {
 }
 
 #[test]
-#[ignore = "heavy: 5 seeds each of the bump, the vibration and two effects at once"]
+#[ignore = "heavy: 5 seeds each of the bump, the vibration and two pairs of effects at once"]
 fn bump_vibration_and_two_effects_over_seeds() {
     sweep(
-        &["localized_force", "time_force", "two_effects"],
+        &[
+            "localized_force",
+            "time_force",
+            "two_effects",
+            "resistance_and_waviness",
+        ],
         |case, seed| match case {
             "localized_force" => check_localized(seed),
             "time_force" => check_time(seed),
-            _ => check_two(seed),
+            "two_effects" => check_two(seed),
+            _ => check_resistance_and_wave(seed),
         },
     );
 }
