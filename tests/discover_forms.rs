@@ -31,6 +31,9 @@
 //!   λ within 0.1 %) 5/5 each. Seed 6 of the 8 mm force had failed on a build of the night
 //!   before (a tilt accepted first, then the wave, then a bump, all kept); now the tilt accepted
 //!   in round 1 is removed by backward elimination once the wave is in (LR 0.4, p 0.51);
+//! - a rolling resistance (c = 0.004) beside a 3 mm waviness (2026-11-26, release pipeline,
+//!   seeds 1–3): 3/3 named, c within 1 %, amplitude within 0.5 %, wavelength within 0.1 %
+//!   (seeds 1 and 2 failed before `forward::mixed_pairs`: a 4.9 mm wave, a bump, a spline);
 //! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
 //!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
 
