@@ -935,9 +935,9 @@ impl Trials<'_> {
                 wanted_for(&[form]),
                 Some((self.set.fold, self.set.opts.folds)),
             );
-            let mut starts = data_starts(form, &props);
-            starts.extend(self.starts(s));
-            starts.dedup();
+            // the proposals of the new residuals only: the form's own starts (its screen's
+            // estimate, the proposals of the residuals before) are those it bent from
+            let starts = data_starts(form, &props);
             let m = beside.extend(
                 form,
                 &starts,
