@@ -905,14 +905,14 @@ impl Trials<'_> {
     /// stand in for both: a wave of 3 mm beside a rolling resistance was fitted as one of 4.9 mm
     /// and 1.5–1.8× the amplitude, after which the resistance scored nothing (its first-order
     /// statistic is taken at the bent wave) and a bump and a spline took the rest. So each named
-    /// term of the strongest significant effects is fitted in full alone, the form is started
-    /// again from the proposals of that model's residuals and fitted with it, and of the pairs
-    /// that predict held-out runs better than the form alone (paired t above its critical
-    /// value) the one with the least held-out error is accepted together (the first that
-    /// passed, a saturating drag with T' ≈ 0.02 s²/m beside a wave still bent, was not the
-    /// answer: the resistance came later in the order); backward elimination then re-tests each given the
-    /// other. Only when drift is left beside the form alone (`drift_beside`): each try is a few
-    /// full fits and a cross-validation.
+    /// term of the strongest significant effects is fitted in full alone, the form is started again
+    /// from the proposals of that model's residuals and fitted with it, and of the pairs that
+    /// predict held-out runs better than the form alone (paired t above its critical value) the one
+    /// with the least held-out error is accepted together (the first that passed, a saturating drag
+    /// with T' ≈ 0.02 s²/m beside a wave still bent, was not the answer: the resistance came later
+    /// in the order); backward elimination then re-tests each given the other. Only when drift is
+    /// left beside the form alone (`drift_beside`): each try is a few full fits and a cross-
+    /// validation.
     fn mixed_pairs(&mut self, s: usize, s_cv: &CvResult, top: &[usize]) {
         let form = self.all[s];
         let mut best: Option<(usize, CvResult, Model, f64)> = None;
