@@ -85,11 +85,11 @@ pub struct Batches {
     pub batches: usize,
 }
 
-/// One batch: its rows, and the bytes of the file that hold them (from the end of the batch
-/// before, so that the batches' bytes cover the file in order up to the footer).
+/// One batch: its rows, and where the bytes of the file that hold them end (they start where
+/// the batch before ended, so that the batches' bytes cover the file in order up to the footer).
 struct Batch {
     rows: Range<usize>,
-    bytes: Range<u64>,
+    end: u64,
 }
 
 /// Hands `each` the file's rows in order, a row group at a time (a larger one in slices of
@@ -121,7 +121,7 @@ pub fn for_each_batch(
         scope.spawn(move || {
             let mut at = 0;
             for batch in batches {
-                let df = read_to(source, len, &mut at, batch.bytes.end).and_then(|buffer| {
+                let df = read_to(source, len, &mut at, batch.end).and_then(|buffer| {
                     decode(&buffer, Some(metadata.clone()), Some(batch.rows.clone()))
                         .ok_or(Stop::Reason(PROBLEM))
                 });
@@ -195,8 +195,8 @@ fn metadata(len: u64, footer_at: u64, footer: &[u8]) -> Option<FileMetadataRef> 
 }
 
 /// The file's rows in batches of whole consecutive row groups, each at least `batch_rows` rows
-/// but the last (one batch of no rows for a file of no row groups), with their bytes; `None`
-/// when the row groups' bytes are not in file order before the footer.
+/// but the last (one batch of no rows for a file of no row groups), with where their bytes end;
+/// `None` when the row groups' bytes are not in file order before the footer.
 fn plan(metadata: &FileMetadata, batch_rows: usize, footer_at: u64) -> Option<Vec<Batch>> {
     let mut batches: Vec<Batch> = Vec::new();
     let (mut row, mut byte) = (0, 0);
@@ -209,20 +209,17 @@ fn plan(metadata: &FileMetadata, batch_rows: usize, footer_at: u64) -> Option<Ve
         match batches.last_mut() {
             Some(open) if open.rows.len() < batch_rows => {
                 open.rows.end = end;
-                open.bytes.end = bytes.end;
+                open.end = bytes.end;
             }
             _ => batches.push(Batch {
                 rows: row..end,
-                bytes: byte..bytes.end,
+                end: bytes.end,
             }),
         }
         (row, byte) = (end, bytes.end);
     }
     if batches.is_empty() {
-        batches.push(Batch {
-            rows: 0..0,
-            bytes: 0..0,
-        });
+        batches.push(Batch { rows: 0..0, end: 0 });
     }
     Some(batches)
 }
