@@ -263,6 +263,16 @@ fn check_resistance_and_wave(seed: Option<u64>) -> String {
             ("position_dependent_force", "periodic in z"),
         ],
     );
+    // accepted as a pair in one round, the wave started again beside the resistance (not the
+    // wave alone first and the resistance never)
+    for f in d.findings.iter().filter(|f| f.accepted) {
+        let why = &f.evidence.decision;
+        assert!(
+            why.contains("accepted together with") && why.contains("drift probes still flagged"),
+            "{}: {why}",
+            f.effect
+        );
+    }
     let p = |n| param(&d, "position_dependent_force", "periodic", n);
     let c = param(&d, "rolling_resistance", "resistance", "coefficient");
     [

@@ -1142,7 +1142,7 @@ pub fn run_round(
                     effect(other)
                 ),
                 true => format!(
-                    "accepted together with {}: the {} alone passed, but bent to stand in for both; fitted together, started again from the residuals beside the {}, they predict held-out runs better than it alone (paired t against the current model = {t:.2})",
+                    "accepted together with {}: the {} alone passed, but the drift probes still flagged a mismatch beside it; started again from the residuals beside the {} and fitted with it, the two predict held-out runs better than it alone (paired t against the current model = {t:.2})",
                     effect(other),
                     effect(b),
                     effect(i)
