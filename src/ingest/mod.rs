@@ -22,6 +22,7 @@ mod manifest;
 pub mod output;
 pub mod params;
 mod parquet_groups;
+mod parquet_pages;
 mod run_memo;
 mod samples;
 pub mod sanity;

@@ -3,6 +3,7 @@
 //! reading and decoding the next batch overlaps grouping the one before.
 
 use super::csv_pieces::Stop;
+use super::parquet_pages;
 use polars::prelude::*;
 use std::io::{Cursor, Read};
 use std::ops::Range;
@@ -75,7 +76,13 @@ impl Source for InMemory<'_> {
 /// `z_m` floats (or integers, read as floats, as the row-by-row path does). `None` if it cannot
 /// be read or a column has another type.
 pub fn read_whole(bytes: &[u8]) -> Option<DataFrame> {
-    decode(bytes, None, None)
+    let metadata = caught(|| {
+        ParquetReader::new(Cursor::new(bytes))
+            .get_metadata()
+            .cloned()
+    })?;
+    let rows = 0..metadata.num_rows;
+    decode(bytes, metadata, rows)
 }
 
 /// How `for_each_batch` read a file: its row groups, and the batches they were decoded in.
@@ -122,7 +129,7 @@ pub fn for_each_batch(
             let mut at = 0;
             for batch in batches {
                 let df = read_to(source, len, &mut at, batch.end).and_then(|buffer| {
-                    decode(&buffer, Some(metadata.clone()), Some(batch.rows.clone()))
+                    decode(&buffer, metadata.clone(), batch.rows.clone())
                         .ok_or(Stop::Reason(PROBLEM))
                 });
                 let stop = df.is_err();
@@ -185,10 +192,15 @@ fn sparse_file(len: u64) -> std::io::Result<memmap2::MmapMut> {
 fn metadata(len: u64, footer_at: u64, footer: &[u8]) -> Option<FileMetadataRef> {
     let mut file = sparse_file(len).ok()?;
     file[footer_at as usize..len as usize].copy_from_slice(footer);
-    let read = || {
-        let mut reader = ParquetReader::new(Cursor::new(&file[..len as usize]));
-        reader.get_metadata().cloned()
-    };
+    caught(|| {
+        ParquetReader::new(Cursor::new(&file[..len as usize]))
+            .get_metadata()
+            .cloned()
+    })
+}
+
+/// What `read` gives, `None` if it panics or fails.
+fn caught<T>(read: impl FnOnce() -> PolarsResult<T>) -> Option<T> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
         .ok()?
         .ok()
@@ -261,26 +273,19 @@ fn changed() -> Stop {
     ))
 }
 
-/// Decodes `rows` (all rows if `None`) of the five columns, each cast to its type.
-fn decode(
-    bytes: &[u8],
-    metadata: Option<FileMetadataRef>,
-    rows: Option<Range<usize>>,
-) -> Option<DataFrame> {
-    let projection: Vec<String> = COLUMNS.iter().map(|(n, _)| n.to_string()).collect();
-    let read = || {
+/// Decodes `rows` of the five columns, each cast to its type, once their pages' headers are
+/// found sound (`parquet_pages`: a damaged header would make polars abort the process).
+fn decode(bytes: &[u8], metadata: FileMetadataRef, rows: Range<usize>) -> Option<DataFrame> {
+    let names = COLUMNS.map(|(n, _)| n);
+    if !parquet_pages::sound(bytes, &metadata, rows.clone(), Some(&names)) {
+        return None;
+    }
+    let projection: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+    let df = caught(|| {
         let mut reader = ParquetReader::new(Cursor::new(bytes)).with_columns(Some(projection));
-        if let Some(metadata) = metadata {
-            reader.set_metadata(metadata);
-        }
-        if let Some(rows) = rows {
-            reader = reader.with_slice(Some((rows.start, rows.len())));
-        }
-        reader.finish()
-    };
-    let df = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
-        .ok()?
-        .ok()?;
+        reader.set_metadata(metadata);
+        reader.with_slice(Some((rows.start, rows.len()))).finish()
+    })?;
     let mut columns = Vec::with_capacity(COLUMNS.len());
     for (name, dtype) in &COLUMNS {
         let c = df.column(name).ok()?;

@@ -3,6 +3,7 @@
 
 use super::csv_check;
 use super::error::Problem;
+use super::parquet_pages;
 use polars::prelude::*;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -65,22 +66,30 @@ impl Table {
 
     /// Reads a Parquet file. Rows are numbered from 1 (Parquet has no header line).
     pub fn from_parquet(file: &str, bytes: &[u8]) -> Result<Table, Problem> {
-        let df = guarded(|| {
-            // one thread: a damaged file gives the same first error (and message) every time
-            ParquetReader::new(Cursor::new(bytes))
-                .read_parallel(ParallelStrategy::None)
-                .finish()
-        })
-        .map_err(|e| {
+        let damaged = |reason: &str| {
             Problem::file(
                 file,
-                format!(
-                    "cannot be read as Parquet: it is damaged or not Parquet ({})",
-                    parser_words(&e)
-                ),
+                format!("cannot be read as Parquet: it is damaged or not Parquet ({reason})"),
                 "write it again as a Parquet file, or use the CSV form",
             )
-        })?;
+        };
+        let metadata = guarded(|| {
+            ParquetReader::new(Cursor::new(bytes))
+                .get_metadata()
+                .cloned()
+        })
+        .map_err(|e| damaged(&parser_words(&e)))?;
+        // a damaged page header would make polars' decoder abort the process
+        if !parquet_pages::sound(bytes, &metadata, 0..metadata.num_rows, None) {
+            return Err(damaged("a page's header is damaged"));
+        }
+        let df = guarded(|| {
+            // one thread: a damaged file gives the same first error (and message) every time
+            let mut reader = ParquetReader::new(Cursor::new(bytes));
+            reader.set_metadata(metadata);
+            reader.read_parallel(ParallelStrategy::None).finish()
+        })
+        .map_err(|e| damaged(&parser_words(&e)))?;
         let mut table = Table::from_frame(file, &df)?;
         table.parquet = true;
         Ok(table)
