@@ -3,7 +3,8 @@
 //! the μ_pp profile's bound or interval containing the chapter's 1.4 when first impacts stick
 //! (one dataset, and unbiased with its coverage over 16 seeds), the fit's model reproducing
 //! noise-free synthesized tracks at the truth, the restitution law chosen by held-out error with
-//! parameters within 15 %, and pairs under a drag the single runs do not share flagged.
+//! parameters within 15 %, pairs under a drag the single runs do not share flagged, and a null
+//! recorded at 2 kHz flagged nothing.
 
 use groove::discover::pairs::check_pairs;
 use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
@@ -189,6 +190,57 @@ fn pairs_under_a_drag_the_single_runs_do_not_share_are_flagged() {
         ),
     );
     assert!(!f.accepted, "{:?}", f.evidence);
+}
+
+/// A null recorded at 2 kHz: the pairs' free fit, which contains the held one, never ends above
+/// it (from its default start it once ended with T0 at its floor and 18× the held χ², read as a
+/// mismatch at p = 0), and the single runs' μ about 1 % high (3σ by the joint fit's errors) is a
+/// significant but small difference, not other physics: nothing accepted.
+#[test]
+fn a_null_at_2_khz_flags_no_pair_physics() {
+    let truth = Truth::parse(&fixture("null_2khz.toml")).unwrap();
+    let recs = dataset(&fixture("null_2khz.toml"));
+    let options = groove::discover::Options {
+        bootstrap: 12,
+        bootstrap_iterations: 5,
+        folds: 4,
+        max_terms: 3,
+        seed: truth.seed,
+        ..groove::discover::Options::default()
+    };
+    let mut d = groove::discover::discover(&recs, &options);
+    groove::discover::pairs::add_pair_findings(&mut d, &recs);
+    let pairs: Vec<_> = d
+        .findings
+        .iter()
+        .filter(|f| f.effect == "pair_physics_mismatch")
+        .collect();
+    assert_eq!(pairs.len(), 2, "one test per material");
+    for f in &pairs {
+        let gain = f.where_["deviance_gain"].as_f64().unwrap();
+        assert!(
+            gain >= 0.0,
+            "free fit above the held one: {gain} {:?}",
+            f.evidence
+        );
+        assert!(!f.accepted, "{:?} {:?}", f.where_, f.evidence);
+        if f.evidence.p_holm < 0.01 {
+            assert!(
+                f.evidence.decision.contains("significant but small"),
+                "{}",
+                f.evidence.decision
+            );
+        }
+    }
+    assert!(
+        d.findings.iter().all(|f| !f.accepted),
+        "{:?}",
+        d.findings
+            .iter()
+            .filter(|f| f.accepted)
+            .map(|f| &f.effect)
+            .collect::<Vec<_>>()
+    );
 }
 
 /// Timing probe on the shipped data (not a test of results): `cargo test --test
