@@ -19,6 +19,7 @@ pub mod forward;
 pub mod holm;
 pub mod joint;
 pub mod locate;
+pub mod noise_floor;
 pub mod null_distribution;
 pub mod pairs;
 pub mod perrun;
