@@ -629,7 +629,7 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
     (
         true,
         format!(
-            "the pairs move under friction or drag the single runs do not share: μ_pg {:.1} % and the drag time up to {:.1} % from the single runs'",
+            "the pairs move under friction or drag the single runs do not share: μ_pg {:.1} % and the drag time up to {:.1} % from the single runs' (a contact distance other than the diameter in runs.csv, e.g. from the length calibration, reads the same way: a 2 % scale error of z was flagged like this)",
             pct(mu),
             pct(drag)
         ),
