@@ -290,7 +290,15 @@ fn describe_run(run: &PairRun, fit: &GroupFit, own: &[f64], se: &[f64]) -> Whole
     let model = fit.spec.model(shared);
     let pair = fit.spec.pair(shared, run.setup, run.diameter_m);
     let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
-    let traj = simulate_pair(&model, &pair, run.init(own), &rel);
+    let traj = simulate_pair(
+        &model,
+        &pair,
+        run.init(
+            own,
+            crate::fit::collision::wholerun::FitSpec::contact(shared),
+        ),
+        &rel,
+    );
     let mut by_phase: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     let mut by_time: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     let (mut ss, mut n) = (0.0, 0usize);

@@ -119,7 +119,9 @@ pub const TP: usize = 2;
 pub const MU_PP: usize = 3;
 /// Slots (a, b) of the rolling law, then of the contact law.
 pub const LAW: usize = 4;
-pub const N_SHARED: usize = 8;
+/// The contact distance over the diameter in runs.csv (held at 1 unless `FitSpec::free_contact`).
+pub const CONTACT: usize = 8;
+pub const N_SHARED: usize = 9;
 /// Indices of the own parameters of a run.
 pub const Z1: usize = 0;
 pub const GAP: usize = 1;
@@ -254,8 +256,9 @@ impl PairRun {
         ]
     }
 
-    /// The initial states at the kick (lab frame) for own parameters `own`.
-    pub fn init(&self, own: &[f64]) -> [State; 2] {
+    /// The initial states at the kick (lab frame) for own parameters `own`, the pair's contact
+    /// distance `contact` times the diameter.
+    pub fn init(&self, own: &[f64], contact: f64) -> [State; 2] {
         [
             State {
                 z_m: own[Z1],
@@ -263,7 +266,7 @@ impl PairRun {
                 va_mps: 0.0,
             },
             State {
-                z_m: own[Z1] + self.direction * (self.diameter_m + own[GAP]),
+                z_m: own[Z1] + self.direction * (self.diameter_m * contact + own[GAP]),
                 v_mps: 0.0,
                 va_mps: 0.0,
             },
@@ -280,6 +283,8 @@ pub struct FitSpec {
     pub laws: [LawForm; 2],
     /// Hold μ_pp at this value (the profile), or fit it.
     pub mu_pp_held: Option<f64>,
+    /// Fit the contact distance (`CONTACT`, a factor on the diameter) instead of holding it at 1.
+    pub free_contact: bool,
 }
 
 impl FitSpec {
@@ -289,7 +294,13 @@ impl FitSpec {
             drag: DragSpec::Saturating,
             laws: [LawForm::Saturating, LawForm::Saturating],
             mu_pp_held: None,
+            free_contact: false,
         }
+    }
+
+    /// The contact distance over the diameter in shared parameters `p` (1 if it has none).
+    pub fn contact(p: &[f64]) -> f64 {
+        p.get(CONTACT).copied().unwrap_or(1.0)
     }
 
     fn law_form(&self, setup: Setup) -> LawForm {
@@ -332,7 +343,7 @@ impl FitSpec {
         PairParams {
             restitution: self.law_form(setup).law(p[i], p[i + 1]),
             mu_pp: p[MU_PP],
-            radius_m: 0.5 * diameter_m,
+            radius_m: 0.5 * diameter_m * FitSpec::contact(p),
         }
     }
 
@@ -359,6 +370,12 @@ impl FitSpec {
         for form in self.laws {
             out.extend(form.specs());
         }
+        let contact = spec(1.0, 0.9, 1.1, 1e-3);
+        out.push(if self.free_contact {
+            contact
+        } else {
+            hold(contact, 1.0)
+        });
         match self.drag {
             DragSpec::Saturating | DragSpec::SaturatingWith(_) => {}
             DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
@@ -405,7 +422,7 @@ impl BlockProblem for Problem<'_> {
         residuals(&self.runs[b], self.spec, shared, own, out);
     }
     fn uses(&self, b: usize, i: usize) -> bool {
-        if i < LAW {
+        if i < LAW || i == CONTACT {
             return true;
         }
         let slot = law_slot(self.runs[b].setup);
@@ -418,7 +435,7 @@ pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out
     let model = spec.model(shared);
     let pair = spec.pair(shared, run.setup, run.diameter_m);
     let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
-    let traj = simulate_pair(&model, &pair, run.init(own), &rel);
+    let traj = simulate_pair(&model, &pair, run.init(own, FitSpec::contact(shared)), &rel);
     let mut k = 0;
     for p in 0..2 {
         let z = &traj.particles[p].z_m;
