@@ -192,6 +192,22 @@ fn pairs_under_a_drag_the_single_runs_do_not_share_are_flagged() {
     assert!(!f.accepted, "{:?}", f.evidence);
 }
 
+/// Discovery as the stage runs it (the single runs, then the pairs against their physics), with
+/// the light settings of the discovery tests.
+fn diagnose(recs: &[Recording], seed: u64) -> groove::discover::Diagnosis {
+    let options = groove::discover::Options {
+        bootstrap: 12,
+        bootstrap_iterations: 5,
+        folds: 4,
+        max_terms: 3,
+        seed,
+        ..groove::discover::Options::default()
+    };
+    let mut d = groove::discover::discover(recs, &options);
+    groove::discover::pairs::add_pair_findings(&mut d, recs);
+    d
+}
+
 /// A null recorded at 2 kHz: the pairs' free fit, which contains the held one, never ends above
 /// it (from its default start it once ended with T0 at its floor and 18× the held χ², read as a
 /// mismatch at p = 0), and the single runs' μ about 1 % high (3σ by the joint fit's errors) is a
@@ -200,16 +216,7 @@ fn pairs_under_a_drag_the_single_runs_do_not_share_are_flagged() {
 fn a_null_at_2_khz_flags_no_pair_physics() {
     let truth = Truth::parse(&fixture("null_2khz.toml")).unwrap();
     let recs = dataset(&fixture("null_2khz.toml"));
-    let options = groove::discover::Options {
-        bootstrap: 12,
-        bootstrap_iterations: 5,
-        folds: 4,
-        max_terms: 3,
-        seed: truth.seed,
-        ..groove::discover::Options::default()
-    };
-    let mut d = groove::discover::discover(&recs, &options);
-    groove::discover::pairs::add_pair_findings(&mut d, &recs);
+    let d = diagnose(&recs, truth.seed);
     let pairs: Vec<_> = d
         .findings
         .iter()
@@ -258,16 +265,7 @@ fn a_length_calibration_error_is_named_not_read_as_friction() {
             *z *= 1.02;
         }
     }
-    let options = groove::discover::Options {
-        bootstrap: 12,
-        bootstrap_iterations: 5,
-        folds: 4,
-        max_terms: 3,
-        seed: truth.seed,
-        ..groove::discover::Options::default()
-    };
-    let mut d = groove::discover::discover(&recs, &options);
-    groove::discover::pairs::add_pair_findings(&mut d, &recs);
+    let d = diagnose(&recs, truth.seed);
     let accepted: Vec<_> = d.findings.iter().filter(|f| f.accepted).collect();
     assert!(
         accepted.is_empty(),

@@ -17,10 +17,10 @@ use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use crate::artifacts::diagnosis::Effect;
 use crate::fit::collision::wholerun::{
-    fit_group, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, TP, T_KICK,
+    fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, TP,
 };
 use crate::lsq::Termination;
-use crate::physics::{simulate_pair, Friction, Groove, Model, Term};
+use crate::physics::{Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use crate::stats::dist::{chi2_sf, t_sf};
 use std::collections::BTreeMap;
@@ -218,19 +218,7 @@ fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ImpactSplit {
     let mut worst: Option<(String, f64)> = None;
     let (mut cross, mut square) = (0.0, 0.0);
     for (run, own) in runs.iter().zip(&fit.result.own) {
-        let shared = &fit.result.shared;
-        let model = fit.spec.model(shared);
-        let pair = fit.spec.pair(shared, run.setup, run.diameter_m);
-        let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
-        let traj = simulate_pair(
-            &model,
-            &pair,
-            run.init(
-                own,
-                crate::fit::collision::wholerun::FitSpec::contact(shared),
-            ),
-            &rel,
-        );
+        let (rel, traj) = simulate_run(run, &fit.spec, &fit.result.shared, own);
         let (mut rn, mut rf) = ((0.0, 0usize), (0.0, 0usize));
         for p in 0..2 {
             let r: Vec<f64> = run.samples[p]

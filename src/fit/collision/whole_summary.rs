@@ -6,11 +6,12 @@ use super::profile::{default_grid, profile_mu_pp, MuPpProfile, ProfileVerdict};
 use super::restitution_law::{choose_law, with_chosen, LawChoice};
 use super::types::Estimate;
 use super::wholerun::{
-    fit_group, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK, V0,
+    fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK,
+    V0,
 };
 use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
 use crate::lsq::Termination;
-use crate::physics::{simulate_pair, Groove, Phase};
+use crate::physics::{Groove, Phase};
 use crate::recording::{Experiment, Recording, Setup};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -286,19 +287,7 @@ fn time_bin(dt: Option<f64>) -> &'static str {
 
 /// One run at the fit: impacts, residuals by phase and by time since the last impact.
 fn describe_run(run: &PairRun, fit: &GroupFit, own: &[f64], se: &[f64]) -> WholeRun {
-    let shared = &fit.result.shared;
-    let model = fit.spec.model(shared);
-    let pair = fit.spec.pair(shared, run.setup, run.diameter_m);
-    let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
-    let traj = simulate_pair(
-        &model,
-        &pair,
-        run.init(
-            own,
-            crate::fit::collision::wholerun::FitSpec::contact(shared),
-        ),
-        &rel,
-    );
+    let (rel, traj) = simulate_run(run, &fit.spec, &fit.result.shared, own);
     let mut by_phase: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     let mut by_time: BTreeMap<String, (f64, usize)> = BTreeMap::new();
     let (mut ss, mut n) = (0.0, 0usize);

@@ -15,7 +15,7 @@ use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
 use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
-    simulate_pair, Friction, Groove, Model, PairParams, Restitution, State, Term,
+    simulate_pair, Friction, Groove, Model, PairParams, PairTrajectory, Restitution, State, Term,
 };
 use crate::recording::{Recording, Setup};
 use serde::{Deserialize, Serialize};
@@ -430,12 +430,24 @@ impl BlockProblem for Problem<'_> {
     }
 }
 
-/// Whitened residuals (model − data)/σ of both tracks of a run, striker first.
-pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out: &mut [f64]) {
+/// A run simulated at shared parameters `shared` and its own `own`: its sample times since the
+/// kick, and the pair's trajectory at them.
+pub fn simulate_run(
+    run: &PairRun,
+    spec: &FitSpec,
+    shared: &[f64],
+    own: &[f64],
+) -> (Vec<f64>, PairTrajectory) {
     let model = spec.model(shared);
     let pair = spec.pair(shared, run.setup, run.diameter_m);
     let rel: Vec<f64> = run.t_s.iter().map(|t| (t - own[T_KICK]).max(0.0)).collect();
     let traj = simulate_pair(&model, &pair, run.init(own, FitSpec::contact(shared)), &rel);
+    (rel, traj)
+}
+
+/// Whitened residuals (model − data)/σ of both tracks of a run, striker first.
+pub fn residuals(run: &PairRun, spec: &FitSpec, shared: &[f64], own: &[f64], out: &mut [f64]) {
+    let (_, traj) = simulate_run(run, spec, shared, own);
     let mut k = 0;
     for p in 0..2 {
         let z = &traj.particles[p].z_m;
