@@ -268,6 +268,11 @@ pub struct Line {
     pub t: f64,
 }
 
+/// How a pair physics test's decision opens when the pairs' contact distance, not friction or
+/// drag, explains them (`where.contact_over_diameter`): a length calibration error or a wrong
+/// diameter. The summary of the report looks for it.
+pub const CONTACT_NOT_PHYSICS: &str = "not friction or drag";
+
 /// An effect id of diagnosis.json: the physics a finding names. Variants are in the order of their
 /// ids, so sorting effects sorts their names.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

@@ -15,7 +15,7 @@
 
 use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use super::holm::holm;
-use crate::artifacts::diagnosis::Effect;
+use crate::artifacts::diagnosis::{Effect, CONTACT_NOT_PHYSICS as NOT_PHYSICS};
 use crate::fit::collision::wholerun::{
     fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, TP,
 };
@@ -624,10 +624,6 @@ fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
         extended: d.score(free, 3, "μ_pg, T0, T' of the pairs"),
     }
 }
-
-/// How the physics test's decision opens when the contact distance, not friction or drag,
-/// explains the pairs.
-const NOT_PHYSICS: &str = "not friction or drag";
 
 /// The physics test's decision and its words: a mismatch needs significance (p Holm < α), a
 /// free fit that reached at least the held fit's χ², no contact distance that explains the

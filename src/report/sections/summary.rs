@@ -1,6 +1,7 @@
 //! Section 1: what was analysed, the key parameters with uncertainties, and what discovery found.
 
 use super::{Block, Table};
+use crate::artifacts::diagnosis::CONTACT_NOT_PHYSICS;
 use crate::artifacts::summary::ProfileVerdict;
 use crate::artifacts::Diagnosis;
 use crate::physics::Groove;
@@ -138,7 +139,68 @@ pub fn block(d: &ReportData) -> Block {
                     acc.join("; ")
                 ));
             }
+            if let Some(text) = contact_warning(diag) {
+                b.para(text);
+            }
         }
     }
     b
+}
+
+/// A warning when the pair test found the pairs touching at another distance than the diameter
+/// in runs.csv (a length calibration error or a wrong diameter), naming the materials.
+fn contact_warning(diag: &Diagnosis) -> Option<String> {
+    let found: Vec<String> = diag
+        .findings
+        .iter()
+        .filter(|f| f.evidence.decision.starts_with(CONTACT_NOT_PHYSICS))
+        .map(|f| {
+            let material = f
+                .where_
+                .get("material")
+                .and_then(|m| m.as_str())
+                .unwrap_or("?");
+            let scale = f
+                .where_
+                .get("contact_over_diameter")
+                .and_then(|c| c.get("value"))
+                .and_then(|v| v.as_f64())
+                .unwrap_or(f64::NAN);
+            format!("{material} at {scale:.4} ×")
+        })
+        .collect();
+    (!found.is_empty()).then(|| {
+        format!(
+            "Check the length calibration (metres per pixel) and the diameter in runs.csv: the collision runs touch at another distance than the diameter ({} the diameter), which the single runs' physics then explains; see section 4.",
+            found.join(", ")
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped diagnosis has no contact warning; with its 316 pair test decided as a contact
+    /// distance, the summary names the material and the factor.
+    #[test]
+    fn a_contact_distance_other_than_the_diameter_is_said_in_the_summary() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/diagnosis.json");
+        let mut diag: Diagnosis =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        assert_eq!(contact_warning(&diag), None);
+        let pair = diag
+            .findings
+            .iter_mut()
+            .find(|f| f.effect == "pair_physics_mismatch" && f.where_["material"] == "316")
+            .expect("the shipped diagnosis tests the 316 pairs");
+        pair.evidence.decision = format!("{CONTACT_NOT_PHYSICS}: …");
+        pair.where_.insert(
+            "contact_over_diameter".into(),
+            serde_json::json!({"value": 1.0202, "stderr": 0.0001, "chi2": 4493.0}),
+        );
+        let text = contact_warning(&diag).expect("a warning");
+        assert!(text.contains("316 at 1.0202 ×"), "{text}");
+        assert!(text.starts_with("Check the length calibration"), "{text}");
+    }
 }
