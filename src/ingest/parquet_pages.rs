@@ -21,7 +21,7 @@ pub fn sound(
 ) -> bool {
     let mut first = 0;
     for group in &metadata.row_groups {
-        let group_rows = first..first + group.num_rows();
+        let group_rows = first..first.saturating_add(group.num_rows());
         first = group_rows.end;
         if group_rows.end <= rows.start || group_rows.start >= rows.end {
             continue;
