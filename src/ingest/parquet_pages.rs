@@ -19,7 +19,7 @@ pub fn sound(
     rows: Range<usize>,
     columns: Option<&[&str]>,
 ) -> bool {
-    let mut first = 0;
+    let mut first: usize = 0;
     for group in &metadata.row_groups {
         let group_rows = first..first.saturating_add(group.num_rows());
         first = group_rows.end;
