@@ -4,6 +4,7 @@
 
 use super::csv_pieces::Stop;
 use super::parquet_pages;
+use super::table::guarded;
 use polars::prelude::*;
 use std::io::{Cursor, Read};
 use std::ops::Range;
@@ -76,11 +77,7 @@ impl Source for InMemory<'_> {
 /// `z_m` floats (or integers, read as floats, as the row-by-row path does). `None` if it cannot
 /// be read or a column has another type.
 pub fn read_whole(bytes: &[u8]) -> Option<DataFrame> {
-    let metadata = caught(|| {
-        ParquetReader::new(Cursor::new(bytes))
-            .get_metadata()
-            .cloned()
-    })?;
+    let metadata = metadata_of(bytes)?;
     let rows = 0..metadata.num_rows;
     decode(bytes, metadata, rows)
 }
@@ -192,18 +189,18 @@ fn sparse_file(len: u64) -> std::io::Result<memmap2::MmapMut> {
 fn metadata(len: u64, footer_at: u64, footer: &[u8]) -> Option<FileMetadataRef> {
     let mut file = sparse_file(len).ok()?;
     file[footer_at as usize..len as usize].copy_from_slice(footer);
-    caught(|| {
-        ParquetReader::new(Cursor::new(&file[..len as usize]))
+    metadata_of(&file[..len as usize])
+}
+
+/// The metadata in the footer of a file's bytes (`None` if it cannot be read; the whole read
+/// names the problem).
+fn metadata_of(bytes: &[u8]) -> Option<FileMetadataRef> {
+    guarded(|| {
+        ParquetReader::new(Cursor::new(bytes))
             .get_metadata()
             .cloned()
     })
-}
-
-/// What `read` gives, `None` if it panics or fails.
-fn caught<T>(read: impl FnOnce() -> PolarsResult<T>) -> Option<T> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
-        .ok()?
-        .ok()
+    .ok()
 }
 
 /// The file's rows in batches of whole consecutive row groups, each at least `batch_rows` rows
@@ -281,11 +278,12 @@ fn decode(bytes: &[u8], metadata: FileMetadataRef, rows: Range<usize>) -> Option
         return None;
     }
     let projection: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-    let df = caught(|| {
+    let df = guarded(|| {
         let mut reader = ParquetReader::new(Cursor::new(bytes)).with_columns(Some(projection));
         reader.set_metadata(metadata);
         reader.with_slice(Some((rows.start, rows.len()))).finish()
-    })?;
+    })
+    .ok()?;
     let mut columns = Vec::with_capacity(COLUMNS.len());
     for (name, dtype) in &COLUMNS {
         let c = df.column(name).ok()?;

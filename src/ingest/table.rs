@@ -387,7 +387,7 @@ fn is_blank(line: &[u8]) -> bool {
 
 /// Runs a polars reader, turning a panic inside it (seen on damaged files) into an error, so bad
 /// bytes never crash groove.
-fn guarded<T>(read: impl FnOnce() -> PolarsResult<T>) -> Result<T, String> {
+pub(super) fn guarded<T>(read: impl FnOnce() -> PolarsResult<T>) -> Result<T, String> {
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)) {
         Ok(Ok(t)) => Ok(t),
         Ok(Err(e)) => Err(e.to_string()),
