@@ -254,8 +254,8 @@ fn a_null_at_2_khz_flags_no_pair_physics() {
 /// was) is absorbed by the single runs' μ, but moves where the pairs touch: freeing friction and
 /// drag read it as a pair physics mismatch on the rolling pairs (μ_pg 3.7 %, the drag time 13 %
 /// off, accepted at p Holm 2e-5). Now the contact distance freed with the single runs' physics
-/// held explains the pairs (1.02 × the diameter, within 0.3 %), nothing is accepted, and a note
-/// says to check the calibration.
+/// held fits the pairs better than freeing friction and drag (1.02 × the diameter, within
+/// 0.3 %), nothing is accepted, and a note says to check the calibration.
 #[test]
 fn a_length_calibration_error_is_named_not_read_as_friction() {
     let truth = Truth::parse(&fixture("null.toml")).unwrap();

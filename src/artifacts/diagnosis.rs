@@ -269,7 +269,7 @@ pub struct Line {
 }
 
 /// How a pair physics test's decision opens when the pairs' contact distance, not friction or
-/// drag, explains them (`where.contact_over_diameter`): a length calibration error or a wrong
+/// drag, fits them best (`where.contact_over_diameter`): a length calibration error or a wrong
 /// diameter. The summary of the report looks for it.
 pub const CONTACT_NOT_PHYSICS: &str = "not friction or drag";
 

@@ -5,7 +5,7 @@
 //! (3 degrees of freedom, Holm over materials, α = 0.01), says whether the pairs move under
 //! physics the single runs do not share, when the difference is also large enough to be physics
 //! (μ_pg by 3 %, the drag time by 10 %), the free fit, which contains the held one, did not end
-//! above it, and no contact distance other than the diameter explains the pairs as well with
+//! above it, and no contact distance other than the diameter fits the pairs at least as well with
 //! the single runs' physics held (a length calibration error, said in a note; the deviance gain
 //! of freeing friction and drag is reported beside). Then the residuals
 //! of the free fit are split by time since the last impact: a misfit concentrated in the
@@ -626,8 +626,8 @@ fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
 }
 
 /// The physics test's decision and its words: a mismatch needs significance (p Holm < α), a
-/// free fit that reached at least the held fit's χ², no contact distance that explains the
-/// pairs as well with the single runs' physics held (more than 3 standard errors from the
+/// free fit that reached at least the held fit's χ², no contact distance that fits the
+/// pairs at least as well with the single runs' physics held (more than 3 standard errors from the
 /// diameter, χ² at most the free fit's), and size (μ_pg off by `MIN_MU` or the drag time by
 /// `MIN_DRAG`); each way of falling short is said as such.
 fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
@@ -652,9 +652,9 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
         return (
             false,
             format!(
-                "{NOT_PHYSICS}: the pairs move under the single runs' physics once they touch at {scale:.4} × the diameter in runs.csv (χ² {contact_chi2:.0}, against {:.0} with friction and drag freed instead and {:.0} with neither): a length calibration error (metres per pixel) or a wrong diameter",
-                d.free.cost(),
-                d.held.cost()
+                "{NOT_PHYSICS}: with the single runs' physics held, a contact distance of {scale:.4} × the diameter in runs.csv lowers χ² from {:.0} to {contact_chi2:.0}, more than freeing friction and drag does ({:.0}): a length calibration error (metres per pixel) or a wrong diameter",
+                d.held.cost(),
+                d.free.cost()
             ),
         );
     }
@@ -762,7 +762,7 @@ pub fn check_pairs(
         let physics = physics_finding(d, p_phys[k]);
         if physics.evidence.decision.starts_with(NOT_PHYSICS) {
             notes.push(format!(
-                "collision runs of {}: the pairs touch at {:.4} × the diameter in runs.csv; check the length calibration (metres per pixel) and the diameter",
+                "collision runs of {}: the pairs fit best touching at {:.4} × the diameter in runs.csv; check the length calibration (metres per pixel) and the diameter",
                 d.material, d.contact.0
             ));
         }

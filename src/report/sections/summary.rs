@@ -171,7 +171,7 @@ fn contact_warning(diag: &Diagnosis) -> Option<String> {
         .collect();
     (!found.is_empty()).then(|| {
         format!(
-            "Check the length calibration (metres per pixel) and the diameter in runs.csv: the collision runs touch at another distance than the diameter ({} the diameter), which the single runs' physics then explains; see section 4.",
+            "Check the length calibration (metres per pixel) and the diameter in runs.csv: the collision runs fit best touching at another distance than the diameter ({} the diameter), better than with friction or drag of their own; see section 4.",
             found.join(", ")
         )
     })
