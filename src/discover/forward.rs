@@ -644,10 +644,17 @@ fn screen_round(round: usize, current: &Model, all: &[&Extra], set: &Setting) ->
         .iter()
         .map(|s| s.as_ref().map(|s| s.replicates.clone()).unwrap_or_default())
         .collect();
+    // a named term's law is computed; a searched form's is fitted to its replicates
     let nulls: Vec<NullFit> = all
         .iter()
         .zip(&reps)
-        .map(|(e, r)| NullFit::from_replicates(r, e.null_df(set.runs.len())))
+        .zip(&screens)
+        .map(
+            |((e, r), s)| match s.as_ref().and_then(|s| s.exact.as_ref()) {
+                Some(x) => NullFit::exact(x, r.len()),
+                None => NullFit::from_replicates(r, e.null_df(set.runs.len())),
+            },
+        )
         .collect();
     let p: Vec<f64> = nulls.iter().zip(&lr).map(|(n, l)| n.p_value(*l)).collect();
     // the linear estimates stand for every candidate; only the significant ones are fitted in

@@ -877,10 +877,8 @@ mod tests {
         assert_eq!(unique_parameter_names(&one, &names)[..6], names[..6]);
     }
 
-    /// The progress line hears each round, each candidate of the screen with its replicates
-    /// done, and the searched forms' batches; the diagnosis is the same with or without it.
-    #[test]
-    fn the_progress_says_round_candidate_and_replicates() {
+    /// The recordings of `tests/fixtures/truths/null_small.toml` (16 runs, nothing missing).
+    fn null_small() -> Vec<Recording> {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("tests/fixtures/truths/null_small.toml");
         let truth = crate::synth::Truth::parse(&std::fs::read_to_string(path).unwrap()).unwrap();
@@ -891,9 +889,154 @@ mod tests {
             "trajectories.csv".to_string(),
             tables.trajectories_csv.into_bytes(),
         );
-        let recs = crate::ingest::ingest(&files, &crate::ingest::IngestParams::default())
+        crate::ingest::ingest(&files, &crate::ingest::IngestParams::default())
             .unwrap()
-            .recordings;
+            .recordings
+    }
+
+    /// A named term's null law is computed from its columns and the noise model, and is the law
+    /// of its replicates: over 3,000 replicates of the baseline's noise, each named term's and
+    /// probe's mean statistic is the law's (within 4 standard errors) and as many replicates
+    /// exceed the law's 95 % and 99 % points as should (within 4 binomial standard deviations),
+    /// one-sided (the drags and the resistance: 0 half the time) or not (the tilt, the probes).
+    #[test]
+    fn a_named_terms_computed_null_is_the_law_of_its_replicates() {
+        use super::super::response::prepare;
+        let recs = null_small();
+        let opts = Options::default();
+        let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
+        let (baseline, _) = fit_baseline(&mut runs, &materials, &opts);
+        let prep = prepare(
+            &baseline.spec,
+            &baseline.params,
+            &baseline.fit.global,
+            &baseline.fit.local,
+            &runs,
+        );
+        let vref = median_speed(&baseline.fit.local);
+        let named = [
+            Extra::QuadraticDrag,
+            Extra::SaturatingDrag,
+            Extra::RollingResistance,
+            Extra::GrooveTilt,
+            Extra::SpeedDriftT { v_ref_mps: vref },
+            Extra::SpeedDriftMu { v_ref_mps: vref },
+            Extra::DirectionAsymmetry,
+        ];
+        let refs: Vec<&Extra> = named.iter().collect();
+        let b = 3000;
+        // as measured (white), then as if every run's noise had a lag-1 correlation of 0.6
+        for rho in [None, Some(0.6)] {
+            if let Some(rho) = rho {
+                runs.iter_mut().for_each(|r| r.rho1 = rho);
+            }
+            check_named_laws(&named, &refs, &baseline, &runs, &prep, b);
+        }
+    }
+
+    /// The check of `a_named_terms_computed_null_is_the_law_of_its_replicates` at the runs'
+    /// noise as they carry it.
+    fn check_named_laws(
+        named: &[Extra],
+        refs: &[&Extra],
+        baseline: &Model,
+        runs: &[RunData],
+        prep: &[super::super::response::Prepared],
+        b: usize,
+    ) {
+        use super::super::detection::critical_lr;
+        use super::super::screen::{screen, Control};
+        let screened = screen(
+            refs,
+            baseline,
+            runs,
+            prep,
+            &Ranges::of(runs),
+            &Control {
+                replicates: b,
+                seed: 11,
+                alpha: 0.01,
+                say: &|_: &str| {},
+            },
+        );
+        for (e, s) in named.iter().zip(&screened) {
+            let s = s.as_ref().expect("every named term is screened");
+            let exact = s.exact.as_ref().expect("a named term's law is computed");
+            let law = NullFit::exact(exact, b);
+            let reps = &s.replicates;
+            assert_eq!(reps.len(), b);
+            let mean = reps.iter().sum::<f64>() / b as f64;
+            let se = (law.var / b as f64).sqrt();
+            assert!(
+                (mean - law.mean).abs() < 4.0 * se,
+                "{} (ρ {}): replicates' mean {mean:.4}, law's {:.4} ± {se:.4}",
+                e.form(),
+                runs[0].rho1,
+                law.mean
+            );
+            for level in [0.05, 0.01] {
+                let c = critical_lr(&law, level);
+                let above = reps.iter().filter(|x| **x > c).count() as f64 / b as f64;
+                let sd = (level * (1.0 - level) / b as f64).sqrt();
+                assert!(
+                    (above - level).abs() < 4.0 * sd,
+                    "{} (ρ {}): {above:.4} of the replicates above the law's {level} point {c:.3}",
+                    e.form(),
+                    runs[0].rho1
+                );
+            }
+        }
+    }
+
+    /// With the law computed, the count of replicates changes only the empirical p-value.
+    #[test]
+    fn a_named_terms_p_value_does_not_depend_on_the_replicates_drawn() {
+        let recs = null_small();
+        let opts = |bootstrap| Options {
+            bootstrap,
+            candidates: [
+                "velocity_dependent_drag",
+                "rolling_resistance",
+                "groove_tilt",
+            ]
+            .map(String::from)
+            .to_vec(),
+            nonparametric: false,
+            seed: 5,
+            ..Options::default()
+        };
+        let round_1 = |d: &Diagnosis| -> Vec<CandidateRow> {
+            d.candidates
+                .iter()
+                .filter(|c| c.evidence.round == 1)
+                .cloned()
+                .collect()
+        };
+        let (few, many) = (
+            round_1(&discover(&recs, &opts(60))),
+            round_1(&discover(&recs, &opts(600))),
+        );
+        // quadratic and saturating drag, resistance, tilt and the three probes
+        assert_eq!(few.len(), 7);
+        for (f, m) in few.iter().zip(&many) {
+            assert_eq!(f.form, m.form);
+            assert_eq!(f.evidence.lr, m.evidence.lr, "{}", f.form);
+            assert_eq!(f.evidence.p_value, m.evidence.p_value, "{}", f.form);
+            assert_eq!(
+                (
+                    f.evidence.bootstrap_replicates,
+                    m.evidence.bootstrap_replicates
+                ),
+                (60, 600)
+            );
+        }
+    }
+
+    /// The progress line hears each round, each candidate of the screen with its replicates
+    /// done, and the searched forms' batches; the diagnosis is the same with or without it.
+    #[test]
+    fn the_progress_says_round_candidate_and_replicates() {
+        let recs = null_small();
         let opts = Options {
             bootstrap: 12,
             folds: 4,

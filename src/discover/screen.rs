@@ -90,6 +90,24 @@ pub struct Screened {
     /// A searched form's information about its size at its most sensitive trial (for its
     /// detection limit, `detection.rs`); None for a named term.
     pub typical: Option<Typical>,
+    /// The statistic's law under the noise model, computed rather than sampled: for a named
+    /// term with one secant (`secant`), whose statistic is a quadratic form in the Gaussian
+    /// noise; None for a searched form or a maximum over trial scales.
+    pub exact: Option<ExactNull>,
+}
+
+/// The first two moments of a named term's statistic c'A⁻¹c under the replicates' noise model
+/// (each run's AR(1) over its kept samples), with c = X̃'y and X̃ the term's columns with the
+/// shared parameters profiled out: c ~ N(0, C), C = Σ_runs X̃'ΣX̃, so the statistic is a sum of
+/// χ²₁ draws weighted by the eigenvalues of A⁻¹C (exactly λχ²₁ for one column; one weight per
+/// column, all 1, for white noise). `one_sided`: a parameter starting at its bound, whose
+/// statistic is 0 when the fit would push it out of range (half the time under the null).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExactNull {
+    /// tr(A⁻¹C) and 2 tr((A⁻¹C)²): the moments of the two-sided statistic.
+    pub mean: f64,
+    pub var: f64,
+    pub one_sided: bool,
 }
 
 /// The information about a searched form's size at its most sensitive trial (the grid's trial
@@ -288,47 +306,12 @@ impl Sums {
     /// stays at the bound, so that replicate's statistic is 0 (the one-sided, χ̄² test), in the
     /// data and in the null alike. Empty, or several columns: two-sided.
     fn solve(&self, v: &Vectors, sign: &[f64]) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
-        let one_sided = match sign {
-            [s] if *s != 0.0 && self.q == 1 => Some(*s),
-            _ => None,
-        };
-        let (q, k) = (self.q, v.kept.len());
-        // A = X'X − X'G (G'G)⁻¹ G'X
-        let mut xg_ginv = vec![0.0; q * k];
-        for a in 0..q {
-            for c in 0..k {
-                xg_ginv[a * k + c] = (0..k)
-                    .map(|d| self.xtg[a * k + d] * v.ginv[d * k + c])
-                    .sum();
-            }
-        }
-        let mut am = self.xtx.clone();
-        for a in 0..q {
-            for b in 0..q {
-                am[a * q + b] -= (0..k)
-                    .map(|c| xg_ginv[a * k + c] * self.xtg[b * k + c])
-                    .sum::<f64>();
-            }
-        }
-        // a column the form cannot move (outside every run, or absorbed by the shared
-        // parameters) carries nothing: it is set aside, not inverted
-        let dead: Vec<bool> = (0..q)
-            .map(|a| !(am[a * q + a] > 1e-9 * self.xtx[a * q + a] && self.xtx[a * q + a] > 0.0))
-            .collect();
-        if dead.iter().all(|d| *d) {
-            return None;
-        }
-        for a in 0..q {
-            if dead[a] {
-                for b in 0..q {
-                    am[a * q + b] = 0.0;
-                    am[b * q + a] = 0.0;
-                }
-                am[a * q + a] = 1.0;
-            }
-        }
+        let one_sided = one_sided(self.q, sign);
+        let q = self.q;
+        let (xg_ginv, am, dead) = self.profiled(v)?;
         let l = cholesky_jittered(&am, q)?;
         let inv = chol_inverse(&l, q);
+        let k = v.kept.len();
         let mut lr = Vec::with_capacity(self.xty.len());
         let mut beta0 = vec![0.0; q];
         for (bb, xty) in self.xty.iter().enumerate() {
@@ -362,6 +345,102 @@ impl Sums {
             .collect();
         Some((lr, beta0, var))
     }
+
+    /// The profile of the shared parameters: X'G(G'G)⁻¹ (q × k) and A = X'X − X'G(G'G)⁻¹G'X,
+    /// with the columns the form cannot move (outside every run, or absorbed by the shared
+    /// parameters) set aside as dead (a unit row and column of A, not inverted); None when every
+    /// column is dead.
+    fn profiled(&self, v: &Vectors) -> Option<(Vec<f64>, Vec<f64>, Vec<bool>)> {
+        let (q, k) = (self.q, v.kept.len());
+        let mut xg_ginv = vec![0.0; q * k];
+        for a in 0..q {
+            for c in 0..k {
+                xg_ginv[a * k + c] = (0..k)
+                    .map(|d| self.xtg[a * k + d] * v.ginv[d * k + c])
+                    .sum();
+            }
+        }
+        let mut am = self.xtx.clone();
+        for a in 0..q {
+            for b in 0..q {
+                am[a * q + b] -= (0..k)
+                    .map(|c| xg_ginv[a * k + c] * self.xtg[b * k + c])
+                    .sum::<f64>();
+            }
+        }
+        // a column the form cannot move (outside every run, or absorbed by the shared
+        // parameters) carries nothing: it is set aside, not inverted
+        let dead: Vec<bool> = (0..q)
+            .map(|a| !(am[a * q + a] > 1e-9 * self.xtx[a * q + a] && self.xtx[a * q + a] > 0.0))
+            .collect();
+        if dead.iter().all(|d| *d) {
+            return None;
+        }
+        for a in 0..q {
+            if dead[a] {
+                for b in 0..q {
+                    am[a * q + b] = 0.0;
+                    am[b * q + a] = 0.0;
+                }
+                am[a * q + a] = 1.0;
+            }
+        }
+        Some((xg_ginv, am, dead))
+    }
+
+    /// The moments of the statistic under the noise model (`ExactNull`): `cols(p)` gives a run's
+    /// columns as `add` took them, or None where the form cannot act.
+    fn null_moments<'c>(
+        &self,
+        v: &Vectors,
+        prep: &[Prepared],
+        runs: &[RunData],
+        cols: impl Fn(&Prepared) -> Option<&'c [Vec<f64>]>,
+    ) -> Option<(f64, f64)> {
+        let (q, k) = (self.q, v.kept.len());
+        let (xg_ginv, am, dead) = self.profiled(v)?;
+        let inv = chol_inverse(&cholesky_jittered(&am, q)?, q);
+        let mut c = vec![0.0; q * q];
+        for p in prep {
+            let Some(x) = cols(p) else { continue };
+            let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
+            let profiled: Vec<Vec<f64>> = (0..q)
+                .map(|a| {
+                    let mut col = x[a].clone();
+                    if dead[a] {
+                        col.iter_mut().for_each(|z| *z = 0.0);
+                        return col;
+                    }
+                    for (d, &j) in v.kept.iter().enumerate() {
+                        let f = xg_ginv[a * k + d];
+                        for (z, g) in col.iter_mut().zip(&p.glob[j]) {
+                            *z -= f * g;
+                        }
+                    }
+                    col
+                })
+                .collect();
+            for a in 0..q {
+                for b in a..q {
+                    let s = ar1_cross(&profiled[a], &profiled[b], rho);
+                    c[a * q + b] += s;
+                    if a != b {
+                        c[b * q + a] += s;
+                    }
+                }
+            }
+        }
+        // M = A⁻¹C: its trace and the trace of its square
+        let m: Vec<f64> = (0..q * q)
+            .map(|ab| {
+                let (a, b) = (ab / q, ab % q);
+                (0..q).map(|d| inv[a * q + d] * c[d * q + b]).sum()
+            })
+            .collect();
+        let mean: f64 = (0..q).filter(|a| !dead[*a]).map(|a| m[a * q + a]).sum();
+        let square: f64 = (0..q * q).map(|ab| m[ab] * m[(ab % q) * q + ab / q]).sum();
+        (mean > 0.0 && square > 0.0).then_some((mean, 2.0 * square))
+    }
 }
 
 /// One trial of a form: LR per replicate, with the estimate and se it gives on the data.
@@ -382,8 +461,44 @@ fn best_of(trials: Vec<Option<Trial>>, nrep: usize) -> Option<Trial> {
     best.map(|(_, est, se)| (lr, est, se))
 }
 
-/// Coherent trial: the same columns' coefficients in every run; `cols(p)` gives a run's columns
-/// (already in noise units with its locals projected) or None where the form cannot act.
+/// The one-sided direction of a single column whose parameter starts at a bound (`sign`, as
+/// `Sums::solve` takes it), None for a two-sided test.
+fn one_sided(q: usize, sign: &[f64]) -> Option<f64> {
+    match sign {
+        [s] if *s != 0.0 && q == 1 => Some(*s),
+        _ => None,
+    }
+}
+
+/// Σᵢⱼ xᵢ yⱼ ρ^|i−j|: the covariance of x'e and y'e for unit-variance AR(1) noise e of lag-1
+/// correlation ρ, in one pass (sₓ carries Σ_{j<i} xⱼ ρ^(i−1−j)).
+fn ar1_cross(x: &[f64], y: &[f64], rho: f64) -> f64 {
+    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
+    for (&xi, &yi) in x.iter().zip(y) {
+        total += xi * yi + rho * (xi * sy + yi * sx);
+        sx = xi + rho * sx;
+        sy = yi + rho * sy;
+    }
+    total
+}
+
+/// The sums of a coherent trial: the same columns' coefficients in every run; `cols(p)` gives a
+/// run's columns (already in noise units with its locals projected) or None where the form
+/// cannot act.
+fn coherent_sums<F>(prep: &[Prepared], v: &Vectors, q: usize, reps: Range<usize>, cols: F) -> Sums
+where
+    F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
+{
+    let mut s = Sums::new(q, v.kept.len(), reps);
+    for (p, yr) in prep.iter().zip(&v.y) {
+        if let Some(c) = cols(p) {
+            s.add(&c, p, v, yr);
+        }
+    }
+    s
+}
+
+/// Coherent trial (`coherent_sums`) solved.
 fn coherent<F>(
     prep: &[Prepared],
     v: &Vectors,
@@ -395,16 +510,11 @@ fn coherent<F>(
 where
     F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
 {
-    let mut s = Sums::new(q, v.kept.len(), reps);
-    for (p, yr) in prep.iter().zip(&v.y) {
-        if let Some(c) = cols(p) {
-            s.add(&c, p, v, yr);
-        }
-    }
-    s.solve(v, sign)
+    coherent_sums(prep, v, q, reps, cols).solve(v, sign)
 }
 
-/// Secant columns of a named term: each parameter stepped from where the term vanishes.
+/// Secant columns of a named term: each parameter stepped from where the term vanishes; with
+/// the statistic's law under the noise model (`ExactNull`).
 fn secant(
     current: &Model,
     extra: &Extra,
@@ -414,7 +524,7 @@ fn secant(
     prep: &[Prepared],
     null_pred: &[Vec<f64>],
     v: &Vectors,
-) -> Option<Trial> {
+) -> Option<(Trial, Option<ExactNull>)> {
     let spec = current.spec.with(extra.clone());
     let q = steps.len();
     // each run's columns (an integration per parameter) in parallel, summed in run order
@@ -456,16 +566,22 @@ fn secant(
             }
         })
         .collect();
-    let (lr, beta, var) = coherent(prep, v, q, 0..v.n_rep(), &sign, |p| {
-        Some(cols[p.run].clone())
-    })?;
+    let sums = coherent_sums(prep, v, q, 0..v.n_rep(), |p| Some(cols[p.run].clone()));
+    let (lr, beta, var) = sums.solve(v, &sign)?;
+    let exact = sums
+        .null_moments(v, prep, runs, |p| Some(cols[p.run].as_slice()))
+        .map(|(mean, var)| ExactNull {
+            mean,
+            var,
+            one_sided: one_sided(q, &sign).is_some(),
+        });
     let mut est = theta0.to_vec();
     let mut se = vec![f64::NAN; theta0.len()];
     for (a, &(j, _)) in steps.iter().enumerate() {
         est[j] = theta0[j] + beta[a];
         se[j] = var[a].sqrt();
     }
-    Some((lr, est, se))
+    Some(((lr, est, se), exact))
 }
 
 /// How a screen runs: the replicates drawn, their seed, the level of the decisions the first
@@ -515,8 +631,9 @@ fn searched_trial(
     }
 }
 
-/// A named term's statistic on every replicate: along its secant (the friction law at a few
-/// trial scales, the best kept).
+/// A named term's statistic on every replicate: along its secant, with its law under the noise
+/// model (the friction law at a few trial scales, the best kept: a maximum, whose law is left to
+/// the replicates).
 fn named_trial(
     e: &Extra,
     current: &Model,
@@ -524,7 +641,7 @@ fn named_trial(
     prep: &[Prepared],
     null_pred: &[Vec<f64>],
     v: &Vectors,
-) -> Option<Trial> {
+) -> (Option<Trial>, Option<ExactNull>) {
     if let Extra::VelocityFriction { materials } = e {
         let lo = e.params()[0].lo;
         let theta0 = vec![lo; *materials];
@@ -532,11 +649,12 @@ fn named_trial(
             .par_iter()
             .map(|vc| {
                 let steps: Vec<(usize, f64)> = (0..*materials).map(|m| (m, vc.ln())).collect();
-                secant(current, e, &theta0, &steps, runs, prep, null_pred, v)
-                    .map(|(lr, _, se)| (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()]))
+                secant(current, e, &theta0, &steps, runs, prep, null_pred, v).map(
+                    |((lr, _, se), _)| (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()]),
+                )
             })
             .collect();
-        return best_of(trials, v.n_rep());
+        return (best_of(trials, v.n_rep()), None);
     }
     let ps = e.params();
     let theta0: Vec<f64> = ps.iter().map(|p| p.start).collect();
@@ -555,7 +673,10 @@ fn named_trial(
             )
         })
         .collect();
-    secant(current, e, &theta0, &steps, runs, prep, null_pred, v)
+    match secant(current, e, &theta0, &steps, runs, prep, null_pred, v) {
+        Some((trial, exact)) => (Some(trial), exact),
+        None => (None, None),
+    }
 }
 
 /// A form's short name for the progress line (its form up to the formula).
@@ -593,7 +714,7 @@ pub fn screen(
         .enumerate()
         .map(|(i, e)| {
             let name = short(e);
-            let (t, typical) = if searched(e) {
+            let (t, typical, exact) = if searched(e) {
                 (ctl.say)(&format!(
                     "candidate {}/{n} {name}: replicates 0/{} done",
                     i + 1,
@@ -617,14 +738,15 @@ pub fn screen(
                     }
                     (lr, est, se)
                 });
-                (t, typical)
+                (t, typical, None)
             } else {
                 (ctl.say)(&format!(
                     "candidate {}/{n} {name}: {} replicates",
                     i + 1,
                     nrep - 1
                 ));
-                (named_trial(e, current, runs, prep, &null_pred, &v), None)
+                let (t, exact) = named_trial(e, current, runs, prep, &null_pred, &v);
+                (t, None, exact)
             };
             t.map(|(lr, estimate, se)| Screened {
                 lr: lr[0],
@@ -632,6 +754,7 @@ pub fn screen(
                 estimate,
                 se,
                 typical,
+                exact,
             })
         })
         .collect()
@@ -883,6 +1006,25 @@ mod tests {
         assert!(!clearly_null(&with(third_largest + 1e-9), 2.0, 0.01));
         // far beyond every replicate
         assert!(!clearly_null(&with(40.0), 2.0, 0.01));
+    }
+
+    #[test]
+    fn the_ar1_covariance_in_one_pass_is_the_double_sum() {
+        let x: Vec<f64> = (0..41).map(|i| (i as f64 * 0.37).sin()).collect();
+        let y: Vec<f64> = (0..41).map(|i| 1.0 / (2.0 + i as f64)).collect();
+        for rho in [0.0, 0.6, -0.3] {
+            let mut plain = 0.0;
+            for (i, xi) in x.iter().enumerate() {
+                for (j, yj) in y.iter().enumerate() {
+                    plain += xi * yj * f64::powi(rho, (i as i32 - j as i32).abs());
+                }
+            }
+            let fast = ar1_cross(&x, &y, rho);
+            assert!(
+                (fast - plain).abs() < 1e-12 * (1.0 + plain.abs()),
+                "ρ {rho}: {fast} {plain}"
+            );
+        }
     }
 
     #[test]
