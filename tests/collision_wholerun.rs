@@ -231,13 +231,15 @@ fn a_null_at_2_khz_flags_no_pair_physics() {
             f.evidence
         );
         assert!(!f.accepted, "{:?} {:?}", f.where_, f.evidence);
-        if f.evidence.p_holm < 0.01 {
-            assert!(
-                f.evidence.decision.contains("significant but small"),
-                "{}",
-                f.evidence.decision
-            );
-        }
+        // with the single runs' errors weighed (they were taken as exact when the joint fit's
+        // covariance was singular, and the 440c pairs' μ_pg, 1 % off, read p Holm 3e-61)
+        assert!(f.evidence.p_holm >= 0.01, "{}", f.evidence.decision);
+    }
+    // the joint fit's covariance is singular on this dataset (a run whose z0, t0, v0 the data
+    // cannot tell apart); the errors come from the information with each run's locals projected
+    for (name, e) in &d.model_parameters {
+        let se = e.se.unwrap_or(f64::NAN);
+        assert!(se.is_finite() && se > 0.0, "{name}: {se}");
     }
     assert!(
         d.findings.iter().all(|f| !f.accepted),

@@ -185,24 +185,36 @@ pub fn fit_joint(
     let dof = runs.iter().map(|r| r.n_used()).sum::<usize>() as f64
         - (ng * usize::from(ctl.free_global) + N_LOCAL * runs.len()) as f64;
     let scale = (chi2 / dof.max(1.0)).max(1.0);
-    // a singular system leaves NaN standard errors (said as such), not made-up ones
+    let local: Vec<[f64; N_LOCAL]> = res
+        .own
+        .iter()
+        .map(|o| o.as_slice().try_into().expect("three locals"))
+        .collect();
+    // a singular system leaves NaN standard errors (said as such), not made-up ones; when the
+    // Schur complement failed on a run whose locals the data cannot tell apart (a 2 kHz null:
+    // every error NaN, and the pair test then took the single runs' physics as exact), the
+    // information with each run's locals projected out gives them
+    let mut profiled: Option<Vec<f64>> = None;
     let global_se = (0..ng)
         .map(|i| {
             let v = res.shared_cov[i][i];
             match (ctl.free_global, v.is_nan()) {
                 (false, _) => 0.0,
-                (true, true) => f64::NAN,
+                (true, true) => {
+                    let se = profiled.get_or_insert_with(|| {
+                        let prep =
+                            super::response::prepare(spec, params, &res.shared, &local, runs);
+                        super::response::profiled_se(&prep)
+                    });
+                    se[i] * scale.sqrt()
+                }
                 (true, false) => (v.max(0.0) * scale).sqrt(),
             }
         })
         .collect();
     Fitted {
         global: res.shared,
-        local: res
-            .own
-            .iter()
-            .map(|o| o.as_slice().try_into().expect("three locals"))
-            .collect(),
+        local,
         chi2,
         chi2_run: res.block_cost,
         global_se,
