@@ -228,6 +228,67 @@ fn rolling_decays_with_te_not_t() {
 }
 
 /// Start rolling at v0 with one extra term and return samples of (t, z, v, phase).
+/// A particle still sliding when a rolling resistance stops it, with a friction too weak to spin
+/// it up against that resistance (μ at a fit's lower bound, 0.001, against c = 0.004): at v = 0
+/// both ways are barred, so it rests there. It used to chatter about v = 0, a switch per
+/// crossing, up to the cap of 10,000 (a per-run fit of a slow run took 8 s), and end "sliding".
+#[test]
+fn a_slide_stopped_by_a_resistance_stronger_than_its_friction_rests() {
+    let (mu, c, v0) = (0.001, 0.004, -0.0035);
+    let m = model(mu, vec![Term::RollingResistance { c }]);
+    let t = times(1200, 1e-4);
+    let tr = simulate(&m, kick(v0, 0.0), &t);
+    let stop = tr
+        .phase
+        .iter()
+        .position(|p| *p == Phase::Rest)
+        .expect("it comes to rest");
+    assert!(tr.phase[..stop].iter().all(|p| *p == Phase::Sliding));
+    assert!(tr.phase[stop..].iter().all(|p| *p == Phase::Rest));
+    assert!(tr.z_m[stop..].iter().all(|z| *z == tr.z_m[stop]));
+    assert!(tr.events.len() <= 3, "{} switches", tr.events.len());
+    // where: the slip (−v0 at first, the spin 0) closes first, under v' = g(μ/s + c) and
+    // u' = v' + s k g μ; then it cannot roll and slides the other way, v' = g(c − μ/s), to v = 0
+    let (s, k) = (m.groove.s, m.groove.k);
+    let a1 = G_MPS2 * (mu / s + c);
+    let t1 = -v0 / (a1 + s * k * G_MPS2 * mu);
+    let v1 = v0 + a1 * t1;
+    let a2 = G_MPS2 * (c - mu / s);
+    let z_stop = v0 * t1 + 0.5 * a1 * t1 * t1 - v1 * v1 / (2.0 * a2);
+    assert!(
+        (tr.z_m[stop] - z_stop).abs() < 1e-9,
+        "{} vs {z_stop}",
+        tr.z_m[stop]
+    );
+}
+
+/// A particle whose motion a rolling resistance stops while it still slips, spun against its
+/// motion, rests there when its spin's friction (g μ/s) is weaker than what the resistance holds
+/// (c g): carried on, v crossed zero back and forth to the cap on switches.
+#[test]
+fn a_particle_stopped_while_it_slips_rests_if_the_resistance_holds_it() {
+    let (mu, c, v0) = (0.001, 0.004, -0.0035);
+    let m = model(mu, vec![Term::RollingResistance { c }]);
+    let t = times(1200, 1e-4);
+    // back-spin: the slip closes long after v reaches 0
+    let tr = simulate(&m, kick(v0, 0.05), &t);
+    let stop = tr
+        .phase
+        .iter()
+        .position(|p| *p == Phase::Rest)
+        .expect("it comes to rest");
+    assert!(tr.phase[stop..].iter().all(|p| *p == Phase::Rest));
+    assert!(tr.events.len() <= 2, "{} switches", tr.events.len());
+    // sliding all the way with v' = g(μ/s + c): v0²/(2a)
+    let a = G_MPS2 * (mu / m.groove.s + c);
+    let z_stop = -v0 * v0 / (2.0 * a);
+    assert!(
+        (tr.z_m[stop] - z_stop).abs() < 1e-9,
+        "{} vs {z_stop}",
+        tr.z_m[stop]
+    );
+}
+
 fn roll(term: Term, v0: f64, t: &[f64]) -> groove::physics::Trajectory {
     let m = model(0.337, vec![term]);
     simulate(&m, kick(v0, v0 / m.groove.s), t)

@@ -787,6 +787,7 @@ pub fn discover_reporting(
     say("residuals and drift before and after");
     let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
     let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
+    ctx.trace("residuals located");
     let drift = drift_of(&sel.current, &per_run, &ctx);
     ctx.trace("drift done");
     let final_score = sel.current.score(&runs, Some(&sel.current_cv));

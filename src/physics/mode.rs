@@ -95,8 +95,14 @@ impl Mode {
                 let mut y0 = *y;
                 y0[1] = 0.0;
                 let probe = Mode::Slide { d, dir: -dir };
-                let new_dir = sign_or(probe.rhs(m, &y0, t)[1], -dir);
-                (Mode::Slide { d, dir: new_dir }, y0)
+                let back = probe.rhs(m, &y0, t)[1];
+                if back * dir >= 0.0 {
+                    // the way back is barred too: what holds a particle at rest (a rolling
+                    // resistance) outweighs the friction of its spin, so v stays 0 (Filippov)
+                    // and z with it; carried on, v chattered about 0 to the cap on switches
+                    return (Mode::Rest, [y[0], 0.0, 0.0]);
+                }
+                (Mode::Slide { d, dir: -dir }, y0)
             }
             (Mode::Roll { dir }, 0) => {
                 let a = accel(m, y[0], y[1], t, dir);
@@ -114,9 +120,16 @@ impl Mode {
     }
 }
 
+/// A speed at which a particle whose slip closes is at rest (m/s): the integrator locates an
+/// event to about 1e-10 m/s, and a slip that closes as the particle stops (a slide held at the
+/// friction limit by a rolling resistance) left v at ±1e-10, took it for motion that way, and
+/// chattered between slides to the cap on switches.
+const V_REST_MPS: f64 = 1e-9;
+
 /// The mode of a particle with zero slip at position `z` and velocity `v` (`va = v/s`).
 pub(crate) fn settle(m: &Model, z: f64, v: f64, t: f64) -> (Mode, [f64; 3]) {
     let s = m.groove.s;
+    let v = if v.abs() <= V_REST_MPS { 0.0 } else { v };
     if v == 0.0 {
         let a_static = m.accel(z, 0.0, t);
         if a_static.abs() <= m.static_hold_mps2() {
