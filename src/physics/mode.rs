@@ -17,9 +17,17 @@ pub(crate) enum Mode {
     Rest,
 }
 
-/// Extra acceleration at time since the kick `t`, with sign terms taken in direction `dir` when v = 0.
+/// Extra acceleration at time since the kick `t`, with sign terms taken in direction `dir` when
+/// v = 0, and also when v is past 0 in a model with a sign jump (a rolling resistance), whose
+/// modes end where v crosses 0 (an event): evaluated at the sign of v itself the right-hand side
+/// jumps there, the integrator cannot step across, and a slide the resistance stops ground on at
+/// v = ±1e-11 in ever smaller steps (2 s for one 0.1 s track) instead of reaching its event.
 fn accel(m: &Model, z: f64, v: f64, t: f64, dir: f64) -> f64 {
-    let v_eff = if v == 0.0 { dir * f64::MIN_POSITIVE } else { v };
+    let v_eff = if v == 0.0 || (v * dir < 0.0 && m.has_sign_jump()) {
+        dir * f64::MIN_POSITIVE
+    } else {
+        v
+    };
     m.accel(z, v_eff, t)
 }
 
@@ -120,16 +128,9 @@ impl Mode {
     }
 }
 
-/// A speed at which a particle whose slip closes is at rest (m/s): the integrator locates an
-/// event to about 1e-10 m/s, and a slip that closes as the particle stops (a slide held at the
-/// friction limit by a rolling resistance) left v at ±1e-10, took it for motion that way, and
-/// chattered between slides to the cap on switches.
-const V_REST_MPS: f64 = 1e-9;
-
 /// The mode of a particle with zero slip at position `z` and velocity `v` (`va = v/s`).
 pub(crate) fn settle(m: &Model, z: f64, v: f64, t: f64) -> (Mode, [f64; 3]) {
     let s = m.groove.s;
-    let v = if v.abs() <= V_REST_MPS { 0.0 } else { v };
     if v == 0.0 {
         let a_static = m.accel(z, 0.0, t);
         if a_static.abs() <= m.static_hold_mps2() {
