@@ -284,8 +284,9 @@ impl Prepared {
     }
 }
 
-/// Standard errors of the shared parameters in units of the runs' noise, from their
-/// information with each run's z0, t0, v0 projected out (Σ G'G over the runs, inverted): NaN for
+/// Standard errors of the shared parameters (in their own units, the residuals weighed by each
+/// run's noise) from their information with each run's z0, t0, v0 projected out (Σ G'G over the
+/// runs, inverted; the caller scales them by χ² per degree of freedom): NaN for
 /// a parameter no run's data moves. The projector drops a local the data cannot tell from the
 /// others, where a Schur complement over the runs' 3×3 blocks would have to invert it.
 pub fn profiled_se(prep: &[Prepared]) -> Vec<f64> {
