@@ -7,6 +7,9 @@
 //! recorded at 2 kHz or under correlated tracking noise flagged nothing, and a length
 //! calibration error named as such.
 
+#[path = "support/noise.rs"]
+mod noise;
+
 use groove::discover::pairs::check_pairs;
 use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
 use groove::fit::collision::whole_summary::{analyze, WholeRunOptions};
@@ -253,21 +256,6 @@ fn a_null_at_2_khz_flags_no_pair_physics() {
     );
 }
 
-/// Each track's positions with AR(1) noise added (lag-1 coefficient `phi`, marginal standard
-/// deviation `sd`, in frame order), from a fixed seed.
-fn with_correlated_noise(recs: &mut [Recording], phi: f64, sd: f64, seed: u64) {
-    use rand::{Rng, SeedableRng};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let innovation = sd * (1.0 - phi * phi).sqrt();
-    for track in recs.iter_mut().flat_map(|r| r.tracks.iter_mut()) {
-        let mut e = sd * rng.sample::<f64, _>(rand_distr::StandardNormal);
-        for z in &mut track.z_m {
-            *z += e;
-            e = phi * e + innovation * rng.sample::<f64, _>(rand_distr::StandardNormal);
-        }
-    }
-}
-
 /// A null under correlated tracking noise (AR(1), lag-1 0.6, 1 µm, over 0.2 µm white) flags no
 /// pair physics: the free pair fits leave about twice the noise, and their covariances are
 /// widened by that misfit (χ² per degree of freedom) besides the residuals' correlation. Before,
@@ -283,7 +271,7 @@ fn correlated_tracking_noise_is_not_pair_physics() {
     assert!(text.contains("noise_m = 0.2e-6"));
     let truth = Truth::parse(&text).unwrap();
     let mut recs = dataset(&text);
-    with_correlated_noise(&mut recs, 0.6, 1e-6, seed);
+    noise::with_correlated_noise(&mut recs, 0.6, 1e-6, seed);
     let d = diagnose(&recs, truth.seed);
     let pairs: Vec<_> = d
         .findings

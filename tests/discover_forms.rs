@@ -37,6 +37,9 @@
 //! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
 //!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
 
+#[path = "support/noise.rs"]
+mod noise;
+
 use groove::discover::{discover, Diagnosis, Options};
 use groove::ingest::{ingest, IngestParams};
 use groove::physics::Term;
@@ -368,21 +371,6 @@ fn check_null(name: &str, seed: Option<u64>) -> bool {
     found.is_empty()
 }
 
-/// Each track's positions with AR(1) noise added (lag-1 coefficient `phi`, marginal standard
-/// deviation `sd`, in frame order), from a fixed seed.
-fn with_correlated_noise(recs: &mut [Recording], phi: f64, sd: f64, seed: u64) {
-    use rand::{Rng, SeedableRng};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let innovation = sd * (1.0 - phi * phi).sqrt();
-    for track in recs.iter_mut().flat_map(|r| r.tracks.iter_mut()) {
-        let mut e = sd * rng.sample::<f64, _>(rand_distr::StandardNormal);
-        for z in &mut track.z_m {
-            *z += e;
-            e = phi * e + innovation * rng.sample::<f64, _>(rand_distr::StandardNormal);
-        }
-    }
-}
-
 /// A null whose tracking noise is correlated in time (AR(1), lag-1 coefficient 0.6, 1 µm, over
 /// 0.2 µm of white noise) accepts nothing. On this seed the largest of a force in time's
 /// frequencies passed for a vibration (p Holm 6e-3, statistic 490 against a null mean of 399)
@@ -397,7 +385,7 @@ fn correlated_tracking_noise_is_not_a_vibration() {
     let mut t = truth("null", Some(1));
     t.camera.noise_m = 0.2e-6;
     let mut recs = recordings(&t);
-    with_correlated_noise(&mut recs, 0.6, 1e-6, seed);
+    noise::with_correlated_noise(&mut recs, 0.6, 1e-6, seed);
     let d = discover(&recs, &options(1));
     let time = d
         .candidates
