@@ -221,12 +221,7 @@ fn a_null_at_2_khz_flags_no_pair_physics() {
     let truth = Truth::parse(&fixture("null_2khz.toml")).unwrap();
     let recs = dataset(&fixture("null_2khz.toml"));
     let d = diagnose(&recs, truth.seed);
-    let pairs: Vec<_> = d
-        .findings
-        .iter()
-        .filter(|f| f.effect == "pair_physics_mismatch")
-        .collect();
-    assert_eq!(pairs.len(), 2, "one test per material");
+    let pairs = pair_physics_findings(&d);
     for f in &pairs {
         let gain = f.where_["deviance_gain"].as_f64().unwrap();
         assert!(
@@ -273,12 +268,7 @@ fn correlated_tracking_noise_is_not_pair_physics() {
     let mut recs = dataset(&text);
     noise::with_correlated_noise(&mut recs, 0.6, 1e-6, seed);
     let d = diagnose(&recs, truth.seed);
-    let pairs: Vec<_> = d
-        .findings
-        .iter()
-        .filter(|f| f.effect == "pair_physics_mismatch")
-        .collect();
-    assert_eq!(pairs.len(), 2, "one test per material");
+    let pairs = pair_physics_findings(&d);
     for f in &pairs {
         println!(
             "seed {seed}: {} p Holm {:.2e}",
@@ -296,6 +286,19 @@ fn correlated_tracking_noise_is_not_pair_physics() {
 
 /// The seed of `correlated_tracking_noise_is_not_pair_physics`.
 const PAIR_AR_SEED: u64 = 5;
+
+/// The pair physics test's findings, one per material of the two.
+fn pair_physics_findings(
+    d: &groove::discover::Diagnosis,
+) -> Vec<&groove::artifacts::diagnosis::Finding> {
+    let pairs: Vec<_> = d
+        .findings
+        .iter()
+        .filter(|f| f.effect == "pair_physics_mismatch")
+        .collect();
+    assert_eq!(pairs.len(), 2, "one test per material");
+    pairs
+}
 
 /// A 2 % error of the length calibration (every position × 1.02, the diameter in runs.csv as it
 /// was) is absorbed by the single runs' μ, but moves where the pairs touch: freeing friction and
