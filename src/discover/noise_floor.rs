@@ -25,14 +25,7 @@ pub fn local_floor(ratio: &[Option<f64>]) -> Vec<f64> {
             if near.len() < 8 {
                 return 1.0;
             }
-            near.sort_by(f64::total_cmp);
-            let m = near.len();
-            let median = if m % 2 == 1 {
-                near[m / 2]
-            } else {
-                0.5 * (near[m / 2 - 1] + near[m / 2])
-            };
-            median.max(1.0)
+            crate::stats::median_in_place(&mut near).max(1.0)
         })
         .collect()
 }

@@ -17,7 +17,8 @@ use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use super::holm::holm;
 use crate::artifacts::diagnosis::{Effect, CONTACT_NOT_PHYSICS as NOT_PHYSICS};
 use crate::fit::collision::wholerun::{
-    fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, TP,
+    fit_group, fit_group_with, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0,
+    MU_PG, TP,
 };
 use crate::lsq::Termination;
 use crate::physics::{Friction, Groove, Model, Term};
@@ -395,6 +396,20 @@ impl Draft {
     }
 }
 
+/// The pair model with the drag and every other single-run force held at `model`'s.
+fn held_spec(model: &Model, groove: Groove) -> FitSpec {
+    FitSpec {
+        drag: DragSpec::Held(model.terms.clone()),
+        ..FitSpec::new(groove)
+    }
+}
+
+/// Whether a fit with the single runs' physics held moves shared slot `i`: every slot but μ_pg
+/// and the drag's.
+fn not_physics(i: usize) -> bool {
+    i != MU_PG && i != LN_T0 && i != TP
+}
+
 /// The pair fit of `runs` with μ_pg and the drag held at the single runs' `model` (started from
 /// the free fit, and again from its own optimum when that start did worse than the free fit).
 fn held_fit(
@@ -409,27 +424,24 @@ fn held_fit(
         Friction::Constant { mu } => mu,
         Friction::VelocityDependent { mu_inf, .. } => mu_inf,
     };
-    let held_spec = FitSpec {
-        drag: DragSpec::Held(model.terms.clone()),
-        ..FitSpec::new(groove)
-    };
+    let held_spec = held_spec(model, groove);
     // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
-    let mut held = crate::fit::collision::wholerun::fit_group_with(
+    let mut held = fit_group_with(
         runs,
         &held_spec,
         &start.result.shared,
         Some(free.result.own.as_slice()),
-        &|i| i != MU_PG && i != LN_T0 && i != TP,
+        &not_physics,
         max_iter,
     );
     if held.cost() > free.cost() {
         // a second start from the held physics' own optimum of the per-run parameters
-        let again = crate::fit::collision::wholerun::fit_group_with(
+        let again = fit_group_with(
             runs,
             &held_spec,
             &held.result.shared,
             Some(held.result.own.as_slice()),
-            &|i| i != MU_PG && i != LN_T0 && i != TP,
+            &not_physics,
             max_iter,
         );
         if again.cost() < held.cost() {
@@ -461,7 +473,7 @@ fn free_from_held(
     start[MU_PG] = mu;
     start[LN_T0] = t0.ln();
     start[TP] = tp;
-    let again = crate::fit::collision::wholerun::fit_group_with(
+    let again = fit_group_with(
         runs,
         free_spec,
         &start,
@@ -488,16 +500,15 @@ fn contact_fit(
     max_iter: usize,
 ) -> GroupFit {
     let spec = FitSpec {
-        drag: DragSpec::Held(model.terms.clone()),
         free_contact: true,
-        ..FitSpec::new(groove)
+        ..held_spec(model, groove)
     };
-    crate::fit::collision::wholerun::fit_group_with(
+    fit_group_with(
         runs,
         &spec,
         &held.result.shared,
         Some(held.result.own.as_slice()),
-        &|i| i != MU_PG && i != LN_T0 && i != TP,
+        &not_physics,
         max_iter,
     )
 }
