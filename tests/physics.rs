@@ -628,3 +628,78 @@ fn contact_pair_collides_at_once() {
     let c = (first.post[1].v_mps - first.post[0].v_mps) / (first.pre[0].v_mps - first.pre[1].v_mps);
     assert!((c - 0.8).abs() < 1e-14);
 }
+
+/// The slide's own equations (`v' = −d g μ(u)/s + a`, `va' = d k g μ(u)`, slip `u = v − s va`
+/// of a fixed sign) by classical RK4 at step `h`, far below the slip's relaxation time: the
+/// reference for a creep. Returns z at every multiple of `every` steps, from t = 0.
+fn slide_by_rk4(m: &Model, init: State, h: f64, steps: usize, every: usize) -> Vec<f64> {
+    let g = m.groove;
+    let d = (init.v_mps - g.s * init.va_mps).signum();
+    let f = |y: [f64; 3], t: f64| {
+        let mu = m.friction.kinetic(y[1] - g.s * y[2]);
+        let a = m.accel(y[0], y[1], t);
+        [y[1], -d * G_MPS2 * mu / g.s + a, d * g.k * G_MPS2 * mu]
+    };
+    let add =
+        |y: [f64; 3], k: [f64; 3], c: f64| [y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2]];
+    let mut y = [init.z_m, init.v_mps, init.va_mps];
+    let mut z = vec![y[0]];
+    for i in 0..steps {
+        let t = i as f64 * h;
+        let k1 = f(y, t);
+        let k2 = f(add(y, k1, h / 2.0), t + h / 2.0);
+        let k3 = f(add(y, k2, h / 2.0), t + h / 2.0);
+        let k4 = f(add(y, k3, h), t + h);
+        for j in 0..3 {
+            y[j] += h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+        }
+        assert!(
+            d * (y[1] - g.s * y[2]) > 0.0,
+            "the reference's slip changed sign"
+        );
+        if (i + 1) % every == 0 {
+            z.push(y[0]);
+        }
+    }
+    z
+}
+
+#[test]
+fn a_slip_held_by_a_downhill_force_creeps_as_the_stiff_slide_does() {
+    // v_c = 50 µm/s: the slip relaxes in τ ≈ 5 µs, and a tilt downhill (0.17 m/s²) with a 0.4 mm
+    // waviness (0.05 m/s², so the held slip changes along the way) keeps it from ever reaching
+    // zero: the particle slides to the end, on the slip's quasi-static value after 2 ms
+    let m = Model {
+        groove: Groove::CHAPTER,
+        friction: Friction::VelocityDependent {
+            mu_inf: 0.3,
+            v_c_mps: 5e-5,
+        },
+        terms: vec![
+            Term::GrooveTilt { alpha_deg: -1.0 },
+            Term::PositionForce {
+                amp_mps2: 0.05,
+                wavelength_m: 0.4e-3,
+                phase_rad: 0.3,
+            },
+        ],
+    };
+    let init = kick(0.02, 0.0);
+    let (h, every) = (2e-7, 2_500);
+    let t = times(101, h * every as f64);
+    let reference = slide_by_rk4(&m, init, h, 100 * every, every);
+    let tr = simulate(&m, init, &t);
+    assert!(tr.phase.iter().all(|p| *p == Phase::Sliding));
+    assert!(tr.z_m[100] > 0.5e-3, "it moved {} m", tr.z_m[100]);
+    for (k, tk) in t.iter().enumerate() {
+        // within 2e-12 m; without the creep's u' = τ ȧ z was off by up to 4e-9 m, and without
+        // the slip put on its quasi-static value at entry by 5e-9 m
+        assert!(
+            (tr.z_m[k] - reference[k]).abs() < 2e-11,
+            "t {tk}: {} vs the stiff slide's {} ({:.1e} m apart)",
+            tr.z_m[k],
+            reference[k],
+            tr.z_m[k] - reference[k]
+        );
+    }
+}

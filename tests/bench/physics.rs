@@ -28,6 +28,19 @@ fn main() {
         }],
         ..extra.clone()
     };
+    // a slip held off zero by a tilt (half the runs go downhill) with a friction that vanishes
+    // at zero slip in microseconds: stiff unless the slide creeps (`physics/mode.rs`)
+    let creeping = Model {
+        friction: Friction::VelocityDependent {
+            mu_inf: 0.337,
+            v_c_mps: 5e-5,
+        },
+        terms: vec![
+            Term::LinearDrag { t_s: 0.1 },
+            Term::GrooveTilt { alpha_deg: 0.5 },
+        ],
+        ..extra.clone()
+    };
     let baseline = Baseline::new(0.337, 0.1);
 
     let start = Instant::now();
@@ -42,6 +55,7 @@ fn main() {
     for (name, model) in [
         ("linear + quadratic drag", &extra),
         ("saturating drag", &saturating),
+        ("μ(v) with v_c = 50 µm/s and a tilt", &creeping),
     ] {
         let start = Instant::now();
         for i in 0..N {
