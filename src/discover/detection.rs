@@ -11,7 +11,7 @@
 
 use super::candidate::Extra;
 use super::diagnosis::DetectionLimit;
-use super::forward::Model;
+use super::model::Model;
 use super::null_distribution::NullFit;
 use super::screen::Typical;
 use super::G_MPS2;

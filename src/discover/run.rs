@@ -7,12 +7,11 @@ use super::diagnosis::{
     CandidateRow, Diagnosis, Drift, DriftPoint, Estimate, Finding, ForceMaps, ModelScore, Settings,
 };
 use super::drift::line;
+use super::estimates::{bound_notes, reported_parameters};
 use super::forcemap::ForceMap;
-use super::forward::{
-    bound_notes, finding, fold_of, median_speed, reported_parameters, run_round, LazyProposals,
-    Model, Round, Setting,
-};
+use super::forward::{finding, fold_of, median_speed, run_round, LazyProposals, Round, Setting};
 use super::locate::locate;
+use super::model::Model;
 use super::null_distribution::NullFit;
 use super::perrun::{fit_each_run, measure_noise, PerRunFit};
 use super::proposal::{propose, wanted_for, Proposals, Ranges, Wanted};

@@ -19,8 +19,8 @@
 
 use super::candidate::{Extra, N_LOCAL};
 use super::data::RunData;
-use super::forward::Model;
 use super::joint::predict;
+use super::model::Model;
 use super::null_distribution::NullFit;
 use super::proposal::{bump_column, bump_trials, Ranges};
 use super::response::Prepared;

@@ -1,0 +1,133 @@
+//! A fitted joint model (the baseline with its extra terms) and where a term's parameters start.
+
+use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
+use super::cv::CvResult;
+use super::data::RunData;
+use super::diagnosis::ModelScore;
+use super::joint::{fit_joint, FitControl, Fitted};
+use super::proposal::{needs_proposal, starts as proposal_starts, Proposals};
+use rayon::prelude::*;
+
+/// A fitted joint model.
+#[derive(Clone)]
+pub struct Model {
+    pub spec: Spec,
+    pub params: Vec<ParamInfo>,
+    pub fit: Fitted,
+}
+
+impl Model {
+    pub fn fit(
+        spec: Spec,
+        materials: &[String],
+        runs: &[RunData],
+        g: &[f64],
+        l: &[[f64; N_LOCAL]],
+        max_iter: usize,
+    ) -> Model {
+        let params = spec.global_params(materials);
+        let fit = fit_joint(
+            &spec,
+            &params,
+            runs,
+            g,
+            l,
+            FitControl {
+                max_iter,
+                free_global: true,
+            },
+        );
+        Model { spec, params, fit }
+    }
+
+    /// The model with `extra` added, fitted from this model's values and each of `starts` for
+    /// the term's parameters (the best fit is kept).
+    pub fn extend(
+        &self,
+        extra: &Extra,
+        starts: &[Vec<f64>],
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
+        starts
+            .par_iter()
+            .map(|s| {
+                let mut g = self.fit.global.clone();
+                g.extend(s.iter().copied());
+                Model::fit(
+                    self.spec.with(extra.clone()),
+                    materials,
+                    runs,
+                    &g,
+                    &self.fit.local,
+                    max_iter,
+                )
+            })
+            .min_by(|a, b| a.fit.chi2.total_cmp(&b.fit.chi2))
+            .expect("at least one start")
+    }
+
+    /// The model without extra term `i`, refitted from the current values.
+    pub fn without(
+        &self,
+        i: usize,
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
+        let off = self.spec.extra_offset(i);
+        let n = self.spec.extras[i].params().len();
+        let mut g = self.fit.global.clone();
+        g.drain(off..off + n);
+        let mut spec = self.spec.clone();
+        spec.extras.remove(i);
+        Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
+    }
+
+    pub fn score(&self, runs: &[RunData], cv: Option<&CvResult>) -> ModelScore {
+        let n: usize = runs.iter().map(|r| r.n_used()).sum();
+        let sq: f64 = self
+            .fit
+            .chi2_run
+            .iter()
+            .zip(runs)
+            .map(|(c, r)| c * r.sigma_m * r.sigma_m)
+            .sum();
+        ModelScore {
+            cv_rms_m: cv.map(|c| c.cv_rms_m).unwrap_or(f64::NAN),
+            rms_m: (sq / n.max(1) as f64).sqrt(),
+            chi2: self.fit.chi2,
+            n_global_params: self.spec.n_global(),
+            terms: self.spec.extras.iter().map(|e| e.form()).collect(),
+        }
+    }
+}
+
+/// Starting values of a term's parameters: where it vanishes, plus a few for a nonlinear scale.
+fn extra_starts(extra: &Extra) -> Vec<Vec<f64>> {
+    match extra {
+        Extra::VelocityFriction { materials } => [1e-4f64, 2e-3, 2e-2]
+            .iter()
+            .map(|v| vec![v.ln(); *materials])
+            .collect(),
+        e => vec![e.params().iter().map(|p| p.start).collect()],
+    }
+}
+
+/// Starts of a term on the data: proposed from the residuals where the form needs it, the
+/// force map's spline (and zero) for the nonparametric term, else `extra_starts`.
+pub fn data_starts(extra: &Extra, props: &Proposals) -> Vec<Vec<f64>> {
+    if needs_proposal(extra) {
+        return proposal_starts(extra, props);
+    }
+    match extra {
+        Extra::Spline { .. } => {
+            let mut s = proposal_starts(extra, props);
+            s.extend(extra_starts(extra));
+            s.dedup();
+            s
+        }
+        e => extra_starts(e),
+    }
+}
