@@ -30,6 +30,7 @@ pub mod residual_structure;
 pub mod response;
 pub mod run;
 pub mod screen;
+mod screen_sums;
 pub mod sim;
 pub mod spectral;
 pub mod timeforce;

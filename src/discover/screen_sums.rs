@@ -1,0 +1,433 @@
+//! The screen's linear algebra: each run's projected residual and noise replicates (`Vectors`),
+//! and the sums over runs and replicates from which a trial's statistic, estimate and null law
+//! are solved (`Sums`), with the AR(1) covariance they need.
+
+use super::data::RunData;
+use super::response::Prepared;
+use crate::lsq::dense::{chol_inverse, cholesky_jittered};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// Each run's data residual (replicate 0) and noise replicates, projected and in noise units.
+pub struct Vectors {
+    /// `[run][b]`, each over the run's kept samples.
+    pub(super) y: Vec<Vec<Vec<f64>>>,
+    /// The shared parameters profiled: kept columns, (G'G)⁻¹ and G'y per replicate.
+    pub(super) kept: Vec<usize>,
+    pub(super) ginv: Vec<f64>,
+    pub(super) gty: Vec<Vec<f64>>,
+}
+
+impl Vectors {
+    pub fn new(prep: &[Prepared], runs: &[RunData], replicates: usize, seed: u64) -> Vectors {
+        let y: Vec<Vec<Vec<f64>>> = prep
+            .par_iter()
+            .map(|p| {
+                let run = &runs[p.run];
+                let n = p.y.len();
+                let mut out = Vec::with_capacity(replicates + 1);
+                out.push(p.y.clone());
+                let rho = run.rho1.clamp(-0.99, 0.99);
+                let innov = (1.0 - rho * rho).sqrt();
+                for b in 0..replicates {
+                    let mut rng = ChaCha8Rng::seed_from_u64(
+                        seed ^ (((p.run as u64) << 20) | (b as u64 + 1))
+                            .wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                    );
+                    let mut e: f64 = rng.sample(StandardNormal);
+                    let mut v = Vec::with_capacity(n);
+                    for _ in 0..n {
+                        v.push(e);
+                        e = rho * e + innov * rng.sample::<f64, _>(StandardNormal);
+                    }
+                    p.proj.apply(&mut v);
+                    out.push(v);
+                }
+                out
+            })
+            .collect();
+        let ng = prep.first().map(|p| p.glob.len()).unwrap_or(0);
+        let kept: Vec<usize> = (0..ng)
+            .filter(|&j| prep.iter().any(|p| p.glob[j].iter().any(|x| *x != 0.0)))
+            .collect();
+        let k = kept.len();
+        let mut gtg = vec![0.0; k * k];
+        let mut gty = vec![vec![0.0; k]; replicates + 1];
+        for (p, yr) in prep.iter().zip(&y) {
+            for (a, &ja) in kept.iter().enumerate() {
+                for (b, &jb) in kept.iter().enumerate() {
+                    gtg[a * k + b] += dot(&p.glob[ja], &p.glob[jb]);
+                }
+                for (bb, yb) in yr.iter().enumerate() {
+                    gty[bb][a] += dot(&p.glob[ja], yb);
+                }
+            }
+        }
+        let ginv = if k == 0 {
+            vec![]
+        } else {
+            match cholesky_jittered(&gtg, k) {
+                Some(l) => chol_inverse(&l, k),
+                None => vec![0.0; k * k],
+            }
+        };
+        Vectors { y, kept, ginv, gty }
+    }
+
+    pub(super) fn n_rep(&self) -> usize {
+        self.y.first().map(|r| r.len()).unwrap_or(1)
+    }
+}
+
+/// Σ aᵢbᵢ in four interleaved partial sums (a fixed order, so the same bits every time; four
+/// chains instead of one keep the additions from waiting on each other).
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut s = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        s[0] += x[0] * y[0];
+        s[1] += x[1] * y[1];
+        s[2] += x[2] * y[2];
+        s[3] += x[3] * y[3];
+    }
+    for (x, y) in ra.iter().zip(rb) {
+        s[0] += x * y;
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
+}
+
+/// (Σ aᵢcᵢ, Σ bᵢcᵢ) in one pass over `c`, each in two interleaved partial sums.
+pub(super) fn dot2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
+    let n = a.len().min(b.len()).min(c.len());
+    let (a, b, c) = (&a[..n], &b[..n], &c[..n]);
+    let mut s = [0.0f64; 4];
+    let (ca, cb, cc) = (a.chunks_exact(2), b.chunks_exact(2), c.chunks_exact(2));
+    let (ra, rb, rc) = (ca.remainder(), cb.remainder(), cc.remainder());
+    for ((x, y), z) in ca.zip(cb).zip(cc) {
+        s[0] += x[0] * z[0];
+        s[1] += x[1] * z[1];
+        s[2] += y[0] * z[0];
+        s[3] += y[1] * z[1];
+    }
+    for ((x, y), z) in ra.iter().zip(rb).zip(rc) {
+        s[0] += x * z;
+        s[2] += y * z;
+    }
+    (s[0] + s[1], s[2] + s[3])
+}
+
+/// Sums over runs for a set of q columns shared by every run (coherent), against the
+/// replicates `reps` (indices into `Vectors::y`; 0 is the data).
+pub(super) struct Sums {
+    pub(super) q: usize,
+    pub(super) reps: Range<usize>,
+    pub(super) xtx: Vec<f64>,
+    pub(super) xtg: Vec<f64>,
+    pub(super) xty: Vec<Vec<f64>>,
+}
+
+impl Sums {
+    pub(super) fn new(q: usize, k: usize, reps: Range<usize>) -> Sums {
+        Sums {
+            q,
+            xtx: vec![0.0; q * q],
+            xtg: vec![0.0; q * k],
+            xty: vec![vec![0.0; q]; reps.len()],
+            reps,
+        }
+    }
+
+    pub(super) fn add(&mut self, cols: &[Vec<f64>], p: &Prepared, v: &Vectors, yr: &[Vec<f64>]) {
+        let (q, k) = (self.q, v.kept.len());
+        for a in 0..q {
+            for b in a..q {
+                let s = dot(&cols[a], &cols[b]);
+                self.xtx[a * q + b] += s;
+                if a != b {
+                    self.xtx[b * q + a] += s;
+                }
+            }
+            for (g, &jg) in v.kept.iter().enumerate() {
+                self.xtg[a * k + g] += dot(&cols[a], &p.glob[jg]);
+            }
+        }
+        // one pass over each replicate for two columns at a time
+        for (xty, yb) in self.xty.iter_mut().zip(&yr[self.reps.clone()]) {
+            let mut a = 0;
+            while a + 1 < q {
+                let (s0, s1) = dot2(&cols[a], &cols[a + 1], yb);
+                xty[a] += s0;
+                xty[a + 1] += s1;
+                a += 2;
+            }
+            if a < q {
+                xty[a] += dot(&cols[a], yb);
+            }
+        }
+    }
+
+    /// LR per replicate of `reps`, the data's coefficients (zero when the data is not among
+    /// `reps`) and their variances (shared parameters profiled). `sign`, for a single column
+    /// whose parameter starts at a bound (a drag slope or a resistance that vanishes at 0 and
+    /// cannot go below), is the direction the coefficient may take: a fit pushed the other way
+    /// stays at the bound, so that replicate's statistic is 0 (the one-sided, χ̄² test), in the
+    /// data and in the null alike. Empty, or several columns: two-sided.
+    pub(super) fn solve(
+        &self,
+        v: &Vectors,
+        sign: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let one_sided = one_sided(self.q, sign);
+        let q = self.q;
+        let (xg_ginv, am, dead) = self.profiled(v)?;
+        let l = cholesky_jittered(&am, q)?;
+        let inv = chol_inverse(&l, q);
+        let k = v.kept.len();
+        let mut lr = Vec::with_capacity(self.xty.len());
+        let mut beta0 = vec![0.0; q];
+        for (bb, xty) in self.xty.iter().enumerate() {
+            let c: Vec<f64> = (0..q)
+                .map(|a| {
+                    if dead[a] {
+                        0.0
+                    } else {
+                        xty[a]
+                            - (0..k)
+                                .map(|d| xg_ginv[a * k + d] * v.gty[self.reps.start + bb][d])
+                                .sum::<f64>()
+                    }
+                })
+                .collect();
+            let beta: Vec<f64> = (0..q)
+                .map(|a| (0..q).map(|b| inv[a * q + b] * c[b]).sum())
+                .collect();
+            let infeasible = one_sided.is_some_and(|s| beta[0] * s < 0.0);
+            lr.push(if infeasible {
+                0.0
+            } else {
+                dot(&beta, &c).max(0.0)
+            });
+            if self.reps.start + bb == 0 {
+                beta0 = if infeasible { vec![0.0] } else { beta };
+            }
+        }
+        let var = (0..q)
+            .map(|a| if dead[a] { f64::NAN } else { inv[a * q + a] })
+            .collect();
+        Some((lr, beta0, var))
+    }
+
+    /// The profile of the shared parameters: X'G(G'G)⁻¹ (q × k) and A = X'X − X'G(G'G)⁻¹G'X,
+    /// with the columns the form cannot move (outside every run, or absorbed by the shared
+    /// parameters) set aside as dead (a unit row and column of A, not inverted); None when every
+    /// column is dead.
+    pub(super) fn profiled(&self, v: &Vectors) -> Option<(Vec<f64>, Vec<f64>, Vec<bool>)> {
+        let (q, k) = (self.q, v.kept.len());
+        let mut xg_ginv = vec![0.0; q * k];
+        for a in 0..q {
+            for c in 0..k {
+                xg_ginv[a * k + c] = (0..k)
+                    .map(|d| self.xtg[a * k + d] * v.ginv[d * k + c])
+                    .sum();
+            }
+        }
+        let mut am = self.xtx.clone();
+        for a in 0..q {
+            for b in 0..q {
+                am[a * q + b] -= (0..k)
+                    .map(|c| xg_ginv[a * k + c] * self.xtg[b * k + c])
+                    .sum::<f64>();
+            }
+        }
+        // a column the form cannot move (outside every run, or absorbed by the shared
+        // parameters) carries nothing: it is set aside, not inverted
+        let dead: Vec<bool> = (0..q)
+            .map(|a| !(am[a * q + a] > 1e-9 * self.xtx[a * q + a] && self.xtx[a * q + a] > 0.0))
+            .collect();
+        if dead.iter().all(|d| *d) {
+            return None;
+        }
+        for a in 0..q {
+            if dead[a] {
+                for b in 0..q {
+                    am[a * q + b] = 0.0;
+                    am[b * q + a] = 0.0;
+                }
+                am[a * q + a] = 1.0;
+            }
+        }
+        Some((xg_ginv, am, dead))
+    }
+
+    /// The moments of the statistic under the noise model (`ExactNull`): `cols(p)` gives a run's
+    /// columns as `add` took them, or None where the form cannot act.
+    pub(super) fn null_moments<'c>(
+        &self,
+        v: &Vectors,
+        prep: &[Prepared],
+        runs: &[RunData],
+        cols: impl Fn(&Prepared) -> Option<&'c [Vec<f64>]>,
+    ) -> Option<(f64, f64)> {
+        let (q, k) = (self.q, v.kept.len());
+        let (xg_ginv, am, dead) = self.profiled(v)?;
+        let inv = chol_inverse(&cholesky_jittered(&am, q)?, q);
+        let mut c = vec![0.0; q * q];
+        for p in prep {
+            let Some(x) = cols(p) else { continue };
+            let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
+            let profiled: Vec<Vec<f64>> = (0..q)
+                .map(|a| {
+                    let mut col = x[a].clone();
+                    if dead[a] {
+                        col.iter_mut().for_each(|z| *z = 0.0);
+                        return col;
+                    }
+                    for (d, &j) in v.kept.iter().enumerate() {
+                        let f = xg_ginv[a * k + d];
+                        for (z, g) in col.iter_mut().zip(&p.glob[j]) {
+                            *z -= f * g;
+                        }
+                    }
+                    col
+                })
+                .collect();
+            for a in 0..q {
+                for b in a..q {
+                    let s = ar1_cross(&profiled[a], &profiled[b], rho);
+                    c[a * q + b] += s;
+                    if a != b {
+                        c[b * q + a] += s;
+                    }
+                }
+            }
+        }
+        // M = A⁻¹C: its trace and the trace of its square
+        let m: Vec<f64> = (0..q * q)
+            .map(|ab| {
+                let (a, b) = (ab / q, ab % q);
+                (0..q).map(|d| inv[a * q + d] * c[d * q + b]).sum()
+            })
+            .collect();
+        let mean: f64 = (0..q).filter(|a| !dead[*a]).map(|a| m[a * q + a]).sum();
+        let square: f64 = (0..q * q).map(|ab| m[ab] * m[(ab % q) * q + ab / q]).sum();
+        (mean > 0.0 && square > 0.0).then_some((mean, 2.0 * square))
+    }
+}
+
+/// One trial of a form: LR per replicate, with the estimate and se it gives on the data.
+pub(super) type Trial = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The elementwise maximum over trials; the estimate is the data's best trial's.
+pub(super) fn best_of(trials: Vec<Option<Trial>>, nrep: usize) -> Option<Trial> {
+    let mut lr = vec![0.0f64; nrep];
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    for (t_lr, est, se) in trials.into_iter().flatten() {
+        for (m, x) in lr.iter_mut().zip(&t_lr) {
+            *m = m.max(*x);
+        }
+        if best.as_ref().is_none_or(|b| t_lr[0] > b.0) {
+            best = Some((t_lr[0], est, se));
+        }
+    }
+    best.map(|(_, est, se)| (lr, est, se))
+}
+
+/// The one-sided direction of a single column whose parameter starts at a bound (`sign`, as
+/// `Sums::solve` takes it), None for a two-sided test.
+pub(super) fn one_sided(q: usize, sign: &[f64]) -> Option<f64> {
+    match sign {
+        [s] if *s != 0.0 && q == 1 => Some(*s),
+        _ => None,
+    }
+}
+
+/// Σᵢⱼ xᵢ yⱼ ρ^|i−j|: the covariance of x'e and y'e for unit-variance AR(1) noise e of lag-1
+/// correlation ρ, in one pass (sₓ carries Σ_{j<i} xⱼ ρ^(i−1−j)).
+pub(super) fn ar1_cross(x: &[f64], y: &[f64], rho: f64) -> f64 {
+    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
+    for (&xi, &yi) in x.iter().zip(y) {
+        total += xi * yi + rho * (xi * sy + yi * sx);
+        sx = xi + rho * sx;
+        sy = yi + rho * sy;
+    }
+    total
+}
+
+/// The sums of a coherent trial: the same columns' coefficients in every run; `cols(p)` gives a
+/// run's columns (already in noise units with its locals projected) or None where the form
+/// cannot act.
+pub(super) fn coherent_sums<F>(
+    prep: &[Prepared],
+    v: &Vectors,
+    q: usize,
+    reps: Range<usize>,
+    cols: F,
+) -> Sums
+where
+    F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
+{
+    let mut s = Sums::new(q, v.kept.len(), reps);
+    for (p, yr) in prep.iter().zip(&v.y) {
+        if let Some(c) = cols(p) {
+            s.add(&c, p, v, yr);
+        }
+    }
+    s
+}
+
+/// Coherent trial (`coherent_sums`) solved.
+pub(super) fn coherent<F>(
+    prep: &[Prepared],
+    v: &Vectors,
+    q: usize,
+    reps: Range<usize>,
+    sign: &[f64],
+    cols: F,
+) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)>
+where
+    F: Fn(&Prepared) -> Option<Vec<Vec<f64>>>,
+{
+    coherent_sums(prep, v, q, reps, cols).solve(v, sign)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ar1_covariance_in_one_pass_is_the_double_sum() {
+        let x: Vec<f64> = (0..41).map(|i| (i as f64 * 0.37).sin()).collect();
+        let y: Vec<f64> = (0..41).map(|i| 1.0 / (2.0 + i as f64)).collect();
+        for rho in [0.0, 0.6, -0.3] {
+            let mut plain = 0.0;
+            for (i, xi) in x.iter().enumerate() {
+                for (j, yj) in y.iter().enumerate() {
+                    plain += xi * yj * f64::powi(rho, (i as i32 - j as i32).abs());
+                }
+            }
+            let fast = ar1_cross(&x, &y, rho);
+            assert!(
+                (fast - plain).abs() < 1e-12 * (1.0 + plain.abs()),
+                "ρ {rho}: {fast} {plain}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_four_chain_dot_products_agree_with_the_plain_sums() {
+        let a: Vec<f64> = (0..37).map(|i| (i as f64 * 0.7).sin()).collect();
+        let b: Vec<f64> = (0..37).map(|i| (i as f64 * 0.3).cos()).collect();
+        let c: Vec<f64> = (0..37).map(|i| 1.0 / (1.0 + i as f64)).collect();
+        let plain = |x: &[f64], y: &[f64]| x.iter().zip(y).map(|(p, q)| p * q).sum::<f64>();
+        assert!((dot(&a, &c) - plain(&a, &c)).abs() < 1e-13);
+        let (s, t) = dot2(&a, &b, &c);
+        assert!((s - plain(&a, &c)).abs() < 1e-13);
+        assert!((t - plain(&b, &c)).abs() < 1e-13);
+    }
+}
