@@ -24,6 +24,7 @@ pub mod model;
 pub mod noise_floor;
 pub mod null_distribution;
 pub mod pairs;
+mod pairs_impact;
 pub mod perrun;
 pub mod proposal;
 pub mod residual_structure;
