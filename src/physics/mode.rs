@@ -191,10 +191,13 @@ impl Mode {
                 let v_zero = if m.has_sign_jump() { y[1] * dir } else { 1.0 };
                 let a = accel(m, y[0], y[1], t, dir);
                 // ends where the force stops pushing the slip (it reaches zero: rolling), or
-                // where the slip's relaxation is no longer fast (the slide goes on)
+                // where the slip's relaxation is no longer fast (the slide goes on); with no
+                // quasi-static slip left (the force no longer pushes it, or pushes more than
+                // the kinetic limit holds: τ passes the exit on the way there unless the force
+                // jumps) it ends at once
                 let end = match quasi_static(m, d, a) {
                     Some((_, tau)) => (d * a).min(CREEP_EXIT * TAU_CREEP_S - tau),
-                    None => d * a,
+                    None => -1.0,
                 };
                 [end, v_zero]
             }
