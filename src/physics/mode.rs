@@ -310,3 +310,56 @@ pub(crate) fn start(m: &Model, z: f64, v: f64, va: f64, t: f64) -> (Mode, [f64; 
     };
     (Mode::Slide { d, dir }, y)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::{Groove, Term};
+
+    fn held(v_c_mps: f64) -> Model {
+        Model {
+            groove: Groove::CHAPTER,
+            friction: Friction::VelocityDependent {
+                mu_inf: 0.3,
+                v_c_mps,
+            },
+            terms: vec![Term::GrooveTilt { alpha_deg: -1.0 }],
+        }
+    }
+
+    /// The state with velocity `v` and slip `u` (`va = (v − u)/s`).
+    fn with_slip(m: &Model, v: f64, u: f64) -> [f64; 3] {
+        [0.0, v, (v - u) / m.groove.s]
+    }
+
+    #[test]
+    fn a_fast_slip_on_its_quasi_static_value_creeps_and_only_then() {
+        let (d, dir, v) = (1.0, 1.0, 0.01);
+        let slide = Mode::Slide { d, dir };
+        let m = held(5e-5);
+        let (u_eq, tau) = quasi_static(&m, d, m.accel(0.0, v, 0.0)).expect("the tilt pushes");
+        assert!(tau < TAU_CREEP_S && u_eq > 0.0, "τ {tau}, u_eq {u_eq}");
+        // armed at the kick (slip far above u_eq), firing on the quasi-static slip
+        assert!(slide.events(&m, &with_slip(&m, 0.02, 0.02), 0.0)[0] > 0.0);
+        let on = with_slip(&m, v, u_eq);
+        assert!(slide.events(&m, &on, 0.0)[0] < 0.0);
+        let (mode, y) = slide.after_event(&m, 0, &on, 0.0);
+        assert_eq!(mode, Mode::Creep { d, dir });
+        assert!((y[1] - on[1]).abs() < 1e-15, "v moved on the value itself");
+        // the creep is armed where it starts, and ends where the force stops pushing the slip
+        assert!(mode.events(&m, &y, 0.0)[0] > 0.0);
+        let flat = Model {
+            terms: vec![Term::LinearDrag { t_s: 0.05 }],
+            ..held(5e-5)
+        };
+        assert!(mode.events(&flat, &y, 0.0)[0] < 0.0);
+        // a slow slip (v_c = 4 mm/s: τ ≈ 0.4 ms) is integrated as it is
+        let soft = held(4e-3);
+        let (u_soft, tau_soft) = quasi_static(&soft, d, soft.accel(0.0, v, 0.0)).unwrap();
+        assert!(tau_soft > CREEP_EXIT * TAU_CREEP_S);
+        assert!(slide.events(&soft, &with_slip(&soft, v, u_soft), 0.0)[0] > 0.0);
+        // a force that does not push the slip (a drag) leaves the zero-slip event alone
+        assert!(slide.events(&flat, &with_slip(&flat, v, 1e-3), 0.0)[0] > 0.0);
+        assert_eq!(quasi_static(&flat, d, flat.accel(0.0, v, 0.0)), None);
+    }
+}
