@@ -116,8 +116,9 @@ pub enum Typical {
     /// Standard error of the size (an amplitude) of a form coherent over the runs.
     Se { se: f64, at: String },
     /// Each run's information a_r about the amplitude of a force periodic in time with a phase
-    /// per run (`time_periodic`).
-    PerRun { a: Vec<f64>, at: String },
+    /// per run (`time_periodic`), and the data's noise floor there (≥ 1: how far the data's
+    /// statistic runs above the replicates' around that frequency, `noise_floor.rs`).
+    PerRun { a: Vec<f64>, floor: f64, at: String },
 }
 
 /// The trial of least standard error `se_of(trial's se)` (the first of equals).
@@ -541,6 +542,7 @@ fn time_periodic(
     }
     let typical = top.map(|(_, i)| Typical::PerRun {
         a: out[i].1.clone(),
+        floor: floor[i],
         at: format!(
             "at {:.0} Hz (higher at higher frequencies, as f² far above)",
             fs[i]
