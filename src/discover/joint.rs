@@ -204,7 +204,7 @@ pub fn fit_joint(
                     let se = profiled.get_or_insert_with(|| {
                         let prep =
                             super::response::prepare(spec, params, &res.shared, &local, runs);
-                        super::response::profiled_se(&prep)
+                        super::screen_sums::profiled_se(&prep)
                     });
                     se[i] * scale.sqrt()
                 }

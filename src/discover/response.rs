@@ -284,35 +284,6 @@ impl Prepared {
     }
 }
 
-/// Standard errors of the shared parameters (in their own units, the residuals weighed by each
-/// run's noise) from their information with each run's z0, t0, v0 projected out (Σ G'G over the
-/// runs, inverted; the caller scales them by χ² per degree of freedom): NaN for
-/// a parameter no run's data moves. The projector drops a local the data cannot tell from the
-/// others, where a Schur complement over the runs' 3×3 blocks would have to invert it.
-pub fn profiled_se(prep: &[Prepared]) -> Vec<f64> {
-    let ng = prep.first().map_or(0, |p| p.glob.len());
-    let kept: Vec<usize> = (0..ng)
-        .filter(|&j| prep.iter().any(|p| p.glob[j].iter().any(|x| *x != 0.0)))
-        .collect();
-    let k = kept.len();
-    let mut gtg = vec![0.0; k * k];
-    for p in prep {
-        for (a, &ja) in kept.iter().enumerate() {
-            for (b, &jb) in kept.iter().enumerate() {
-                gtg[a * k + b] += dot(&p.glob[ja], &p.glob[jb]);
-            }
-        }
-    }
-    let mut se = vec![f64::NAN; ng];
-    if let Some(l) = crate::lsq::dense::cholesky(&gtg, k) {
-        let inv = crate::lsq::dense::chol_inverse(&l, k);
-        for (a, &j) in kept.iter().enumerate() {
-            se[j] = inv[a * k + a].max(0.0).sqrt();
-        }
-    }
-    se
-}
-
 /// Prepare every run of a fitted joint model for regressions of its residuals.
 pub fn prepare(
     spec: &super::candidate::Spec,

@@ -1,6 +1,8 @@
 //! The screen's linear algebra: each run's projected residual and noise replicates (`Vectors`),
 //! and the sums over runs and replicates from which a trial's statistic, estimate and null law
-//! are solved (`Sums`), with the AR(1) covariance they need.
+//! are solved (`Sums`), with the AR(1) covariance they need; the shared parameters' information
+//! with each run's locals projected out (`shared_information`) also gives the joint fit its
+//! errors where its covariance is singular (`profiled_se`).
 
 use super::data::RunData;
 use super::response::Prepared;
@@ -49,18 +51,11 @@ impl Vectors {
                 out
             })
             .collect();
-        let ng = prep.first().map(|p| p.glob.len()).unwrap_or(0);
-        let kept: Vec<usize> = (0..ng)
-            .filter(|&j| prep.iter().any(|p| p.glob[j].iter().any(|x| *x != 0.0)))
-            .collect();
+        let (kept, gtg) = shared_information(prep);
         let k = kept.len();
-        let mut gtg = vec![0.0; k * k];
         let mut gty = vec![vec![0.0; k]; replicates + 1];
         for (p, yr) in prep.iter().zip(&y) {
             for (a, &ja) in kept.iter().enumerate() {
-                for (b, &jb) in kept.iter().enumerate() {
-                    gtg[a * k + b] += dot(&p.glob[ja], &p.glob[jb]);
-                }
                 for (bb, yb) in yr.iter().enumerate() {
                     gty[bb][a] += dot(&p.glob[ja], yb);
                 }
@@ -80,6 +75,44 @@ impl Vectors {
     pub(super) fn n_rep(&self) -> usize {
         self.y.first().map(|r| r.len()).unwrap_or(1)
     }
+}
+
+/// The shared parameters' information with each run's z0, t0, v0 projected out: the columns
+/// some run's data move (`kept`) and Σ G'G over the runs on them (k × k, row-major).
+fn shared_information(prep: &[Prepared]) -> (Vec<usize>, Vec<f64>) {
+    let ng = prep.first().map_or(0, |p| p.glob.len());
+    let kept: Vec<usize> = (0..ng)
+        .filter(|&j| prep.iter().any(|p| p.glob[j].iter().any(|x| *x != 0.0)))
+        .collect();
+    let k = kept.len();
+    let mut gtg = vec![0.0; k * k];
+    for p in prep {
+        for (a, &ja) in kept.iter().enumerate() {
+            for (b, &jb) in kept.iter().enumerate() {
+                gtg[a * k + b] += dot(&p.glob[ja], &p.glob[jb]);
+            }
+        }
+    }
+    (kept, gtg)
+}
+
+/// Standard errors of the shared parameters (in their own units, the residuals weighed by each
+/// run's noise) from `shared_information`, inverted (the caller scales them by χ² per degree of
+/// freedom): NaN for a parameter no run's data moves, or when the information is singular. The
+/// projector drops a local the data cannot tell from the others, where a Schur complement over
+/// the runs' 3×3 blocks would have to invert it.
+pub(super) fn profiled_se(prep: &[Prepared]) -> Vec<f64> {
+    let ng = prep.first().map_or(0, |p| p.glob.len());
+    let (kept, gtg) = shared_information(prep);
+    let k = kept.len();
+    let mut se = vec![f64::NAN; ng];
+    if let Some(l) = crate::lsq::dense::cholesky(&gtg, k) {
+        let inv = chol_inverse(&l, k);
+        for (a, &j) in kept.iter().enumerate() {
+            se[j] = inv[a * k + a].max(0.0).sqrt();
+        }
+    }
+    se
 }
 
 /// Σ aᵢbᵢ in four interleaved partial sums (a fixed order, so the same bits every time; four
