@@ -227,7 +227,18 @@ fn rolling_decays_with_te_not_t() {
     assert!((te / t_drag - 2.198).abs() < 1e-3);
 }
 
-/// Start rolling at v0 with one extra term and return samples of (t, z, v, phase).
+/// The first sample at rest; every later one is at rest too, where it stopped.
+fn first_rest(tr: &groove::physics::Trajectory) -> usize {
+    let stop = tr
+        .phase
+        .iter()
+        .position(|p| *p == Phase::Rest)
+        .expect("it comes to rest");
+    assert!(tr.phase[stop..].iter().all(|p| *p == Phase::Rest));
+    assert!(tr.z_m[stop..].iter().all(|z| *z == tr.z_m[stop]));
+    stop
+}
+
 /// A particle still sliding when a rolling resistance stops it, with a friction too weak to spin
 /// it up against that resistance (μ at a fit's lower bound, 0.001, against c = 0.004): at v = 0
 /// both ways are barred, so it rests there. It used to chatter about v = 0, a switch per
@@ -238,14 +249,8 @@ fn a_slide_stopped_by_a_resistance_stronger_than_its_friction_rests() {
     let m = model(mu, vec![Term::RollingResistance { c }]);
     let t = times(1200, 1e-4);
     let tr = simulate(&m, kick(v0, 0.0), &t);
-    let stop = tr
-        .phase
-        .iter()
-        .position(|p| *p == Phase::Rest)
-        .expect("it comes to rest");
+    let stop = first_rest(&tr);
     assert!(tr.phase[..stop].iter().all(|p| *p == Phase::Sliding));
-    assert!(tr.phase[stop..].iter().all(|p| *p == Phase::Rest));
-    assert!(tr.z_m[stop..].iter().all(|z| *z == tr.z_m[stop]));
     assert!(tr.events.len() <= 3, "{} switches", tr.events.len());
     // where: the slip (−v0 at first, the spin 0) closes first, under v' = g(μ/s + c) and
     // u' = v' + s k g μ; then it cannot roll and slides the other way, v' = g(c − μ/s), to v = 0
@@ -272,12 +277,7 @@ fn a_particle_stopped_while_it_slips_rests_if_the_resistance_holds_it() {
     let t = times(1200, 1e-4);
     // back-spin: the slip closes long after v reaches 0
     let tr = simulate(&m, kick(v0, 0.05), &t);
-    let stop = tr
-        .phase
-        .iter()
-        .position(|p| *p == Phase::Rest)
-        .expect("it comes to rest");
-    assert!(tr.phase[stop..].iter().all(|p| *p == Phase::Rest));
+    let stop = first_rest(&tr);
     assert!(tr.events.len() <= 2, "{} switches", tr.events.len());
     // sliding all the way with v' = g(μ/s + c): v0²/(2a)
     let a = G_MPS2 * (mu / m.groove.s + c);
@@ -289,6 +289,7 @@ fn a_particle_stopped_while_it_slips_rests_if_the_resistance_holds_it() {
     );
 }
 
+/// Start rolling at v0 with one extra term and return samples of (t, z, v, phase).
 fn roll(term: Term, v0: f64, t: &[f64]) -> groove::physics::Trajectory {
     let m = model(0.337, vec![term]);
     simulate(&m, kick(v0, v0 / m.groove.s), t)
