@@ -399,6 +399,86 @@ fn rest_holds_against_a_small_tilt_but_not_a_large_one() {
     assert!((tr.z_m[k] - 0.5 * a * t[k] * t[k]).abs() < 1e-13);
 }
 
+/// Rest under a force that grows in time is not for good: a particle held by a rolling
+/// resistance (c g = 0.039 m/s²) starts rolling exactly when a vibration A sin(ωt) outgrows the
+/// hold, and then rolls as the closed form says. It used to stay where it was to the end.
+#[test]
+fn a_particle_at_rest_starts_when_a_force_in_time_outgrows_the_hold() {
+    let (c, amp, freq) = (0.004, 0.1, 10.0);
+    let m = model(
+        0.337,
+        vec![
+            Term::RollingResistance { c },
+            Term::TimePeriodicForce {
+                amp_mps2: amp,
+                freq_hz: freq,
+                phase_rad: 0.0,
+            },
+        ],
+    );
+    let t = times(600, 1e-4);
+    let tr = simulate(&m, kick(0.0, 0.0), &t);
+    let (hold, w) = (c * G_MPS2, std::f64::consts::TAU * freq);
+    let t_start = (hold / amp).asin() / w;
+    let first = &tr.events[0];
+    assert_eq!((first.from, first.to), (Phase::Rest, Phase::Rolling));
+    assert!(
+        (first.t_s - t_start).abs() < 1e-9,
+        "{} vs {t_start}",
+        first.t_s
+    );
+    // rolling forward from rest: v' = f (A sin ωt − c g), up to the next switch
+    let f = m.groove.rolling_factor();
+    let z = |t: f64| {
+        let dt = t - t_start;
+        f * (amp / w * (dt * (w * t_start).cos() - ((w * t).sin() - (w * t_start).sin()) / w)
+            - 0.5 * hold * dt * dt)
+    };
+    let end = tr.events.get(1).map_or(f64::INFINITY, |e| e.t_s);
+    let mut rolled = 0;
+    for (k, &tk) in t.iter().enumerate() {
+        if tk < t_start {
+            assert_eq!((tr.phase[k], tr.z_m[k]), (Phase::Rest, 0.0));
+        } else if tk < end {
+            assert_eq!(tr.phase[k], Phase::Rolling);
+            assert!(
+                (tr.z_m[k] - z(tk)).abs() < 1e-12,
+                "t {tk}: {} vs {}",
+                tr.z_m[k],
+                z(tk)
+            );
+            rolled += 1;
+        }
+    }
+    assert!(rolled > 300, "{rolled} samples rolling");
+    assert!(
+        tr.z_m[t.len() - 1] > 1e-5,
+        "it moved {} m",
+        tr.z_m[t.len() - 1]
+    );
+    // a pair at rest far apart: each moves as the single particle does
+    let p = PairParams {
+        restitution: Restitution::Constant(0.9),
+        mu_pp: 0.3,
+        radius_m: 150e-6,
+    };
+    let far = State {
+        z_m: 0.01,
+        ..kick(0.0, 0.0)
+    };
+    let pair = simulate_pair(&m, &p, [kick(0.0, 0.0), far], &t);
+    for (q, z0) in pair.particles.iter().zip([0.0, 0.01]) {
+        assert!(
+            (q.events[0].t_s - t_start).abs() < 1e-9,
+            "{}",
+            q.events[0].t_s
+        );
+        for k in 0..t.len() {
+            assert!((q.z_m[k] - z0 - tr.z_m[k]).abs() < 1e-12, "t {}", t[k]);
+        }
+    }
+}
+
 #[test]
 fn friction_limit_makes_a_steep_groove_slide() {
     // need |s a/(1 + ks²)| = 2.7 m/s² > g μ = 0.49 m/s²: cannot roll, slides downhill

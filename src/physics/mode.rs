@@ -5,7 +5,8 @@
 //! terms). Sliding with slip direction `d`: `v' = −d g μ(u)/s + a`,
 //! `va' = d k g μ(u)`. Rolling (constrained, Filippov): `v' = ks²/(1 + ks²)·a`, `va = v/s`, while
 //! the friction it needs, `|s a/(1 + ks²)|`, stays within `g μ_static`. Rest while what holds the
-//! particle (rolling resistance) exceeds the non-dissipative forces. Creep: a slide whose
+//! particle (rolling resistance) exceeds the non-dissipative forces; under a force that depends on
+//! time, rest ends where that force outgrows the hold (`Mode::absorbing`). Creep: a slide whose
 //! velocity-dependent friction holds the slip at its quasi-static value (below).
 
 use super::{Friction, Model, Phase, G_MPS2};
@@ -129,6 +130,12 @@ fn can_roll(m: &Model, a: f64) -> bool {
 }
 
 impl Mode {
+    /// The mode lasts to the end: rest under forces that do not depend on time (z is fixed, so
+    /// nothing that holds it can change).
+    pub fn absorbing(&self, m: &Model) -> bool {
+        *self == Mode::Rest && !m.time_dependent()
+    }
+
     pub fn phase(&self) -> Phase {
         match self {
             Mode::Slide { .. } | Mode::Creep { .. } => Phase::Sliding,
@@ -208,6 +215,10 @@ impl Mode {
                 let limit = G_MPS2 * m.friction.static_limit() * (1.0 + 1e-12);
                 [limit - need, y[1] * dir]
             }
+            // z is fixed at rest, so only a force in time can outgrow what holds the particle
+            Mode::Rest if m.time_dependent() => {
+                [m.static_hold_mps2() - m.accel(y[0], 0.0, t).abs(), 1.0]
+            }
             Mode::Rest => [1.0, 1.0],
         }
     }
@@ -258,6 +269,8 @@ impl Mode {
                 )
             }
             (Mode::Roll { .. }, _) => settle(m, y[0], 0.0, t),
+            // a force in time outgrew the hold: the particle starts from rest as `settle` says
+            (Mode::Rest, 0) => settle(m, y[0], 0.0, t),
             (Mode::Rest, _) => (Mode::Rest, *y),
         }
     }

@@ -39,6 +39,11 @@ impl Model {
         self.terms.iter().any(Term::has_sign_jump)
     }
 
+    /// Some term depends on the time since the kick (so a particle at rest may start again).
+    pub fn time_dependent(&self) -> bool {
+        self.terms.iter().any(Term::time_dependent)
+    }
+
     /// What the terms can hold at rest (m/s²).
     pub fn static_hold_mps2(&self) -> f64 {
         self.terms.iter().map(Term::static_hold_mps2).sum()

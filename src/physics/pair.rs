@@ -119,7 +119,7 @@ pub fn simulate_pair(
         }
         let phases = [modes[0].phase(), modes[1].phase()];
         let ms = modes;
-        let both_rest = ms[0] == Mode::Rest && ms[1] == Mode::Rest;
+        let both_rest = ms[0].absorbing(model) && ms[1].absorbing(model);
         let (p0, p1) = out.particles.split_at_mut(1);
         let mut sampler = Sampler {
             times: t_s,
@@ -174,6 +174,16 @@ pub fn simulate_pair(
                 note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
                 modes[i] = m;
                 y[3 * i..3 * i + 3].copy_from_slice(&y_new);
+                // a force in time starts both particles at rest at once; the event of the other
+                // would not fire again (it is past zero already), so it starts here too
+                let j = 1 - i;
+                let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
+                if modes[j] == Mode::Rest && modes[j].events(model, &yj, t)[0] < 0.0 {
+                    let (m, y_new) = modes[j].after_event(model, 0, &yj, t);
+                    note_switch(&mut out.particles[j], t, modes[j], m, &y_new);
+                    modes[j] = m;
+                    y[3 * j..3 * j + 3].copy_from_slice(&y_new);
+                }
             }
         }
     }

@@ -40,7 +40,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
     let mut switches = 0;
     loop {
         let phase = mode.phase();
-        if mode == Mode::Rest || switches >= MAX_SWITCHES {
+        if mode.absorbing(model) || switches >= MAX_SWITCHES {
             for &ts in &t_s[next..] {
                 traj.push(ts, &y, phase);
             }
