@@ -15,6 +15,7 @@ pub mod detection;
 pub mod diagnosis;
 pub mod drift;
 pub mod estimates;
+mod findings;
 pub mod forcemap;
 pub mod forward;
 pub mod holm;
