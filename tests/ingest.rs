@@ -15,6 +15,10 @@ use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 
+#[path = "support/ingest_stage.rs"]
+mod ingest_stage;
+use ingest_stage::stage_outputs;
+
 type Files = BTreeMap<String, Vec<u8>>;
 
 // ---------------------------------------------------------------- known recordings
@@ -397,22 +401,6 @@ fn set_field(line: &str, field: usize, value: &str) -> String {
     let mut cells: Vec<&str> = line.split(',').collect();
     cells[field] = value;
     cells.join(",")
-}
-
-fn stage_outputs(files: &Files, params: &toml::Table) -> BTreeMap<String, Artifact> {
-    let dataset = Artifact::Collection(files.clone());
-    let input = StageInput {
-        params,
-        inputs: BTreeMap::from([("dataset", &dataset)]),
-        item: None,
-        seed: 1,
-        progress: None,
-        put_item: None,
-        memo: None,
-    };
-    Ingest
-        .run(&input)
-        .unwrap_or_else(|e| panic!("stage failed: {e}"))
 }
 
 /// The known recordings sorted by run, as ingest returns them.

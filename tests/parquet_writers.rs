@@ -5,12 +5,14 @@
 //! The files are made by tests/fixtures/parquet_writers/make_fixtures.py (by hand: CI has no
 //! pyarrow).
 
-use groove::engine::stage::{Artifact, StageInput, StageKind};
 use groove::ingest::{self, IngestParams};
 use groove::recording::Recording;
-use groove::stages::ingest::Ingest;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+#[path = "support/ingest_stage.rs"]
+mod ingest_stage;
+use ingest_stage::{folder_files, stage_outputs};
 
 type Files = BTreeMap<String, Vec<u8>>;
 
@@ -24,32 +26,11 @@ const WRITERS: [&str; 6] = [
 ];
 
 fn folder(name: &str) -> Files {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/parquet_writers");
-    let mut files = Files::new();
-    for e in std::fs::read_dir(dir.join(name)).unwrap() {
-        let p = e.unwrap().path();
-        let n = p.file_name().unwrap().to_string_lossy().into_owned();
-        files.insert(n, std::fs::read(&p).unwrap());
-    }
-    files
-}
-
-/// The ingest stage's outputs (items as bytes: no store).
-fn stage_outputs(files: &Files) -> BTreeMap<String, Artifact> {
-    let dataset = Artifact::Collection(files.clone());
-    let params = toml::Table::new();
-    let input = StageInput {
-        params: &params,
-        inputs: BTreeMap::from([("dataset", &dataset)]),
-        item: None,
-        seed: 1,
-        progress: None,
-        put_item: None,
-        memo: None,
-    };
-    Ingest
-        .run(&input)
-        .unwrap_or_else(|e| panic!("stage failed: {e}"))
+    folder_files(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/parquet_writers")
+            .join(name),
+    )
 }
 
 #[test]
@@ -62,7 +43,7 @@ fn parquet_of_common_writers_reads_as_the_csv_of_the_same_rows() {
         "four single runs and a collision run"
     );
     assert!(want.skipped.is_empty());
-    let want_items = stage_outputs(&csv);
+    let want_items = stage_outputs(&csv, &toml::Table::new());
     for writer in WRITERS {
         let files = folder(writer);
         assert!(files.contains_key("trajectories.parquet"), "{writer}");
@@ -74,7 +55,7 @@ fn parquet_of_common_writers_reads_as_the_csv_of_the_same_rows() {
             assert!(g == w, "{writer}: run {} reads otherwise", w.info.run);
         }
         assert!(got.skipped.is_empty(), "{writer}");
-        let items = stage_outputs(&files);
+        let items = stage_outputs(&files, &toml::Table::new());
         assert_eq!(
             items.keys().collect::<Vec<_>>(),
             want_items.keys().collect::<Vec<_>>()

@@ -14,6 +14,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "support/ingest_stage.rs"]
+mod ingest_stage;
+use ingest_stage::folder_files;
+
 type Files = BTreeMap<String, Vec<u8>>;
 
 /// The rendered videos' pixel size and frame rate (make_fixtures.py).
@@ -27,15 +31,7 @@ fn fixtures() -> PathBuf {
 }
 
 fn folder(name: &str) -> Files {
-    let mut files = Files::new();
-    for e in std::fs::read_dir(fixtures().join(name)).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_file() {
-            let n = p.file_name().unwrap().to_string_lossy().into_owned();
-            files.insert(n, std::fs::read(&p).unwrap());
-        }
-    }
-    files
+    folder_files(&fixtures().join(name))
 }
 
 /// The fixtures' calibration: the groove along image x, nothing else (the manifests give the rest).
