@@ -456,6 +456,23 @@ fn a_particle_at_rest_starts_when_a_force_in_time_outgrows_the_hold() {
         "it moved {} m",
         tr.z_m[t.len() - 1]
     );
+    // a vibration just above the hold (1.02×) at 900 Hz outgrows it for 71 µs a half period:
+    // the first such window starts it, however large the steps at rest had grown
+    let (amp, freq) = (1.02 * hold, 900.0);
+    let mut fast = m.clone();
+    fast.terms[1] = Term::TimePeriodicForce {
+        amp_mps2: amp,
+        freq_hz: freq,
+        phase_rad: 0.0,
+    };
+    let first = &simulate(&fast, kick(0.0, 0.0), &t).events[0];
+    let t_first = (hold / amp).asin() / (std::f64::consts::TAU * freq);
+    assert_eq!((first.from, first.to), (Phase::Rest, Phase::Rolling));
+    assert!(
+        (first.t_s - t_first).abs() < 1e-9,
+        "{} vs {t_first}",
+        first.t_s
+    );
     // a pair at rest far apart: each moves as the single particle does
     let p = PairParams {
         restitution: Restitution::Constant(0.9),

@@ -39,7 +39,9 @@ impl<F> Sampler<'_, F> {
 }
 
 /// Integrate from (`t0`, `y0`) until `t_end` or the first event, filling samples on the way.
-/// `h` carries the step size from one piece to the next.
+/// `h` carries the step size from one piece to the next; no step is longer than `h_max` (nor
+/// than `H_MAX_S`): an event the error control cannot see coming (rest ending where a vibration
+/// outgrows the hold, while nothing moves) is missed if a step can span it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])>(
     rhs: &impl Fn(&[f64; N]) -> [f64; N],
@@ -50,6 +52,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     sampler: &mut Sampler<'_, F>,
     tol: &Tolerance<N>,
     h: &mut f64,
+    h_max: f64,
 ) -> Stop<N> {
     sampler.fill_until(t0, |_| y0);
     let (mut t, mut y) = (t0, y0);
@@ -57,7 +60,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     let mut e0 = events(&y);
     let mut rejects = 0;
     while t < t_end {
-        let h_try = h.min(H_MAX_S).min(t_end - t);
+        let h_try = h.min(H_MAX_S).min(h_max).min(t_end - t);
         let step = dopri5(rhs, &y, &f, h_try, tol);
         let min_h = 1e-14 * t.abs().max(1e-3);
         if step.err > 1.0 && h_try > min_h && rejects < 200 {

@@ -136,6 +136,18 @@ impl Mode {
         *self == Mode::Rest && !m.time_dependent()
     }
 
+    /// The longest step this mode may take (s): at rest under forces in time, a 32nd of their
+    /// shortest time scale, so that no step spans a window where they outgrow the hold (nothing
+    /// moves at rest, so the error control would let steps grow to the largest); otherwise
+    /// unbounded (the error control sees the forces through the motion).
+    pub fn step_cap(&self, m: &Model) -> f64 {
+        match self {
+            // a floor, so that a term with no time scale left (f = ∞) cannot stall the integrator
+            Mode::Rest => (m.shortest_time_scale_s() / 32.0).max(1e-7),
+            _ => f64::INFINITY,
+        }
+    }
+
     pub fn phase(&self) -> Phase {
         match self {
             Mode::Slide { .. } | Mode::Creep { .. } => Phase::Sliding,

@@ -44,6 +44,14 @@ impl Model {
         self.terms.iter().any(Term::time_dependent)
     }
 
+    /// The shortest time over which a term in time changes (s; infinite without one).
+    pub fn shortest_time_scale_s(&self) -> f64 {
+        self.terms
+            .iter()
+            .filter_map(Term::time_scale_s)
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// What the terms can hold at rest (m/s²).
     pub fn static_hold_mps2(&self) -> f64 {
         self.terms.iter().map(Term::static_hold_mps2).sum()

@@ -154,6 +154,7 @@ pub fn simulate_pair(
             &mut sampler,
             &TOL,
             &mut h,
+            ms[0].step_cap(model).min(ms[1].step_cap(model)),
         );
         next = sampler.next;
         t = stop.t_s;

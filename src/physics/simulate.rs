@@ -64,6 +64,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
             &mut sampler,
             &TOL,
             &mut h,
+            mode.step_cap(model),
         );
         next = sampler.next;
         t = stop.t_s;

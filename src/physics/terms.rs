@@ -92,6 +92,16 @@ impl Term {
         }
     }
 
+    /// The time over which the term changes (s): a vibration's period, a spline's knot spacing
+    /// in t; `None` for a term that does not depend on time.
+    pub fn time_scale_s(&self) -> Option<f64> {
+        match self {
+            Term::TimePeriodicForce { freq_hz, .. } => Some(1.0 / freq_hz.abs()),
+            Term::Spline(sp) if sp.variable == super::spline::Variable::T => Some(sp.dx.abs()),
+            _ => None,
+        }
+    }
+
     /// The term jumps where v changes sign (so the integrator stops there).
     pub fn has_sign_jump(&self) -> bool {
         matches!(self, Term::RollingResistance { c } if *c != 0.0)
