@@ -175,12 +175,14 @@ pub fn simulate_pair(
                 note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
                 modes[i] = m;
                 y[3 * i..3 * i + 3].copy_from_slice(&y_new);
-                // a force in time starts both particles at rest at once; the event of the other
-                // would not fire again (it is past zero already), so it starts here too
+                // the other particle's event at the same time (a force in time starting both at
+                // rest at once): `advance` stops at one event, and the other's function, already
+                // past zero, would not fire again, so it is taken here too
                 let j = 1 - i;
                 let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
-                if modes[j] == Mode::Rest && modes[j].events(model, &yj, t)[0] < 0.0 {
-                    let (m, y_new) = modes[j].after_event(model, 0, &yj, t);
+                let ej = modes[j].events(model, &yj, t);
+                if let Some(k) = (0..ej.len()).find(|&k| ej[k] < 0.0) {
+                    let (m, y_new) = modes[j].after_event(model, k, &yj, t);
                     note_switch(&mut out.particles[j], t, modes[j], m, &y_new);
                     modes[j] = m;
                     y[3 * j..3 * j + 3].copy_from_slice(&y_new);
