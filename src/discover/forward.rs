@@ -35,6 +35,17 @@ pub const CV_LEVEL: f64 = 0.05;
 /// 1.2× the wave's; beside a true wave and a tilt it was 0.3–0.55×.
 const PAIR_GAIN_RATIO: f64 = 1.5;
 
+/// With GROOVE_DISCOVER_TRACE set, print how long `what` took (stderr only, never in outputs).
+fn trace_took(start: std::time::Instant, what: impl FnOnce() -> String) {
+    if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+        eprintln!(
+            "discover: {} took {:.2} s",
+            what(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+}
+
 /// The model a candidate would give to first order: the current fit with the screen's linear
 /// estimates of the term (not refitted; χ² lowered by the screen's statistic).
 fn pseudo(current: &Model, e: &Extra, s: Option<&Screened>, materials: &[String]) -> Model {
@@ -321,10 +332,14 @@ impl Trials<'_> {
                 self.round,
                 self.all[i].effect().unwrap_or("probe")
             ));
+            let start = std::time::Instant::now();
             self.fitted[i] = self.full(i);
             self.refused[i] = scale_at_bound(&self.fitted[i]);
             let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
+            trace_took(start, || {
+                format!("round {}: {} in full", self.round, self.all[i].form())
+            });
         }
         let (cv, t) = self.cv_of[i].clone().expect("just set");
         let passes =
@@ -403,6 +418,7 @@ impl Trials<'_> {
                     ea.effect().unwrap_or("probe"),
                     eb.effect().unwrap_or("probe")
                 ));
+                let start = std::time::Instant::now();
                 let m = self.fitted[a].extend(
                     eb,
                     &self.starts(b),
@@ -410,6 +426,9 @@ impl Trials<'_> {
                     self.set.runs,
                     FULL_ITERATIONS,
                 );
+                trace_took(start, || {
+                    format!("round {}: {} + {}", self.round, ea.form(), eb.form())
+                });
                 if scale_at_bound(&m).is_some() {
                     continue;
                 }

@@ -22,6 +22,7 @@ pub mod holm;
 pub mod joint;
 pub mod locate;
 pub mod model;
+pub mod noise;
 pub mod noise_floor;
 pub mod null_distribution;
 pub mod pairs;

@@ -4,7 +4,6 @@
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
 use super::joint::{fit_joint, predict, FitControl};
-use super::residual_structure::lag1_autocorrelation;
 use rayon::prelude::*;
 
 /// One run's own fit.
@@ -129,7 +128,8 @@ pub fn residuals(
     run.z_m.iter().zip(&z).map(|(a, b)| a - b).collect()
 }
 
-/// Measure each run's noise from its baseline fit and flag outliers (|r| > 5 robust σ), twice.
+/// Measure each run's noise and flag its outliers from its baseline fit, twice (`noise::measure`:
+/// what a local cubic leaves of the residuals, so a slow misfit of the baseline is not noise).
 pub fn measure_noise(
     runs: &mut [RunData],
     base: &Spec,
@@ -137,24 +137,12 @@ pub fn measure_noise(
 ) -> Vec<PerRunFit> {
     let mut fits = fit_each_run(runs, base, base_params, &[], None);
     for pass in 0..2 {
-        for (run, fit) in runs.iter_mut().zip(&fits) {
+        runs.par_iter_mut().zip(&fits).for_each(|(run, fit)| {
             let res = residuals(run, base, base_params, &[], fit);
-            let mad_sigma = crate::stats::abs_scale(&res).max(1e-12);
-            for (k, r) in run.keep.iter_mut().zip(&res) {
-                *k = r.abs() <= 5.0 * mad_sigma;
-            }
-            let kept: Vec<f64> = res
-                .iter()
-                .zip(&run.keep)
-                .filter(|(_, k)| **k)
-                .map(|(r, _)| *r)
-                .collect();
-            let dof = (kept.len() as f64 - 5.0).max(1.0);
-            run.sigma_m = (kept.iter().map(|r| r * r).sum::<f64>() / dof)
-                .sqrt()
-                .max(1e-12);
-            run.rho1 = lag1_autocorrelation(&kept).clamp(0.0, 0.95);
-        }
+            let noise = super::noise::measure(&run.t_s, &res, &mut run.keep);
+            run.sigma_m = noise.sigma_m;
+            run.rho1 = noise.rho1;
+        });
         if pass == 0 {
             fits = fit_each_run(runs, base, base_params, &[], Some(&fits));
         }

@@ -116,7 +116,24 @@ fn fit_baseline(
         .collect();
     g0.extend((0..materials.len()).map(|m| of_material(m, |f| f.t_s)));
     let l0: Vec<[f64; N_LOCAL]> = per_run.iter().map(|f| f.local).collect();
-    let baseline = Model::fit(base_spec, materials, runs, &g0, &l0, 80);
+    // also from the parameters' own starts: where the baseline cannot follow the runs (runs that
+    // come to rest) the per-run μ end at their bounds, and their medians start the joint fit in
+    // a basin it does not leave (60 such runs: χ² 28.6 M from them, 15.6 M from these, and only
+    // from the second did the rolling resistance's fit reach the truth)
+    let prior: Vec<f64> = base_params.iter().map(|p| p.start).collect();
+    let baseline = if prior == g0 {
+        Model::fit(base_spec, materials, runs, &g0, &l0, 80)
+    } else {
+        let (from_runs, from_prior) = rayon::join(
+            || Model::fit(base_spec.clone(), materials, runs, &g0, &l0, 80),
+            || Model::fit(base_spec.clone(), materials, runs, &prior, &l0, 80),
+        );
+        if from_prior.fit.chi2 < from_runs.fit.chi2 {
+            from_prior
+        } else {
+            from_runs
+        }
+    };
     (baseline, per_run)
 }
 

@@ -218,6 +218,12 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
                     .zip(specs)
                     .map(|((x, d), s)| (x + d).clamp(s.lower, s.upper))
                     .collect();
+                if trial.iter().any(|v| !v.is_finite()) {
+                    // a step from a normal matrix with a non-finite entry (the model gave a
+                    // non-finite residual on a difference step): not a point to evaluate
+                    lambda *= 4.0;
+                    continue;
+                }
                 model.residuals(&trial, &mut r_try);
                 let c_trial = weighted_cost(&r_try, &w);
                 if c_trial.is_finite() && c_trial < cost {
@@ -255,5 +261,60 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
         normal,
         termination,
         iterations,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// r = x − 2, whose normal equations carry a NaN (as a difference step that left the model's
+    /// domain gives); its residuals refuse a non-finite point, as the simulator does.
+    struct NanNormal;
+    struct Nan(Vec<f64>);
+    impl Normal for Nan {
+        fn gradient(&self) -> &[f64] {
+            &self.0
+        }
+        fn solve(&self, _: f64, _: &[bool], rhs: &[f64]) -> Option<Vec<f64>> {
+            Some(rhs.iter().map(|_| f64::NAN).collect())
+        }
+        fn apply(&self, _: f64, x: &[f64]) -> Vec<f64> {
+            x.to_vec()
+        }
+    }
+    impl Model for NanNormal {
+        type Normal = Nan;
+        fn n_residuals(&self) -> usize {
+            1
+        }
+        fn residuals(&self, x: &[f64], out: &mut [f64]) {
+            assert!(x[0].is_finite(), "the driver evaluated a non-finite point");
+            out[0] = x[0] - 2.0;
+        }
+        fn normal(&self, x: &[f64], _: &[f64], _: &[f64]) -> Nan {
+            Nan(vec![x[0] - 2.0])
+        }
+    }
+
+    #[test]
+    fn a_step_with_a_non_finite_value_is_refused_not_evaluated() {
+        let spec = ParamSpec {
+            start: 1.0,
+            lower: 0.0,
+            upper: 10.0,
+            step: 1e-6,
+        };
+        let s = Settings {
+            max_iter: 5,
+            rounds: 1,
+            huber_k: 2.5,
+            scale: Scale::Fixed(1.0),
+            cost_tol: 1e-9,
+            rel_tol: 0.0,
+        };
+        let sol = minimize(&NanNormal, &[spec], &s);
+        assert_eq!(sol.x, vec![1.0]);
+        assert_eq!(sol.termination, Termination::NoFurtherDecrease);
     }
 }
