@@ -17,7 +17,7 @@ set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 seeds="${SEEDS:-1 2 3 4 5}"
 null_seeds="${NULL_SEEDS:-$(seq -s ' ' 1 20)}"
-effects="${EFFECTS:-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness}"
+effects="${EFFECTS:-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness runs_that_stop}"
 nulls="${NULLS:-null null_quantized null_small}"
 work="$(mktemp -d "${TMPDIR:-/tmp}/groove-power.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
@@ -42,6 +42,7 @@ expect() {
       echo "groove_tilt tilt alpha_deg=0.05"
       echo "position_dependent_force periodic amplitude_mps2=0.05 wavelength_m=2.0e-3"
       ;;
+    runs_that_stop) echo "rolling_resistance resistance coefficient=0.004" ;;
     resistance_and_waviness)
       echo "rolling_resistance resistance coefficient=0.004"
       echo "position_dependent_force periodic amplitude_mps2=0.05 wavelength_m=3.0e-3"
