@@ -165,7 +165,8 @@ fn match_moments(f: &Filter, d: &[f64]) -> Noise {
     let ratio = |rho: f64| poly(&c1, rho) / poly(&c0, rho);
     let target = a1 / a0.max(1e-300);
     // the ratio rises with ρ; bisect within [0, RHO_MAX], the ends taken as they are
-    let rho = if target <= ratio(0.0) {
+    // nothing left (a model through every sample): no correlation to read
+    let rho = if a0 <= 0.0 || target <= ratio(0.0) {
         0.0
     } else if target >= ratio(RHO_MAX) {
         RHO_MAX
@@ -345,6 +346,21 @@ mod tests {
         assert_eq!(flagged, bad);
         assert!((m.sigma_m / 1e-6 - 1.0).abs() < 0.1, "σ {:e}", m.sigma_m);
         assert!((m.rho1 - 0.2).abs() < 0.1, "ρ {}", m.rho1);
+    }
+
+    #[test]
+    fn residuals_that_are_all_zero_read_as_the_floor_without_a_correlation() {
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * 1e-4).collect();
+        let mut keep = vec![true; 200];
+        let m = measure(&t, &[0.0; 200], &mut keep);
+        assert_eq!(
+            m,
+            Noise {
+                sigma_m: 1e-12,
+                rho1: 0.0
+            }
+        );
+        assert!(keep.iter().all(|k| *k));
     }
 
     #[test]
