@@ -449,6 +449,14 @@ fn a_rolling_resistance_that_brings_runs_to_rest_is_named_alone() {
     println!("{}", check_existing("runs_that_stop", None));
 }
 
+/// Slow runs trapped in the wells of a 3 mm waviness: the wave named alone, amplitude and
+/// wavelength within 15 %. With the noise read from the baseline's rms a tilt, the wave and an
+/// unexplained spline were accepted.
+#[test]
+fn runs_trapped_in_a_waviness_name_the_wave_alone() {
+    println!("{}", check_waviness("waviness_trapped", None));
+}
+
 #[test]
 fn quantized_positions_with_outliers_give_no_finding() {
     assert!(check_null("null_quantized", None), "a finding on a null");

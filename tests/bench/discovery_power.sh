@@ -17,7 +17,7 @@ set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 seeds="${SEEDS:-1 2 3 4 5}"
 null_seeds="${NULL_SEEDS:-$(seq -s ' ' 1 20)}"
-effects="${EFFECTS:-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness runs_that_stop}"
+effects="${EFFECTS:-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness runs_that_stop waviness_trapped}"
 nulls="${NULLS:-null null_quantized null_small}"
 work="$(mktemp -d "${TMPDIR:-/tmp}/groove-power.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
@@ -34,7 +34,7 @@ expect() {
     position_force) echo "position_dependent_force periodic amplitude_mps2=0.1 wavelength_m=8.0e-3" ;;
     waviness_0p5mm) echo "position_dependent_force periodic amplitude_mps2=0.06 wavelength_m=0.5e-3" ;;
     waviness_0p8mm) echo "position_dependent_force periodic amplitude_mps2=0.06 wavelength_m=0.8e-3" ;;
-    waviness_3mm) echo "position_dependent_force periodic amplitude_mps2=0.05 wavelength_m=3.0e-3" ;;
+    waviness_3mm | waviness_trapped) echo "position_dependent_force periodic amplitude_mps2=0.05 wavelength_m=3.0e-3" ;;
     waviness_5mm) echo "position_dependent_force periodic amplitude_mps2=0.05 wavelength_m=5.0e-3" ;;
     localized_force) echo "position_dependent_force localized amplitude_mps2=0.3 centre_m=2.0e-3 width_m=0.3e-3" ;;
     time_force) echo "time_dependent_force periodic amplitude_mps2=0.3 frequency_hz=150" ;;
