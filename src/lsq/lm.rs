@@ -192,7 +192,7 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
     let mut iterations = 0;
     let mut termination = Termination::MaxIterations;
     model.residuals(&x, &mut r);
-    for _ in 0..s.rounds.max(1) {
+    'rounds: for _ in 0..s.rounds.max(1) {
         let scale = scale_of(&r, s.scale);
         huber_weights(&r, s.huber_k * scale, &mut w);
         let mut cost = weighted_cost(&r, &w);
@@ -201,6 +201,12 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
         for _ in 0..s.max_iter {
             iterations += 1;
             let normal = model.normal(&x, &r, &w);
+            if normal.gradient().iter().any(|g| !g.is_finite()) {
+                // a difference step left the model's domain: no direction to take from here,
+                // and no evidence of a minimum either (not "converged")
+                termination = Termination::NonFinite;
+                break 'rounds;
+            }
             let on = active(&x, normal.gradient(), specs);
             if !on.iter().any(|&o| o) {
                 termination = Termination::AtBounds;
@@ -219,8 +225,8 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
                     .map(|((x, d), s)| (x + d).clamp(s.lower, s.upper))
                     .collect();
                 if trial.iter().any(|v| !v.is_finite()) {
-                    // a step from a normal matrix with a non-finite entry (the model gave a
-                    // non-finite residual on a difference step): not a point to evaluate
+                    // a step that overflowed (a non-finite entry of the normal matrix behind a
+                    // finite gradient): not a point to evaluate; more damping shortens it
                     lambda *= 4.0;
                     continue;
                 }
@@ -268,9 +274,12 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
 mod tests {
     use super::*;
 
-    /// r = x − 2, whose normal equations carry a NaN (as a difference step that left the model's
-    /// domain gives); its residuals refuse a non-finite point, as the simulator does.
-    struct NanNormal;
+    /// r = x − 2 whose normal equations carry a NaN: in the gradient (`nan_gradient`, as a
+    /// difference step that left the model's domain gives) or only in the solved step. Its
+    /// residuals refuse a non-finite point, as the simulator does.
+    struct NanNormal {
+        nan_gradient: bool,
+    }
     struct Nan(Vec<f64>);
     impl Normal for Nan {
         fn gradient(&self) -> &[f64] {
@@ -293,12 +302,15 @@ mod tests {
             out[0] = x[0] - 2.0;
         }
         fn normal(&self, x: &[f64], _: &[f64], _: &[f64]) -> Nan {
-            Nan(vec![x[0] - 2.0])
+            Nan(vec![if self.nan_gradient {
+                f64::NAN
+            } else {
+                x[0] - 2.0
+            }])
         }
     }
 
-    #[test]
-    fn a_step_with_a_non_finite_value_is_refused_not_evaluated() {
+    fn minimize_nan(nan_gradient: bool) -> Solution<Nan> {
         let spec = ParamSpec {
             start: 1.0,
             lower: 0.0,
@@ -307,13 +319,27 @@ mod tests {
         };
         let s = Settings {
             max_iter: 5,
-            rounds: 1,
+            rounds: 3,
             huber_k: 2.5,
             scale: Scale::Fixed(1.0),
             cost_tol: 1e-9,
             rel_tol: 0.0,
         };
-        let sol = minimize(&NanNormal, &[spec], &s);
+        minimize(&NanNormal { nan_gradient }, &[spec], &s)
+    }
+
+    #[test]
+    fn a_non_finite_gradient_ends_the_fit_as_non_finite_not_converged() {
+        let sol = minimize_nan(true);
+        assert_eq!(sol.x, vec![1.0]);
+        assert_eq!(sol.termination, Termination::NonFinite);
+        assert!(!sol.termination.is_converged());
+        assert_eq!(sol.iterations, 1, "the rounds after it are not run");
+    }
+
+    #[test]
+    fn a_step_with_a_non_finite_value_is_refused_not_evaluated() {
+        let sol = minimize_nan(false);
         assert_eq!(sol.x, vec![1.0]);
         assert_eq!(sol.termination, Termination::NoFurtherDecrease);
     }

@@ -18,7 +18,7 @@ pub enum Termination {
     AtBounds,
     /// The iteration budget ran out before a stopping rule held.
     MaxIterations,
-    /// The model gave non-finite values at the start.
+    /// The model gave non-finite values at the start, or in the gradient of a step.
     NonFinite,
     /// Too few frames for the number of free parameters.
     TooFewPoints,
