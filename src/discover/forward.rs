@@ -338,7 +338,11 @@ impl Trials<'_> {
             let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
             trace_took(start, || {
-                format!("round {}: {} in full", self.round, self.all[i].form())
+                format!(
+                    "round {}: {} fitted in full and cross-validated",
+                    self.round,
+                    self.all[i].form()
+                )
             });
         }
         let (cv, t) = self.cv_of[i].clone().expect("just set");
@@ -427,7 +431,7 @@ impl Trials<'_> {
                     FULL_ITERATIONS,
                 );
                 trace_took(start, || {
-                    format!("round {}: {} + {}", self.round, ea.form(), eb.form())
+                    format!("round {}: {} + {} fitted", self.round, ea.form(), eb.form())
                 });
                 if scale_at_bound(&m).is_some() {
                     continue;

@@ -36,6 +36,11 @@ struct Filter {
     g: Vec<Vec<f64>>,
 }
 
+/// Samples in a window of a series of `n`.
+fn window_len(n: usize) -> usize {
+    (2 * HALF + 1).min(n)
+}
+
 /// The window of sample `i` among `n`: `w` samples, centred where the ends allow.
 fn window(i: usize, n: usize, w: usize) -> usize {
     i.saturating_sub(w / 2).min(n - w)
@@ -45,7 +50,7 @@ fn window(i: usize, n: usize, w: usize) -> usize {
 /// `t[lo..lo + w]` that give its value at `tq`; `None` if those times cannot carry a cubic.
 fn cubic_weights(t: &[f64], p: usize, tq: f64) -> (usize, Option<Vec<f64>>) {
     let n = t.len();
-    let w = (2 * HALF + 1).min(n);
+    let w = window_len(n);
     let l = window(p, n, w);
     let ts = &t[l..l + w];
     let span = (ts[w - 1] - ts[0]).max(1e-300) / 2.0;
@@ -89,7 +94,7 @@ fn filter(t: &[f64]) -> Filter {
                     .enumerate()
                     .map(|(j, x)| f64::from(u8::from(l + j == i)) - x)
                     .collect(),
-                None => vec![0.0; (2 * HALF + 1).min(t.len())],
+                None => vec![0.0; window_len(t.len())],
             };
             (l, row)
         })
@@ -164,8 +169,8 @@ fn match_moments(f: &Filter, d: &[f64]) -> Noise {
     let (c0, c1) = f.moment_coefficients();
     let ratio = |rho: f64| poly(&c1, rho) / poly(&c0, rho);
     let target = a1 / a0.max(1e-300);
-    // the ratio rises with ρ; bisect within [0, RHO_MAX], the ends taken as they are
-    // nothing left (a model through every sample): no correlation to read
+    // the ratio rises with ρ: bisect within [0, RHO_MAX], the ends taken as they are (and
+    // nothing left, a model through every sample, has no correlation to read)
     let rho = if a0 <= 0.0 || target <= ratio(0.0) {
         0.0
     } else if target >= ratio(RHO_MAX) {
