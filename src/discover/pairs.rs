@@ -37,6 +37,11 @@ pub const ALPHA: f64 = 0.01;
 const MIN_MU: f64 = 0.03;
 const MIN_DRAG: f64 = 0.10;
 const DRAG_SPEEDS: [f64; 2] = [0.01, 0.1];
+/// χ² per sample of a free pair fit above which the fits are also tried in the other order: 3×
+/// the noise in rms, above the 1.3–2.2× that null pairs' free fits leave when the noise is
+/// measured low (`misfit`).
+const RETRY_MISFIT: f64 = 9.0;
+
 /// The free fit contains the held one; a free χ² above the held χ² by more than this fraction
 /// means it stopped at a worse optimum.
 const WORSE: f64 = 1e-6;
@@ -284,6 +289,33 @@ fn not_physics(i: usize) -> bool {
     i != MU_PG && i != LN_T0 && i != TP
 }
 
+/// The single runs' μ_pg (μ∞ of a friction that depends on speed).
+fn single_mu(model: &Model) -> f64 {
+    match model.friction {
+        Friction::Constant { mu } => mu,
+        Friction::VelocityDependent { mu_inf, .. } => mu_inf,
+    }
+}
+
+/// The pair fit of `runs` with μ_pg and the drag held at the single runs' `model`, from the pair
+/// model's own starting values: the well-posed fit (only the runs' kicks, gaps and the impact
+/// laws move), so it starts the free one.
+fn held_from_defaults(
+    runs: &[PairRun],
+    model: &Model,
+    groove: Groove,
+    max_iter: usize,
+) -> GroupFit {
+    let spec = held_spec(model, groove);
+    let mut shared: Vec<f64> = spec
+        .shared_specs(None, runs)
+        .iter()
+        .map(|s| s.start)
+        .collect();
+    shared[MU_PG] = single_mu(model);
+    fit_group_with(runs, &spec, &shared, None, &not_physics, max_iter)
+}
+
 /// The pair fit of `runs` with μ_pg and the drag held at the single runs' `model` (started from
 /// the free fit, and again from its own optimum when that start did worse than the free fit).
 fn held_fit(
@@ -294,10 +326,7 @@ fn held_fit(
     max_iter: usize,
 ) -> GroupFit {
     let mut start = free.clone();
-    start.result.shared[MU_PG] = match model.friction {
-        Friction::Constant { mu } => mu,
-        Friction::VelocityDependent { mu_inf, .. } => mu_inf,
-    };
+    start.result.shared[MU_PG] = single_mu(model);
     let held_spec = held_spec(model, groove);
     // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
     let mut held = fit_group_with(
@@ -325,41 +354,70 @@ fn held_fit(
     held
 }
 
-/// The free fit: `first` (from the defaults), or when the held fit did better, which the free
-/// model contains, the free fit again from the held fit's optimum with μ_pg and the drag at the
-/// single runs' values, whichever ends lower. From the defaults a 2 kHz null's free fit once
-/// ended with T0 at its floor and 18× the held χ², and read as a huge mismatch.
+/// The free fit started at the held fit's optimum, μ_pg and the drag at the single runs' values:
+/// the free model contains the held one, so it cannot end above it. None when the single runs
+/// have no linear or saturating drag to start from.
 fn free_from_held(
     runs: &[PairRun],
     free_spec: &FitSpec,
     model: &Model,
     held: &GroupFit,
-    first: GroupFit,
     max_iter: usize,
-) -> GroupFit {
-    let Some([mu, t0, tp]) = single_values(model) else {
-        return first;
-    };
-    if first.cost() <= held.cost() {
-        return first;
-    }
+) -> Option<GroupFit> {
+    let [mu, t0, tp] = single_values(model)?;
     let mut start = held.result.shared.clone();
     start[MU_PG] = mu;
     start[LN_T0] = t0.ln();
     start[TP] = tp;
-    let again = fit_group_with(
+    Some(fit_group_with(
         runs,
         free_spec,
         &start,
         Some(held.result.own.as_slice()),
         &|_| true,
         max_iter,
-    );
-    if again.cost() < first.cost() {
-        again
-    } else {
-        first
+    ))
+}
+
+/// The held and the free fits of `runs`. The held fit starts from the pair model's defaults and
+/// the free fit from its optimum. From the defaults the free fit is the fragile one: on pairs
+/// under a 2 mm waviness carried in both, it ended with T0 at a tenth of the single runs', 9× the
+/// noise and 75× the held χ², in 174 s, and read as a huge mismatch (the held fit from the
+/// defaults: 1.0× the noise in 16 s); a 2 kHz null's once ended with T0 at its floor and 18× the
+/// held χ². When the free fit still leaves a misfit of `RETRY_MISFIT` (χ² per sample), the other
+/// order is tried too — the free fit from the defaults, the held fit from its optimum — and the
+/// lower of each is kept.
+fn held_and_free(
+    runs: &[PairRun],
+    free_spec: &FitSpec,
+    model: &Model,
+    groove: Groove,
+    max_iter: usize,
+) -> (GroupFit, GroupFit) {
+    let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
+    let mut held = held_from_defaults(runs, model, groove, max_iter);
+    let mut free = free_from_held(runs, free_spec, model, &held, max_iter);
+    if free
+        .as_ref()
+        .is_some_and(|f| f.cost() <= RETRY_MISFIT * n_pts as f64)
+    {
+        return (held, free.expect("checked"));
     }
+    let first = fit_group(runs, free_spec, None, max_iter);
+    let from_first = held_fit(runs, model, &first, groove, max_iter);
+    if from_first.cost() < held.cost() {
+        held = from_first;
+        if let Some(again) = free_from_held(runs, free_spec, model, &held, max_iter) {
+            if free.as_ref().is_none_or(|f| again.cost() < f.cost()) {
+                free = Some(again);
+            }
+        }
+    }
+    let free = match free {
+        Some(f) if f.cost() <= first.cost() => f,
+        _ => first,
+    };
+    (held, free)
 }
 
 /// The single runs' physics held (as in `held`, from its optimum) with the pair's contact
@@ -412,9 +470,7 @@ fn test_material(
         },
         ..FitSpec::new(groove)
     };
-    let first = fit_group(runs, &free_spec, None, max_iter);
-    let held = held_fit(runs, model, &first, groove, max_iter);
-    let free = free_from_held(runs, &free_spec, model, &held, first, max_iter);
+    let (held, free) = held_and_free(runs, &free_spec, model, groove, max_iter);
     let deviance_gain = held.cost() - free.cost();
     // the single runs' values carry their own errors: compare them with the pairs' by a
     // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
@@ -545,12 +601,10 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
             ),
         );
     }
-    if p_holm >= ALPHA || d.lr <= 0.0 {
-        return (
-            false,
-            "the single runs' physics explains the pair motion".to_string(),
-        );
-    }
+    // before the test of friction and drag, whose significance it does not need: on pairs
+    // recorded with a 2 % length error the contact distance freed left χ² 4493 against the free
+    // fit's 14113 and the held fit's 14569, and the Wald test of a free fit at that optimum gave p
+    // 0.027, so gated behind it the calibration error went unsaid
     let (scale, scale_se, contact_chi2) = d.contact;
     if contact_chi2 <= d.free.cost() && (scale - 1.0).abs() > 3.0 * scale_se {
         return (
@@ -560,6 +614,12 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
                 d.held.cost(),
                 d.free.cost()
             ),
+        );
+    }
+    if p_holm >= ALPHA || d.lr <= 0.0 {
+        return (
+            false,
+            "the single runs' physics explains the pair motion".to_string(),
         );
     }
     let Some((mu, drag)) = d.size else {
