@@ -19,7 +19,8 @@ use super::holm::holm;
 use super::pairs_impact::{impact_decision, impact_p_value, split_by_impact, IMPACT_WINDOW_S};
 use crate::artifacts::diagnosis::{Effect, CONTACT_NOT_PHYSICS as NOT_PHYSICS};
 use crate::fit::collision::wholerun::{
-    fit_group, fit_group_with, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, TP,
+    fit_group, fit_group_with, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, MU_PP,
+    TP,
 };
 use crate::lsq::Termination;
 use crate::physics::{Friction, Groove, Model, Term};
@@ -546,6 +547,12 @@ fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
     where_.insert(
         "contact_over_diameter".to_string(),
         serde_json::json!({"value": d.contact.0, "stderr": d.contact.1, "chi2": d.contact.2}),
+    );
+    // μ_pp with the single runs' whole physics held (their forces fixed in the lab included),
+    // which the report's whole-run fits, made before discovery, do not carry
+    where_.insert(
+        "mu_pp_held".to_string(),
+        serde_json::json!({"value": held.result.shared[MU_PP], "stderr": held.result.shared_se(MU_PP)}),
     );
     where_.insert(
         "rms_noise_held".to_string(),

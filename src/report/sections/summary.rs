@@ -110,6 +110,8 @@ pub fn block(d: &ReportData) -> Block {
         };
         let caveat = if super::whole_run::speed_dependent_friction(d, name).is_some() {
             "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
+        } else if super::whole_run::uncarried_physics(d, name).is_some() {
+            "; without the single-run physics discovery accepted: see 3.5.1"
         } else {
             ""
         };

@@ -4,6 +4,7 @@
 
 use super::{Block, Table};
 use crate::artifacts::collision_fit::Estimate;
+use crate::artifacts::diagnosis::Finding;
 use crate::artifacts::summary::{MuPpProfile, ProfileVerdict, WholeRun, STOP_DEVIANCE};
 use crate::report::inputs::ReportData;
 use crate::report::value::serde_name;
@@ -48,6 +49,47 @@ pub fn speed_dependent_friction(d: &ReportData, material: &str) -> Option<String
     Some(format!(
         "{material}: discovery found this material's friction to depend on the slip speed (v_c = {} m/s); the whole-run model holds μ_pg constant, so its μ_pp of {material} rests on a friction law the single runs reject and is not a measurement of μ_pp.",
         crate::report::value::sig(vc, 3)
+    ))
+}
+
+/// The single-run physics discovery accepted that the whole-run model (μ_pg and a saturating
+/// drag fitted, made before discovery) does not carry: every accepted single-run effect but a
+/// saturating drag and a speed-dependent friction (which has its own words). The words for
+/// `material`, with μ_pp of discovery's pair check, which held that physics, or None.
+pub fn uncarried_physics(d: &ReportData, material: &str) -> Option<String> {
+    uncarried_words(&d.diagnosis.as_ref()?.findings, material)
+}
+
+fn uncarried_words(findings: &[Finding], material: &str) -> Option<String> {
+    let names: Vec<String> = findings
+        .iter()
+        .filter(|f| {
+            f.accepted
+                && f.where_.get("experiment") != Some(&serde_json::json!("collision"))
+                && f.effect != "velocity_dependent_friction"
+                && !(f.effect == "velocity_dependent_drag" && f.form.starts_with("saturating"))
+        })
+        .map(|f| format!("{} ({})", f.effect.replace('_', " "), f.form))
+        .collect();
+    if names.is_empty() {
+        return None;
+    }
+    let held = findings
+        .iter()
+        .find(|f| {
+            f.effect == "pair_physics_mismatch"
+                && f.where_.get("material") == Some(&serde_json::json!(material))
+        })
+        .and_then(|f| f.where_.get("mu_pp_held")?.get("value")?.as_f64());
+    let check = match held {
+        Some(mu) => format!(
+            " Discovery's pair check, which holds the single runs' accepted physics, fitted μ_pp = {mu:.3} (best fit; its error is not widened as the profile's is)."
+        ),
+        None => " Discovery's pair check did not fit this material's pairs (section 4 says why).".to_string(),
+    };
+    Some(format!(
+        "{material}: discovery accepted for the single runs {}, which this whole-run model does not carry (it fits μ_pg and a saturating drag only), so its μ_pp and restitution laws of {material} are those of a model the single runs reject and can be biased by what it leaves out.{check}",
+        names.join("; ")
     ))
 }
 
@@ -136,6 +178,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         ]);
         b.para(mu_pp_words(name, &m.profile.verdict));
         if let Some(words) = speed_dependent_friction(d, name) {
+            b.para(words);
+        }
+        if let Some(words) = uncarried_physics(d, name) {
             b.para(words);
         }
         if let Some(w) = not_fitted_words(&m.profile) {
@@ -236,5 +281,67 @@ mod tests {
         assert!(out.contains("outside"), "{out}");
         let high = mu_pp_words("316", &ProfileVerdict::LowerBound { lo: 2.0 });
         assert!(high.contains("1.4 is excluded"), "{high}");
+    }
+
+    fn finding(effect: &str, form: &str, accepted: bool, where_: serde_json::Value) -> Finding {
+        Finding {
+            effect: effect.into(),
+            accepted,
+            form: form.into(),
+            parameters: BTreeMap::new(),
+            evidence: Default::default(),
+            where_: serde_json::from_value(where_).unwrap(),
+            baseline: Default::default(),
+            extended: Default::default(),
+        }
+    }
+
+    /// A wave the single runs accepted is named as not carried, with the pair check's μ_pp of
+    /// the material asked for; a saturating drag alone, a rejected wave, or a finding on the
+    /// pairs themselves say nothing.
+    #[test]
+    fn single_run_physics_the_whole_run_fits_do_not_carry_is_said() {
+        let pair = |m: &str, mu: f64| {
+            finding(
+                "pair_physics_mismatch",
+                "μ_pg and drag",
+                false,
+                serde_json::json!({"experiment": "collision", "material": m, "mu_pp_held": {"value": mu, "stderr": 0.001}}),
+            )
+        };
+        let drag = finding(
+            "velocity_dependent_drag",
+            "saturating: a = -v/(T0 + T'|v|)",
+            true,
+            serde_json::json!({}),
+        );
+        let wave = |accepted| {
+            finding(
+                "position_dependent_force",
+                "periodic in z",
+                accepted,
+                serde_json::json!({}),
+            )
+        };
+        let quiet = [
+            drag.clone(),
+            wave(false),
+            pair("316", 1.2),
+            pair("440c", 1.41),
+        ];
+        assert_eq!(uncarried_words(&quiet, "440c"), None);
+        let found = [drag, wave(true), pair("316", 1.2), pair("440c", 1.41)];
+        let words = uncarried_words(&found, "440c").unwrap();
+        assert!(
+            words.contains("position dependent force (periodic in z)")
+                && words.contains("μ_pp = 1.410")
+                && !words.contains("velocity dependent drag"),
+            "{words}"
+        );
+        let untested = uncarried_words(&found[..2], "440c").unwrap();
+        assert!(
+            untested.contains("did not fit this material's pairs"),
+            "{untested}"
+        );
     }
 }
