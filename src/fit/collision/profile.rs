@@ -293,6 +293,17 @@ pub fn profile_mu_pp(
     grid: &[f64],
     max_iter: usize,
 ) -> MuPpProfile {
+    profile_and_lowest(runs, best, grid, max_iter).0
+}
+
+/// `profile_mu_pp`, with the profile's lowest fit when it ended below `best` (μ_pp held there):
+/// then `best` is not the joint fit's minimum, and that fit is where to start it again.
+pub fn profile_and_lowest(
+    runs: &[PairRun],
+    best: &GroupFit,
+    grid: &[f64],
+    max_iter: usize,
+) -> (MuPpProfile, Option<GroupFit>) {
     let mu_best = best.result.shared[MU_PP];
     let (mut fits, not_fitted) = walk_grid(runs, best, grid, max_iter);
     let dispersion = refine_near_estimate(runs, best, &mut fits, max_iter);
@@ -318,7 +329,13 @@ pub fn profile_mu_pp(
             .map(|p| p.mu_pp)
             .unwrap_or(mu_best)
     };
-    MuPpProfile {
+    let lowest = fits
+        .iter()
+        .map(|f| &f.1)
+        .filter(|f| f.cost() < best.cost())
+        .min_by(|a, b| a.cost().total_cmp(&b.cost()))
+        .cloned();
+    let profile = MuPpProfile {
         verdict: verdict(&points, estimate, DELTA_95),
         points,
         not_fitted,
@@ -329,7 +346,8 @@ pub fn profile_mu_pp(
         serial_factor,
         scale_factor: checks.scale,
         inflation,
-    }
+    };
+    (profile, lowest)
 }
 
 /// Where the deviance crosses `delta` on either side of the estimate (its square root

@@ -2,7 +2,7 @@
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
 //! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
 
-use super::profile::{default_grid, profile_mu_pp, MuPpProfile, ProfileVerdict};
+use super::profile::{default_grid, profile_and_lowest, MuPpProfile, ProfileVerdict};
 use super::restitution_law::{choose_law, with_chosen, LawChoice};
 use super::types::Estimate;
 use super::wholerun::{
@@ -148,6 +148,10 @@ pub fn analyze(recs: &[Recording], groove: Groove, opts: &WholeRunOptions) -> Wh
     WholeRunSummary { materials, notes }
 }
 
+/// Deviance by which a profile fit must end below the joint fit for the joint fit to be started
+/// again from it (below that, the two are the same minimum reached to the fits' tolerance).
+const RESTART_GAIN: f64 = 1.0;
+
 /// The whole-run analysis of the runs of one material.
 pub fn analyze_material(
     material: &str,
@@ -188,13 +192,31 @@ pub fn analyze_material(
             first
         }
     };
+    let mut best = best;
+    let (mut profile, lowest) = profile_and_lowest(runs, &best, &opts.grid, opts.step_iter);
+    // a fit with μ_pp held ended below the joint fit, which frees it: the joint fit stopped at a
+    // local optimum (under a 2 mm waviness the whole-run model leaves out, 440c's ended at μ_pp
+    // 0.61 with the profile 405 lower at 1.58, and its table printed 0.61 as the best fit)
+    if let Some(low) = lowest.filter(|l| l.cost() < best.cost() - RESTART_GAIN) {
+        let again = fit_group(runs, &best.spec, Some(&low), opts.max_iter);
+        if again.cost() < best.cost() {
+            notes.push(format!(
+                "the joint fit first ended at a local optimum (μ_pp = {:.3}, deviance {:.1} above the fit with μ_pp held at {:.3}); started again from that fit it reached μ_pp = {:.3}, which the table and the profile use",
+                best.result.shared[MU_PP],
+                best.cost() - low.cost(),
+                low.result.shared[MU_PP],
+                again.result.shared[MU_PP]
+            ));
+            best = again;
+            (profile, _) = profile_and_lowest(runs, &best, &opts.grid, opts.step_iter);
+        }
+    }
     if best.result.termination == Termination::MaxIterations {
         notes.push(format!(
             "the joint fit stopped at its iteration limit ({}); raise whole_run.max_iter",
             opts.max_iter
         ));
     }
-    let profile = profile_mu_pp(runs, &best, &opts.grid, opts.step_iter);
     if let Some(note) = unconverged_profile_note(&profile, opts.step_iter) {
         notes.push(note);
     }
