@@ -196,7 +196,8 @@ pub fn analyze_material(
     let (mut profile, lowest) = profile_and_lowest(runs, &best, &opts.grid, opts.step_iter);
     // a fit with μ_pp held ended below the joint fit, which frees it: the joint fit stopped at a
     // local optimum (under a 2 mm waviness the whole-run model leaves out, 440c's ended at μ_pp
-    // 0.61 with the profile 405 lower at 1.58, and its table printed 0.61 as the best fit)
+    // 0.61 with the profile's fit at 1.58 lower by 300,234, and its table printed 0.61 as the
+    // best fit)
     if let Some(low) = lowest.filter(|l| l.cost() < best.cost() - RESTART_GAIN) {
         let again = fit_group(runs, &best.spec, Some(&low), opts.max_iter);
         if again.cost() < best.cost() {
