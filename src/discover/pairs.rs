@@ -552,7 +552,7 @@ fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
     // which the report's whole-run fits, made before discovery, do not carry
     where_.insert(
         "mu_pp_held".to_string(),
-        serde_json::json!({"value": held.result.shared[MU_PP], "stderr": held.result.shared_se(MU_PP)}),
+        serde_json::json!({"value": held.result.shared[MU_PP], "stderr": held.result.shared_se(MU_PP), "converged": held.converged()}),
     );
     where_.insert(
         "rms_noise_held".to_string(),

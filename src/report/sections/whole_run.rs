@@ -80,10 +80,14 @@ fn uncarried_words(findings: &[Finding], material: &str) -> Option<String> {
             f.effect == "pair_physics_mismatch"
                 && f.where_.get("material") == Some(&serde_json::json!(material))
         })
-        .and_then(|f| f.where_.get("mu_pp_held")?.get("value")?.as_f64());
+        .and_then(|f| f.where_.get("mu_pp_held"))
+        .and_then(|h| Some((h.get("value")?.as_f64()?, h.get("converged")?.as_bool()?)));
     let check = match held {
-        Some(mu) => format!(
+        Some((mu, true)) => format!(
             " Discovery's pair check, which holds the single runs' accepted physics, fitted μ_pp = {mu:.3} (best fit; its error is not widened as the profile's is)."
+        ),
+        Some((mu, false)) => format!(
+            " Discovery's pair check, which holds the single runs' accepted physics, ended at μ_pp = {mu:.3} without converging, so it gives no estimate of μ_pp."
         ),
         None => " Discovery's pair check did not fit this material's pairs (section 4 says why).".to_string(),
     };
@@ -297,8 +301,8 @@ mod tests {
     }
 
     /// A wave the single runs accepted is named as not carried, with the pair check's μ_pp of
-    /// the material asked for; a saturating drag alone, a rejected wave, or a finding on the
-    /// pairs themselves say nothing.
+    /// the material asked for (not called an estimate when that fit did not converge); a
+    /// saturating drag alone, a rejected wave, or a finding on the pairs themselves say nothing.
     #[test]
     fn single_run_physics_the_whole_run_fits_do_not_carry_is_said() {
         let pair = |m: &str, mu: f64| {
@@ -306,7 +310,7 @@ mod tests {
                 "pair_physics_mismatch",
                 "μ_pg and drag",
                 false,
-                serde_json::json!({"experiment": "collision", "material": m, "mu_pp_held": {"value": mu, "stderr": 0.001}}),
+                serde_json::json!({"experiment": "collision", "material": m, "mu_pp_held": {"value": mu, "stderr": 0.001, "converged": mu > 1.0}}),
             )
         };
         let drag = finding(
@@ -330,13 +334,18 @@ mod tests {
             pair("440c", 1.41),
         ];
         assert_eq!(uncarried_words(&quiet, "440c"), None);
-        let found = [drag, wave(true), pair("316", 1.2), pair("440c", 1.41)];
+        let found = [drag, wave(true), pair("316", 0.8), pair("440c", 1.41)];
         let words = uncarried_words(&found, "440c").unwrap();
         assert!(
             words.contains("position dependent force (periodic in z)")
                 && words.contains("μ_pp = 1.410")
                 && !words.contains("velocity dependent drag"),
             "{words}"
+        );
+        let stuck = uncarried_words(&found, "316").unwrap();
+        assert!(
+            stuck.contains("μ_pp = 0.800 without converging") && !stuck.contains("fitted μ_pp"),
+            "{stuck}"
         );
         let untested = uncarried_words(&found[..2], "440c").unwrap();
         assert!(
