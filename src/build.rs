@@ -1,5 +1,9 @@
 //! Build script: computes each stage kind's code fingerprint and the last commit that touched the code.
 //!
+//! Files of this folder:
+//!
+//! - `code_deps.rs`: The source files a stage kind uses
+//!
 //! A kind's fingerprint is the sha256 of every source file its adapter `src/stages/<kind>.rs`
 //! uses, found by following its module paths (`build/code_deps.rs`), so editing a module
 //! invalidates exactly the kinds that use it and no list can drift. The engine's own `command`

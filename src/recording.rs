@@ -1,5 +1,9 @@
 //! One recorded run, as the analysis stages see it after ingest: run metadata plus one track per particle.
 //!
+//! Files of this folder:
+//!
+//! - `item.rs`: The bytes of a recording item
+//!
 //! This is the per-run item that `ingest` emits (as the binary format of `item`) and that `fit`, `simulate`,
 //! `compare` and `discover` read. Units are SI and in the field names. Ingest guarantees every
 //! number is finite, |z_m| ≤ `Z_MAX_M`, |t_s| ≤ `T_MAX_S`, and t_s strictly increases along a

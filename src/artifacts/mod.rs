@@ -2,6 +2,22 @@
 //! the stage that writes it and by every stage that reads it (readers deserialize these types; a
 //! renamed field fails loudly instead of blanking part of the report).
 //!
+//! Files of this folder:
+//!
+//! - `collision_fit.rs`: The per-run result of a collision fit
+//! - `comparison.rs`: The `compare` stage's `comparison`
+//! - `contract.rs`: The documented contract of the published files
+//! - `diagnosis.rs`: diagnosis.json (output of `discover`)
+//! - `estimate.rs`: One `Estimate` for every artifact
+//! - `fits_table.rs`: fits.csv (output of `aggregate`)
+//! - `nan_null.rs`: Serde helper: an `f64` that may be NaN
+//! - `provenance.rs`: `engine:provenance` as its readers see it
+//! - `residuals.rs`: The `simulate` stage's item per run
+//! - `run_fit.rs`: The `fit` stage's item per run
+//! - `skipped.rs`: `ingest:skipped`
+//! - `summary.rs`: The types of summary.json
+//! - `validation.rs`: The `validate` stage's `validation`
+//!
 //! One file per artifact family: `run_fit` + `collision_fit` (the `fit` stage's item per run),
 //! `fits_table` (fits.csv), `summary` (summary.json), `residuals` (`simulate`'s item per run),
 //! `comparison` (`compare`), `diagnosis` (diagnosis.json), `validation` (`validate`), `provenance`

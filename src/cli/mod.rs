@@ -1,4 +1,8 @@
 //! The verbs: each loads the pipeline, calls the engine, and prints its result.
+//!
+//! Files of this folder:
+//!
+//! - `args.rs`: The command-line grammar (clap): verbs and their options
 
 pub mod args;
 

@@ -1,5 +1,37 @@
 //! Discovery: locate where the baseline misses, name and fit the missing physics, decide by evidence.
 //!
+//! Files of this folder:
+//!
+//! - `candidate.rs`: The candidate physics library and the joint model's parameter layout
+//! - `cv.rs`: Leave-runs-out cross-validation of the simulated trajectories
+//! - `data.rs`: The runs discovery works on
+//! - `detection.rs`: Detection limits
+//! - `diagnosis.rs`: diagnosis.json, the output contract of discovery
+//! - `drift.rs`: Drift of per-run fitted parameters with run covariates
+//! - `estimates.rs`: A fitted term's parameters as reported
+//! - `findings.rs`: What a finished term selection reports
+//! - `forward.rs`: Forward selection
+//! - `holm.rs`: Holm's step-down correction for testing several candidates at once
+//! - `joint.rs`: The joint fit: shared physics and per-run z0, t0, v0 on `lsq::block`
+//! - `locate.rs`: Residuals of a fitted joint model with the model's phase
+//! - `model.rs`: A fitted joint model
+//! - `noise.rs`: A run's camera noise
+//! - `noise_floor.rs`: The noise floor of a scan over frequencies measured on the data itself
+//! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
+//! - `pairs.rs`: Discovery on pairs
+//! - `pairs_impact.rs`: The impact-specific test of the collision runs
+//! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
+//! - `proposal.rs`: Proposals: from the residuals of the current model
+//! - `residual_structure.rs`: Where a model misses
+//! - `response.rs`: Linear response of a fitted run to a small extra acceleration
+//! - `run.rs`: The whole discovery on a set of recordings
+//! - `screen.rs`: The screen: every candidate's likelihood-ratio statistic and its parametric-bootstrap null
+//! - `screen_sums.rs`: The screen's linear algebra
+//! - `sim.rs`: one-particle trajectories for the discovery fits
+//! - `spectral.rs`: Spectral search
+//! - `timeforce.rs`: Each run's own phase of a force periodic in time
+//! - `forcemap/`: The force map: the missing acceleration as a smooth function of one variable
+//!
 //! The method (issue 5): per-run baseline fits measure each run's noise and flag outliers; a joint
 //! model shares the physics (μ and T per material, plus extra terms) over every run with per-run
 //! z0, t0, v0. Candidate terms from a physical library are tested against the current model by a

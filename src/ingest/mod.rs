@@ -1,6 +1,30 @@
 //! Ingest: reads a dataset folder (interchange CSV/Parquet, trackpy or TrackMate exports), checks
 //! every bad-input class of data-format.md, and returns one `Recording` per run.
 //!
+//! Files of this folder:
+//!
+//! - `assemble.rs`: Cross-table checks
+//! - `axis.rs`: Catches a wrong calibration axis of tracker exports
+//! - `columnar.rs`: The fast path of the interchange format
+//! - `csv_check.rs`: Checks of a CSV file's bytes before the parser sees them
+//! - `csv_fast.rs`: Trajectory rows in the layout `groove synth` writes
+//! - `csv_pieces.rs`: A CSV read from any reader in pieces of whole lines
+//! - `error.rs`: What can be wrong with a dataset
+//! - `interchange.rs`: Reads the interchange format: runs.csv and trajectories.csv (or `.parquet`)
+//! - `manifest.rs`: The per-run metadata of tracker exports
+//! - `output.rs`: The ingest stage's artifacts as bytes
+//! - `params.rs`: The ingest stage's params as written in `pipeline.toml`
+//! - `parquet_groups.rs`: trajectories.parquet read once, in order, a batch of row groups at a time
+//! - `parquet_pages.rs`: A Parquet file's page headers checked before polars decodes the pages
+//! - `run_memo.rs`: Runs whose item an earlier ingest already made from the same bytes
+//! - `samples.rs`: The common form every source format is read into before checking
+//! - `sanity.rs`: Physical sanity of a recording
+//! - `spots.rs`: Tracker spots (trackpy, TrackMate) into tracks of one run
+//! - `table.rs`: A table read from CSV or Parquet bytes with polars
+//! - `trackmate.rs`: Reads Fiji TrackMate spot tables
+//! - `trackmate_xml.rs`: Reads the XML file Fiji TrackMate saves
+//! - `trackpy.rs`: Reads trackpy CSV exports
+//!
 //! Everything here works on bytes in memory (file name → bytes), or, for trajectories.csv, on a
 //! reader the stage is given, so the stage never opens a file itself; `read_dataset_dir` is the
 //! one helper that reads a folder, for tests and tools.

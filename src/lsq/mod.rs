@@ -7,6 +7,20 @@
 //! columns that step inward at an upper bound), and `golden` (a one-dimensional golden-section
 //! search). A singular system is `None` or
 //! [`Termination::Singular`], never a made-up factor.
+//!
+//! Files of this folder:
+//!
+//! - `block.rs`: The block-arrow back-end of the [`lm`](super::lm) driver
+//! - `dense.rs`: The dense back-end
+//! - `dense_fit.rs`: The dense back-end of the [`lm`](super::lm) driver
+//! - `fd.rs`: Forward-difference Jacobians for models without an analytic one
+//! - `fixed.rs`: The fixed-size, allocation-free back-end
+//! - `golden.rs`: Golden-section search for the minimum of a one-dimensional function
+//! - `lm.rs`: The Levenberg–Marquardt driver of the allocating back-ends
+//! - `loss.rs`: Robust losses: ρ(u) and the IRLS weight ψ(u)/u
+//! - `robust.rs`: The robust loop of the fixed-size back-end
+//! - `termination.rs`: Why a minimisation stopped
+//! - `wide.rs`: The fit's hottest loop compiled for wider vectors where the CPU has them
 
 pub mod block;
 pub mod dense;

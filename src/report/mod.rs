@@ -1,6 +1,24 @@
 //! The report: figures (plotters SVG) and pages (Markdown, self-contained HTML) rendered to strings
 //! from the upstream artifacts; the engine writes them.
 //!
+//! Files of this folder:
+//!
+//! - `audit.rs`: The equation audit
+//! - `chapter.rs`: The chapter's printed values and the constants used to check them
+//! - `collisions.rs`: Collision-run fits read from the per-run fit JSON
+//! - `date.rs`: A calendar date
+//! - `html.rs`: The HTML page (report.html)
+//! - `inputs.rs`: Everything the figures and pages show
+//! - `markdown.rs`: The Markdown page
+//! - `singles.rs`: Per-run fits of single runs
+//! - `style.rs`: Colours, marker shapes and font sizes shared by every figure
+//! - `summary.rs`: Aggregates per material from summary.json
+//! - `trajectory.rs`: One single run's observed positions beside its fitted baseline
+//! - `truth.rs`: Truth values from the validate stage's `validation`
+//! - `value.rs`: Numbers as the report prints them
+//! - `figures/`: every figure of the report
+//! - `sections/`: The report's content as plain data
+//!
 //! Upstream artifacts are read as their contract types (`crate::artifacts`): per-run fits, fits.csv,
 //! summary.json, residuals, diagnosis.json, validation, provenance; an absent part stays empty and
 //! the report says so. The report imports nothing from the engine: the stage adapters

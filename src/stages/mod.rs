@@ -1,4 +1,17 @@
 //! The built-in stage kinds: each adapts a pure analysis function to the engine's `StageKind` contract.
+//!
+//! Files of this folder:
+//!
+//! - `aggregate.rs`: The `aggregate` stage kind
+//! - `compare.rs`: The `compare` stage kind
+//! - `discover.rs`: The `discover` stage kind: recordings in, diagnosis.json out
+//! - `figures.rs`: The `figures` stage kind
+//! - `fit.rs`: The `fit` stage kind
+//! - `fit_io.rs`: helpers shared by the fit-side stage kinds
+//! - `ingest.rs`: The `ingest` stage kind
+//! - `report.rs`: The `report` stage kind
+//! - `simulate.rs`: The `simulate` stage kind
+//! - `validate.rs`: The `validate` stage kind
 
 use crate::engine::stage::StageKind;
 

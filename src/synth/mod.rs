@@ -1,5 +1,12 @@
 //! The virtual experiment: writes a dataset in the interchange format from a truth file.
 //!
+//! Files of this folder:
+//!
+//! - `camera.rs`: The virtual camera
+//! - `runs.rs`: One run of the virtual experiment
+//! - `tables.rs`: The dataset tables as text, with fixed float formatting so the bytes never vary
+//! - `truth.rs`: The truth file of the virtual experiment
+//!
 //! `run_synth` reads the truth TOML, simulates every run with the physics module (one seeded
 //! ChaCha8 stream per run), records it with the virtual camera, and writes `runs.csv`,
 //! `trajectories.csv` and, under `truth/`, a copy of the truth file plus `runs_truth.csv` (the

@@ -1,6 +1,10 @@
 //! The force map: the missing acceleration as a smooth function of one variable (lab z, signed v,
 //! time since the kick) or of the motion phase, estimated jointly over every single run.
 //!
+//! Files of this folder:
+//!
+//! - `mod.rs`: this file alone holds the force map
+//!
 //! The residuals of the current joint model are regressed on each run's linear response to the
 //! cubic B-spline basis functions of the variable (`response.rs`), with each run's z0, t0, v0
 //! projected out and the shared parameters (μ, T, accepted terms) refitted alongside, so the map

@@ -1,4 +1,10 @@
 //! Reading `pipeline.toml` in two layers: a serde mirror ([`raw`]) and one validation step ([`validate`]).
+//!
+//! Files of this folder:
+//!
+//! - `raw.rs`: The serde mirror of `pipeline.toml`
+//! - `span.rs`: byte offsets of `pipeline.toml` to line numbers, and errors located at a line
+//! - `validate.rs`: The validation step
 
 pub mod raw;
 pub mod span;

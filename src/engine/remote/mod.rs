@@ -2,6 +2,16 @@
 //! S3 bucket (`s3://`, cargo feature `s3`), looked up after the local store and pushed to after
 //! each local commit.
 //!
+//! Files of this folder:
+//!
+//! - `backend.rs`: What a remote must do
+//! - `cache.rs`: The remote cache on top of a backend
+//! - `file.rs`: The `file://` remote
+//! - `push.rs`: The pusher: uploads committed entries with bounded concurrency
+//! - `s3.rs`: The `s3://bucket/prefix` remote
+//! - `settings.rs`: `[remote]` in `pipeline.toml`
+//! - `sync.rs`: `groove push` and `groove pull`
+//!
 //! [`backend`] is what a remote must do (get, exists, create-if-absent; never list), [`file`]
 //! and `s3` are the two backends, [`cache`] does lookups with sha256 verification and the
 //! counts, [`push`] uploads with bounded concurrency (blobs first, entry last), [`sync`] is

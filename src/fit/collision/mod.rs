@@ -2,6 +2,28 @@
 //! (nonzero initial spin), recover velocities and spins before and after every impact, and
 //! summarize μ_pp and the coefficient of restitution over a dataset.
 //!
+//! Files of this folder:
+//!
+//! - `curves.rs`: Falling curves of the coefficient of restitution against impact speed
+//! - `detect.rs`: Finding impacts in noisy tracks
+//! - `fit.rs`: `fit_collision`
+//! - `impulse.rs`: The impulse model of one impact between equal spheres
+//! - `model.rs`: The joint piecewise model of a collision run
+//! - `motion.rs`: The closed-form motion of one sphere in the groove
+//! - `mu_pp.rs`: Estimates of the particle–particle friction μ_pp from the impacts of a dataset
+//! - `options.rs`: Settings of the collision fit (`fit` stage params reach it through `FitOptions`)
+//! - `plan.rs`: A fit plan: starting values and bounds of every parameter of the joint model
+//! - `profile.rs`: Profile likelihood of μ_pp
+//! - `report.rs`: from a solved joint model to the `CollisionFit` record
+//! - `restitution_law.rs`: The restitution law C(v) of one material and setup from the whole-run fits
+//! - `secondary.rs`: Secondary collisions
+//! - `start.rs`: Starting plans of the joint fit
+//! - `summary.rs`: `summarize`: the collision results of a dataset
+//! - `trajectory.rs`: The fitted model trajectory of a collision run
+//! - `types.rs`: The per-run result of a collision fit
+//! - `whole_summary.rs`: The whole-run collision analysis of a dataset
+//! - `wholerun.rs`: Whole-run pair fits
+//!
 //! Code map: `fit` (entry) → `detect` (noise, departure from rest, contacts in the gap) →
 //! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
 //! (the joint piecewise model) → `crate::lsq::dense_fit` (robust solver) → `report` (the per-run record, `types`).

@@ -1,4 +1,17 @@
 //! Every figure of the report, each rendered to an SVG string by its own file; `render_all` names them.
+//!
+//! Files of this folder:
+//!
+//! - `common.rs`: Drawing helpers shared by the figures
+//! - `discovery.rs`: Discovery figures
+//! - `fig_4_2b.rs`: Fig. 4.2b: one trajectory with its fit, sliding and rolling marked
+//! - `fig_4_2c.rs`: Fig. 4.2c: fitted T against v0
+//! - `fig_4_2d.rs`: Fig. 4.2d: fitted μ against v0
+//! - `fig_4_3.rs`: Figs. 4.3c–d: striker and target trajectories
+//! - `fig_4_4.rs`: Figs. 4.4a–c: spin change against velocity change, restitution
+//! - `forcemap.rs`: force-map figures
+//! - `mu_pp_profile.rs`: The profile of μ_pp beside Fig. 4.4a
+//! - `secondary.rs`: The secondary-collision factor
 
 pub mod common;
 pub mod discovery;

@@ -1,5 +1,16 @@
 //! The report's content as plain data (blocks of paragraphs, tables and figures), built once and
 //! rendered by both the Markdown and the HTML template.
+//!
+//! Files of this folder:
+//!
+//! - `chapter.rs`: Section 3, single runs: the chapter's figures and tables
+//! - `collisions.rs`: Section 3, collisions: the chapter's figures and tables
+//! - `compare.rs`: Section 3.4.1: the compare stage's residuals of the collision fits
+//! - `data.rs`: Section 2: the data
+//! - `discovery.rs`: Section 4: discovery
+//! - `provenance.rs`: Section 6: provenance
+//! - `summary.rs`: Section 1: what was analysed
+//! - `whole_run.rs`: The whole-run collision fits in the report
 
 pub mod chapter;
 pub mod collisions;
