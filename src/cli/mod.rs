@@ -3,6 +3,35 @@
 //! Files of this folder:
 //!
 //! - `args.rs`: The command-line grammar (clap): verbs and their options
+//!
+//! # The verbs
+//!
+//! Every verb has `--help`. `run`, `status`, `dag`, `clean`, `gc` and `publish` take
+//! `--config FILE` (default `./pipeline.toml`; relative paths inside it resolve against its folder),
+//! `--data DIR` (replaces `[project] data`) and `--out DIR` (replaces `[project] reports`; both
+//! relative to the current folder), so the same analysis runs on any dataset in the interchange
+//! format.
+//!
+//! | verb | what it does |
+//! | --- | --- |
+//! | `groove run [STAGE…]` | runs what is stale: every stage, or the named ones and what they need. `--jobs N` worker threads (default: one per core), `--force STAGE` (repeatable) reruns a stage even when its result is stored, `--dry-run` prints what would run and why. Ends with one line: stages run, reused, time, report path. |
+//! | `groove status [--json]` | every stage, fresh or stale, with the reasons (which input, param or code changed, old → new). `--json` prints `[{"stage", "state": "fresh"\|"stale", "reasons": [..]}]`, stable for scripts. Needs no lock; never runs anything. |
+//! | `groove dag [--format text\|dot\|mermaid]` | the stage graph, in topological order (text) or for Graphviz / Mermaid. |
+//! | `groove clean` | removes the store `.groove/` (outputs in the project and `pipeline.lock` stay). |
+//! | `groove gc` | drops store entries that `pipeline.lock` does not reference (older params, older code), then objects neither they nor the memos of the lock's stages reference (an aggregate's material summaries stay for the next edit), and the memos of stages the lock does not hold. Refuses (exit 2, nothing removed) when `pipeline.lock` is missing, unreadable or names no stage. |
+//! | `groove verify` | checks every store object against its sha256; drops damaged objects and the entries naming a missing one, and lists them (exit 1 if anything was dropped; the next `run` recomputes it). |
+//! | `groove synth --truth FILE --out DIR [--format parquet]` | writes a synthetic dataset from a truth file (`--format parquet`: trajectories.parquet, the same values typed and zstd-compressed, instead of trajectories.csv). |
+//! | `groove publish --to DIR` | refuses with exit 1, naming each stale stage and why, unless every stage is fresh; otherwise writes the bundle to DIR: every output materialized inside the reports folder (report.html, report.md, figures/, and the tables beside them) taken from the store, `pipeline.lock`, and `SHA256SUMS` (`sha256sum -c` format). DIR must be new, empty or an earlier bundle; it is replaced whole. |
+//!
+//! # Exit codes
+//!
+//! | code | meaning |
+//! | --- | --- |
+//! | 0 | success |
+//! | 1 | ran, but a check failed: `publish` with stale stages, `verify` that dropped something |
+//! | 2 | error: bad `pipeline.toml` (with its line), bad data, IO, a stage failed (with its stderr), bad arguments |
+//!
+//! Errors are printed once, by `main`, as `groove: error: …`, lowercase, saying how to fix.
 
 pub mod args;
 

@@ -10,11 +10,11 @@
 //! frequency grid spaced evenly up to the Nyquist limit it sits at kHz (72 m/s² on the shipped data).
 
 use super::candidate::Extra;
-use super::diagnosis::DetectionLimit;
 use super::model::Model;
 use super::null_distribution::NullFit;
 use super::screen::Typical;
 use super::G_MPS2;
+use crate::artifacts::diagnosis::DetectionLimit;
 use std::f64::consts::FRAC_PI_2;
 
 /// One-sided 90 % power: the size is found in 90 % of datasets.
@@ -171,7 +171,7 @@ pub fn rice_mean(nu: f64) -> f64 {
 // The modified Bessel functions are written here (Abramowitz & Stegun 9.8.1–9.8.4, tested
 // against their Table 9.8 below) because no kept crate gives what the Rice mean needs: statrs 0.19
 // has neither modified Bessel functions nor the Rice law, and puruspe's `In` is unscaled, so
-// I0(x) overflows past x ≈ 700 where this needs e^(−x)·I0(x) (the README's dependencies say so).
+// I0(x) overflows past x ≈ 700 where this needs e^(−x)·I0(x) (statrs has no Bessel functions, and puruspe's unscaled `In` overflows there, so the scaled forms of Abramowitz & Stegun are kept, tested against their table).
 
 /// e^(−x)·I0(x), x ≥ 0 (polynomial approximations, relative error below 6e-7).
 fn i0e(x: f64) -> f64 {

@@ -1,6 +1,6 @@
 //! The closed-form baseline as a fit model: positions and their analytic partial derivatives.
 //!
-//! The model of one particle (physics.md, "Closed form of the baseline", generalised to a nonzero
+//! The model of one particle (the physics module's closed form of the baseline, generalised to a nonzero
 //! initial spin as in the contract's addendum): Coulomb friction μ and linear drag v/T while
 //! sliding with direction d = sign(v0 − s·va0), a switch at t1 where v = s·va, then constrained
 //! rolling decaying with Te = T(1 + ks²)/ks². The observation model adds an offset and a time shift:

@@ -1,4 +1,4 @@
-//! Reads the interchange format of data-format.md: runs.csv and trajectories.csv (or `.parquet`).
+//! Reads the interchange format (see the module docs): runs.csv and trajectories.csv (or `.parquet`).
 
 use super::error::Problem;
 use super::samples::{RunRow, Sample, SampleFile};
@@ -48,7 +48,7 @@ pub fn pick<'a>(
         (None, None) => Err(Problem::file(
             &csv,
             "is missing from the dataset folder",
-            format!("add {csv} ({what}; see data-format.md) or {parquet}"),
+            format!("add {csv} ({what}; see README, Using it on your data) or {parquet}"),
         )),
     }
 }

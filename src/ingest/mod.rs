@@ -1,5 +1,5 @@
 //! Ingest: reads a dataset folder (interchange CSV/Parquet, trackpy or TrackMate exports), checks
-//! every bad-input class of data-format.md, and returns one `Recording` per run.
+//! every class of bad input (below), and returns one `Recording` per run.
 //!
 //! Files of this folder:
 //!
@@ -28,6 +28,187 @@
 //! Everything here works on bytes in memory (file name → bytes), or, for trajectories.csv, on a
 //! reader the stage is given, so the stage never opens a file itself; `read_dataset_dir` is the
 //! one helper that reads a folder, for tests and tools.
+//!
+//! # The interchange format
+//!
+//! A dataset is a folder holding two tables, as CSV (`runs.csv`, `trajectories.csv`) or as
+//! Parquet with the same columns (`runs.parquet`, `trajectories.parquet`).
+//!
+//! `runs.csv` has one row per recorded run:
+//!
+//! | column | type | meaning |
+//! | --- | --- | --- |
+//! | `run` | text | the run's id, unique in the table |
+//! | `experiment` | text | `single` (one sphere) or `collision` (a striker and a target) |
+//! | `material` | text | e.g. `316`, `440c`; runs are grouped by it exactly as written |
+//! | `diameter_m` | number | the sphere's diameter, metres |
+//! | `fps` | number | the camera's frame rate, frames per second |
+//!
+//! Optional: `setup` for collision runs (`rolling`: the striker rolled in; `contact`: the pair
+//! started touching), and any other column, kept and shown but not interpreted.
+//!
+//! `trajectories.csv` has one row per particle per frame:
+//!
+//! | column | type | meaning |
+//! | --- | --- | --- |
+//! | `run` | text | a run of runs.csv |
+//! | `particle` | integer | 0 in a single run; in a collision run 0 is the striker, 1 the target |
+//! | `frame` | integer | the frame index; a gap is a dropped frame |
+//! | `t_s` | number | seconds since the run's first frame |
+//! | `z_m` | number | position along the groove, metres; either direction |
+//!
+//! Rows may come in any order. Noise, dropped frames, a few tracking outliers and particles leaving
+//! the view are normal and handled, not rejected.
+//!
+//! Bad input is: a missing file or column; a run in one table and not the other; a value that is not
+//! a number or not finite; a repeated (run, particle, frame); a run with too few frames to fit; an
+//! unknown experiment; values outside the physical limits (`sanity.rs`: fps 50 … 1e8, diameter 1 µm … 10 cm, |z_m| ≤ 10 m, |t_s| ≤ 60 s, and t_s within
+//! half a frame plus 1 % of the elapsed time of (frame − first frame)/fps). Each is reported with the
+//! file, the row and the column and what would fix it. The run stops before any output is replaced,
+//! unless the ingest params say `skip_bad_runs = true`, which leaves the bad runs out and names them
+//! in the `skipped` output.
+//!
+//! The ingest params, with a calibration for tracker exports:
+//!
+//! ```toml
+//! [stages.ingest]
+//! kind = "ingest"
+//! inputs = { dataset = "${data}" }
+//! params = { format = "auto", skip_bad_runs = false, min_frames = 20,
+//!   calibration = { m_per_px = 2.5e-5, fps = 200, axis = "x", direction = 1,
+//!                   material = "316", diameter_m = 3e-4, experiment = "single" } }
+//! ```
+//!
+//! # The recording items
+//!
+//! The items of `ingest:runs` (one per run, named by the run id made file-name safe; a `command`
+//! stage receives them as files) are binary, not JSON (`src/recording/item.rs`), all numbers
+//! little-endian with no padding:
+//!
+//! | bytes | field |
+//! | --- | --- |
+//! | 8 | magic `GROOVREC` |
+//! | 4 | format version, u32 = 1 |
+//! | 4 | length M of the metadata, u32 |
+//! | M | metadata: compact UTF-8 JSON of the run's row of runs.csv: `run`, `experiment` (`single`/`collision`), `material`, `diameter_m`, `fps`, `setup` (`rolling`/`contact`/null), `extra` (other columns, as text) |
+//! | 4 | number of tracks, u32; then per track, sorted by particle: |
+//! | 4 + 4 + 4 | particle u32, number of samples N u32, number of frame segments S u32 |
+//! | 8·S + 8·S | each segment's first frame (i64), then each segment's length (i64, ≥ 1, summing to N): a segment is a stretch of consecutive frames, so a track without dropped frames has one |
+//! | 8·N + 8·N | `t_s` (f64, s), then `z_m` (f64, m), in frame order |
+//!
+//! Units and checks are those of the trajectories table above (SI; ingest has checked every
+//! value). A 600-frame single run is 9.7 KB (JSON text was 12.7 KB) and decodes without parsing
+//! a number. In Python: `numpy.frombuffer(b, '<f8', count=N, offset=o)` reads a column.
+//!
+//! # Reading fast and in bounded memory
+//!
+//! the interchange format (polars), trackpy and TrackMate exports, checks with
+//!   errors at file, row and column; `columnar.rs` the fast path of a clean interchange dataset
+//!   (typed columns sorted and sliced into recordings by polars; at any problem the row-by-row
+//!   path reads the dataset again and names it). The stage streams: trajectories.csv is read from
+//!   disk and parsed 8 MB of whole lines at a time (`csv_pieces.rs`; rows in the exact layout
+//!   `groove synth` writes are split and parsed without polars by `csv_fast.rs`, any other piece by
+//!   polars) and each run's item is made as its last row is read, so the typed table and
+//!   the recordings are never held whole (`ingest::ingest_items`); when the rows of a run are not
+//!   one block (shuffled rows) it reads the file whole and sorts it, and the progress
+//!   line says which (`read in N chunks …`, `decoded from Parquet in N batches of whole row groups
+//!   …` or `read whole (why)`); a Parquet file is read once in order and decoded a batch of its row
+//!   groups at a time on a thread of its own, never held whole (`parquet_groups.rs`), and the page
+//!   headers of every row group are checked before polars decodes them (`parquet_pages.rs`: a
+//!   negative count in a damaged header made polars' decoder abort the process). Same items either way; and the same items from Parquet as pyarrow and pandas write it (snappy, zstd, gzip, v1 and v2 pages, dictionary, plain, byte-stream-split and delta encodings, shuffled rows with pandas' index, int32 particles, a typed runs.parquet with null setups: `tests/parquet_writers.rs`, files made by `tests/fixtures/parquet_writers/make_fixtures.py`). With the stage's memo
+//!   (`run_memo.rs`) a strict-layout piece is first cut into its runs' blocks of lines, each whole
+//!   run keyed by a BLAKE3 digest of its lines and its runs.csv row; a run whose key the memo holds
+//!   (and whose item the store still holds) is not parsed, so an edit of one recording parses
+//!   that run and the runs at the pieces' edges only.
+//!
+//! # Tracker exports
+//!
+//! groove reads positions exported by trackpy and Fiji TrackMate directly; the `ingest` stage turns
+//! them into the interchange tables with a calibration. With `format = "auto"` a folder holding
+//! `trajectories.csv` (or `.parquet`) is the interchange format; otherwise every tracker file in it
+//! is recognised by its header (trackpy: `frame, particle, x, y`; TrackMate: `TRACK_ID, FRAME,
+//! POSITION_X, POSITION_Y`) or root element (`<TrackMate>`), and other files are ignored.
+//!
+//! **Layouts.** Any mix of:
+//!
+//! - one trackpy CSV per run (`tp.link(...).to_csv("s01.csv")`): the run is named by the file (`s01`);
+//! - one trackpy CSV holding many runs, with a column `run` naming each row's run (the particle ids
+//!   may repeat between runs). A file of several runs without it stops with "add a column `run`";
+//! - one TrackMate XML per movie (`File > Save`): spots from `Model/AllSpots/SpotsInFrame/Spot`
+//!   (`ID`, `FRAME`, `POSITION_X`, `POSITION_Y`, `VISIBILITY`), tracks from
+//!   `Model/AllTracks/Track/Edge`, the tracks kept by TrackMate's filters from `FilteredTracks`;
+//! - one TrackMate spot table per movie (`Spots in tracks statistics.csv`, or any name; spaces in
+//!   file names are fine), with its extra header rows.
+//!
+//! **Naming.** A run's id is the `run` column's value, or the file name without `.csv` / `.xml`, or
+//! what the manifest's `file` column maps the file to (a TrackMate default name says nothing about the
+//! run). Ids that are not file-name safe are kept as they are in the report and get a safe item name.
+//!
+//! **Calibration and metadata.** Trackers record pixels and frames, not the run. Each run's material,
+//! diameter, frame rate, experiment and setup come from a manifest `runs.csv` beside the exports
+//! (columns `run` and any of `file, material, diameter_m, fps, experiment, setup`; other columns are
+//! kept and shown), or from the same rows as `runs = [{ run = "s01", material = "316" }, ...]` in the
+//! ingest params; what a row leaves empty comes from `calibration` in the ingest params. With a
+//! manifest, every run must have a row and every row a run. Positions become
+//! `z_m = direction · position · m_per_px` along `axis` (image x right or y down) and frames
+//! `t_s = (frame − first frame) / fps`. TrackMate files that state a length unit (XML
+//! `spatialunits="micron"`, CSV units row `(micron)`) are converted with it and need no `m_per_px`;
+//! the XML's frame interval (`ImageData timeinterval` in `timeunits`) is used only when neither the
+//! manifest nor the params give `fps`.
+//!
+//! **What is left out, and said.** In a single run the longest track is the sphere; shorter tracks
+//! fill frames it misses, and spots in frames it already covers are spurious. Every track or spot left
+//! out (spurious tracks, unlinked spots, tracks TrackMate's filters removed, hidden spots) is listed
+//! in the ingest stage's `skipped` output and in the report's "Left out" table, with the run kept;
+//! "Nothing was left out" appears only when nothing was.
+//!
+//! **Wrong axis.** If in half the runs or more the sphere moves more across `axis` than along it, or
+//! not beyond its frame-to-frame noise along it, the run stops with exit code 2 naming the runs and
+//! the axis to try (`set calibration.axis = "y"`); in fewer runs those runs are named as bad runs.
+//!
+//! **Worked example** (the fixtures in `tests/fixtures/trackers/`, made by `make_fixtures.py` with
+//! trackpy 0.7 from rendered videos of six synthesized runs, 20 µm per pixel, 10,000 fps):
+//!
+//! ```
+//! my-runs/
+//!   runs.csv      run,material,diameter_m,fps,experiment
+//!                 single-316-001,316,0.0003,10000,single
+//!                 single-440c-001,440c,0.0003,10000,single
+//!                 ...
+//!   tracks.csv    ,run,y,x,mass,size,ecc,signal,raw_mass,ep,frame,particle
+//!                 0,single-316-001,10.32,96.4872,6891.52,3.46574,0.025013,131.833,15800,,0,0
+//!                 ...
+//! ```
+//!
+//! ```toml
+//! [stages.ingest]
+//! kind = "ingest"
+//! inputs = { dataset = "${data}" }
+//! params = { calibration = { m_per_px = 2e-5, axis = "x", direction = 1 } }
+//! ```
+//!
+//! `groove run --data my-runs` then fits every run with its own material and frame rate. A TrackMate
+//! XML in microns needs only the manifest (or `calibration.material` and `diameter_m`); a TrackMate
+//! table under its default name needs a manifest row naming it:
+//! `single-440c-002,Spots in tracks statistics.csv,440c,0.0003,10000,single` under
+//! `run,file,material,diameter_m,fps,experiment`.
+//!
+//! # Hostile input
+//!
+//! Fuzzing: `cargo test --locked --test fuzz` runs 1,000 cases per property (CSV, generated cells,
+//! Parquet, trackpy/TrackMate, `pipeline.toml`); `PROPTEST_CASES=100000 cargo test --locked --test
+//! fuzz` runs 100,000. The cases come from a fixed seed, the same in every run (another with
+//! `PROPTEST_RNG_SEED=<u64>`). A mutated Parquet file once made polars' page decoder ask for 2^61 bytes (a damaged page
+//! header's negative count, cast to an unsigned size) and the failed allocation aborted the process
+//! (about one case in 30,000: seeds 112, 118, 125, 127 and 128 of 5,000 cases). Every page header
+//! is now checked before polars decodes the page (`ingest/parquet_pages.rs`: no negative size or
+//! count, each page inside its column chunk, the pages' values adding up to the chunk's, one a
+//! row), and such a file exits 2 ("a page's header is damaged"); 40 seeds × 5,000 cases
+//! (`PROPTEST_RNG_SEED=100…139`, 200,000 mutated files) passed with none aborting. The
+//! hostile-input reproducers are `tests/hostile_input.rs` (library) and
+//! `tests/hostile_project.rs` (binary: exit 2 within 10 s, every project file unchanged). The kill -9
+//! soak is `bash tests/soak.sh [KILLS_PER_VERB]` (needs `cargo build`; prints counts of corrupt entries,
+//! partial outputs and failed recoveries, which must all be 0).
 
 // A `Problem` carries file, row, column, run, message and fix; it is returned only for bad
 // input, so its size on the error path is not worth boxing.
@@ -470,7 +651,7 @@ fn no_dataset_files(files: &BTreeMap<String, Vec<u8>>) -> Problem {
             "holds no dataset files (it has: {})",
             if names.is_empty() { "nothing".to_string() } else { names.join(", ") }
         ),
-        "add runs.csv and trajectories.csv (see data-format.md), or trackpy or TrackMate exports (CSV or TrackMate XML) with a calibration in the ingest params (see README, Tracker exports)",
+        "add runs.csv and trajectories.csv (see README, Using it on your data), or trackpy or TrackMate exports (CSV or TrackMate XML) with a calibration in the ingest params (see README, Tracker exports)",
     )
 }
 

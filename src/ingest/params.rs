@@ -61,7 +61,7 @@ impl Default for IngestParams {
 pub enum Format {
     /// `runs.*` present: interchange; otherwise each CSV file is recognised by its header.
     Auto,
-    /// runs.csv + trajectories.csv (or .parquet), see data-format.md.
+    /// runs.csv + trajectories.csv (or .parquet), see the module docs.
     Interchange,
     /// trackpy CSV exports: one file per run (run id = file name without `.csv`), or files with a
     /// `run` column naming each row's run.

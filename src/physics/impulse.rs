@@ -1,4 +1,4 @@
-//! The collision impulse between two equal spheres in the groove (physics.md, Eqs. 4.9–4.13).
+//! The collision impulse between two equal spheres in the groove (the chapter's Eqs. 4.9–4.13).
 //!
 //! With J = (1 + C)/2 · (v_l − v_r) (l is the particle at lower z): `v_l' = v_l − J`,
 //! `v_r' = v_r + J`. The contact slips when `|va_l + va_r| ≥ 2 μ_pp k J`, and then both spins

@@ -1,4 +1,4 @@
-//! The equation audit: each defect physics.md lists, checked with numbers from the physics module.
+//! The equation audit: each defect of the chapter the physics module's docs list, checked with numbers from the physics module.
 
 use super::chapter;
 use super::inputs::ReportData;
@@ -267,7 +267,7 @@ pub fn mu_440c(d: &ReportData) -> AuditItem {
     }
 }
 
-/// Every audit item in physics.md's order.
+/// Every audit item in the order the physics module's docs list them.
 pub fn audit(d: &ReportData) -> Vec<AuditItem> {
     let g = Groove::CHAPTER;
     vec![

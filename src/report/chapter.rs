@@ -1,4 +1,4 @@
-//! The chapter's printed values and the constants of physics.md used to check them.
+//! The chapter's printed values and the constants used to check them.
 
 /// T = T0 + T'·v0 as printed (Fig. 4.2c and text): intercept in s.
 pub const T0_S: f64 = 0.052;
@@ -28,7 +28,7 @@ pub const FIG_4_2B_V0_MPS: f64 = 0.025;
 pub const STRIKER_MAX_MPS: f64 = 0.3;
 pub const LASER_SCATTER: f64 = 0.15;
 
-/// Particle radius (m), density (kg/m³) and air viscosity (Pa·s) of physics.md's Stokes check.
+/// Particle radius (m), density (kg/m³) and air viscosity (Pa·s) of the Stokes check.
 pub const RADIUS_M: f64 = 150e-6;
 pub const DENSITY_KG_M3: f64 = 7900.0;
 pub const AIR_VISCOSITY_PA_S: f64 = 1.81e-5;

@@ -6,7 +6,7 @@ use crate::engine::stage::{
 };
 use crate::recording::item;
 
-/// Finds missing physics over all single runs (issue 5).
+/// Finds missing physics over all single runs.
 pub struct Discover;
 
 fn options(params: &toml::Table) -> Result<(Options, serde_json::Value), ParamError> {

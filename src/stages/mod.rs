@@ -12,6 +12,11 @@
 //! - `report.rs`: The `report` stage kind
 //! - `simulate.rs`: The `simulate` stage kind
 //! - `validate.rs`: The `validate` stage kind
+//!
+//! `fit:pair_runs` holds, per run, the recording again for a collision run and nothing for a single
+//! run: aggregate needs only the collision recordings (the whole-run pair fits), so it binds that
+//! instead of `ingest:runs` and does not load every single-run recording (the store keeps one copy
+//! of identical bytes, so the collision recordings are not stored twice).
 
 use crate::engine::stage::StageKind;
 

@@ -16,6 +16,79 @@
 //! and `s3` are the two backends, [`cache`] does lookups with sha256 verification and the
 //! counts, [`push`] uploads with bounded concurrency (blobs first, entry last), [`sync`] is
 //! `groove push` / `groove pull`.
+//!
+//! # In use
+//!
+//! The store is an action cache (an entry per stage key) plus content-addressed blobs, and a remote
+//! holds the same two things in the same layout (`entries/<key>.json`, `objects/ab/cdef…`), in a
+//! folder on a shared filesystem or in an S3 bucket:
+//!
+//! ```toml
+//! [remote]
+//! url = "file:///shared/groove-cache"   # or "s3://bucket/prefix"; a relative file:// path is relative to pipeline.toml
+//! read_only = false                     # true: look up, never upload (untrusted clones, CI that should not write)
+//! required = false                      # true: a remote error is exit 2 instead of a warning
+//! jobs = 8                              # concurrent uploads
+//! ```
+//!
+//! `--remote URL` replaces the url, `--no-remote` ignores every remote, `--remote-read-only` and
+//! `--remote-required` set the modes; the environment has `GROOVE_REMOTE` (a URL) and
+//! `GROOVE_REMOTE_READ_ONLY=1`. Precedence: flag, then environment, then `pipeline.toml`.
+//!
+//! - **Lookup**: local store, then the remote entry by key (one GET), then each blob the local store
+//!   lacks (one GET each), every blob checked against its sha256 before anything is written; only then
+//!   is the entry committed locally (blobs first, entry by one rename, as for a local run). A missing,
+//!   corrupt or unreadable remote object is a miss: the stage runs here, exit 0. groove never lists
+//!   a remote, so a bucket of millions of objects costs what an empty one does.
+//! - **Push**: after each local commit, in the background with bounded concurrency: one HEAD of the
+//!   entry (present: nothing more, so a re-push uploads no body); else for each blob a HEAD and, if
+//!   absent, a create-if-absent PUT; the entry is put (create-if-absent) only after all its blobs
+//!   are there, so a killed push leaves at most orphan blobs, never an entry without its blobs. Two
+//!   machines pushing the same keys both succeed. A blob found corrupt during a lookup is re-uploaded
+//!   by the push that follows the local rerun.
+//! - `groove push` uploads every result `pipeline.lock` names; `groove pull` fills the local store with
+//!   every result the pipeline can reuse (it walks the DAG like `status`, runs nothing).
+//! - An unreachable remote or refused credentials give **one** warning naming what to set, and the run
+//!   goes on with the local store (exit 2 instead with `--remote-required`). `groove run`, `push` and
+//!   `pull` end with a line counting the remote's hits, misses and errors, entries and blobs pushed,
+//!   and the GET / HEAD / PUT requests and bytes: `groove: remote file:///… : 9 hits, 0 misses, 0
+//!   errors; pushed 0 entries, 0 blobs; 203 GET, 0 HEAD, 0 PUT, 0 LIST; 2.7 MiB down, 0 B up`.
+//!
+//! **`file://`** needs nothing: create-if-absent is a temp file hard-linked to its name (`link(2)` fails
+//! if the name exists), so a reader sees a whole object or none.
+//!
+//! **`s3://bucket/prefix`** needs the cargo feature `s3`: `cargo build --release --features s3`. It is
+//! a feature so that the README's first command does not get slower to build: the S3 client is
+//! rusty-s3 (signs requests, no I/O of its own) with ureq (a small blocking HTTP client, rustls) —
+//! no async runtime (its cold-build cost is in `tests/bench/ENGINE.md`). Configuration is the usual environment only:
+//! `AWS_ACCESS_KEY_ID`, `AWS_SECRET_ACCESS_KEY`, `AWS_SESSION_TOKEN`, `AWS_REGION` (or
+//! `AWS_DEFAULT_REGION`; default `us-east-1`) and, for a non-AWS server (MinIO, Ceph, moto),
+//! `AWS_ENDPOINT_URL` (or `AWS_ENDPOINT`; path-style URLs, `http://` allowed). `~/.aws/credentials`
+//! and `AWS_PROFILE` are not read. Without credentials requests are unsigned (an anonymous, read-only
+//! cache of a public bucket: use `--remote-read-only`). Create-if-absent is `PUT` with
+//! `If-None-Match: *`. Grant `s3:GetObject`, `s3:PutObject` and `s3:ListBucket` on the bucket:
+//! without `ListBucket` S3 answers a miss with 403 instead of 404 (groove still never lists).
+//!
+//! # Tests and CI
+//!
+//! `tests/remote.rs` (file:// remotes, in `cargo test`) and, opt-in (`#[ignore]`d), the S3 and
+//! shipped-analysis tests in it and every test in `tests/slurm.rs`. `.ci/run` runs them all:
+//! `tests/infra/slurm.sh start|stop DIR` installs Debian's `slurm-wlm` and `munge` when absent and
+//! runs a one-node cluster as root (no systemd needed); `tests/infra/moto.sh start|stop DIR PORT
+//! BUCKET` installs `moto[server]` into a venv and runs a local S3 server on 127.0.0.1,
+//! moto accepting any credentials (its optional IAM check reads only the `Authorization` header,
+//! not the presigned signatures groove sends, so refused credentials are not exercised there; an
+//! unreachable endpoint is); both are stopped by PID. To run them by hand:
+//!
+//! ```text
+//! bash tests/infra/slurm.sh start /tmp/slurm && export SLURM_CONF=/tmp/slurm/slurm.conf
+//! bash tests/infra/moto.sh start /tmp/moto 9199 groove-ci && source /tmp/moto/env
+//! GROOVE_TEST_S3_BUCKET=groove-ci GROOVE_TEST_MOTO_LOG=/tmp/moto/moto.log \
+//!   cargo test --features s3 --test remote --test slurm -- --include-ignored --test-threads=1 --nocapture
+//! ```
+//!
+//! `.ci/run` runs the README's test command, `cargo test --locked --features s3` (one build with the
+//! S3 client, so the opt-in suites need no second build), then the opt-in suites with the services up.
 
 pub mod backend;
 pub mod cache;

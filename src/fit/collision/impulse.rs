@@ -1,4 +1,4 @@
-//! The impulse model of one impact between equal spheres (physics.md): normal impulse
+//! The impulse model of one impact between equal spheres (see `physics`): normal impulse
 //! J = (1 + C)/2 · (v1 − v2), then friction at the contact either slips (both spins change by
 //! μ_pp k J against the sliding) or sticks (the contact surfaces end up moving together).
 //!
