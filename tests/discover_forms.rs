@@ -1,41 +1,14 @@
-//! Discovery beyond the fixed list (issue 11), on datasets made by `groove synth` from the truth
-//! files in tests/fixtures/truths/ (lab coordinates: each run starts 0.5–1.5 mm inside either end
-//! of a 12 mm field of view, both directions, 316 and 440c, 1 µm noise on a sub-pixel grid,
-//! dropped frames and outliers), read back through ingest.
+//! Discovery beyond the fixed list, on datasets made by `groove synth` from the truth files in
+//! tests/fixtures/truths/ (lab coordinates: each run starts 0.5–1.5 mm inside either end of a
+//! 12 mm field of view, both directions, 316 and 440c, 1 µm noise on a sub-pixel grid, dropped
+//! frames and outliers), read back through ingest.
 //!
 //! Each concealed effect must be named with the right effect and form, its magnitudes within
 //! 15 % of the truth, and no other term accepted; nulls must accept nothing and carry detection
-//! limits. The default run uses one seed per case; the multi-seed sweeps are `#[ignore]`d (about
-//! a minute per 60-run seed in the dev profile on the shared 2-core machine; each prints a line
-//! per seed with the magnitudes found and their errors):
-//!
-//!     cargo test --locked --features s3 --test discover_forms -- --ignored --nocapture --test-threads=1
-//!     GROOVE_SWEEP_CASES="waviness_5mm" GROOVE_SWEEP_SEEDS="2" cargo test ... -- --ignored   # one
-//!
-//! Measured (2026-11-24 on 42c145a, seeds 2–6; errors are found/truth − 1):
-//! - waviness 0.5 mm: 5/5 named, amplitude within 1.1 %, wavelength within 0.1 %;
-//! - waviness 0.8 mm: 5/5, amplitude within 0.2 %, wavelength within 0.1 %;
-//! - waviness 3 mm: 5/5, amplitude within 0.4 %, wavelength within 0.1 %;
-//! - waviness 5 mm: 5/5, amplitude within 1.0 %, wavelength within 0.1 % (it failed, 0/3,
-//!   until the periodogram's long-wavelength end was scanned finer for the fit's starts: the
-//!   fit had settled on an alias near 3.2 mm, the stronger of the two grid points around 5 mm);
-//! - a bump (0.3 m/s², z_c = 2 mm, w = 0.3 mm): 5/5, amplitude, centre and width within 0.3 %;
-//! - a vibration (0.3 m/s², 150 Hz, a phase per run): 5/5, amplitude −8.9, −2.2, +2.7, −0.8,
-//!   +9.8 % (mean +0.1 %; with each run's phase fitted instead of integrated out it read −2.3,
-//!   +3.6, +8.4, +5.2, +14.9 %), frequency within 0.5 %;
-//! - two effects (tilt 0.05°, waviness 0.05 m/s² at 2 mm): 5/5, tilt within 2.6 %, amplitude
-//!   within 6.9 %, wavelength within 0.5 %;
-//! - the fixed list in lab coordinates, seeds 2–6 (rerun 2026-11-24 morning on e803d33, 18.7
-//!   min): quadratic drag, saturating drag (T' and T0 within 0.4 %), rolling resistance, groove
-//!   tilt, velocity-dependent friction and the periodic force at 8 mm (amplitude within 0.3 %,
-//!   λ within 0.1 %) 5/5 each. Seed 6 of the 8 mm force had failed on a build of the night
-//!   before (a tilt accepted first, then the wave, then a bump, all kept); now the tilt accepted
-//!   in round 1 is removed by backward elimination once the wave is in (LR 0.4, p 0.51);
-//! - a rolling resistance (c = 0.004) beside a 3 mm waviness (2026-11-26, release pipeline,
-//!   seeds 1–3): 3/3 named, c within 1 %, amplitude within 0.5 %, wavelength within 0.1 %
-//!   (seeds 1 and 2 failed before `forward::mixed_pairs`: a 4.9 mm wave, a bump, a spline);
-//! - nulls, seeds 100–119: quantized positions with 0.5 % outliers 0/20 with a finding, the
-//!   small set (16 runs of 30 ms) 0/20; every seed carries its detection limits.
+//! limits. These tests use one seed per case; the sweeps over seeds of the same fixtures are a
+//! benchmark, `tests/bench/discovery_power.sh` (e.g. `SEEDS="2 3 4 5 6" EFFECTS="waviness_5mm"
+//! NULLS="" bash tests/bench/discovery_power.sh`), and their results are in
+//! tests/bench/DISCOVERY.md.
 
 #[path = "support/noise.rs"]
 mod noise;
@@ -465,132 +438,4 @@ fn quantized_positions_with_outliers_give_no_finding() {
 #[test]
 fn a_small_set_gives_no_finding_and_states_its_limits() {
     assert!(check_null("null_small", None), "a finding on a null");
-}
-
-/// The seeds of the multi-seed sweeps (the default tests use each fixture's own seed, 1);
-/// `GROOVE_SWEEP_SEEDS="5 6"` and `GROOVE_SWEEP_CASES="waviness_0p5mm"` narrow a sweep down to
-/// reproduce one outcome.
-fn sweep_seeds() -> Vec<u64> {
-    match std::env::var("GROOVE_SWEEP_SEEDS") {
-        Ok(s) => s
-            .split_whitespace()
-            .map(|x| x.parse().expect("GROOVE_SWEEP_SEEDS: integers"))
-            .collect(),
-        Err(_) => (2..7).collect(),
-    }
-}
-
-/// Runs `check` for every case and seed, prints one line per seed (what was found, the
-/// magnitudes and their errors, or why it failed) and a tally per case, then fails if any seed
-/// failed.
-fn sweep(cases: &[&str], check: impl Fn(&str, Option<u64>) -> String + std::panic::RefUnwindSafe) {
-    let only = std::env::var("GROOVE_SWEEP_CASES").ok();
-    let seeds = sweep_seeds();
-    let mut failed = Vec::new();
-    for case in cases {
-        if only
-            .as_ref()
-            .is_some_and(|o| !o.split_whitespace().any(|c| c == *case))
-        {
-            continue;
-        }
-        let mut ok = 0;
-        for &seed in &seeds {
-            match std::panic::catch_unwind(|| check(case, Some(seed))) {
-                Ok(line) => {
-                    ok += 1;
-                    println!("{case} seed {seed}: named; {line}");
-                }
-                Err(e) => {
-                    let why = e
-                        .downcast_ref::<String>()
-                        .cloned()
-                        .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
-                        .unwrap_or_default();
-                    println!("{case} seed {seed}: FAILED: {why}");
-                    failed.push(format!("{case} seed {seed}"));
-                }
-            }
-        }
-        println!("{case}: {ok}/{} seeds named and sized", seeds.len());
-    }
-    assert!(failed.is_empty(), "failed: {failed:?}");
-}
-
-#[test]
-#[ignore = "heavy: 5 seeds of each wavelength, 60-run sets"]
-fn waviness_from_half_a_millimetre_to_five_over_seeds() {
-    sweep(
-        &[
-            "waviness_0p5mm",
-            "waviness_0p8mm",
-            "waviness_3mm",
-            "waviness_5mm",
-        ],
-        check_waviness,
-    );
-}
-
-#[test]
-#[ignore = "heavy: 5 seeds each of the bump, the vibration and two pairs of effects at once"]
-fn bump_vibration_and_two_effects_over_seeds() {
-    sweep(
-        &[
-            "localized_force",
-            "time_force",
-            "two_effects",
-            "resistance_and_waviness",
-        ],
-        |case, seed| match case {
-            "localized_force" => check_localized(seed),
-            "time_force" => check_time(seed),
-            "two_effects" => check_two(seed),
-            _ => check_resistance_and_wave(seed),
-        },
-    );
-}
-
-#[test]
-#[ignore = "heavy: 5 seeds of each effect of the fixed list, 60-run sets in lab coordinates"]
-fn every_listed_effect_over_seeds() {
-    sweep(
-        &[
-            "quadratic_drag",
-            "saturating_drag",
-            "rolling_resistance",
-            "groove_tilt",
-            "velocity_dependent_friction",
-            "position_force",
-        ],
-        check_existing,
-    );
-}
-
-#[test]
-#[ignore = "heavy: 20 seeds of each null"]
-fn nulls_over_twenty_seeds() {
-    for name in ["null_quantized", "null_small"] {
-        let false_findings: Vec<u64> = (100..120)
-            .filter(|s| {
-                let clean = check_null(name, Some(*s));
-                println!(
-                    "{name} seed {s}: {}",
-                    if clean {
-                        "nothing accepted"
-                    } else {
-                        "A FINDING"
-                    }
-                );
-                !clean
-            })
-            .collect();
-        println!(
-            "{name}: {} of 20 seeds with a finding",
-            false_findings.len()
-        );
-        assert!(
-            false_findings.len() <= 1,
-            "{name}: seeds with a finding {false_findings:?}"
-        );
-    }
 }

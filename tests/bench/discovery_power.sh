@@ -9,6 +9,7 @@
 # run in CI (minutes of CPU).
 #
 # Usage: tests/bench/discovery_power.sh            # 5 seeds per effect, 20 seeds per null
+#        EFFECTS= NULLS=null tests/bench/discovery_power.sh   # only the null, 20 seeds (empty = none)
 #        SEEDS="1 2" NULL_SEEDS="1 2 3 4" EFFECTS="groove_tilt" NULLS="null" tests/bench/discovery_power.sh
 #        GROOVE_BIN=target/debug/groove tests/bench/discovery_power.sh   # skip the release build
 # Needs: cargo, python3 (standard library only).
@@ -17,8 +18,8 @@ set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 seeds="${SEEDS:-1 2 3 4 5}"
 null_seeds="${NULL_SEEDS:-$(seq -s ' ' 1 20)}"
-effects="${EFFECTS:-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness runs_that_stop waviness_trapped}"
-nulls="${NULLS:-null null_quantized null_small}"
+effects="${EFFECTS-quadratic_drag saturating_drag rolling_resistance groove_tilt velocity_dependent_friction position_force waviness_0p5mm waviness_0p8mm waviness_3mm waviness_5mm localized_force time_force two_effects resistance_and_waviness runs_that_stop waviness_trapped}"
+nulls="${NULLS-null null_quantized null_small}"
 work="$(mktemp -d "${TMPDIR:-/tmp}/groove-power.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
 
