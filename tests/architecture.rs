@@ -1,6 +1,6 @@
 //! The shape of the code, checked: the engine names no analysis module and its files form no
-//! cycle, each kind's compiled code fingerprint covers exactly the modules it uses, and the
-//! README's code map names every module and names nothing that does not exist.
+//! cycle, each kind's compiled code fingerprint covers exactly the modules it uses, every folder's
+//! module docs open with a map of exactly its files, and the README names every top-level module.
 
 #[path = "../src/build/code_deps.rs"]
 #[allow(dead_code)]
@@ -135,15 +135,88 @@ fn the_engine_check_catches_an_analysis_import() {
     assert!(engine_escapes(&src).is_empty());
 }
 
+/// Every folder of code directly under `src/` (each checked with the folders below it).
+fn top_folders(src: &Path) -> Vec<PathBuf> {
+    let mut out: Vec<PathBuf> = fs::read_dir(src)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir())
+        .collect();
+    out.sort();
+    out
+}
+
+/// Imports that run back up: a file of `from/` naming a file of `to/`.
+fn arrows_back_up(src: &Path, from: &str, to: &str) -> Vec<String> {
+    let (from, to) = (src.join(from), src.join(to));
+    folders(&from)
+        .iter()
+        .flat_map(|d| fs::read_dir(d).unwrap().flatten().map(|e| e.path()))
+        .filter(|f| f.extension().is_some_and(|x| x == "rs"))
+        .flat_map(|f| {
+            code_deps::direct_uses(src, &f)
+                .named
+                .into_iter()
+                .filter(|n| n.starts_with(&to))
+                .map(move |n| format!("{} -> {}", rel(src, &f), rel(src, &n)))
+        })
+        .collect()
+}
+
 #[test]
-fn the_engine_files_form_no_cycle() {
+fn no_folder_of_src_has_an_import_cycle() {
     let src = repo().join("src");
-    if let Some(cycle) = find_cycle(&src, &src.join("engine")) {
-        panic!(
-            "engine modules use each other in a cycle: {}",
-            cycle.join(" -> ")
-        );
-    }
+    let cycles: Vec<String> = top_folders(&src)
+        .iter()
+        .filter_map(|d| find_cycle(&src, d))
+        .map(|c| c.join(" -> "))
+        .collect();
+    assert!(
+        cycles.is_empty(),
+        "modules use each other in a cycle (move what both need to where it belongs): {cycles:#?}"
+    );
+}
+
+#[test]
+fn the_artifact_contract_imports_nothing_from_the_fits() {
+    let arrows = arrows_back_up(&repo().join("src"), "artifacts", "fit");
+    assert!(
+        arrows.is_empty(),
+        "artifacts/ is the contract the fits write; it names no fit module: {arrows:#?}"
+    );
+}
+
+#[test]
+fn the_back_up_check_catches_an_artifact_importing_a_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("src");
+    write(
+        dir.path(),
+        &[
+            ("src/lib.rs", "pub mod artifacts;\npub mod fit;\n"),
+            ("src/artifacts/mod.rs", "pub mod summary;\n"),
+            (
+                "src/artifacts/summary.rs",
+                "pub use crate::fit::collision::summary::MuPp;\n",
+            ),
+            ("src/fit/mod.rs", "pub mod collision;\n"),
+            ("src/fit/collision/mod.rs", "pub mod summary;\n"),
+            (
+                "src/fit/collision/summary.rs",
+                "use crate::artifacts::summary::X;\npub struct MuPp;\n",
+            ),
+        ],
+    );
+    assert_eq!(
+        arrows_back_up(&src, "artifacts", "fit"),
+        ["artifacts/summary.rs -> fit/collision/summary.rs"]
+    );
+    write(
+        dir.path(),
+        &[("src/artifacts/summary.rs", "pub struct MuPp;\n")],
+    );
+    assert!(arrows_back_up(&src, "artifacts", "fit").is_empty());
 }
 
 #[test]
@@ -163,6 +236,29 @@ fn the_cycle_check_catches_a_cycle() {
     assert_eq!(cycle, ["engine/a.rs", "engine/b.rs", "engine/a.rs"]);
     write(dir.path(), &[("src/engine/b.rs", "use super::c::Y;\n")]);
     assert_eq!(find_cycle(&src, &src.join("engine")), None);
+    // a cycle through a nested folder, seen from its top folder, through `crate::` paths
+    write(
+        dir.path(),
+        &[
+            ("src/lib.rs", "pub mod discover;\n"),
+            ("src/discover/mod.rs", "pub mod pairs;\npub mod forcemap;\n"),
+            (
+                "src/discover/pairs.rs",
+                "use crate::discover::forcemap::grid::G;\n",
+            ),
+            ("src/discover/forcemap/mod.rs", "pub mod grid;\n"),
+            (
+                "src/discover/forcemap/grid.rs",
+                "pub struct G;\nfn f() { crate::discover::pairs::run(); }\n",
+            ),
+        ],
+    );
+    let cycle = find_cycle(&src, &src.join("discover")).expect("pairs -> grid -> pairs");
+    assert_eq!(cycle.first(), cycle.last());
+    assert!(
+        cycle.contains(&"discover/forcemap/grid.rs".to_string()),
+        "{cycle:?}"
+    );
 }
 
 /// The derivation on a small tree: `use` trees with braces, `super::`, `mod` children,
@@ -368,17 +464,6 @@ fn backticked(text: &str) -> Vec<&str> {
     text.split('`').skip(1).step_by(2).collect()
 }
 
-/// A backticked name that names a file or folder: under the repository root (`src/…`,
-/// `tests/…`, `data/…`, `reports/…`) or relative to its entry's folders (`stage.rs`, `config/`).
-fn is_path(name: &str) -> bool {
-    !name.contains([' ', ':', '(', '['])
-        && (name.ends_with(".rs")
-            || name.ends_with('/')
-            || ["src/", "tests/", "data/", "reports/"]
-                .iter()
-                .any(|p| name.starts_with(p)))
-}
-
 /// Every folder at or below `dir`.
 fn folders(dir: &Path) -> Vec<PathBuf> {
     let mut out = vec![dir.to_path_buf()];
@@ -393,15 +478,173 @@ fn folders(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-/// What is wrong with the code map `map` of the tree at `root`, both ways: a module of
-/// `src/lib.rs`, a folder of `src/` holding code, or a file of `src/engine/` it does not name,
-/// and a path it names that does not exist (a relative name is looked up below the folders its
-/// entry names, or below `src/`).
-fn code_map_problems(root: &Path, map: &str) -> Vec<String> {
-    let src = root.join("src");
+/// Whether `dir` or a folder below it holds Rust code.
+fn holds_code(dir: &Path) -> bool {
+    folders(dir).iter().any(|d| {
+        fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .any(|e| e.path().extension().is_some_and(|x| x == "rs"))
+    })
+}
+
+/// The file whose module docs map the folder `dir`: its `mod.rs`, or the `dir.rs` beside it.
+fn map_file(dir: &Path) -> PathBuf {
+    let inside = dir.join("mod.rs");
+    if inside.exists() {
+        inside
+    } else {
+        dir.with_extension("rs")
+    }
+}
+
+/// The names a module's map lists: the first backticked name of each item of the first list in
+/// the file's opening `//!` docs.
+fn map_names(text: &str) -> Vec<String> {
+    let docs = text
+        .lines()
+        .take_while(|l| l.starts_with("//!"))
+        .map(|l| l.trim_start_matches("//!").trim_start());
+    let mut names = Vec::new();
+    let mut in_list = false;
+    for line in docs {
+        if let Some(item) = line.strip_prefix("- ") {
+            in_list = true;
+            if let Some(name) = backticked(item).first() {
+                names.push(name.to_string());
+            }
+        } else if in_list && !line.is_empty() && !line.starts_with("- ") {
+            // a continuation line of the item before
+            continue;
+        } else if in_list {
+            break;
+        }
+    }
+    names
+}
+
+/// What is wrong with the module map of the folder `dir`, both ways: a file or folder of code it
+/// does not name, and a name it lists that does not exist there.
+fn module_map_problems(dir: &Path) -> Vec<String> {
+    let file = map_file(dir);
+    let shown = |p: &Path| p.file_name().unwrap().to_string_lossy().into_owned();
+    let Ok(text) = fs::read_to_string(&file) else {
+        return vec![format!(
+            "{}: no mod.rs or {}.rs to hold its map",
+            dir.display(),
+            shown(dir)
+        )];
+    };
+    let names = map_names(&text);
     let mut problems = Vec::new();
-    let names = backticked(map);
-    let lib = fs::read_to_string(src.join("lib.rs")).unwrap_or_default();
+    if names.is_empty() {
+        problems.push(format!(
+            "{}: its docs open with no map of the folder",
+            shown(&file)
+        ));
+    }
+    let mut entries: Vec<PathBuf> = fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    entries.sort();
+    for p in entries {
+        let name = if p.is_dir() {
+            if !holds_code(&p) {
+                continue;
+            }
+            format!("{}/", shown(&p))
+        } else if p.extension().is_some_and(|x| x == "rs") && shown(&p) != "mod.rs" {
+            shown(&p)
+        } else {
+            continue;
+        };
+        if !names.contains(&name) {
+            problems.push(format!("the map of {} does not name {name}", dir.display()));
+        }
+    }
+    for name in &names {
+        let path = dir.join(name.trim_end_matches('/'));
+        if !path.exists() || name.ends_with('/') != path.is_dir() {
+            problems.push(format!(
+                "the map of {} names `{name}`, which does not exist",
+                dir.display()
+            ));
+        }
+    }
+    problems
+}
+
+#[test]
+fn every_folder_of_code_opens_with_a_map_of_its_files() {
+    let src = repo().join("src");
+    let problems: Vec<String> = folders(&src)
+        .into_iter()
+        .skip(1)
+        .filter(|d| holds_code(d))
+        .flat_map(|d| module_map_problems(&d))
+        .collect();
+    assert!(
+        problems.is_empty(),
+        "module maps (the `//! - `name.rs`: …` list each folder's mod.rs opens with): {problems:#?}"
+    );
+}
+
+#[test]
+fn the_module_map_check_catches_a_missing_file_and_a_stale_name() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        &[
+            (
+                "src/fit/mod.rs",
+                "//! Fits.\n//!\n//! - `lm.rs`: the driver\n//! - `collision/`: collisions,\n//!   over two lines\n//!\n//! - `later.rs`: another list\n",
+            ),
+            ("src/fit/lm.rs", "//! lm\n"),
+            ("src/fit/collision/mod.rs", "//! Collisions.\n//!\n//! - `mod.rs`: all of it\n"),
+            ("src/fit/templates/page.html", "<p></p>\n"),
+            ("src/recording.rs", "//! One run.\n//!\n//! - `item.rs`: its bytes\n"),
+            ("src/recording/item.rs", "//! item\n"),
+        ],
+    );
+    let src = dir.path().join("src");
+    for d in ["fit", "fit/collision", "recording"] {
+        assert_eq!(
+            module_map_problems(&src.join(d)),
+            Vec::<String>::new(),
+            "{d}"
+        );
+    }
+    // a file the map forgets, and a name it keeps after the file went
+    write(dir.path(), &[("src/fit/robust.rs", "//! robust\n")]);
+    fs::remove_file(src.join("fit/lm.rs")).unwrap();
+    let problems = module_map_problems(&src.join("fit"));
+    assert_eq!(problems.len(), 2, "{problems:?}");
+    assert!(
+        problems[0].ends_with("does not name robust.rs"),
+        "{problems:?}"
+    );
+    assert!(
+        problems[1].ends_with("names `lm.rs`, which does not exist"),
+        "{problems:?}"
+    );
+    // docs with no map at all
+    write(dir.path(), &[("src/recording.rs", "//! One run.\n")]);
+    let problems = module_map_problems(&src.join("recording"));
+    assert!(
+        problems.iter().any(|p| p.contains("no map")),
+        "{problems:?}"
+    );
+}
+
+#[test]
+fn the_readme_names_every_top_level_module() {
+    let readme = fs::read_to_string(repo().join("README.md")).unwrap();
+    let modules = section(&readme, "### Modules");
+    let names = backticked(modules);
+    let lib = fs::read_to_string(repo().join("src/lib.rs")).unwrap();
+    let mut missing = Vec::new();
     for line in lib.lines() {
         let Some(name) = line.trim().strip_prefix("pub mod ") else {
             continue;
@@ -409,135 +652,24 @@ fn code_map_problems(root: &Path, map: &str) -> Vec<String> {
         let name = name.trim_end_matches(';');
         let (dir, file) = (format!("src/{name}/"), format!("src/{name}.rs"));
         if !names.contains(&dir.as_str()) && !names.contains(&file.as_str()) {
-            problems.push(format!("does not name module {name}"));
+            missing.push(name.to_string());
         }
     }
-    for top in [
-        "src/main.rs",
-        "src/cli/",
-        "src/build.rs",
-        "src/build/code_deps.rs",
-    ] {
+    for top in ["src/main.rs", "src/cli/", "src/build.rs"] {
         if !names.contains(&top) {
-            problems.push(format!("does not name {top}"));
+            missing.push(top.to_string());
         }
     }
-    // every folder of code, by its name (`sections/`) or a path through it (`fit/collision/`)
-    for dir in folders(&src).into_iter().skip(1) {
-        let holds_code = fs::read_dir(&dir)
-            .unwrap()
-            .flatten()
-            .any(|e| e.path().extension().is_some_and(|x| x == "rs"));
-        let shown = format!("{}/", dir.file_name().unwrap().to_string_lossy());
-        if holds_code && !names.iter().any(|n| n.contains(&shown)) {
-            problems.push(format!("does not name folder src/{}", rel(&src, &dir)));
-        }
-    }
-    // the engine's files one by one (the folder a newcomer reads first)
-    for e in fs::read_dir(src.join("engine"))
-        .into_iter()
-        .flatten()
-        .flatten()
-    {
-        let name = e.file_name().to_string_lossy().into_owned();
-        let shown = if e.path().is_dir() {
-            format!("{name}/")
-        } else {
-            name.clone()
-        };
-        if name != "mod.rs" && !names.contains(&shown.as_str()) {
-            problems.push(format!("does not name src/engine/{name}"));
-        }
-    }
-    // the other way: every path it names exists; an entry is a top-level `- ` line with its
-    // continuation and sub-entries
-    let mut entries: Vec<String> = Vec::new();
-    for line in map.lines() {
-        if line.starts_with("- ") || entries.is_empty() {
-            entries.push(String::new());
-        }
-        let last = entries.last_mut().unwrap();
-        last.push_str(line);
-        last.push('\n');
-    }
-    for entry in &entries {
-        let names: Vec<&str> = backticked(entry)
-            .into_iter()
-            .filter(|n| is_path(n))
-            .collect();
-        let mut bases: Vec<PathBuf> = names
-            .iter()
-            .filter(|n| n.starts_with("src/") && n.ends_with('/'))
-            .flat_map(|n| folders(&root.join(n)))
-            .collect();
-        bases.push(src.clone());
-        for name in names {
-            let rooted = ["src/", "tests/", "data/", "reports/"]
-                .iter()
-                .any(|p| name.starts_with(p));
-            let found = if rooted {
-                root.join(name).exists()
-            } else {
-                bases.iter().any(|b| b.join(name).exists())
-            };
-            if !found {
-                problems.push(format!("names `{name}`, which does not exist"));
-            }
-        }
-    }
-    problems
-}
-
-#[test]
-fn the_readme_code_map_names_every_module_and_only_what_exists() {
-    let readme = fs::read_to_string(repo().join("README.md")).unwrap();
-    let map = section(&readme, "### Code map");
-    let problems = code_map_problems(repo(), map);
-    assert!(problems.is_empty(), "README's code map: {problems:#?}");
-}
-
-#[test]
-fn the_code_map_check_catches_a_missing_module_and_a_stale_path() {
-    let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        &[
-            ("src/lib.rs", "pub mod engine;\npub mod fit;\n"),
-            ("src/main.rs", ""),
-            ("src/build.rs", ""),
-            ("src/build/code_deps.rs", ""),
-            ("src/cli/mod.rs", ""),
-            ("src/engine/mod.rs", "pub mod store;\n"),
-            ("src/engine/store.rs", ""),
-            ("src/fit/mod.rs", "pub mod lm;\n"),
-            ("src/fit/lm.rs", ""),
-            ("src/fit/collision/mod.rs", ""),
-        ],
+    assert!(
+        missing.is_empty(),
+        "README's modules do not name {missing:?}"
     );
-    let top = "- `src/main.rs`, `src/cli/`, `src/build.rs`, `src/build/code_deps.rs`: top\n";
-    let good = format!(
-        "{top}- `src/engine/`: engine\n  - `store.rs`: store\n- `src/fit/`: `lm.rs`, `fit/collision/`\n"
-    );
-    assert_eq!(code_map_problems(dir.path(), &good), Vec::<String>::new());
-    // a module and a folder the map forgets
-    let forgets = format!("{top}- `src/engine/`: `store.rs`\n");
-    assert_eq!(
-        code_map_problems(dir.path(), &forgets),
-        [
-            "does not name module fit",
-            "does not name folder src/fit",
-            "does not name folder src/fit/collision"
-        ]
-    );
-    // a path the map names that is gone: relative to its entry and rooted
-    let stale = format!("{good}- `src/fit/`: `robust.rs`; `tests/gone.rs`\n");
-    assert_eq!(
-        code_map_problems(dir.path(), &stale),
-        [
-            "names `robust.rs`, which does not exist",
-            "names `tests/gone.rs`, which does not exist"
-        ]
-    );
+    for name in names.iter().filter(|n| n.starts_with("src/")) {
+        assert!(
+            repo().join(name).exists(),
+            "README names `{name}`, which does not exist"
+        );
+    }
 }
 
 #[test]

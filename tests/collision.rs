@@ -2,7 +2,7 @@
 //! noise, dropped frames, outliers and an unknown kick time: impacts, restitution and μ_pp are
 //! recovered within stated tolerances across seeds, both setups and both directions.
 
-use groove::fit::collision::types::{Contact, PreImpactSource, Termination, NO_IMPACT};
+use groove::artifacts::collision_fit::{Contact, PreImpactSource, Termination, NO_IMPACT};
 use groove::fit::collision::{fit_collision, summarize_seeded, CollisionFit, CollisionOptions};
 use groove::ingest::{read_dataset_dir, IngestParams};
 use groove::physics::{

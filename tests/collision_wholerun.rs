@@ -10,10 +10,11 @@
 #[path = "support/noise.rs"]
 mod noise;
 
+use groove::artifacts::collision_summary::{LawForm, ProfileVerdict};
 use groove::discover::pairs::check_pairs;
-use groove::fit::collision::profile::{default_grid, profile_mu_pp, ProfileVerdict};
+use groove::fit::collision::profile::{default_grid, profile_mu_pp};
 use groove::fit::collision::whole_summary::{analyze, WholeRunOptions};
-use groove::fit::collision::wholerun::{fit_group, FitSpec, LawForm, PairRun, MU_PP};
+use groove::fit::collision::wholerun::{fit_group, FitSpec, PairRun, MU_PP};
 use groove::ingest::{read_dataset_dir, IngestParams};
 use groove::lsq::Termination;
 use groove::physics::Groove;
@@ -540,7 +541,7 @@ fn no_whole_run_fit_of_the_shipped_report_is_at_its_iteration_limit() {
 }
 
 /// The impact test's finding of 440c on `recs`, the single runs' physics being the truth's.
-fn impact_finding(recs: &[Recording]) -> groove::discover::diagnosis::Finding {
+fn impact_finding(recs: &[Recording]) -> groove::artifacts::diagnosis::Finding {
     let model = physics(
         0.293,
         vec![Term::SaturatingDrag {

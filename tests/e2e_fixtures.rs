@@ -6,8 +6,9 @@
 //! 1 µm Gaussian noise (the same draws with and without the effect). "Without" is the null
 //! fixture's physics: constant μ of the material and linear drag T = 60 ms.
 
-use groove::fit::lm::Workspace;
+use groove::artifacts::FitStatus;
 use groove::fit::single::fit_track;
+use groove::fit::track_problem::Workspace;
 use groove::fit::FitOptions;
 use groove::physics::{simulate, Friction, Model, State, Term};
 use groove::synth::Truth;
@@ -58,9 +59,9 @@ fn fit_rms(model: &Model, v0_mps: f64, noise: &[f64]) -> f64 {
     // then exactly because μ and T ran to their upper bounds (the fit turns the short slide into
     // a long one); its RMS still says how well the baseline mimics the data, which is what
     // concealment is about. Any other status or reason fails.
-    match fit.status.as_str() {
-        "converged" => {}
-        "suspect" => {
+    match fit.status {
+        FitStatus::Converged => {}
+        FitStatus::Suspect => {
             assert!(v0_mps.abs() <= 0.005, "v0 {v0_mps}: {:?}", fit.suspect);
             let at_bound = |name: &str| {
                 fit.suspect

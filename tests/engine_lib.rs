@@ -388,6 +388,43 @@ fn param_and_input_errors_name_the_line() {
     }
 }
 
+/// `[project] params` reach every stage whose kind takes the param, unless the stage sets its
+/// own; a shared param no kind takes is an error at its line.
+#[test]
+fn project_params_are_inherited_by_the_kinds_that_take_them() {
+    let calls = Calls::new();
+    let cat = catalog(&calls, "q1");
+    let offset_of = |text: &str| -> serde_json::Value {
+        let dir = project(text);
+        let p = load(&dir, &cat).unwrap();
+        p.stages["total"].canonical_params["offset"].clone()
+    };
+    let shared = PIPELINE.replace("seed = 11\n", "seed = 11\nparams = { offset = 2.5 }\n");
+    // the stage's own value wins; without it the project's; the kinds without it get nothing
+    assert_eq!(offset_of(&shared), serde_json::json!(0.5));
+    let inherited = shared.replace("params = { offset = 0.5 }\n", "");
+    assert_eq!(offset_of(&inherited), serde_json::json!(2.5));
+    assert_eq!(
+        offset_of(&PIPELINE.replace("params = { offset = 0.5 }\n", "")),
+        serde_json::json!(0.0)
+    );
+    let dir = project(&inherited);
+    let p = load(&dir, &cat).unwrap();
+    assert!(!p.stages["square"].params.contains_key("offset"));
+    // the inherited value is the stage's param: it runs with it
+    run(&cat, &p, &quiet()).unwrap();
+    let total = std::fs::read_to_string(dir.path().join("reports/total.txt")).unwrap();
+    assert_eq!(total.trim(), "16.5");
+    // a misspelt shared param
+    let text = PIPELINE.replace("seed = 11\n", "seed = 11\nparams = { ofset = 2.5 }\n");
+    let err = load(&project(&text), &cat)
+        .expect_err("no kind takes `ofset`")
+        .to_string();
+    let line = text.lines().position(|l| l.contains("ofset")).unwrap() + 1;
+    assert!(err.starts_with(&format!("pipeline.toml:{line}: ")), "{err}");
+    assert!(err.contains("no stage's kind takes `ofset`"), "{err}");
+}
+
 #[test]
 fn optional_absent_input_is_missing_and_appearing_makes_it_stale() {
     let calls = Calls::new();

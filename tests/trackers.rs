@@ -7,6 +7,7 @@
 //! restart count in the report; the residual-structure threshold and the restarts are measured on
 //! a synthesized null; one wild run cannot move the T-vs-v0 line by more than its share.
 
+use groove::artifacts::FitStatus;
 use groove::fit::{fit_single, FitOptions, SingleFit};
 use groove::ingest::{self, Axis, IngestParams, Ingested};
 use groove::recording::Recording;
@@ -225,7 +226,7 @@ fn trackpy_file_of_all_runs_gives_the_interchange_fits_and_the_truth() {
     // A good spot diameter: every run fits near its truth.
     let (v0, mu) = truth();
     for f in &fg {
-        assert_eq!(f.status, "converged", "{f:?}");
+        assert_eq!(f.status, FitStatus::Converged, "{f:?}");
         let v = v0[&f.run];
         assert!(
             (f.v0_mps - v).abs() < 0.01 * v.abs(),
@@ -479,7 +480,7 @@ fn check_pixel_locked(name: &str) -> (usize, usize) {
     let (v0, mu) = truth_of("truth_locked.toml", "truth/runs_truth_locked.csv");
     let summary = aggregate_single(&fs, &AggregateOptions::default(), 7);
     let recovered = fs.iter().filter(|f| f.restarted).count();
-    let looked_wrong = recovered + fs.iter().filter(|f| f.status == "suspect").count();
+    let looked_wrong = recovered + fs.iter().filter(|f| f.status == FitStatus::Suspect).count();
     for f in &fs {
         eprintln!(
             "{} ({}): v0 {:.5} (truth {:.5}) mu {:.4} (truth {}) T {:.4} status {} restarted {} {:?}",
@@ -506,14 +507,14 @@ fn check_pixel_locked(name: &str) -> (usize, usize) {
             .left_out
             .iter()
             .find(|l| l.run == f.run);
-        if f.status == "converged" {
+        if f.status == FitStatus::Converged {
             assert!(
                 fit_is_right(f, v0[&f.run], mu[&f.material]),
                 "a wrong fit is averaged in: {f:?}"
             );
             assert!(left.is_none(), "{}", f.run);
         } else {
-            assert_eq!(f.status, "suspect", "{f:?}");
+            assert_eq!(f.status, FitStatus::Suspect, "{f:?}");
             assert!(!f.suspect.is_empty(), "{f:?}");
             assert_eq!(left.map(|l| l.why.clone()), Some(f.suspect.join("; ")));
         }
@@ -623,9 +624,9 @@ fn null_run(
 /// residual structure above the threshold (a false suspect).
 #[test]
 fn the_structure_threshold_flags_under_one_percent_of_clean_runs() {
-    use groove::fit::lm::Workspace;
     use groove::fit::quality::{structure_ratio, STRUCTURE_FACTOR};
     use groove::fit::single::fit_track;
+    use groove::fit::track_problem::Workspace;
     use rand::SeedableRng;
     let opts = FitOptions::default();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
@@ -690,9 +691,9 @@ fn the_structure_threshold_flags_under_one_percent_of_clean_runs() {
 /// restart that is kept is wrong.
 #[test]
 fn restarts_recover_pixel_locked_runs_whose_first_fit_is_suspect() {
-    use groove::fit::lm::Workspace;
-    use groove::fit::loss::Loss;
     use groove::fit::single::{fit_track_using, Restarts};
+    use groove::fit::track_problem::Workspace;
+    use groove::lsq::loss::Loss;
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     let mut ws = Workspace::default();
@@ -712,14 +713,14 @@ fn restarts_recover_pixel_locked_runs_whose_first_fit_is_suspect() {
                 ..FitOptions::default()
             };
             let f = fit_track_using(&t, &z, 1e4, &opts, &mut ws, restarts);
-            if f.restarted || f.status == "suspect" {
+            if f.restarted || f.status == FitStatus::Suspect {
                 c.0 += 1;
             }
             if f.restarted {
                 c.1 += 1;
                 assert!(fit_is_right(&f, v0, mu), "a kept restart is wrong: {f:?}");
             }
-            if f.status == "converged" && !fit_is_right(&f, v0, mu) {
+            if f.status == FitStatus::Converged && !fit_is_right(&f, v0, mu) {
                 c.2 += 1;
                 eprintln!(
                     "passes wrong ({loss:?}, {restarts:?}): v0 {v0:.4} μ {mu:.3} → v0 {:.4} μ {:.3} ± {:.3}",
@@ -775,7 +776,7 @@ fn planted(run: &str, v0: f64, t: f64) -> SingleFit {
         n_outliers: 0,
         iterations: 10,
         termination: groove::fit::Termination::SmallStep,
-        status: "converged".into(),
+        status: FitStatus::Converged,
         suspect: Vec::new(),
         restarted: false,
     }
@@ -821,7 +822,7 @@ fn one_wild_run_moves_the_t_vs_v0_line_by_less_than_its_share_and_a_suspect_one_
     assert!(iv.contains(1.1) && iv.hi - iv.lo < 0.5, "{iv:?}");
     // The same run flagged suspect is left out: the line is the calm one, to the bit.
     let last = wild.last_mut().unwrap();
-    last.status = "suspect".into();
+    last.status = FitStatus::Suspect;
     last.suspect = vec!["μ = 1.0000e-4 is at its bound".into()];
     assert_eq!(slope(&wild), calm);
     fs.push(wild.pop().unwrap());
@@ -836,8 +837,8 @@ fn one_wild_run_moves_the_t_vs_v0_line_by_less_than_its_share_and_a_suspect_one_
 /// runs of the null whose first fit (without restarts) is suspect, and `n_good` runs whose first
 /// fit is clean.
 fn locked_dataset(n_wrong: usize, n_good: usize) -> Files {
-    use groove::fit::lm::Workspace;
     use groove::fit::single::{fit_track_using, Restarts};
+    use groove::fit::track_problem::Workspace;
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(33);
     let mut ws = Workspace::default();
@@ -850,12 +851,12 @@ fn locked_dataset(n_wrong: usize, n_good: usize) -> Files {
         }
         let (_, _, t, z) = null_run(k, "pixel-locked", &mut rng);
         let first = fit_track_using(&t, &z, FPS, &FitOptions::default(), &mut ws, Restarts::None);
-        let keep = match first.status.as_str() {
-            "suspect" if wrong < n_wrong => {
+        let keep = match first.status {
+            FitStatus::Suspect if wrong < n_wrong => {
                 wrong += 1;
                 true
             }
-            "converged" if good < n_good => {
+            FitStatus::Converged if good < n_good => {
                 good += 1;
                 true
             }
@@ -882,7 +883,7 @@ fn the_report_says_how_many_suspect_first_fits_the_restarts_recovered() {
     let recs = ingest_ok(&files, &IngestParams::default()).recordings;
     let fs = fits(&recs);
     let recovered = fs.iter().filter(|f| f.restarted).count();
-    let still = fs.iter().filter(|f| f.status == "suspect").count();
+    let still = fs.iter().filter(|f| f.status == FitStatus::Suspect).count();
     eprintln!("{recovered} recovered, {still} still suspect");
     // every one of the six wrong first fits is either recovered or still suspect
     assert_eq!(recovered + still, 6);

@@ -57,7 +57,7 @@ pub struct Kin {
     pub va_mps: Estimate,
 }
 
-/// Stick or slip at the contact, judged from the measured spins (physics.md): stick leaves the
+/// Stick or slip at the contact, judged from the measured spins (see `physics`): stick leaves the
 /// surfaces moving together (v_a1' + v_a2' = 0); slip changes both spins by the same amount.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -2,9 +2,63 @@
 //! tagged by `experiment`.
 
 pub use super::collision_fit::CollisionFit;
-pub use crate::fit::status::Termination;
+pub use crate::lsq::Termination;
 use crate::physics::Groove;
 use serde::{Deserialize, Serialize};
+
+/// How a single-run fit ended, written as fits.csv's `status` word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitStatus {
+    /// At a minimum, and every check of its quality passed.
+    Converged,
+    /// At a minimum, but a check failed (the reasons are in `SingleFit::suspect`).
+    Suspect,
+    /// The iteration budget ran out first.
+    MaxIterations,
+    /// Any other stop: too few frames, non-finite values, a singular system.
+    Failed,
+}
+
+impl FitStatus {
+    /// The status of a fit that stopped for `why`, suspect when a converged fit failed a check.
+    pub fn of(why: Termination, suspect: bool) -> FitStatus {
+        match (why.is_converged(), suspect, why) {
+            (true, true, _) => FitStatus::Suspect,
+            (true, false, _) => FitStatus::Converged,
+            (false, _, Termination::MaxIterations) => FitStatus::MaxIterations,
+            (false, _, _) => FitStatus::Failed,
+        }
+    }
+
+    /// The word fits.csv and the report print.
+    pub fn word(self) -> &'static str {
+        match self {
+            FitStatus::Converged => "converged",
+            FitStatus::Suspect => "suspect",
+            FitStatus::MaxIterations => "max_iterations",
+            FitStatus::Failed => "failed",
+        }
+    }
+
+    /// The status a fits.csv word names.
+    pub fn from_word(word: &str) -> Option<FitStatus> {
+        [
+            FitStatus::Converged,
+            FitStatus::Suspect,
+            FitStatus::MaxIterations,
+            FitStatus::Failed,
+        ]
+        .into_iter()
+        .find(|s| s.word() == word)
+    }
+}
+
+impl std::fmt::Display for FitStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.word())
+    }
+}
 
 /// The fit of one run: the JSON item the `fit` stage emits per run.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -51,9 +105,9 @@ pub struct SingleFit {
     pub n_outliers: usize,
     pub iterations: u32,
     pub termination: Termination,
-    /// `converged`, `suspect` (converged, but see `suspect`), `max_iterations` or `failed` (the
-    /// status column of fits.csv). Only `converged` fits enter the aggregates.
-    pub status: String,
+    /// How the fit ended (the status column of fits.csv). Only `converged` fits enter the
+    /// aggregates.
+    pub status: FitStatus,
     /// Why a converged fit is suspect (a parameter at a bound, the switch to rolling outside the
     /// recording, v0 far from the first frames' speed, structured residuals); empty if it is not.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

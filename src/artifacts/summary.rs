@@ -1,15 +1,12 @@
 //! The types of summary.json (the output contract of the fits): per-material estimates with
 //! bootstrap intervals (each an `Estimate` written as `{value, interval}`), the T-vs-v0 line, and the collision aggregates when there are collision runs.
 
+pub use super::collision_summary::{
+    CollisionSummary, LawCandidate, LawChoice, MaterialWholeRun, MuPp, MuPpProfile, ProfilePoint,
+    ProfileVerdict, RestitutionCurve, RestitutionPoint, SpinPoint, WholeRun, WholeRunSummary,
+    STOP_DEVIANCE,
+};
 pub use super::estimate::{Estimate, Interval};
-pub use crate::fit::collision::profile::{
-    MuPpProfile, ProfilePoint, ProfileVerdict, STOP_DEVIANCE,
-};
-pub use crate::fit::collision::restitution_law::{LawCandidate, LawChoice};
-pub use crate::fit::collision::summary::{
-    CollisionSummary, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
-};
-pub use crate::fit::collision::whole_summary::{MaterialWholeRun, WholeRun, WholeRunSummary};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 

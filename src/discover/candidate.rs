@@ -5,6 +5,7 @@
 //! the diagnosis uses) or a drift probe: a phenomenological term that only locates a mismatch.
 
 use super::data::RunData;
+pub use super::data::N_LOCAL;
 use super::sim::{Drag, SimModel};
 use super::G_MPS2;
 use crate::physics::{SplineForce, Term, Variable};
@@ -216,9 +217,6 @@ pub struct Spec {
     pub extras: Vec<Extra>,
 }
 
-/// Number of per-run parameters: z0 (m), t0 (s, kick before the first frame), v0 (m/s).
-pub const N_LOCAL: usize = 3;
-
 impl Spec {
     pub fn with(&self, extra: Extra) -> Spec {
         let mut s = self.clone();
@@ -390,4 +388,10 @@ impl Spec {
         };
         m
     }
+}
+/// Predicted positions of `run` at its sample times.
+pub fn predict(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData, out: &mut [f64]) {
+    let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
+    let model = spec.run_model(g, l, run);
+    model.simulate(l[0], l[2], &tt, out, None, None);
 }

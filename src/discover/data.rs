@@ -2,6 +2,9 @@
 
 use crate::recording::{Experiment, Recording, T_MAX_S, Z_MAX_M};
 
+/// Number of per-run parameters: z0 (m), t0 (s, kick before the first frame), v0 (m/s).
+pub const N_LOCAL: usize = 3;
+
 /// One single-particle run prepared for joint fitting.
 #[derive(Clone, Debug)]
 pub struct RunData {

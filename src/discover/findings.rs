@@ -3,14 +3,14 @@
 
 use super::candidate::Spec;
 use super::data::RunData;
-use super::diagnosis::{CandidateRow, Drift, DriftPoint, Estimate, Finding, ModelScore};
 use super::drift::line;
 use super::estimates::{bound_notes, reported_parameters};
 use super::forward::finding;
 use super::model::Model;
 use super::perrun::{fit_each_run, PerRunFit};
 use super::residual_structure::Structure;
-use super::run::{Accepted, Ctx, Selection};
+use super::selection::{Accepted, Ctx, Selection};
+use crate::artifacts::diagnosis::{CandidateRow, Drift, DriftPoint, Estimate, Finding, ModelScore};
 use crate::artifacts::estimate::stderr;
 use serde_json::json;
 use std::collections::BTreeMap;

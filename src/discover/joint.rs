@@ -6,7 +6,7 @@
 //! on, so a step costs one simulation per run per (local or affecting global) parameter; z0 is an
 //! additive offset unless a force depends on position, and then its column is known exactly.
 
-use super::candidate::{ParamInfo, Spec, N_LOCAL};
+use super::candidate::{predict, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
 use crate::lsq::block::{minimize_blocks, BlockProblem};
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
@@ -31,13 +31,6 @@ pub struct FitControl {
     pub max_iter: usize,
     /// False: the globals stay fixed (held-out runs in cross-validation).
     pub free_global: bool,
-}
-
-/// Predicted positions of `run` at its sample times.
-pub fn predict(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData, out: &mut [f64]) {
-    let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
-    let model = spec.run_model(g, l, run);
-    model.simulate(l[0], l[2], &tt, out, None, None);
 }
 
 /// χ² of one run.

@@ -3,9 +3,9 @@
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
 use super::cv::CvResult;
 use super::data::RunData;
-use super::diagnosis::ModelScore;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::proposal::{needs_proposal, starts as proposal_starts, Proposals};
+use crate::artifacts::diagnosis::ModelScore;
 use rayon::prelude::*;
 
 /// A fitted joint model.

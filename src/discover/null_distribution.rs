@@ -5,14 +5,27 @@
 //! multiple-testing correction. The law is therefore a scaled gamma (the χ² family stretched by
 //! the dependence of frames within a run), whose tail gives the p-value used for decisions; the
 //! empirical one is reported beside it. A named term's statistic is a quadratic form in the
-//! Gaussian noise, so its law's moments are computed from its columns (`screen::ExactNull`);
+//! Gaussian noise, so its law's moments are computed from its columns (`ExactNull`);
 //! moments matched to 60 replicates instead had their scale off by ±18 % (one parameter), and with
 //! the pipeline's one seed the same draws served every dataset: on 40 null datasets a direction
 //! difference of μ and T was flagged on 3 (p Holm 0.001–0.006), and on none with its computed law.
 
-use super::screen::ExactNull;
 use crate::stats::dist::gamma_q;
 use serde::Serialize;
+
+/// The first two moments of a named term's statistic c'A⁻¹c under the replicates' noise model
+/// (each run's AR(1) over its kept samples), with c = X̃'y and X̃ the term's columns with the
+/// shared parameters profiled out: c ~ N(0, C), C = Σ_runs X̃'ΣX̃, so the statistic is a sum of
+/// χ²₁ draws weighted by the eigenvalues of A⁻¹C (exactly λχ²₁ for one column; one weight per
+/// column, all 1, for white noise). `one_sided`: a parameter starting at its bound, whose
+/// statistic is 0 when the fit would push it out of range (half the time under the null).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExactNull {
+    /// tr(A⁻¹C) and 2 tr((A⁻¹C)²): the moments of the two-sided statistic.
+    pub mean: f64,
+    pub var: f64,
+    pub one_sided: bool,
+}
 
 /// The null distribution of one statistic.
 #[derive(Clone, Debug, Serialize)]

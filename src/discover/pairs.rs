@@ -14,10 +14,12 @@
 //! correlates the residuals within a run) points at the impact model itself (restitution law,
 //! spin transfer; `pairs_impact.rs`).
 
-use super::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use super::holm::holm;
-use super::pairs_impact::{impact_decision, impact_p_value, split_by_impact, IMPACT_WINDOW_S};
+use super::pairs_impact::{
+    impact_decision, impact_p_value, split_by_impact, ALPHA, IMPACT_WINDOW_S,
+};
 use crate::artifacts::diagnosis::{Effect, CONTACT_NOT_PHYSICS as NOT_PHYSICS};
+use crate::artifacts::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use crate::fit::collision::wholerun::{
     fit_group, fit_group_with, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, MU_PP,
     TP,
@@ -28,8 +30,6 @@ use crate::recording::{Experiment, Recording};
 use crate::stats::dist::chi2_sf;
 use std::collections::BTreeMap;
 
-/// Significance of both tests.
-pub const ALPHA: f64 = 0.01;
 /// A difference of physics between the pairs and the single runs must also be this large to
 /// count: μ_pg by this fraction of the single runs' value, or the drag time T0 + T'|v| by
 /// `MIN_DRAG` somewhere in the single runs' speed range `DRAG_SPEEDS`. On nulls recorded at
@@ -745,7 +745,10 @@ pub fn check_pairs(
 
 /// The discover stage's hook: test the collision runs against the diagnosis' final model and
 /// append the findings (each with `where.experiment = "collision"`); notes go to `note`.
-pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings: &[Recording]) {
+pub fn add_pair_findings(
+    diagnosis: &mut crate::artifacts::diagnosis::Diagnosis,
+    recordings: &[Recording],
+) {
     if !recordings
         .iter()
         .any(|r| r.info.experiment == Experiment::Collision)
@@ -824,7 +827,7 @@ pub fn add_pair_findings(diagnosis: &mut super::diagnosis::Diagnosis, recordings
 #[cfg(test)]
 mod tests {
     use super::single_run_physics;
-    use crate::discover::diagnosis::{Estimate, Evidence, Finding, ModelScore};
+    use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
     use crate::discover::pairs_impact::impact_decision;
     use crate::physics::{Groove, Term};
     use std::collections::BTreeMap;

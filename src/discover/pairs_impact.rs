@@ -2,9 +2,11 @@
 //! time since the last impact, a misfit concentrated in the milliseconds after impacts (isolated
 //! tracking outliers left out; Student's t over the runs' log ratios) and its decision in words.
 
-use super::pairs::ALPHA;
 use crate::fit::collision::wholerun::{simulate_run, GroupFit, PairRun};
 use crate::stats::dist::t_sf;
+
+/// Significance of both tests of the pairs (this one and the physics test of `pairs`).
+pub const ALPHA: f64 = 0.01;
 
 /// Window after an impact that counts as "at the impact" (s).
 pub const IMPACT_WINDOW_S: f64 = 5e-3;

@@ -1,9 +1,10 @@
 //! Per-run fits: each run alone with its own μ and T (extra terms held at given values), which
 //! measure the run's noise, flag its tracking outliers and give the drift of fitted T and μ.
 
+use super::candidate::predict;
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::joint::{fit_joint, predict, FitControl};
+use super::joint::{fit_joint, FitControl};
 use rayon::prelude::*;
 
 /// One run's own fit.

@@ -326,7 +326,7 @@ pub fn prepare(
                     }
                     g[j] += h;
                     let mut z = vec![0.0; run.t_s.len()];
-                    super::joint::predict(spec, &g, l, run, &mut z);
+                    super::candidate::predict(spec, &g, l, run, &mut z);
                     let mut c: Vec<f64> = (0..run.t_s.len())
                         .filter(|k| run.keep[*k])
                         .map(|k| (z[k] - pred[k]) / h * track.w)

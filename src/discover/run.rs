@@ -3,17 +3,16 @@
 use super::candidate::{Extra, Spec, N_LOCAL};
 use super::cv::{cross_validate, CvResult};
 use super::data::{prepare_runs, RunData};
-use super::diagnosis::{CandidateRow, Diagnosis, ForceMaps, ModelScore, Settings};
 use super::findings::{drift_of, findings_of, model_parameters};
 use super::forcemap::ForceMap;
 use super::forward::{fold_of, median_speed, run_round, LazyProposals, Round, Setting};
 use super::locate::locate;
 use super::model::Model;
-use super::null_distribution::NullFit;
 use super::perrun::{measure_noise, PerRunFit};
 use super::proposal::{propose, wanted_for, Proposals, Ranges, Wanted};
-use super::spectral::Spectrum;
+use super::selection::{Accepted, Ctx, Selection};
 use super::Options;
+use crate::artifacts::diagnosis::{Diagnosis, ForceMaps, ModelScore, Settings};
 use crate::physics::Variable;
 use crate::recording::Recording;
 use std::collections::BTreeMap;
@@ -76,16 +75,6 @@ fn settings(opts: &Options) -> Settings {
     }
 }
 
-/// An accepted term with what the report shows about it.
-pub(super) struct Accepted {
-    pub(super) row: CandidateRow,
-    pub(super) before: ModelScore,
-    pub(super) after: ModelScore,
-    pub(super) probes_after: Vec<CandidateRow>,
-    pub(super) null: NullFit,
-    pub(super) extra: Extra,
-}
-
 /// The baseline joint model with its starting values from the per-run fits.
 fn fit_baseline(
     runs: &mut [RunData],
@@ -135,18 +124,6 @@ fn fit_baseline(
         }
     };
     (baseline, per_run)
-}
-
-/// The data and settings every step of a discovery reads.
-pub(super) struct Ctx<'a> {
-    pub(super) runs: &'a [RunData],
-    pub(super) materials: &'a [String],
-    pub(super) fold: &'a [usize],
-    pub(super) rg: &'a Ranges,
-    pub(super) opts: &'a Options,
-    pub(super) t0: std::time::Instant,
-    /// Where the step under way is said (the stage's progress line).
-    pub(super) say: &'a (dyn Fn(&str) + Sync),
 }
 
 impl Ctx<'_> {
@@ -210,24 +187,6 @@ impl Ctx<'_> {
             self.opts.folds,
         )
     }
-}
-
-/// The state of the term selection: the current model and what the diagnosis reports of it.
-pub(super) struct Selection {
-    pub(super) current: Model,
-    pub(super) current_cv: CvResult,
-    pub(super) accepted: Vec<Accepted>,
-    pub(super) removed: Vec<Accepted>,
-    /// Every candidate and probe row of every round.
-    pub(super) table: Vec<CandidateRow>,
-    /// The candidates of the last round (none accepted) and its probes.
-    pub(super) last_rows: Vec<CandidateRow>,
-    pub(super) last_probes: Vec<CandidateRow>,
-    /// Probes still flagging a mismatch when no candidate passed.
-    pub(super) unexplained: Vec<CandidateRow>,
-    pub(super) maps_before: Vec<ForceMap>,
-    pub(super) spectra: Vec<Spectrum>,
-    pub(super) round: usize,
 }
 
 impl Selection {
@@ -585,6 +544,8 @@ pub fn discover_reporting(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::artifacts::diagnosis::CandidateRow;
+    use crate::discover::null_distribution::NullFit;
     use std::collections::BTreeMap;
     use std::sync::Mutex;
 

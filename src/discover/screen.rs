@@ -17,11 +17,10 @@
 //! `FIRST_BATCH`, and the rest only when those leave its decision open (`clearly_null`). The
 //! named terms cost a few dot products and always take every replicate.
 
-use super::candidate::{Extra, N_LOCAL};
+use super::candidate::{predict, Extra, N_LOCAL};
 use super::data::RunData;
-use super::joint::predict;
 use super::model::Model;
-use super::null_distribution::NullFit;
+use super::null_distribution::{ExactNull, NullFit};
 use super::proposal::{bump_column, bump_trials, Ranges};
 use super::response::Prepared;
 use super::screen_sums::{best_of, coherent, coherent_sums, dot, dot2, one_sided, Trial, Vectors};
@@ -91,20 +90,6 @@ pub struct Screened {
     /// term with one secant (`secant`), whose statistic is a quadratic form in the Gaussian
     /// noise; None for a searched form or a maximum over trial scales.
     pub exact: Option<ExactNull>,
-}
-
-/// The first two moments of a named term's statistic c'A⁻¹c under the replicates' noise model
-/// (each run's AR(1) over its kept samples), with c = X̃'y and X̃ the term's columns with the
-/// shared parameters profiled out: c ~ N(0, C), C = Σ_runs X̃'ΣX̃, so the statistic is a sum of
-/// χ²₁ draws weighted by the eigenvalues of A⁻¹C (exactly λχ²₁ for one column; one weight per
-/// column, all 1, for white noise). `one_sided`: a parameter starting at its bound, whose
-/// statistic is 0 when the fit would push it out of range (half the time under the null).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExactNull {
-    /// tr(A⁻¹C) and 2 tr((A⁻¹C)²): the moments of the two-sided statistic.
-    pub mean: f64,
-    pub var: f64,
-    pub one_sided: bool,
 }
 
 /// The information about a searched form's size at its most sensitive trial (the grid's trial

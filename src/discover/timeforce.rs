@@ -13,11 +13,9 @@
 //! chosen on the raw residual is the one that cancels it, not the one of the oscillation, and the
 //! amplitude fitted with such phases comes out near 2/π of the truth.
 
-use super::candidate::{Spec, N_LOCAL};
-use super::data::RunData;
+use super::data::{RunData, N_LOCAL};
 use super::sim::SimModel;
 use crate::physics::Term;
-use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 fn simulate(m: &SimModel, l: &[f64; N_LOCAL], tt: &[f64]) -> Vec<f64> {
@@ -81,7 +79,7 @@ pub fn best_phase(k: &[f64; 5]) -> f64 {
 }
 
 /// The index, amplitude and frequency of the time-periodic force of `m`, if it has one.
-fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
+pub(super) fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
     let idx = m
         .terms
         .iter()
@@ -98,7 +96,7 @@ fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
 /// The sums (ss, sc, cc, es, ec) of `run` for the time-periodic force `idx` of `m`: e the
 /// residual without the force, s and c the responses to the force at its amplitude with phase
 /// 0 and π/2, all with the run's z0, t0 and v0 projected out (metres², not noise units).
-fn run_sums(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunData) -> [f64; 5] {
+pub(super) fn run_sums(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunData) -> [f64; 5] {
     let Term::TimePeriodicForce {
         amp_mps2, freq_hz, ..
     } = m.terms[idx]
@@ -170,7 +168,7 @@ const PHASE_POINTS: usize = 256;
 
 /// ln of the mean over the phase circle of the run's likelihood ratio, at `scale` times the
 /// amplitude its sums `k` were taken at (`var` the noise variance, m²).
-fn log_marginal(k: &[f64; 5], scale: f64, var: f64) -> f64 {
+pub(super) fn log_marginal(k: &[f64; 5], scale: f64, var: f64) -> f64 {
     let terms: Vec<f64> = (0..PHASE_POINTS)
         .map(|j| {
             let (sn, cs) = (TAU * j as f64 / PHASE_POINTS as f64).sin_cos();
@@ -181,47 +179,6 @@ fn log_marginal(k: &[f64; 5], scale: f64, var: f64) -> f64 {
         .collect();
     let top = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     top + (terms.iter().map(|t| (t - top).exp()).sum::<f64>() / PHASE_POINTS as f64).ln()
-}
-
-/// The amplitude of a force periodic in time with each run's phase integrated out (uniform over
-/// the circle) instead of fitted: the maximum of the marginal likelihood, at the joint fit's
-/// frequency and locals. `None` without such a term.
-///
-/// The joint fit profiles a phase per run, and a phase chosen per run also fits that run's noise:
-/// with n runs and the effect's total χ² X, the profiled amplitude comes out high by about
-/// n/(2X) (the Rice bias: E|y| = √(A² + 2σ²) for a two-component projection; 6.5 % for 60 runs
-/// at X = 460), and the excess does not fall with more runs, since every run brings its own
-/// phase (Neyman and Scott's incidental parameters). Integrating the phases out leaves one
-/// parameter for all runs, and its maximum-likelihood estimate is consistent.
-pub fn amplitude_over_phases(
-    spec: &Spec,
-    global: &[f64],
-    local: &[[f64; N_LOCAL]],
-    runs: &[RunData],
-) -> Option<f64> {
-    let sums: Vec<([f64; 5], f64)> = runs
-        .par_iter()
-        .zip(local)
-        .filter_map(|(run, l)| {
-            let m = spec.sim_model(global, run.material, l[2]);
-            let (idx, amp, _) = time_term(&m)?;
-            (amp != 0.0).then(|| (run_sums(&m, idx, l, run), run.sigma_m * run.sigma_m))
-        })
-        .collect();
-    let amp = {
-        let m = spec.sim_model(global, runs.first()?.material, local.first()?[2]);
-        time_term(&m)?.1
-    };
-    if sums.is_empty() || amp == 0.0 {
-        return None;
-    }
-    let total = |scale: f64| -> f64 {
-        sums.iter()
-            .map(|(k, var)| log_marginal(k, scale, *var))
-            .sum()
-    };
-    // the scale in [0, 2] that maximises it (the profiled amplitude is scale 1, and above)
-    Some(crate::lsq::golden::minimize(|x| -total(x), 0.0, 2.0, 50) * amp)
 }
 
 #[cfg(test)]

@@ -7,7 +7,10 @@
 use super::bootstrap::percentile_intervals_in_groups;
 use super::regression::{kept_table, mean_kept, mean_where, RobustMean};
 use super::single::SingleFit;
-use super::summary::{DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary};
+use crate::artifacts::run_fit::FitStatus;
+use crate::artifacts::summary::{
+    DragLine, Estimate, FrictionLine, LeftOut, MaterialSummary, SingleSummary,
+};
 use crate::stats::{theil_sen_intercept, theil_sen_many, InterceptOrder, SlopeOrder, SLOPE_LANES};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -151,7 +154,10 @@ const RESAMPLE_PAIRS: usize = 50_000;
 const RESAMPLE_PAIRS_PER_RUN: usize = 20;
 
 fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> MaterialSummary {
-    let ok: Vec<&&SingleFit> = fits.iter().filter(|f| f.status == "converged").collect();
+    let ok: Vec<&&SingleFit> = fits
+        .iter()
+        .filter(|f| f.status == FitStatus::Converged)
+        .collect();
     let speed: Vec<f64> = ok.iter().map(|f| f.v0_mps.abs()).collect();
     let mu: Vec<f64> = ok.iter().map(|f| f.mu).collect();
     let mu_se: Vec<f64> = ok.iter().map(|f| f.mu_se.unwrap_or(f64::NAN)).collect();
@@ -255,10 +261,10 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
         speed_range_mps,
         left_out: fits
             .iter()
-            .filter(|f| f.status != "converged")
+            .filter(|f| f.status != FitStatus::Converged)
             .map(|f| LeftOut {
                 run: f.run.clone(),
-                status: f.status.clone(),
+                status: f.status.to_string(),
                 why: match f.suspect.is_empty() {
                     true => format!("the fit ended with {:?}", f.termination),
                     false => f.suspect.join("; "),
@@ -274,7 +280,10 @@ fn material_summary(fits: &[&SingleFit], opts: &AggregateOptions, seed: u64) -> 
 /// many stay suspect and are left out. `None` when every first fit passed its checks.
 pub fn restart_note(fits: &[SingleFit]) -> Option<String> {
     let recovered = fits.iter().filter(|f| f.restarted).count();
-    let still = fits.iter().filter(|f| f.status == "suspect").count();
+    let still = fits
+        .iter()
+        .filter(|f| f.status == FitStatus::Suspect)
+        .count();
     let n = recovered + still;
     (n > 0).then(|| {
         format!(

@@ -100,7 +100,7 @@ mod tests {
             n_outliers: 0,
             iterations: 9,
             termination: crate::fit::Termination::SmallStep,
-            status: "converged".into(),
+            status: crate::artifacts::run_fit::FitStatus::Converged,
             suspect: Vec::new(),
             restarted: false,
         };

@@ -1,7 +1,7 @@
 //! Options of every fit (the `params` of the `fit` stage): groove geometry, loss, outlier cut.
 
 use super::collision::CollisionOptions;
-use super::loss::Loss;
+use crate::lsq::loss::Loss;
 use crate::physics::Groove;
 use serde::{Deserialize, Serialize};
 

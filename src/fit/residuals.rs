@@ -5,6 +5,7 @@
 use super::collision::CollisionFit;
 use super::single::SingleFit;
 use super::RunFit;
+use crate::artifacts::run_fit::FitStatus;
 use crate::physics::{self, Baseline, Groove};
 use crate::recording::Recording;
 
@@ -116,7 +117,7 @@ fn single_residuals(rec: &Recording, f: &SingleFit) -> RunResiduals {
     let Some(track) = rec.track(0) else {
         return RunResiduals::empty(rec, "skipped: the run has no track of particle 0".into());
     };
-    if f.status == "failed" {
+    if f.status == FitStatus::Failed {
         return RunResiduals::empty(
             rec,
             format!("skipped: the fit failed ({:?})", f.termination),

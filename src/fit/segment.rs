@@ -1,12 +1,12 @@
 //! Fit one time range of a track with z(t) = z0 + Δz(t − t_ref; v0, va0, μ, T), any subset of the
 //! parameters free. The single-run fit and the collision phases both build on it.
 
-use super::lm::{Bounds, Settings, Workspace};
 use super::model::{Prepared, MU, NP, T0, TD, V0, VA0, Z0};
 use super::options::FitOptions;
-use super::robust::{fit_robust, RobustFit, RobustOptions};
-use super::status::Termination;
 use super::track_problem::TrackProblem;
+use super::track_problem::{Bounds, RobustFit, RobustOptions, Settings, Workspace};
+use crate::lsq::robust::fit_robust;
+use crate::lsq::Termination;
 use serde::{Deserialize, Serialize};
 
 /// Which parameters a segment fit may change.
@@ -53,12 +53,12 @@ pub struct SegmentFit {
     pub t_drag_s: f64,
     pub se: SegmentSe,
     /// Time from `t_ref_s` to the end of sliding (0 if the segment starts rolling).
-    #[serde(with = "super::nan_null")]
+    #[serde(with = "crate::artifacts::nan_null")]
     pub t1_s: f64,
     /// RMS of the residuals of the frames used, and the robust scale (null if no fit was made).
-    #[serde(with = "super::nan_null")]
+    #[serde(with = "crate::artifacts::nan_null")]
     pub rms_m: f64,
-    #[serde(with = "super::nan_null")]
+    #[serde(with = "crate::artifacts::nan_null")]
     pub scale_m: f64,
     pub n_frames: usize,
     pub n_used: usize,

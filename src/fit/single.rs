@@ -1,18 +1,19 @@
 //! Fit of a single run: the closed-form baseline (μ, T) with nuisance offset z0, kick time t0
 //! (within the first frame) and initial velocity v0 (its sign is the direction), robustly.
 
-use super::lm::{Bounds, Workspace};
 use super::model::{Prepared, MU, NP, T0, TD, V0, Z0};
 use super::options::FitOptions;
 use super::quality::{early_speed, suspect_reasons};
-use super::robust::{fit_robust, RobustFit};
 use super::segment::{model_bounds, settings};
 use super::start::single_start;
-use super::status::Termination;
 use super::track_problem::TrackProblem;
+use super::track_problem::{Bounds, RobustFit, Workspace};
+use crate::lsq::robust::fit_robust;
+use crate::lsq::Termination;
 use crate::physics::Groove;
 use crate::recording::Recording;
 
+use crate::artifacts::run_fit::FitStatus;
 pub use crate::artifacts::run_fit::SingleFit;
 
 /// Fit particle 0 of a single run.
@@ -41,7 +42,7 @@ pub enum Restarts {
     /// Free fits from a grid of starts: v0 from the first frames' speed (a local quadratic) and
     /// from the data's start, μ at 0.1, 0.3 and 0.6, T at the data's start and ten times it.
     /// (Holding v0 at the first frames' speed while the rest settles, then releasing it, recovered
-    /// no more runs on the pixel-locked null, nor did a linear or soft-L1 loss; see the README.)
+    /// no more runs on the pixel-locked null, nor did a linear or soft-L1 loss; see the docs of `fit`.)
     Grid,
 }
 
@@ -116,10 +117,7 @@ pub fn fit_track_using(
     }
     let x = r.x;
     let t1_s = Prepared::new(&x, groove).map_or(f64::NAN, |m| m.t1_s);
-    let status = match (r.termination.is_converged(), why.is_empty()) {
-        (true, false) => "suspect".to_string(),
-        _ => r.termination.status_word().to_string(),
-    };
+    let status = FitStatus::of(r.termination, !why.is_empty());
     SingleFit {
         run: String::new(),
         material: String::new(),
@@ -201,7 +199,7 @@ fn failed(n: usize, groove: Groove, why: Termination) -> SingleFit {
         n_outliers: 0,
         iterations: 0,
         termination: why,
-        status: why.status_word().to_string(),
+        status: FitStatus::of(why, false),
         suspect: Vec::new(),
         restarted: false,
     }

@@ -1,8 +1,19 @@
 //! The least-squares problem of one track: observed positions against the closed-form model.
 
-use super::lm::Problem;
 use super::model::{Prepared, NP};
+use crate::lsq::fixed::{self, Problem};
 use crate::physics::Groove;
+
+/// Box bounds of a track's fit; a parameter with `free[i] == false` stays at its start value.
+pub type Bounds = fixed::Bounds<NP>;
+/// Stopping rules of a track's fit.
+pub type Settings = fixed::Settings<NP>;
+/// Buffers reused across fits (the iterations allocate nothing).
+pub type Workspace = fixed::Workspace<NP>;
+/// How the robust fit of a track treats residuals.
+pub type RobustOptions = crate::lsq::robust::RobustOptions<NP>;
+/// The result of a track's robust fit.
+pub type RobustFit = crate::lsq::robust::RobustFit<NP>;
 
 /// Frames (t, z) of one track, the model's time origin and the groove.
 pub struct TrackProblem<'a> {

@@ -97,14 +97,8 @@ impl ReportData {
                 }
             }
         }
-        d.singles = match file(inputs, "fits_csv")? {
-            Some(b) => {
-                let mut rows = singles::parse_fits_csv(&String::from_utf8_lossy(b))?;
-                singles::add_nuisance(&mut rows, &single_json);
-                rows
-            }
-            None => single_json.into_values().collect(),
-        };
+        // the typed per-run items (by run id); fits.csv holds the same fits as text
+        d.singles = single_json.into_values().collect();
         d.collisions.sort_by(|a, b| a.run.cmp(&b.run));
         for (name, bytes) in items(inputs, "residuals")? {
             let r: RunResiduals = artifacts::from_json(&format!("residuals item `{name}`"), bytes)?;

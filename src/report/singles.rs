@@ -2,7 +2,7 @@
 
 use crate::artifacts::fits_table;
 use crate::artifacts::Estimate;
-use crate::artifacts::SingleFit;
+use crate::artifacts::{FitStatus, SingleFit};
 use std::collections::BTreeMap;
 
 /// One single run's baseline fit, as the report shows it.
@@ -15,21 +15,17 @@ pub struct SingleRow {
     pub t_drag_s: Estimate,
     pub t1_s: Option<f64>,
     pub rms_m: Option<f64>,
-    pub status: String,
+    pub status: FitStatus,
     /// Nuisance parameters (from the fit JSON only).
     pub z0_m: Option<f64>,
     pub t0_s: Option<f64>,
 }
 
 impl SingleRow {
-    /// A fit counts as usable unless its status says it failed or is suspect.
+    /// A fit counts as usable unless it failed or is suspect (one stopped at its iteration
+    /// limit is shown; the aggregates leave it out).
     pub fn converged(&self) -> bool {
-        let s = self.status.to_ascii_lowercase();
-        !(s.contains("fail")
-            || s.contains("diverge")
-            || s.contains("error")
-            || s.contains("nan")
-            || s.contains("suspect"))
+        !matches!(self.status, FitStatus::Failed | FitStatus::Suspect)
     }
 }
 
@@ -56,7 +52,7 @@ pub fn parse_fits_csv(csv: &str) -> Result<Vec<SingleRow>, String> {
                 },
                 t1_s: r.t1_s,
                 rms_m: r.rms_m,
-                status: r.status,
+                status: FitStatus::from_word(&r.status)?,
                 z0_m: None,
                 t0_s: None,
                 run: r.run,
@@ -90,7 +86,7 @@ pub fn from_fit(fit: &SingleFit) -> Option<SingleRow> {
         t_drag_s: est(fit.t_drag_s, fit.t_drag_se)?,
         t1_s: finite(fit.t1_s),
         rms_m: finite(fit.rms_m),
-        status: fit.status.clone(),
+        status: fit.status,
         z0_m: finite(fit.z0_m),
         t0_s: finite(fit.t0_s),
     })

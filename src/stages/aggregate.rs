@@ -1,11 +1,11 @@
 //! The `aggregate` stage kind: all run fits in, summary.json and fits.csv out; `runs` needs only the collision recordings (`fit:pair_runs`).
 
 use super::fit_io::{collection_input, json_pretty, param_error, parse_item, recording, run_info};
+use crate::artifacts::summary::{BootstrapInfo, MaterialSummary, Summary};
 use crate::engine::stage::{
     typed_params, Artifact, ObjectMemo, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::aggregate::{aggregate_single_memo, restart_note, AggregateOptions, SummaryMemo};
-use crate::fit::summary::{BootstrapInfo, MaterialSummary, Summary};
 use crate::fit::{collision, fits_csv, RunFit};
 use rayon::prelude::*;
 

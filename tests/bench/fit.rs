@@ -8,9 +8,10 @@
 #[path = "../support/single_runs.rs"]
 mod single_runs;
 
-use groove::fit::lm::Workspace;
+use groove::artifacts::FitStatus;
 use groove::fit::single::fit_track;
 use groove::fit::start::single_start;
+use groove::fit::track_problem::Workspace;
 use groove::fit::FitOptions;
 use rayon::prelude::*;
 use single_runs::{runs, Camera};
@@ -62,7 +63,7 @@ fn main() {
     let mut worst_v0 = 0.0f64;
     for r in &all {
         let f = fit_track(&r.t_s, &r.z_m, fps, &opts, &mut ws);
-        converged += (f.status == "converged") as usize;
+        converged += (f.status == FitStatus::Converged) as usize;
         iterations += f.iterations as u64;
         worst_v0 = worst_v0.max((f.v0_mps / r.truth.v0_mps - 1.0).abs());
     }
@@ -86,7 +87,7 @@ fn main() {
         let done: usize = all
             .par_iter()
             .map_init(Workspace::default, |ws, r| {
-                (fit_track(&r.t_s, &r.z_m, fps, &opts, ws).status == "converged") as usize
+                (fit_track(&r.t_s, &r.z_m, fps, &opts, ws).status == FitStatus::Converged) as usize
             })
             .sum();
         let secs = start.elapsed().as_secs_f64();

@@ -23,6 +23,9 @@ pub struct RawProject {
     pub seed: u64,
     pub data: Option<Spanned<String>>,
     pub reports: Option<Spanned<String>>,
+    /// Params every stage whose kind takes them inherits, unless it sets its own.
+    #[serde(default)]
+    pub params: BTreeMap<Spanned<String>, Spanned<toml::Value>>,
 }
 
 #[derive(Debug, Deserialize)]

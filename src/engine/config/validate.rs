@@ -32,6 +32,7 @@ pub fn validate(
         }
         None => (0, None, None),
     };
+    let shared = SharedParams::of(raw.project.as_ref().map(|p| &p.get_ref().params), file);
     let from_cli = |p: &Option<PathBuf>| -> Result<Option<PathBuf>, EngineError> {
         p.as_ref()
             .map(|p| std::path::absolute(p).at(p).map(|a| normalize(&a)))
@@ -77,6 +78,7 @@ pub fn validate(
             stage.into_inner(),
             file,
             catalog,
+            &shared,
             &mut lines,
         )?;
         pipeline.stages.insert(name, spec);
@@ -87,6 +89,7 @@ pub fn validate(
             "defines no stages (is the file empty?); add [stages.NAME] tables, see README.md",
         ));
     }
+    shared.check_taken(&pipeline, file)?;
     check_references(&pipeline, file, &lines)?;
     check_outputs(&pipeline, file)?;
     if let Err(cycle) = dag::order(&pipeline) {
@@ -116,6 +119,7 @@ fn validate_stage(
     raw: RawStage,
     file: &Source,
     catalog: &Catalog,
+    shared: &SharedParams,
     lines: &mut Lines,
 ) -> Result<StageSpec, EngineError> {
     let kind_line = file.line_of(raw.kind.span().start);
@@ -135,11 +139,15 @@ fn validate_stage(
         .keys()
         .map(|k| (k.get_ref().clone(), here(k)))
         .collect();
-    let params: toml::Table = raw
+    let mut params_lines = params_lines;
+    let mut params: toml::Table = raw
         .params
         .into_iter()
         .map(|(k, v)| (k.into_inner(), v.into_inner()))
         .collect();
+    if let Some(kind_impl) = builtin {
+        shared.inherit(kind_impl, &mut params, &mut params_lines);
+    }
     let cmd = raw.cmd.map(|c| (here(&c), c.into_inner()));
     let at = Place {
         file,
@@ -575,4 +583,66 @@ fn check_outputs(pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> 
         }
     }
     Ok(())
+}
+
+/// `[project] params`: params every stage whose kind takes them inherits unless it sets its own
+/// (a kind takes a param when its defaults name it), so a setting shared by several stages
+/// (`min_frames`) is written once.
+struct SharedParams {
+    params: Vec<(String, toml::Value, usize)>,
+}
+
+impl SharedParams {
+    fn of(raw: Option<&BTreeMap<Spanned<String>, Spanned<toml::Value>>>, file: &Source) -> Self {
+        let params = raw
+            .into_iter()
+            .flatten()
+            .map(|(k, v)| {
+                let line = file.line_of(k.span().start);
+                (k.get_ref().clone(), v.get_ref().clone(), line)
+            })
+            .collect();
+        SharedParams { params }
+    }
+
+    /// The names a kind's params take, from its defaults.
+    fn taken_by(kind: &dyn StageKind) -> Vec<String> {
+        match kind.canonical_params(&toml::Table::new()) {
+            Ok(serde_json::Value::Object(defaults)) => defaults.keys().cloned().collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Adds to `params` each shared param the kind takes and the stage does not set.
+    fn inherit(
+        &self,
+        kind: &dyn StageKind,
+        params: &mut toml::Table,
+        lines: &mut BTreeMap<String, usize>,
+    ) {
+        let taken = Self::taken_by(kind);
+        for (name, value, line) in &self.params {
+            if taken.contains(name) && !params.contains_key(name) {
+                params.insert(name.clone(), value.clone());
+                lines.insert(name.clone(), *line);
+            }
+        }
+    }
+
+    /// A shared param that no stage's kind takes is a spelling mistake, said at its line.
+    fn check_taken(&self, pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> {
+        for (name, _, line) in &self.params {
+            let used = pipeline
+                .stages
+                .values()
+                .any(|s| s.cmd.is_none() && s.canonical_params.get(name).is_some());
+            if !used {
+                return Err(file.error(
+                    *line,
+                    format!("[project] params: no stage's kind takes `{name}`; fix the spelling or remove it"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }

@@ -15,7 +15,7 @@ use super::model::{Layout, TrackData};
 use super::options::CollisionOptions;
 use super::plan::Plan;
 use super::report::{failed_fit, summarize_fit};
-use super::types::{CollisionFit, NO_IMPACT};
+use crate::artifacts::collision_fit::{CollisionFit, NO_IMPACT};
 use crate::lsq::dense_fit::{minimize, DenseFit as LmResult};
 use crate::lsq::lm::{Scale, Settings};
 use crate::lsq::Termination;

@@ -20,13 +20,12 @@
 //! - `start.rs`: Starting plans of the joint fit
 //! - `summary.rs`: `summarize`: the collision results of a dataset
 //! - `trajectory.rs`: The fitted model trajectory of a collision run
-//! - `types.rs`: The per-run result of a collision fit
 //! - `whole_summary.rs`: The whole-run collision analysis of a dataset
 //! - `wholerun.rs`: Whole-run pair fits
 //!
 //! Code map: `fit` (entry) → `detect` (noise, departure from rest, contacts in the gap) →
 //! `start` + `secondary` (starting plans, secondary impacts, where to stop) → `plan` + `model`
-//! (the joint piecewise model) → `crate::lsq::dense_fit` (robust solver) → `report` (the per-run record, `types`).
+//! (the joint piecewise model) → `crate::lsq::dense_fit` (robust solver) → `report` (the per-run record, `artifacts::collision_fit`).
 //! `summary` aggregates a dataset with `mu_pp` and `curves`. `motion` wraps the physics closed
 //! form, `impulse` is the impact model, `trajectory` evaluates a fitted run (figures, residuals).
 
@@ -46,12 +45,12 @@ mod secondary;
 mod start;
 pub mod summary;
 mod trajectory;
-pub mod types;
 pub mod whole_summary;
 pub mod wholerun;
 
+pub use crate::artifacts::collision_fit::CollisionFit;
+pub use crate::artifacts::collision_summary::CollisionSummary;
 pub use fit::fit_collision;
 pub use options::CollisionOptions;
-pub use summary::{summarize, summarize_seeded, CollisionSummary};
+pub use summary::{summarize, summarize_seeded};
 pub use trajectory::FittedState;
-pub use types::CollisionFit;

@@ -3,7 +3,7 @@
 //! track is fitted with it.
 //!
 //! Sliding while v ≠ s·v_a with d = sign(v0 − s·v_a0) (either sign; friction may accelerate),
-//! then constrained rolling decaying with Te = T(1 + ks²)/ks² (physics.md).
+//! then constrained rolling decaying with Te = T(1 + ks²)/ks² (see `physics`).
 
 pub use crate::physics::G_MPS2;
 use crate::physics::{Baseline, Groove, Phase};

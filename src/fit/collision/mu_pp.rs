@@ -3,7 +3,7 @@
 //! whole impulse model (stick and slip together).
 
 use super::impulse::spin_change;
-use super::types::{Contact, ImpactFit};
+use crate::artifacts::collision_fit::{Contact, ImpactFit};
 
 /// μ_pp = slope / k of y = −sign(S)·Δv_a2 against x = Δv_z2 through the origin, slip impacts.
 pub fn slip_slope(impacts: &[&ImpactFit], k: f64) -> Option<f64> {

@@ -3,7 +3,9 @@
 //! a minimum inside the grid, a one-sided bound when it is flat towards one end.
 
 use super::wholerun::{fit_group, residuals, FitSpec, GroupFit, PairRun, MU_PP};
-use serde::{Deserialize, Serialize};
+use crate::artifacts::collision_summary::{
+    MuPpProfile, ProfilePoint, ProfileVerdict, STOP_DEVIANCE,
+};
 
 /// Rise of the deviance that bounds a 95 % interval of one parameter (χ²₁ quantile).
 pub const DELTA_95: f64 = 3.841_458_820_694_124;
@@ -14,69 +16,6 @@ const HUBER_K: f64 = 3.0;
 
 /// Largest lag-1 autocorrelation used for the variance inflation (factor 39).
 const RHO_MAX: f64 = 0.95;
-
-/// The walk along the grid stops in a direction once a fit beyond the estimate lies this far
-/// (raw deviance above the best fit) above the minimum: even divided by the largest serial
-/// inflation (39) it is far above the 95 % level, and the fits further out, the slowest of
-/// the profile, would only draw the curve.
-pub const STOP_DEVIANCE: f64 = 1e4;
-
-/// One grid value.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ProfilePoint {
-    pub mu_pp: f64,
-    /// Deviance above the best fit divided by the profile's `inflation` (χ² units; 0 at the
-    /// minimum).
-    pub deviance: f64,
-    pub converged: bool,
-}
-
-/// What the profile says about μ_pp.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum ProfileVerdict {
-    /// A minimum inside the grid; the 95 % interval.
-    Interval { estimate: f64, lo: f64, hi: f64 },
-    /// Flat above `lo`: the recordings only say μ_pp > lo (95 %).
-    LowerBound { lo: f64 },
-    /// Flat below `hi`: μ_pp < hi (95 %).
-    UpperBound { hi: f64 },
-    /// Flat over the whole grid: the recordings do not constrain μ_pp.
-    Unconstrained,
-}
-
-/// The profile of one material.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct MuPpProfile {
-    pub points: Vec<ProfilePoint>,
-    /// Grid values not fitted: beyond a fit whose deviance passed `STOP_DEVIANCE` (raw), on the
-    /// same side of the estimate.
-    pub not_fitted: Vec<f64>,
-    pub verdict: ProfileVerdict,
-    /// The deviance rise used for the interval.
-    pub threshold: f64,
-    /// Run-level dispersion (≥ 1): how much more the runs disagree about μ_pp than their noise
-    /// says (a sandwich over runs at the estimate).
-    pub dispersion: f64,
-    /// Pooled lag-1 autocorrelation of the best fit's residuals (consecutive samples of each
-    /// track of each run, Huber-clipped, not centred).
-    pub lag1_autocorrelation: f64,
-    /// Pooled lag-1 autocorrelation of the residuals' contributions to the μ_pp score
-    /// (residual × its derivative in ln μ_pp): the serial correlation where μ_pp is measured.
-    pub score_lag1_autocorrelation: f64,
-    /// Variance inflation of an AR(1) score, (1 + ρ)/(1 − ρ) with ρ =
-    /// `score_lag1_autocorrelation` (1 when ρ ≤ 0): the deviance of correlated residuals
-    /// counts each sample as more than the independent information it carries.
-    pub serial_factor: f64,
-    /// Scale of the Huber deviance, mean ψ² / mean ψ′ of the best fit's whitened residuals
-    /// (ψ clipped at the Huber threshold, ψ′ = 1 inside it): 1 when each run's noise estimate
-    /// is right; the average rise of the deviance at the true μ_pp otherwise.
-    pub scale_factor: f64,
-    /// What the deviances were divided by: the larger of `dispersion` and `scale_factor` ×
-    /// `serial_factor` (both estimate how much the fit's noise model understates the variance of
-    /// the μ_pp score).
-    pub inflation: f64,
-}
 
 /// What the best fit's residuals say about the deviance's noise model.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -380,18 +319,6 @@ pub fn verdict(points: &[ProfilePoint], estimate: f64, delta: f64) -> ProfileVer
         (Some(lo), None) => ProfileVerdict::LowerBound { lo },
         (None, Some(hi)) => ProfileVerdict::UpperBound { hi },
         (None, None) => ProfileVerdict::Unconstrained,
-    }
-}
-
-impl ProfileVerdict {
-    /// Whether `mu` is inside what the profile allows.
-    pub fn contains(&self, mu: f64) -> bool {
-        match *self {
-            ProfileVerdict::Interval { lo, hi, .. } => lo <= mu && mu <= hi,
-            ProfileVerdict::LowerBound { lo } => mu >= lo,
-            ProfileVerdict::UpperBound { hi } => mu <= hi,
-            ProfileVerdict::Unconstrained => true,
-        }
     }
 }
 

@@ -3,7 +3,7 @@
 //! errors propagated from the fit's covariance.
 
 use super::model::{Layout, MU, T_DRAG};
-use super::types::{
+use crate::artifacts::collision_fit::{
     CollisionFit, Contact, Estimate, ImpactFit, Kin, PhaseKind, PhaseSpan, PreImpactSource,
     SegmentFit,
 };

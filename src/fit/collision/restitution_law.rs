@@ -5,53 +5,12 @@
 //! parameters are fitted). Intervals are ±1.96 standard errors of the all-runs fit.
 
 use super::wholerun::{
-    fit_group_with, fit_own_only, law_slots, law_start, FitSpec, GroupFit, LawForm, PairRun,
+    fit_group_with, fit_own_only, law_slots, law_start, FitSpec, GroupFit, PairRun,
 };
+use crate::artifacts::collision_summary::{LawCandidate, LawChoice, LawForm};
 use crate::artifacts::estimate::{Estimate, Interval};
 use crate::recording::Setup;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-
-/// One candidate form.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LawCandidate {
-    pub form: LawForm,
-    /// Each parameter by name (`LawForm::parameter_names`) with its standard error and 95 %
-    /// interval (written `{value, lo, hi}`).
-    #[serde(with = "crate::artifacts::estimate::bounds::map")]
-    pub parameters: BTreeMap<String, Estimate>,
-    /// RMS of the held-out runs' residuals, in units of their position noise.
-    pub heldout_rms_noise: f64,
-    /// Held-out Huber deviance summed over the folds.
-    pub heldout_deviance: f64,
-}
-
-/// The law chosen for one material and setup.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LawChoice {
-    pub setup: Setup,
-    pub n_runs: usize,
-    pub folds: usize,
-    pub chosen: LawForm,
-    pub candidates: Vec<LawCandidate>,
-}
-
-impl LawCandidate {
-    /// The parameters in the order of `LawForm::parameter_names` (slot a, then b).
-    pub fn ordered(&self) -> Vec<(&'static str, &Estimate)> {
-        self.form
-            .parameter_names()
-            .iter()
-            .filter_map(|n| self.parameters.get(*n).map(|e| (*n, e)))
-            .collect()
-    }
-}
-
-impl LawChoice {
-    pub fn chosen_candidate(&self) -> Option<&LawCandidate> {
-        self.candidates.iter().find(|c| c.form == self.chosen)
-    }
-}
 
 /// A simpler form is kept unless a richer one lowers the held-out deviance by more than this.
 const PREFER_SIMPLER: f64 = 4.0;

@@ -5,118 +5,19 @@
 
 use super::curves::{exp_fit, one_minus_av};
 use super::mu_pp::{impulse_fit, slip_slope};
-use super::types::{CollisionFit, Contact, ImpactFit, PreImpactSource};
+use crate::artifacts::collision_fit::{CollisionFit, Contact, ImpactFit};
+use crate::artifacts::collision_summary::{
+    CollisionSummary, MuPp, RestitutionCurve, RestitutionPoint, SpinPoint,
+};
 use crate::recording::{RunInfo, Setup};
 use crate::stats::{quantile_nearest, weighted_line as line_fit};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// A point estimate with a 95 % percentile bootstrap interval, written as `{value, lo, hi}`.
 pub use crate::artifacts::estimate::Estimate;
 use crate::artifacts::estimate::Interval;
-
-/// μ_pp estimates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct MuPp {
-    /// The headline value: the impulse-model fit when there are slip impacts, else None.
-    #[serde(with = "crate::artifacts::estimate::bounds::option")]
-    pub value: Option<Estimate>,
-    /// Slope of −sign(S)·Δv_a against Δv_z of the target over slip impacts, divided by k.
-    #[serde(with = "crate::artifacts::estimate::bounds::option")]
-    pub from_slip_slope: Option<Estimate>,
-    /// μ_pp minimizing the misfit of the measured spin changes of both particles to the
-    /// impulse model, stick and slip impacts together.
-    #[serde(with = "crate::artifacts::estimate::bounds::option")]
-    pub from_impulse_fit: Option<Estimate>,
-    /// Stick impacts need μ_pp > |S| / (2 k J); the largest such bound.
-    pub stick_lower_bound: Option<f64>,
-    pub n_slip: usize,
-    pub n_stick: usize,
-    pub n_undetermined: usize,
-}
-
-/// C against impact speed for one material and setup, over the first impact of each run
-/// (secondary impacts are slow and short-lived; they are listed in `restitution_points`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RestitutionCurve {
-    pub material: String,
-    pub setup: Option<Setup>,
-    pub n_impacts: usize,
-    pub n_runs: usize,
-    /// C = c0 − slope · v (weighted least squares).
-    #[serde(with = "crate::artifacts::estimate::bounds")]
-    pub c0: Estimate,
-    #[serde(with = "crate::artifacts::estimate::bounds")]
-    pub slope_per_mps: Estimate,
-    /// C = 1 − a · v, the chapter's "C → 1 at low speed" form.
-    #[serde(with = "crate::artifacts::estimate::bounds")]
-    pub a_per_mps: Estimate,
-    /// C = c_inf + (1 − c_inf) e^{−v/v_ref}: 1 for a gentle touch, falling to c_inf
-    /// (the form `physics::Restitution::SpeedDependent` simulates).
-    #[serde(with = "crate::artifacts::estimate::bounds")]
-    pub c_inf: Estimate,
-    #[serde(with = "crate::artifacts::estimate::bounds")]
-    pub v_ref_mps: Estimate,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub mean_c: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub min_speed_mps: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub max_speed_mps: f64,
-}
-
-/// One impact in Fig. 4.4a (target, striker-forward frame).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SpinPoint {
-    pub run: String,
-    pub material: String,
-    pub impact: usize,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub dvz_mps: f64,
-    pub dvz_se_mps: Option<f64>,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub dva_mps: f64,
-    pub dva_se_mps: Option<f64>,
-    pub contact: Contact,
-}
-
-/// One impact in Figs. 4.4b–c.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RestitutionPoint {
-    pub run: String,
-    pub material: String,
-    pub setup: Option<Setup>,
-    pub impact: usize,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub impact_speed_mps: f64,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub restitution: f64,
-    pub restitution_se: Option<f64>,
-    pub striker_before_source: PreImpactSource,
-}
-
-/// `summary.json` → "collisions".
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CollisionSummary {
-    pub n_runs: usize,
-    pub n_runs_fitted: usize,
-    pub n_impacts: usize,
-    #[serde(with = "crate::artifacts::nan_null")]
-    pub k: f64,
-    pub mu_pp: MuPp,
-    pub restitution: Vec<RestitutionCurve>,
-    pub spin_points: Vec<SpinPoint>,
-    pub restitution_points: Vec<RestitutionPoint>,
-    pub bootstrap_seed: u64,
-    pub bootstrap_resamples: usize,
-    pub notes: Vec<String>,
-    /// The whole-run pair fits per material (μ_pp profile, restitution laws); absent when the
-    /// stage did not compute them.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub whole_run: Option<super::whole_summary::WholeRunSummary>,
-}
 
 /// Default bootstrap seed when the caller has none (the aggregate stage passes its own).
 pub const DEFAULT_SEED: u64 = 20261122;

@@ -2,7 +2,7 @@
 //! particle at any time, from its piece's start state and drag time. The one evaluation of a
 //! fitted collision run, used by the figures (the chapter's Fig. 4.3c–d) and the residuals.
 
-use super::types::CollisionFit;
+use crate::artifacts::collision_fit::CollisionFit;
 use crate::physics::{Baseline, Groove, Phase};
 
 /// The fitted state of one particle at an instant (lab frame).

@@ -2,13 +2,16 @@
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
 //! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
 
-use super::profile::{default_grid, profile_and_lowest, MuPpProfile, ProfileVerdict};
-use super::restitution_law::{choose_law, with_chosen, LawChoice};
-use super::types::Estimate;
+use super::profile::{default_grid, profile_and_lowest};
+use super::restitution_law::{choose_law, with_chosen};
 use super::wholerun::{
     fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK,
     V0,
 };
+use crate::artifacts::collision_summary::{
+    LawChoice, LawForm, MaterialWholeRun, MuPpProfile, ProfileVerdict, WholeRun, WholeRunSummary,
+};
+use crate::artifacts::estimate::Estimate;
 use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
 use crate::lsq::Termination;
 use crate::physics::{Groove, Phase};
@@ -37,83 +40,6 @@ impl Default for WholeRunOptions {
             step_iter: 25,
             grid: default_grid(),
             folds: 3,
-        }
-    }
-}
-
-/// One run in the whole-run fit of its material.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct WholeRun {
-    pub run: String,
-    pub setup: Setup,
-    /// Kick speed of the striker (lab frame, m/s).
-    pub v0_mps: Estimate,
-    pub t_kick_s: f64,
-    /// RMS of the residuals (m) and the position noise (m).
-    pub rms_m: f64,
-    pub noise_m: f64,
-    pub n_points: usize,
-    /// Impacts the fitted model makes in the recorded time, and how many slip.
-    pub n_impacts: usize,
-    pub n_slip: usize,
-    /// The first impact: approach speed (m/s) and C of the fitted law there.
-    pub first_impact_speed_mps: Option<f64>,
-    pub first_impact_restitution: Option<f64>,
-    /// RMS of the residuals (in units of the noise) by phase of the particle and by time since
-    /// the last impact (`0-1ms`, `1-5ms`, `5-20ms`, `>20ms`, `before`).
-    pub residual_by_phase: BTreeMap<String, f64>,
-    pub residual_by_time_since_impact: BTreeMap<String, f64>,
-}
-
-/// The whole-run analysis of one material.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct MaterialWholeRun {
-    pub material: String,
-    pub n_runs: usize,
-    pub status: Termination,
-    pub iterations: usize,
-    pub max_iter: usize,
-    /// The drag form of the shared physics.
-    pub drag: String,
-    pub mu_pg: Estimate,
-    pub t0_s: Estimate,
-    pub tp_s_per_mps: Estimate,
-    /// μ_pp of the best fit (its standard error is meaningful only with an interval).
-    pub mu_pp: Estimate,
-    pub profile: MuPpProfile,
-    pub restitution: Vec<LawChoice>,
-    /// Deviance (χ² units) and residual RMS in noise units over all runs.
-    pub deviance: f64,
-    pub rms_noise: f64,
-    pub runs: Vec<WholeRun>,
-    pub notes: Vec<String>,
-}
-
-/// summary.json → collisions → whole_run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct WholeRunSummary {
-    pub materials: Vec<MaterialWholeRun>,
-    pub notes: Vec<String>,
-}
-
-impl MaterialWholeRun {
-    /// The sentence the report prints about μ_pp.
-    pub fn mu_pp_words(&self) -> String {
-        match self.profile.verdict {
-            ProfileVerdict::Interval { estimate, lo, hi } => format!(
-                "μ_pp = {estimate:.2} (95 % profile interval {lo:.2}–{hi:.2}); the chapter's 1.4 is {}",
-                if (lo..=hi).contains(&1.4) { "inside it" } else { "outside it" }
-            ),
-            ProfileVerdict::LowerBound { lo } => format!(
-                "the recordings bound μ_pp from below at {lo:.2} (95 %): the profile is flat above, so the chapter's 1.4 is {}",
-                if 1.4 >= lo { "allowed but not measured" } else { "excluded" }
-            ),
-            ProfileVerdict::UpperBound { hi } => {
-                format!("the recordings bound μ_pp from above at {hi:.2} (95 %)")
-            }
-            ProfileVerdict::Unconstrained => {
-                "the recordings do not constrain μ_pp over the profiled range".to_string()
-            }
         }
     }
 }
@@ -178,7 +104,7 @@ pub fn analyze_material(
                 let p = cand.ordered();
                 start.result.shared[ia] = p.first().map_or(f64::NAN, |(_, e)| e.value);
                 start.result.shared[ib] = match (c.chosen, p.get(1)) {
-                    (super::wholerun::LawForm::Saturating, Some((_, e))) => e.value.ln(),
+                    (LawForm::Saturating, Some((_, e))) => e.value.ln(),
                     (_, Some((_, e))) => e.value,
                     (_, None) => 0.0,
                 };
@@ -379,7 +305,8 @@ fn describe_run(run: &PairRun, fit: &GroupFit, own: &[f64], se: &[f64]) -> Whole
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fit::collision::profile::{ProfilePoint, DELTA_95};
+    use crate::artifacts::collision_summary::ProfilePoint;
+    use crate::fit::collision::profile::DELTA_95;
 
     fn profile(points: &[(f64, f64, bool)]) -> MuPpProfile {
         MuPpProfile {

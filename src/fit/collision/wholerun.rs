@@ -11,6 +11,7 @@
 
 use super::detect::{median, noise_scale_m, robust_line};
 use super::model::TrackData;
+use crate::artifacts::collision_summary::LawForm;
 use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
 use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
@@ -18,23 +19,8 @@ use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairParams, PairTrajectory, Restitution, State, Term,
 };
 use crate::recording::{Recording, Setup};
-use serde::{Deserialize, Serialize};
-
-/// Form of a restitution law C(v) of the impact speed v.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LawForm {
-    /// C = c.
-    Constant,
-    /// C = c0 − slope·v.
-    Linear,
-    /// C = c_inf + (1 − c_inf) e^{−v/v_ref} (physics.md).
-    Saturating,
-}
 
 impl LawForm {
-    pub const ALL: [LawForm; 3] = [LawForm::Constant, LawForm::Linear, LawForm::Saturating];
-
     /// The law from its two parameter slots (a, b): constant (c, —), linear (c0, slope),
     /// saturating (c_inf, ln v_ref).
     pub fn law(self, a: f64, b: f64) -> Restitution {
@@ -48,15 +34,6 @@ impl LawForm {
                 c0: a,
                 v_ref_mps: b.exp(),
             },
-        }
-    }
-
-    /// Names of its parameters (SI units in the names) and how slot b maps to them.
-    pub fn parameter_names(self) -> &'static [&'static str] {
-        match self {
-            LawForm::Constant => &["c"],
-            LawForm::Linear => &["c0", "slope_per_mps"],
-            LawForm::Saturating => &["c_inf", "v_ref_mps"],
         }
     }
 

@@ -1,6 +1,7 @@
 //! Section 2: the data — runs per material and setup, frame rates, noise, what was left out and why.
 
 use super::{Block, Table};
+use crate::artifacts::FitStatus;
 use crate::artifacts::Summary;
 use crate::recording::{Experiment, Setup};
 use crate::report::inputs::ReportData;
@@ -109,9 +110,11 @@ fn failed_singles(d: &ReportData) -> Vec<(String, String)> {
         .iter()
         .filter(|r| !r.converged())
         .map(|r| {
-            let why = match (r.status.as_str(), left_out_why(&r.run)) {
-                ("suspect", Some(w)) => format!("fit suspect: {w}; excluded from the aggregates"),
-                ("suspect", None) => "fit suspect; excluded from the aggregates".into(),
+            let why = match (r.status, left_out_why(&r.run)) {
+                (FitStatus::Suspect, Some(w)) => {
+                    format!("fit suspect: {w}; excluded from the aggregates")
+                }
+                (FitStatus::Suspect, None) => "fit suspect; excluded from the aggregates".into(),
                 _ => "fit did not converge; excluded from the aggregates".into(),
             };
             (format!("{} ({})", r.run, r.status), why)

@@ -1,0 +1,54 @@
+//! The state a discovery carries between its steps: the data and settings every step reads
+//! (`Ctx`), the term selection under way (`Selection`) and each accepted term (`Accepted`); the
+//! steps themselves are in `run`, what a finished selection reports in `findings`.
+
+use super::candidate::Extra;
+use super::cv::CvResult;
+use super::data::RunData;
+use super::forcemap::ForceMap;
+use super::model::Model;
+use super::null_distribution::NullFit;
+use super::proposal::Ranges;
+use super::spectral::Spectrum;
+use super::Options;
+use crate::artifacts::diagnosis::{CandidateRow, ModelScore};
+
+/// An accepted term with what the report shows about it.
+pub(super) struct Accepted {
+    pub(super) row: CandidateRow,
+    pub(super) before: ModelScore,
+    pub(super) after: ModelScore,
+    pub(super) probes_after: Vec<CandidateRow>,
+    pub(super) null: NullFit,
+    pub(super) extra: Extra,
+}
+
+/// The data and settings every step of a discovery reads.
+pub(super) struct Ctx<'a> {
+    pub(super) runs: &'a [RunData],
+    pub(super) materials: &'a [String],
+    pub(super) fold: &'a [usize],
+    pub(super) rg: &'a Ranges,
+    pub(super) opts: &'a Options,
+    pub(super) t0: std::time::Instant,
+    /// Where the step under way is said (the stage's progress line).
+    pub(super) say: &'a (dyn Fn(&str) + Sync),
+}
+
+/// The state of the term selection: the current model and what the diagnosis reports of it.
+pub(super) struct Selection {
+    pub(super) current: Model,
+    pub(super) current_cv: CvResult,
+    pub(super) accepted: Vec<Accepted>,
+    pub(super) removed: Vec<Accepted>,
+    /// Every candidate and probe row of every round.
+    pub(super) table: Vec<CandidateRow>,
+    /// The candidates of the last round (none accepted) and its probes.
+    pub(super) last_rows: Vec<CandidateRow>,
+    pub(super) last_probes: Vec<CandidateRow>,
+    /// Probes still flagging a mismatch when no candidate passed.
+    pub(super) unexplained: Vec<CandidateRow>,
+    pub(super) maps_before: Vec<ForceMap>,
+    pub(super) spectra: Vec<Spectrum>,
+    pub(super) round: usize,
+}
