@@ -8,6 +8,7 @@
 //! term passing both is added and the search repeats. Drift probes (T or μ drifting with |v0|, a
 //! direction asymmetry), fitted inside the joint model, say whether a mismatch is left unexplained.
 
+pub mod admissible;
 pub mod candidate;
 pub mod cv;
 pub mod data;
@@ -26,12 +27,14 @@ pub mod noise;
 pub mod noise_floor;
 pub mod null_distribution;
 pub mod pairs;
+mod particles;
 mod pairs_impact;
 pub mod perrun;
 pub mod proposal;
 pub mod residual_structure;
 pub mod response;
 pub mod run;
+mod run_phase;
 pub mod screen;
 mod screen_sums;
 pub mod sim;
@@ -46,13 +49,16 @@ use serde::{Deserialize, Serialize};
 pub use crate::physics::G_MPS2;
 
 /// Every candidate effect id the library knows, in the order they are listed.
-pub const EFFECTS: [&str; 6] = [
+pub const EFFECTS: [&str; 9] = [
     "velocity_dependent_drag",
     "rolling_resistance",
     "groove_tilt",
     "velocity_dependent_friction",
+    "direction_dependent_friction",
+    "position_dependent_friction",
     "position_dependent_force",
     "time_dependent_force",
+    "position_distortion",
 ];
 
 /// Settings of a discovery (the `discover` stage params, plus the seed).

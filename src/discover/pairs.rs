@@ -128,6 +128,7 @@ pub fn single_run_physics(
     Ok(Model {
         groove,
         friction: Friction::Constant { mu },
+        variation: Default::default(),
         terms,
     })
 }

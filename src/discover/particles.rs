@@ -1,0 +1,235 @@
+//! Differences between particles: μ and T varying from run to run beyond what each run's noise
+//! allows, with nothing missing from the equations.
+//!
+//! Around the final joint model, each run's residual (in noise units, its z0, t0 and v0 projected
+//! out) is regressed on that run's own μ and T columns. The statistic `LR` is the χ² those
+//! per-run parameters take up; `RES` is what is left. Each run's measured noise (σ and lag-1
+//! correlation) is pushed through the same projections in replicates, which give both their laws.
+//! The test is on the ratio `F = (LR/E LR₀)/(RES/E RES₀)`: a noise larger or redder than measured
+//! inflates both alike, while particles that differ raise `LR` alone. The particles are said to
+//! differ only when `F` lies beyond every replicate's at level α (a normal tail on ln F of the
+//! replicates) and the per-run parameters leave the runs at their noise (`RES` within
+//! `RESIDUAL_SLACK` of its expectation): a force or a friction the model lacks leaves structure a
+//! run's own μ and T cannot take up, and that is no difference between particles.
+//!
+//! The size is the spread of the per-run estimates beyond their own errors (method of moments:
+//! the variance of the per-run μ less the mean of their noise variances), per material.
+
+use super::data::RunData;
+use super::model::Model;
+use super::response::{prepare, Prepared};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+
+/// Noise replicates of the check.
+const REPLICATES: usize = 200;
+
+/// Largest ratio of what the per-run parameters leave to its expectation under the noise for
+/// the runs to count as explained by them.
+pub const RESIDUAL_SLACK: f64 = 1.25;
+
+/// The spread of one material's per-run parameters beyond their errors.
+#[derive(Clone, Debug)]
+pub struct Spread {
+    pub material: String,
+    pub n_runs: usize,
+    /// Shared μ and T of the material (the joint model's).
+    pub mu: f64,
+    pub t_s: f64,
+    /// Standard deviation of μ and T over the particles beyond the runs' noise (0: none seen).
+    pub mu_sd: f64,
+    pub t_sd: f64,
+    /// The typical error of one run's μ and T from its noise alone.
+    pub mu_se: f64,
+    pub t_se: f64,
+}
+
+/// What the check found.
+#[derive(Clone, Debug)]
+pub struct Check {
+    pub lr: f64,
+    pub lr_null_mean: f64,
+    pub residual_ratio: f64,
+    pub f: f64,
+    pub p_value: f64,
+    pub spreads: Vec<Spread>,
+    pub differ: bool,
+}
+
+/// One run's orthonormal basis of its own μ and T columns (noise units, locals projected out),
+/// with the coefficients that map basis coordinates back to (δμ, δT).
+struct RunBasis {
+    q: Vec<Vec<f64>>,
+    /// Rows: δμ, δT per unit coordinate along each basis vector.
+    back: [[f64; 2]; 2],
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Gram–Schmidt of the run's μ and T columns; `back` maps a vector of coordinates along `q`
+/// to the parameter steps that make it (a column that the locals absorb is dropped).
+fn basis(p: &Prepared, mu_col: usize, t_col: usize) -> RunBasis {
+    let cols = [&p.glob[mu_col], &p.glob[t_col]];
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    // r: the upper-triangular factor, cols = Q R
+    let mut r = [[0.0f64; 2]; 2];
+    for (j, c) in cols.iter().enumerate() {
+        let mut x = c.to_vec();
+        let n0 = dot(&x, &x).sqrt();
+        for (i, qi) in q.iter().enumerate() {
+            let d = dot(qi, &x);
+            r[i][j] = d;
+            x.iter_mut().zip(qi).for_each(|(a, b)| *a -= d * b);
+        }
+        let n = dot(&x, &x).sqrt();
+        if n0 > 0.0 && n > 1e-6 * n0 {
+            r[q.len()][j] = n;
+            x.iter_mut().for_each(|a| *a /= n);
+            q.push(x);
+        }
+    }
+    // back = R⁻¹ (2×2 upper triangular); a run whose locals absorb one of the two columns gives
+    // no per-run step (zero), though its χ² still counts
+    let mut back = [[0.0; 2]; 2];
+    if q.len() == 2 {
+        back[0][0] = 1.0 / r[0][0];
+        back[1][1] = 1.0 / r[1][1];
+        back[0][1] = -r[0][1] / (r[0][0] * r[1][1]);
+    }
+    RunBasis { q, back }
+}
+
+/// AR(1) noise of lag-1 correlation `rho` over `n` samples, unit variance.
+fn ar1(n: usize, rho: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let innov = (1.0 - rho * rho).sqrt();
+    let mut e: f64 = StandardNormal.sample(rng);
+    (0..n)
+        .map(|_| {
+            let x = e;
+            let z: f64 = StandardNormal.sample(rng);
+            e = rho * e + innov * z;
+            x
+        })
+        .collect()
+}
+
+/// (LR, RES) of one projected residual `y` against the run's basis.
+fn split(b: &RunBasis, y: &[f64]) -> (f64, f64, [f64; 2]) {
+    let coords: Vec<f64> = b.q.iter().map(|q| dot(q, y)).collect();
+    let lr: f64 = coords.iter().map(|c| c * c).sum();
+    let mut coord = [0.0; 2];
+    coord[..coords.len()].copy_from_slice(&coords);
+    (lr, dot(y, y) - lr, coord)
+}
+
+/// The check on the fitted model `m` of `runs` (`seed` for the replicates); None when there are
+/// too few runs per material to tell a spread (fewer than 4).
+pub fn check(
+    m: &Model,
+    runs: &[RunData],
+    materials: &[String],
+    alpha: f64,
+    seed: u64,
+) -> Option<Check> {
+    let nm = m.spec.n_materials;
+    if (0..nm).any(|k| runs.iter().filter(|r| r.material == k).count() < 4) {
+        return None;
+    }
+    let prep = prepare(&m.spec, &m.params, &m.fit.global, &m.fit.local, runs);
+    let bases: Vec<RunBasis> = prep
+        .iter()
+        .map(|p| {
+            let k = runs[p.run].material;
+            basis(p, k, nm + k)
+        })
+        .collect();
+    // the data, then the replicates: (LR, RES) summed over runs
+    let data: Vec<(f64, f64, [f64; 2])> = prep
+        .iter()
+        .zip(&bases)
+        .map(|(p, b)| split(b, &p.y))
+        .collect();
+    let lr: f64 = data.iter().map(|d| d.0).sum();
+    let res: f64 = data.iter().map(|d| d.1).sum();
+    let reps: Vec<(f64, f64, Vec<[f64; 2]>)> = (0..REPLICATES)
+        .into_par_iter()
+        .map(|b| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9));
+            let (mut l, mut r) = (0.0, 0.0);
+            let mut coords = Vec::with_capacity(prep.len());
+            for (p, base) in prep.iter().zip(&bases) {
+                let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
+                let mut e = ar1(p.y.len(), rho, &mut rng);
+                p.proj.apply(&mut e);
+                let (a, c, coord) = split(base, &e);
+                l += a;
+                r += c;
+                coords.push(coord);
+            }
+            (l, r, coords)
+        })
+        .collect();
+    let n = REPLICATES as f64;
+    let lr0 = reps.iter().map(|r| r.0).sum::<f64>() / n;
+    let res0 = reps.iter().map(|r| r.1).sum::<f64>() / n;
+    if !(lr0 > 0.0 && res0 > 0.0) {
+        return None;
+    }
+    let ratio = |l: f64, r: f64| (l / lr0) / (r / res0).max(1e-12);
+    let f = ratio(lr, res);
+    let logs: Vec<f64> = reps.iter().map(|r| ratio(r.0, r.1).ln()).collect();
+    let mean = logs.iter().sum::<f64>() / n;
+    let sd = (logs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let z = (f.ln() - mean) / sd.max(1e-12);
+    let p_value = 0.5 * statrs::function::erf::erfc(z / std::f64::consts::SQRT_2);
+    let residual_ratio = res / res0;
+    // per material: the per-run steps (δμ, δT) on the data and their noise variance
+    let step = |base: &RunBasis, c: &[f64; 2]| -> [f64; 2] {
+        [
+            base.back[0][0] * c[0] + base.back[0][1] * c[1],
+            base.back[1][0] * c[0] + base.back[1][1] * c[1],
+        ]
+    };
+    let spreads: Vec<Spread> = (0..nm)
+        .map(|k| {
+            let idx: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].material == k).collect();
+            let moment = |coords: &dyn Fn(usize) -> [f64; 2], which: usize| -> f64 {
+                idx.iter()
+                    .map(|&i| step(&bases[i], &coords(i))[which].powi(2))
+                    .sum::<f64>()
+                    / idx.len() as f64
+            };
+            let on_data = |i: usize| data[i].2;
+            let noise_var = |which: usize| -> f64 {
+                reps.iter()
+                    .map(|r| moment(&|i: usize| r.2[i], which))
+                    .sum::<f64>()
+                    / n
+            };
+            let (mu_nv, t_nv) = (noise_var(0), noise_var(1));
+            Spread {
+                material: materials.get(k).cloned().unwrap_or_default(),
+                n_runs: idx.len(),
+                mu: m.fit.global[k],
+                t_s: m.fit.global[nm + k],
+                mu_sd: (moment(&on_data, 0) - mu_nv).max(0.0).sqrt(),
+                t_sd: (moment(&on_data, 1) - t_nv).max(0.0).sqrt(),
+                mu_se: mu_nv.sqrt(),
+                t_se: t_nv.sqrt(),
+            }
+        })
+        .collect();
+    Some(Check {
+        lr,
+        lr_null_mean: lr0,
+        residual_ratio,
+        f,
+        p_value,
+        differ: p_value < alpha && residual_ratio <= RESIDUAL_SLACK,
+        spreads,
+    })
+}
