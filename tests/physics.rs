@@ -127,6 +127,7 @@ fn model(mu: f64, terms: Vec<Term>) -> Model {
     Model {
         groove: Groove::CHAPTER,
         friction: Friction::Constant { mu },
+        variation: Default::default(),
         terms,
     }
 }

@@ -21,6 +21,33 @@ pub struct Vectors {
     pub(super) kept: Vec<usize>,
     pub(super) ginv: Vec<f64>,
     pub(super) gty: Vec<Vec<f64>>,
+    /// How much the data's residuals exceed what the measured noise leaves (Σ‖y‖² of the data
+    /// over the replicates' mean, pooled over runs, at least 1): the replicates and the computed
+    /// null laws are scaled by it.
+    pub dispersion: f64,
+}
+
+/// The data's pooled squared residual over the mean of the replicates' (`y[run][b]`, b = 0 the
+/// data): 1 when the measured noise accounts for the residuals. A noise redder or larger than
+/// measured, or physics the model lacks, raise it; the tests then ask more of a candidate, as a
+/// quasi-likelihood does with overdispersed counts.
+fn dispersion_of(y: &[Vec<Vec<f64>>]) -> f64 {
+    let (mut data, mut noise) = (0.0, 0.0);
+    for run in y {
+        let Some((d, reps)) = run.split_first() else {
+            continue;
+        };
+        if reps.is_empty() {
+            continue;
+        }
+        data += dot(d, d);
+        noise += reps.iter().map(|r| dot(r, r)).sum::<f64>() / reps.len() as f64;
+    }
+    if noise > 0.0 {
+        data / noise
+    } else {
+        1.0
+    }
 }
 
 impl Vectors {
@@ -51,6 +78,18 @@ impl Vectors {
                 out
             })
             .collect();
+        // the replicates carry the noise as measured, scaled up when the data's residuals
+        // exceed what that noise leaves (pooled over runs; never scaled down)
+        let dispersion = dispersion_of(&y);
+        let mut y = y;
+        if dispersion > 1.0 {
+            let f = dispersion.sqrt();
+            y.par_iter_mut().for_each(|run| {
+                for rep in run.iter_mut().skip(1) {
+                    rep.iter_mut().for_each(|x| *x *= f);
+                }
+            });
+        }
         let (kept, gtg) = shared_information(prep);
         let k = kept.len();
         let mut gty = vec![vec![0.0; k]; replicates + 1];
@@ -69,7 +108,13 @@ impl Vectors {
                 None => vec![0.0; k * k],
             }
         };
-        Vectors { y, kept, ginv, gty }
+        Vectors {
+            y,
+            kept,
+            ginv,
+            gty,
+            dispersion: dispersion.max(1.0),
+        }
     }
 
     pub(super) fn n_rep(&self) -> usize {
@@ -340,6 +385,7 @@ impl Sums {
                 }
             }
         }
+        c.iter_mut().for_each(|x| *x *= v.dispersion);
         // M = A⁻¹C: its trace and the trace of its square
         let m: Vec<f64> = (0..q * q)
             .map(|ab| {
