@@ -5,12 +5,15 @@
 //! out) is regressed on that run's own μ and T columns. The statistic `LR` is the χ² those
 //! per-run parameters take up; `RES` is what is left. Each run's measured noise (σ and lag-1
 //! correlation) is pushed through the same projections in replicates, which give both their laws.
-//! The test is on the ratio `F = (LR/E LR₀)/(RES/E RES₀)`: a noise larger or redder than measured
-//! inflates both alike, while particles that differ raise `LR` alone. The particles are said to
-//! differ only when `F` lies beyond every replicate's at level α (a normal tail on ln F of the
-//! replicates) and the per-run parameters leave the runs at their noise (`RES` within
+//! The test is on the ratio `F = (LR/E LR₀)/(RES/E RES₀)`: a noise larger than measured inflates
+//! both alike, while particles that differ raise `LR` alone. The particles are said to differ only
+//! when `F` lies beyond the replicates' at level α (a normal tail on ln F of the replicates), is
+//! at least `MIN_RATIO`, and the per-run parameters leave the runs at their noise (`RES` within
 //! `RESIDUAL_SLACK` of its expectation): a force or a friction the model lacks leaves structure a
-//! run's own μ and T cannot take up, and that is no difference between particles.
+//! run's own μ and T cannot take up, and that is no difference between particles. Nor is a noise
+//! that wanders over many frames, which a run's own μ and T take up as well: the data's energy in
+//! slow shapes that a run's μ and T cannot make (Legendre degrees 2–5, orthogonal to them) must
+//! stay within `WANDER_LIMIT` of the noise's, or the check says it cannot decide.
 //!
 //! The size is the spread of the per-run estimates beyond their own errors (method of moments:
 //! the variance of the per-run μ less the mean of their noise variances), per material.
@@ -25,6 +28,18 @@ use rayon::prelude::*;
 
 /// Noise replicates of the check.
 const REPLICATES: usize = 200;
+
+/// Smallest `F` said to be a difference between particles: the runs' own μ and T must take up
+/// half as much again as the noise gives them. A tracker noise that wanders over many frames
+/// lifts `F` above 1 by itself (the replicates' AR(1) noise does not wander), by up to a third on
+/// the correlated-noise nulls of the test bed.
+pub const MIN_RATIO: f64 = 1.5;
+
+/// Largest ratio of the data's energy to the noise's in slow shapes that a run's own μ and T
+/// cannot make (`wander`) for the check to decide: above it the tracker noise wanders over many
+/// frames, which a run's μ and T would also take up, and the particles cannot be told apart from
+/// it. Under white noise over 60 runs the ratio scatters by about 0.1.
+pub const WANDER_LIMIT: f64 = 1.5;
 
 /// Largest ratio of what the per-run parameters leave to its expectation under the noise for
 /// the runs to count as explained by them.
@@ -52,6 +67,8 @@ pub struct Check {
     pub lr: f64,
     pub lr_null_mean: f64,
     pub residual_ratio: f64,
+    /// The data's energy in slow shapes a run's μ and T cannot make, over the noise's.
+    pub wander_ratio: f64,
     pub f: f64,
     pub p_value: f64,
     pub spreads: Vec<Spread>,
@@ -62,6 +79,8 @@ pub struct Check {
 /// with the coefficients that map basis coordinates back to (δμ, δT).
 struct RunBasis {
     q: Vec<Vec<f64>>,
+    /// Slow shapes orthogonal to the locals and to `q` (Legendre degrees 2–5 over the samples).
+    slow: Vec<Vec<f64>>,
     /// Rows: δμ, δT per unit coordinate along each basis vector.
     back: [[f64; 2]; 2],
 }
@@ -100,7 +119,47 @@ fn basis(p: &Prepared, mu_col: usize, t_col: usize) -> RunBasis {
         back[1][1] = 1.0 / r[1][1];
         back[0][1] = -r[0][1] / (r[0][0] * r[1][1]);
     }
-    RunBasis { q, back }
+    let n = p.y.len();
+    let mut slow: Vec<Vec<f64>> = Vec::new();
+    if n >= 16 {
+        for deg in 2..=5 {
+            let mut c: Vec<f64> = (0..n)
+                .map(|i| legendre(deg, 2.0 * i as f64 / (n - 1) as f64 - 1.0))
+                .collect();
+            p.proj.apply(&mut c);
+            for _ in 0..2 {
+                for b in q.iter().chain(&slow) {
+                    let a = dot(b, &c);
+                    c.iter_mut().zip(b).for_each(|(x, y)| *x -= a * y);
+                }
+            }
+            let norm = dot(&c, &c).sqrt();
+            if norm > 1e-6 * (n as f64).sqrt() {
+                c.iter_mut().for_each(|x| *x /= norm);
+                slow.push(c);
+            }
+        }
+    }
+    RunBasis { q, slow, back }
+}
+
+/// The Legendre polynomial of degree `n` at `x`.
+fn legendre(n: usize, x: f64) -> f64 {
+    let (mut p0, mut p1) = (1.0, x);
+    if n == 0 {
+        return p0;
+    }
+    for k in 1..n {
+        let p2 = ((2 * k + 1) as f64 * x * p1 - k as f64 * p0) / (k + 1) as f64;
+        p0 = p1;
+        p1 = p2;
+    }
+    p1
+}
+
+/// Energy of `y` in the run's slow shapes that its μ and T cannot make.
+fn wander(b: &RunBasis, y: &[f64]) -> f64 {
+    b.slow.iter().map(|s| dot(s, y).powi(2)).sum()
 }
 
 /// AR(1) noise of lag-1 correlation `rho` over `n` samples, unit variance.
@@ -154,23 +213,29 @@ pub fn check(
         .map(|(p, b)| split(b, &p.y))
         .collect();
     let lr: f64 = data.iter().map(|d| d.0).sum();
+    let wander_data: f64 = prep
+        .iter()
+        .zip(&bases)
+        .map(|(p, b)| wander(b, &p.y))
+        .sum();
     let res: f64 = data.iter().map(|d| d.1).sum();
-    let reps: Vec<(f64, f64, Vec<[f64; 2]>)> = (0..REPLICATES)
+    let reps: Vec<(f64, f64, Vec<[f64; 2]>, f64)> = (0..REPLICATES)
         .into_par_iter()
         .map(|b| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9));
-            let (mut l, mut r) = (0.0, 0.0);
+            let (mut l, mut r, mut w) = (0.0, 0.0, 0.0);
             let mut coords = Vec::with_capacity(prep.len());
             for (p, base) in prep.iter().zip(&bases) {
                 let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
                 let mut e = ar1(p.y.len(), rho, &mut rng);
                 p.proj.apply(&mut e);
                 let (a, c, coord) = split(base, &e);
+                w += wander(base, &e);
                 l += a;
                 r += c;
                 coords.push(coord);
             }
-            (l, r, coords)
+            (l, r, coords, w)
         })
         .collect();
     let n = REPLICATES as f64;
@@ -187,6 +252,8 @@ pub fn check(
     let z = (f.ln() - mean) / sd.max(1e-12);
     let p_value = 0.5 * statrs::function::erf::erfc(z / std::f64::consts::SQRT_2);
     let residual_ratio = res / res0;
+    let wander0 = reps.iter().map(|r| r.3).sum::<f64>() / n;
+    let wander_ratio = if wander0 > 0.0 { wander_data / wander0 } else { 1.0 };
     // per material: the per-run steps (δμ, δT) on the data and their noise variance
     let step = |base: &RunBasis, c: &[f64; 2]| -> [f64; 2] {
         [
@@ -227,9 +294,13 @@ pub fn check(
         lr,
         lr_null_mean: lr0,
         residual_ratio,
+        wander_ratio,
         f,
         p_value,
-        differ: p_value < alpha && residual_ratio <= RESIDUAL_SLACK,
+        differ: p_value < alpha
+            && f >= MIN_RATIO
+            && residual_ratio <= RESIDUAL_SLACK
+            && wander_ratio <= WANDER_LIMIT,
         spreads,
     })
 }

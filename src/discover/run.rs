@@ -630,6 +630,16 @@ fn particle_finding(
             "accepted: the runs' own mu and T take up {:.2}x what the noise gives them while what they leave is {:.2}x the noise's (p = {:.2e})",
             c.f, c.residual_ratio, c.p_value
         )
+    } else if c.p_value < opts.alpha && c.wander_ratio > super::particles::WANDER_LIMIT {
+        format!(
+            "undecided: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but the runs' noise wanders over many frames ({:.2}x the measured noise in slow shapes mu and T cannot make), and a run's own mu and T take up such a noise as well: these data cannot tell particles that differ from a wandering tracker",
+            c.f, c.p_value, c.wander_ratio
+        )
+    } else if c.p_value < opts.alpha && c.f < super::particles::MIN_RATIO {
+        format!(
+            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), less than the {:.1}x a difference between particles must show",
+            c.f, c.p_value, super::particles::MIN_RATIO
+        )
     } else if c.p_value < opts.alpha {
         format!(
             "rejected: the runs' own mu and T take up more than noise ({:.2}x, p = {:.2e}), but leave {:.2}x the noise: something the equations lack, not particles that differ",
@@ -647,6 +657,7 @@ fn particle_finding(
         "residual_ratio".to_string(),
         serde_json::json!(c.residual_ratio),
     );
+    w.insert("wander_ratio".to_string(), serde_json::json!(c.wander_ratio));
     Some(super::diagnosis::Finding {
         effect: "particle_differences".into(),
         accepted: c.differ,
