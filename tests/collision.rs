@@ -463,6 +463,7 @@ fn shipped_truth(run: &str, material: &str, setup: Setup) -> Vec<Impact> {
     let model = Model {
         groove,
         friction,
+        variation: Default::default(),
         terms,
     };
     let t: Vec<f64> = (0..1000).map(|i| i as f64 * 1e-4).collect();

@@ -160,6 +160,7 @@ fn physics(mu: f64, terms: Vec<Term>) -> BTreeMap<String, (Model, [f64; 3])> {
             Model {
                 groove: Groove::CHAPTER,
                 friction: Friction::Constant { mu },
+                variation: Default::default(),
                 terms,
             },
             [0.0; 3],

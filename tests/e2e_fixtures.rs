@@ -100,6 +100,7 @@ fn rms_ratios(truth: &Truth) -> Vec<f64> {
             friction: Friction::Constant {
                 mu: material.friction.static_limit(),
             },
+            variation: Default::default(),
             terms: vec![Term::LinearDrag { t_s: 0.06 }],
         };
         for i in 0..10 {

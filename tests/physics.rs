@@ -127,6 +127,7 @@ fn model(mu: f64, terms: Vec<Term>) -> Model {
     Model {
         groove: Groove::CHAPTER,
         friction: Friction::Constant { mu },
+        variation: Default::default(),
         terms,
     }
 }
@@ -527,6 +528,7 @@ fn velocity_dependent_friction_slides_longer_and_tends_to_coulomb() {
                 mu_inf: 0.293,
                 v_c_mps: v_c,
             },
+            variation: Default::default(),
             terms: vec![Term::LinearDrag { t_s: 0.05 }],
         };
         simulate(&m, kick(0.02, 0.0), &t)
@@ -579,6 +581,7 @@ fn rolling_pair(
     let m = Model {
         groove,
         friction: Friction::Constant { mu: 0.337 },
+        variation: Default::default(),
         terms: t_drag
             .map(|t_s| vec![Term::LinearDrag { t_s }])
             .unwrap_or_default(),
@@ -773,6 +776,7 @@ fn a_slip_held_by_a_downhill_force_creeps_as_the_stiff_slide_does() {
             mu_inf: 0.3,
             v_c_mps: 5e-5,
         },
+        variation: Default::default(),
         terms: vec![
             Term::GrooveTilt { alpha_deg: -1.0 },
             Term::PositionForce {

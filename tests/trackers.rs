@@ -592,6 +592,7 @@ fn null_run(
     let model = Model {
         groove: FitOptions::default().groove(),
         friction: Friction::Constant { mu },
+        variation: Default::default(),
         terms: vec![Term::LinearDrag { t_s: 0.06 }],
     };
     let t_first = rng.random_range(0.0..1e-4);

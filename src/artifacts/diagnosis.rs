@@ -278,12 +278,20 @@ pub const CONTACT_NOT_PHYSICS: &str = "not friction or drag";
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
+    /// μ differs by the direction of motion.
+    DirectionDependentFriction,
     GrooveTilt,
     /// Collision runs only: the impacts do something the impulse rule misses.
     ImpactSpecificMismatch,
     /// Collision runs only: the pairs' friction or drag differ from the single runs'.
     PairPhysicsMismatch,
+    /// μ or T differ from particle to particle beyond the runs' noise, nothing else missing.
+    ParticleDifferences,
+    /// The camera's positions are distorted across the image (a measurement, no dynamics).
+    PositionDistortion,
     PositionDependentForce,
+    /// μ varies along the groove (fixed in the lab).
+    PositionDependentFriction,
     RollingResistance,
     /// A force that depends on the time since the kick (e.g. a vibration), not on z or v.
     TimeDependentForce,
@@ -294,11 +302,15 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in id order.
-    pub const ALL: [Effect; 9] = [
+    pub const ALL: [Effect; 13] = [
+        Effect::DirectionDependentFriction,
         Effect::GrooveTilt,
         Effect::ImpactSpecificMismatch,
         Effect::PairPhysicsMismatch,
+        Effect::ParticleDifferences,
         Effect::PositionDependentForce,
+        Effect::PositionDependentFriction,
+        Effect::PositionDistortion,
         Effect::RollingResistance,
         Effect::TimeDependentForce,
         Effect::Unexplained,
@@ -309,10 +321,14 @@ impl Effect {
     /// The id as written in diagnosis.json.
     pub fn id(self) -> &'static str {
         match self {
+            Effect::DirectionDependentFriction => "direction_dependent_friction",
             Effect::GrooveTilt => "groove_tilt",
             Effect::ImpactSpecificMismatch => "impact_specific_mismatch",
             Effect::PairPhysicsMismatch => "pair_physics_mismatch",
+            Effect::ParticleDifferences => "particle_differences",
             Effect::PositionDependentForce => "position_dependent_force",
+            Effect::PositionDependentFriction => "position_dependent_friction",
+            Effect::PositionDistortion => "position_distortion",
             Effect::RollingResistance => "rolling_resistance",
             Effect::TimeDependentForce => "time_dependent_force",
             Effect::Unexplained => "unexplained",
@@ -324,6 +340,25 @@ impl Effect {
     /// The effect of an id, if it is one.
     pub fn from_id(id: &str) -> Option<Effect> {
         Effect::ALL.into_iter().find(|e| e.id() == id)
+    }
+
+    /// Where the effect enters the equations (`where.place` of a finding): a force on the
+    /// particle, the particle–groove friction, the measurement, or the pair's contact.
+    pub fn place(self) -> &'static str {
+        match self {
+            Effect::DirectionDependentFriction
+            | Effect::PositionDependentFriction
+            | Effect::VelocityDependentFriction => "friction",
+            Effect::PositionDistortion => "measurement",
+            Effect::ParticleDifferences => "particles",
+            Effect::ImpactSpecificMismatch | Effect::PairPhysicsMismatch => "pair",
+            Effect::GrooveTilt
+            | Effect::PositionDependentForce
+            | Effect::RollingResistance
+            | Effect::TimeDependentForce
+            | Effect::Unexplained
+            | Effect::VelocityDependentDrag => "force",
+        }
     }
 }
 

@@ -42,6 +42,16 @@ pub enum Extra {
     },
     /// a(t) = A·sin(2π f t + φ_run), t since the kick, with each run's own phase (profiled).
     TimePeriodic { f_lo: f64, f_hi: f64 },
+    /// μ differs by the direction of motion: μ_m·(1 + δ·dir) (friction, not a force: it acts
+    /// while sliding and on the rolling hold only).
+    FrictionDirection,
+    /// μ varies along the lab: μ_m·(1 + p₁P₁(x) + p₂P₂(x)), x over the observed stretch.
+    FrictionPosition { z_mid_m: f64, half_span_m: f64 },
+    /// μ varies with the slip speed u: μ_m·(1 + β(|u|/u_ref − 1)), rising or falling.
+    FrictionSlip { u_ref_mps: f64 },
+    /// The camera distorts positions: z_meas = z + a₂P₂(x) + a₃P₃(x), x over the observed
+    /// stretch (the linear part is a length scale, which μ and T absorb exactly).
+    Distortion { z_mid_m: f64, half_span_m: f64 },
     /// The nonparametric model: a cubic B-spline in one variable with `segments` knot intervals.
     Spline {
         variable: Variable,
@@ -89,7 +99,25 @@ impl Extra {
             Extra::PeriodicZ { .. } | Extra::Localized { .. } => Some("position_dependent_force"),
             Extra::TimePeriodic { .. } => Some("time_dependent_force"),
             Extra::Spline { .. } => Some("unexplained"),
+            Extra::FrictionDirection => Some("direction_dependent_friction"),
+            Extra::FrictionPosition { .. } => Some("position_dependent_friction"),
+            Extra::FrictionSlip { .. } => Some("velocity_dependent_friction"),
+            Extra::Distortion { .. } => Some("position_distortion"),
             _ => None,
+        }
+    }
+
+    /// Where the term enters the equations: a force on the particle, the particle–groove
+    /// friction, or the measurement (probes: where they locate a mismatch).
+    pub fn place(&self) -> &'static str {
+        match self {
+            Extra::VelocityFriction { .. }
+            | Extra::FrictionDirection
+            | Extra::FrictionPosition { .. }
+            | Extra::FrictionSlip { .. }
+            | Extra::SpeedDriftMu { .. } => "friction",
+            Extra::Distortion { .. } => "measurement",
+            _ => "force",
         }
     }
 
@@ -123,6 +151,18 @@ impl Extra {
                 variable.label(),
                 segments + 3
             ),
+            Extra::FrictionDirection => {
+                "mu by direction: mu (1 + delta dir), while sliding and holding".into()
+            }
+            Extra::FrictionPosition { .. } => {
+                "mu along the groove: mu (1 + p1 P1(x) + p2 P2(x)), fixed in the lab".into()
+            }
+            Extra::FrictionSlip { .. } => {
+                "mu(u) = mu (1 + beta (|u|/u_ref - 1)), u slip speed".into()
+            }
+            Extra::Distortion { .. } => {
+                "distortion: z_meas = z + a2 P2(x) + a3 P3(x), x across the image".into()
+            }
             Extra::SpeedDriftT { .. } => "probe: T drifts with |v0|".into(),
             Extra::SpeedDriftMu { .. } => "probe: mu drifts with |v0|".into(),
             Extra::DirectionAsymmetry => "probe: mu and T differ by direction".into(),
@@ -141,6 +181,10 @@ impl Extra {
             Extra::Localized { .. } => "a localized force",
             Extra::TimePeriodic { .. } => "a periodic force in time",
             Extra::Spline { .. } => "a smooth force",
+            Extra::FrictionDirection => "a difference of friction by direction",
+            Extra::FrictionPosition { .. } => "a variation of friction along the groove",
+            Extra::FrictionSlip { .. } => "a slip-speed dependence of friction",
+            Extra::Distortion { .. } => "a distortion of the measured positions",
             _ => "a drift",
         }
     }
@@ -198,6 +242,16 @@ impl Extra {
             Extra::Spline { segments, .. } => (0..segments + 3)
                 .map(|j| p(&format!("coef{j}_mps2"), 0.0, -20.0, 20.0, 1e-4))
                 .collect(),
+            Extra::FrictionDirection => vec![p("delta_dir", 0.0, -0.9, 0.9, 1e-5)],
+            Extra::FrictionPosition { .. } => vec![
+                p("p1_rel", 0.0, -0.9, 0.9, 1e-5),
+                p("p2_rel", 0.0, -0.9, 0.9, 1e-5),
+            ],
+            Extra::FrictionSlip { .. } => vec![p("beta_rel", 0.0, -0.95, 5.0, 1e-5)],
+            Extra::Distortion { .. } => vec![
+                p("a2_m", 0.0, -1e-3, 1e-3, 1e-9),
+                p("a3_m", 0.0, -1e-3, 1e-3, 1e-9),
+            ],
             Extra::SpeedDriftT { .. } => vec![p("dT_dv_s_per_mps", 0.0, -1e3, 1e3, 1e-3)],
             Extra::SpeedDriftMu { .. } => vec![p("dmu_dv_s_per_m", 0.0, -1e3, 1e3, 1e-4)],
             Extra::DirectionAsymmetry => vec![
@@ -275,6 +329,8 @@ impl Spec {
                 Extra::PositionForce { .. }
                     | Extra::PeriodicZ { .. }
                     | Extra::Localized { .. }
+                    | Extra::FrictionPosition { .. }
+                    | Extra::Distortion { .. }
                     | Extra::Spline {
                         variable: Variable::Z,
                         ..
@@ -314,6 +370,8 @@ impl Spec {
             tilt_mps2: 0.0,
             position: Vec::new(),
             terms: Vec::new(),
+            variation: Default::default(),
+            distortion: None,
         };
         let mut quad = 0.0;
         let mut tp = None;
@@ -368,6 +426,30 @@ impl Spec {
                     dx: *dx,
                     coefs_mps2: x[..segments + 3].to_vec(),
                 })),
+                Extra::FrictionDirection => m.variation.by_direction = x[0],
+                Extra::FrictionPosition {
+                    z_mid_m,
+                    half_span_m,
+                } => {
+                    m.variation.z_mid_m = *z_mid_m;
+                    m.variation.half_span_m = *half_span_m;
+                    m.variation.by_position = [x[0], x[1]];
+                }
+                Extra::FrictionSlip { u_ref_mps } => {
+                    m.variation.u_ref_mps = *u_ref_mps;
+                    m.variation.by_slip = x[0];
+                }
+                Extra::Distortion {
+                    z_mid_m,
+                    half_span_m,
+                } => {
+                    m.distortion = Some(super::sim::Distortion {
+                        z_mid_m: *z_mid_m,
+                        half_span_m: *half_span_m,
+                        a2_m: x[0],
+                        a3_m: x[1],
+                    })
+                }
                 Extra::SpeedDriftT { v_ref_mps } => t_s += x[0] * (v0_mps.abs() - v_ref_mps),
                 Extra::SpeedDriftMu { v_ref_mps } => mu += x[0] * (v0_mps.abs() - v_ref_mps),
                 Extra::DirectionAsymmetry => {

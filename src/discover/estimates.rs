@@ -130,6 +130,63 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
             out.insert("x_lo".into(), est(*lo, 0.0));
             out.insert("x_hi".into(), est(hi, 0.0));
         }
+        Extra::FrictionDirection => {
+            out.insert("delta_dir".into(), est(g[off], se[off]));
+            for (k, name) in materials.iter().enumerate() {
+                let mu = g[k];
+                out.insert(format!("mu_forward_{name}"), est(mu * (1.0 + g[off]), f64::NAN));
+                out.insert(format!("mu_backward_{name}"), est(mu * (1.0 - g[off]), f64::NAN));
+            }
+        }
+        Extra::FrictionPosition {
+            z_mid_m,
+            half_span_m,
+        } => {
+            let (p1, p2) = (g[off], g[off + 1]);
+            let (mut peak, mut at) = (0.0f64, *z_mid_m);
+            for j in 0..=200 {
+                let x = -1.0 + 2.0 * j as f64 / 200.0;
+                let d = p1 * x + p2 * 0.5 * (3.0 * x * x - 1.0);
+                if d.abs() > peak.abs() {
+                    peak = d;
+                    at = z_mid_m + half_span_m * x;
+                }
+            }
+            out.insert("p1_rel".into(), est(p1, se[off]));
+            out.insert("p2_rel".into(), est(p2, se[off + 1]));
+            out.insert("peak_rel".into(), est(peak, f64::NAN));
+            out.insert("z_at_peak_m".into(), est(at, 0.0));
+            out.insert("z_lo_m".into(), est(z_mid_m - half_span_m, 0.0));
+            out.insert("z_hi_m".into(), est(z_mid_m + half_span_m, 0.0));
+        }
+        Extra::FrictionSlip { u_ref_mps } => {
+            out.insert("beta_rel".into(), est(g[off], se[off]));
+            out.insert("u_ref_mps".into(), est(*u_ref_mps, 0.0));
+            out.insert(
+                "dmu_rel_per_mps".into(),
+                est(g[off] / u_ref_mps, se[off] / u_ref_mps),
+            );
+        }
+        Extra::Distortion {
+            z_mid_m,
+            half_span_m,
+        } => {
+            let d = super::sim::Distortion {
+                z_mid_m: *z_mid_m,
+                half_span_m: *half_span_m,
+                a2_m: g[off],
+                a3_m: g[off + 1],
+            };
+            let peak = (0..=200)
+                .map(|j| {
+                    let z = z_mid_m + half_span_m * (-1.0 + 2.0 * j as f64 / 200.0);
+                    d.measured(z) - z
+                })
+                .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
+            out.insert("a2_m".into(), est(g[off], se[off]));
+            out.insert("a3_m".into(), est(g[off + 1], se[off + 1]));
+            out.insert("peak_shift_m".into(), est(peak, f64::NAN));
+        }
         Extra::SpeedDriftT { .. } | Extra::SpeedDriftMu { .. } | Extra::DirectionAsymmetry => {
             for (k, p) in m.spec.extras[i].params().iter().enumerate() {
                 out.insert(p.name.clone(), est(g[off + k], se[off + k]));

@@ -8,7 +8,8 @@ use super::candidate::{Extra, N_LOCAL};
 use super::cv::{cross_validate, folds, paired_t, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
-use super::estimates::{reported_parameters, scale_at_bound};
+use super::admissible::refusal;
+use super::estimates::reported_parameters;
 use super::holm::holm;
 use super::model::{data_starts, Model};
 use super::null_distribution::{empirical_p, NullFit};
@@ -334,7 +335,7 @@ impl Trials<'_> {
             ));
             let start = std::time::Instant::now();
             self.fitted[i] = self.full(i);
-            self.refused[i] = scale_at_bound(&self.fitted[i]);
+            self.refused[i] = refusal(&self.fitted[i]);
             let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
             trace_took(start, || {
@@ -433,7 +434,7 @@ impl Trials<'_> {
                 trace_took(start, || {
                     format!("round {}: {} + {} fitted", self.round, ea.form(), eb.form())
                 });
-                if scale_at_bound(&m).is_some() {
+                if refusal(&m).is_some() {
                     continue;
                 }
                 let (passes, cv, t) = self.held_out(&m);
@@ -518,7 +519,7 @@ impl Trials<'_> {
                 self.set.runs,
                 FULL_ITERATIONS,
             );
-            if scale_at_bound(&m).is_some() {
+            if refusal(&m).is_some() {
                 continue;
             }
             let (passes, cv, t_stat) = self.held_out(&m);
@@ -569,6 +570,27 @@ impl Trials<'_> {
             }
         }
     }
+}
+
+/// The candidates fitted in full that pass both tests and that held-out runs cannot tell from
+/// the accepted single term (paired t of the accepted over it within its critical value), with
+/// that t; none beside a pair.
+fn tied(tr: &Trials, ne: usize) -> Vec<(usize, f64)> {
+    let Some((b, b_cv)) = tr.best.as_ref() else {
+        return vec![];
+    };
+    if tr.pair.is_some() {
+        return vec![];
+    }
+    (0..ne)
+        .filter(|&j| j != *b && tr.refused[j].is_none())
+        .filter_map(|j| {
+            let (cv, t_base) = tr.cv_of[j].as_ref()?;
+            let passes = cv.cv_rms_m < tr.current_cv.cv_rms_m && *t_base > tr.t_cv;
+            let t = paired_t(cv, b_cv);
+            (passes && t <= tr.t_cv).then_some((j, t))
+        })
+        .collect()
 }
 
 /// The decision of candidate or probe `i` in words (and its CV in `ev`).
@@ -698,10 +720,24 @@ pub fn run_round(
         rows.push(row(round, e, &tr.fitted[i], set.materials, set.runs, ev));
     }
     let partner = tr.pair.as_ref().map(|(b, _, _)| *b);
+    let ties = tied(&tr, ne);
+    for &(j, t) in &ties {
+        rows[j].evidence.decision = format!(
+            "tie: passes both tests and predicts held-out runs as well as the accepted term (paired t = {t:.2}, within its critical value {:.2}): these data cannot tell the two apart",
+            tr.t_cv
+        );
+    }
     let accepted = tr.best.map(|(i, cv)| {
         rows[i].accepted = true;
         let Some((b, m, t)) = tr.pair else {
             rows[i].evidence.decision = "accepted: strongest term passing both tests".into();
+            if !ties.is_empty() {
+                let forms: Vec<String> = ties.iter().map(|&(j, _)| all[j].form()).collect();
+                rows[i].evidence.decision.push_str(&format!(
+                    "; tied with {}: these data cannot tell them apart, and this one, simpler or stronger, is in the model",
+                    forms.join(" and ")
+                ));
+            }
             return (i, tr.fitted[i].clone(), cv);
         };
         let effect = |k: usize| all[k].effect().unwrap_or("probe").replace('_', " ");
@@ -746,8 +782,11 @@ pub fn finding(
     row: &CandidateRow,
     before: ModelScore,
     after: ModelScore,
-    where_: BTreeMap<String, serde_json::Value>,
+    mut where_: BTreeMap<String, serde_json::Value>,
 ) -> Finding {
+    if let Some(e) = crate::artifacts::diagnosis::Effect::from_id(&row.effect) {
+        where_.insert("place".into(), serde_json::json!(e.place()));
+    }
     Finding {
         effect: row.effect.clone(),
         accepted: row.accepted,

@@ -2,6 +2,7 @@
 //!
 //! Files of this folder:
 //!
+//! - `admissible.rs`: Whether a fitted term is physics (its search resolved it; a dissipation never pushes)
 //! - `candidate.rs`: The candidate physics library and the joint model's parameter layout
 //! - `cv.rs`: Leave-runs-out cross-validation of the simulated trajectories
 //! - `data.rs`: The runs discovery works on
@@ -19,11 +20,13 @@
 //! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
 //! - `pairs.rs`: Discovery on pairs
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
+//! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
 //! - `proposal.rs`: Proposals: from the residuals of the current model
 //! - `residual_structure.rs`: Where a model misses
 //! - `response.rs`: Linear response of a fitted run to a small extra acceleration
 //! - `run.rs`: The whole discovery on a set of recordings
+//! - `run_phase.rs`: The held-out error under a phase of each run's own (chosen on one half, scored on the other)
 //! - `screen.rs`: The screen: every candidate's likelihood-ratio statistic and its parametric-bootstrap null
 //! - `screen_sums.rs`: The screen's linear algebra
 //! - `selection.rs`: The state a discovery carries between its steps (`Ctx`, `Selection`, `Accepted`)
@@ -34,11 +37,29 @@
 //!
 //! The method in brief: per-run baseline fits measure each run's noise and flag outliers; a joint
 //! model shares the physics (μ and T per material, plus extra terms) over every run with per-run
-//! z0, t0, v0. Candidate terms from a physical library are tested against the current model by a
-//! likelihood ratio whose null comes from a parametric bootstrap with each run's measured AR(1)
-//! noise, Holm-corrected over the candidates, and by leave-runs-out cross-validation; the strongest
-//! term passing both is added and the search repeats. Drift probes (T or μ drifting with |v0|, a
-//! direction asymmetry), fitted inside the joint model, say whether a mismatch is left unexplained.
+//! z0, t0, v0. Missing physics enters in one of a few **places**, and the library has forms for
+//! each (`Extra::place`, `where.place` of a finding):
+//!
+//! - a **force** on the particle, a(z, v, t): the drags, a rolling resistance, a tilt, forces
+//!   periodic or localized in lab z, a force periodic in time, a spline (the fallback);
+//! - the particle–groove **friction**, acting only while sliding and on what holds rolling:
+//!   μ(u) of the slip speed (saturating, or linear: rising or falling), μ by direction of motion,
+//!   μ along the groove (a gradient and a curvature over the observed stretch);
+//! - the **measurement**: a smooth distortion of the positions across the image (its linear part,
+//!   a length scale, is exactly μ and T over again and cannot be told from single runs);
+//! - **differences between particles**: μ and T scattering from run to run (`particles.rs`),
+//!   tested after the terms.
+//!
+//! Every form of every place competes in the same screen, so the place is decided by the data,
+//! not by an order. A candidate is tested by a likelihood ratio whose null comes from each run's
+//! measured AR(1) noise, scaled up by the data's overdispersion (pooled over runs, and in slow
+//! shapes per run, where a wandering tracker noise piles up; `screen_sums::Vectors`), Holm-
+//! corrected, and then by leave-runs-out cross-validation (a phase of each run's own is chosen on
+//! one half of the held-out run and scored on the other, `run_phase.rs`). A term that passes both
+//! must also be physics (`admissible.rs`: a drag that pushes the particle is refused). Two forms
+//! that held-out runs cannot tell apart are said as a tie. The strongest term is added and the
+//! search repeats. Drift probes (T or μ drifting with |v0|, a direction asymmetry), fitted inside
+//! the joint model, say whether a mismatch is left unexplained.
 //!
 //! # How discovery decides
 //!
@@ -225,6 +246,7 @@
 //! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times on stderr (not in any
 //! output).
 
+pub mod admissible;
 pub mod candidate;
 pub mod cv;
 pub mod data;
@@ -242,12 +264,14 @@ pub mod noise;
 pub mod noise_floor;
 pub mod null_distribution;
 pub mod pairs;
+mod particles;
 mod pairs_impact;
 pub mod perrun;
 pub mod proposal;
 pub mod residual_structure;
 pub mod response;
 pub mod run;
+mod run_phase;
 pub mod screen;
 mod screen_sums;
 mod selection;
@@ -263,13 +287,16 @@ use serde::{Deserialize, Serialize};
 pub use crate::physics::G_MPS2;
 
 /// Every candidate effect id the library knows, in the order they are listed.
-pub const EFFECTS: [&str; 6] = [
+pub const EFFECTS: [&str; 9] = [
     "velocity_dependent_drag",
     "rolling_resistance",
     "groove_tilt",
     "velocity_dependent_friction",
+    "direction_dependent_friction",
+    "position_dependent_friction",
     "position_dependent_force",
     "time_dependent_force",
+    "position_distortion",
 ];
 
 /// Settings of a discovery (the `discover` stage params, plus the seed).

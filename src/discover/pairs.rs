@@ -128,6 +128,7 @@ pub fn single_run_physics(
     Ok(Model {
         groove,
         friction: Friction::Constant { mu },
+        variation: Default::default(),
         terms,
     })
 }
@@ -796,7 +797,10 @@ pub fn add_pair_findings(
             Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
         }
     }
-    let (findings, more) = check_pairs(recordings, &physics, groove, 80);
+    let (mut findings, more) = check_pairs(recordings, &physics, groove, 80);
+    for f in &mut findings {
+        f.where_.insert("place".into(), serde_json::json!("pair"));
+    }
     diagnosis.findings.extend(findings);
     // a material already said to be untested needs no second note
     let untested: Vec<String> = diagnosis

@@ -28,6 +28,8 @@ pub struct Ranges {
     /// Longest time since the kick (s) and the highest frequency searched (Nyquist, Hz).
     pub duration_s: f64,
     pub f_max_hz: f64,
+    /// The runs' median early speed (m/s): the reference of a friction varying with slip speed.
+    pub v_ref_mps: f64,
 }
 
 impl Ranges {
@@ -36,6 +38,7 @@ impl Ranges {
         let mut steps = Vec::new();
         let mut duration: f64 = 0.0;
         let mut fps = f64::INFINITY;
+        let mut speeds = Vec::new();
         for r in runs {
             let kept: Vec<(f64, f64)> = r
                 .t_s
@@ -47,6 +50,12 @@ impl Ranges {
                 .collect();
             for w in kept.windows(2) {
                 steps.push((w[1].1 - w[0].1).abs());
+            }
+            // the run's early speed: over its first few kept samples
+            if let (Some(a), Some(b)) = (kept.first(), kept.get(5.min(kept.len().saturating_sub(1)))) {
+                if b.0 > a.0 {
+                    speeds.push(((b.1 - a.1) / (b.0 - a.0)).abs());
+                }
             }
             for (t, z) in &kept {
                 lo = lo.min(*z);
@@ -60,6 +69,8 @@ impl Ranges {
         steps.sort_by(f64::total_cmp);
         let dz_med = steps.get(steps.len() / 2).copied().unwrap_or(1e-6);
         let span = (hi - lo).max(1e-6);
+        speeds.sort_by(f64::total_cmp);
+        let v_ref = speeds.get(speeds.len() / 2).copied().unwrap_or(0.0);
         Ranges {
             z_lo: lo,
             z_hi: hi,
@@ -67,6 +78,7 @@ impl Ranges {
             lambda_min_m: (2.0 * dz_med).max(span / 100.0),
             duration_s: duration.max(1e-3),
             f_max_hz: if fps.is_finite() { 0.5 * fps } else { 5e3 },
+            v_ref_mps: if v_ref > 0.0 { v_ref } else { 0.01 },
         }
     }
 
@@ -84,6 +96,29 @@ impl Ranges {
             z_ref_m: self.z_ref(),
             k_lo: 0.5 * TAU / self.span(),
             k_hi: 1.5 * TAU / self.lambda_min_m,
+        }
+    }
+
+    /// μ varying along the observed stretch of groove.
+    pub fn friction_position(&self) -> Extra {
+        Extra::FrictionPosition {
+            z_mid_m: self.z_ref(),
+            half_span_m: 0.5 * self.span(),
+        }
+    }
+
+    /// μ varying with the slip speed, about the runs' median early speed.
+    pub fn friction_slip(&self) -> Extra {
+        Extra::FrictionSlip {
+            u_ref_mps: self.v_ref_mps,
+        }
+    }
+
+    /// The camera's positions distorted over the observed stretch.
+    pub fn distortion(&self) -> Extra {
+        Extra::Distortion {
+            z_mid_m: self.z_ref(),
+            half_span_m: 0.5 * self.span(),
         }
     }
 

@@ -379,6 +379,8 @@ mod tests {
             tilt_mps2: 0.0,
             position: vec![],
             terms: vec![],
+            variation: Default::default(),
+            distortion: None,
         }
     }
 

@@ -31,9 +31,15 @@ fn library(opts: &Options, n_materials: usize, rg: &Ranges) -> Vec<Extra> {
             }
             "rolling_resistance" => out.push(Extra::RollingResistance),
             "groove_tilt" => out.push(Extra::GrooveTilt),
-            "velocity_dependent_friction" => out.push(Extra::VelocityFriction {
-                materials: n_materials,
-            }),
+            "velocity_dependent_friction" => {
+                out.push(Extra::VelocityFriction {
+                    materials: n_materials,
+                });
+                out.push(rg.friction_slip());
+            }
+            "direction_dependent_friction" => out.push(Extra::FrictionDirection),
+            "position_dependent_friction" => out.push(rg.friction_position()),
+            "position_distortion" => out.push(rg.distortion()),
             "position_dependent_force" => {
                 out.push(rg.periodic_z());
                 out.push(rg.localized());
@@ -511,13 +517,18 @@ pub fn discover_reporting(
     let drift = drift_of(&sel.current, &per_run, &ctx);
     ctx.trace("drift done");
     let final_score = sel.current.score(&runs, Some(&sel.current_cv));
-    let findings = findings_of(
+    let mut findings = findings_of(
         &sel,
         fallback.as_ref(),
         [&residuals_before, &residuals_after],
         &final_score,
         &ctx,
     );
+    say("testing whether the particles differ");
+    if let Some(f) = particle_finding(&sel.current, &runs, &materials, opts, &final_score) {
+        findings.insert(sel.accepted.len(), f);
+    }
+    ctx.trace("particles checked");
     let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {
         mismatch: any_accepted || !sel.unexplained.is_empty(),
@@ -539,6 +550,96 @@ pub fn discover_reporting(
         settings: settings(opts),
         note: String::new(),
     }
+}
+
+/// The finding of `particles::check` on the final model: accepted when the particles differ,
+/// a row saying so otherwise (None when the check cannot run: fewer than 4 runs of a material,
+/// or a friction law per material that one run's own fit cannot carry).
+fn particle_finding(
+    current: &Model,
+    runs: &[RunData],
+    materials: &[String],
+    opts: &Options,
+    score: &ModelScore,
+) -> Option<crate::artifacts::diagnosis::Finding> {
+    if materials.len() > 1
+        && current
+            .spec
+            .extras
+            .iter()
+            .any(|e| matches!(e, Extra::VelocityFriction { .. }))
+    {
+        return None;
+    }
+    let c = super::particles::check(current, runs, materials, opts.alpha, opts.seed ^ 0x5EED_0F_9A27)?;
+    let mut parameters = BTreeMap::new();
+    let est = crate::artifacts::Estimate::new;
+    for s in &c.spreads {
+        let m = &s.material;
+        parameters.insert(format!("mu_{m}"), est(s.mu, f64::NAN));
+        parameters.insert(format!("t_s_{m}"), est(s.t_s, f64::NAN));
+        parameters.insert(format!("n_runs_{m}"), est(s.n_runs as f64, 0.0));
+        parameters.insert(format!("mu_sd_{m}"), est(s.mu_sd, f64::NAN));
+        parameters.insert(format!("t_sd_s_{m}"), est(s.t_sd, f64::NAN));
+        parameters.insert(format!("mu_se_run_{m}"), est(s.mu_se, f64::NAN));
+        parameters.insert(format!("t_se_run_s_{m}"), est(s.t_se, f64::NAN));
+    }
+    let decision = if c.differ {
+        format!(
+            "accepted: the runs' own mu and T take up {:.2}x what the noise gives them while what they leave is {:.2}x the noise's (p = {:.2e})",
+            c.f, c.residual_ratio, c.p_value
+        )
+    } else if c.p_value < opts.alpha && c.wander_ratio > super::particles::WANDER_LIMIT {
+        format!(
+            "undecided: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but the runs' noise wanders over many frames ({:.2}x the measured noise in slow shapes mu and T cannot make), and a run's own mu and T take up such a noise as well: these data cannot tell particles that differ from a wandering tracker",
+            c.f, c.p_value, c.wander_ratio
+        )
+    } else if c.p_value < opts.alpha && c.f < super::particles::MIN_RATIO {
+        format!(
+            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), less than the {:.1}x a difference between particles must show",
+            c.f, c.p_value, super::particles::MIN_RATIO
+        )
+    } else if c.p_value < opts.alpha {
+        format!(
+            "rejected: the runs' own mu and T take up more than noise ({:.2}x, p = {:.2e}), but leave {:.2}x the noise: something the equations lack, not particles that differ",
+            c.f, c.p_value, c.residual_ratio
+        )
+    } else {
+        format!(
+            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2}): the particles agree within their noise",
+            c.f, c.p_value
+        )
+    };
+    let mut w = BTreeMap::new();
+    w.insert("place".to_string(), serde_json::json!("particles"));
+    w.insert(
+        "residual_ratio".to_string(),
+        serde_json::json!(c.residual_ratio),
+    );
+    w.insert("wander_ratio".to_string(), serde_json::json!(c.wander_ratio));
+    Some(crate::artifacts::diagnosis::Finding {
+        effect: "particle_differences".into(),
+        accepted: c.differ,
+        form: "mu and T of each particle scatter about the material's".into(),
+        parameters,
+        evidence: crate::artifacts::diagnosis::Evidence {
+            round: 0,
+            lr: c.lr,
+            extra_params: 2 * runs.len().saturating_sub(materials.len()),
+            bootstrap_replicates: 200,
+            null_mean_lr: c.lr_null_mean,
+            p_value: c.p_value,
+            p_empirical: c.p_value,
+            p_holm: c.p_value,
+            cv_paired_t: None,
+            cv_rms_m: None,
+            decision,
+            detection_limit: None,
+        },
+        where_: w,
+        baseline: score.clone(),
+        extended: score.clone(),
+    })
 }
 
 #[cfg(test)]

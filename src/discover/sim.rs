@@ -36,6 +36,29 @@ pub struct SimModel {
     /// Further physics terms (localized, time-periodic and spline forces), passed to the
     /// integrator as they are.
     pub terms: Vec<crate::physics::Term>,
+    /// How μ varies with direction, position and slip speed (none by default).
+    pub variation: crate::physics::FrictionVariation,
+    /// What the camera does to the positions (None: it records them as they are).
+    pub distortion: Option<Distortion>,
+}
+
+/// A smooth distortion of the measured positions across the image: `z_meas = z + a₂P₂(x) +
+/// a₃P₃(x)`, `x = (z − z_mid)/half_span` (Legendre polynomials: no constant or linear part,
+/// which the run's offset and the physics' scale take).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Distortion {
+    pub z_mid_m: f64,
+    pub half_span_m: f64,
+    pub a2_m: f64,
+    pub a3_m: f64,
+}
+
+impl Distortion {
+    /// The measured position of a particle at `z_m`.
+    pub fn measured(&self, z_m: f64) -> f64 {
+        let x = (z_m - self.z_mid_m) / self.half_span_m.max(1e-9);
+        z_m + self.a2_m * 0.5 * (3.0 * x * x - 1.0) + self.a3_m * 0.5 * (5.0 * x * x * x - 3.0 * x)
+    }
 }
 
 /// Motion phase at a sample.
@@ -87,6 +110,7 @@ impl SimModel {
                     v_c_mps,
                 },
             },
+            variation: self.variation,
             terms,
         }
     }
@@ -109,6 +133,9 @@ impl SimModel {
         };
         let traj = crate::physics::simulate(&self.to_physics(), init, t_s);
         z_out.copy_from_slice(&traj.z_m);
+        if let Some(d) = &self.distortion {
+            z_out.iter_mut().for_each(|z| *z = d.measured(*z));
+        }
         if let Some(v) = v_out {
             v.copy_from_slice(&traj.v_mps);
         }

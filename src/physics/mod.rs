@@ -7,6 +7,7 @@
 //! - `baseline.rs`: The closed-form baseline
 //! - `constants.rs`: Physical constants used throughout the physics module
 //! - `friction.rs`: Particle–groove friction
+//! - `friction_variation.rs`: How μ varies by direction, position and slip speed beyond its law
 //! - `groove.rs`: The groove geometry
 //! - `hermite.rs`: Interpolation inside one integration step
 //! - `impulse.rs`: The collision impulse between two equal spheres in the groove
@@ -131,6 +132,7 @@ mod advance;
 mod baseline;
 mod constants;
 mod friction;
+mod friction_variation;
 mod groove;
 mod hermite;
 pub mod impulse;
@@ -148,6 +150,7 @@ mod trajectory;
 pub use baseline::Baseline;
 pub use constants::G_MPS2;
 pub use friction::Friction;
+pub use friction_variation::FrictionVariation;
 pub use groove::Groove;
 pub use model::{Model, State};
 pub use pair::{simulate_pair, Impact, PairParams, PairTrajectory, V_TOGETHER_MPS};

@@ -88,7 +88,9 @@ fn onto_creep(m: &Model, d: f64, dir: f64, y: &[f64; 3], t: f64) -> [f64; 3] {
 /// The creep's entry function at state `y` (negative: the slide may creep), or None when the
 /// friction is not velocity-dependent.
 fn creep_entry(m: &Model, d: f64, dir: f64, y: &[f64; 3], t: f64) -> Option<f64> {
-    if !matches!(m.friction, Friction::VelocityDependent { .. }) {
+    // the quasi-static slip is that of the law alone: with a variation of μ on top the slide is
+    // integrated as it is (stiff, so in small steps, but exact)
+    if !matches!(m.friction, Friction::VelocityDependent { .. }) || !m.variation.is_none() {
         return None;
     }
     let u = y[1] - m.groove.s * y[2];
@@ -123,10 +125,16 @@ fn sign_or(x: f64, fallback: f64) -> f64 {
     }
 }
 
-/// Friction can hold the rolling constraint against the extra acceleration `a`.
-fn can_roll(m: &Model, a: f64) -> bool {
+/// Largest friction coefficient available at zero slip at `z`, moving in direction `dir`.
+fn hold_mu(m: &Model, z: f64, dir: f64) -> f64 {
+    m.friction.static_limit() * m.variation.factor(z, dir, 0.0)
+}
+
+/// Friction can hold the rolling constraint at `z` (direction `dir`) against the extra
+/// acceleration `a`.
+fn can_roll(m: &Model, z: f64, dir: f64, a: f64) -> bool {
     let g = &m.groove;
-    (g.s * a / (1.0 + g.ks2())).abs() <= G_MPS2 * m.friction.static_limit() * (1.0 + 1e-12)
+    (g.s * a / (1.0 + g.ks2())).abs() <= G_MPS2 * hold_mu(m, z, dir) * (1.0 + 1e-12)
 }
 
 impl Mode {
@@ -161,7 +169,8 @@ impl Mode {
         let g = &m.groove;
         match *self {
             Mode::Slide { d, dir } => {
-                let mu = m.friction.kinetic(y[1] - g.s * y[2]);
+                let slip = y[1] - g.s * y[2];
+                let mu = m.friction.kinetic(slip) * m.variation.factor(y[0], dir, slip);
                 let a = accel(m, y[0], y[1], t, dir);
                 [y[1], -d * G_MPS2 * mu / g.s + a, d * g.k * G_MPS2 * mu]
             }
@@ -224,7 +233,7 @@ impl Mode {
                 let a = accel(m, y[0], y[1], t, dir);
                 let need = (g.s * a / (1.0 + g.ks2())).abs();
                 // the same slack as `can_roll`
-                let limit = G_MPS2 * m.friction.static_limit() * (1.0 + 1e-12);
+                let limit = G_MPS2 * hold_mu(m, y[0], dir) * (1.0 + 1e-12);
                 [limit - need, y[1] * dir]
             }
             // z is fixed at rest, so only a force in time can outgrow what holds the particle
@@ -298,7 +307,7 @@ pub(crate) fn settle(m: &Model, z: f64, v: f64, t: f64) -> (Mode, [f64; 3]) {
         }
         let dir = a_static.signum();
         let a = accel(m, z, 0.0, t, dir);
-        let mode = if can_roll(m, a) {
+        let mode = if can_roll(m, z, dir, a) {
             Mode::Roll { dir }
         } else {
             Mode::Slide { d: a.signum(), dir }
@@ -307,7 +316,7 @@ pub(crate) fn settle(m: &Model, z: f64, v: f64, t: f64) -> (Mode, [f64; 3]) {
     }
     let dir = v.signum();
     let a = m.accel(z, v, t);
-    let mode = if can_roll(m, a) {
+    let mode = if can_roll(m, z, dir, a) {
         Mode::Roll { dir }
     } else {
         Mode::Slide {
@@ -348,6 +357,7 @@ mod tests {
                 mu_inf: 0.3,
                 v_c_mps,
             },
+            variation: Default::default(),
             terms: vec![Term::GrooveTilt { alpha_deg: -1.0 }],
         }
     }

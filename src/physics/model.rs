@@ -1,6 +1,6 @@
 //! A one-particle model (groove, friction law, extra terms) and the particle state.
 
-use super::{Friction, Groove, Term};
+use super::{Friction, FrictionVariation, Groove, Term};
 use serde::{Deserialize, Serialize};
 
 /// Everything that sets the motion of one particle in the groove.
@@ -8,6 +8,9 @@ use serde::{Deserialize, Serialize};
 pub struct Model {
     pub groove: Groove,
     pub friction: Friction,
+    /// How μ varies with direction, position and slip speed beyond its law (none by default).
+    #[serde(default, skip_serializing_if = "FrictionVariation::is_none")]
+    pub variation: FrictionVariation,
     pub terms: Vec<Term>,
 }
 
@@ -25,6 +28,7 @@ impl Model {
         Model {
             groove: Groove::CHAPTER,
             friction: Friction::Constant { mu },
+            variation: FrictionVariation::default(),
             terms: vec![Term::LinearDrag { t_s: t_drag_s }],
         }
     }

@@ -206,6 +206,7 @@ impl Truth {
         Model {
             groove: self.groove(),
             friction: material.friction,
+            variation: Default::default(),
             terms: self.physics.terms.clone(),
         }
     }

@@ -16,6 +16,7 @@ fn main() {
     let extra = Model {
         groove: Groove::CHAPTER,
         friction: Friction::Constant { mu: 0.337 },
+        variation: Default::default(),
         terms: vec![
             Term::LinearDrag { t_s: 0.1 },
             Term::QuadraticDrag { c_per_m: 2.0 },
@@ -35,6 +36,7 @@ fn main() {
             mu_inf: 0.337,
             v_c_mps: 5e-5,
         },
+        variation: Default::default(),
         terms: vec![
             Term::LinearDrag { t_s: 0.1 },
             Term::GrooveTilt { alpha_deg: 0.5 },

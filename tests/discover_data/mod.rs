@@ -65,6 +65,8 @@ impl Truth {
                 .map(|(a, lambda, ph)| vec![(a, 2.0 * std::f64::consts::PI / lambda, ph)])
                 .unwrap_or_default(),
             terms: vec![],
+            variation: Default::default(),
+            distortion: None,
         }
     }
 }

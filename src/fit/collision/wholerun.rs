@@ -310,6 +310,7 @@ impl FitSpec {
         Model {
             groove: self.groove,
             friction: Friction::Constant { mu: p[MU_PG] },
+            variation: Default::default(),
             terms,
         }
     }

@@ -1,0 +1,81 @@
+//! How the groove's friction coefficient varies beyond its law in the slip speed: a factor on μ
+//! by the direction of motion, by the position in the lab and by the slip speed.
+//!
+//! `μ_eff = μ(u) · (1 + δ_dir·dir) · (1 + p₁ P₁(x) + p₂ P₂(x)) · (1 + β (|u|/u_ref − 1))`, with
+//! `dir = ±1` the direction of motion, `x = (z − z_mid)/half_span` held in [−1, 1] and P₁, P₂ the
+//! Legendre polynomials (a gradient and a curvature over the observed stretch of groove), `u` the
+//! slip speed. The factor never goes below zero. It acts wherever friction acts: on the sliding
+//! motion and on what friction can hold while rolling (at zero slip), and nowhere else, which is
+//! what sets it apart from a force: a pure rolling phase does not feel it.
+
+use serde::{Deserialize, Serialize};
+
+/// The variation of μ beyond its law (every field 0: none).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FrictionVariation {
+    /// Relative difference by direction of motion: μ × (1 + by_direction · dir).
+    pub by_direction: f64,
+    /// Centre and half-length of the stretch the position variation is laid on (m; 0: none).
+    pub z_mid_m: f64,
+    pub half_span_m: f64,
+    /// Relative gradient and curvature over that stretch (Legendre P₁, P₂ coefficients).
+    pub by_position: [f64; 2],
+    /// Reference slip speed of the slip variation (m/s; 0: none).
+    pub u_ref_mps: f64,
+    /// Relative change of μ per u_ref of slip speed, about u_ref.
+    pub by_slip: f64,
+}
+
+impl FrictionVariation {
+    /// True when μ does not vary (the default).
+    pub fn is_none(&self) -> bool {
+        *self == FrictionVariation::default()
+    }
+
+    /// The factor on μ at lab position `z_m`, direction of motion `dir` and slip speed `slip_mps`.
+    pub fn factor(&self, z_m: f64, dir: f64, slip_mps: f64) -> f64 {
+        let mut f = 1.0 + self.by_direction * dir.signum();
+        if self.half_span_m > 0.0 {
+            let x = ((z_m - self.z_mid_m) / self.half_span_m).clamp(-1.0, 1.0);
+            f *= 1.0 + self.by_position[0] * x + self.by_position[1] * 0.5 * (3.0 * x * x - 1.0);
+        }
+        if self.u_ref_mps > 0.0 {
+            f *= 1.0 + self.by_slip * (slip_mps.abs() / self.u_ref_mps - 1.0);
+        }
+        f.max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FrictionVariation;
+
+    #[test]
+    fn the_factor_is_one_without_variation_and_follows_each_part() {
+        let none = FrictionVariation::default();
+        assert_eq!(none.factor(0.003, -1.0, 0.02), 1.0);
+        let dir = FrictionVariation {
+            by_direction: 0.1,
+            ..none
+        };
+        assert!((dir.factor(0.0, 1.0, 0.0) - 1.1).abs() < 1e-12);
+        assert!((dir.factor(0.0, -1.0, 0.0) - 0.9).abs() < 1e-12);
+        let pos = FrictionVariation {
+            z_mid_m: 0.005,
+            half_span_m: 0.005,
+            by_position: [0.2, 0.0],
+            ..none
+        };
+        assert!((pos.factor(0.010, 1.0, 0.0) - 1.2).abs() < 1e-12);
+        assert!((pos.factor(0.050, 1.0, 0.0) - 1.2).abs() < 1e-12, "held at the end");
+        let slip = FrictionVariation {
+            u_ref_mps: 0.01,
+            by_slip: -0.3,
+            ..none
+        };
+        assert!((slip.factor(0.0, 1.0, 0.0) - 1.3).abs() < 1e-12);
+        assert!((slip.factor(0.0, 1.0, 0.02) - 0.7).abs() < 1e-12);
+        assert_eq!(slip.factor(0.0, 1.0, 0.1), 0.0, "never below zero");
+    }
+}
