@@ -9,6 +9,7 @@
 //! standard error, interval) with the adapters that keep each file's shape; `contract` lists the documented fields of
 //! the published files for the README; `nan_null` carries a not-computed number as JSON `null`.
 
+pub mod checked_json;
 pub mod collision_fit;
 pub mod comparison;
 pub mod contract;
