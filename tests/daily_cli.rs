@@ -383,7 +383,7 @@ fn run_ingest_alone_names_no_report() {
     let last = said.lines().last().unwrap();
     assert!(!last.contains("report:"), "{last}");
     assert!(
-        last.contains("results in the store") && last.contains("groove show ingest:OUTPUT"),
+        last.contains("results in the store") && last.contains("`groove show ingest:runs`"),
         "{last}"
     );
 }

@@ -268,8 +268,12 @@ fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSumm
     let place = if written.contains(&&report) && report.is_file() {
         format!("report: {}", openable(&report))
     } else if written.is_empty() {
-        let first = done.first().map_or("STAGE", |s| s.as_str());
-        format!("results in the store (`groove show {first}:OUTPUT` prints one)")
+        let first = done
+            .first()
+            .and_then(|s| pipeline.stages.get(s.as_str()))
+            .and_then(|spec| Some(format!("{}:{}", spec.name, spec.outputs.keys().next()?)))
+            .unwrap_or_else(|| "STAGE:OUTPUT".to_string());
+        format!("results in the store (`groove show {first}` prints one)")
     } else {
         let mut shown: Vec<String> = written.iter().map(|p| openable(p)).collect();
         shown.sort();
