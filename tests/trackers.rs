@@ -909,3 +909,93 @@ fn the_report_says_how_many_suspect_first_fits_the_restarts_recovered() {
     let md = std::fs::read_to_string(p.path().join("reports/report.md")).unwrap();
     assert!(md.contains(&note), "{md}");
 }
+
+/// The TrackMate CSV fixture with one more track (id 99) in `frames`, its x position `x_of(frame)`.
+fn trackmate_with_track(frames: std::ops::Range<i64>, x_of: impl Fn(i64) -> f64) -> Files {
+    let mut files = folder("trackmate_csv");
+    let name = "Spots in tracks statistics.csv";
+    let mut text = String::from_utf8(files[name].clone()).unwrap();
+    for f in frames {
+        text += &format!(
+            "ID{},{},99,5000.0,{},300.0,0.0,{},{f},150.0,1,50.0\n",
+            90_000 + f,
+            90_000 + f,
+            x_of(f),
+            f as f64 * 1e-4
+        );
+    }
+    files.insert(name.to_string(), text.into_bytes());
+    files
+}
+
+#[test]
+fn a_still_track_longer_than_the_sphere_s_is_left_out_and_said() {
+    let base = ingest_ok(&folder("trackmate_csv"), &IngestParams::default());
+    let frames = base.recordings[0].tracks[0].frame.clone();
+    let (lo, hi) = (frames[0], *frames.last().unwrap());
+    // a speck of dust: tracked from before the sphere's first frame to after its last, jittering
+    // by a few hundredths of a micron
+    let files = trackmate_with_track(lo - 20..hi + 21, |f| {
+        4000.0 + 0.03 * ((f * f * 7919 + 31 * f + 101).rem_euclid(97)) as f64 / 97.0
+    });
+    let got = ingest_ok(&files, &IngestParams::default());
+    assert_eq!(
+        got.recordings[0].tracks, base.recordings[0].tracks,
+        "the moving track is the one kept, whole"
+    );
+    let said: Vec<&str> = got.skipped.iter().map(|s| s.reason.as_str()).collect();
+    let note = said
+        .iter()
+        .find(|r| r.starts_with("track 99 "))
+        .unwrap_or_else(|| panic!("the still track is not said: {said:?}"));
+    assert!(
+        note.contains("left out") && note.contains("still object"),
+        "{note}"
+    );
+}
+
+/// A trackpy export of runs whose tracks wander as much along x as along y (cells, colloids):
+/// four runs on ellipses, two wider along x and two along y.
+fn wandering_tracks() -> Files {
+    let mut runs = String::from("run,material,diameter_m,fps,experiment\n");
+    let mut tracks = String::from("run,x,y,frame,particle\n");
+    for k in 0..4 {
+        let run = format!("cell-{k}");
+        runs += &format!("{run},316,0.0003,10000,single\n");
+        let (ax, ay) = if k % 2 == 0 {
+            (100.0, 130.0)
+        } else {
+            (130.0, 100.0)
+        };
+        for f in 0..200 {
+            let phase = f as f64 / 200.0 * std::f64::consts::TAU;
+            tracks += &format!(
+                "{run},{},{},{f},0\n",
+                500.0 + ax * phase.cos(),
+                500.0 + ay * phase.sin()
+            );
+        }
+    }
+    BTreeMap::from([
+        ("runs.csv".to_string(), runs.into_bytes()),
+        ("tracks.csv".to_string(), tracks.into_bytes()),
+    ])
+}
+
+#[test]
+fn the_axis_advice_does_not_flip_on_tracks_that_wander_along_both_axes() {
+    let files = wandering_tracks();
+    for axis in [Axis::X, Axis::Y] {
+        let mut p = params();
+        p.calibration.axis = axis;
+        let err = ingest::ingest(&files, &p)
+            .expect_err("not groove recordings")
+            .to_string();
+        assert!(err.contains("cannot be confirmed"), "{axis:?}: {err}");
+        assert!(err.contains("as cells or colloids do"), "{axis:?}: {err}");
+        assert!(
+            !err.contains("set calibration.axis"),
+            "{axis:?}: advice to flip: {err}"
+        );
+    }
+}

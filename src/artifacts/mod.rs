@@ -54,6 +54,7 @@
 //!   `time_dependent_force`, `unexplained`;
 //! - `report.html` (one self-contained file), `report.md` and `figures/*.svg`.
 
+pub mod checked_json;
 pub mod collision_fit;
 pub mod collision_summary;
 pub mod comparison;

@@ -5,8 +5,9 @@ use std::path::PathBuf;
 
 /// Run a whole groove-experiment analysis with one command; rerun only what went stale.
 ///
-/// Exit codes: 0 success; 1 ran, but a check failed (`publish` with stale stages);
-/// 2 error (bad config, bad data, IO, a stage failed).
+/// Exit codes: 0 success; 1 ran, but a check failed (`publish` or `status --exit-code` with
+/// stale stages, `verify` dropped something, `diff --fail-above` exceeded); 2 error (bad config,
+/// bad data, IO, a stage failed).
 #[derive(Debug, Parser)]
 #[command(name = "groove", version, about, long_about)]
 pub struct Cli {
@@ -41,6 +42,15 @@ impl Project {
     }
 }
 
+/// Which project's store (`clean`, `gc`, `verify`): the folder of the pipeline file. Without one
+/// here, the current folder (where the built-in pipeline keeps its `.groove`).
+#[derive(Debug, Args)]
+pub struct StoreProject {
+    /// The pipeline file (default: pipeline.toml); its folder holds the store `.groove/`.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+}
+
 /// The shared remote cache (see README, "Remote cache and Slurm").
 #[derive(Debug, Args, Clone)]
 pub struct RemoteArgs {
@@ -51,12 +61,17 @@ pub struct RemoteArgs {
     /// Use no remote, whatever the environment and pipeline.toml say.
     #[arg(long, conflicts_with = "remote")]
     pub no_remote: bool,
-    /// Look results up on the remote but never write to it.
-    #[arg(long)]
-    pub remote_read_only: bool,
     /// Exit 2 when the remote fails instead of warning and going on locally.
     #[arg(long)]
     pub remote_required: bool,
+}
+
+/// `--remote-read-only`, for the verbs that may write to the remote but need not (`run`, `pull`).
+#[derive(Debug, Args, Clone)]
+pub struct ReadOnly {
+    /// Look results up on the remote but never write to it.
+    #[arg(long)]
+    pub remote_read_only: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum, PartialEq, Eq)]
@@ -90,6 +105,8 @@ pub enum Verb {
         executor: Executor,
         #[command(flatten)]
         remote: RemoteArgs,
+        #[command(flatten)]
+        read_only: ReadOnly,
     },
     /// Upload every result pipeline.lock names from the local store to the remote cache
     /// (blobs first, then entries; what the remote has is not sent again).
@@ -106,6 +123,8 @@ pub enum Verb {
         project: Project,
         #[command(flatten)]
         remote: RemoteArgs,
+        #[command(flatten)]
+        read_only: ReadOnly,
     },
     /// Run one Slurm job step (started by `groove run --executor slurm`, not by hand).
     #[command(hide = true)]
@@ -114,35 +133,92 @@ pub enum Verb {
         file: PathBuf,
     },
     /// For every stage: fresh or stale, and why (which input, param or code changed).
+    /// Ends with a counts line (`9 stages: 7 fresh, 2 stale`).
     Status {
         #[command(flatten)]
         project: Project,
         /// Print `[{stage, state, reasons}]` as JSON (stable for scripts).
         #[arg(long)]
         json: bool,
+        /// Exit 1 when any stage is stale (0 when every stage is fresh), for scripts and CI.
+        #[arg(long)]
+        exit_code: bool,
     },
-    /// Print the stage graph.
+    /// Print the stage graph, each stage marked fresh or stale (dot and Mermaid: by colour).
     Dag {
         #[command(flatten)]
         project: Project,
         #[arg(long, value_enum, default_value_t = DagFormat::Text)]
         format: DagFormat,
     },
+    /// Start a project in DIR (default: here): the built-in pipeline.toml and an empty dataset
+    /// folder `data/` (runs.csv and trajectories.csv with their headers). Overwrites nothing.
+    Init {
+        /// The project folder (made if missing).
+        #[arg(value_name = "DIR", default_value = ".")]
+        dir: PathBuf,
+    },
+    /// Print a stored result readably: `groove show ingest:runs` (a line per run), `--csv` (the
+    /// runs as interchange CSV), `fit:fits --item RUN` (the fit as JSON), `aggregate:summary`.
+    /// Reads the results of the last run (pipeline.lock) from the store; changes nothing.
+    Show {
+        /// STAGE:OUTPUT, e.g. ingest:runs, fit:fits, discover:diagnosis.
+        #[arg(value_name = "STAGE:OUTPUT")]
+        target: String,
+        #[command(flatten)]
+        project: Project,
+        /// Only this item of a per-item output (e.g. a run id).
+        #[arg(long, value_name = "KEY")]
+        item: Option<String>,
+        /// As CSV (recordings: run,particle,frame,t_s,z_m, the interchange format).
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// As JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compare two results number by number: every number of summary.json and diagnosis.json
+    /// side by side with its change in combined standard errors (σ), findings that appeared or
+    /// disappeared, and params changed. A and B are result folders (reports/), published bundles
+    /// or git revisions (their committed reports/); default A: HEAD, B: the working reports.
+    Diff {
+        /// The baseline: a folder or a git revision (default: HEAD).
+        #[arg(value_name = "A")]
+        a: Option<String>,
+        /// The result compared with it: a folder or a git revision (default: the reports folder).
+        #[arg(value_name = "B")]
+        b: Option<String>,
+        /// Print every compared number as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Print unchanged numbers too.
+        #[arg(long)]
+        all: bool,
+        /// Exit 1 when any estimate moved by more than SIGMA combined standard errors.
+        #[arg(long, value_name = "SIGMA")]
+        fail_above: Option<f64>,
+    },
+    /// Print a shell completion script: e.g. `groove completions bash > ~/.local/share/bash-completion/completions/groove`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
     /// Remove the store (`.groove/`); outputs and pipeline.lock stay.
     Clean {
         #[command(flatten)]
-        project: Project,
+        project: StoreProject,
     },
     /// Drop store entries that pipeline.lock does not reference.
     Gc {
         #[command(flatten)]
-        project: Project,
+        project: StoreProject,
     },
     /// Check every object of the store against its hash; drop damaged objects and the entries
     /// that name them (their stages run again). Exit 1 if anything was dropped.
     Verify {
         #[command(flatten)]
-        project: Project,
+        project: StoreProject,
     },
     /// Write a synthetic dataset from a truth file (the virtual experiment).
     Synth {

@@ -34,12 +34,17 @@
 //! Errors are printed once, by `main`, as `groove: error: …`, lowercase, saying how to fix.
 
 pub mod args;
+mod completions;
+mod diff;
+mod init;
+mod show;
+mod status;
 
-use args::{Cli, DagFormat, Executor, Project, RemoteArgs, Verb, DEFAULT_CONFIG};
+use args::{Cli, Executor, Project, RemoteArgs, StoreProject, Verb, DEFAULT_CONFIG};
 use groove::engine::config::{self, Overrides};
 use groove::engine::publish::{publish, Published};
 use groove::engine::run::{run, RunOptions};
-use groove::engine::{dag, maintenance, status, Catalog, EngineError, Pipeline};
+use groove::engine::{maintenance, status as stage_status, Catalog, EngineError, Pipeline};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -64,6 +69,29 @@ fn load(project: &Project, catalog: &Catalog) -> Result<Pipeline, EngineError> {
     config::load(&project.config_path(), &overrides, catalog)
 }
 
+/// The project whose store `clean`, `gc` and `verify` look after: the pipeline file's (not
+/// validated against a dataset: the store needs none), or, with no pipeline file here, the
+/// current folder, where the built-in pipeline keeps its store.
+fn store_project(project: &StoreProject, catalog: &Catalog) -> Result<Pipeline, EngineError> {
+    let config = project
+        .config
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from(DEFAULT_CONFIG));
+    if project.config.is_some() || config.exists() {
+        return config::load(&config, &Overrides::default(), catalog);
+    }
+    let root = std::env::current_dir()
+        .map_err(|e| EngineError::Usage(format!("cannot tell the current folder: {e}")))?;
+    Ok(Pipeline {
+        config_path: root.join(DEFAULT_CONFIG),
+        data_dir: root.join("data"),
+        reports_dir: root.join("reports"),
+        root,
+        seed: 0,
+        stages: Default::default(),
+    })
+}
+
 /// A dataset given with `--data`, no `--config`, and no `pipeline.toml` in this folder.
 fn uses_built_in(project: &Project) -> bool {
     project.data.is_some() && project.config.is_none() && !Path::new(DEFAULT_CONFIG).exists()
@@ -73,11 +101,12 @@ fn uses_built_in(project: &Project) -> bool {
 fn remote_settings(
     project: &Project,
     args: &RemoteArgs,
+    read_only: bool,
 ) -> Result<Option<groove::engine::remote::Settings>, EngineError> {
     let flags = groove::engine::remote::settings::Flags {
         url: args.remote.clone(),
         no_remote: args.no_remote,
-        read_only: args.remote_read_only,
+        read_only,
         required: args.remote_required,
     };
     groove::engine::remote::settings::resolve(&project.config_path(), &flags)
@@ -110,6 +139,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             dry_run,
             executor,
             remote,
+            read_only,
         } => {
             let pipeline = load(&project, &catalog)?;
             let opts = RunOptions {
@@ -118,7 +148,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                 jobs,
                 dry_run,
                 quiet: false,
-                remote: remote_settings(&project, &remote)?,
+                remote: remote_settings(&project, &remote, read_only.remote_read_only)?,
                 slurm: executor == Executor::Slurm,
             };
             let summary = run(&catalog, &pipeline, &opts)?;
@@ -130,7 +160,11 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             Ok(ExitCode::SUCCESS)
         }
         Verb::Push { project, remote } => push(&catalog, &project, &remote),
-        Verb::Pull { project, remote } => pull(&catalog, &project, &remote),
+        Verb::Pull {
+            project,
+            remote,
+            read_only,
+        } => pull(&catalog, &project, &remote, read_only.remote_read_only),
         Verb::SlurmStep { file } => {
             let threads = std::env::var("SLURM_CPUS_PER_TASK")
                 .ok()
@@ -143,31 +177,48 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             pool.install(|| groove::engine::slurm::worker::run_step(&catalog, &file))?;
             Ok(ExitCode::SUCCESS)
         }
-        Verb::Status { project, json } => {
-            let pipeline = load(&project, &catalog)?;
-            let statuses = status::status(&catalog, &pipeline, None)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&statuses).expect("statuses serialize")
-                );
-            } else {
-                print!("{}", status::render(&statuses));
-            }
+        Verb::Status {
+            project,
+            json,
+            exit_code,
+        } => status::status(&catalog, &project, json, exit_code),
+        Verb::Dag { project, format } => status::dag(&catalog, &project, format),
+        Verb::Init { dir } => {
+            let wrote = init::init(&dir, BUILT_IN_PIPELINE)?;
+            println!(
+                "groove: wrote {} in {}; put your runs in data/ (README, \"Dataset format\"), or try `groove synth --truth TRUTH.toml --out data`, then `groove run`",
+                wrote.join(", "),
+                openable(&dir)
+            );
             Ok(ExitCode::SUCCESS)
         }
-        Verb::Dag { project, format } => {
-            let pipeline = load(&project, &catalog)?;
-            let format = match format {
-                DagFormat::Text => dag::Format::Text,
-                DagFormat::Dot => dag::Format::Dot,
-                DagFormat::Mermaid => dag::Format::Mermaid,
+        Verb::Show {
+            target,
+            project,
+            item,
+            csv,
+            json,
+        } => {
+            let how = match (csv, json) {
+                (true, _) => show::As::Csv,
+                (_, true) => show::As::Json,
+                _ => show::As::Readable,
             };
-            print!("{}", dag::render(&pipeline, format));
+            show::show(&catalog, &project, &target, item.as_deref(), how)
+        }
+        Verb::Diff {
+            a,
+            b,
+            json,
+            all,
+            fail_above,
+        } => diff::diff(a.as_deref(), b.as_deref(), json, all, fail_above),
+        Verb::Completions { shell } => {
+            completions::print(shell);
             Ok(ExitCode::SUCCESS)
         }
         Verb::Clean { project } => {
-            let pipeline = load(&project, &catalog)?;
+            let pipeline = store_project(&project, &catalog)?;
             let removed = maintenance::clean(&pipeline)?;
             println!(
                 "groove: removed {removed} item(s) from {}",
@@ -176,7 +227,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
             Ok(ExitCode::SUCCESS)
         }
         Verb::Gc { project } => {
-            let pipeline = load(&project, &catalog)?;
+            let pipeline = store_project(&project, &catalog)?;
             let (entries, objects) = maintenance::gc(&pipeline)?;
             println!("groove: removed {entries} store entr{} and {objects} object(s) not in pipeline.lock", if entries == 1 { "y" } else { "ies" });
             Ok(ExitCode::SUCCESS)
@@ -196,7 +247,7 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                     eprintln!(
                         "groove: not published: these stages are stale (run `groove run` first):"
                     );
-                    eprint!("{}", status::render(&stale));
+                    eprint!("{}", stage_status::render(&stale));
                     Ok(ExitCode::from(1))
                 }
                 Published::Written { dir, files } => {
@@ -218,7 +269,7 @@ fn print_would_run(summary: &groove::engine::run::RunSummary) {
         println!("groove: nothing to run; every stage is fresh");
     } else {
         println!("would run:");
-        print!("{}", status::render(&summary.would_run));
+        print!("{}", stage_status::render(&summary.would_run));
     }
 }
 
@@ -236,21 +287,37 @@ fn openable(path: &std::path::Path) -> String {
     shown.to_string_lossy().replace('\\', "/")
 }
 
-/// The closing lines of `run`: stages run and reused, time, the report, Slurm and remote lines.
+/// The closing lines of `run`: stages run and reused, time, where the results are (the report
+/// when a stage of this run writes it, else the files its stages write, else the store), Slurm
+/// and remote lines.
 fn print_run_summary(pipeline: &Pipeline, summary: &groove::engine::run::RunSummary) {
+    let done: Vec<&String> = summary.ran.iter().chain(&summary.reused).collect();
+    let written: Vec<&std::path::PathBuf> = done
+        .iter()
+        .filter_map(|s| pipeline.stages.get(s.as_str()))
+        .flat_map(|spec| spec.outputs.values().flatten())
+        .collect();
     let report = pipeline.reports_dir.join("report.html");
-    let shown = if report.is_file() {
-        report
+    let place = if written.contains(&&report) && report.is_file() {
+        format!("report: {}", openable(&report))
+    } else if written.is_empty() {
+        let first = done
+            .first()
+            .and_then(|s| pipeline.stages.get(s.as_str()))
+            .and_then(|spec| Some(format!("{}:{}", spec.name, spec.outputs.keys().next()?)))
+            .unwrap_or_else(|| "STAGE:OUTPUT".to_string());
+        format!("results in the store (`groove show {first}` prints one)")
     } else {
-        pipeline.reports_dir.clone()
+        let mut shown: Vec<String> = written.iter().map(|p| openable(p)).collect();
+        shown.sort();
+        format!("wrote {}", shown.join(", "))
     };
     println!(
-        "groove: {} stage{} run, {} reused, {:.2} s; report: {}",
+        "groove: {} stage{} run, {} reused, {:.2} s; {place}",
         summary.ran.len(),
         if summary.ran.len() == 1 { "" } else { "s" },
         summary.reused.len(),
         summary.elapsed_s,
-        openable(&shown)
     );
     if let Some(line) = &summary.slurm_line {
         println!("groove: {line}");
@@ -266,10 +333,11 @@ fn with_remote(
     catalog: &Catalog,
     project: &Project,
     remote: &RemoteArgs,
+    read_only: bool,
     what: &str,
 ) -> Result<(Pipeline, groove::engine::remote::Settings), EngineError> {
     let pipeline = load(project, catalog)?;
-    let Some(settings) = remote_settings(project, remote)? else {
+    let Some(settings) = remote_settings(project, remote, read_only)? else {
         return Err(EngineError::Usage(format!("no remote to {what}; pass --remote URL, set GROOVE_REMOTE, or add [remote] url to pipeline.toml")));
     };
     Ok((pipeline, settings))
@@ -281,9 +349,9 @@ fn push(
     project: &Project,
     remote: &RemoteArgs,
 ) -> Result<ExitCode, EngineError> {
-    let (pipeline, settings) = with_remote(catalog, project, remote, "push to")?;
+    let (pipeline, settings) = with_remote(catalog, project, remote, false, "push to")?;
     if settings.read_only {
-        return Err(EngineError::Usage(format!("the remote {} is read-only here; drop --remote-read-only (or GROOVE_REMOTE_READ_ONLY, `read_only` in [remote]) to push", settings.url)));
+        return Err(EngineError::Usage(format!("the remote {} is read-only here (GROOVE_REMOTE_READ_ONLY or `read_only = true` in [remote]); unset it to push", settings.url)));
     }
     let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
     let store = groove::engine::store::Store::at(&pipeline.root);
@@ -304,8 +372,9 @@ fn pull(
     catalog: &Catalog,
     project: &Project,
     remote: &RemoteArgs,
+    read_only: bool,
 ) -> Result<ExitCode, EngineError> {
-    let (pipeline, settings) = with_remote(catalog, project, remote, "pull from")?;
+    let (pipeline, settings) = with_remote(catalog, project, remote, read_only, "pull from")?;
     let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
     let fresh = groove::engine::remote::sync::pull(catalog, &pipeline, &cache)?;
     println!(
@@ -316,8 +385,8 @@ fn pull(
 }
 
 /// `verify`: every store object against its sha256; exit 1 when something was dropped.
-fn verify(catalog: &Catalog, project: &Project) -> Result<ExitCode, EngineError> {
-    let pipeline = load(project, catalog)?;
+fn verify(catalog: &Catalog, project: &StoreProject) -> Result<ExitCode, EngineError> {
+    let pipeline = store_project(project, catalog)?;
     let v = maintenance::verify(&pipeline)?;
     println!(
         "groove: checked {} object(s) and {} store entr{}",

@@ -117,6 +117,27 @@ fn edges(pipeline: &Pipeline) -> Vec<(&str, &str, &str, &str)> {
 
 /// Render the graph as text, Graphviz dot, or Mermaid.
 pub fn render(pipeline: &Pipeline, format: Format) -> String {
+    render_with_state(pipeline, format, &BTreeMap::new(), false)
+}
+
+/// A stage's state, for colouring the graph: `fresh`, `stale`, or none when not known.
+fn state_of<'a>(states: &'a BTreeMap<String, String>, stage: &str) -> Option<&'a str> {
+    states.get(stage).map(String::as_str)
+}
+
+/// Fill colours of the states in dot and Mermaid (light green, light orange).
+const FRESH_FILL: &str = "#c8e6c9";
+const STALE_FILL: &str = "#ffcc80";
+
+/// [`render`] with each stage marked by its state (stage → `fresh` or `stale`, as `groove
+/// status` says): in text a `[fresh]`/`[stale]` tag (green or
+/// yellow with `ansi`, for a terminal), in dot and Mermaid a fill colour and a legend.
+pub fn render_with_state(
+    pipeline: &Pipeline,
+    format: Format,
+    states: &BTreeMap<String, String>,
+    ansi: bool,
+) -> String {
     let waves = order(pipeline).unwrap_or_default();
     let mut s = String::new();
     match format {
@@ -135,7 +156,15 @@ pub fn render(pipeline: &Pipeline, format: Format) -> String {
                 } else {
                     format!(" foreach {each}")
                 };
-                s.push_str(&format!("{stage} ({}{each})\n", spec.kind));
+                let tag = match (state_of(states, stage), ansi) {
+                    (None, _) => String::new(),
+                    (Some(st), false) => format!(" [{st}]"),
+                    (Some(st), true) => {
+                        let colour = if st == "fresh" { 32 } else { 33 };
+                        format!(" \x1b[{colour}m[{st}]\x1b[0m")
+                    }
+                };
+                s.push_str(&format!("{stage} ({}{each}){tag}\n", spec.kind));
                 for (input, bound) in &spec.inputs {
                     let from = match bound {
                         InputSpec::Stage { stage, output } => format!("{stage}:{output}"),
@@ -162,8 +191,16 @@ pub fn render(pipeline: &Pipeline, format: Format) -> String {
         Format::Dot => {
             s.push_str("digraph groove {\n  rankdir=LR;\n  node [shape=box];\n");
             for stage in pipeline.stages.values() {
+                let fill = match state_of(states, &stage.name) {
+                    Some("fresh") => format!(", style=filled, fillcolor=\"{FRESH_FILL}\""),
+                    Some(_) => format!(", style=filled, fillcolor=\"{STALE_FILL}\""),
+                    None => String::new(),
+                };
+                let st = state_of(states, &stage.name)
+                    .map(|st| format!(", {st}"))
+                    .unwrap_or_default();
                 s.push_str(&format!(
-                    "  \"{}\" [label=\"{}\\n({})\"];\n",
+                    "  \"{}\" [label=\"{}\\n({}{st})\"{fill}];\n",
                     stage.name, stage.name, stage.kind
                 ));
             }
@@ -184,6 +221,22 @@ pub fn render(pipeline: &Pipeline, format: Format) -> String {
             }
             for (up, output, down, input) in edges(pipeline) {
                 s.push_str(&format!("  {up} -->|{output} → {input}| {down}\n"));
+            }
+            if !states.is_empty() {
+                s.push_str(&format!(
+                    "  classDef fresh fill:{FRESH_FILL}\n  classDef stale fill:{STALE_FILL}\n"
+                ));
+                for st in ["fresh", "stale"] {
+                    let names: Vec<&str> = pipeline
+                        .stages
+                        .keys()
+                        .filter(|n| state_of(states, n) == Some(st))
+                        .map(String::as_str)
+                        .collect();
+                    if !names.is_empty() {
+                        s.push_str(&format!("  class {} {st}\n", names.join(",")));
+                    }
+                }
             }
         }
     }

@@ -1,5 +1,8 @@
 //! Catches a wrong calibration axis of tracker exports: a particle that moves more across the
 //! chosen image axis than along it, or not beyond its noise along it, was filmed along the other.
+//! The other axis is advised only when the runs move clearly more along it (both axes' spans
+//! decide, so the advice cannot flip with the axis chosen); tracks that wander about as much
+//! along both (cells, colloids) get no axis advice but the doubt that they are groove recordings.
 
 use super::error::Problem;
 use super::params::Axis;
@@ -10,6 +13,36 @@ const NOISE_FACTOR: f64 = 10.0;
 
 /// How many runs a message names before summarising the rest.
 const NAMED: usize = 8;
+
+/// The median run must span this many times more along one axis than the other for that axis to
+/// be the groove's.
+const DOMINANT: f64 = 2.0;
+
+/// Which image axis the runs' motion points to, from the median ratio of their spans.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Verdict {
+    /// The chosen axis: the runs move along it.
+    Chosen,
+    /// The other axis: the runs move clearly more along it.
+    Other,
+    /// Neither: the runs move about as much along both (median across/along ratio).
+    Neither(f64),
+}
+
+fn verdict(ratios: &mut [f64]) -> Verdict {
+    if ratios.is_empty() {
+        return Verdict::Chosen;
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    if median >= DOMINANT {
+        Verdict::Other
+    } else if median <= 1.0 / DOMINANT {
+        Verdict::Chosen
+    } else {
+        Verdict::Neither(median)
+    }
+}
 
 /// Why a run's motion says the axis is wrong, or `None` if it looks right.
 fn wrong(m: &Motion) -> Option<&'static str> {
@@ -38,11 +71,13 @@ pub fn check(files: &[SpotFile], axis: Axis) -> Option<Vec<Problem>> {
     };
     let (a, o) = (name(axis), name(other));
     let mut measured = 0;
+    let mut ratios = Vec::new();
     let mut flagged: Vec<(String, String, String)> = Vec::new();
     for f in files {
         for rs in &f.runs {
             let Some(m) = motion(rs) else { continue };
             measured += 1;
+            ratios.push(m.across / m.along);
             if let Some(why) = wrong(&m) {
                 flagged.push((
                     rs.run.clone(),
@@ -58,10 +93,19 @@ pub fn check(files: &[SpotFile], axis: Axis) -> Option<Vec<Problem>> {
     if flagged.is_empty() {
         return None;
     }
-    let fix = format!(
-        "the groove probably runs along image {o}: set calibration.axis = \"{o}\" in the ingest params of pipeline.toml (and check calibration.direction)"
-    );
-    if 2 * flagged.len() >= measured {
+    let verdict = verdict(&mut ratios);
+    let fix = match verdict {
+        Verdict::Other => format!(
+            "the groove probably runs along image {o}: set calibration.axis = \"{o}\" in the ingest params of pipeline.toml (and check calibration.direction)"
+        ),
+        Verdict::Chosen => format!(
+            "most runs move along image {a}, so the axis is right; check this run's tracking"
+        ),
+        Verdict::Neither(r) => format!(
+            "the runs move about as much along image {o} as along {a} (median span ratio {r:.2}), as cells or colloids do, not a sphere rolling along a groove: check that the export holds this experiment's runs (the axis cannot be told from them)"
+        ),
+    };
+    if 2 * flagged.len() >= measured && verdict != Verdict::Chosen {
         let mut names: Vec<String> = flagged
             .iter()
             .take(NAMED)
@@ -70,10 +114,14 @@ pub fn check(files: &[SpotFile], axis: Axis) -> Option<Vec<Problem>> {
         if flagged.len() > NAMED {
             names.push(format!("and {} more", flagged.len() - NAMED));
         }
+        let doubt = match verdict {
+            Verdict::Other => "looks wrong",
+            _ => "cannot be confirmed",
+        };
         return Some(vec![Problem::file(
             "pipeline.toml",
             format!(
-                "calibration.axis = \"{a}\" looks wrong: in {} of {measured} runs the particle does not move along image {a}: {}",
+                "calibration.axis = \"{a}\" {doubt}: in {} of {measured} runs the particle does not move along image {a}: {}",
                 flagged.len(),
                 names.join("; ")
             ),

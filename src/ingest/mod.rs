@@ -231,6 +231,7 @@ mod parquet_pages;
 mod run_memo;
 mod samples;
 pub mod sanity;
+pub mod scale;
 mod spots;
 mod table;
 mod trackmate;
@@ -283,6 +284,7 @@ pub fn ingest(
         {
             let mut problems = Vec::new();
             check_item_names(&recordings, &mut problems);
+            problems.extend(scale::check(&recordings, "trajectories", "z_m"));
             if problems.is_empty() && !recordings.is_empty() {
                 return Ok(Ingested {
                     recordings,
@@ -343,6 +345,14 @@ pub fn ingest_row_by_row(
         ));
     }
     check_item_names(&recordings, &mut problems);
+    if problems.is_empty() {
+        let (file, column) = sample_files
+            .first()
+            .map_or(("trajectories.csv", "z_m"), |f| {
+                (f.file.as_str(), f.position_column)
+            });
+        problems.extend(scale::check(&recordings, file, column));
+    }
     if problems.is_empty() {
         return Ok(Ingested {
             recordings,
@@ -479,12 +489,14 @@ pub fn stream_items<T: Send>(
     // the runs of a piece are encoded and kept (stored) in parallel on a thread of their own,
     // while the next piece is parsed; at most one piece waits for it
     let kept_found = memo.as_ref().map(|m| m.kept);
-    let (streamed, (runs, clash, memo_made, found)) = std::thread::scope(|scope| {
+    let (streamed, (runs, clash, memo_made, found, moves)) = std::thread::scope(|scope| {
         let (tx, rx) = std::sync::mpsc::sync_channel::<columnar::Ready>(1);
         let writer = scope.spawn(move || {
             let (mut runs, mut clash) = (BTreeMap::new(), false);
             let (mut memo_made, mut found) = (Vec::new(), 0);
+            let mut moves = Vec::new();
             for ready in rx {
+                moves.extend(ready.made.iter().flat_map(|(r, _)| scale::measure(r)));
                 let kept: Vec<(String, T, Option<[u8; 32]>)> = ready
                     .made
                     .par_iter()
@@ -502,7 +514,7 @@ pub fn stream_items<T: Send>(
                     found += 1;
                 }
             }
-            (runs, clash, memo_made, found)
+            (runs, clash, memo_made, found, moves)
         });
         let streamed = columnar::stream(
             files,
@@ -522,6 +534,9 @@ pub fn stream_items<T: Send>(
         (streamed, written)
     });
     let why = match streamed {
+        Ok(_) if scale::impossible(&moves).is_some() => {
+            "the positions are not in metres (the whole read names the problem)"
+        }
         Ok(pieces) if !clash && !runs.is_empty() => {
             let how = match found {
                 0 => format!("{pieces}, each run's item made as its last row was read"),

@@ -290,20 +290,49 @@ pub fn calibrate(file: &SpotFile, rs: &RunSpots, meta: &RunMeta) -> Result<Calib
 }
 
 /// The spots of a single run's one sphere from its tracks: trackers split one sphere's track into
-/// fragments when it is briefly lost, and link the odd spurious detection into a short track. The
-/// longest track is taken whole; each shorter one (longest first, then lower id) adds its spots in
-/// frames not yet covered by an earlier track, and its other spots are left out as spurious (said
-/// in `notes`, one line per track).
+/// fragments when it is briefly lost, and link the odd spurious detection (dust, a reflection)
+/// into a track of its own, sometimes longer than the sphere's. The track that moves most along
+/// the axis is taken whole; each other one (moving most first, then longest, then lower id) adds
+/// its spots in frames not yet covered by an earlier track, and its other spots are left out as
+/// spurious. A track that moves no more than its own noise along the axis (a still object) is
+/// left out whole while another track moves. Each track left out, in part or whole, is said in
+/// `notes`, one line per track.
 fn merge_fragments<'a>(
     tracks: &BTreeMap<i64, Vec<&'a Spot>>,
     notes: &mut Vec<String>,
 ) -> Vec<&'a Spot> {
-    let mut order: Vec<(i64, &Vec<&'a Spot>)> = tracks.iter().map(|(&id, ss)| (id, ss)).collect();
-    order.sort_by_key(|&(id, ss)| (std::cmp::Reverse(ss.len()), id));
-    let longest = order.first().map(|&(id, _)| id);
+    // (id, spots, span along the axis, still)
+    let mut order: Vec<(i64, &Vec<&'a Spot>, f64, bool)> = tracks
+        .iter()
+        .map(|(&id, ss)| {
+            let mut by_frame = ss.clone();
+            by_frame.sort_by_key(|s| s.frame);
+            let p: Vec<f64> = by_frame.iter().map(|s| s.p_px).collect();
+            let span = spread(&p);
+            let still = p.len() >= 5 && span <= STILL_FACTOR * noise(&p);
+            (id, ss, span, still)
+        })
+        .collect();
+    order.sort_by(|a, b| {
+        b.2.total_cmp(&a.2)
+            .then(b.1.len().cmp(&a.1.len()))
+            .then(a.0.cmp(&b.0))
+    });
+    let Some(&(first, _, first_span, _)) = order.first() else {
+        return Vec::new();
+    };
     let mut covered: BTreeSet<i64> = BTreeSet::new();
     let mut kept = Vec::new();
-    for (id, ss) in order {
+    for (id, ss, span, still) in order {
+        let lo = ss.iter().map(|s| s.frame).min().unwrap_or(0);
+        let hi = ss.iter().map(|s| s.frame).max().unwrap_or(0);
+        if still && id != first {
+            notes.push(format!(
+                "track {id} ({} spots, frames {lo}–{hi}) left out: it moves {span:.3} units along the axis, no more than its noise (a still object, not the kicked sphere); track {first}, which moves {first_span:.3}, is taken",
+                ss.len()
+            ));
+            continue;
+        }
         let fresh: Vec<&Spot> = ss
             .iter()
             .filter(|s| !covered.contains(&s.frame))
@@ -311,8 +340,6 @@ fn merge_fragments<'a>(
             .collect();
         let dropped = ss.len() - fresh.len();
         if dropped > 0 {
-            let lo = ss.iter().map(|s| s.frame).min().unwrap_or(0);
-            let hi = ss.iter().map(|s| s.frame).max().unwrap_or(0);
             let what = match fresh.len() {
                 0 => format!("track {id} ({} spots, frames {lo}–{hi}) left out", ss.len()),
                 n => format!(
@@ -321,8 +348,7 @@ fn merge_fragments<'a>(
                 ),
             };
             notes.push(format!(
-                "{what}: a longer track (track {}) already has a spot in those frames, so they are taken as spurious detections",
-                longest.unwrap_or(id)
+                "{what}: a track that moves more (track {first}) already has a spot in those frames, so they are taken as spurious detections"
             ));
         }
         covered.extend(fresh.iter().map(|s| s.frame));
@@ -330,6 +356,10 @@ fn merge_fragments<'a>(
     }
     kept
 }
+
+/// A track that spans no more than this many times its frame-to-frame noise along the axis is
+/// still.
+const STILL_FACTOR: f64 = 10.0;
 
 /// How much a run's longest track moves along and across the chosen axis, against its noise.
 #[derive(Debug, Clone, Copy)]

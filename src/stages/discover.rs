@@ -50,9 +50,9 @@ impl StageKind for Discover {
         let say = |what: &str| input.report(what);
         let mut diagnosis = discover_reporting(&recordings, &opts, &say);
         crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings);
-        let mut bytes = serde_json::to_vec_pretty(&diagnosis)
-            .map_err(|e| StageError(format!("diagnosis could not be serialized: {e}")))?;
-        bytes.push(b'\n');
+        let bytes =
+            crate::artifacts::checked_json::to_json_pretty_checked("diagnosis.json", &diagnosis)
+                .map_err(StageError)?;
         let mut out = StageOutputs::new();
         out.insert("diagnosis".into(), Artifact::File(bytes));
         Ok(out)

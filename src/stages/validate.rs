@@ -48,9 +48,9 @@ impl StageKind for Validate {
                 validate(&truth, &summary, &diagnosis)
             }
         };
-        let mut bytes = serde_json::to_vec_pretty(&validation)
-            .map_err(|e| StageError(format!("cannot encode validation: {e}")))?;
-        bytes.push(b'\n');
+        let bytes =
+            crate::artifacts::checked_json::to_json_pretty_checked("validation.json", &validation)
+                .map_err(StageError)?;
         Ok(BTreeMap::from([(
             "validation".to_string(),
             Artifact::File(bytes),

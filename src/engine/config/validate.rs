@@ -13,6 +13,35 @@ use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
 use toml::Spanned;
 
+/// A folder given on the command line (`flag` is `--data` or `--out`, `given` as typed, `whole`
+/// its absolute form): a file there is an error, and so is nothing there when it must exist.
+/// Blamed on the flag, not on the pipeline line that would otherwise name the folder.
+fn check_folder_flag(
+    flag: &str,
+    given: &Path,
+    whole: &Path,
+    must_exist: bool,
+) -> Result<(), EngineError> {
+    let shown = given.display();
+    if whole.is_file() {
+        let parent = given
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        return Err(EngineError::Usage(format!(
+            "{flag} {shown} is a file, not a folder; pass the folder that holds it: {flag} {}",
+            parent.display()
+        )));
+    }
+    if must_exist && !whole.exists() {
+        return Err(EngineError::Usage(format!(
+            "{flag} {shown}: there is no folder {}; pass the dataset folder (the one that holds runs.csv and trajectories.csv, or the tracker exports)",
+            whole.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Turn the serde mirror into a validated pipeline.
 pub fn validate(
     raw: RawPipeline,
@@ -39,11 +68,22 @@ pub fn validate(
             .transpose()
     };
     let data_dir = match from_cli(&overrides.data)? {
-        Some(d) => d,
+        Some(d) => {
+            check_folder_flag("--data", overrides.data.as_deref().unwrap_or(&d), &d, true)?;
+            d
+        }
         None => normalize(&root.join(data.as_deref().unwrap_or("data"))),
     };
     let reports_dir = match from_cli(&overrides.reports)? {
-        Some(d) => d,
+        Some(d) => {
+            check_folder_flag(
+                "--out",
+                overrides.reports.as_deref().unwrap_or(&d),
+                &d,
+                false,
+            )?;
+            d
+        }
         None => normalize(&root.join(reports.as_deref().unwrap_or("reports"))),
     };
     let mut pipeline = Pipeline {
