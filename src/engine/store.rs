@@ -539,22 +539,60 @@ mod tests {
 
     #[test]
     fn an_entry_reads_its_items_as_a_map_whatever_their_order() {
-        let text = br#"{"outputs": {"runs": {"type": "collection", "items": {"b": "2", "a": "1", "c": "3", "a": "4"}}, "summary": {"type": "file", "sha256": "ff"}}}"#;
-        let entry: Entry = serde_json::from_slice(text).unwrap();
+        let h = |c: char| c.to_string().repeat(64);
+        let text = format!(
+            r#"{{"outputs": {{"runs": {{"type": "collection", "items": {{"b": "{}", "a": "{}", "c": "{}", "a": "{}"}}}}, "summary": {{"type": "file", "sha256": "{}"}}}}}}"#,
+            h('2'),
+            h('1'),
+            h('3'),
+            h('4'),
+            h('f')
+        );
+        let entry: Entry = serde_json::from_str(&text).unwrap();
         let items = BTreeMap::from([
-            ("a".to_string(), "4".to_string()),
-            ("b".to_string(), "2".to_string()),
-            ("c".to_string(), "3".to_string()),
+            ("a".to_string(), h('4')),
+            ("b".to_string(), h('2')),
+            ("c".to_string(), h('3')),
         ]);
         assert_eq!(entry.outputs["runs"], Stored::Collection { items });
-        assert_eq!(
-            entry.outputs["summary"],
-            Stored::File {
-                sha256: "ff".into()
-            }
+        assert_eq!(entry.outputs["summary"], Stored::File { sha256: h('f') });
+        let both = text.replace(r#""type": "file","#, r#""type": "file", "items": {},"#);
+        assert!(serde_json::from_str::<Entry>(&both).is_err());
+    }
+
+    #[test]
+    fn hashes_and_names_that_are_paths_are_damage() {
+        let good = format!(
+            r#"{{"outputs": {{"x": {{"type": "file", "sha256": "{}"}}}}}}"#,
+            "a".repeat(64)
         );
-        let both = br#"{"outputs": {"x": {"type": "file", "sha256": "ff", "items": {}}}}"#;
-        assert!(serde_json::from_slice::<Entry>(both).is_err());
+        assert!(serde_json::from_str::<Entry>(&good).is_ok());
+        for bad in [
+            "ab",
+            "../../etc/passwd",
+            &"A".repeat(64),
+            &format!("..{}", "/".repeat(62)),
+        ] {
+            let text = good.replace(&"a".repeat(64), bad);
+            assert!(serde_json::from_str::<Entry>(&text).is_err(), "{bad}");
+        }
+        for name in ["..", ".", "a/b", "/abs", "", r"a\nb", r"a\u0000b"] {
+            let output = good.replace(r#""x""#, &format!("\"{name}\""));
+            assert!(
+                serde_json::from_str::<Entry>(&output).is_err(),
+                "output {name}"
+            );
+            let item = format!(
+                r#"{{"outputs": {{"x": {{"type": "collection", "items": {{"{name}": "{}"}}}}}}}}"#,
+                "a".repeat(64)
+            );
+            assert!(serde_json::from_str::<Entry>(&item).is_err(), "item {name}");
+        }
+        let store = Store::in_dir(PathBuf::from("/nowhere/.groove"));
+        assert!(store
+            .object_path("../../x")
+            .starts_with("/nowhere/.groove/objects"));
+        assert!(store.entry("../../x").is_none());
     }
 
     #[test]
