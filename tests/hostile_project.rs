@@ -583,3 +583,92 @@ fn invalid_utf8_in_the_config_names_its_line() {
     assert_names(&text(&out.stderr), &["is not UTF-8"]);
     assert_names(&text(&out.stderr), &["pipeline.toml:"]);
 }
+
+// ------------------------------------------------- messages of the store and config probe
+
+/// Invariant: bad input exits 2 naming its place, with nothing lost. A run id that cannot name
+/// a file (`../x`, `.`, `..`, one with a line break) is refused at its cell.
+#[test]
+fn a_run_id_that_is_a_path_exits_2_at_its_cell() {
+    for (k, id) in ["../x", ".", "..", "\"a\nb\"", "a/b"].iter().enumerate() {
+        let err = refused(&format!("run_id_{k}"), |p| {
+            set_cell(&p.join("data/runs.csv"), 2, 0, id)
+        });
+        assert_names(&err, &["runs.csv row 2, column run", "rename the run"]);
+    }
+}
+
+/// Invariant: bad input exits 2 naming its place. A header that names one column twice is
+/// refused (it was read silently, one of the two columns dropped).
+#[test]
+fn a_header_naming_a_column_twice_exits_2() {
+    let err = refused("dup_column", |p| {
+        edit_line(&p.join("data/runs.csv"), 1, |l| set_field(l, 3, "fps"))
+    });
+    assert_names(&err, &["runs.csv row 1, column fps", "twice"]);
+}
+
+/// Invariant: bad input exits 2 naming its place. A NaN param never reaches a stage.
+#[test]
+fn a_nan_param_exits_2_at_its_line() {
+    let (_, out) = engine_case(
+        "nan_param",
+        |p| {
+            let path = p.join("pipeline.toml");
+            let text = std::fs::read_to_string(&path).unwrap();
+            let text = text.replacen(
+                "params = { format = \"auto\" }",
+                "params = { format = \"auto\", x = nan }",
+                1,
+            );
+            std::fs::write(path, text).unwrap();
+        },
+        &["run"],
+        2,
+        &[],
+    );
+    assert_names(
+        &text(&out.stderr),
+        &["pipeline.toml:", "`x` = nan", "finite number"],
+    );
+}
+
+/// Invariant: bad input exits 2 naming its place. `reports = "${data}"` says the project's
+/// folders take no variables (it said "unknown variable `${data}`; use `${data}`").
+#[test]
+fn a_variable_in_the_project_folders_exits_2_saying_so() {
+    let (_, out) = engine_case(
+        "reports_var",
+        |p| {
+            let path = p.join("pipeline.toml");
+            let text = std::fs::read_to_string(&path).unwrap();
+            std::fs::write(
+                path,
+                text.replacen("reports = \"reports\"", "reports = \"${data}\"", 1),
+            )
+            .unwrap();
+        },
+        &["run"],
+        2,
+        &[],
+    );
+    let err = text(&out.stderr);
+    assert_names(&err, &["pipeline.toml:7", "take no variables"]);
+    assert!(!err.contains("unknown variable"), "{err}");
+}
+
+/// Invariant: no store or remote entry can make groove write outside the project and its
+/// store, and the project is no remote. `file://.` (the project itself) is refused.
+#[test]
+fn the_project_folder_as_remote_exits_2() {
+    for url in ["file://.", "file://reports/cache", "file://.groove"] {
+        let (_, out) = engine_case(
+            &format!("remote_{}", url.len()),
+            |_| {},
+            &["run", "--remote", url],
+            2,
+            &[],
+        );
+        assert_names(&text(&out.stderr), &["inside the project"]);
+    }
+}

@@ -1,21 +1,26 @@
 #!/usr/bin/env bash
-# kill -9 soak (issue 16): groove is killed at random moments during `run`, `gc` and `publish`;
-# after each kill the store, the reports folder and the bundle are checked, then the project
-# must recover with one ordinary command. Runnable by hand, not part of CI:
+# kill -9 soak: groove is killed at random moments during every verb that writes (`run`,
+# `run --remote`, `gc`, `clean`, `verify`, `publish`, `push`, `pull`) and the read-only ones
+# (`status`, `dag`); after each kill the store, the reports folder and the bundle are checked,
+# then the project must recover with one ordinary command. Runnable by hand, not part of CI:
 #
-#     bash tests/soak.sh [KILLS_PER_VERB] [GROOVE_BINARY]
+#     bash tests/soak.sh [KILLS_PER_VERB] [GROOVE_BINARY] [VERBS]
 #
-# (default 20 kills per verb, target/debug/groove — build it first with `cargo build`). It prints
-# one line per kill and, at the end, the counts that must be 0:
+# (default 20 kills per verb, target/debug/groove — build it first with `cargo build`; VERBS a
+# space-separated subset, default all). It prints one line per kill and, at the end, the counts
+# that must be 0:
 #   corrupt entries  – store entries that do not parse or name a missing or damaged object
 #   partial outputs  – files in reports/ that are neither the old nor the new content, temp
 #                      leftovers (.NAME.groove-*) still there after the next run or publish, and
 #                      bundles that fail `sha256sum -c`
-#   failed recoveries – a next `groove run` (or publish) that does not exit 0 with every stage fresh
+#   failed recoveries – a next `groove run` (or publish) that does not exit 0 with every stage
+#                       fresh, or one that says it reused every stage while the store lacks
+#                       an object it names (what a killed `clean` must never leave)
 set -u
 KILLS=${1:-20}
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 GROOVE=${2:-$REPO/target/debug/groove}
+VERBS=${3:-run remote gc clean verify publish push pull status dag}
 [ -x "$GROOVE" ] || { echo "soak: no groove binary at $GROOVE; run cargo build first" >&2; exit 2; }
 WORK=$(mktemp -d /tmp/groove-soak.XXXXXX)
 trap 'rm -rf "$WORK"' EXIT
@@ -28,6 +33,8 @@ cp "$REPO/pipeline.toml" project/
 cd project || exit 2
 echo "soak: reference run (this takes a while)"
 "$GROOVE" run >/dev/null 2>&1 || { echo "soak: the reference run failed" >&2; exit 2; }
+mkdir -p ../remote
+REMOTE="file://$WORK/remote"
 
 # sha256 of every file under reports/ (relative path, hash), as the reference
 snapshot() { (cd reports && find . -type f ! -name '.*' -print0 | sort -z | xargs -0 sha256sum); }
@@ -68,7 +75,12 @@ check_reports() {
 }
 
 recover() {
-  if ! "$GROOVE" run >/dev/null 2>&1; then echo "  recovery run failed" >&2; return 1; fi
+  local out missing
+  missing=$(check_store)
+  if ! out=$("$GROOVE" run 2>&1); then echo "  recovery run failed" >&2; return 1; fi
+  if [ "$missing" -gt 0 ] && echo "$out" | grep -q "0 stages run"; then
+    echo "  recovery run reused every stage over $missing broken entries" >&2; return 1
+  fi
   if "$GROOVE" status --json | grep -q '"stale"'; then echo "  stale after recovery" >&2; return 1; fi
   return 0
 }
@@ -81,12 +93,33 @@ kill_at_random() { # $@: the command; kills it after 0–1.5 s (or lets it finis
   wait "$pid" 2>/dev/null
 }
 
-for verb in run gc publish; do
+random_stage() {
+  python3 -c 'import random; print(random.choice(["ingest","fit","aggregate","simulate","figures","report"]))'
+}
+
+nverbs=0
+for verb in $VERBS; do
+  nverbs=$((nverbs + 1))
   for i in $(seq 1 "$KILLS"); do
     case $verb in
       run)
-        stage=$(python3 -c 'import random; print(random.choice(["ingest","fit","aggregate","simulate","figures","report"]))')
-        kill_at_random "$GROOVE" run --force "$stage" ;;
+        kill_at_random "$GROOVE" run --force "$(random_stage)" ;;
+      remote)
+        kill_at_random "$GROOVE" run --remote "$REMOTE" --force "$(random_stage)" ;;
+      clean)
+        kill_at_random "$GROOVE" clean ;;
+      verify)
+        kill_at_random "$GROOVE" verify ;;
+      push)
+        # a fresh remote now and then, so that there is something to upload
+        [ $((i % 3)) -eq 0 ] && rm -rf ../remote && mkdir -p ../remote
+        kill_at_random "$GROOVE" push --remote "$REMOTE" ;;
+      pull)
+        "$GROOVE" push --remote "$REMOTE" >/dev/null 2>&1
+        [ $((i % 2)) -eq 0 ] && "$GROOVE" clean >/dev/null 2>&1
+        kill_at_random "$GROOVE" pull --remote "$REMOTE" ;;
+      status | dag)
+        kill_at_random "$GROOVE" "$verb" ;;
       gc)
         # leave something for gc to drop: a run with another seed
         sed -i 's/^seed = .*/seed = '"$RANDOM"'/' pipeline.toml
@@ -112,5 +145,5 @@ for verb in run gc publish; do
     echo "soak: $verb kill $i: corrupt entries $c, partial outputs $p"
   done
 done
-echo "soak: $((3 * KILLS)) kills: corrupt entries $corrupt, partial outputs $partial, failed recoveries $failed"
+echo "soak: $((nverbs * KILLS)) kills: corrupt entries $corrupt, partial outputs $partial, failed recoveries $failed"
 [ "$corrupt" -eq 0 ] && [ "$partial" -eq 0 ] && [ "$failed" -eq 0 ]

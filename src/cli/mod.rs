@@ -364,6 +364,16 @@ fn push(
         "groove: push: {} keys in pipeline.lock, {} not in the local store",
         synced.keys, synced.skipped
     );
+    // pushing is the verb's whole work: a remote that cannot be reached is an error
+    if cache.is_disabled() {
+        println!("groove: {}", cache.closing_line());
+        return Err(EngineError::Usage(format!(
+            "cannot push to the remote {}: {}; {}",
+            cache.describe(),
+            cache.first_error().unwrap_or_default(),
+            cache.hint()
+        )));
+    }
     remote_closing(&cache, settings.required)
 }
 

@@ -133,7 +133,8 @@ fn evaluate_stage(
     let force = matches!(action, Action::Run { force: true });
     let index = (spec.foreach.is_some() && !units.is_empty() && !force)
         .then(|| ctx.store.entry_checked(&key, &ctx.hashes))
-        .flatten();
+        .flatten()
+        .filter(|e| e.fits(spec.outputs.keys(), Some(false)));
     let Units {
         outputs,
         executed,
@@ -201,9 +202,15 @@ fn lookup_or_run(
     action: Action,
     seed: u64,
 ) -> Result<Units, EngineError> {
+    // an entry holds exactly the declared outputs (per item, each a file); any other is damage
+    let files = spec.foreach.as_ref().map(|_| true);
+    let fits = |e: &Entry| e.fits(spec.outputs.keys(), files);
     let mut entries: Vec<Option<Entry>> = units
         .par_iter()
-        .map(|(_, k)| super::remote::lookup(&ctx.store, &ctx.hashes, ctx.remote.as_deref(), k))
+        .map(|(_, k)| {
+            let remote = ctx.remote.as_deref();
+            super::remote::lookup(&ctx.store, &ctx.hashes, remote, k, &fits)
+        })
         .collect();
     // the entry packs read for these lookups are not needed while the stage runs
     ctx.store.forget_entry_packs();

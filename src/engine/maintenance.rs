@@ -21,19 +21,25 @@ pub fn clean(pipeline: &Pipeline) -> Result<usize, EngineError> {
             "groove: another groove run holds this project ({holder}); waiting for it to finish"
         )
     })?;
-    let mut removed = 0;
+    // the entries go first, by one rename, so a kill at any moment leaves either every entry
+    // with its objects or no entry at all; the rest is moved beside them into `tmp/` (which
+    // the next command sweeps if this one is killed) and removed with it
+    let trash = store.tmp_dir("cleaned")?;
+    let entries = store.dir.join("entries");
+    if entries.symlink_metadata().is_ok() {
+        std::fs::rename(&entries, trash.join("entries")).at(&entries)?;
+    }
+    let mut removed = usize::from(trash.join("entries").symlink_metadata().is_ok());
     for entry in std::fs::read_dir(&store.dir).at(&store.dir)?.flatten() {
         let path = entry.path();
-        if entry.file_name() == "lock" {
+        if entry.file_name() == "lock" || entry.file_name() == "tmp" {
             continue;
         }
-        if path.is_dir() {
-            std::fs::remove_dir_all(&path).at(&path)?;
-        } else {
-            std::fs::remove_file(&path).at(&path)?;
-        }
+        std::fs::rename(&path, trash.join(entry.file_name())).at(&path)?;
         removed += 1;
     }
+    let tmp = store.tmp_root();
+    std::fs::remove_dir_all(&tmp).at(&tmp)?;
     Ok(removed)
 }
 

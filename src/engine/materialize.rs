@@ -9,6 +9,7 @@ use super::error::{EngineError, IoContext};
 use super::hashing::HashCache;
 use super::inputs::dir_files;
 use super::store::{Store, Stored};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Does the path already hold exactly this artifact?
@@ -42,16 +43,20 @@ pub struct Staged {
 
 /// Write an artifact next to its path (a hidden `.NAME.groove-new-*` sibling: a file, or a
 /// folder for a Collection) without touching the path itself; `None` if the path already holds
-/// it. A file output never replaces a folder.
+/// it. A file output never replaces a folder, and a folder output replaces only what groove
+/// wrote there: `was` gives what the lock says this output held before (asked only when the
+/// path does not hold the artifact already; see [`check_not_foreign`]).
 pub fn stage(
     store: &Store,
     path: &Path,
     stored: &Stored,
+    was: &dyn Fn() -> Option<Stored>,
     cache: &HashCache,
 ) -> Result<Option<Staged>, EngineError> {
     if is_current(path, stored, cache) {
         return Ok(None);
     }
+    check_not_foreign(path, stored, was().as_ref(), cache)?;
     let parent = path.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).at(parent)?;
     let name = path
@@ -111,6 +116,59 @@ impl Staged {
     }
 }
 
+/// Never lose a user's file: a folder output replaces what is at its path only when groove
+/// wrote it. Each file there must be an item the output held before (`was`, from the lock) or
+/// hold exactly the bytes the new output gives it; a subfolder, a link or any other file is
+/// the user's, and the run stops naming it (exit 2) with nothing changed. A file in the way of a
+/// folder output counts as groove's only when it is the file the output held before.
+pub fn check_not_foreign(
+    path: &Path,
+    stored: &Stored,
+    was: Option<&Stored>,
+    cache: &HashCache,
+) -> Result<(), EngineError> {
+    let Stored::Collection { items } = stored else {
+        return Ok(());
+    };
+    let Ok(meta) = path.symlink_metadata() else {
+        return Ok(()); // nothing there
+    };
+    let foreign = |what: &Path| {
+        EngineError::Usage(format!(
+            "{} is in the way of a folder output and groove did not write it; groove replaces only what it wrote there, so nothing was changed: move it away (or delete it) and run again, or give the output another path",
+            what.display()
+        ))
+    };
+    let was_items = match was {
+        Some(Stored::Collection { items }) => Some(items),
+        _ => None,
+    };
+    if meta.is_symlink() {
+        return Ok(()); // the link itself is replaced, never what it points to
+    }
+    if !meta.is_dir() {
+        let ours = matches!(was, Some(Stored::File { sha256 })
+            if cache.hash_file(path).ok().as_ref() == Some(sha256));
+        return if ours { Ok(()) } else { Err(foreign(path)) };
+    }
+    for entry in std::fs::read_dir(path).at(path)? {
+        let entry = entry.at(path)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let file = entry.path();
+        let plain = entry.file_type().is_ok_and(|t| t.is_file());
+        let written_before = was_items.is_some_and(|w| w.contains_key(&name));
+        let same_bytes = || {
+            items
+                .get(&name)
+                .is_some_and(|h| cache.hash_file(&file).ok().as_ref() == Some(h))
+        };
+        if !plain || !(written_before || same_bytes()) {
+            return Err(foreign(&file));
+        }
+    }
+    Ok(())
+}
+
 /// Write an artifact to its path unless it is already there. Returns whether it wrote.
 pub fn materialize(
     store: &Store,
@@ -118,7 +176,7 @@ pub fn materialize(
     stored: &Stored,
     cache: &HashCache,
 ) -> Result<bool, EngineError> {
-    match stage(store, path, stored, cache)? {
+    match stage(store, path, stored, &|| None, cache)? {
         Some(staged) => staged.commit().map(|()| true),
         None => Ok(false),
     }
@@ -170,4 +228,35 @@ pub fn sweep_leftovers(parent: &Path, name: &str) -> Result<(), EngineError> {
         }
     }
     Ok(())
+}
+
+/// Remove what killed runs left beside any of `paths` (`.NAME.groove-new-*` and the like, see
+/// [`sweep_leftovers`]): one listing per folder, so a run removes them even when it writes
+/// nothing there. Best effort: a folder that cannot be read is left as it is.
+pub fn sweep_leftovers_of<'p>(paths: impl Iterator<Item = &'p Path>) {
+    let mut by_parent: BTreeMap<&Path, BTreeSet<String>> = BTreeMap::new();
+    for path in paths {
+        if let (Some(parent), Some(name)) = (path.parent(), path.file_name()) {
+            let names = by_parent.entry(parent).or_default();
+            names.insert(name.to_string_lossy().into_owned());
+        }
+    }
+    for (parent, names) in by_parent {
+        let Ok(list) = std::fs::read_dir(parent) else {
+            continue;
+        };
+        for entry in list.flatten() {
+            let n = entry.file_name().to_string_lossy().into_owned();
+            let Some(rest) = n.strip_prefix('.') else {
+                continue;
+            };
+            let left = ["groove-new-", "groove-old-", "groove-tmp-"]
+                .iter()
+                .filter_map(|tag| rest.rfind(&format!(".{tag}")))
+                .any(|at| names.contains(&rest[..at]));
+            if left {
+                let _ = remove_any(&entry.path());
+            }
+        }
+    }
 }

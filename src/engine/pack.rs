@@ -64,13 +64,19 @@ pub fn entry_packs(store_dir: &Path) -> PathBuf {
 }
 
 /// The files of a folder with an extension, sorted (none if the folder is missing).
+/// A folder reached through a link, and linked files, are left out: the store is never
+/// followed out of itself.
 pub fn files_with(dir: &Path, ext: &str) -> Vec<PathBuf> {
+    if dir.symlink_metadata().is_ok_and(|m| m.is_symlink()) {
+        return Vec::new();
+    }
     let Ok(list) = std::fs::read_dir(dir) else {
         return Vec::new();
     };
     let mut out: Vec<PathBuf> = list
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .filter(|p| p.symlink_metadata().is_ok_and(|m| m.is_file()))
         .collect();
     out.sort();
     out
@@ -110,7 +116,7 @@ pub fn read_idx(idx: &Path) -> Option<HashMap<String, Loc>> {
         let mut f = line.split(' ');
         let (h, off, len) = (f.next()?, f.next()?, f.next()?);
         let (offset, len): (u64, u64) = (off.parse().ok()?, len.parse().ok()?);
-        if h.len() != 64 || offset.checked_add(len)? > size {
+        if !super::store::is_sha256(h) || offset.checked_add(len)? > size {
             return None;
         }
         let pack = Arc::clone(&pack);

@@ -37,3 +37,29 @@ pub fn acquire(store_dir: &Path, on_wait: impl FnOnce(&str)) -> Result<ProjectLo
     let _ = write!(file, "pid {}", std::process::id());
     Ok(ProjectLock { _file: file })
 }
+
+/// Take the lock shared, for a command that only reads the project (`publish`): no run can
+/// change the lock or the store while it is held, and several readers may hold it at once.
+/// Opened read-only, so it works on a store that cannot be written; a store without a lock file
+/// was never run in, and `None` is returned (there is nothing a run could tear).
+pub fn acquire_shared(
+    store_dir: &Path,
+    on_wait: impl FnOnce(&str),
+) -> Result<Option<ProjectLock>, EngineError> {
+    let path = store_dir.join("lock");
+    let file = match File::open(&path) {
+        Ok(file) => file,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(EngineError::io(&path, e)),
+    };
+    match file.try_lock_shared() {
+        Ok(()) => {}
+        Err(TryLockError::WouldBlock) => {
+            let holder = std::fs::read_to_string(&path).unwrap_or_default();
+            on_wait(holder.trim());
+            file.lock_shared().at(&path)?;
+        }
+        Err(TryLockError::Error(e)) => return Err(EngineError::io(&path, e)),
+    }
+    Ok(Some(ProjectLock { _file: file }))
+}

@@ -31,6 +31,12 @@ pub fn publish(
     pipeline: &Pipeline,
     to: &Path,
 ) -> Result<Published, EngineError> {
+    // one snapshot: no run changes the lock or the store between the check and the copy
+    let _lock = super::project_lock::acquire_shared(&pipeline.root.join(".groove"), |holder| {
+        eprintln!(
+            "groove: another groove run holds this project ({holder}); waiting for it to finish"
+        )
+    })?;
     let statuses = status(catalog, pipeline, None)?;
     let stale: Vec<StageStatus> = statuses
         .into_iter()
@@ -73,7 +79,13 @@ pub fn publish(
         )));
     }
     let lock_file = lock_path(pipeline);
-    let lock = PipelineLock::load(&lock_file);
+    let lock_bytes = std::fs::read(&lock_file).at(&lock_file)?;
+    let lock: PipelineLock = serde_json::from_slice(&lock_bytes).map_err(|e| {
+        EngineError::Usage(format!(
+            "{} cannot be read ({e}); run `groove run` to write it again",
+            pipeline.show(&lock_file)
+        ))
+    })?;
     let store = Store::at(&pipeline.root);
 
     let mut files: BTreeMap<String, Vec<u8>> = BTreeMap::new();
@@ -87,7 +99,14 @@ pub fn publish(
                 continue;
             };
             let rel = rel.to_string_lossy().replace('\\', "/");
-            match &record.outputs[output] {
+            let Some(stored) = record.outputs.get(output) else {
+                return Err(EngineError::Usage(format!(
+                    "{} has no record of output `{output}` of stage `{}`; run `groove run` to write it again",
+                    pipeline.show(&lock_file),
+                    stage.name
+                )));
+            };
+            match stored {
                 Stored::File { sha256 } => {
                     files.insert(rel, store.read_object(sha256)?);
                 }
@@ -105,10 +124,7 @@ pub fn publish(
             pipeline.show(&pipeline.reports_dir)
         )));
     }
-    files.insert(
-        "pipeline.lock".into(),
-        std::fs::read(&lock_file).at(&lock_file)?,
-    );
+    files.insert("pipeline.lock".into(), lock_bytes);
     let manifest: String = files
         .iter()
         .map(|(rel, bytes)| format!("{}  {rel}\n", sha256_hex(bytes)))

@@ -101,6 +101,9 @@ pub fn run(
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
     super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
+    // ...and the outputs a killed run had staged beside their paths but not swapped in
+    let outputs = pipeline.stages.values().flat_map(|s| s.outputs.values());
+    super::materialize::sweep_leftovers_of(outputs.flatten().map(|p| p.as_path()));
     let pool = worker_pool(&ctx, opts.jobs)?;
     // objects are checked when read, not at lookup; a Slurm step reads them in another process,
     // whose failure would not say which object was damaged, so that executor checks at lookup
@@ -349,8 +352,14 @@ fn materialize_all(
             } else {
                 &pipeline.root
             };
+            // what groove wrote at this path before (a folder output replaces only that)
+            let was = || {
+                let record = ctx.lock().stages.get(name)?;
+                record.outputs.get(output).cloned()
+            };
             let step = super::materialize::check_no_symlink_below(base, path).and_then(|()| {
-                super::materialize::stage(&ctx.store, path, &current.outputs[output], &ctx.hashes)
+                let stored = &current.outputs[output];
+                super::materialize::stage(&ctx.store, path, stored, &was, &ctx.hashes)
             });
             match step {
                 Ok(Some(s)) => staged.push(s),

@@ -39,7 +39,9 @@ pub fn status(
     if let Some(e) = errors.into_iter().next() {
         return Err(e);
     }
-    ctx.hashes.save()?;
+    // the hash cache only spares a later command work: a store that cannot be written (read
+    // only, full) costs that, never the answer
+    let _ = ctx.hashes.save();
     Ok(describe(&ctx, &done))
 }
 

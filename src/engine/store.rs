@@ -70,12 +70,39 @@ fn sorted_map<'de, D: serde::Deserializer<'de>>(
     Ok(Some(d.deserialize_map(Pairs)?.into_iter().collect()))
 }
 
+/// Whether `s` names an object: 64 lowercase hex digits, as `sha256_hex` writes them. Anything
+/// else read from a store, a remote or a lock is damage, never a path.
+pub fn is_sha256(s: &str) -> bool {
+    s.len() == 64 && s.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
+
+/// Whether `s` is a plain name for one file in a folder: not empty, not `.` or `..`, no
+/// separator (`/`, `\`) and no control character (NUL, newline). Item and output names read
+/// from a store or a remote must be, so joining one to a folder never leaves that folder.
+pub fn is_plain_name(s: &str) -> bool {
+    !s.is_empty()
+        && s != "."
+        && s != ".."
+        && !s.chars().any(|c| c == '/' || c == '\\' || c.is_control())
+}
+
 impl TryFrom<StoredFields> for Stored {
     type Error = String;
     fn try_from(f: StoredFields) -> Result<Stored, String> {
         match (f.kind.as_str(), f.sha256, f.items) {
-            ("file", Some(sha256), None) => Ok(Stored::File { sha256 }),
-            ("collection", None, Some(items)) => Ok(Stored::Collection { items }),
+            ("file", Some(sha256), None) if is_sha256(&sha256) => Ok(Stored::File { sha256 }),
+            ("collection", None, Some(items))
+                if items.iter().all(|(n, h)| is_plain_name(n) && is_sha256(h)) =>
+            {
+                Ok(Stored::Collection { items })
+            }
+            ("file", Some(sha256), None) => Err(format!(
+                "a stored file's hash `{}` is not 64 lowercase hex digits",
+                sha256.escape_debug()
+            )),
+            ("collection", None, Some(_)) => Err(
+                "a stored collection names an item that is not a plain file name or a hash that is not 64 lowercase hex digits".into(),
+            ),
             (kind, _, _) => Err(format!(
                 "a stored artifact of type `{kind}` needs `sha256` (file) or `items` (collection), not both"
             )),
@@ -96,15 +123,49 @@ impl Stored {
 /// What one stage key produced.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Entry {
+    #[serde(deserialize_with = "plain_outputs")]
     pub outputs: BTreeMap<String, Stored>,
+}
+
+/// An entry's outputs as read: every output name a plain name (else the entry is damage).
+fn plain_outputs<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, Stored>, D::Error> {
+    let outputs = BTreeMap::<String, Stored>::deserialize(d)?;
+    match outputs.keys().find(|n| !is_plain_name(n)) {
+        Some(bad) => Err(serde::de::Error::custom(format!(
+            "output name `{}` is not a plain name",
+            bad.escape_debug()
+        ))),
+        None => Ok(outputs),
+    }
+}
+
+impl Entry {
+    /// Whether the entry holds exactly the outputs `names` (a stage's declaration), each a
+    /// file when `files` is `Some(true)`, a collection when `Some(false)`: an entry of another
+    /// shape is damage (its stage runs again), never a missing output found later.
+    pub fn fits<'n>(&self, names: impl Iterator<Item = &'n String>, files: Option<bool>) -> bool {
+        let mut count = 0;
+        for n in names {
+            count += 1;
+            match (self.outputs.get(n), files) {
+                (None, _) => return false,
+                (Some(Stored::File { .. }), Some(false))
+                | (Some(Stored::Collection { .. }), Some(true)) => return false,
+                _ => {}
+            }
+        }
+        count == self.outputs.len()
+    }
 }
 
 pub struct Store {
     pub dir: PathBuf,
-    /// Take an entry's objects as sound at lookup without checking them (one `stat` each:
-    /// 20,000 on a 10,000-run no-op, most of its time). Every read still checks an object's bytes
-    /// against its name, so a damaged object is found when a stage needs it; `groove run` then
-    /// checks every object and reruns what made the damaged one (`engine::run`). Off by default.
+    /// Take an entry's objects as sound at lookup when they are there (a `stat` each, or a
+    /// look in the pack index read), without reading them. Every read still checks an object's bytes against its name, so a damaged object is
+    /// found when a stage needs it; `groove run` then checks every object and reruns what made
+    /// the damaged one (`engine::run`). Off by default.
     pub trust_objects: bool,
     /// What the packs hold, read when first needed (`None` until then).
     packs: RwLock<Option<PackIndex>>,
@@ -239,15 +300,20 @@ impl Store {
         }
     }
 
+    /// Where a loose object lies. Every hash read from a store, a remote or a lock is checked
+    /// to be one when parsed; anything else gets a name in `objects/` no object has, never a
+    /// path outside it.
     pub fn object_path(&self, sha256: &str) -> PathBuf {
-        self.dir
-            .join("objects")
-            .join(&sha256[..2])
-            .join(&sha256[2..])
+        let objects = self.dir.join("objects");
+        match is_sha256(sha256) {
+            true => objects.join(&sha256[..2]).join(&sha256[2..]),
+            false => objects.join("not-a-hash"),
+        }
     }
 
-    fn entry_path(&self, key: &str) -> PathBuf {
-        self.dir.join("entries").join(format!("{key}.json"))
+    /// Where a key's loose entry lies (`None` for a key that is not a hash: no entry).
+    fn entry_path(&self, key: &str) -> Option<PathBuf> {
+        is_sha256(key).then(|| self.dir.join("entries").join(format!("{key}.json")))
     }
 
     pub fn tmp_root(&self) -> PathBuf {
@@ -270,7 +336,8 @@ impl Store {
 
     /// The entry of a key, if a complete one was committed.
     pub fn entry(&self, key: &str) -> Option<Entry> {
-        match std::fs::read(self.entry_path(key)) {
+        let path = self.entry_path(key)?;
+        match std::fs::read(path) {
             Ok(bytes) => serde_json::from_slice(&bytes).ok(),
             Err(_) => {
                 if let Some(packs) = &*self.entry_packs.read().expect("entry pack lock") {
@@ -315,15 +382,22 @@ impl Store {
         Ok(bytes)
     }
 
-    /// The entry of a key if it is complete and (unless `trust_objects`) every object it names
-    /// exists with the right hash. A file object is checked through `hashes` (one `stat` while
-    /// unchanged); the objects of a collection, read and hashed on every core (only a run
-    /// repairing a damaged object checks them, so their stamps are not kept). A damaged or
-    /// missing object makes the entry a miss: the stage runs again and stores the object anew.
+    /// The entry of a key if it is complete and every object it names exists with the right
+    /// hash. A file object is checked through `hashes`; the objects of a collection are read
+    /// and hashed on every core. With `trust_objects` each object only has to be there (a pack's
+    /// blob or a loose file; a damaged one is found when read). A damaged or missing object
+    /// makes the entry a miss: the stage runs again and stores the object anew.
     pub fn entry_checked(&self, key: &str, hashes: &HashCache) -> Option<Entry> {
         let entry = self.entry(key)?;
         if self.trust_objects {
-            return Some(entry);
+            // trusted, an object only has to be there (in a pack read, or a loose file): its
+            // bytes are checked when read, and a damaged one makes `run` check everything
+            let there = |h: &String| {
+                self.with_packs(false, |i| i.objects.contains_key(h))
+                    || self.object_path(h).is_file()
+            };
+            let all_there = entry.outputs.values().all(|s| stored_objects(s).all(there));
+            return all_there.then_some(entry);
         }
         let sound_object = |h: &String| {
             let path = self.object_path(h);
@@ -383,7 +457,9 @@ impl Store {
     ) -> Result<Entry, EngineError> {
         let entry = Entry { outputs };
         let bytes = serde_json::to_vec_pretty(&entry).expect("an entry serializes");
-        let path = self.entry_path(key);
+        let path = self.entry_path(key).ok_or_else(|| {
+            EngineError::Usage(format!("`{}` is not a store key", key.escape_debug()))
+        })?;
         let tmp = self.tmp_root();
         std::fs::create_dir_all(&tmp).at(&tmp)?;
         let staged = tmp.join(unique_name("entry"));
@@ -463,22 +539,60 @@ mod tests {
 
     #[test]
     fn an_entry_reads_its_items_as_a_map_whatever_their_order() {
-        let text = br#"{"outputs": {"runs": {"type": "collection", "items": {"b": "2", "a": "1", "c": "3", "a": "4"}}, "summary": {"type": "file", "sha256": "ff"}}}"#;
-        let entry: Entry = serde_json::from_slice(text).unwrap();
+        let h = |c: char| c.to_string().repeat(64);
+        let text = format!(
+            r#"{{"outputs": {{"runs": {{"type": "collection", "items": {{"b": "{}", "a": "{}", "c": "{}", "a": "{}"}}}}, "summary": {{"type": "file", "sha256": "{}"}}}}}}"#,
+            h('2'),
+            h('1'),
+            h('3'),
+            h('4'),
+            h('f')
+        );
+        let entry: Entry = serde_json::from_str(&text).unwrap();
         let items = BTreeMap::from([
-            ("a".to_string(), "4".to_string()),
-            ("b".to_string(), "2".to_string()),
-            ("c".to_string(), "3".to_string()),
+            ("a".to_string(), h('4')),
+            ("b".to_string(), h('2')),
+            ("c".to_string(), h('3')),
         ]);
         assert_eq!(entry.outputs["runs"], Stored::Collection { items });
-        assert_eq!(
-            entry.outputs["summary"],
-            Stored::File {
-                sha256: "ff".into()
-            }
+        assert_eq!(entry.outputs["summary"], Stored::File { sha256: h('f') });
+        let both = text.replace(r#""type": "file","#, r#""type": "file", "items": {},"#);
+        assert!(serde_json::from_str::<Entry>(&both).is_err());
+    }
+
+    #[test]
+    fn hashes_and_names_that_are_paths_are_damage() {
+        let good = format!(
+            r#"{{"outputs": {{"x": {{"type": "file", "sha256": "{}"}}}}}}"#,
+            "a".repeat(64)
         );
-        let both = br#"{"outputs": {"x": {"type": "file", "sha256": "ff", "items": {}}}}"#;
-        assert!(serde_json::from_slice::<Entry>(both).is_err());
+        assert!(serde_json::from_str::<Entry>(&good).is_ok());
+        for bad in [
+            "ab",
+            "../../etc/passwd",
+            &"A".repeat(64),
+            &format!("..{}", "/".repeat(62)),
+        ] {
+            let text = good.replace(&"a".repeat(64), bad);
+            assert!(serde_json::from_str::<Entry>(&text).is_err(), "{bad}");
+        }
+        for name in ["..", ".", "a/b", "/abs", "", r"a\nb", r"a\u0000b"] {
+            let output = good.replace(r#""x""#, &format!("\"{name}\""));
+            assert!(
+                serde_json::from_str::<Entry>(&output).is_err(),
+                "output {name}"
+            );
+            let item = format!(
+                r#"{{"outputs": {{"x": {{"type": "collection", "items": {{"{name}": "{}"}}}}}}}}"#,
+                "a".repeat(64)
+            );
+            assert!(serde_json::from_str::<Entry>(&item).is_err(), "item {name}");
+        }
+        let store = Store::in_dir(PathBuf::from("/nowhere/.groove"));
+        assert!(store
+            .object_path("../../x")
+            .starts_with("/nowhere/.groove/objects"));
+        assert!(store.entry("../../x").is_none());
     }
 
     #[test]

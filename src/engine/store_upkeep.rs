@@ -4,7 +4,7 @@
 use super::error::{EngineError, IoContext};
 use super::hashing::sha256_hex;
 use super::pack;
-use super::store::{stored_objects, Entry, Store};
+use super::store::{is_sha256, stored_objects, Entry, Store};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -19,8 +19,9 @@ pub struct Verified {
     pub dropped_entries: Vec<String>,
 }
 
+/// Remove a file, a link (never what it points to) or a folder.
 fn remove_any(path: &Path) -> Result<(), EngineError> {
-    if path.is_dir() {
+    if path.symlink_metadata().is_ok_and(|m| m.is_dir()) {
         std::fs::remove_dir_all(path).at(path)
     } else {
         std::fs::remove_file(path).at(path)
@@ -33,7 +34,14 @@ impl Store {
     /// object (call while holding the project lock). Returns what was checked and dropped.
     pub fn verify(&self) -> Result<Verified, EngineError> {
         let mut report = Verified::default();
-        for (name, obj) in self.loose_objects()? {
+        let (objects, strays) = self.loose_objects()?;
+        for stray in strays {
+            // a link, a folder or a misnamed file among the objects: removed itself (a link,
+            // never what it points to), as damage
+            remove_any(&stray)?;
+            report.dropped_objects.push(file_name(&stray));
+        }
+        for (name, obj) in objects {
             report.objects += 1;
             let sound = std::fs::read(&obj).is_ok_and(|b| sha256_hex(&b) == name);
             if !sound {
@@ -128,7 +136,11 @@ impl Store {
             }
         }
         let mut removed_objects = 0;
-        for (name, obj) in self.loose_objects()? {
+        let (objects, strays) = self.loose_objects()?;
+        for stray in strays {
+            remove_any(&stray)?;
+        }
+        for (name, obj) in objects {
             if !live.contains(&name) {
                 std::fs::remove_file(&obj).at(&obj)?;
                 removed_objects += 1;
@@ -197,26 +209,41 @@ impl Store {
         std::fs::remove_file(file).at(file)
     }
 
-    /// The loose objects: (hash, path), sorted.
-    fn loose_objects(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
-        let mut out = Vec::new();
+    /// The loose objects: (hash, path), sorted; and the strays beside them (links, folders,
+    /// files not named by a hash), which are never followed.
+    #[allow(clippy::type_complexity)]
+    fn loose_objects(&self) -> Result<(Vec<(String, PathBuf)>, Vec<PathBuf>), EngineError> {
+        let (mut out, mut strays) = (Vec::new(), Vec::new());
         for sub in read_dir_sorted(&self.dir.join("objects"))? {
             let prefix = file_name(&sub);
-            if prefix.len() != 2 {
-                continue; // `packs/`
+            if prefix == "packs" && !is_link(&sub) {
+                continue;
+            }
+            let hex_prefix = prefix.len() == 2 && prefix.bytes().all(|b| b.is_ascii_hexdigit());
+            if !hex_prefix || is_link(&sub) || !sub.is_dir() {
+                strays.push(sub);
+                continue;
             }
             for obj in read_dir_sorted(&sub)? {
-                out.push((format!("{prefix}{}", file_name(&obj)), obj));
+                let name = format!("{prefix}{}", file_name(&obj));
+                let plain_file = obj.symlink_metadata().is_ok_and(|m| m.is_file());
+                match plain_file && is_sha256(&name) {
+                    true => out.push((name, obj)),
+                    false => strays.push(obj),
+                }
             }
         }
-        Ok(out)
+        Ok((out, strays))
     }
 
     /// The loose entries: (key, path), sorted.
     fn loose_entries(&self) -> Result<Vec<(String, PathBuf)>, EngineError> {
         Ok(read_dir_sorted(&self.dir.join("entries"))?
             .into_iter()
-            .filter(|e| e.is_file())
+            .filter(|e| {
+                e.symlink_metadata()
+                    .is_ok_and(|m| m.is_file() || m.is_symlink())
+            })
             .map(|e| {
                 let key = e
                     .file_stem()
@@ -242,8 +269,15 @@ fn read_entry_pack(file: &Path) -> BTreeMap<String, Entry> {
         .unwrap_or_default()
 }
 
+/// Whether a path is a symbolic link.
+fn is_link(path: &Path) -> bool {
+    path.symlink_metadata().is_ok_and(|m| m.is_symlink())
+}
+
+/// A folder's entries, sorted; none for a missing folder or one reached through a link (the
+/// store is never followed out of itself).
 fn read_dir_sorted(dir: &Path) -> Result<Vec<PathBuf>, EngineError> {
-    if !dir.exists() {
+    if !dir.exists() || is_link(dir) {
         return Ok(Vec::new());
     }
     let mut out: Vec<PathBuf> = std::fs::read_dir(dir)

@@ -13,6 +13,27 @@ pub fn check(file: &str, bytes: &[u8]) -> Result<(), Problem> {
         return Ok(());
     };
     let names = header_names(bytes, header);
+    let mut seen = std::collections::HashMap::new();
+    for (k, name) in names
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !n.trim().is_empty())
+    {
+        if let Some(first) = seen.insert(name.trim(), k) {
+            return Err(Problem::at(
+                file,
+                header.line,
+                name.trim(),
+                format!(
+                    "the header names column {} twice (fields {} and {})",
+                    name.trim(),
+                    first + 1,
+                    k + 1
+                ),
+                "rename or delete one of the two columns",
+            ));
+        }
+    }
     if let Err(e) = std::str::from_utf8(bytes) {
         let at = e.valid_up_to();
         let row = rows.iter().find(|r| at < r.end).unwrap_or(header);

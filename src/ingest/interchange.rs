@@ -121,12 +121,29 @@ pub fn rows_by_run<T>(
                 continue;
             }
         };
+        if !run_id_ok(&run) {
+            problems.push(table.problem(
+                "run",
+                i,
+                format!("run id {run:?} cannot name the run's files (it is `.` or `..`, begins with a dot, or holds a `/`, a `\\` or a control character such as a line break)"),
+                "rename the run with letters, digits, `.`, `_` and `-` (e.g. s1 or run_07)",
+            ));
+            continue;
+        }
         match read(i, &run) {
             Ok(row) => rows.push(row),
             Err(p) => problems.push(p.in_run(&run)),
         }
     }
     (rows, problems)
+}
+
+/// Whether a run id can name the run's files: not empty, no leading dot (so not `.` or `..`),
+/// no separator and no control character.
+pub fn run_id_ok(run: &str) -> bool {
+    !run.is_empty()
+        && !run.starts_with('.')
+        && !run.chars().any(|c| c == '/' || c == '\\' || c.is_control())
 }
 
 /// The experiment kind `text` written in row `i`'s `experiment` cell.

@@ -62,6 +62,21 @@ pub fn validate(
         None => (0, None, None),
     };
     let shared = SharedParams::of(raw.project.as_ref().map(|p| &p.get_ref().params), file);
+    if let Some(p) = &raw.project {
+        let p = p.get_ref();
+        for (key, value) in [("data", &p.data), ("reports", &p.reports)] {
+            let Some(value) = value else { continue };
+            let text = value.get_ref();
+            if text.contains("${") {
+                return Err(file.error(
+                    file.line_of(value.span().start),
+                    format!(
+                        "[project] {key} = \"{text}\": the project's folders take no variables (`${{data}}` and `${{reports}}` are these folders); write a path such as \"{key}\""
+                    ),
+                ));
+            }
+        }
+    }
     let from_cli = |p: &Option<PathBuf>| -> Result<Option<PathBuf>, EngineError> {
         p.as_ref()
             .map(|p| std::path::absolute(p).at(p).map(|a| normalize(&a)))
@@ -187,6 +202,15 @@ fn validate_stage(
         .collect();
     if let Some(kind_impl) = builtin {
         shared.inherit(kind_impl, &mut params, &mut params_lines);
+    }
+    // a NaN or an infinity would reach the stage (or its key, as JSON null) unchecked
+    if let Some((key, value)) = params.iter().find(|(_, v)| !finite(v)) {
+        return Err(file.error(
+            params_lines.get(key).copied().unwrap_or(line),
+            format!(
+                "stage `{name}`: param `{key}` = {value} is not a finite number; write a number such as 0.5 (or remove the param)"
+            ),
+        ));
     }
     let cmd = raw.cmd.map(|c| (here(&c), c.into_inner()));
     let at = Place {
@@ -437,6 +461,16 @@ fn parse_binding(pipeline: &Pipeline, raw: RawInput) -> Result<InputSpec, String
             path: substitute(pipeline, &t.path)?,
             optional: t.optional,
         }),
+    }
+}
+
+/// Whether a param holds no NaN or infinity (in arrays and tables too).
+fn finite(value: &toml::Value) -> bool {
+    match value {
+        toml::Value::Float(x) => x.is_finite(),
+        toml::Value::Array(a) => a.iter().all(finite),
+        toml::Value::Table(t) => t.values().all(finite),
+        _ => true,
     }
 }
 

@@ -9,7 +9,7 @@
 
 use super::backend::{blob_name, entry_name, Backend, Counted, RemoteError, Requests};
 use crate::engine::hashing::sha256_hex;
-use crate::engine::store::{Entry, Store, Stored};
+use crate::engine::store::{is_sha256, Entry, Store, Stored};
 use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -81,6 +81,11 @@ impl RemoteCache {
         self.backend.inner.describe()
     }
 
+    /// What to set when the remote cannot be reached or refuses requests.
+    pub fn hint(&self) -> String {
+        self.backend.inner.hint()
+    }
+
     pub fn is_disabled(&self) -> bool {
         self.disabled.load(Ordering::Relaxed)
     }
@@ -120,12 +125,13 @@ impl RemoteCache {
     }
 
     /// Look a key up on the remote; on a hit its blobs are verified and the entry committed to
-    /// `store`. `None` is a miss (absent, incomplete, corrupt) or an error (counted and warned).
-    pub fn fetch(&self, store: &Store, key: &str) -> Option<Entry> {
+    /// `store`. `None` is a miss (absent, incomplete, corrupt, or not of the shape `fits` wants:
+    /// the stage's declared outputs) or an error (counted and warned).
+    pub fn fetch(&self, store: &Store, key: &str, fits: &dyn Fn(&Entry) -> bool) -> Option<Entry> {
         if self.is_disabled() {
             return None;
         }
-        match self.try_fetch(store, key) {
+        match self.try_fetch(store, key, fits) {
             Ok(Some(entry)) => {
                 self.hits.fetch_add(1, Ordering::Relaxed);
                 Some(entry)
@@ -141,13 +147,25 @@ impl RemoteCache {
         }
     }
 
-    fn try_fetch(&self, store: &Store, key: &str) -> Result<Option<Entry>, RemoteError> {
+    fn try_fetch(
+        &self,
+        store: &Store,
+        key: &str,
+        fits: &dyn Fn(&Entry) -> bool,
+    ) -> Result<Option<Entry>, RemoteError> {
+        if !is_sha256(key) {
+            return Ok(None);
+        }
         let Some(bytes) = self.backend.get(&entry_name(key))? else {
             return Ok(None);
         };
+        // parsing checks every hash and name (a crafted entry is a miss, never a path)
         let Ok(entry) = serde_json::from_slice::<Entry>(&bytes) else {
             return Ok(None);
         };
+        if !fits(&entry) {
+            return Ok(None);
+        }
         let mut wanted = BTreeSet::new();
         for stored in entry.outputs.values() {
             match stored {
@@ -158,10 +176,8 @@ impl RemoteCache {
             }
         }
         for sha in &wanted {
-            if !is_sha256(sha) {
-                return Ok(None);
-            }
-            if store.has_object(sha) {
+            // a local copy counts only when sound: a damaged one is replaced by the remote's
+            if store.read_object(sha).is_ok() {
                 continue;
             }
             let Some(blob) = self.backend.get(&blob_name(sha))? else {
@@ -213,10 +229,6 @@ impl RemoteCache {
             human_bytes(r.bytes_up)
         )
     }
-}
-
-fn is_sha256(s: &str) -> bool {
-    s.len() == 64 && s.bytes().all(|b| b.is_ascii_hexdigit())
 }
 
 pub fn human_bytes(n: u64) -> String {

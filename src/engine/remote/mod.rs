@@ -139,7 +139,19 @@ pub fn backend_for(url: &str, base: &Path) -> Result<Box<dyn backend::Backend>, 
                 "remote `{url}` names no folder; write file:///absolute/path or file://relative/path"
             )));
         }
-        return Ok(Box::new(file::FileRemote::new(&base.join(path))));
+        let normalize = crate::engine::config::validate::normalize;
+        let base = &normalize(&std::path::absolute(base).unwrap_or_else(|_| base.into()));
+        let root = normalize(&base.join(path));
+        if root.starts_with(base) {
+            return Err(EngineError::Usage(format!(
+                "remote `{url}` is {}, inside the project: a remote is a folder outside it that other clones share; write file:///shared/path or file://../shared-cache",
+                match &root == base {
+                    true => "the project folder itself".to_string(),
+                    false => format!("{}", root.display()),
+                }
+            )));
+        }
+        return Ok(Box::new(file::FileRemote::new(&root)));
     }
     if let Some(rest) = url.strip_prefix("s3://") {
         return s3_backend(url, rest);
@@ -162,17 +174,23 @@ fn s3_backend(url: &str, _rest: &str) -> Result<Box<dyn backend::Backend>, Engin
 }
 
 /// A key's entry: from the local store, else from the remote (verified and committed locally).
+/// Either counts only when `fits` (the stage's declared outputs): any other is damage, a miss.
 pub fn lookup(
     store: &crate::engine::store::Store,
     hashes: &crate::engine::hashing::HashCache,
     remote: Option<&RemoteCache>,
     key: &str,
+    fits: &dyn Fn(&crate::engine::store::Entry) -> bool,
 ) -> Option<crate::engine::store::Entry> {
     // a local entry counts only with every object sound; a fetched one is checked the same way
     // (a damaged local object the fetch did not replace makes it a miss: the stage reruns)
-    store.entry_checked(key, hashes).or_else(|| {
-        remote
-            .and_then(|r| r.fetch(store, key))
-            .and_then(|_| store.entry_checked(key, hashes))
-    })
+    store
+        .entry_checked(key, hashes)
+        .filter(|e| fits(e))
+        .or_else(|| {
+            remote
+                .and_then(|r| r.fetch(store, key, fits))
+                .and_then(|_| store.entry_checked(key, hashes))
+                .filter(|e| fits(e))
+        })
 }

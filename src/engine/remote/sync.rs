@@ -4,7 +4,6 @@ use super::cache::RemoteCache;
 use super::push::Pusher;
 use crate::engine::lockfile::PipelineLock;
 use crate::engine::store::Store;
-use rayon::prelude::*;
 use std::collections::BTreeSet;
 use std::sync::Arc;
 
@@ -46,19 +45,6 @@ pub fn push_all(
         }
     }
     pusher.finish();
-    Synced {
-        keys: keys.len(),
-        skipped,
-    }
-}
-
-/// Download every key of `keys` the local store lacks (verified, then committed locally).
-pub fn pull_all(cache: &RemoteCache, store: &Store, keys: &BTreeSet<String>) -> Synced {
-    let todo: Vec<&String> = keys.iter().filter(|k| store.entry(k).is_none()).collect();
-    let skipped = keys.len() - todo.len();
-    todo.par_iter().for_each(|k| {
-        cache.fetch(store, k);
-    });
     Synced {
         keys: keys.len(),
         skipped,
