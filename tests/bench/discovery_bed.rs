@@ -78,13 +78,14 @@ fn parse() -> Args {
     a
 }
 
+fn fail(msg: String) -> ! {
+    eprintln!("discovery_bed: {msg}");
+    std::process::exit(1)
+}
+
 fn main() {
     let args = parse();
     let started = Instant::now();
-    let fail = |msg: String| -> ! {
-        eprintln!("discovery_bed: {msg}");
-        std::process::exit(1)
-    };
     let mut records = read(&args.results).unwrap_or_else(|e| fail(e));
     if !args.table_only {
         let groove = args.groove.clone().unwrap_or_else(|| usage("give the groove binary with --groove BIN or GROOVE_BIN"));
@@ -103,10 +104,11 @@ fn main() {
             let _ = std::fs::remove_dir_all(&dir);
             let record = run_case(&case, args.quick, &groove, &pipeline, &dir).unwrap_or_else(|e| fail(e));
             eprintln!(
-                "dataset {index}: {} [{}] ×{:?} noise {} → named {} sized {} false accept {} accepted {:?} discover {:?} s ({})",
+                "dataset {index}: {} [{}] ×{:?} {:?} noise {} → named {} sized {} false accept {} accepted {:?} discover {:?} s ({})",
                 if record.shapes.is_empty() { "null".to_string() } else { record.shapes.join("+") },
                 record.places.join("+"),
                 record.multiples,
+                record.sizes,
                 record.noise,
                 record.named,
                 record.sized,

@@ -6,7 +6,7 @@
 //! over places, shapes and noise models; every fifth effect dataset holds a second effect.
 
 use super::dataset::{DatasetSpec, Material, RunSpec};
-use super::limit::{snr2, LIMIT_SNR2};
+use super::limit::{snr2, Basis, LIMIT_SNR2};
 use super::shapes::{Effect, Truth, SHAPES};
 use crate::indsim::camera::Camera;
 use crate::indsim::model::Physics;
@@ -136,12 +136,13 @@ fn base(seed: u64, size: Size, collisions: bool, noise: Noise, rng: &mut ChaCha8
 
 /// Sizes `effect` to `multiple` × its detection limit in `base` (two passes: the change is
 /// nearly linear in the size) and returns the multiple reached.
-fn size_to(effect: &mut Effect, base: &DatasetSpec, multiple: f64) -> f64 {
+fn size_to(effect: &mut Effect, base: &DatasetSpec, basis: &Basis, multiple: f64) -> f64 {
     let target = LIMIT_SNR2.sqrt() * multiple;
-    for _ in 0..2 {
+    let clean = base.render(true);
+    for _ in 0..3 {
         let mut with = base.clone();
         effect.apply(&mut with);
-        let snr = snr2(base, &with).sqrt();
+        let snr = snr2(basis, base, &clean, &with).sqrt();
         if !(snr > 0.0) {
             return 0.0;
         }
@@ -149,7 +150,7 @@ fn size_to(effect: &mut Effect, base: &DatasetSpec, multiple: f64) -> f64 {
     }
     let mut with = base.clone();
     effect.apply(&mut with);
-    snr2(base, &with).sqrt() / LIMIT_SNR2.sqrt()
+    snr2(basis, base, &clean, &with).sqrt() / LIMIT_SNR2.sqrt()
 }
 
 /// Draws case `index` at dataset size `size`.
@@ -187,10 +188,11 @@ pub fn draw(index: usize, size: Size) -> Case {
     let mut spec = base.clone();
     let mut truths = Vec::new();
     let names: Vec<&str> = base.materials.iter().map(|m| m.name).collect();
+    let basis = if shapes.is_empty() { None } else { Some(Basis::new(&base)) };
     for s in shapes {
         let mut effect = Effect::draw(s, base.runs.len(), &mut rng);
         let want = (10f64.ln() * rng.random::<f64>()).exp();
-        let got = size_to(&mut effect, &base, want);
+        let got = size_to(&mut effect, &base, basis.as_ref().expect("an effect dataset has a basis"), want);
         effect.apply(&mut spec);
         truths.push(effect.truth(&names, got));
     }

@@ -44,6 +44,7 @@ pub fn run_case(case: &Case, quick: bool, groove: &Path, pipeline: &Path, dir: &
         places: case.truths.iter().map(|t| t.place.clone()).collect(),
         shapes: case.truths.iter().map(|t| t.shape.clone()).collect(),
         multiples: case.truths.iter().map(|t| (t.multiple * 100.0).round() / 100.0).collect(),
+        sizes: case.truths.iter().map(|t| t.sizes.clone()).collect(),
         status: "ok".to_string(),
         named: false,
         sized: false,

@@ -16,6 +16,9 @@ pub struct Record {
     pub shapes: Vec<String>,
     /// Each effect's size in units of its detection limit.
     pub multiples: Vec<f64>,
+    /// Each effect's true sizes (parameter, value).
+    #[serde(default)]
+    pub sizes: Vec<Vec<(String, f64)>>,
     /// `ok`, or why the pipeline did not complete.
     pub status: String,
     pub named: bool,

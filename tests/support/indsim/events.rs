@@ -16,6 +16,8 @@ pub struct Particle {
     pub x: State,
     pub mode: Mode,
     pub dir: f64,
+    /// When the current mode began (s since the kick).
+    pub switched_at: f64,
 }
 
 /// The friction the rolling constraint needs, as g μ would be: s a / (1 + ks²).
@@ -33,12 +35,15 @@ impl Particle {
     /// A particle kicked to `v0` with no spin at `z0`.
     pub fn kicked(z0: f64, v0: f64) -> Particle {
         let mode = if v0 == 0.0 { Mode::Rest } else { Mode::Slide(v0.signum()) };
-        Particle { x: State { z: z0, v: v0, va: 0.0 }, mode, dir: if v0 < 0.0 { -1.0 } else { 1.0 } }
+        Particle { x: State { z: z0, v: v0, va: 0.0 }, mode, dir: if v0 < 0.0 { -1.0 } else { 1.0 }, switched_at: 0.0 }
     }
 
     /// Puts the particle in the mode its state calls for (after an impulse or a switch).
     pub fn settle(&mut self, p: &Physics, t: f64, ext: f64) {
         let g = p.groove;
+        if self.x.v != 0.0 {
+            self.dir = self.x.v.signum();
+        }
         let u = self.x.v - g.s * self.x.va;
         if u.abs() > SLIP_END_MPS {
             self.mode = Mode::Slide(u.signum());
@@ -63,7 +68,7 @@ impl Particle {
     /// True when a switch has happened between `self` (at `t`) and `y` (at `t1`).
     fn switched(&self, p: &Physics, y: &State, t1: f64, ext: f64) -> bool {
         match self.mode {
-            Mode::Slide(d) => d * (y.v - p.groove.s * y.va) <= SLIP_END_MPS,
+            Mode::Slide(d) => d * (y.v - p.groove.s * y.va) <= SLIP_END_MPS || y.v * self.dir < 0.0,
             Mode::Roll => {
                 y.v * self.dir <= 0.0 || hold_needed(p, y, t1, ext, self.dir).abs() > G * p.mu_static(y.z, self.dir)
             }
@@ -80,6 +85,7 @@ impl Particle {
                     return;
                 }
                 self.settle(p, t, ext);
+                self.switched_at = t;
             }
             let y = rk4(p, self.mode, &self.x, t, rem, ext, self.dir);
             if n == MAX_SWITCHES || !self.switched(p, &y, t + rem, ext) {
@@ -102,20 +108,27 @@ impl Particle {
             t += hi;
             rem -= hi;
             match was {
-                Mode::Slide(_) => self.x.va = self.x.v / p.groove.s,
+                Mode::Slide(d) if d * (y.v - p.groove.s * y.va) <= SLIP_END_MPS => {
+                    // the slip ends: roll (or stop, or slip the other way if the hold fails)
+                    self.x.va = self.x.v / p.groove.s;
+                    self.settle(p, t, ext);
+                }
+                // the motion reverses while sliding: the same slip, the other direction
+                Mode::Slide(_) => self.dir = -self.dir,
                 Mode::Roll if y.v * self.dir <= 0.0 => {
                     self.x.v = 0.0;
                     self.x.va = 0.0;
+                    self.settle(p, t, ext);
                 }
-                _ => {}
+                // a hold that breaks leaves u = 0: start the slip in the direction the force drives
+                _ => {
+                    let f = hold_needed(p, &self.x, t, ext, self.dir);
+                    self.mode = Mode::Slide(f.signum());
+                    self.x.va -= f.signum() * 2.0 * SLIP_END_MPS / p.groove.s;
+                }
             }
-            // a hold that breaks leaves u = 0: start the slip in the direction the force drives
-            if was == Mode::Roll && self.x.v != 0.0 {
-                let f = hold_needed(p, &self.x, t, ext, self.dir);
-                self.mode = Mode::Slide(f.signum());
-                self.x.va -= f.signum() * 2.0 * SLIP_END_MPS / p.groove.s;
-            } else {
-                self.settle(p, t, ext);
+            if self.mode != was {
+                self.switched_at = t;
             }
             if rem <= 0.0 {
                 return;

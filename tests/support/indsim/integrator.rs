@@ -22,19 +22,18 @@ pub enum Mode {
 }
 
 /// Time derivatives (dz, dv, dv_a) in `mode`; `ext` is an extra acceleration held over the step
-/// (the force between two particles) and `dir` the direction of motion when v = 0.
+/// (the force between two particles) and `dir` the direction of motion, fixed over the step.
 pub fn rhs(p: &Physics, mode: Mode, x: &State, t: f64, ext: f64, dir: f64) -> (f64, f64, f64) {
     let g = p.groove;
-    let dirv = if x.v != 0.0 { x.v.signum() } else { dir };
     match mode {
         Mode::Slide(d) => {
             let u = x.v - g.s * x.va;
-            let mu = p.mu_kinetic(x.z, u.abs(), dirv);
-            let a = p.accel(x.z, x.v, t, dirv) + ext;
+            let mu = p.mu_kinetic(x.z, u.abs(), dir);
+            let a = p.accel(x.z, x.v, t, dir) + ext;
             (x.v, -d * G * mu / g.s + a, d * g.k * G * mu)
         }
         Mode::Roll => {
-            let a = p.accel(x.z, x.v, t, dirv) + ext;
+            let a = p.accel(x.z, x.v, t, dir) + ext;
             let dv = g.ks2() / (1.0 + g.ks2()) * a;
             (x.v, dv, dv / g.s)
         }

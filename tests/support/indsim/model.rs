@@ -49,9 +49,9 @@ impl Physics {
         }
     }
 
-    /// Every acceleration but groove friction; `dir` is the direction of motion used when v = 0.
+    /// Every acceleration but groove friction; `dir` is the direction of motion (±1), kept through
+    /// a step (a change of direction is an event), so the stages of a step agree on it.
     pub fn accel(&self, z: f64, v: f64, t: f64, dir: f64) -> f64 {
-        let dir = if v != 0.0 { v.signum() } else { dir };
         self.drag.accel(v) + self.forces.iter().map(|f| f.accel(z, v, t, dir)).sum::<f64>()
     }
 

@@ -81,9 +81,9 @@ pub fn simulate_pair(
     let mut impacts = Vec::new();
     let gap = |q: &[Particle; 2]| n * (q[1].x.z - q[0].x.z) - 2.0 * m.radius_m;
     let closing = |q: &[Particle; 2]| n * (q[0].x.v - q[1].x.v) > 0.0;
-    let mut collide = |q: &mut [Particle; 2], t: f64, e: [f64; 2], impacts: &mut Vec<Impact>| {
+    let collide = |q: &mut [Particle; 2], t: f64, e: [f64; 2], impacts: &mut Vec<Impact>| {
         let before = [(q[0].x.v, q[0].x.va), (q[1].x.v, q[1].x.va)];
-        let [a, b] = q;
+        let [a, b] = &mut *q;
         impulse(m, a, b, n);
         q[0].settle(p[0], t, e[0]);
         q[1].settle(p[1], t, e[1]);

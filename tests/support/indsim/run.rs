@@ -14,14 +14,14 @@ pub struct Fine {
     pub z: Vec<f64>,
     pub v: Vec<f64>,
     pub va: Vec<f64>,
-    /// (time, mode entered) at every change of mode.
+    /// (time, mode entered) at every change of mode seen at a grid point.
     pub switches: Vec<(f64, Mode)>,
 }
 
 impl Fine {
     pub fn push(&mut self, p: &Particle, t: f64) {
         if self.switches.last().map(|s| s.1) != Some(p.mode) {
-            self.switches.push((t, p.mode));
+            self.switches.push((if self.z.is_empty() { t } else { p.switched_at }, p.mode));
         }
         self.z.push(p.x.z);
         self.v.push(p.x.v);
