@@ -26,9 +26,20 @@ fn the_quick_subset_runs_through_the_pipeline_and_is_scored() {
         let case = draw(index, QUICK_SIZE);
         let dir = work.path().join(format!("case-{index}"));
         let record = run_case(&case, true, &groove, &pipeline, &dir).unwrap();
-        assert_eq!(record.status, "ok", "dataset {index}: {}", std::fs::read_to_string(dir.join("run.log")).unwrap());
-        assert!(record.discover_s.is_some(), "dataset {index}: the run log gives the discover stage's time");
-        assert!(!dir.join("data/truth.json").exists() && dir.join("truth.json").exists(), "the truth stays out of the dataset");
+        assert_eq!(
+            record.status,
+            "ok",
+            "dataset {index}: {}",
+            std::fs::read_to_string(dir.join("run.log")).unwrap()
+        );
+        assert!(
+            record.discover_s.is_some(),
+            "dataset {index}: the run log gives the discover stage's time"
+        );
+        assert!(
+            !dir.join("data/truth.json").exists() && dir.join("truth.json").exists(),
+            "the truth stays out of the dataset"
+        );
         assert_eq!(record.shapes.len(), case.truths.len());
         if case.truths.is_empty() {
             assert!(!record.named && !record.sized, "a null names nothing");
@@ -57,10 +68,20 @@ fn scoring_names_the_place_and_form_sizes_within_15_percent_and_counts_anything_
     use bed::score::{accepted, score};
     use bed::shapes::Truth;
     let finding = |effect: &str, form: &str, params: &str| {
-        format!(r#"{{"effect": "{effect}", "accepted": true, "form": "{form}", "parameters": {{{params}}}}}"#)
+        format!(
+            r#"{{"effect": "{effect}", "accepted": true, "form": "{form}", "parameters": {{{params}}}}}"#
+        )
     };
-    let tilt = finding("groove_tilt", "tilt: a = -g sin(alpha)", r#""alpha_deg": {"value": 0.11, "stderr": 0.01}"#);
-    let drag = finding("velocity_dependent_drag", "quadratic: a = -v/T - c v|v|", r#""c_per_m": {"value": 40.0, "stderr": 1.0}"#);
+    let tilt = finding(
+        "groove_tilt",
+        "tilt: a = -g sin(alpha)",
+        r#""alpha_deg": {"value": 0.11, "stderr": 0.01}"#,
+    );
+    let drag = finding(
+        "velocity_dependent_drag",
+        "quadratic: a = -v/T - c v|v|",
+        r#""c_per_m": {"value": 40.0, "stderr": 1.0}"#,
+    );
     let rejected = r#"{"effect": "rolling_resistance", "accepted": false, "form": "constant resistance", "parameters": {}}"#;
     let truth = Truth {
         place: "force".into(),
@@ -75,7 +96,10 @@ fn scoring_names_the_place_and_form_sizes_within_15_percent_and_counts_anything_
     let s = score(&alone, std::slice::from_ref(&truth));
     assert!(s.named && s.sized);
     // 0.11 against 0.1 is inside 15 %; against 0.09 it is not
-    let off = Truth { sizes: vec![("alpha_deg".into(), 0.09)], ..truth.clone() };
+    let off = Truth {
+        sizes: vec![("alpha_deg".into(), 0.09)],
+        ..truth.clone()
+    };
     let s = score(&alone, &[off]);
     assert!(s.named && !s.sized);
     // a term beside the right one: not named right

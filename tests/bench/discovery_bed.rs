@@ -58,8 +58,14 @@ fn parse() -> Args {
     let mut it = std::env::args().skip(1);
     let mut results = None;
     while let Some(arg) = it.next() {
-        let mut value = |name: &str| it.next().unwrap_or_else(|| usage(&format!("{name} needs a value")));
-        let number = |s: String, name: &str| s.parse::<usize>().unwrap_or_else(|_| usage(&format!("{name} takes a whole number, not {s:?}")));
+        let mut value = |name: &str| {
+            it.next()
+                .unwrap_or_else(|| usage(&format!("{name} needs a value")))
+        };
+        let number = |s: String, name: &str| {
+            s.parse::<usize>()
+                .unwrap_or_else(|_| usage(&format!("{name} takes a whole number, not {s:?}")))
+        };
         match arg.as_str() {
             "--groove" => a.groove = Some(PathBuf::from(value("--groove"))),
             "--quick" => a.quick = true,
@@ -73,7 +79,11 @@ fn parse() -> Args {
             other => usage(&format!("unknown argument {other:?}")),
         }
     }
-    let name = if a.quick { "results-quick.jsonl" } else { "results.jsonl" };
+    let name = if a.quick {
+        "results-quick.jsonl"
+    } else {
+        "results.jsonl"
+    };
     a.results = results.unwrap_or_else(|| a.work.join(name));
     a
 }
@@ -88,21 +98,39 @@ fn main() {
     let started = Instant::now();
     let mut records = read(&args.results).unwrap_or_else(|e| fail(e));
     if !args.table_only {
-        let groove = args.groove.clone().unwrap_or_else(|| usage("give the groove binary with --groove BIN or GROOVE_BIN"));
+        let groove = args
+            .groove
+            .clone()
+            .unwrap_or_else(|| usage("give the groove binary with --groove BIN or GROOVE_BIN"));
         let pipeline = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipeline.toml");
-        let indices: Vec<usize> = if args.quick { QUICK.to_vec() } else { (0..FULL).collect() };
+        let indices: Vec<usize> = if args.quick {
+            QUICK.to_vec()
+        } else {
+            (0..FULL).collect()
+        };
         let size = if args.quick { QUICK_SIZE } else { FULL_SIZE };
         if let Some(dir) = args.results.parent() {
-            std::fs::create_dir_all(dir).unwrap_or_else(|e| fail(format!("{}: {e}", dir.display())));
+            std::fs::create_dir_all(dir)
+                .unwrap_or_else(|e| fail(format!("{}: {e}", dir.display())));
         }
-        for index in indices.into_iter().filter(|&i| i >= args.from && i < args.to) {
-            if records.iter().any(|r| r.index == index && r.quick == args.quick) {
+        for index in indices
+            .into_iter()
+            .filter(|&i| i >= args.from && i < args.to)
+        {
+            if records
+                .iter()
+                .any(|r| r.index == index && r.quick == args.quick)
+            {
                 continue; // done in an earlier chunk
             }
             let case = draw(index, size);
-            let dir = args.work.join(format!("case-{index:03}{}", if args.quick { "-quick" } else { "" }));
+            let dir = args.work.join(format!(
+                "case-{index:03}{}",
+                if args.quick { "-quick" } else { "" }
+            ));
             let _ = std::fs::remove_dir_all(&dir);
-            let record = run_case(&case, args.quick, &groove, &pipeline, &dir).unwrap_or_else(|e| fail(e));
+            let record =
+                run_case(&case, args.quick, &groove, &pipeline, &dir).unwrap_or_else(|e| fail(e));
             eprintln!(
                 "dataset {index}: {} [{}] ×{:?} {:?} noise {} → named {} sized {} false accept {} accepted {:?} discover {:?} s ({})",
                 if record.shapes.is_empty() { "null".to_string() } else { record.shapes.join("+") },
@@ -123,14 +151,23 @@ fn main() {
                 .append(true)
                 .open(&args.results)
                 .unwrap_or_else(|e| fail(format!("{}: {e}", args.results.display())));
-            writeln!(f, "{line}").unwrap_or_else(|e| fail(format!("{}: {e}", args.results.display())));
+            writeln!(f, "{line}")
+                .unwrap_or_else(|e| fail(format!("{}: {e}", args.results.display())));
             records.push(record);
             if !args.keep {
                 let _ = std::fs::remove_dir_all(&dir);
             }
         }
     }
-    let mine: Vec<_> = records.into_iter().filter(|r| r.quick == args.quick).collect();
+    let mine: Vec<_> = records
+        .into_iter()
+        .filter(|r| r.quick == args.quick)
+        .collect();
     println!("{}", tables(&mine));
-    println!("\n{} datasets in {}; this invocation took {:.0} s", mine.len(), args.results.display(), started.elapsed().as_secs_f64());
+    println!(
+        "\n{} datasets in {}; this invocation took {:.0} s",
+        mine.len(),
+        args.results.display(),
+        started.elapsed().as_secs_f64()
+    );
 }

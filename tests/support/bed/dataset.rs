@@ -52,8 +52,18 @@ pub struct DatasetSpec {
 impl DatasetSpec {
     fn pair_model(&self, run: &RunSpec) -> PairModel {
         let m = &self.materials[run.material];
-        let (c0, v_ref_mps) = if run.setup == "contact" { m.restitution_contact } else { m.restitution_rolling };
-        PairModel { radius_m: 0.5 * m.diameter_m, mu_pp: self.mu_pp, c0, v_ref_mps, force: self.pair_force }
+        let (c0, v_ref_mps) = if run.setup == "contact" {
+            m.restitution_contact
+        } else {
+            m.restitution_rolling
+        };
+        PairModel {
+            radius_m: 0.5 * m.diameter_m,
+            mu_pp: self.mu_pp,
+            c0,
+            v_ref_mps,
+            force: self.pair_force,
+        }
     }
 
     /// Simulates and films every run; noise-free (no noise, drops or outliers) when `clean`.
@@ -78,11 +88,17 @@ impl DatasetSpec {
                 } else {
                     vec![simulate(&run.physics[0], run.z0[0], run.v0, span, DT_S)]
                 };
-                let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(i as u64 + 1)));
+                let mut rng = ChaCha8Rng::seed_from_u64(
+                    self.seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(i as u64 + 1)),
+                );
                 let tracks: Vec<Vec<Frame>> = fines
                     .iter()
                     .map(|f| {
-                        let noise = if clean { None } else { Some((&self.noise, &mut rng)) };
+                        let noise = if clean {
+                            None
+                        } else {
+                            Some((&self.noise, &mut rng))
+                        };
                         self.camera.film(f, run.frac, run.duration_s, noise)
                     })
                     .collect();

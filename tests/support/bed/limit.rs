@@ -49,12 +49,16 @@ impl Basis {
         };
         let dv = perturbed(&|s| s.runs.iter_mut().for_each(|r| r.v0 *= 1.0 + STEP_V0));
         let dmu = perturbed(&|s| {
-            s.runs.iter_mut().for_each(|r| r.physics.iter_mut().for_each(|p| p.mu *= 1.0 + STEP_MU))
-        });
-        let dt = perturbed(&|s| {
             s.runs
                 .iter_mut()
-                .for_each(|r| r.physics.iter_mut().for_each(|p| p.drag = p.drag.with_t_s(p.drag.t_s() * (1.0 + STEP_T))))
+                .for_each(|r| r.physics.iter_mut().for_each(|p| p.mu *= 1.0 + STEP_MU))
+        });
+        let dt = perturbed(&|s| {
+            s.runs.iter_mut().for_each(|r| {
+                r.physics
+                    .iter_mut()
+                    .for_each(|p| p.drag = p.drag.with_t_s(p.drag.t_s() * (1.0 + STEP_T)))
+            })
         });
         let dframe = 1e-3; // kick time: a shift of the frames by a thousandth of a frame
         let shifted = perturbed(&|s| s.runs.iter_mut().for_each(|r| r.frac += dframe));
@@ -66,8 +70,13 @@ impl Basis {
                 if spec.experiment != "single" {
                     return None;
                 }
-                let (z, v, mu, t, sh) =
-                    (by_frame(&clean[i]), by_frame(&dv[i]), by_frame(&dmu[i]), by_frame(&dt[i]), by_frame(&shifted[i]));
+                let (z, v, mu, t, sh) = (
+                    by_frame(&clean[i]),
+                    by_frame(&dv[i]),
+                    by_frame(&dmu[i]),
+                    by_frame(&dt[i]),
+                    by_frame(&shifted[i]),
+                );
                 let rows = z
                     .iter()
                     .filter_map(|(&k, &z0)| {
@@ -81,10 +90,16 @@ impl Basis {
                         ))
                     })
                     .collect();
-                Some(RunBasis { material: spec.material, rows })
+                Some(RunBasis {
+                    material: spec.material,
+                    rows,
+                })
             })
             .collect();
-        Basis { runs, materials: base.materials.len() }
+        Basis {
+            runs,
+            materials: base.materials.len(),
+        }
     }
 
     /// Σ (r/σ)² of the change `delta` (per run, frame → Δz) after the projection.
@@ -104,7 +119,9 @@ impl Basis {
             let (mut a, mut b, mut c) = ([[0.0; 3]; 3], [[0.0; 2]; 3], [[0.0; 2]; 2]);
             let (mut ay, mut cy, mut yy) = ([0.0; 3], [0.0; 2], 0.0);
             for (k, y) in d {
-                let Some((l, g)) = run.rows.get(k) else { continue };
+                let Some((l, g)) = run.rows.get(k) else {
+                    continue;
+                };
                 yy += y * y;
                 for i in 0..3 {
                     ay[i] += l[i] * y;
@@ -124,12 +141,15 @@ impl Basis {
             }
             let a_vec: Vec<Vec<f64>> = a.iter().map(|r| r.to_vec()).collect();
             // A⁻¹ B and A⁻¹ (Jᵀy)
-            let ainv_b: Vec<Vec<f64>> = (0..2).map(|j| solve(&a_vec, &[b[0][j], b[1][j], b[2][j]])).collect();
+            let ainv_b: Vec<Vec<f64>> = (0..2)
+                .map(|j| solve(&a_vec, &[b[0][j], b[1][j], b[2][j]]))
+                .collect();
             let ainv_y = solve(&a_vec, &ay);
             for i in 0..2 {
                 rhs[cols[i]] += cy[i] - (0..3).map(|q| b[q][i] * ainv_y[q]).sum::<f64>();
                 for j in 0..2 {
-                    s[cols[i]][cols[j]] += c[i][j] - (0..3).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
+                    s[cols[i]][cols[j]] +=
+                        c[i][j] - (0..3).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
                 }
             }
             blocks.push((cols, yy, ay, cy, ainv_y, ainv_b));
@@ -143,8 +163,11 @@ impl Basis {
         let mut total = raw;
         for (cols, yy, ay, cy, ainv_y, ainv_b) in blocks {
             let gl = [g[cols[0]], g[cols[1]]];
-            let local: Vec<f64> = (0..3).map(|q| ainv_y[q] - ainv_b[0][q] * gl[0] - ainv_b[1][q] * gl[1]).collect();
-            let fitted = (0..3).map(|q| local[q] * ay[q]).sum::<f64>() + gl[0] * cy[0] + gl[1] * cy[1];
+            let local: Vec<f64> = (0..3)
+                .map(|q| ainv_y[q] - ainv_b[0][q] * gl[0] - ainv_b[1][q] * gl[1])
+                .collect();
+            let fitted =
+                (0..3).map(|q| local[q] * ay[q]).sum::<f64>() + gl[0] * cy[0] + gl[1] * cy[1];
             total += (yy - fitted).max(0.0);
         }
         total / (sigma * sigma)
@@ -155,10 +178,19 @@ impl Basis {
 /// singular direction gets 0).
 fn solve(m: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
     let n = b.len();
-    let mut a: Vec<Vec<f64>> = m.iter().zip(b).map(|(r, &y)| r.iter().copied().chain([y]).collect()).collect();
-    let scale = a.iter().map(|r| r[..n].iter().fold(0.0f64, |s, x| s.max(x.abs()))).fold(0.0f64, f64::max);
+    let mut a: Vec<Vec<f64>> = m
+        .iter()
+        .zip(b)
+        .map(|(r, &y)| r.iter().copied().chain([y]).collect())
+        .collect();
+    let scale = a
+        .iter()
+        .map(|r| r[..n].iter().fold(0.0f64, |s, x| s.max(x.abs())))
+        .fold(0.0f64, f64::max);
     for c in 0..n {
-        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs())).unwrap_or(c);
+        let p = (c..n)
+            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+            .unwrap_or(c);
         a.swap(c, p);
         if a[c][c].abs() <= 1e-14 * scale {
             continue;
@@ -172,7 +204,15 @@ fn solve(m: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
             }
         }
     }
-    (0..n).map(|i| if a[i][i].abs() <= 1e-14 * scale { 0.0 } else { a[i][n] / a[i][i] }).collect()
+    (0..n)
+        .map(|i| {
+            if a[i][i].abs() <= 1e-14 * scale {
+                0.0
+            } else {
+                a[i][n] / a[i][i]
+            }
+        })
+        .collect()
 }
 
 /// The change between two clean renderings, per run, frame → Δz (particle 0; both particles of
@@ -196,6 +236,14 @@ pub fn change(base: &[RecordedRun], with: &[RecordedRun]) -> Vec<BTreeMap<usize,
 }
 
 /// SNR² of the change from `base` to `with`, after what the baseline absorbs (see the module).
-pub fn snr2(basis: &Basis, base: &DatasetSpec, base_render: &[RecordedRun], with: &DatasetSpec) -> f64 {
-    basis.residual_snr2(&change(base_render, &with.render(true)), base.noise.sigma_m())
+pub fn snr2(
+    basis: &Basis,
+    base: &DatasetSpec,
+    base_render: &[RecordedRun],
+    with: &DatasetSpec,
+) -> f64 {
+    basis.residual_snr2(
+        &change(base_render, &with.render(true)),
+        base.noise.sigma_m(),
+    )
 }

@@ -19,7 +19,13 @@ pub fn discover_seconds(log: &str) -> Option<f64> {
 
 /// Writes the case's dataset under `dir/data` and its truth to `dir/truth.json` (beside, not
 /// inside, the dataset), runs `groove` with `pipeline` and scores the diagnosis.
-pub fn run_case(case: &Case, quick: bool, groove: &Path, pipeline: &Path, dir: &Path) -> Result<Record, String> {
+pub fn run_case(
+    case: &Case,
+    quick: bool,
+    groove: &Path,
+    pipeline: &Path,
+    dir: &Path,
+) -> Result<Record, String> {
     let data = dir.join("data");
     let reports = dir.join("reports");
     let io = |e: std::io::Error| format!("{}: {e}", dir.display());
@@ -31,11 +37,23 @@ pub fn run_case(case: &Case, quick: bool, groove: &Path, pipeline: &Path, dir: &
     let started = Instant::now();
     let out = Command::new(groove)
         .current_dir(dir)
-        .args(["run", "--config", "pipeline.toml", "--data", "data", "--out", "reports"])
+        .args([
+            "run",
+            "--config",
+            "pipeline.toml",
+            "--data",
+            "data",
+            "--out",
+            "reports",
+        ])
         .output()
         .map_err(|e| format!("cannot start {}: {e}", groove.display()))?;
     let run_s = started.elapsed().as_secs_f64();
-    let log = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let log = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
     std::fs::write(dir.join("run.log"), &log).map_err(io)?;
     let mut record = Record {
         index: case.index,
@@ -43,7 +61,11 @@ pub fn run_case(case: &Case, quick: bool, groove: &Path, pipeline: &Path, dir: &
         noise: case.noise.clone(),
         places: case.truths.iter().map(|t| t.place.clone()).collect(),
         shapes: case.truths.iter().map(|t| t.shape.clone()).collect(),
-        multiples: case.truths.iter().map(|t| (t.multiple * 100.0).round() / 100.0).collect(),
+        multiples: case
+            .truths
+            .iter()
+            .map(|t| (t.multiple * 100.0).round() / 100.0)
+            .collect(),
         sizes: case.truths.iter().map(|t| t.sizes.clone()).collect(),
         status: "ok".to_string(),
         named: false,
@@ -64,6 +86,9 @@ pub fn run_case(case: &Case, quick: bool, groove: &Path, pipeline: &Path, dir: &
     record.named = s.named;
     record.sized = s.sized;
     record.false_accept = s.false_accept;
-    record.accepted = found.iter().map(|a| format!("{}/{}: {}", a.place, a.effect, a.form)).collect();
+    record.accepted = found
+        .iter()
+        .map(|a| format!("{}/{}: {}", a.place, a.effect, a.form))
+        .collect();
     Ok(record)
 }

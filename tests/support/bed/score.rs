@@ -24,7 +24,10 @@ pub fn place_of(finding: &Value) -> String {
     }
     match finding.get("effect").and_then(Value::as_str).unwrap_or("") {
         "velocity_dependent_friction" => "friction",
-        "velocity_dependent_drag" | "rolling_resistance" | "groove_tilt" | "position_dependent_force"
+        "velocity_dependent_drag"
+        | "rolling_resistance"
+        | "groove_tilt"
+        | "position_dependent_force"
         | "time_dependent_force" => "force",
         "pair_physics_mismatch" | "impact_specific_mismatch" => "pair",
         "unexplained" => "unexplained",
@@ -35,7 +38,8 @@ pub fn place_of(finding: &Value) -> String {
 
 /// The accepted findings of a diagnosis.json text.
 pub fn accepted(diagnosis: &str) -> Result<Vec<Accepted>, String> {
-    let d: Value = serde_json::from_str(diagnosis).map_err(|e| format!("diagnosis.json does not parse: {e}"))?;
+    let d: Value = serde_json::from_str(diagnosis)
+        .map_err(|e| format!("diagnosis.json does not parse: {e}"))?;
     let findings = d
         .get("findings")
         .and_then(Value::as_array)
@@ -45,14 +49,27 @@ pub fn accepted(diagnosis: &str) -> Result<Vec<Accepted>, String> {
         .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
         .map(|f| Accepted {
             place: place_of(f),
-            effect: f.get("effect").and_then(Value::as_str).unwrap_or("").to_string(),
-            form: f.get("form").and_then(Value::as_str).unwrap_or("").to_string(),
+            effect: f
+                .get("effect")
+                .and_then(Value::as_str)
+                .unwrap_or("")
+                .to_string(),
+            form: f
+                .get("form")
+                .and_then(Value::as_str)
+                .unwrap_or("")
+                .to_string(),
             parameters: f
                 .get("parameters")
                 .and_then(Value::as_object)
                 .map(|m| {
                     m.iter()
-                        .filter_map(|(k, v)| Some((k.clone(), v.get("value").and_then(Value::as_f64).or(v.as_f64())?)))
+                        .filter_map(|(k, v)| {
+                            Some((
+                                k.clone(),
+                                v.get("value").and_then(Value::as_f64).or(v.as_f64())?,
+                            ))
+                        })
                         .collect()
                 })
                 .unwrap_or_default(),
@@ -70,10 +87,19 @@ pub fn names(a: &Accepted, t: &Truth) -> bool {
 /// per size; signs compared only for the tilt).
 pub fn sizes(a: &Accepted, t: &Truth) -> bool {
     t.sizes.iter().all(|(name, truth)| {
-        let got: Vec<f64> = a.parameters.iter().filter(|(k, _)| k.starts_with(name.as_str())).map(|p| p.1).collect();
+        let got: Vec<f64> = a
+            .parameters
+            .iter()
+            .filter(|(k, _)| k.starts_with(name.as_str()))
+            .map(|p| p.1)
+            .collect();
         !got.is_empty()
             && got.iter().all(|&g| {
-                let (g, w) = if name == "alpha_deg" { (g, *truth) } else { (g.abs(), truth.abs()) };
+                let (g, w) = if name == "alpha_deg" {
+                    (g, *truth)
+                } else {
+                    (g.abs(), truth.abs())
+                };
                 (g - w).abs() <= SIZE_TOLERANCE * w.abs()
             })
     })
@@ -93,20 +119,33 @@ pub struct Score {
 /// Scores the accepted findings against the truths (empty: a null).
 pub fn score(found: &[Accepted], truths: &[Truth]) -> Score {
     if truths.is_empty() {
-        return Score { named: false, sized: false, false_accept: !found.is_empty() };
+        return Score {
+            named: false,
+            sized: false,
+            false_accept: !found.is_empty(),
+        };
     }
     // each truth takes a distinct finding that names it; the assignment is tried both ways for two
     let mut best = (false, false);
     let n = truths.len();
     if found.len() == n {
-        let orders: Vec<Vec<usize>> = if n == 2 { vec![vec![0, 1], vec![1, 0]] } else { vec![(0..n).collect()] };
+        let orders: Vec<Vec<usize>> = if n == 2 {
+            vec![vec![0, 1], vec![1, 0]]
+        } else {
+            vec![(0..n).collect()]
+        };
         for order in orders {
-            let pairs: Vec<(&Accepted, &Truth)> = order.iter().map(|&i| &found[i]).zip(truths).collect();
+            let pairs: Vec<(&Accepted, &Truth)> =
+                order.iter().map(|&i| &found[i]).zip(truths).collect();
             if pairs.iter().all(|(a, t)| names(a, t)) {
                 let sized = pairs.iter().all(|(a, t)| sizes(a, t));
                 best = (true, best.1 || sized);
             }
         }
     }
-    Score { named: best.0, sized: best.1, false_accept: false }
+    Score {
+        named: best.0,
+        sized: best.1,
+        false_accept: false,
+    }
 }

@@ -89,9 +89,21 @@ impl Effect {
         let tau = std::f64::consts::TAU;
         let params = match SHAPES[shape].1 {
             "periodic_z" => vec![log_uniform(rng, 0.5e-3, 8e-3), tau * rng.random::<f64>()],
-            "localized_z" => vec![rng.random_range(2e-3..10e-3), rng.random_range(0.2e-3..1e-3), sign(rng)],
+            "localized_z" => vec![
+                rng.random_range(2e-3..10e-3),
+                rng.random_range(0.2e-3..1e-3),
+                sign(rng),
+            ],
             "step_z" => vec![rng.random_range(3e-3..9e-3), sign(rng)],
-            "field_z" => (0..5).flat_map(|_| [log_uniform(rng, 1e-3, 10e-3), tau * rng.random::<f64>(), normal(rng)]).collect(),
+            "field_z" => (0..5)
+                .flat_map(|_| {
+                    [
+                        log_uniform(rng, 1e-3, 10e-3),
+                        tau * rng.random::<f64>(),
+                        normal(rng),
+                    ]
+                })
+                .collect(),
             "time_common_phase" => vec![log_uniform(rng, 20.0, 200.0), tau * rng.random::<f64>()],
             "time_run_phase" => {
                 let mut p = vec![log_uniform(rng, 20.0, 200.0)];
@@ -101,7 +113,11 @@ impl Effect {
             "speed_bump" => vec![rng.random_range(0.01..0.06), rng.random_range(0.005..0.015)],
             "tilt" => vec![sign(rng)],
             "mu_position" => vec![log_uniform(rng, 1e-3, 8e-3), tau * rng.random::<f64>()],
-            "mu_patch" => vec![rng.random_range(2e-3..7e-3), rng.random_range(1e-3..4e-3), sign(rng)],
+            "mu_patch" => vec![
+                rng.random_range(2e-3..7e-3),
+                rng.random_range(1e-3..4e-3),
+                sign(rng),
+            ],
             "mu_slip_falling" => vec![rng.random_range(0.005..0.03)],
             "mu_direction" => vec![sign(rng)],
             "mu_material" => vec![if rng.random::<bool>() { 1.0 } else { 0.0 }],
@@ -110,7 +126,11 @@ impl Effect {
             "pair_force" | "pair_force_attractive" => vec![rng.random_range(50e-6..300e-6)],
             _ => Vec::new(),
         };
-        Effect { shape, params, size: Effect::reference_size(shape) }
+        Effect {
+            shape,
+            params,
+            size: Effect::reference_size(shape),
+        }
     }
 
     /// A size of the right order to start the search for the detection limit.
@@ -162,33 +182,82 @@ impl Effect {
                         ph.drag = if self.name() == "quadratic_drag" {
                             Drag::Quadratic { t_s, c_per_m: x }
                         } else {
-                            Drag::Saturating { t0_s: t_s, tp_s_per_mps: x }
+                            Drag::Saturating {
+                                t0_s: t_s,
+                                tp_s_per_mps: x,
+                            }
                         };
                     }
                 }
             }
             "resistance" => force(spec, &|_| Force::Resistance { c: x }),
-            "tilt" => force(spec, &|_| Force::Tilt { alpha_rad: (p[0] * x).to_radians() }),
-            "periodic_z" => force(spec, &|_| Force::Periodic { amp: x, wavelength_m: p[0], phase: p[1] }),
-            "localized_z" => force(spec, &|_| Force::Localized { amp: p[2] * x, centre_m: p[0], width_m: p[1] }),
-            "step_z" => force(spec, &|_| Force::Step { amp: p[1] * x, z_m: p[0], width_m: 0.1e-3 }),
+            "tilt" => force(spec, &|_| Force::Tilt {
+                alpha_rad: (p[0] * x).to_radians(),
+            }),
+            "periodic_z" => force(spec, &|_| Force::Periodic {
+                amp: x,
+                wavelength_m: p[0],
+                phase: p[1],
+            }),
+            "localized_z" => force(spec, &|_| Force::Localized {
+                amp: p[2] * x,
+                centre_m: p[0],
+                width_m: p[1],
+            }),
+            "step_z" => force(spec, &|_| Force::Step {
+                amp: p[1] * x,
+                z_m: p[0],
+                width_m: 0.1e-3,
+            }),
             "field_z" => {
                 let modes = self.field_modes();
-                force(spec, &|_| Force::Field { modes: modes.clone() })
+                force(spec, &|_| Force::Field {
+                    modes: modes.clone(),
+                })
             }
-            "time_common_phase" => force(spec, &|_| Force::Time { amp: x, freq_hz: p[0], phase: p[1] }),
-            "time_run_phase" => force(spec, &|i| Force::Time { amp: x, freq_hz: p[0], phase: p[1 + i % (p.len() - 1)] }),
-            "speed_bump" => force(spec, &|_| Force::SpeedBump { amp: x, v_c: p[0], width: p[1] }),
+            "time_common_phase" => force(spec, &|_| Force::Time {
+                amp: x,
+                freq_hz: p[0],
+                phase: p[1],
+            }),
+            "time_run_phase" => force(spec, &|i| Force::Time {
+                amp: x,
+                freq_hz: p[0],
+                phase: p[1 + i % (p.len() - 1)],
+            }),
+            "speed_bump" => force(spec, &|_| Force::SpeedBump {
+                amp: x,
+                v_c: p[0],
+                width: p[1],
+            }),
             "mu_slip_rising" => friction(spec, &|_| Some(FrictionLaw::SlipRising { v_c: x })),
             "mu_material" => {
                 let m = p[0] as usize;
-                friction(spec, &|mat| (mat == m).then_some(FrictionLaw::SlipRising { v_c: x }))
+                friction(spec, &|mat| {
+                    (mat == m).then_some(FrictionLaw::SlipRising { v_c: x })
+                })
             }
-            "mu_position" => friction(spec, &|_| Some(FrictionLaw::Position { delta: x, wavelength_m: p[0], phase: p[1] })),
-            "mu_patch" => friction(spec, &|_| {
-                Some(FrictionLaw::Patch { delta_mu: p[2] * x, z_a: p[0], z_b: p[0] + p[1], edge_m: 0.1e-3 })
+            "mu_position" => friction(spec, &|_| {
+                Some(FrictionLaw::Position {
+                    delta: x,
+                    wavelength_m: p[0],
+                    phase: p[1],
+                })
             }),
-            "mu_slip_falling" => friction(spec, &|_| Some(FrictionLaw::SlipFalling { delta: x, v_c: p[0] })),
+            "mu_patch" => friction(spec, &|_| {
+                Some(FrictionLaw::Patch {
+                    delta_mu: p[2] * x,
+                    z_a: p[0],
+                    z_b: p[0] + p[1],
+                    edge_m: 0.1e-3,
+                })
+            }),
+            "mu_slip_falling" => friction(spec, &|_| {
+                Some(FrictionLaw::SlipFalling {
+                    delta: x,
+                    v_c: p[0],
+                })
+            }),
             "mu_direction" => friction(spec, &|_| Some(FrictionLaw::Direction { delta: p[0] * x })),
             "scale" => spec.camera.scale_error = p[0] * x,
             "distortion" => spec.camera.distortion = p[0] * x,
@@ -222,9 +291,17 @@ impl Effect {
             .chunks(3)
             .map(|c| (c[2], std::f64::consts::TAU / c[0], c[1]))
             .collect();
-        let at = |z: f64| raw.iter().map(|(a, k, ph)| a * (k * z + ph).sin()).sum::<f64>();
-        let peak = (0..=1200).map(|i| at(i as f64 * 1e-5).abs()).fold(0.0, f64::max);
-        raw.iter().map(|&(a, k, ph)| (a * self.size / peak, k, ph)).collect()
+        let at = |z: f64| {
+            raw.iter()
+                .map(|(a, k, ph)| a * (k * z + ph).sin())
+                .sum::<f64>()
+        };
+        let peak = (0..=1200)
+            .map(|i| at(i as f64 * 1e-5).abs())
+            .fold(0.0, f64::max);
+        raw.iter()
+            .map(|&(a, k, ph)| (a * self.size / peak, k, ph))
+            .collect()
     }
 
     /// The truth of this effect in a dataset whose material names are `materials`.
@@ -237,21 +314,41 @@ impl Effect {
             "saturating_drag" => (s(&["saturating"]), vec![v("tp_s_per_mps", x)]),
             "resistance" => (s(&["resistance"]), vec![v("coefficient", x)]),
             "tilt" => (s(&["tilt"]), vec![v("alpha_deg", p[0] * x)]),
-            "periodic_z" => (s(&["periodic in z"]), vec![v("amplitude_mps2", x), v("wavelength_m", p[0])]),
+            "periodic_z" => (
+                s(&["periodic in z"]),
+                vec![v("amplitude_mps2", x), v("wavelength_m", p[0])],
+            ),
             "localized_z" => (
                 s(&["localized in z"]),
-                vec![v("amplitude_mps2", p[2] * x), v("centre_m", p[0]), v("width_m", p[1])],
+                vec![
+                    v("amplitude_mps2", p[2] * x),
+                    v("centre_m", p[0]),
+                    v("width_m", p[1]),
+                ],
             ),
-            "step_z" => (s(&["step in z", "map in z", "spline in z"]), vec![v("step_mps2", p[1] * x)]),
-            "field_z" => (s(&["map in z", "spline in z", "field in z"]), vec![v("peak_accel_mps2", x)]),
-            "time_common_phase" | "time_run_phase" => {
-                (s(&["periodic in time"]), vec![v("amplitude_mps2", x), v("frequency_hz", p[0])])
-            }
-            "speed_bump" => (s(&["map in v", "spline in v", "in speed"]), vec![v("peak_accel_mps2", x)]),
+            "step_z" => (
+                s(&["step in z", "map in z", "spline in z"]),
+                vec![v("step_mps2", p[1] * x)],
+            ),
+            "field_z" => (
+                s(&["map in z", "spline in z", "field in z"]),
+                vec![v("peak_accel_mps2", x)],
+            ),
+            "time_common_phase" | "time_run_phase" => (
+                s(&["periodic in time"]),
+                vec![v("amplitude_mps2", x), v("frequency_hz", p[0])],
+            ),
+            "speed_bump" => (
+                s(&["map in v", "spline in v", "in speed"]),
+                vec![v("peak_accel_mps2", x)],
+            ),
             "mu_slip_rising" => (s(&["mu(u)", "slip speed"]), vec![v("v_c_mps", x)]),
             "mu_material" => {
                 let m = materials[p[0] as usize];
-                (s(&["mu(u)", "slip speed"]), vec![v(&format!("v_c_mps_{m}"), x)])
+                (
+                    s(&["mu(u)", "slip speed"]),
+                    vec![v(&format!("v_c_mps_{m}"), x)],
+                )
             }
             "mu_slip_falling" => (s(&["slip speed", "mu(u)"]), vec![v("delta_mu_rel", x)]),
             "mu_position" => (s(&["in z", "mu(z"]), vec![v("delta_mu_rel", x)]),
@@ -259,12 +356,16 @@ impl Effect {
             "mu_direction" => (s(&["direction"]), vec![v("delta_mu_rel", p[0] * x)]),
             "scale" => (s(&["scale"]), vec![v("scale_error", p[0] * x)]),
             "distortion" => (s(&["distortion"]), vec![v("distortion", p[0] * x)]),
-            "time_base" => (s(&["time base", "frame rate", "timing"]), vec![v("time_error", p[0] * x)]),
+            "time_base" => (
+                s(&["time base", "frame rate", "timing"]),
+                vec![v("time_error", p[0] * x)],
+            ),
             "mu_spread" => (s(&["mu", "friction"]), vec![v("mu_sd_rel", x)]),
             "size_spread" => (s(&["size", "drag", "diameter"]), vec![v("size_sd_rel", x)]),
-            "pair_force" | "pair_force_attractive" => {
-                (s(&["between", "separation"]), vec![v("pair_amplitude_mps2", x)])
-            }
+            "pair_force" | "pair_force_attractive" => (
+                s(&["between", "separation"]),
+                vec![v("pair_amplitude_mps2", x)],
+            ),
             other => unreachable!("no shape {other}"),
         };
         Truth {

@@ -70,10 +70,20 @@ impl Tally {
     }
 
     fn row(&self, key: &str) -> String {
-        let frac = |a: usize, b: usize| if b == 0 { "–".to_string() } else { format!("{a}/{b}") };
+        let frac = |a: usize, b: usize| {
+            if b == 0 {
+                "–".to_string()
+            } else {
+                format!("{a}/{b}")
+            }
+        };
         let mut t = self.times.clone();
         t.sort_by(f64::total_cmp);
-        let med = if t.is_empty() { "–".to_string() } else { format!("{:.1}", t[t.len() / 2]) };
+        let med = if t.is_empty() {
+            "–".to_string()
+        } else {
+            format!("{:.1}", t[t.len() / 2])
+        };
         let max = t.last().map_or("–".to_string(), |m| format!("{m:.1}"));
         format!(
             "| {key} | {} | {} | {} | {} | {} | {} | {} | {med} | {max} |",
@@ -104,18 +114,35 @@ pub fn tables(records: &[Record]) -> String {
     for r in records {
         last.insert((r.quick, r.index), r);
     }
-    let (mut all, mut place, mut shape, mut noise) = (Tally::default(), BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
+    let (mut all, mut place, mut shape, mut noise) = (
+        Tally::default(),
+        BTreeMap::new(),
+        BTreeMap::new(),
+        BTreeMap::new(),
+    );
     for r in last.values() {
         all.add(r);
         let (p, s) = match r.shapes.len() {
             0 => ("null".to_string(), "null".to_string()),
-            1 => (r.places[0].clone(), format!("{}: {}", r.places[0], r.shapes[0])),
-            _ if r.places[0] == r.places[1] => ("two effects, one place".to_string(), "two effects".to_string()),
-            _ => ("two effects, two places".to_string(), "two effects".to_string()),
+            1 => (
+                r.places[0].clone(),
+                format!("{}: {}", r.places[0], r.shapes[0]),
+            ),
+            _ if r.places[0] == r.places[1] => (
+                "two effects, one place".to_string(),
+                "two effects".to_string(),
+            ),
+            _ => (
+                "two effects, two places".to_string(),
+                "two effects".to_string(),
+            ),
         };
         place.entry(p).or_insert_with(Tally::default).add(r);
         shape.entry(s).or_insert_with(Tally::default).add(r);
-        noise.entry(r.noise.clone()).or_insert_with(Tally::default).add(r);
+        noise
+            .entry(r.noise.clone())
+            .or_insert_with(Tally::default)
+            .add(r);
     }
     let mut total = BTreeMap::new();
     total.insert("all".to_string(), all);
@@ -137,7 +164,13 @@ pub fn read(path: &std::path::Path) -> Result<Vec<Record>, String> {
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
-            serde_json::from_str(l).map_err(|e| format!("{} line {}: {e}; delete the line to rerun that dataset", path.display(), i + 1))
+            serde_json::from_str(l).map_err(|e| {
+                format!(
+                    "{} line {}: {e}; delete the line to rerun that dataset",
+                    path.display(),
+                    i + 1
+                )
+            })
         })
         .collect()
 }

@@ -50,7 +50,13 @@ impl Camera {
     }
 
     /// The recorded frames of one track: noise-free when `noise` is None (no drops, no outliers).
-    pub fn film(&self, fine: &Fine, frac: f64, duration_s: f64, noise: Option<(&Noise, &mut ChaCha8Rng)>) -> Vec<Frame> {
+    pub fn film(
+        &self,
+        fine: &Fine,
+        frac: f64,
+        duration_s: f64,
+        noise: Option<(&Noise, &mut ChaCha8Rng)>,
+    ) -> Vec<Frame> {
         let times = self.times(frac, duration_s);
         let (z, v): (Vec<f64>, Vec<f64>) = times.iter().map(|&t| fine.at(t)).unzip();
         let image: Vec<f64> = z.iter().map(|&z| self.image(z)).collect();
@@ -58,7 +64,11 @@ impl Camera {
         match noise {
             None => (0..times.len())
                 .filter(|&i| seen(i))
-                .map(|i| Frame { frame: i, t_s: i as f64 / self.fps, z_m: image[i] })
+                .map(|i| Frame {
+                    frame: i,
+                    t_s: i as f64 / self.fps,
+                    z_m: image[i],
+                })
                 .collect(),
             Some((model, rng)) => {
                 let measured = model.apply(&image, &v, self.fps, rng);
@@ -68,8 +78,16 @@ impl Camera {
                     let outlier = rng.random::<f64>() < self.outliers.0;
                     let jump = self.outliers.1 * (rng.random::<f64>() - 0.5) * 2.0;
                     if seen(i) && !drop {
-                        let z_m = if outlier { image[i] + jump } else { measured[i] };
-                        out.push(Frame { frame: i, t_s: i as f64 / self.fps, z_m });
+                        let z_m = if outlier {
+                            image[i] + jump
+                        } else {
+                            measured[i]
+                        };
+                        out.push(Frame {
+                            frame: i,
+                            t_s: i as f64 / self.fps,
+                            z_m,
+                        });
                     }
                 }
                 out

@@ -28,14 +28,29 @@ fn hold_needed(p: &Physics, x: &State, t: f64, ext: f64, dir: f64) -> f64 {
 
 /// The direction a force would move the particle from rest at `x`, if any.
 fn release(p: &Physics, x: &State, t: f64, ext: f64) -> Option<f64> {
-    [1.0, -1.0].into_iter().find(|&d| d * (p.accel(x.z, 0.0, t, d) + ext) > 0.0)
+    [1.0, -1.0]
+        .into_iter()
+        .find(|&d| d * (p.accel(x.z, 0.0, t, d) + ext) > 0.0)
 }
 
 impl Particle {
     /// A particle kicked to `v0` with no spin at `z0`.
     pub fn kicked(z0: f64, v0: f64) -> Particle {
-        let mode = if v0 == 0.0 { Mode::Rest } else { Mode::Slide(v0.signum()) };
-        Particle { x: State { z: z0, v: v0, va: 0.0 }, mode, dir: if v0 < 0.0 { -1.0 } else { 1.0 }, switched_at: 0.0 }
+        let mode = if v0 == 0.0 {
+            Mode::Rest
+        } else {
+            Mode::Slide(v0.signum())
+        };
+        Particle {
+            x: State {
+                z: z0,
+                v: v0,
+                va: 0.0,
+            },
+            mode,
+            dir: if v0 < 0.0 { -1.0 } else { 1.0 },
+            switched_at: 0.0,
+        }
     }
 
     /// Puts the particle in the mode its state calls for (after an impulse or a switch).
@@ -62,7 +77,11 @@ impl Particle {
             self.dir = self.x.v.signum();
         }
         let f = hold_needed(p, &self.x, t, ext, self.dir);
-        self.mode = if f.abs() > G * p.mu_static(self.x.z, self.dir) { Mode::Slide(f.signum()) } else { Mode::Roll };
+        self.mode = if f.abs() > G * p.mu_static(self.x.z, self.dir) {
+            Mode::Slide(f.signum())
+        } else {
+            Mode::Roll
+        };
     }
 
     /// True when a switch has happened between `self` (at `t`) and `y` (at `t1`).
@@ -70,7 +89,8 @@ impl Particle {
         match self.mode {
             Mode::Slide(d) => d * (y.v - p.groove.s * y.va) <= SLIP_END_MPS || y.v * self.dir < 0.0,
             Mode::Roll => {
-                y.v * self.dir <= 0.0 || hold_needed(p, y, t1, ext, self.dir).abs() > G * p.mu_static(y.z, self.dir)
+                y.v * self.dir <= 0.0
+                    || hold_needed(p, y, t1, ext, self.dir).abs() > G * p.mu_static(y.z, self.dir)
             }
             Mode::Rest => false,
         }

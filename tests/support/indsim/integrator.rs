@@ -43,7 +43,11 @@ pub fn rhs(p: &Physics, mode: Mode, x: &State, t: f64, ext: f64, dir: f64) -> (f
 
 /// One classical RK4 step of length `h` from time `t`.
 pub fn rk4(p: &Physics, mode: Mode, x: &State, t: f64, h: f64, ext: f64, dir: f64) -> State {
-    let add = |x: &State, k: (f64, f64, f64), f: f64| State { z: x.z + f * k.0, v: x.v + f * k.1, va: x.va + f * k.2 };
+    let add = |x: &State, k: (f64, f64, f64), f: f64| State {
+        z: x.z + f * k.0,
+        v: x.v + f * k.1,
+        va: x.va + f * k.2,
+    };
     let k1 = rhs(p, mode, x, t, ext, dir);
     let k2 = rhs(p, mode, &add(x, k1, 0.5 * h), t + 0.5 * h, ext, dir);
     let k3 = rhs(p, mode, &add(x, k2, 0.5 * h), t + 0.5 * h, ext, dir);

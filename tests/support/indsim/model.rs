@@ -17,7 +17,10 @@ pub struct Groove {
 impl Groove {
     /// A groove of opening angle `theta_deg` holding solid spheres.
     pub fn from_angle_deg(theta_deg: f64) -> Groove {
-        Groove { s: (0.5 * theta_deg.to_radians()).sin(), k: 2.5 }
+        Groove {
+            s: (0.5 * theta_deg.to_radians()).sin(),
+            k: 2.5,
+        }
     }
 
     /// k s².
@@ -52,7 +55,12 @@ impl Physics {
     /// Every acceleration but groove friction; `dir` is the direction of motion (±1), kept through
     /// a step (a change of direction is an event), so the stages of a step agree on it.
     pub fn accel(&self, z: f64, v: f64, t: f64, dir: f64) -> f64 {
-        self.drag.accel(v) + self.forces.iter().map(|f| f.accel(z, v, t, dir)).sum::<f64>()
+        self.drag.accel(v)
+            + self
+                .forces
+                .iter()
+                .map(|f| f.accel(z, v, t, dir))
+                .sum::<f64>()
     }
 
     /// Kinetic friction coefficient at lab position `z`, slip speed `slip` (≥ 0), direction `dir`.

@@ -83,7 +83,10 @@ impl Noise {
             }
             if let Some((rate, size)) = self.outliers {
                 if rng.random::<f64>() < rate {
-                    y = z[i] + size * if rng.random::<bool>() { 1.0 } else { -1.0 } * (0.5 + rng.random::<f64>());
+                    y = z[i]
+                        + size
+                            * if rng.random::<bool>() { 1.0 } else { -1.0 }
+                            * (0.5 + rng.random::<f64>());
                 }
             }
             out.push(y);

@@ -77,7 +77,16 @@ pub fn simulate_pair(
     let e = ext(&parts);
     parts[0].settle(p[0], 0.0, e[0]);
     parts[1].settle(p[1], 0.0, e[1]);
-    let mut fine = [Fine { dt, ..Fine::default() }, Fine { dt, ..Fine::default() }];
+    let mut fine = [
+        Fine {
+            dt,
+            ..Fine::default()
+        },
+        Fine {
+            dt,
+            ..Fine::default()
+        },
+    ];
     let mut impacts = Vec::new();
     let gap = |q: &[Particle; 2]| n * (q[1].x.z - q[0].x.z) - 2.0 * m.radius_m;
     let closing = |q: &[Particle; 2]| n * (q[0].x.v - q[1].x.v) > 0.0;
@@ -87,7 +96,11 @@ pub fn simulate_pair(
         impulse(m, a, b, n);
         q[0].settle(p[0], t, e[0]);
         q[1].settle(p[1], t, e[1]);
-        impacts.push(Impact { t_s: t, before, after: [(q[0].x.v, q[0].x.va), (q[1].x.v, q[1].x.va)] });
+        impacts.push(Impact {
+            t_s: t,
+            before,
+            after: [(q[0].x.v, q[0].x.va), (q[1].x.v, q[1].x.va)],
+        });
     };
     if gap(&parts) <= 0.0 && closing(&parts) {
         collide(&mut parts, 0.0, e, &mut impacts);

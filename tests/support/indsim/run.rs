@@ -21,7 +21,8 @@ pub struct Fine {
 impl Fine {
     pub fn push(&mut self, p: &Particle, t: f64) {
         if self.switches.last().map(|s| s.1) != Some(p.mode) {
-            self.switches.push((if self.z.is_empty() { t } else { p.switched_at }, p.mode));
+            self.switches
+                .push((if self.z.is_empty() { t } else { p.switched_at }, p.mode));
         }
         self.z.push(p.x.z);
         self.v.push(p.x.v);
@@ -39,9 +40,17 @@ impl Fine {
         let x = (t / self.dt).clamp(0.0, (n - 1) as f64);
         let i = (x.floor() as usize).min(n - 2);
         let s = x - i as f64;
-        let (z0, z1, v0, v1) = (self.z[i], self.z[i + 1], self.v[i] * self.dt, self.v[i + 1] * self.dt);
+        let (z0, z1, v0, v1) = (
+            self.z[i],
+            self.z[i + 1],
+            self.v[i] * self.dt,
+            self.v[i + 1] * self.dt,
+        );
         let (s2, s3) = (s * s, s * s * s);
-        let z = (2.0 * s3 - 3.0 * s2 + 1.0) * z0 + (s3 - 2.0 * s2 + s) * v0 + (-2.0 * s3 + 3.0 * s2) * z1 + (s3 - s2) * v1;
+        let z = (2.0 * s3 - 3.0 * s2 + 1.0) * z0
+            + (s3 - 2.0 * s2 + s) * v0
+            + (-2.0 * s3 + 3.0 * s2) * z1
+            + (s3 - s2) * v1;
         let v = self.v[i] + s * (self.v[i + 1] - self.v[i]);
         (z, v)
     }
@@ -52,7 +61,10 @@ pub fn simulate(p: &Physics, z0: f64, v0: f64, duration_s: f64, dt: f64) -> Fine
     let mut part = Particle::kicked(z0, v0);
     part.settle(p, 0.0, 0.0);
     let steps = (duration_s / dt).ceil() as usize + 1;
-    let mut fine = Fine { dt, ..Fine::default() };
+    let mut fine = Fine {
+        dt,
+        ..Fine::default()
+    };
     fine.push(&part, 0.0);
     for i in 0..steps {
         let t = i as f64 * dt;

@@ -24,10 +24,18 @@ pub fn write_dataset(dir: &Path, runs: &[RecordedRun]) -> std::io::Result<()> {
     let mut r = String::from("run,experiment,material,diameter_m,fps,setup\n");
     let mut t = String::from("run,particle,frame,t_s,z_m\n");
     for run in runs {
-        let _ = writeln!(r, "{},{},{},{:.6e},{},{}", run.run, run.experiment, run.material, run.diameter_m, run.fps, run.setup);
+        let _ = writeln!(
+            r,
+            "{},{},{},{:.6e},{},{}",
+            run.run, run.experiment, run.material, run.diameter_m, run.fps, run.setup
+        );
         for (p, track) in run.tracks.iter().enumerate() {
             for f in track {
-                let _ = writeln!(t, "{},{},{},{:.8},{:.10}", run.run, p, f.frame, f.t_s, f.z_m);
+                let _ = writeln!(
+                    t,
+                    "{},{},{},{:.8},{:.10}",
+                    run.run, p, f.frame, f.t_s, f.z_m
+                );
             }
         }
     }
