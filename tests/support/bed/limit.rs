@@ -1,0 +1,249 @@
+//! The operational detection limit of an effect in one dataset.
+//!
+//! The effect's signal is the change it makes to the noise-free recorded positions, frame by
+//! frame (the same runs, kicks, frames and field of view with and without it), less what the
+//! baseline's own free parameters can absorb of it: the change is projected, by linear least
+//! squares, off the baseline's sensitivities to each single run's start position, kick speed and
+//! kick time, and to each material's μ and drag time T (shared by the material's runs). What
+//! remains, in units of the tracker's per-frame standard deviation σ, gives
+//! SNR² = Σ (residual change / σ)² over the dataset. The detection limit is the size at which
+//! SNR² = 25 (five standard deviations over the dataset). Collision runs enter unprojected.
+
+use super::dataset::DatasetSpec;
+use crate::indsim::writer::RecordedRun;
+use std::collections::BTreeMap;
+
+/// SNR² defining the limit.
+pub const LIMIT_SNR2: f64 = 25.0;
+
+/// Relative steps of the finite differences.
+const STEP_V0: f64 = 1e-3;
+const STEP_MU: f64 = 1e-3;
+const STEP_T: f64 = 1e-3;
+
+/// Per-run local sensitivities (z0, v0, t0) and global ones (μ, T of the run's material), by
+/// frame, for each single run of a base dataset.
+pub struct Basis {
+    runs: Vec<Option<RunBasis>>,
+    materials: usize,
+}
+
+struct RunBasis {
+    material: usize,
+    /// frame → (local columns, the two global columns of its material)
+    rows: BTreeMap<usize, ([f64; 3], [f64; 2])>,
+}
+
+fn by_frame(run: &RecordedRun) -> BTreeMap<usize, f64> {
+    run.tracks[0].iter().map(|f| (f.frame, f.z_m)).collect()
+}
+
+impl Basis {
+    /// The sensitivities of `base`'s clean recording (finite differences of re-simulations).
+    pub fn new(base: &DatasetSpec) -> Basis {
+        let clean = base.render(true);
+        let perturbed = |f: &dyn Fn(&mut DatasetSpec)| {
+            let mut s = base.clone();
+            f(&mut s);
+            s.render(true)
+        };
+        let dv = perturbed(&|s| s.runs.iter_mut().for_each(|r| r.v0 *= 1.0 + STEP_V0));
+        let dmu = perturbed(&|s| {
+            s.runs
+                .iter_mut()
+                .for_each(|r| r.physics.iter_mut().for_each(|p| p.mu *= 1.0 + STEP_MU))
+        });
+        let dt = perturbed(&|s| {
+            s.runs.iter_mut().for_each(|r| {
+                r.physics
+                    .iter_mut()
+                    .for_each(|p| p.drag = p.drag.with_t_s(p.drag.t_s() * (1.0 + STEP_T)))
+            })
+        });
+        let dframe = 1e-3; // kick time: a shift of the frames by a thousandth of a frame
+        let shifted = perturbed(&|s| s.runs.iter_mut().for_each(|r| r.frac += dframe));
+        let runs = base
+            .runs
+            .iter()
+            .enumerate()
+            .map(|(i, spec)| {
+                if spec.experiment != "single" {
+                    return None;
+                }
+                let (z, v, mu, t, sh) = (
+                    by_frame(&clean[i]),
+                    by_frame(&dv[i]),
+                    by_frame(&dmu[i]),
+                    by_frame(&dt[i]),
+                    by_frame(&shifted[i]),
+                );
+                let rows = z
+                    .iter()
+                    .filter_map(|(&k, &z0)| {
+                        let d = |m: &BTreeMap<usize, f64>, h: f64| m.get(&k).map(|&x| (x - z0) / h);
+                        Some((
+                            k,
+                            (
+                                [1.0, d(&v, STEP_V0 * spec.v0.abs())?, d(&sh, dframe)?],
+                                [d(&mu, STEP_MU)?, d(&t, STEP_T)?],
+                            ),
+                        ))
+                    })
+                    .collect();
+                Some(RunBasis {
+                    material: spec.material,
+                    rows,
+                })
+            })
+            .collect();
+        Basis {
+            runs,
+            materials: base.materials.len(),
+        }
+    }
+
+    /// Σ (r/σ)² of the change `delta` (per run, frame → Δz) after the projection.
+    pub fn residual_snr2(&self, delta: &[BTreeMap<usize, f64>], sigma: f64) -> f64 {
+        let ng = 2 * self.materials;
+        // normal equations, the local blocks eliminated (Schur complement)
+        let mut s = vec![vec![0.0; ng]; ng];
+        let mut rhs = vec![0.0; ng];
+        let mut blocks = Vec::new();
+        let mut raw = 0.0;
+        for (run, d) in self.runs.iter().zip(delta) {
+            let Some(run) = run else {
+                raw += d.values().map(|x| x * x).sum::<f64>();
+                continue;
+            };
+            let cols: Vec<usize> = vec![2 * run.material, 2 * run.material + 1];
+            let (mut a, mut b, mut c) = ([[0.0; 3]; 3], [[0.0; 2]; 3], [[0.0; 2]; 2]);
+            let (mut ay, mut cy, mut yy) = ([0.0; 3], [0.0; 2], 0.0);
+            for (k, y) in d {
+                let Some((l, g)) = run.rows.get(k) else {
+                    continue;
+                };
+                yy += y * y;
+                for i in 0..3 {
+                    ay[i] += l[i] * y;
+                    for j in 0..3 {
+                        a[i][j] += l[i] * l[j];
+                    }
+                    for j in 0..2 {
+                        b[i][j] += l[i] * g[j];
+                    }
+                }
+                for i in 0..2 {
+                    cy[i] += g[i] * y;
+                    for j in 0..2 {
+                        c[i][j] += g[i] * g[j];
+                    }
+                }
+            }
+            let a_vec: Vec<Vec<f64>> = a.iter().map(|r| r.to_vec()).collect();
+            // A⁻¹ B and A⁻¹ (Jᵀy)
+            let ainv_b: Vec<Vec<f64>> = (0..2)
+                .map(|j| solve(&a_vec, &[b[0][j], b[1][j], b[2][j]]))
+                .collect();
+            let ainv_y = solve(&a_vec, &ay);
+            for i in 0..2 {
+                rhs[cols[i]] += cy[i] - (0..3).map(|q| b[q][i] * ainv_y[q]).sum::<f64>();
+                for j in 0..2 {
+                    s[cols[i]][cols[j]] +=
+                        c[i][j] - (0..3).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
+                }
+            }
+            blocks.push((cols, yy, ay, cy, ainv_y, ainv_b));
+        }
+        // a tiny ridge keeps a material without single runs solvable
+        for (i, row) in s.iter_mut().enumerate() {
+            row[i] += 1e-30 + 1e-12 * row[i].abs();
+        }
+        let g = solve(&s, &rhs);
+        // the residual sum of squares of each run: yᵀy − (fitted)ᵀ y at the least-squares optimum
+        let mut total = raw;
+        for (cols, yy, ay, cy, ainv_y, ainv_b) in blocks {
+            let gl = [g[cols[0]], g[cols[1]]];
+            let local: Vec<f64> = (0..3)
+                .map(|q| ainv_y[q] - ainv_b[0][q] * gl[0] - ainv_b[1][q] * gl[1])
+                .collect();
+            let fitted =
+                (0..3).map(|q| local[q] * ay[q]).sum::<f64>() + gl[0] * cy[0] + gl[1] * cy[1];
+            total += (yy - fitted).max(0.0);
+        }
+        total / (sigma * sigma)
+    }
+}
+
+/// Solves the small dense system `m x = b` (Gaussian elimination with partial pivoting; a
+/// singular direction gets 0).
+fn solve(m: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
+    let n = b.len();
+    let mut a: Vec<Vec<f64>> = m
+        .iter()
+        .zip(b)
+        .map(|(r, &y)| r.iter().copied().chain([y]).collect())
+        .collect();
+    let scale = a
+        .iter()
+        .map(|r| r[..n].iter().fold(0.0f64, |s, x| s.max(x.abs())))
+        .fold(0.0f64, f64::max);
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+            .unwrap_or(c);
+        a.swap(c, p);
+        if a[c][c].abs() <= 1e-14 * scale {
+            continue;
+        }
+        for r in 0..n {
+            if r != c {
+                let f = a[r][c] / a[c][c];
+                for k in c..=n {
+                    a[r][k] -= f * a[c][k];
+                }
+            }
+        }
+    }
+    (0..n)
+        .map(|i| {
+            if a[i][i].abs() <= 1e-14 * scale {
+                0.0
+            } else {
+                a[i][n] / a[i][i]
+            }
+        })
+        .collect()
+}
+
+/// The change between two clean renderings, per run, frame → Δz (particle 0; both particles of
+/// a collision run are summed in as separate frames).
+pub fn change(base: &[RecordedRun], with: &[RecordedRun]) -> Vec<BTreeMap<usize, f64>> {
+    base.iter()
+        .zip(with)
+        .map(|(a, b)| {
+            let mut out = BTreeMap::new();
+            for (p, (ta, tb)) in a.tracks.iter().zip(&b.tracks).enumerate() {
+                let by: BTreeMap<usize, f64> = ta.iter().map(|f| (f.frame, f.z_m)).collect();
+                for f in tb {
+                    if let Some(z) = by.get(&f.frame) {
+                        out.insert(f.frame + p * 1_000_000, f.z_m - z);
+                    }
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+/// SNR² of the change from `base` to `with`, after what the baseline absorbs (see the module).
+pub fn snr2(
+    basis: &Basis,
+    base: &DatasetSpec,
+    base_render: &[RecordedRun],
+    with: &DatasetSpec,
+) -> f64 {
+    basis.residual_snr2(
+        &change(base_render, &with.render(true)),
+        base.noise.sigma_m(),
+    )
+}

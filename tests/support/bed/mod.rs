@@ -1,0 +1,10 @@
+//! The randomized discovery bench: datasets drawn from a seed by the independent simulator, each
+//! with a truth kept beside (never inside) the dataset folder, scored against diagnosis.json.
+
+pub mod dataset;
+pub mod draw;
+pub mod limit;
+pub mod pipeline;
+pub mod score;
+pub mod shapes;
+pub mod table;

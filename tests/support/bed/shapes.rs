@@ -1,0 +1,379 @@
+//! The catalogue of effects the bench draws from: where each enters (force, friction,
+//! measurement, particles, pair), how it changes a dataset, and its truth (the form names a
+//! finding may carry and the sizes it should report).
+
+use super::dataset::DatasetSpec;
+use crate::indsim::effects::{Drag, Force, FrictionLaw};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+/// Every shape: (place, name). The bench cycles through them in this order.
+pub const SHAPES: [(&str, &str); 24] = [
+    ("force", "quadratic_drag"),
+    ("friction", "mu_slip_rising"),
+    ("measurement", "scale"),
+    ("particles", "mu_spread"),
+    ("force", "saturating_drag"),
+    ("pair", "pair_force"),
+    ("force", "resistance"),
+    ("friction", "mu_position"),
+    ("force", "tilt"),
+    ("measurement", "distortion"),
+    ("force", "periodic_z"),
+    ("friction", "mu_slip_falling"),
+    ("force", "localized_z"),
+    ("particles", "size_spread"),
+    ("force", "step_z"),
+    ("friction", "mu_direction"),
+    ("force", "field_z"),
+    ("measurement", "time_base"),
+    ("force", "time_common_phase"),
+    ("friction", "mu_patch"),
+    ("force", "time_run_phase"),
+    ("friction", "mu_material"),
+    ("force", "speed_bump"),
+    ("pair", "pair_force_attractive"),
+];
+
+/// One drawn effect: its shape, its drawn shape parameters and its size.
+#[derive(Clone, Debug)]
+pub struct Effect {
+    pub shape: usize,
+    pub params: Vec<f64>,
+    pub size: f64,
+}
+
+/// What a finding must say to be right about one effect.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Truth {
+    pub place: String,
+    pub shape: String,
+    /// A finding's form (lowercased) must contain one of these.
+    pub forms: Vec<String>,
+    /// (parameter name or prefix, true value): every parameter of the finding whose name starts
+    /// with it must be within 15 % of the value.
+    pub sizes: Vec<(String, f64)>,
+    /// The size in units of the detection limit.
+    pub multiple: f64,
+}
+
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+fn sign(rng: &mut ChaCha8Rng) -> f64 {
+    if rng.random::<bool>() {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
+fn log_uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.random::<f64>() * (hi / lo).ln()).exp()
+}
+
+impl Effect {
+    pub fn place(&self) -> &'static str {
+        SHAPES[self.shape].0
+    }
+
+    pub fn name(&self) -> &'static str {
+        SHAPES[self.shape].1
+    }
+
+    /// Draws the shape's parameters (all but the size); `runs` bounds the per-run draws.
+    pub fn draw(shape: usize, runs: usize, rng: &mut ChaCha8Rng) -> Effect {
+        let tau = std::f64::consts::TAU;
+        let params = match SHAPES[shape].1 {
+            "periodic_z" => vec![log_uniform(rng, 0.5e-3, 8e-3), tau * rng.random::<f64>()],
+            "localized_z" => vec![
+                rng.random_range(2e-3..10e-3),
+                rng.random_range(0.2e-3..1e-3),
+                sign(rng),
+            ],
+            "step_z" => vec![rng.random_range(3e-3..9e-3), sign(rng)],
+            "field_z" => (0..5)
+                .flat_map(|_| {
+                    [
+                        log_uniform(rng, 1e-3, 10e-3),
+                        tau * rng.random::<f64>(),
+                        normal(rng),
+                    ]
+                })
+                .collect(),
+            "time_common_phase" => vec![log_uniform(rng, 20.0, 200.0), tau * rng.random::<f64>()],
+            "time_run_phase" => {
+                let mut p = vec![log_uniform(rng, 20.0, 200.0)];
+                p.extend((0..runs).map(|_| tau * rng.random::<f64>()));
+                p
+            }
+            "speed_bump" => vec![rng.random_range(0.01..0.06), rng.random_range(0.005..0.015)],
+            "tilt" => vec![sign(rng)],
+            "mu_position" => vec![log_uniform(rng, 1e-3, 8e-3), tau * rng.random::<f64>()],
+            "mu_patch" => vec![
+                rng.random_range(2e-3..7e-3),
+                rng.random_range(1e-3..4e-3),
+                sign(rng),
+            ],
+            "mu_slip_falling" => vec![rng.random_range(0.005..0.03)],
+            "mu_direction" => vec![sign(rng)],
+            "mu_material" => vec![if rng.random::<bool>() { 1.0 } else { 0.0 }],
+            "mu_spread" | "size_spread" => (0..runs).map(|_| normal(rng)).collect(),
+            "scale" | "distortion" | "time_base" => vec![sign(rng)],
+            "pair_force" | "pair_force_attractive" => vec![rng.random_range(50e-6..300e-6)],
+            _ => Vec::new(),
+        };
+        Effect {
+            shape,
+            params,
+            size: Effect::reference_size(shape),
+        }
+    }
+
+    /// A size of the right order to start the search for the detection limit.
+    pub fn reference_size(shape: usize) -> f64 {
+        match SHAPES[shape].1 {
+            "quadratic_drag" => 20.0,
+            "saturating_drag" => 1.0,
+            "resistance" => 0.003,
+            "tilt" => 0.1,
+            "periodic_z" | "step_z" | "field_z" => 0.05,
+            "localized_z" | "time_common_phase" | "time_run_phase" | "speed_bump" => 0.2,
+            "mu_position" => 0.02,
+            "mu_patch" => 0.01,
+            "mu_slip_rising" => 0.002,
+            "mu_slip_falling" => 0.05,
+            "mu_direction" => 0.01,
+            "mu_material" => 0.002,
+            "mu_spread" => 0.02,
+            "size_spread" => 0.05,
+            "scale" | "distortion" | "time_base" => 0.005,
+            _ => 0.5,
+        }
+    }
+
+    /// Puts the effect into a dataset.
+    pub fn apply(&self, spec: &mut DatasetSpec) {
+        let (x, p) = (self.size, &self.params);
+        let force = |spec: &mut DatasetSpec, f: &dyn Fn(usize) -> Force| {
+            for (i, run) in spec.runs.iter_mut().enumerate() {
+                for ph in run.physics.iter_mut() {
+                    ph.forces.push(f(i));
+                }
+            }
+        };
+        let friction = |spec: &mut DatasetSpec, law: &dyn Fn(usize) -> Option<FrictionLaw>| {
+            for run in spec.runs.iter_mut() {
+                if let Some(l) = law(run.material) {
+                    for ph in run.physics.iter_mut() {
+                        ph.friction = l.clone();
+                    }
+                }
+            }
+        };
+        match self.name() {
+            "quadratic_drag" | "saturating_drag" => {
+                for run in spec.runs.iter_mut() {
+                    for ph in run.physics.iter_mut() {
+                        let t_s = ph.drag.t_s();
+                        ph.drag = if self.name() == "quadratic_drag" {
+                            Drag::Quadratic { t_s, c_per_m: x }
+                        } else {
+                            Drag::Saturating {
+                                t0_s: t_s,
+                                tp_s_per_mps: x,
+                            }
+                        };
+                    }
+                }
+            }
+            "resistance" => force(spec, &|_| Force::Resistance { c: x }),
+            "tilt" => force(spec, &|_| Force::Tilt {
+                alpha_rad: (p[0] * x).to_radians(),
+            }),
+            "periodic_z" => force(spec, &|_| Force::Periodic {
+                amp: x,
+                wavelength_m: p[0],
+                phase: p[1],
+            }),
+            "localized_z" => force(spec, &|_| Force::Localized {
+                amp: p[2] * x,
+                centre_m: p[0],
+                width_m: p[1],
+            }),
+            "step_z" => force(spec, &|_| Force::Step {
+                amp: p[1] * x,
+                z_m: p[0],
+                width_m: 0.1e-3,
+            }),
+            "field_z" => {
+                let modes = self.field_modes();
+                force(spec, &|_| Force::Field {
+                    modes: modes.clone(),
+                })
+            }
+            "time_common_phase" => force(spec, &|_| Force::Time {
+                amp: x,
+                freq_hz: p[0],
+                phase: p[1],
+            }),
+            "time_run_phase" => force(spec, &|i| Force::Time {
+                amp: x,
+                freq_hz: p[0],
+                phase: p[1 + i % (p.len() - 1)],
+            }),
+            "speed_bump" => force(spec, &|_| Force::SpeedBump {
+                amp: x,
+                v_c: p[0],
+                width: p[1],
+            }),
+            "mu_slip_rising" => friction(spec, &|_| Some(FrictionLaw::SlipRising { v_c: x })),
+            "mu_material" => {
+                let m = p[0] as usize;
+                friction(spec, &|mat| {
+                    (mat == m).then_some(FrictionLaw::SlipRising { v_c: x })
+                })
+            }
+            "mu_position" => friction(spec, &|_| {
+                Some(FrictionLaw::Position {
+                    delta: x,
+                    wavelength_m: p[0],
+                    phase: p[1],
+                })
+            }),
+            "mu_patch" => friction(spec, &|_| {
+                Some(FrictionLaw::Patch {
+                    delta_mu: p[2] * x,
+                    z_a: p[0],
+                    z_b: p[0] + p[1],
+                    edge_m: 0.1e-3,
+                })
+            }),
+            "mu_slip_falling" => friction(spec, &|_| {
+                Some(FrictionLaw::SlipFalling {
+                    delta: x,
+                    v_c: p[0],
+                })
+            }),
+            "mu_direction" => friction(spec, &|_| Some(FrictionLaw::Direction { delta: p[0] * x })),
+            "scale" => spec.camera.scale_error = p[0] * x,
+            "distortion" => spec.camera.distortion = p[0] * x,
+            "time_base" => spec.camera.time_error = p[0] * x,
+            "mu_spread" => {
+                for (i, run) in spec.runs.iter_mut().enumerate() {
+                    for ph in run.physics.iter_mut() {
+                        ph.mu *= (1.0 + x * p[i % p.len()]).max(0.2);
+                    }
+                }
+            }
+            "size_spread" => {
+                // a drag time growing as the radius squared (a viscous drag on a larger sphere)
+                for (i, run) in spec.runs.iter_mut().enumerate() {
+                    for ph in run.physics.iter_mut() {
+                        let r = (1.0 + x * p[i % p.len()]).max(0.2);
+                        ph.drag = ph.drag.with_t_s(ph.drag.t_s() * r * r);
+                    }
+                }
+            }
+            "pair_force" => spec.pair_force = Some((x, p[0])),
+            "pair_force_attractive" => spec.pair_force = Some((-x, p[0])),
+            other => unreachable!("no shape {other}"),
+        }
+    }
+
+    /// The modes of a random field normalised so that its peak over the field of view is the size.
+    fn field_modes(&self) -> Vec<(f64, f64, f64)> {
+        let raw: Vec<(f64, f64, f64)> = self
+            .params
+            .chunks(3)
+            .map(|c| (c[2], std::f64::consts::TAU / c[0], c[1]))
+            .collect();
+        let at = |z: f64| {
+            raw.iter()
+                .map(|(a, k, ph)| a * (k * z + ph).sin())
+                .sum::<f64>()
+        };
+        let peak = (0..=1200)
+            .map(|i| at(i as f64 * 1e-5).abs())
+            .fold(0.0, f64::max);
+        raw.iter()
+            .map(|&(a, k, ph)| (a * self.size / peak, k, ph))
+            .collect()
+    }
+
+    /// The truth of this effect in a dataset whose material names are `materials`.
+    pub fn truth(&self, materials: &[&str], multiple: f64) -> Truth {
+        let (x, p) = (self.size, &self.params);
+        let s = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let v = |k: &str, x: f64| (k.to_string(), x);
+        let (forms, sizes): (Vec<String>, Vec<(String, f64)>) = match self.name() {
+            "quadratic_drag" => (s(&["quadratic"]), vec![v("c_per_m", x)]),
+            "saturating_drag" => (s(&["saturating"]), vec![v("tp_s_per_mps", x)]),
+            "resistance" => (s(&["resistance"]), vec![v("coefficient", x)]),
+            "tilt" => (s(&["tilt"]), vec![v("alpha_deg", p[0] * x)]),
+            "periodic_z" => (
+                s(&["periodic in z"]),
+                vec![v("amplitude_mps2", x), v("wavelength_m", p[0])],
+            ),
+            "localized_z" => (
+                s(&["localized in z"]),
+                vec![
+                    v("amplitude_mps2", p[2] * x),
+                    v("centre_m", p[0]),
+                    v("width_m", p[1]),
+                ],
+            ),
+            "step_z" => (
+                s(&["step in z", "map in z", "spline in z"]),
+                vec![v("step_mps2", p[1] * x)],
+            ),
+            "field_z" => (
+                s(&["map in z", "spline in z", "field in z"]),
+                vec![v("peak_accel_mps2", x)],
+            ),
+            "time_common_phase" | "time_run_phase" => (
+                s(&["periodic in time"]),
+                vec![v("amplitude_mps2", x), v("frequency_hz", p[0])],
+            ),
+            "speed_bump" => (
+                s(&["map in v", "spline in v", "in speed"]),
+                vec![v("peak_accel_mps2", x)],
+            ),
+            "mu_slip_rising" => (s(&["mu(u)", "slip speed"]), vec![v("v_c_mps", x)]),
+            "mu_material" => {
+                let m = materials[p[0] as usize];
+                (
+                    s(&["mu(u)", "slip speed"]),
+                    vec![v(&format!("v_c_mps_{m}"), x)],
+                )
+            }
+            "mu_slip_falling" => (s(&["slip speed", "mu(u)"]), vec![v("delta_mu_rel", x)]),
+            "mu_position" => (s(&["in z", "mu(z"]), vec![v("delta_mu_rel", x)]),
+            "mu_patch" => (s(&["in z", "mu(z", "patch"]), vec![v("delta_mu", p[2] * x)]),
+            "mu_direction" => (s(&["direction"]), vec![v("delta_mu_rel", p[0] * x)]),
+            "scale" => (s(&["scale"]), vec![v("scale_error", p[0] * x)]),
+            "distortion" => (s(&["distortion"]), vec![v("distortion", p[0] * x)]),
+            "time_base" => (
+                s(&["time base", "frame rate", "timing"]),
+                vec![v("time_error", p[0] * x)],
+            ),
+            "mu_spread" => (s(&["mu", "friction"]), vec![v("mu_sd_rel", x)]),
+            "size_spread" => (s(&["size", "drag", "diameter"]), vec![v("size_sd_rel", x)]),
+            "pair_force" | "pair_force_attractive" => (
+                s(&["between", "separation"]),
+                vec![v("pair_amplitude_mps2", x)],
+            ),
+            other => unreachable!("no shape {other}"),
+        };
+        Truth {
+            place: self.place().to_string(),
+            shape: self.name().to_string(),
+            forms,
+            sizes,
+            multiple,
+        }
+    }
+}

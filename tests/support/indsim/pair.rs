@@ -1,0 +1,148 @@
+//! Two particles in one groove: the contact impulse with restitution and μ_pp, and a force
+//! between them that depends on their separation.
+
+use super::events::Particle;
+use super::model::Physics;
+use super::run::Fine;
+
+/// What the collision model needs besides each particle's physics.
+#[derive(Clone, Debug)]
+pub struct PairModel {
+    /// Particle radius (contact at 2R).
+    pub radius_m: f64,
+    /// Particle–particle friction.
+    pub mu_pp: f64,
+    /// Restitution C(v) = c0 + (1 − c0) exp(−v/v_ref), v the approach speed.
+    pub c0: f64,
+    pub v_ref_mps: f64,
+    /// A force between the two: A exp(−(gap)/λ) on each, pushing apart when A > 0 (m/s², m).
+    pub force: Option<(f64, f64)>,
+}
+
+impl PairModel {
+    pub fn restitution(&self, v: f64) -> f64 {
+        self.c0 + (1.0 - self.c0) * (-v.abs() / self.v_ref_mps).exp()
+    }
+}
+
+/// One collision: the time and the velocities and spins just before and after.
+#[derive(Clone, Copy, Debug)]
+pub struct Impact {
+    pub t_s: f64,
+    pub before: [(f64, f64); 2],
+    pub after: [(f64, f64); 2],
+}
+
+/// The impulse between `a` (behind, moving towards `b`) and `b`, along `n` = sign(z_b − z_a).
+pub fn impulse(m: &PairModel, a: &mut Particle, b: &mut Particle, n: f64) {
+    let (v1, v2) = (n * a.x.v, n * b.x.v);
+    let (w1, w2) = (n * a.x.va, n * b.x.va);
+    let j = 0.5 * (1.0 + m.restitution(v1 - v2)) * (v1 - v2);
+    let (v1n, v2n) = (v1 - j, v2 + j);
+    let sum = w1 + w2;
+    let (w1n, w2n) = if sum.abs() >= 2.0 * m.mu_pp * 2.5 * j {
+        let dw = sum.signum() * m.mu_pp * 2.5 * j;
+        (w1 - dw, w2 - dw)
+    } else {
+        (0.5 * (w1 - w2), 0.5 * (w2 - w1))
+    };
+    a.x.v = n * v1n;
+    b.x.v = n * v2n;
+    a.x.va = n * w1n;
+    b.x.va = n * w2n;
+}
+
+/// Particle 0 (the striker, kicked to `v0`) and particle 1 (the target, at rest), for
+/// `duration_s`; returns both fine trajectories and the impacts.
+pub fn simulate_pair(
+    p: [&Physics; 2],
+    m: &PairModel,
+    z0: [f64; 2],
+    v0: f64,
+    duration_s: f64,
+    dt: f64,
+) -> ([Fine; 2], Vec<Impact>) {
+    let mut parts = [Particle::kicked(z0[0], v0), Particle::kicked(z0[1], 0.0)];
+    let n = (z0[1] - z0[0]).signum();
+    let ext = |parts: &[Particle; 2]| -> [f64; 2] {
+        match m.force {
+            Some((a, lambda)) => {
+                let gap = n * (parts[1].x.z - parts[0].x.z) - 2.0 * m.radius_m;
+                let f = a * (-gap.max(0.0) / lambda).exp();
+                [-n * f, n * f]
+            }
+            None => [0.0, 0.0],
+        }
+    };
+    let e = ext(&parts);
+    parts[0].settle(p[0], 0.0, e[0]);
+    parts[1].settle(p[1], 0.0, e[1]);
+    let mut fine = [
+        Fine {
+            dt,
+            ..Fine::default()
+        },
+        Fine {
+            dt,
+            ..Fine::default()
+        },
+    ];
+    let mut impacts = Vec::new();
+    let gap = |q: &[Particle; 2]| n * (q[1].x.z - q[0].x.z) - 2.0 * m.radius_m;
+    let closing = |q: &[Particle; 2]| n * (q[0].x.v - q[1].x.v) > 0.0;
+    let collide = |q: &mut [Particle; 2], t: f64, e: [f64; 2], impacts: &mut Vec<Impact>| {
+        let before = [(q[0].x.v, q[0].x.va), (q[1].x.v, q[1].x.va)];
+        let [a, b] = &mut *q;
+        impulse(m, a, b, n);
+        q[0].settle(p[0], t, e[0]);
+        q[1].settle(p[1], t, e[1]);
+        impacts.push(Impact {
+            t_s: t,
+            before,
+            after: [(q[0].x.v, q[0].x.va), (q[1].x.v, q[1].x.va)],
+        });
+    };
+    if gap(&parts) <= 0.0 && closing(&parts) {
+        collide(&mut parts, 0.0, e, &mut impacts);
+    }
+    for (f, q) in fine.iter_mut().zip(&parts) {
+        f.push(q, 0.0);
+    }
+    let steps = (duration_s / dt).ceil() as usize + 1;
+    for i in 0..steps {
+        let t = i as f64 * dt;
+        let e = ext(&parts);
+        let start = parts;
+        let step = |h: f64| {
+            let mut q = start;
+            q[0].advance(p[0], t, h, e[0]);
+            q[1].advance(p[1], t, h, e[1]);
+            q
+        };
+        let q = step(dt);
+        if gap(&q) <= 0.0 && closing(&q) && gap(&start) > 0.0 {
+            let (mut lo, mut hi) = (0.0, dt);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if gap(&step(mid)) <= 0.0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            parts = step(hi);
+            collide(&mut parts, t + hi, e, &mut impacts);
+            parts[0].advance(p[0], t + hi, dt - hi, e[0]);
+            parts[1].advance(p[1], t + hi, dt - hi, e[1]);
+        } else {
+            parts = q;
+            if gap(&parts) <= 0.0 && closing(&parts) {
+                collide(&mut parts, t + dt, e, &mut impacts);
+            }
+        }
+        for (f, q) in fine.iter_mut().zip(&parts) {
+            f.push(q, t + dt);
+        }
+    }
+    (fine, impacts)
+}
