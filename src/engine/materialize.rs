@@ -117,7 +117,8 @@ impl Staged {
 }
 
 /// Never lose a user's file: a folder output replaces what is at its path only when groove
-/// wrote it. Each file there must be an item the output held before (`was`, from the lock) or
+/// wrote it. Each file there must be an item the output held before (`was`, from the lock; with
+/// no lock at all, an item of the new output by name: a fresh clone's committed reports) or
 /// hold exactly the bytes the new output gives it; a subfolder, a link or any other file is
 /// the user's, and the run stops naming it (exit 2) with nothing changed. A file in the way of a
 /// folder output counts as groove's only when it is the file the output held before.
@@ -156,7 +157,12 @@ pub fn check_not_foreign(
         let name = entry.file_name().to_string_lossy().into_owned();
         let file = entry.path();
         let plain = entry.file_type().is_ok_and(|t| t.is_file());
-        let written_before = was_items.is_some_and(|w| w.contains_key(&name));
+        // with no lock to ask (a fresh clone of a project whose reports are committed), a file
+        // named as one of the output's own items is taken as an earlier run's
+        let written_before = match was_items {
+            Some(w) => w.contains_key(&name),
+            None => was.is_none() && items.contains_key(&name),
+        };
         let same_bytes = || {
             items
                 .get(&name)
