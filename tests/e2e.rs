@@ -17,7 +17,11 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 const SINGLE_RUNS: usize = 16;
 const FITS_HEADER: &str = "run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status";
-const EFFECT_IDS: [&str; 9] = [
+const EFFECT_IDS: [&str; 13] = [
+    "particle_differences",
+    "direction_dependent_friction",
+    "position_dependent_friction",
+    "position_distortion",
     "pair_physics_mismatch",
     "impact_specific_mismatch",
     "velocity_dependent_drag",

@@ -823,13 +823,13 @@ fn item_names_are_file_name_safe_and_distinct() {
     assert_eq!(unique.len(), names.len(), "{names:?}");
     // The true id stays in the recording.
     let mut recs = known_recordings();
-    recs[1].info.run = "day 2/s01".into();
+    recs[1].info.run = "day 2:s01".into();
     let out = stage_outputs(&interchange_csv(&recs), &toml::Table::new());
     let Artifact::Collection(runs) = &out["runs"] else {
         panic!()
     };
-    let rec = groove::recording::item::decode(&runs[&item_name("day 2/s01")]).unwrap();
-    assert_eq!(rec.info.run, "day 2/s01");
+    let rec = groove::recording::item::decode(&runs[&item_name("day 2:s01")]).unwrap();
+    assert_eq!(rec.info.run, "day 2:s01");
 }
 
 #[test]

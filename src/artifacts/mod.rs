@@ -4,6 +4,7 @@
 //!
 //! Files of this folder:
 //!
+//! - `checked_json.rs`: Writing an artifact's JSON only when it reads back as its own type
 //! - `collision_fit.rs`: The per-run result of a collision fit
 //! - `collision_summary.rs`: The collision aggregates of summary.json
 //! - `comparison.rs`: The `compare` stage's `comparison`

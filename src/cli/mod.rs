@@ -3,6 +3,11 @@
 //! Files of this folder:
 //!
 //! - `args.rs`: The command-line grammar (clap): verbs and their options
+//! - `completions.rs`: `groove completions SHELL`
+//! - `diff.rs`: `groove diff [A] [B]`
+//! - `init.rs`: `groove init [DIR]`
+//! - `show.rs`: `groove show STAGE:OUTPUT`
+//! - `status.rs`: `groove status` and `groove dag` for scripts and eyes
 //!
 //! # The verbs
 //!

@@ -3,17 +3,10 @@
 //! Runs are dealt to folds after sorting by (material, direction, |v0|), so each fold spans the
 //! conditions. For each fold the shared parameters are fitted on the other runs; each held-out run
 //! then gets only its own z0, t0, v0, and its residual is the held-out error.
-//!
-//! A term with a parameter of each run's own (the phase of a force periodic in time) would fit
-//! that parameter on the held-out run itself and so always gain something, noise or not. Its
-//! held-out error is therefore taken across the run's halves: the phase is chosen on the samples
-//! of one half and the other half is scored with it, both ways round. A vibration keeps its
-//! phase through a run and predicts the other half; a phase fitted to noise predicts nothing.
 
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
 use super::joint::{fit_joint, FitControl, Fitted};
-use super::run_phase::split_phase_chi2;
 use serde::Serialize;
 
 /// Held-out error of one model.
@@ -93,11 +86,7 @@ pub fn cross_validate(
         for (j, &i) in test.iter().enumerate() {
             let n = runs[i].n_used().max(1);
             // chi2_run is Σ (r/σ)²
-            let chi2 = if spec.has_run_phase() {
-                split_phase_chi2(spec, &held.global, &held.local[j], &runs[i])
-            } else {
-                held.chi2_run[j]
-            };
+            let chi2 = held.chi2_run[j];
             per_run[i] = chi2 / n as f64;
             sq += chi2 * runs[i].sigma_m.powi(2);
             count += n;

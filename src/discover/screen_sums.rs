@@ -21,97 +21,8 @@ pub struct Vectors {
     pub(super) kept: Vec<usize>,
     pub(super) ginv: Vec<f64>,
     pub(super) gty: Vec<Vec<f64>>,
-    /// How much the data's residuals exceed what the measured noise leaves (Σ‖y‖² of the data
-    /// over the replicates' mean, pooled over runs, at least 1): the replicates and the computed
-    /// null laws are scaled by it.
-    pub dispersion: f64,
 }
 
-/// Slow shapes per run on which the slow dispersion is read: Legendre polynomials of these
-/// degrees over the run's kept samples (degrees 0 and 1 are the run's z0 and v0).
-const SLOW_DEGREES: [usize; 4] = [2, 3, 4, 5];
-
-/// The dispersion in the slow shapes a run's physics would leave (`SLOW_DEGREES`, the run's
-/// locals projected out): what the data put there over what the replicates put there, pooled
-/// over runs. A tracker noise that wanders over many frames hides from a noise read off a local
-/// cubic and piles up exactly where drags, frictions and slow forces leave their signatures;
-/// read here, it calibrates their tests. Missing physics raises it too, by its χ² over the
-/// number of these shapes (four per run), so a real effect keeps its significance.
-fn slow_dispersion(prep: &[Prepared], y: &[Vec<Vec<f64>>]) -> f64 {
-    let (mut data, mut noise) = (0.0, 0.0);
-    for (p, run) in prep.iter().zip(y) {
-        let n = p.y.len();
-        let Some((d, reps)) = run.split_first() else {
-            continue;
-        };
-        if n < 16 || reps.is_empty() {
-            continue;
-        }
-        let mut q: Vec<Vec<f64>> = Vec::new();
-        for &deg in &SLOW_DEGREES {
-            let mut c: Vec<f64> = (0..n)
-                .map(|i| legendre(deg, 2.0 * i as f64 / (n - 1) as f64 - 1.0))
-                .collect();
-            p.proj.apply(&mut c);
-            for _ in 0..2 {
-                for qi in &q {
-                    let a = dot(qi, &c);
-                    c.iter_mut().zip(qi).for_each(|(x, b)| *x -= a * b);
-                }
-            }
-            let norm = dot(&c, &c).sqrt();
-            if norm > 1e-6 * (n as f64).sqrt() {
-                c.iter_mut().for_each(|x| *x /= norm);
-                q.push(c);
-            }
-        }
-        let energy = |v: &[f64]| q.iter().map(|qi| dot(qi, v).powi(2)).sum::<f64>();
-        data += energy(d);
-        noise += reps.iter().map(|r| energy(r)).sum::<f64>() / reps.len() as f64;
-    }
-    if noise > 0.0 {
-        data / noise
-    } else {
-        1.0
-    }
-}
-
-/// The Legendre polynomial of degree `n` at `x` (three-term recurrence).
-fn legendre(n: usize, x: f64) -> f64 {
-    let (mut p0, mut p1) = (1.0, x);
-    if n == 0 {
-        return p0;
-    }
-    for k in 1..n {
-        let p2 = ((2 * k + 1) as f64 * x * p1 - k as f64 * p0) / (k + 1) as f64;
-        p0 = p1;
-        p1 = p2;
-    }
-    p1
-}
-
-/// The data's pooled squared residual over the mean of the replicates' (`y[run][b]`, b = 0 the
-/// data): 1 when the measured noise accounts for the residuals. A noise redder or larger than
-/// measured, or physics the model lacks, raise it; the tests then ask more of a candidate, as a
-/// quasi-likelihood does with overdispersed counts.
-fn dispersion_of(y: &[Vec<Vec<f64>>]) -> f64 {
-    let (mut data, mut noise) = (0.0, 0.0);
-    for run in y {
-        let Some((d, reps)) = run.split_first() else {
-            continue;
-        };
-        if reps.is_empty() {
-            continue;
-        }
-        data += dot(d, d);
-        noise += reps.iter().map(|r| dot(r, r)).sum::<f64>() / reps.len() as f64;
-    }
-    if noise > 0.0 {
-        data / noise
-    } else {
-        1.0
-    }
-}
 
 impl Vectors {
     pub fn new(prep: &[Prepared], runs: &[RunData], replicates: usize, seed: u64) -> Vectors {
@@ -141,18 +52,6 @@ impl Vectors {
                 out
             })
             .collect();
-        // the replicates carry the noise as measured, scaled up when the data's residuals
-        // exceed what that noise leaves (pooled over runs; never scaled down)
-        let dispersion = dispersion_of(&y).max(slow_dispersion(prep, &y));
-        let mut y = y;
-        if dispersion > 1.0 {
-            let f = dispersion.sqrt();
-            y.par_iter_mut().for_each(|run| {
-                for rep in run.iter_mut().skip(1) {
-                    rep.iter_mut().for_each(|x| *x *= f);
-                }
-            });
-        }
         let (kept, gtg) = shared_information(prep);
         let k = kept.len();
         let mut gty = vec![vec![0.0; k]; replicates + 1];
@@ -171,13 +70,7 @@ impl Vectors {
                 None => vec![0.0; k * k],
             }
         };
-        Vectors {
-            y,
-            kept,
-            ginv,
-            gty,
-            dispersion: dispersion.max(1.0),
-        }
+        Vectors { y, kept, ginv, gty }
     }
 
     pub(super) fn n_rep(&self) -> usize {
@@ -448,7 +341,6 @@ impl Sums {
                 }
             }
         }
-        c.iter_mut().for_each(|x| *x *= v.dispersion);
         // M = A⁻¹C: its trace and the trace of its square
         let m: Vec<f64> = (0..q * q)
             .map(|ab| {

@@ -10,6 +10,12 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+
+/// Whether `s` names an object: 64 lowercase hex digits, as `sha256_hex` writes them. Anything
+/// else read from a store, a remote or a lock is damage, never a path.
+pub fn is_sha256(s: &str) -> bool {
+    s.len() == 64 && s.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
+}
 use std::sync::Mutex;
 
 /// Lowercase hex sha256 of some bytes.

@@ -116,7 +116,7 @@ pub fn read_idx(idx: &Path) -> Option<HashMap<String, Loc>> {
         let mut f = line.split(' ');
         let (h, off, len) = (f.next()?, f.next()?, f.next()?);
         let (offset, len): (u64, u64) = (off.parse().ok()?, len.parse().ok()?);
-        if !super::store::is_sha256(h) || offset.checked_add(len)? > size {
+        if !super::hashing::is_sha256(h) || offset.checked_add(len)? > size {
             return None;
         }
         let pack = Arc::clone(&pack);

@@ -9,7 +9,7 @@
 
 use super::atomic::unique_name;
 use super::error::{EngineError, IoContext};
-use super::hashing::{json_map_sha256, sha256_hex, HashCache};
+use super::hashing::{is_sha256, json_map_sha256, sha256_hex, HashCache};
 use super::pack::{self, PackIndex, PACK_MIN};
 use super::stage::Artifact;
 use rayon::prelude::*;
@@ -68,12 +68,6 @@ fn sorted_map<'de, D: serde::Deserializer<'de>>(
     }
     // `collect` sorts stably (one pass over sorted pairs) and keeps a repeated key's last value
     Ok(Some(d.deserialize_map(Pairs)?.into_iter().collect()))
-}
-
-/// Whether `s` names an object: 64 lowercase hex digits, as `sha256_hex` writes them. Anything
-/// else read from a store, a remote or a lock is damage, never a path.
-pub fn is_sha256(s: &str) -> bool {
-    s.len() == 64 && s.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'))
 }
 
 /// Whether `s` is a plain name for one file in a folder: not empty, not `.` or `..`, no

@@ -4,7 +4,8 @@
 use super::error::{EngineError, IoContext};
 use super::hashing::sha256_hex;
 use super::pack;
-use super::store::{is_sha256, stored_objects, Entry, Store};
+use super::hashing::is_sha256;
+use super::store::{stored_objects, Entry, Store};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 

@@ -19,6 +19,7 @@
 //! - `run_memo.rs`: Runs whose item an earlier ingest already made from the same bytes
 //! - `samples.rs`: The common form every source format is read into before checking
 //! - `sanity.rs`: Physical sanity of a recording
+//! - `scale.rs`: The positions' scale: tracks faster or slowing harder than steel spheres can
 //! - `spots.rs`: Tracker spots (trackpy, TrackMate) into tracks of one run
 //! - `table.rs`: A table read from CSV or Parquet bytes with polars
 //! - `trackmate.rs`: Reads Fiji TrackMate spot tables

@@ -9,7 +9,8 @@
 
 use super::backend::{blob_name, entry_name, Backend, Counted, RemoteError, Requests};
 use crate::engine::hashing::sha256_hex;
-use crate::engine::store::{is_sha256, Entry, Store, Stored};
+use crate::engine::hashing::is_sha256;
+use crate::engine::store::{Entry, Store, Stored};
 use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
