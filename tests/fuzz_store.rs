@@ -6,11 +6,11 @@
 //! Each property runs 256 cases by default (seconds in CI); set `PROPTEST_CASES` for more, e.g.
 //! `PROPTEST_CASES=100000 cargo test --locked --features s3 --release --test fuzz_store`.
 
+use groove::engine::hashing::is_sha256;
 use groove::engine::hashing::{sha256_hex, HashCache};
 use groove::engine::materialize;
 use groove::engine::remote::file::FileRemote;
 use groove::engine::remote::{Mode, RemoteCache};
-use groove::engine::hashing::is_sha256;
 use groove::engine::store::{is_plain_name, Entry, Store, Stored};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};

@@ -134,8 +134,14 @@ pub fn term_parameters(m: &Model, i: usize, materials: &[String]) -> BTreeMap<St
             out.insert("delta_dir".into(), est(g[off], se[off]));
             for (k, name) in materials.iter().enumerate() {
                 let mu = g[k];
-                out.insert(format!("mu_forward_{name}"), est(mu * (1.0 + g[off]), f64::NAN));
-                out.insert(format!("mu_backward_{name}"), est(mu * (1.0 - g[off]), f64::NAN));
+                out.insert(
+                    format!("mu_forward_{name}"),
+                    est(mu * (1.0 + g[off]), f64::NAN),
+                );
+                out.insert(
+                    format!("mu_backward_{name}"),
+                    est(mu * (1.0 - g[off]), f64::NAN),
+                );
             }
         }
         Extra::FrictionPosition {

@@ -4,11 +4,11 @@
 //! then ask the drift probes whether a mismatch is left unexplained. The model and its starts are
 //! in `model.rs`, the parameters as reported in `estimates.rs`.
 
+use super::admissible::refusal;
 use super::candidate::{Extra, N_LOCAL};
 use super::cv::{cross_validate, folds, paired_t, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
-use super::admissible::refusal;
 use super::estimates::reported_parameters;
 use super::holm::holm;
 use super::model::{data_starts, Model};

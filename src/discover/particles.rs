@@ -214,16 +214,13 @@ pub fn check(
         .map(|(p, b)| split(b, &p.y))
         .collect();
     let lr: f64 = data.iter().map(|d| d.0).sum();
-    let wander_data: f64 = prep
-        .iter()
-        .zip(&bases)
-        .map(|(p, b)| wander(b, &p.y))
-        .sum();
+    let wander_data: f64 = prep.iter().zip(&bases).map(|(p, b)| wander(b, &p.y)).sum();
     let res: f64 = data.iter().map(|d| d.1).sum();
     let reps: Vec<(f64, f64, Vec<[f64; 2]>, f64)> = (0..REPLICATES)
         .into_par_iter()
         .map(|b| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9));
+            let mut rng =
+                ChaCha8Rng::seed_from_u64(seed ^ (b as u64 + 1).wrapping_mul(0x9E37_79B9));
             let (mut l, mut r, mut w) = (0.0, 0.0, 0.0);
             let mut coords = Vec::with_capacity(prep.len());
             for (p, base) in prep.iter().zip(&bases) {
@@ -254,7 +251,11 @@ pub fn check(
     let p_value = 0.5 * statrs::function::erf::erfc(z / std::f64::consts::SQRT_2);
     let residual_ratio = res / res0;
     let wander0 = reps.iter().map(|r| r.3).sum::<f64>() / n;
-    let wander_ratio = if wander0 > 0.0 { wander_data / wander0 } else { 1.0 };
+    let wander_ratio = if wander0 > 0.0 {
+        wander_data / wander0
+    } else {
+        1.0
+    };
     // per material: the per-run steps (δμ, δT) on the data and their noise variance
     let step = |base: &RunBasis, c: &[f64; 2]| -> [f64; 2] {
         [
@@ -288,7 +289,11 @@ pub fn check(
                 }
                 ses.sort_by(f64::total_cmp);
                 let typical = ses.get(ses.len() / 2).copied().unwrap_or(f64::NAN);
-                let sd = if den > 0.0 { (num / den).max(0.0).sqrt() } else { 0.0 };
+                let sd = if den > 0.0 {
+                    (num / den).max(0.0).sqrt()
+                } else {
+                    0.0
+                };
                 (sd, typical)
             };
             let ((mu_sd, mu_se), (t_sd, t_se)) = (spread(0), spread(1));

@@ -52,7 +52,9 @@ impl Ranges {
                 steps.push((w[1].1 - w[0].1).abs());
             }
             // the run's early speed: over its first few kept samples
-            if let (Some(a), Some(b)) = (kept.first(), kept.get(5.min(kept.len().saturating_sub(1)))) {
+            if let (Some(a), Some(b)) =
+                (kept.first(), kept.get(5.min(kept.len().saturating_sub(1))))
+            {
                 if b.0 > a.0 {
                     speeds.push(((b.1 - a.1) / (b.0 - a.0)).abs());
                 }

@@ -534,10 +534,17 @@ pub fn discover_reporting(
             .last_probes
             .iter()
             .any(|p| p.evidence.p_holm < opts.alpha);
-    if let Some(f) =
-        particle_finding(&sel.current, &runs, &materials, opts, &final_score, drift_left)
-    {
-        findings.insert(sel.accepted.len(), f);
+    if let Some(f) = particle_finding(
+        &sel.current,
+        &runs,
+        &materials,
+        opts,
+        &final_score,
+        drift_left,
+    ) {
+        // accepted findings come first: after them, or first of them when accepted
+        let at = findings.iter().take_while(|f| f.accepted).count();
+        findings.insert(at, f);
     }
     ctx.trace("particles checked");
     let any_accepted = findings.iter().any(|f| f.accepted);
@@ -583,7 +590,13 @@ fn particle_finding(
     {
         return None;
     }
-    let c = super::particles::check(current, runs, materials, opts.alpha, opts.seed ^ 0x5EED_0F_9A27)?;
+    let c = super::particles::check(
+        current,
+        runs,
+        materials,
+        opts.alpha,
+        opts.seed ^ 0x5EED_0F_9A27,
+    )?;
     let mut parameters = BTreeMap::new();
     let est = crate::artifacts::Estimate::new;
     for s in &c.spreads {
@@ -633,7 +646,10 @@ fn particle_finding(
         "residual_ratio".to_string(),
         serde_json::json!(c.residual_ratio),
     );
-    w.insert("wander_ratio".to_string(), serde_json::json!(c.wander_ratio));
+    w.insert(
+        "wander_ratio".to_string(),
+        serde_json::json!(c.wander_ratio),
+    );
     Some(crate::artifacts::diagnosis::Finding {
         effect: "particle_differences".into(),
         accepted: c.differ && !drift_left,

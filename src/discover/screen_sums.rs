@@ -23,7 +23,6 @@ pub struct Vectors {
     pub(super) gty: Vec<Vec<f64>>,
 }
 
-
 impl Vectors {
     pub fn new(prep: &[Prepared], runs: &[RunData], replicates: usize, seed: u64) -> Vectors {
         let y: Vec<Vec<Vec<f64>>> = prep

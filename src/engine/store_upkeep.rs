@@ -2,9 +2,9 @@
 //! is damaged) and `Store::gc` (keep what the lock names), for loose files and packs alike.
 
 use super::error::{EngineError, IoContext};
+use super::hashing::is_sha256;
 use super::hashing::sha256_hex;
 use super::pack;
-use super::hashing::is_sha256;
 use super::store::{stored_objects, Entry, Store};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

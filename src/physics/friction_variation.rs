@@ -68,7 +68,10 @@ mod tests {
             ..none
         };
         assert!((pos.factor(0.010, 1.0, 0.0) - 1.2).abs() < 1e-12);
-        assert!((pos.factor(0.050, 1.0, 0.0) - 1.2).abs() < 1e-12, "held at the end");
+        assert!(
+            (pos.factor(0.050, 1.0, 0.0) - 1.2).abs() < 1e-12,
+            "held at the end"
+        );
         let slip = FrictionVariation {
             u_ref_mps: 0.01,
             by_slip: -0.3,

@@ -8,8 +8,8 @@
 //! committed locally (one rename), so a kill leaves no half entry.
 
 use super::backend::{blob_name, entry_name, Backend, Counted, RemoteError, Requests};
-use crate::engine::hashing::sha256_hex;
 use crate::engine::hashing::is_sha256;
+use crate::engine::hashing::sha256_hex;
 use crate::engine::store::{Entry, Store, Stored};
 use std::collections::BTreeSet;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
