@@ -107,20 +107,6 @@ impl Extra {
         }
     }
 
-    /// Where the term enters the equations: a force on the particle, the particle–groove
-    /// friction, or the measurement (probes: where they locate a mismatch).
-    pub fn place(&self) -> &'static str {
-        match self {
-            Extra::VelocityFriction { .. }
-            | Extra::FrictionDirection
-            | Extra::FrictionPosition { .. }
-            | Extra::FrictionSlip { .. }
-            | Extra::SpeedDriftMu { .. } => "friction",
-            Extra::Distortion { .. } => "measurement",
-            _ => "force",
-        }
-    }
-
     /// A short label of the term's form (also names probes).
     pub fn form(&self) -> String {
         match self {

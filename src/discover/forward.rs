@@ -782,11 +782,8 @@ pub fn finding(
     row: &CandidateRow,
     before: ModelScore,
     after: ModelScore,
-    mut where_: BTreeMap<String, serde_json::Value>,
+    where_: BTreeMap<String, serde_json::Value>,
 ) -> Finding {
-    if let Some(e) = crate::artifacts::diagnosis::Effect::from_id(&row.effect) {
-        where_.insert("place".into(), serde_json::json!(e.place()));
-    }
     Finding {
         effect: row.effect.clone(),
         accepted: row.accepted,

@@ -37,7 +37,7 @@
 //! The method in brief: per-run baseline fits measure each run's noise and flag outliers; a joint
 //! model shares the physics (μ and T per material, plus extra terms) over every run with per-run
 //! z0, t0, v0. Missing physics enters in one of a few **places**, and the library has forms for
-//! each (`Extra::place`, `where.place` of a finding):
+//! each (`artifacts::diagnosis::Effect::place`, `where.place` of a finding):
 //!
 //! - a **force** on the particle, a(z, v, t): the drags, a rolling resistance, a tilt, forces
 //!   periodic or localized in lab z, a force periodic in time, a spline (the fallback);

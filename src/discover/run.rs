@@ -547,6 +547,14 @@ pub fn discover_reporting(
         findings.insert(at, f);
     }
     ctx.trace("particles checked");
+    // every finding says where its physics enters, from its effect (the unexplained one too)
+    for f in &mut findings {
+        if let Some(e) = crate::artifacts::diagnosis::Effect::from_id(&f.effect) {
+            f.where_
+                .entry("place".to_string())
+                .or_insert_with(|| serde_json::json!(e.place()));
+        }
+    }
     let any_accepted = findings.iter().any(|f| f.accepted);
     Diagnosis {
         mismatch: any_accepted || !sel.unexplained.is_empty(),
