@@ -122,7 +122,10 @@ fn a_200_stage_dag_on_slurm_matches_a_local_run_in_one_allocation() {
     );
     assert_eq!(jobs_named(&name).len(), 1);
     let status = on_slurm.ok(&["status"]);
-    assert!(!status.contains("stale"), "{status}");
+    assert!(
+        status.contains("200 stages: 200 fresh, 0 stale") && !status.contains("stale  "),
+        "{status}"
+    );
 }
 
 #[test]

@@ -664,7 +664,13 @@ fn step_job(
     }
     Ok(StepJob {
         config: ctx.pipeline.config_path.clone(),
-        data: Some(ctx.pipeline.data_dir.clone()),
+        // the pipeline's own data folder when it has none on disk (a pipeline of command
+        // stages): the step resolves the same default, while `--data` must name a folder
+        data: ctx
+            .pipeline
+            .data_dir
+            .exists()
+            .then(|| ctx.pipeline.data_dir.clone()),
         reports: Some(ctx.pipeline.reports_dir.clone()),
         stage: spec.name.clone(),
         code: ctx.catalog.fingerprint(&spec.kind).to_string(),
