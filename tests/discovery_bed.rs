@@ -14,6 +14,8 @@ mod bed;
 use bed::draw::{draw, QUICK_SIZE};
 use bed::pipeline::{discover_seconds, run_case};
 use bed::table::tables;
+use bed::whiten::Whitener;
+use indsim::noise::Noise;
 use std::path::{Path, PathBuf};
 
 #[test]
@@ -112,4 +114,60 @@ fn scoring_names_the_place_and_form_sizes_within_15_percent_and_counts_anything_
     assert!(score(&two, &[]).false_accept);
     assert!(!score(&[], &[]).false_accept);
     assert!(accepted("{").is_err() && accepted("{}").is_err());
+}
+
+/// yᵀ C⁻¹ y by the filter against a dense solve of the AR(1) + white covariance.
+#[test]
+fn the_filter_gives_the_quadratic_form_of_the_dense_covariance() {
+    let noise = Noise {
+        white_m: 0.4,
+        ar1: Some((1.0, 0.8)),
+        drift: Some((0.7, 5.0 / 1000.0)),
+        ..Noise::default()
+    };
+    let fps = 1000.0;
+    let w = Whitener::new(&noise, fps);
+    let frames: Vec<usize> = (0..40).filter(|i| i % 7 != 3).collect();
+    let y: Vec<f64> = frames
+        .iter()
+        .map(|&f| (f as f64 * 0.3).sin() + 0.1)
+        .collect();
+    let got: f64 = w.apply(&frames, &vec![0.0; frames.len()], &[y.clone()])[0]
+        .iter()
+        .map(|e| e * e)
+        .sum();
+    let phi_d = (-1.0f64 / (fps * 5e-3)).exp();
+    let n = frames.len();
+    let mut c: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| {
+                    let d = frames[i].abs_diff(frames[j]) as i32;
+                    0.8f64.powi(d) + 0.49 * phi_d.powi(d) + if i == j { 0.16 } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect();
+    // Cholesky solve
+    for j in 0..n {
+        for k in 0..j {
+            let v = c[j][k];
+            for i in j..n {
+                c[i][j] -= c[i][k] * v;
+            }
+        }
+        let d = c[j][j].sqrt();
+        for i in j..n {
+            c[i][j] /= d;
+        }
+    }
+    let mut z = y.clone();
+    for i in 0..n {
+        for k in 0..i {
+            z[i] -= c[i][k] * z[k];
+        }
+        z[i] /= c[i][i];
+    }
+    let want: f64 = z.iter().map(|e| e * e).sum();
+    assert!((got / want - 1.0).abs() < 1e-9, "{got} vs {want}");
 }

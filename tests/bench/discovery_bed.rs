@@ -5,7 +5,8 @@
 //! chunks and resumed.
 //!
 //! Usage: cargo bench --bench discovery_bed -- --groove BIN [--quick] [--from N] [--to M]
-//!        [--results FILE] [--work DIR] [--keep] [--table]
+//!        [--results FILE] [--work DIR] [--keep] [--table] [--draw]
+//! (`--draw` prints the drawn datasets, their effects and true sizes, and runs nothing.)
 //! (tests/bench/discovery_bed.sh builds the release binary and calls this.)
 
 #[allow(dead_code)]
@@ -35,11 +36,12 @@ struct Args {
     work: PathBuf,
     keep: bool,
     table_only: bool,
+    draw_only: bool,
 }
 
 fn usage(msg: &str) -> ! {
     eprintln!("discovery_bed: {msg}");
-    eprintln!("usage: discovery_bed --groove BIN [--quick] [--from N] [--to M] [--results FILE] [--work DIR] [--keep] [--table]");
+    eprintln!("usage: discovery_bed --groove BIN [--quick] [--from N] [--to M] [--results FILE] [--work DIR] [--keep] [--table] [--draw]");
     std::process::exit(2)
 }
 
@@ -54,6 +56,7 @@ fn parse() -> Args {
         work: PathBuf::from(&target).join("discovery_bed"),
         keep: false,
         table_only: false,
+        draw_only: false,
     };
     let mut it = std::env::args().skip(1);
     let mut results = None;
@@ -75,6 +78,7 @@ fn parse() -> Args {
             "--work" => a.work = PathBuf::from(value("--work")),
             "--keep" => a.keep = true,
             "--table" => a.table_only = true,
+            "--draw" => a.draw_only = true,
             "--bench" => {} // passed by `cargo bench`
             other => usage(&format!("unknown argument {other:?}")),
         }
@@ -93,8 +97,41 @@ fn fail(msg: String) -> ! {
     std::process::exit(1)
 }
 
+/// Prints each drawn dataset of the selection: its noise and its effects with their true sizes.
+fn print_draws(args: &Args) {
+    let (indices, size) = if args.quick {
+        (QUICK.to_vec(), QUICK_SIZE)
+    } else {
+        ((0..FULL).collect::<Vec<_>>(), FULL_SIZE)
+    };
+    for index in indices
+        .into_iter()
+        .filter(|&i| i >= args.from && i < args.to)
+    {
+        let case = draw(index, size);
+        let effects: Vec<String> = case
+            .truths
+            .iter()
+            .map(|t| format!("{}/{} ×{:.2} {:?}", t.place, t.shape, t.multiple, t.sizes))
+            .collect();
+        println!(
+            "dataset {index}: noise {}: {}",
+            case.noise,
+            if effects.is_empty() {
+                "null".to_string()
+            } else {
+                effects.join("; ")
+            }
+        );
+    }
+}
+
 fn main() {
     let args = parse();
+    if args.draw_only {
+        print_draws(&args);
+        return;
+    }
     let started = Instant::now();
     let mut records = read(&args.results).unwrap_or_else(|e| fail(e));
     if !args.table_only {

@@ -205,7 +205,7 @@ fn size_to(effect: &mut Effect, base: &DatasetSpec, basis: &Basis, multiple: f64
     for _ in 0..3 {
         let mut with = base.clone();
         effect.apply(&mut with);
-        let snr = snr2(basis, base, &clean, &with).sqrt();
+        let snr = snr2(basis, &clean, &with).sqrt();
         if !(snr > 0.0) {
             return 0.0;
         }
@@ -213,7 +213,7 @@ fn size_to(effect: &mut Effect, base: &DatasetSpec, basis: &Basis, multiple: f64
     }
     let mut with = base.clone();
     effect.apply(&mut with);
-    snr2(basis, base, &clean, &with).sqrt() / LIMIT_SNR2.sqrt()
+    snr2(basis, &clean, &with).sqrt() / LIMIT_SNR2.sqrt()
 }
 
 /// Draws case `index` at dataset size `size`.

@@ -4,17 +4,24 @@
 //! frame (the same runs, kicks, frames and field of view with and without it), less what the
 //! baseline's own free parameters can absorb of it: the change is projected, by linear least
 //! squares, off the baseline's sensitivities to each single run's start position, kick speed and
-//! kick time, and to each material's μ and drag time T (shared by the material's runs). What
-//! remains, in units of the tracker's per-frame standard deviation σ, gives
-//! SNR² = Σ (residual change / σ)² over the dataset. The detection limit is the size at which
-//! SNR² = 25 (five standard deviations over the dataset). Collision runs enter unprojected.
+//! kick time, and to each material's μ and drag time T (shared by the material's runs), all in
+//! the metric of the tracker noise's own covariance C (generalized least squares: every series is
+//! whitened by [`Whitener`] first, so AR(1) errors, slow drifts and motion blur count as what
+//! they are, not as white noise of the same size). What remains gives SNR² = Δᵀ C⁻¹ Δ over the
+//! dataset, the square of what an ideal matched filter for this one effect would see.
+//!
+//! Discovery does not know the effect's shape: it searches places, forms and their parameters,
+//! and must hold its false alarms on nulls. The limit is therefore set at SNR² = 36 (six standard
+//! deviations along the effect's direction): five standard deviations after a trials factor of
+//! about a hundred independent shapes. Collision runs enter unprojected (whitened alike).
 
 use super::dataset::DatasetSpec;
+use super::whiten::Whitener;
 use crate::indsim::writer::RecordedRun;
 use std::collections::BTreeMap;
 
-/// SNR² defining the limit.
-pub const LIMIT_SNR2: f64 = 25.0;
+/// SNR² defining the limit (see the module).
+pub const LIMIT_SNR2: f64 = 36.0;
 
 /// Relative steps of the finite differences.
 const STEP_V0: f64 = 1e-3;
@@ -26,7 +33,33 @@ const STEP_T: f64 = 1e-3;
 pub struct Basis {
     runs: Vec<Option<RunBasis>>,
     materials: usize,
+    /// Per run, key (frame + particle × 10⁶, as [`change`] keys) → the clean speed there.
+    speeds: Vec<BTreeMap<usize, f64>>,
+    whitener: Whitener,
 }
+
+/// Key → speed of every track of a clean rendering (central differences of the positions).
+fn speeds(run: &RecordedRun) -> BTreeMap<usize, f64> {
+    let mut out = BTreeMap::new();
+    for (p, track) in run.tracks.iter().enumerate() {
+        for (i, f) in track.iter().enumerate() {
+            let (a, b) = (
+                &track[i.saturating_sub(1)],
+                &track[(i + 1).min(track.len() - 1)],
+            );
+            let v = if b.t_s > a.t_s {
+                (b.z_m - a.z_m) / (b.t_s - a.t_s)
+            } else {
+                0.0
+            };
+            out.insert(f.frame + p * PARTICLE_KEY, v.abs());
+        }
+    }
+    out
+}
+
+/// The key offset of the second particle of a collision run.
+const PARTICLE_KEY: usize = 1_000_000;
 
 struct RunBasis {
     material: usize,
@@ -99,29 +132,72 @@ impl Basis {
         Basis {
             runs,
             materials: base.materials.len(),
+            speeds: clean.iter().map(speeds).collect(),
+            whitener: Whitener::new(&base.noise, base.camera.fps),
         }
     }
 
-    /// Σ (r/σ)² of the change `delta` (per run, frame → Δz) after the projection.
-    pub fn residual_snr2(&self, delta: &[BTreeMap<usize, f64>], sigma: f64) -> f64 {
+    /// Whitens the series `cols` over `keys` of run `run`, one track (particle) at a time.
+    fn whiten(&self, run: usize, keys: &[usize], cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let mut out = vec![Vec::with_capacity(keys.len()); cols.len()];
+        let mut start = 0;
+        while start < keys.len() {
+            let particle = keys[start] / PARTICLE_KEY;
+            let end = keys[start..]
+                .iter()
+                .position(|k| k / PARTICLE_KEY != particle)
+                .map_or(keys.len(), |n| start + n);
+            let frames: Vec<usize> = keys[start..end].iter().map(|k| k % PARTICLE_KEY).collect();
+            let speed: Vec<f64> = keys[start..end]
+                .iter()
+                .map(|k| self.speeds[run].get(k).copied().unwrap_or(0.0))
+                .collect();
+            let part: Vec<Vec<f64>> = cols.iter().map(|c| c[start..end].to_vec()).collect();
+            for (o, w) in out
+                .iter_mut()
+                .zip(self.whitener.apply(&frames, &speed, &part))
+            {
+                o.extend(w);
+            }
+            start = end;
+        }
+        out
+    }
+
+    /// Δᵀ C⁻¹ Δ of the change `delta` (per run, key → Δz) after the projection.
+    pub fn residual_snr2(&self, delta: &[BTreeMap<usize, f64>]) -> f64 {
         let ng = 2 * self.materials;
         // normal equations, the local blocks eliminated (Schur complement)
         let mut s = vec![vec![0.0; ng]; ng];
         let mut rhs = vec![0.0; ng];
         let mut blocks = Vec::new();
         let mut raw = 0.0;
-        for (run, d) in self.runs.iter().zip(delta) {
+        for (index, (run, d)) in self.runs.iter().zip(delta).enumerate() {
             let Some(run) = run else {
-                raw += d.values().map(|x| x * x).sum::<f64>();
+                let keys: Vec<usize> = d.keys().copied().collect();
+                let w = self.whiten(index, &keys, &[d.values().copied().collect()]);
+                raw += w[0].iter().map(|x| x * x).sum::<f64>();
                 continue;
             };
+            // the rows present in both, whitened together
+            let keys: Vec<usize> = d
+                .keys()
+                .copied()
+                .filter(|k| run.rows.contains_key(k))
+                .collect();
+            let mut cols = vec![Vec::with_capacity(keys.len()); 6];
+            for k in &keys {
+                let (l, g) = &run.rows[k];
+                for (c, x) in cols.iter_mut().zip(l.iter().chain(g).chain([&d[k]])) {
+                    c.push(*x);
+                }
+            }
+            let w = self.whiten(index, &keys, &cols);
             let cols: Vec<usize> = vec![2 * run.material, 2 * run.material + 1];
             let (mut a, mut b, mut c) = ([[0.0; 3]; 3], [[0.0; 2]; 3], [[0.0; 2]; 2]);
             let (mut ay, mut cy, mut yy) = ([0.0; 3], [0.0; 2], 0.0);
-            for (k, y) in d {
-                let Some((l, g)) = run.rows.get(k) else {
-                    continue;
-                };
+            for r in 0..keys.len() {
+                let (l, g, y) = ([w[0][r], w[1][r], w[2][r]], [w[3][r], w[4][r]], w[5][r]);
                 yy += y * y;
                 for i in 0..3 {
                     ay[i] += l[i] * y;
@@ -170,7 +246,7 @@ impl Basis {
                 (0..3).map(|q| local[q] * ay[q]).sum::<f64>() + gl[0] * cy[0] + gl[1] * cy[1];
             total += (yy - fitted).max(0.0);
         }
-        total / (sigma * sigma)
+        total
     }
 }
 
@@ -226,7 +302,7 @@ pub fn change(base: &[RecordedRun], with: &[RecordedRun]) -> Vec<BTreeMap<usize,
                 let by: BTreeMap<usize, f64> = ta.iter().map(|f| (f.frame, f.z_m)).collect();
                 for f in tb {
                     if let Some(z) = by.get(&f.frame) {
-                        out.insert(f.frame + p * 1_000_000, f.z_m - z);
+                        out.insert(f.frame + p * PARTICLE_KEY, f.z_m - z);
                     }
                 }
             }
@@ -236,14 +312,6 @@ pub fn change(base: &[RecordedRun], with: &[RecordedRun]) -> Vec<BTreeMap<usize,
 }
 
 /// SNR² of the change from `base` to `with`, after what the baseline absorbs (see the module).
-pub fn snr2(
-    basis: &Basis,
-    base: &DatasetSpec,
-    base_render: &[RecordedRun],
-    with: &DatasetSpec,
-) -> f64 {
-    basis.residual_snr2(
-        &change(base_render, &with.render(true)),
-        base.noise.sigma_m(),
-    )
+pub fn snr2(basis: &Basis, base_render: &[RecordedRun], with: &DatasetSpec) -> f64 {
+    basis.residual_snr2(&change(base_render, &with.render(true)))
 }

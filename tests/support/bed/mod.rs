@@ -8,3 +8,4 @@ pub mod pipeline;
 pub mod score;
 pub mod shapes;
 pub mod table;
+pub mod whiten;
