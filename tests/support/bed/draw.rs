@@ -197,23 +197,23 @@ fn base(
     }
 }
 
-/// Sizes `effect` to `multiple` × its detection limit in `base` (two passes: the change is
-/// nearly linear in the size) and returns the multiple reached.
+/// Sizes `effect` to `multiple` × its detection limit in `base` (a few passes: the change is
+/// nearly linear in the size), within its plausible range, and returns the multiple reached.
 fn size_to(effect: &mut Effect, base: &DatasetSpec, basis: &Basis, multiple: f64) -> f64 {
     let target = LIMIT_SNR2.sqrt() * multiple;
     let clean = base.render(true);
     for _ in 0..3 {
         let mut with = base.clone();
         effect.apply(&mut with);
-        let snr = snr2(basis, &clean, &with).sqrt();
+        let snr = snr2(basis, base, &clean, &with).sqrt();
         if !(snr > 0.0) {
             return 0.0;
         }
-        effect.size *= target / snr;
+        effect.size = (effect.size * target / snr).min(effect.plausible_max());
     }
     let mut with = base.clone();
     effect.apply(&mut with);
-    snr2(basis, &clean, &with).sqrt() / LIMIT_SNR2.sqrt()
+    snr2(basis, base, &clean, &with).sqrt() / LIMIT_SNR2.sqrt()
 }
 
 /// Draws case `index` at dataset size `size`.

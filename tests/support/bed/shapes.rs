@@ -155,6 +155,22 @@ impl Effect {
         }
     }
 
+    /// The largest size the experiment makes plausible, where a calibration bounds it: a length
+    /// scale or a time base off by more than 5 %, or a distortion of more than 10 % at the image's
+    /// edge, would be seen by anyone who calibrates the camera; a friction that falls with slip
+    /// speed is at most twice its sliding value at rest (static against kinetic friction).
+    /// On single runs the scale and the
+    /// time base are μ, T, z0 and v0 over again, so their detection limit may lie beyond it;
+    /// the dataset then carries the effect below its limit (its multiple says so).
+    pub fn plausible_max(&self) -> f64 {
+        match self.name() {
+            "scale" | "time_base" => 0.05,
+            "distortion" => 0.1,
+            "mu_slip_falling" => 1.0,
+            _ => f64::INFINITY,
+        }
+    }
+
     /// Puts the effect into a dataset.
     pub fn apply(&self, spec: &mut DatasetSpec) {
         let (x, p) = (self.size, &self.params);
