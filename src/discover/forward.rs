@@ -375,11 +375,21 @@ impl Trials<'_> {
         // named forms with fixed shapes only, every form of the three strongest significant
         // effects (alone, a quadratic drag beside a missing resistance may fit with the wrong
         // sign and rank below the saturating form of the same effect)
+        // and of the incumbent's place: a searched force stands in for named forces, not for a
+        // friction law or a distortion (those compete with it in the screen on their own)
+        let place = |e: &Extra| {
+            e.effect()
+                .and_then(crate::artifacts::diagnosis::Effect::from_id)
+                .map(|e| e.place())
+        };
+        let incumbent_place = incumbent.as_ref().and_then(|(b, _)| place(self.all[*b]));
         let named: Vec<usize> = order
             .iter()
             .copied()
             .filter(|&i| {
-                !needs_proposal(self.all[i]) && !matches!(self.all[i], Extra::Spline { .. })
+                !needs_proposal(self.all[i])
+                    && !matches!(self.all[i], Extra::Spline { .. })
+                    && incumbent_place.is_none_or(|p| place(self.all[i]) == Some(p))
             })
             .collect();
         let mut effects: Vec<Option<&str>> = Vec::new();

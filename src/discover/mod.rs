@@ -50,8 +50,7 @@
 //!   tested after the terms.
 //!
 //! Every form of every place competes in the same screen, so the place is decided by the data,
-//! not by an order. The friction forms beyond μ(u) and the distortion are opt-in for now
-//! (`DEFAULT_EFFECTS`; name them in the stage's `candidates`). A candidate is tested by a likelihood ratio whose null comes from each run's
+//! not by an order. A candidate is tested by a likelihood ratio whose null comes from each run's
 //! measured AR(1) noise, Holm-
 //! corrected, and then by leave-runs-out cross-validation. A term that passes both
 //! must also be physics (`admissible.rs`: a drag that pushes the particle is refused). Two forms
@@ -283,19 +282,9 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::physics::G_MPS2;
 
-/// The effects tested unless the `discover` stage's `candidates` param says otherwise. The
-/// friction and measurement places (`direction_dependent_friction`, `position_dependent_friction`,
-/// `position_distortion`) are opt-in for now: as named forms they take slots among the three
-/// strongest effects whose pairs are tried, and a rolling resistance beside a waviness was then
-/// missed; and no dataset has yet shown them finding what they are for.
-pub const DEFAULT_EFFECTS: [&str; 6] = [
-    "velocity_dependent_drag",
-    "rolling_resistance",
-    "groove_tilt",
-    "velocity_dependent_friction",
-    "position_dependent_force",
-    "time_dependent_force",
-];
+/// The effects tested unless the `discover` stage's `candidates` param says otherwise: every
+/// place's forms, which compete in one screen.
+pub const DEFAULT_EFFECTS: [&str; 9] = EFFECTS;
 
 /// Every candidate effect id the library knows, in the order they are listed.
 pub const EFFECTS: [&str; 9] = [

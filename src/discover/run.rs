@@ -31,15 +31,14 @@ fn library(opts: &Options, n_materials: usize, rg: &Ranges) -> Vec<Extra> {
             }
             "rolling_resistance" => out.push(Extra::RollingResistance),
             "groove_tilt" => out.push(Extra::GrooveTilt),
-            "velocity_dependent_friction" => out.push(Extra::VelocityFriction {
-                materials: n_materials,
-            }),
-            // the friction place's newer forms come together (opt-in, see `DEFAULT_EFFECTS`):
-            // by direction, and linear in the slip speed (rising or falling)
-            "direction_dependent_friction" => {
-                out.push(Extra::FrictionDirection);
+            // μ of the slip speed: saturating, and linear (rising or falling)
+            "velocity_dependent_friction" => {
+                out.push(Extra::VelocityFriction {
+                    materials: n_materials,
+                });
                 out.push(rg.friction_slip());
             }
+            "direction_dependent_friction" => out.push(Extra::FrictionDirection),
             "position_dependent_friction" => out.push(rg.friction_position()),
             "position_distortion" => out.push(rg.distortion()),
             "position_dependent_force" => {

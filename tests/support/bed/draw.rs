@@ -253,7 +253,48 @@ pub fn draw(index: usize, size: Size) -> Case {
         }
     }
     let pair = shapes.iter().any(|&s| SHAPES[s].0 == "pair") || (null && k % 3 == 2);
-    let base = base(seed, size, pair, noise, &mut rng);
+    let drawn: Vec<(usize, Option<f64>)> = shapes.into_iter().map(|s| (s, None)).collect();
+    build(index, label, noise, size, pair, &drawn, &mut rng, seed)
+}
+
+/// A case made to order (for tests): `shapes` are (index in [`SHAPES`], multiple of the
+/// detection limit), the noise model one of [`NOISES`]; collision runs when a shape is a pair's
+/// or `collisions`.
+pub fn case(
+    seed: u64,
+    size: Size,
+    noise_label: &str,
+    shapes: &[(usize, f64)],
+    collisions: bool,
+) -> Case {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = noise(noise_label, &mut rng);
+    let pair = collisions || shapes.iter().any(|&(s, _)| SHAPES[s].0 == "pair");
+    let given: Vec<(usize, Option<f64>)> = shapes.iter().map(|&(s, m)| (s, Some(m))).collect();
+    build(
+        seed as usize,
+        noise_label,
+        noise,
+        size,
+        pair,
+        &given,
+        &mut rng,
+        seed,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build(
+    index: usize,
+    label: &str,
+    noise: Noise,
+    size: Size,
+    pair: bool,
+    shapes: &[(usize, Option<f64>)],
+    rng: &mut ChaCha8Rng,
+    seed: u64,
+) -> Case {
+    let base = base(seed, size, pair, noise, rng);
     let mut spec = base.clone();
     let mut truths = Vec::new();
     let names: Vec<&str> = base.materials.iter().map(|m| m.name).collect();
@@ -262,9 +303,10 @@ pub fn draw(index: usize, size: Size) -> Case {
     } else {
         Some(Basis::new(&base))
     };
-    for s in shapes {
-        let mut effect = Effect::draw(s, base.runs.len(), &mut rng);
-        let want = (10f64.ln() * rng.random::<f64>()).exp();
+    for &(s, want) in shapes {
+        let mut effect = Effect::draw(s, base.runs.len(), rng);
+        // drawn log-uniformly in 1–10× unless given
+        let want = want.unwrap_or_else(|| (10f64.ln() * rng.random::<f64>()).exp());
         let got = size_to(
             &mut effect,
             &base,

@@ -1,0 +1,105 @@
+//! Discovery on recordings of the independent simulator (tests/support/indsim): an effect in each
+//! place where physics enters (a force, the friction, the measurement, differences between
+//! particles), two shapes per place where two are detectable, at 8× its detection limit in the
+//! tracker noise it is drawn with, must be named in its place with an acceptable form and nothing
+//! beside it. The rates over randomized datasets, sizes and noises are the bench's
+//! (`tests/bench/discovery_bed.rs`); these fix one seed each so a regression shows here first.
+
+#[allow(dead_code)]
+#[path = "support/indsim/mod.rs"]
+mod indsim;
+
+#[allow(dead_code)]
+#[path = "support/bed/mod.rs"]
+mod bed;
+
+use bed::draw::{case, Size};
+use bed::score::{accepted, names, score};
+use bed::shapes::SHAPES;
+use groove::discover::{discover, Options};
+use groove::ingest::{ingest, IngestParams};
+use std::collections::BTreeMap;
+
+/// 12 single runs per material of 50 ms.
+const SIZE: Size = Size {
+    singles_per_material: 12,
+    duration_s: 0.05,
+};
+
+fn shape(name: &str) -> usize {
+    SHAPES
+        .iter()
+        .position(|s| s.1 == name)
+        .unwrap_or_else(|| panic!("no shape {name}"))
+}
+
+/// Draws `name` at `multiple`× its limit in `noise`, runs discovery through ingest, and returns
+/// what it accepted (place/effect: form) and whether that names the truth alone.
+fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, Vec<String>) {
+    let c = case(seed, SIZE, noise, &[(shape(name), multiple)], false);
+    let dir = tempfile::tempdir().unwrap();
+    indsim::writer::write_dataset(dir.path(), &c.spec.render(false)).unwrap();
+    let mut files = BTreeMap::new();
+    for f in ["runs.csv", "trajectories.csv"] {
+        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
+    }
+    let recordings = ingest(&files, &IngestParams::default())
+        .expect("an indsim dataset ingests")
+        .recordings;
+    let d = discover(
+        &recordings,
+        &Options {
+            seed,
+            ..Options::default()
+        },
+    );
+    let found = accepted(&serde_json::to_string(&d).unwrap()).unwrap();
+    let said: Vec<String> = found
+        .iter()
+        .map(|a| format!("{}/{}: {}", a.place, a.effect, a.form))
+        .collect();
+    let s = score(&found, &c.truths);
+    let one = found.len() == 1 && names(&found[0], &c.truths[0]);
+    assert_eq!(s.named, one);
+    (s.named, said)
+}
+
+fn assert_named(seed: u64, noise: &str, name: &str) {
+    let (named, said) = discovered(seed, noise, name, 8.0);
+    assert!(named, "{name} in {noise} noise (seed {seed}): accepted {said:?}");
+}
+
+#[test]
+fn a_force_is_named_a_force_tilt() {
+    assert_named(1, "white", "tilt");
+}
+
+#[test]
+fn a_force_is_named_a_force_resistance() {
+    assert_named(2, "ar1", "resistance");
+}
+
+#[test]
+fn a_friction_is_named_a_friction_rising_with_slip() {
+    assert_named(3, "white", "mu_slip_rising");
+}
+
+#[test]
+fn a_friction_is_named_a_friction_by_direction() {
+    assert_named(4, "blur", "mu_direction");
+}
+
+#[test]
+fn a_measurement_is_named_a_measurement_distortion() {
+    assert_named(5, "white", "distortion");
+}
+
+#[test]
+fn particles_that_differ_are_named_so_mu() {
+    assert_named(6, "white", "mu_spread");
+}
+
+#[test]
+fn particles_that_differ_are_named_so_size() {
+    assert_named(7, "ar1", "size_spread");
+}
