@@ -269,6 +269,9 @@ struct Trials<'r> {
     cv_of: Vec<Option<(CvResult, f64)>>,
     /// Why a candidate fitted in full is no finding although it predicts held-out runs better.
     refused: Vec<Option<String>>,
+    /// Whether the runs' own μ and T explain the current model's misfit (differences between
+    /// particles), checked once a round when a term with a phase per run is fitted.
+    particles_differ: Option<bool>,
     best: Option<(usize, CvResult)>,
     /// A second term accepted with `best`: neither alone passed the held-out check, both did.
     pair: Option<(usize, Model, f64)>,
@@ -336,6 +339,17 @@ impl Trials<'_> {
             let start = std::time::Instant::now();
             self.fitted[i] = self.full(i);
             self.refused[i] = refusal(&self.fitted[i]);
+            if self.refused[i].is_none()
+                && matches!(self.all[i], Extra::TimePeriodic { .. })
+                && self.particles_differ()
+            {
+                // a phase per run fits whatever misfit a run has of its own; when each run's own
+                // μ and T take that misfit up, it is a difference between particles, said by the
+                // particle check on the final model
+                self.refused[i] = Some(
+                    "refused: each run's own mu and T take up the misfit it fits (differences between particles), and a phase per run fits any run's own misfit".into(),
+                );
+            }
             let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
             trace_took(start, || {
@@ -350,6 +364,21 @@ impl Trials<'_> {
         let passes =
             cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv && self.refused[i].is_none();
         (passes, cv)
+    }
+
+    /// Whether the particle check says the current model's runs differ in μ and T (once a round).
+    fn particles_differ(&mut self) -> bool {
+        if self.particles_differ.is_none() {
+            let c = super::particles::check(
+                self.current,
+                self.set.runs,
+                self.set.materials,
+                self.set.opts.alpha,
+                self.set.opts.seed ^ 0x5EED_0F_9A27,
+            );
+            self.particles_differ = Some(c.is_some_and(|c| c.differ));
+        }
+        self.particles_differ.unwrap_or(false)
     }
 
     /// When no significant candidate passes the held-out check alone, two of the strongest
@@ -680,6 +709,7 @@ pub fn run_round(
         fitted: sc.linear.clone(),
         cv_of: vec![None; ne],
         refused: vec![None; ne],
+        particles_differ: None,
         best: None,
         pair: None,
         displaced: None,

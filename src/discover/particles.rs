@@ -74,6 +74,10 @@ pub struct Check {
     pub p_value: f64,
     pub spreads: Vec<Spread>,
     pub differ: bool,
+    /// Whether the runs' own μ or T drift with |v0| or direction beyond their scatter from run
+    /// to run (a between-run test: the drift probes' null is the noise alone, and particles that
+    /// differ make any per-run slope look significant against it).
+    pub drift_beyond_scatter: bool,
 }
 
 /// One run's orthonormal basis of its own μ and T columns (noise units, locals projected out),
@@ -184,6 +188,43 @@ fn split(b: &RunBasis, y: &[f64]) -> (f64, f64, [f64; 2]) {
     let mut coord = [0.0; 2];
     coord[..coords.len()].copy_from_slice(&coords);
     (lr, dot(y, y) - lr, coord)
+}
+
+/// Two-sided p-value of the least-squares slope of `y` on `x` against the scatter about the
+/// line (Student's t with n − 2 degrees of freedom); 1 when it cannot be told (n < 4, no spread
+/// of x).
+fn slope_p(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len();
+    if n < 4 {
+        return 1.0;
+    }
+    let (mx, my) = (
+        x.iter().sum::<f64>() / n as f64,
+        y.iter().sum::<f64>() / n as f64,
+    );
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    if !(sxx > 0.0) {
+        return 1.0;
+    }
+    let b = x
+        .iter()
+        .zip(y)
+        .map(|(a, c)| (a - mx) * (c - my))
+        .sum::<f64>()
+        / sxx;
+    let rss: f64 = x
+        .iter()
+        .zip(y)
+        .map(|(a, c)| (c - my - b * (a - mx)).powi(2))
+        .sum();
+    let se = (rss / (n - 2) as f64 / sxx).sqrt();
+    if !(se > 0.0) {
+        return if b == 0.0 { 1.0 } else { 0.0 };
+    }
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    StudentsT::new(0.0, 1.0, (n - 2) as f64)
+        .map(|t| 2.0 * (1.0 - t.cdf((b / se).abs())))
+        .unwrap_or(1.0)
 }
 
 /// The check on the fitted model `m` of `runs` (`seed` for the replicates); None when there are
@@ -309,7 +350,25 @@ pub fn check(
             }
         })
         .collect();
+    let steps: Vec<[f64; 2]> = data
+        .iter()
+        .zip(&bases)
+        .map(|(d, b)| step(b, &d.2))
+        .collect();
+    let drift_beyond_scatter = (0..nm).any(|k| {
+        let idx: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].material == k).collect();
+        let v0: Vec<f64> = idx.iter().map(|&i| m.fit.local[i][2]).collect();
+        (0..2).any(|which| {
+            let y: Vec<f64> = idx.iter().map(|&i| steps[i][which]).collect();
+            let speed: Vec<f64> = v0.iter().map(|v| v.abs()).collect();
+            let dir: Vec<f64> = v0.iter().map(|v| v.signum()).collect();
+            // Bonferroni over the four slopes of each material
+            let level = alpha / (4 * nm) as f64;
+            slope_p(&speed, &y) < level || slope_p(&dir, &y) < level
+        })
+    });
     Some(Check {
+        drift_beyond_scatter,
         lr,
         lr_null_mean: lr0,
         residual_ratio,

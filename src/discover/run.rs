@@ -616,9 +616,12 @@ fn particle_finding(
         parameters.insert(format!("mu_se_run_{m}"), est(s.mu_se, f64::NAN));
         parameters.insert(format!("t_se_run_s_{m}"), est(s.t_se, f64::NAN));
     }
+    // the drift probes' null is the noise alone: particles that differ make a per-run slope
+    // look significant against it, so a drift counts only beyond the runs' scatter
+    let drift_left = drift_left && c.drift_beyond_scatter;
     let decision = if c.differ && drift_left {
         format!(
-            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but they drift with the runs' speed or direction (the drift probes flag it): physics the model lacks, not particles that differ",
+            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but they drift with the runs' speed or direction beyond their scatter from run to run: physics the model lacks, not particles that differ",
             c.f, c.p_value
         )
     } else if c.differ {
@@ -660,7 +663,7 @@ fn particle_finding(
     Some(crate::artifacts::diagnosis::Finding {
         effect: "particle_differences".into(),
         accepted: c.differ && !drift_left,
-        form: "mu and T of each particle scatter about the material's".into(),
+        form: "mu (friction) and T (drag) of each particle scatter about the material's".into(),
         parameters,
         evidence: crate::artifacts::diagnosis::Evidence {
             round: 0,

@@ -1,6 +1,7 @@
 //! Section 4: discovery — where the mismatch is, the candidates and their evidence, the accepted
 //! physics, before/after figures, and a comparison with the chapter's own correction (Eq. 4.8).
 
+use super::params::params_text;
 use super::{Block, Table};
 use crate::artifacts::diagnosis::{
     CandidateRow, Diagnosis, Effect, Estimate, Evidence, Finding, Structure,
@@ -305,26 +306,6 @@ fn drift_table(diag: &Diagnosis) -> Option<Table> {
     (!t.rows.is_empty()).then_some(t)
 }
 
-/// `name = value ± stderr` for each parameter of a finding.
-pub fn params_text(ps: &BTreeMap<String, Estimate>) -> String {
-    let parts: Vec<String> = ps
-        .iter()
-        .map(|(k, p)| {
-            let v = finite(p.value).map_or("—".into(), |x| sig(x, 4));
-            // a zero error marks a value that was set, not estimated (a spline's range)
-            match p.se.and_then(finite).filter(|se| *se > 0.0) {
-                Some(se) => format!("{k} = {v} ± {}", sig(se, 2)),
-                None => format!("{k} = {v}"),
-            }
-        })
-        .collect();
-    if parts.is_empty() {
-        "—".into()
-    } else {
-        parts.join(", ")
-    }
-}
-
 fn param(f: &Finding, name: &str) -> Option<f64> {
     f.parameters.get(name).and_then(|p| finite(p.value))
 }
@@ -534,6 +515,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
             format!("{}.", diag.note.trim_end_matches('.'))
         });
         return b;
+    }
+    if let Some(v) = super::verdict::verdict(diag) {
+        b.para(v);
     }
     b.para(if mismatch {
         "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."

@@ -8,8 +8,10 @@
 //! - `compare.rs`: Section 3.4.1: the compare stage's residuals of the collision fits
 //! - `data.rs`: Section 2: the data
 //! - `discovery.rs`: Section 4: discovery
+//! - `params.rs`: A fitted term's parameters as text
 //! - `provenance.rs`: Section 6: provenance
 //! - `summary.rs`: Section 1: what was analysed
+//! - `verdict.rs`: Discovery's verdict in one sentence per finding
 //! - `whole_run.rs`: The whole-run collision fits in the report
 
 pub mod chapter;
@@ -17,8 +19,10 @@ pub mod collisions;
 pub mod compare;
 pub mod data;
 pub mod discovery;
+pub mod params;
 pub mod provenance;
 pub mod summary;
+pub mod verdict;
 pub mod whole_run;
 
 use super::audit::{audit, AuditItem};

@@ -33,7 +33,7 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
                 "{} ({}): {}{}",
                 f.effect.replace('_', " "),
                 f.form,
-                super::discovery::params_text(&f.parameters),
+                super::params::params_text(&f.parameters),
                 if bounds.is_empty() {
                     String::new()
                 } else {

@@ -17,9 +17,14 @@ pub struct Accepted {
     pub parameters: Vec<(String, f64)>,
 }
 
-/// The place of a finding: its `place` field, else the place today's effect ids stand for.
+/// The place of a finding: its `where.place` (or a top-level `place`), else the place today's effect ids stand for.
 pub fn place_of(finding: &Value) -> String {
-    if let Some(p) = finding.get("place").and_then(Value::as_str) {
+    if let Some(p) = finding
+        .get("where")
+        .and_then(|w| w.get("place"))
+        .or_else(|| finding.get("place"))
+        .and_then(Value::as_str)
+    {
         return p.to_string();
     }
     match finding.get("effect").and_then(Value::as_str).unwrap_or("") {

@@ -1,0 +1,79 @@
+//! Discovery's verdict in one sentence per finding: the place, what and how much, and what the
+//! held-out runs gained; a tie or an undecided case said as such.
+
+use super::params::params_text;
+use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
+
+/// The words a finding's place is said in.
+fn place_words(f: &Finding) -> &'static str {
+    let place = f
+        .where_
+        .get("place")
+        .and_then(|v| v.as_str())
+        .map(str::to_string)
+        .or_else(|| Effect::from_id(&f.effect).map(|e| e.place().to_string()));
+    match place.as_deref() {
+        Some("force") => "a force on the particle",
+        Some("friction") => "the friction between particle and groove",
+        Some("measurement") => "the measurement",
+        Some("particles") => "differences between the particles",
+        Some("pair") => "the collisions",
+        _ => "an unplaced term",
+    }
+}
+
+/// One sentence for an accepted finding.
+fn sentence(f: &Finding) -> String {
+    let mut s = format!(
+        "In {}: {}, {}",
+        place_words(f),
+        f.effect.replace('_', " "),
+        f.form
+    );
+    let params = params_text(&f.parameters);
+    if !params.is_empty() {
+        s.push_str(&format!(" ({params})"));
+    }
+    let (before, after) = (f.baseline.cv_rms_m, f.extended.cv_rms_m);
+    if before.is_finite() && after.is_finite() && before > 0.0 && after > 0.0 {
+        s.push_str(&format!(
+            "; held-out RMS {:.3} → {:.3} µm",
+            before * 1e6,
+            after * 1e6
+        ));
+    }
+    if let Some(rest) = f.evidence.decision.split("tied with ").nth(1) {
+        let other = rest.split(':').next().unwrap_or(rest);
+        s.push_str(&format!(
+            "; tied with {other}: these data cannot tell the two apart, and this one is in the model"
+        ));
+    }
+    s.push('.');
+    s
+}
+
+/// The verdict paragraph, or None when discovery tested nothing.
+pub fn verdict(diag: &Diagnosis) -> Option<String> {
+    if diag.candidates.is_empty() && diag.findings.is_empty() {
+        return None;
+    }
+    let accepted: Vec<&Finding> = diag.findings.iter().filter(|f| f.accepted).collect();
+    if accepted.is_empty() {
+        return Some(if diag.mismatch {
+            "Verdict: the baseline misses, and no candidate explains it well enough to be accepted."
+                .to_string()
+        } else {
+            "Verdict: nothing missing was found, within the detection limits given below."
+                .to_string()
+        });
+    }
+    let lines: Vec<String> = accepted.iter().map(|f| sentence(f)).collect();
+    Some(format!(
+        "Verdict: {} found. {}",
+        match accepted.len() {
+            1 => "one missing piece of physics".to_string(),
+            n => format!("{n} missing pieces of physics"),
+        },
+        lines.join(" ")
+    ))
+}
