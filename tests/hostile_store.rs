@@ -444,7 +444,11 @@ fn pull_from_a_missing_remote_exits_2() {
         }
         let out = p.groove(&["pull", "--remote", &url(&missing)]);
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "complete store {complete}: {err}");
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "complete store {complete}: {err}"
+        );
         assert!(err.contains("cannot pull from the remote"), "{err}");
         assert!(err.contains("no/such/remote"), "{err}");
         assert!(!missing.exists());
@@ -482,4 +486,30 @@ outputs = { note = "${reports}/note.txt" }
     let out = p.groove(&["run"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("the-secret-line"), "{err}");
+}
+
+/// Invariant: `run`, `status`, `publish` and `pull` agree about state. A reused object whose
+/// bytes changed on disk (the same size) is not reused by `run`: the stage that made it runs
+/// again, where before `run` said "reused" while `status` said stale. The object is made anew
+/// and the next run reuses everything.
+#[test]
+fn run_does_not_reuse_an_object_whose_bytes_changed() {
+    let (_sandbox, p) = sandboxed();
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    let key = key_of(&p, "side");
+    let e: serde_json::Value =
+        serde_json::from_str(&p.read(&format!(".groove/entries/{key}.json"))).unwrap();
+    let sha = e["outputs"]["note"]["sha256"].as_str().unwrap().to_string();
+    let object = format!(".groove/objects/{}/{}", &sha[..2], &sha[2..]);
+    assert_eq!(p.read(&object), "HELLO\n");
+    p.write(&object, "HELLX\n");
+    assert_eq!(p.stale(), vec!["side".to_string()]);
+    let out = p.ok(&["run"]);
+    assert!(out.contains("1 stage run"), "{out}");
+    assert_eq!(p.take_trace(), vec!["side".to_string()]);
+    assert_eq!(p.read(&object), "HELLO\n");
+    assert!(p.stale().is_empty());
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
 }

@@ -40,8 +40,9 @@ echo "soak: reference run (this takes a while)"
 mkdir -p ../remote
 REMOTE="file://$WORK/remote"
 
-# sha256 of every file under reports/ (relative path, hash), as the reference
-snapshot() { (cd reports && find . -type f ! -name '.*' -print0 | sort -z | xargs -0 sha256sum); }
+# sha256 of every file under reports/ (relative path, hash) but staged leftovers (.NAME.groove-*,
+# files or folders), as the reference
+snapshot() { (cd reports && find . -type f ! -path '*/.*' -print0 | sort -z | xargs -0 sha256sum); }
 snapshot > ../reference.sums
 
 corrupt=0 partial=0 failed=0 mid=0

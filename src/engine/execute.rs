@@ -184,8 +184,7 @@ pub fn run_key(
         Memo::open(&ctx.store, &spec.name, salt.to_string().as_bytes())
     });
     let outputs: StageOutputs = if spec.kind == "command" {
-        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed)
-            .map_err(failed_reading)?
+        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed_reading)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
         // per-item stages already show `done/total items`

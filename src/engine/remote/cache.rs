@@ -90,7 +90,10 @@ impl RemoteCache {
     /// Whether the remote is there at all (a `file://` folder that does not exist is not):
     /// `Err` is the reason, for the verbs whose whole work is the remote.
     pub fn check_present(&self) -> Result<(), String> {
-        self.backend.inner.check_present().map_err(|e| e.to_string())
+        self.backend
+            .inner
+            .check_present()
+            .map_err(|e| e.to_string())
     }
 
     pub fn is_disabled(&self) -> bool {
