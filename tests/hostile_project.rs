@@ -672,3 +672,43 @@ fn the_project_folder_as_remote_exits_2() {
         assert_names(&text(&out.stderr), &["inside the project"]);
     }
 }
+
+// ------------------------------------------------------------------- memory bounds
+
+/// A header of 5,000 columns is refused before the table is parsed (the parser held an empty
+/// cell per header column per row: 200,000 columns over 2,000 rows took 7.5 GB), naming the
+/// file, the limit and the variable that raises it.
+#[test]
+fn a_header_wider_than_the_limit_exits_2_before_the_table_is_read() {
+    let err = refused("wide_header", |p| {
+        let runs = std::fs::read_to_string(p.join("data/runs.csv")).unwrap();
+        let (header, rows) = runs.split_once('\n').unwrap();
+        let extra: Vec<String> = (0..5000).map(|i| format!("x{i}")).collect();
+        let wide = format!("{header},{}\n{rows}", extra.join(","));
+        std::fs::write(p.join("data/runs.csv"), wide).unwrap();
+    });
+    let columns = "the header names 5007 columns, more than the 1000 groove reads";
+    assert!(
+        err.contains("runs.csv row 1") && err.contains(columns),
+        "{err}"
+    );
+    assert!(err.contains("GROOVE_INGEST_MAX_COLUMNS=5007"), "{err}");
+}
+
+/// A runs.csv of 257 MB (sparse: its size, not its bytes, is the point) is refused before it
+/// is read whole, naming its size, the limit and the variable that raises it.
+#[test]
+fn a_file_read_whole_above_the_limit_exits_2_before_it_is_read() {
+    let err = refused("huge_runs", |p| {
+        let f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(p.join("data/runs.csv"))
+            .unwrap();
+        f.set_len(257 << 20).unwrap();
+    });
+    assert!(
+        err.contains("runs.csv: is 257 MB, more than the 256 MB ingest reads whole"),
+        "{err}"
+    );
+    assert!(err.contains("GROOVE_INGEST_MAX_WHOLE_MB=257"), "{err}");
+}

@@ -430,3 +430,86 @@ fn push_to_a_missing_remote_exits_2() {
     assert!(err.contains("no/such/remote"), "{err}");
     assert!(!missing.exists());
 }
+
+/// Invariant: a remote that is not there is an error for the verbs that need one. `pull` from a
+/// missing remote exits 2 naming it, whether the local store lacks results (the lookups fail) or
+/// holds them all (no lookup is needed), and creates nothing.
+#[test]
+fn pull_from_a_missing_remote_exits_2() {
+    let (sandbox, p) = sandboxed();
+    let missing = sandbox.path().join("no/such/remote");
+    for complete in [true, false] {
+        if !complete {
+            p.ok(&["clean"]);
+        }
+        let out = p.groove(&["pull", "--remote", &url(&missing)]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "complete store {complete}: {err}"
+        );
+        assert!(err.contains("cannot pull from the remote"), "{err}");
+        assert!(err.contains("no/such/remote"), "{err}");
+        assert!(!missing.exists());
+    }
+}
+
+/// Invariant: nothing outside the project is quoted. An input file that is a link to a file
+/// outside the project fails its stage without the stage's message (which may quote the file);
+/// the message names the link and where it leads. The same bytes copied in are quoted as usual.
+#[test]
+fn a_failing_input_linked_from_outside_is_not_quoted() {
+    let sandbox = tempfile::tempdir().unwrap();
+    let secret = sandbox.path().join("secret.txt");
+    std::fs::write(&secret, "the-secret-line\n").unwrap();
+    let p = Project::new_in(
+        &sandbox.path().join("work"),
+        r#"
+[stages.read]
+kind = "command"
+cmd = "head -1 {in.settings} >&2; exit 3"
+inputs = { settings = "settings.txt" }
+outputs = { note = "${reports}/note.txt" }
+"#,
+    );
+    std::os::unix::fs::symlink(&secret, p.path("settings.txt")).unwrap();
+    let out = p.groove(&["run"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("the-secret-line"), "{err}");
+    assert!(err.contains("settings.txt is a link to"), "{err}");
+    assert!(err.contains("secret.txt, outside the project"), "{err}");
+    // a copy inside the project is quoted: the check above is about the link, not the stage
+    std::fs::remove_file(p.path("settings.txt")).unwrap();
+    std::fs::copy(&secret, p.path("settings.txt")).unwrap();
+    let out = p.groove(&["run"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the-secret-line"), "{err}");
+}
+
+/// Invariant: `run`, `status`, `publish` and `pull` agree about state. A reused object whose
+/// bytes changed on disk (the same size) is not reused by `run`: the stage that made it runs
+/// again, where before `run` said "reused" while `status` said stale. The object is made anew
+/// and the next run reuses everything.
+#[test]
+fn run_does_not_reuse_an_object_whose_bytes_changed() {
+    let (_sandbox, p) = sandboxed();
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+    let key = key_of(&p, "side");
+    let e: serde_json::Value =
+        serde_json::from_str(&p.read(&format!(".groove/entries/{key}.json"))).unwrap();
+    let sha = e["outputs"]["note"]["sha256"].as_str().unwrap().to_string();
+    let object = format!(".groove/objects/{}/{}", &sha[..2], &sha[2..]);
+    assert_eq!(p.read(&object), "HELLO\n");
+    p.write(&object, "HELLX\n");
+    assert_eq!(p.stale(), vec!["side".to_string()]);
+    let out = p.ok(&["run"]);
+    assert!(out.contains("1 stage run"), "{out}");
+    assert_eq!(p.take_trace(), vec!["side".to_string()]);
+    assert_eq!(p.read(&object), "HELLO\n");
+    assert!(p.stale().is_empty());
+    let out = p.ok(&["run"]);
+    assert!(out.contains("0 stages run"), "{out}");
+}

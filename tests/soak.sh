@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # kill -9 soak: groove is killed at random moments during every verb that writes (`run`,
-# `run --remote`, `gc`, `clean`, `verify`, `publish`, `push`, `pull`) and the read-only ones
+# `run --remote`, a `run --data` onto another dataset (`switch`), `gc`, `clean`, `verify`,
+# `publish`, `push`, `pull`) and the read-only ones
 # (`status`, `dag`); after each kill the store, the reports folder and the bundle are checked,
 # then the project must recover with one ordinary command. Runnable by hand, not part of CI:
 #
@@ -20,13 +21,16 @@ set -u
 KILLS=${1:-20}
 REPO=$(cd "$(dirname "$0")/.." && pwd)
 GROOVE=${2:-$REPO/target/debug/groove}
-VERBS=${3:-run remote gc clean verify publish push pull status dag}
+VERBS=${3:-run remote switch gc clean verify publish push pull status dag}
 [ -x "$GROOVE" ] || { echo "soak: no groove binary at $GROOVE; run cargo build first" >&2; exit 2; }
 WORK=$(mktemp -d /tmp/groove-soak.XXXXXX)
 trap 'rm -rf "$WORK"' EXIT
 cd "$WORK" || exit 2
 
 "$GROOVE" synth --truth "$REPO/tests/fixtures/truths/e2e_small.toml" --out dataset >/dev/null || exit 2
+# the other dataset of `switch`: the same truth with another seed (every stage's result differs)
+sed 's/^seed = .*/seed = 8/' "$REPO/tests/fixtures/truths/e2e_small.toml" > other_truth.toml
+"$GROOVE" synth --truth other_truth.toml --out other >/dev/null || exit 2
 mkdir -p project/data
 cp dataset/*.csv project/data/
 cp "$REPO/pipeline.toml" project/
@@ -36,11 +40,12 @@ echo "soak: reference run (this takes a while)"
 mkdir -p ../remote
 REMOTE="file://$WORK/remote"
 
-# sha256 of every file under reports/ (relative path, hash), as the reference
-snapshot() { (cd reports && find . -type f ! -name '.*' -print0 | sort -z | xargs -0 sha256sum); }
+# sha256 of every file under reports/ (relative path, hash) but staged leftovers (.NAME.groove-*,
+# files or folders), as the reference
+snapshot() { (cd reports && find . -type f ! -path '*/.*' -print0 | sort -z | xargs -0 sha256sum); }
 snapshot > ../reference.sums
 
-corrupt=0 partial=0 failed=0
+corrupt=0 partial=0 failed=0 mid=0
 
 # entries that do not parse or reference a missing or damaged object
 check_store() {
@@ -85,11 +90,17 @@ recover() {
   return 0
 }
 
-kill_at_random() { # $@: the command; kills it after 0–1.5 s (or lets it finish)
+# $@: the command; kills it after 1 ms – 1.5 s, drawn evenly in the logarithm so that commands
+# of a few milliseconds are hit as often as long ones (or lets it finish). Sets `landed` to 1
+# when the kill found the command still running.
+landed=0
+kill_at_random() {
+  local delay pid
+  delay=$(python3 -c 'import random; print(round(10 ** random.uniform(-3, 0.176), 4))')
   "$@" >/dev/null 2>&1 &
-  local pid=$!
-  sleep "$(python3 -c 'import random; print(round(random.uniform(0, 1.5), 3))')"
-  kill -9 "$pid" 2>/dev/null
+  pid=$!
+  sleep "$delay"
+  if kill -9 "$pid" 2>/dev/null; then landed=1; else landed=0; fi
   wait "$pid" 2>/dev/null
 }
 
@@ -118,6 +129,14 @@ for verb in $VERBS; do
         "$GROOVE" push --remote "$REMOTE" >/dev/null 2>&1
         [ $((i % 2)) -eq 0 ] && "$GROOVE" clean >/dev/null 2>&1
         kill_at_random "$GROOVE" pull --remote "$REMOTE" ;;
+      switch)
+        # the reports of another dataset, killed while they replace these: its results are in
+        # the store (one whole run first), so the killed run spends its time writing reports/
+        if [ "$i" -eq 1 ]; then
+          "$GROOVE" run --data ../other >/dev/null 2>&1; snapshot > ../other.sums
+          "$GROOVE" run >/dev/null 2>&1
+        fi
+        kill_at_random "$GROOVE" run --data ../other ;;
       status | dag)
         kill_at_random "$GROOVE" "$verb" ;;
       gc)
@@ -130,9 +149,18 @@ for verb in $VERBS; do
       publish)
         kill_at_random "$GROOVE" publish --to ../bundle ;;
     esac
-    c=$(check_store); p=0
-    # right after the kill the reports may lack nothing and hold no torn file
-    t=$( (cd reports && sha256sum --quiet -c ../../reference.sums 2>/dev/null) | wc -l)
+    c=$(check_store); p=0; switched=
+    # right after the kill the reports may lack nothing and hold no torn file (after a killed
+    # `switch`, each file is this dataset's or the other's: a mix until the next run)
+    if [ "$verb" = switch ]; then
+      snapshot > ../now.sums
+      t=$(( $(grep -cvxF -f <(cat ../reference.sums ../other.sums) ../now.sums) + \
+            $(comm -23 <(cut -c67- ../reference.sums | sort) <(cut -c67- ../now.sums | sort) | wc -l) ))
+      # how far the killed run got: files already the other dataset's (those that differ)
+      switched=$(grep -cxF -f <(grep -vxF -f ../reference.sums ../other.sums) ../now.sums)
+    else
+      t=$( (cd reports && sha256sum --quiet -c ../../reference.sums 2>/dev/null) | wc -l)
+    fi
     p=$((p + t))
     if ! recover; then failed=$((failed + 1)); fi
     p=$((p + $(check_reports)))
@@ -142,8 +170,9 @@ for verb in $VERBS; do
       p=$((p + $(find .. -maxdepth 1 -name '.bundle.groove-*' | wc -l)))
     fi
     corrupt=$((corrupt + c)); partial=$((partial + p))
-    echo "soak: $verb kill $i: corrupt entries $c, partial outputs $p"
+    mid=$((mid + landed))
+    echo "soak: $verb kill $i ($([ "$landed" = 1 ] && echo "killed mid-command" || echo "it had finished")): corrupt entries $c, partial outputs $p${switched:+, $switched files switched before the kill}"
   done
 done
-echo "soak: $((nverbs * KILLS)) kills: corrupt entries $corrupt, partial outputs $partial, failed recoveries $failed"
+echo "soak: $((nverbs * KILLS)) kills ($mid mid-command): corrupt entries $corrupt, partial outputs $partial, failed recoveries $failed"
 [ "$corrupt" -eq 0 ] && [ "$partial" -eq 0 ] && [ "$failed" -eq 0 ]

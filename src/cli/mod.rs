@@ -369,17 +369,26 @@ fn push(
         "groove: push: {} keys in pipeline.lock, {} not in the local store",
         synced.keys, synced.skipped
     );
-    // pushing is the verb's whole work: a remote that cannot be reached is an error
-    if cache.is_disabled() {
-        println!("groove: {}", cache.closing_line());
-        return Err(EngineError::Usage(format!(
-            "cannot push to the remote {}: {}; {}",
-            cache.describe(),
-            cache.first_error().unwrap_or_default(),
-            cache.hint()
-        )));
-    }
+    unreachable_is_an_error(&cache, "push to")?;
     remote_closing(&cache, settings.required)
+}
+
+/// Pushing or pulling is the verb's whole work: a remote that could not be reached (it turned
+/// itself off after its first failure) is an error, exit 2, naming it and the fix.
+fn unreachable_is_an_error(
+    cache: &groove::engine::remote::RemoteCache,
+    what: &str,
+) -> Result<(), EngineError> {
+    if !cache.is_disabled() {
+        return Ok(());
+    }
+    println!("groove: {}", cache.closing_line());
+    Err(EngineError::Usage(format!(
+        "cannot {what} the remote {}: {}; {}",
+        cache.describe(),
+        cache.first_error().unwrap_or_default(),
+        cache.hint()
+    )))
 }
 
 /// `pull`: every stage's results from the remote into the local store.
@@ -391,11 +400,19 @@ fn pull(
 ) -> Result<ExitCode, EngineError> {
     let (pipeline, settings) = with_remote(catalog, project, remote, read_only, "pull from")?;
     let cache = std::sync::Arc::new(groove::engine::remote::open(&settings, &pipeline.root)?);
+    if let Err(why) = cache.check_present() {
+        return Err(EngineError::Usage(format!(
+            "cannot pull from the remote {}: {why}; {}",
+            cache.describe(),
+            cache.hint()
+        )));
+    }
     let fresh = groove::engine::remote::sync::pull(catalog, &pipeline, &cache)?;
     println!(
         "groove: pull: {fresh} of {} stages now have every result in the local store",
         pipeline.stages.len()
     );
+    unreachable_is_an_error(&cache, "pull from")?;
     remote_closing(&cache, settings.required)
 }
 

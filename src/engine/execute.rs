@@ -98,6 +98,33 @@ pub fn store_outputs(
     Ok(stored)
 }
 
+/// A stage's message, unless an input file it read is a link out of the project: the message
+/// may quote that file (a header, a cell), so it is replaced by where the link leads and how to
+/// see the message (a file copied in is quoted as any other).
+fn unquoted(ctx: &Context, bound: &BTreeMap<String, Bound>, message: String) -> String {
+    let linked: Vec<(std::path::PathBuf, std::path::PathBuf)> = bound
+        .values()
+        .filter_map(|b| match &b.source {
+            Source::Path(p) => Some(super::inputs::linked_from_outside(
+                &ctx.pipeline.root,
+                p,
+                &b.stored,
+            )),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    let Some((link, target)) = linked.first() else {
+        return message;
+    };
+    let shown = |p: &std::path::Path| ctx.pipeline.show(p);
+    format!(
+        "it failed on its input, and {} is a link to {}, outside the project, so its message is not shown (it may quote that file); copy the file into the project in place of the link to see the message",
+        shown(link),
+        target.display()
+    )
+}
+
 /// Run one key and check its outputs (not stored yet). Blobs the kind puts as it runs go
 /// through `writer`.
 pub fn run_key(
@@ -114,6 +141,8 @@ pub fn run_key(
         item: item.map(str::to_string),
         message,
     };
+    // what the kind or the command says may quote its inputs
+    let failed_reading = |message: String| failed(unquoted(ctx, bound, message));
     let mut item_artifacts: Vec<(&str, Artifact)> = Vec::new();
     if let Some(item) = item {
         for name in spec.foreach.iter().chain(&spec.foreach_with) {
@@ -155,7 +184,7 @@ pub fn run_key(
         Memo::open(&ctx.store, &spec.name, salt.to_string().as_bytes())
     });
     let outputs: StageOutputs = if spec.kind == "command" {
-        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed)?
+        command::run(&ctx.store, ctx.pipeline, spec, &inputs, item, seed).map_err(failed_reading)?
     } else {
         let kind = ctx.catalog.kind(&spec.kind).expect("validated kinds exist");
         // per-item stages already show `done/total items`
@@ -172,7 +201,7 @@ pub fn run_key(
         };
         // a panicking kind fails its stage; the other stages and the store are unaffected
         match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| kind.run(&input))) {
-            Ok(result) => result.map_err(|e| failed(e.to_string()))?,
+            Ok(result) => result.map_err(|e| failed_reading(e.to_string()))?,
             Err(panic) => {
                 let what = panic
                     .downcast_ref::<String>()

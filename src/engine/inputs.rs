@@ -62,6 +62,25 @@ fn note_skipped(dir: &Path, name: &str) {
     }
 }
 
+/// The files of a path input that are links to a file outside `root` (the project), with where
+/// they lead. A stage's error may quote what it read; from such a file it must not (a dataset
+/// can link `runs.csv` to any file the user can read), so the engine says this instead.
+pub fn linked_from_outside(root: &Path, path: &Path, stored: &Stored) -> Vec<(PathBuf, PathBuf)> {
+    let files: Vec<PathBuf> = match stored {
+        Stored::File { .. } => vec![path.to_path_buf()],
+        Stored::Collection { items } => items.keys().map(|n| path.join(n)).collect(),
+    };
+    let root = std::fs::canonicalize(root).unwrap_or_else(|_| root.to_path_buf());
+    files
+        .into_iter()
+        .filter(|f| std::fs::symlink_metadata(f).is_ok_and(|m| m.file_type().is_symlink()))
+        .filter_map(|f| {
+            let target = std::fs::canonicalize(&f).ok()?;
+            (!target.starts_with(&root)).then_some((f, target))
+        })
+        .collect()
+}
+
 /// Hash a path input through the cache.
 pub fn hash_path(path: &Path, cache: &HashCache) -> Result<Stored, EngineError> {
     if path.is_dir() {

@@ -90,8 +90,11 @@ pub fn stage(
 }
 
 impl Staged {
-    /// Swap the staged copy in: a file by one rename; a folder by moving the old one aside,
-    /// renaming the new one in, and removing the old one.
+    /// Swap the staged copy in: a file by one rename; a folder over a folder item by item, each
+    /// by one rename, then the old items the new output lacks removed, so that a run killed
+    /// meanwhile leaves each file old or new and none missing (the next run finishes the swap);
+    /// a folder over anything else by moving that aside, renaming the new one in, and removing
+    /// what was moved.
     pub fn commit(self) -> Result<(), EngineError> {
         let parent = self.path.parent().unwrap_or(Path::new(".")).to_path_buf();
         let name = self
@@ -99,7 +102,28 @@ impl Staged {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        if self.fresh.is_dir() && (self.path.exists() || self.path.is_symlink()) {
+        let folder_over_folder = self.fresh.is_dir()
+            && self
+                .path
+                .symlink_metadata()
+                .is_ok_and(|m| m.file_type().is_dir());
+        if folder_over_folder {
+            let mut new = std::collections::BTreeSet::new();
+            for entry in std::fs::read_dir(&self.fresh).at(&self.fresh)? {
+                let item = entry.at(&self.fresh)?.file_name();
+                let to = self.path.join(&item);
+                std::fs::rename(self.fresh.join(&item), &to).at(&to)?;
+                new.insert(item);
+            }
+            // what is left was groove's (`check_not_foreign` said so before staging)
+            for entry in std::fs::read_dir(&self.path).at(&self.path)? {
+                let entry = entry.at(&self.path)?;
+                if !new.contains(&entry.file_name()) {
+                    remove_any(&entry.path())?;
+                }
+            }
+            remove_any(&self.fresh)?;
+        } else if self.fresh.is_dir() && (self.path.exists() || self.path.is_symlink()) {
             let old = parent.join(unique_name(&format!(".{name}.groove-old")));
             std::fs::rename(&self.path, &old).at(&self.path)?;
             std::fs::rename(&self.fresh, &self.path).at(&self.path)?;

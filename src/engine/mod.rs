@@ -20,6 +20,7 @@
 //! - `maintenance.rs`: `groove clean` and `groove gc`
 //! - `materialize.rs`: Writing stored outputs to their paths in the project
 //! - `memo.rs`: A stage's object memo
+//! - `object_stamps.rs`: The stat of each loose store object at which its bytes last matched its name
 //! - `pack.rs`: Packs: the many small blobs and entries of one stage run in a few files
 //! - `pack_writer.rs`: Writing packs (`engine::pack`)
 //! - `pipeline.rs`: The validated pipeline
@@ -53,15 +54,19 @@
 //!   wrote there, and anything else in the way stops the run (exit 2) naming it.
 //! - Staged outputs a killed run left (`.NAME.groove-new-*`) are removed by the next run.
 //! - `run`, `status`, `publish` and `pull` agree about state: a reused entry's objects are
-//!   there, a missing or damaged one makes its stage run again, and `pull` replaces a damaged
-//!   local object by the remote's sound one.
+//!   there and match their names (a loose one unchanged since it was last hashed, see
+//!   `engine::object_stamps`), a missing or damaged one makes its stage run again, and `pull`
+//!   replaces a damaged local object by the remote's sound one.
 //! - A kill at any moment of any verb leaves the store and the reports either as they were or
 //!   as they are meant to be; `clean` drops every entry by one rename before anything else.
 //! - `publish` copies one snapshot (the lock and the objects it names) under the project lock.
 //! - Read-only commands stay read-only: `status`, `publish` and `dag` work on a store that
 //!   cannot be written.
 //! - Bad input exits 2 naming its file, row, column or line and the fix, and loses nothing;
-//!   `push` to a remote that is not there exits 2.
+//!   `push` to or `pull` from a remote that is not there exits 2; a failing input that is a link
+//!   out of the project is named, never quoted.
+//! - Memory is bounded on hostile data: ingest checks a CSV header's width and the size of a
+//!   file it reads whole before reading (`ingest::bounds`).
 //!
 //! Flow: [`config::load`] turns `pipeline.toml` into a validated [`pipeline::Pipeline`];
 //! [`evaluate`] walks the DAG in waves, hashing inputs and looking stage keys up in the
@@ -143,7 +148,9 @@
 //!   --times`, `touch -r`), so such an edit is hashed, never missed; a `chmod` moves it too, which
 //!   costs one rehash and reruns nothing. Store objects are not in it: an object is
 //!   named by its sha256, and every read checks its bytes against that name.
-//! - A store object is checked when a stage reads it, not at lookup (a no-op reads none). If one is
+//! - A store object is checked when a stage reads it; at lookup a loose one only has to be
+//!   unchanged (its stat) since its bytes last matched its name (`.groove/objects.stamps`; read and
+//!   hashed once when not), a packed one in a pack read (a no-op reads none). If one is
 //!   missing or damaged, `groove run` drops it, checks every object the run names at lookup, and
 //!   reruns what made it: only the items whose objects were bad; whatever the first pass committed is
 //!   reused. `groove verify` checks them all at any time. With `--executor slurm` (steps read objects
@@ -301,6 +308,7 @@ pub mod lockfile;
 pub mod maintenance;
 pub mod materialize;
 pub mod memo;
+pub mod object_stamps;
 pub mod pack;
 pub mod pack_writer;
 pub mod pipeline;

@@ -101,6 +101,7 @@ pub fn run(
     // temp files of a killed run's atomic writes
     super::materialize::sweep_leftovers(&pipeline.root, "pipeline.lock")?;
     super::materialize::sweep_leftovers(&store_dir, "hashes.json")?;
+    super::materialize::sweep_leftovers(&store_dir, super::object_stamps::FILE)?;
     // ...and the outputs a killed run had staged beside their paths but not swapped in
     let outputs = pipeline.stages.values().flat_map(|s| s.outputs.values());
     super::materialize::sweep_leftovers_of(outputs.flatten().map(|p| p.as_path()));
@@ -309,6 +310,7 @@ fn close(
     store_dir: &std::path::Path,
 ) -> Result<(), EngineError> {
     ctx.hashes.save()?;
+    ctx.store.save_stamps();
     if let Some(p) = ctx.pusher.take() {
         p.finish();
     }

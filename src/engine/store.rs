@@ -161,6 +161,9 @@ pub struct Store {
     /// found when a stage needs it; `groove run` then checks every object and reruns what made
     /// the damaged one (`engine::run`). Off by default.
     pub trust_objects: bool,
+    /// The stat at which each loose object last matched its name, read when first needed:
+    /// with `trust_objects`, an object is taken as sound at lookup only at that stat.
+    stamps: std::sync::OnceLock<super::object_stamps::ObjectStamps>,
     /// What the packs hold, read when first needed (`None` until then).
     packs: RwLock<Option<PackIndex>>,
     entry_packs: RwLock<Option<EntryPacks>>,
@@ -215,6 +218,7 @@ impl Store {
         Store {
             dir,
             trust_objects: false,
+            stamps: std::sync::OnceLock::new(),
             packs: RwLock::new(None),
             entry_packs: RwLock::new(None),
         }
@@ -384,11 +388,16 @@ impl Store {
     pub fn entry_checked(&self, key: &str, hashes: &HashCache) -> Option<Entry> {
         let entry = self.entry(key)?;
         if self.trust_objects {
-            // trusted, an object only has to be there (in a pack read, or a loose file): its
-            // bytes are checked when read, and a damaged one makes `run` check everything
+            // trusted, a packed object only has to be in a pack read (packs are checked on read
+            // and by `groove verify`), a loose one unchanged since its bytes last matched its
+            // name (a `stat`; read and hashed once when not); a damaged one found when read
+            // makes `run` check everything
+            let stamps = self
+                .stamps
+                .get_or_init(|| super::object_stamps::ObjectStamps::load(&self.dir));
             let there = |h: &String| {
                 self.with_packs(false, |i| i.objects.contains_key(h))
-                    || self.object_path(h).is_file()
+                    || stamps.sound(h, &self.object_path(h))
             };
             let all_there = entry.outputs.values().all(|s| stored_objects(s).all(there));
             return all_there.then_some(entry);
@@ -406,6 +415,13 @@ impl Store {
             Stored::Collection { items } => items.par_iter().all(|(_, h)| sound_item(h)),
         });
         sound.then_some(entry)
+    }
+
+    /// Keep the loose objects' stamps taken this run (best-effort).
+    pub fn save_stamps(&self) {
+        if let Some(stamps) = self.stamps.get() {
+            stamps.save();
+        }
     }
 
     /// Load a stored artifact's bytes.

@@ -5,6 +5,7 @@
 //!
 //! - `assemble.rs`: Cross-table checks
 //! - `axis.rs`: Catches a wrong calibration axis of tracker exports
+//! - `bounds.rs`: Limits checked before a dataset file is read
 //! - `columnar.rs`: The fast path of the interchange format
 //! - `csv_check.rs`: Checks of a CSV file's bytes before the parser sees them
 //! - `csv_fast.rs`: Trajectory rows in the layout `groove synth` writes
@@ -217,6 +218,7 @@
 
 mod assemble;
 mod axis;
+pub mod bounds;
 mod columnar;
 pub use columnar::CHUNK_BYTES;
 mod csv_check;

@@ -117,10 +117,14 @@ fn items_of<T: Send>(
     memo: Option<ingest::ItemMemo<T>>,
 ) -> Result<Items<T>, StageError> {
     let failed = |e: ingest::IngestError| StageError(e.to_string());
+    let bound = |p: ingest::Problem| StageError(ingest::IngestError::from(p).to_string());
     let files = match dataset {
         Dataset::InMemory(files) => {
+            for (name, bytes) in files {
+                ingest::bounds::check_header(name, bytes).map_err(bound)?;
+            }
             return ingest::ingest_items_kept(files, params, ingest::CHUNK_BYTES, keep)
-                .map_err(failed)
+                .map_err(failed);
         }
         Dataset::OnDisk(files) => files,
     };
@@ -128,6 +132,20 @@ fn items_of<T: Send>(
     let streamed = ["trajectories.csv", "trajectories.parquet"]
         .into_iter()
         .find(|name| files.contains_key(*name));
+    // every file's header width and, for those read whole, size, before any is read
+    for (name, file) in files {
+        ingest::bounds::check_header(name, &header_bytes(file)?).map_err(bound)?;
+        if Some(name.as_str()) != streamed {
+            let why = "every dataset file but the trajectories is";
+            ingest::bounds::check_whole(
+                name,
+                size_of(file)?,
+                why,
+                "check that it is the file meant",
+            )
+            .map_err(bound)?;
+        }
+    }
     let mut bytes = BTreeMap::new();
     for (name, file) in files {
         let read = match Some(name.as_str()) == streamed {
@@ -159,8 +177,34 @@ fn items_of<T: Send>(
         }
     };
     // not for the fast path: read whole, which sorts the rows or names every problem
+    let whole = format!("it cannot be read in pieces: {why}");
+    let fix = match why.contains("not together") {
+        true => "put each run's rows together (sorted by run) so that it is read in pieces",
+        false => "mend that so that it is read in pieces (a few of its runs, copied to another dataset, name every problem)",
+    };
+    ingest::bounds::check_whole(streamed, size_of(traj)?, &whole, fix).map_err(bound)?;
     bytes.insert(streamed.into(), traj.read()?);
     ingest::ingest_items_whole(&bytes, params, why, keep).map_err(failed)
+}
+
+/// The size of a dataset file on disk.
+fn size_of(file: &InputFile) -> Result<u64, StageError> {
+    std::fs::metadata(&file.path)
+        .map(|m| m.len())
+        .map_err(|e| StageError(format!("{} cannot be read: {e}", file.path.display())))
+}
+
+/// The start of a dataset file, enough to hold its header line (`ingest::bounds::HEADER_BYTES`).
+fn header_bytes(file: &InputFile) -> Result<Vec<u8>, StageError> {
+    use std::io::Read;
+    let mut start = Vec::new();
+    std::fs::File::open(&file.path)
+        .and_then(|f| {
+            f.take(ingest::bounds::HEADER_BYTES as u64)
+                .read_to_end(&mut start)
+        })
+        .map_err(|e| StageError(format!("{} cannot be read: {e}", file.path.display())))?;
+    Ok(start)
 }
 
 /// A trajectories file on disk as the streamed read takes it: read in order through the

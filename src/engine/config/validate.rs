@@ -579,7 +579,7 @@ fn check_references(pipeline: &Pipeline, file: &Source, lines: &Lines) -> Result
 /// Why an output may not be written at `path`, if it may not: outputs stay inside the project
 /// folder or the reports folder, and never land on (or in, or around) the config, the lock, the
 /// store, the dataset or any path input.
-fn forbidden_output(pipeline: &Pipeline, path: &Path) -> Option<String> {
+fn forbidden_output(pipeline: &Pipeline, inputs: &PathInputs, path: &Path) -> Option<String> {
     let inside = |base: &Path| path.starts_with(base) && path != base;
     if !inside(&pipeline.root) && !inside(&pipeline.reports_dir) {
         return Some("outside the project folder and the reports folder".into());
@@ -600,28 +600,37 @@ fn forbidden_output(pipeline: &Pipeline, path: &Path) -> Option<String> {
             pipeline.show(&pipeline.data_dir)
         ));
     }
-    for stage in pipeline.stages.values() {
-        for (name, input) in &stage.inputs {
+    // the first stage (and its first input) in config order that `path` is at or inside
+    let (_, name, stage) = path.ancestors().filter_map(|a| inputs.get(a)).min()?;
+    Some(format!("onto or inside input `{name}` of stage `{stage}`"))
+}
+
+/// Every path input of the pipeline, each with its first reader (stage and input, in the order
+/// the stages and their inputs are kept): an output's ancestors are looked up here, one
+/// search each, not every input of every stage per output (10,000 stages took 7 s).
+type PathInputs<'p> = BTreeMap<&'p Path, ((usize, usize), &'p str, &'p str)>;
+
+fn path_inputs(pipeline: &Pipeline) -> PathInputs<'_> {
+    let mut all = PathInputs::new();
+    for (i, stage) in pipeline.stages.values().enumerate() {
+        for (j, (name, input)) in stage.inputs.iter().enumerate() {
             if let InputSpec::Path { path: input, .. } = input {
-                if path.starts_with(input) {
-                    return Some(format!(
-                        "onto or inside input `{name}` of stage `{}`",
-                        stage.name
-                    ));
-                }
+                all.entry(input.as_path())
+                    .or_insert(((i, j), name.as_str(), stage.name.as_str()));
             }
         }
     }
-    None
+    all
 }
 
 /// No two outputs write one path, nor one inside another.
 fn check_outputs(pipeline: &Pipeline, file: &Source) -> Result<(), EngineError> {
     let mut all: Vec<(&PathBuf, &str, &str, usize)> = Vec::new();
+    let inputs = path_inputs(pipeline);
     for stage in pipeline.stages.values() {
         for (output, path) in &stage.outputs {
             let Some(path) = path else { continue };
-            if let Some(why) = forbidden_output(pipeline, path) {
+            if let Some(why) = forbidden_output(pipeline, &inputs, path) {
                 return Err(file.error(stage.line, format!(
                     "stage `{}` output `{output}` would write {}, {why}; choose a path inside the reports folder",
                     stage.name,

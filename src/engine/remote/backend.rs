@@ -37,6 +37,11 @@ pub trait Backend: Send + Sync {
     fn put_overwrite(&self, name: &str, bytes: &[u8]) -> Result<(), RemoteError>;
     /// What to set when requests are refused or the remote cannot be reached.
     fn hint(&self) -> String;
+    /// Whether the remote is there at all, without a request where that costs one (a bucket
+    /// that is missing shows at its first request instead).
+    fn check_present(&self) -> Result<(), RemoteError> {
+        Ok(())
+    }
 }
 
 /// Request and byte counts of one run, for the closing line and the benchmark.

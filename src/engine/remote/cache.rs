@@ -87,6 +87,15 @@ impl RemoteCache {
         self.backend.inner.hint()
     }
 
+    /// Whether the remote is there at all (a `file://` folder that does not exist is not):
+    /// `Err` is the reason, for the verbs whose whole work is the remote.
+    pub fn check_present(&self) -> Result<(), String> {
+        self.backend
+            .inner
+            .check_present()
+            .map_err(|e| e.to_string())
+    }
+
     pub fn is_disabled(&self) -> bool {
         self.disabled.load(Ordering::Relaxed)
     }

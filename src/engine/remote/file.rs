@@ -113,6 +113,16 @@ impl Backend for FileRemote {
         moved
     }
 
+    fn check_present(&self) -> Result<(), RemoteError> {
+        match self.root.is_dir() {
+            true => Ok(()),
+            false => Err(RemoteError::Unavailable(format!(
+                "{} is not a folder",
+                self.root.display()
+            ))),
+        }
+    }
+
     fn hint(&self) -> String {
         format!(
             "create {} (readable, and writable unless the remote is read-only) or fix the remote URL",
