@@ -132,7 +132,7 @@ fn the_filter_gives_the_quadratic_form_of_the_dense_covariance() {
         .iter()
         .map(|&f| (f as f64 * 0.3).sin() + 0.1)
         .collect();
-    let got: f64 = w.apply(&frames, &vec![0.0; frames.len()], &[y.clone()])[0]
+    let got: f64 = w.apply(&frames, &vec![0.0; frames.len()], std::slice::from_ref(&y))[0]
         .iter()
         .map(|e| e * e)
         .sum();

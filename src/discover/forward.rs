@@ -374,7 +374,7 @@ impl Trials<'_> {
                 self.set.runs,
                 self.set.materials,
                 self.set.opts.alpha,
-                self.set.opts.seed ^ 0x5EED_0F_9A27,
+                self.set.opts.seed ^ 0x005E_ED0F_9A27,
             );
             self.particles_differ = Some(c.is_some_and(|c| c.differ));
         }

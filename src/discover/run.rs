@@ -602,7 +602,7 @@ fn particle_finding(
         runs,
         materials,
         opts.alpha,
-        opts.seed ^ 0x5EED_0F_9A27,
+        opts.seed ^ 0x005E_ED0F_9A27,
     )?;
     let mut parameters = BTreeMap::new();
     let est = crate::artifacts::Estimate::new;

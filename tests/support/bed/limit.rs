@@ -139,7 +139,9 @@ impl Basis {
 
     /// Whitens the series `cols` over `keys` of run `run`, one track (particle) at a time.
     fn whiten(&self, run: usize, keys: &[usize], cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
-        let mut out = vec![Vec::with_capacity(keys.len()); cols.len()];
+        let mut out = (0..cols.len())
+            .map(|_| Vec::with_capacity(keys.len()))
+            .collect::<Vec<Vec<f64>>>();
         let mut start = 0;
         while start < keys.len() {
             let particle = keys[start] / PARTICLE_KEY;
@@ -186,7 +188,9 @@ impl Basis {
                 .copied()
                 .filter(|k| run.rows.contains_key(k))
                 .collect();
-            let mut cols = vec![Vec::with_capacity(keys.len()); 6];
+            let mut cols = (0..6)
+                .map(|_| Vec::with_capacity(keys.len()))
+                .collect::<Vec<Vec<f64>>>();
             for k in &keys {
                 let (l, g) = &run.rows[k];
                 for (c, x) in cols.iter_mut().zip(l.iter().chain(g).chain([&d[k]])) {

@@ -46,7 +46,9 @@ impl Whitener {
     /// frames were dropped; `speed` the particle's speed at each frame).
     pub fn apply(&self, frames: &[usize], speed: &[f64], cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
         let k = cols.len();
-        let mut out = vec![Vec::with_capacity(frames.len()); k];
+        let mut out = (0..k)
+            .map(|_| Vec::with_capacity(frames.len()))
+            .collect::<Vec<Vec<f64>>>();
         // state estimate per column, and the shared state covariance
         let mut x = vec![[0.0f64; 2]; k];
         let mut p = [[self.ar[0].0, 0.0], [0.0, self.ar[1].0]];
