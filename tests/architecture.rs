@@ -719,3 +719,57 @@ fn the_readme_keeps_its_set_up_and_reference_sections() {
         }
     }
 }
+
+/// Every file below `dir` whose text names a document that is not in the repository (the notes
+/// the code was first written from), as `path: name`.
+fn outside_documents(dir: &Path) -> Vec<String> {
+    const NAMES: [&str; 5] = [
+        "physics.md",
+        "data-format.md",
+        "engine-lessons.md",
+        "scaleout.md",
+        "../shared/",
+    ];
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if let Ok(text) = fs::read_to_string(&path) {
+                for name in NAMES.iter().filter(|n| text.contains(**n)) {
+                    found.push(format!("{}: {name}", rel(repo(), &path)));
+                }
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+#[test]
+fn no_code_template_or_test_names_a_document_outside_the_repository() {
+    let mut found = outside_documents(&repo().join("src"));
+    found.extend(
+        outside_documents(&repo().join("tests"))
+            .into_iter()
+            .filter(|f| !f.starts_with("tests/architecture.rs")),
+    );
+    assert!(found.is_empty(), "names outside the repository: {found:?}");
+}
+
+#[test]
+fn the_outside_document_check_catches_a_template_naming_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    write(
+        tmp.path(),
+        &[(
+            "src/report/templates/page.md.jinja",
+            "Each defect listed in physics.md.\n",
+        )],
+    );
+    let found = outside_documents(tmp.path());
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].ends_with("page.md.jinja: physics.md"), "{found:?}");
+}

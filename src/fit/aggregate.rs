@@ -5,6 +5,7 @@
 //! Theil–Sen lines.
 
 use super::bootstrap::percentile_intervals_in_groups;
+use super::options::OptionError;
 use super::regression::{kept_table, mean_kept, mean_where, RobustMean};
 use super::single::SingleFit;
 use crate::artifacts::run_fit::FitStatus;
@@ -42,30 +43,25 @@ impl Default for AggregateOptions {
 
 impl AggregateOptions {
     /// Check ranges; the error names the key and a valid range.
-    pub fn validate(&self) -> Result<(), (String, String)> {
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let bad = |key, message| Err(OptionError { key, message });
         if !(100..=1_000_000).contains(&self.bootstrap_resamples) {
-            return Err((
-                "bootstrap_resamples".into(),
-                "must be between 100 and 1000000, e.g. 2000".into(),
-            ));
+            return bad(
+                "bootstrap_resamples",
+                "must be between 100 and 1000000, e.g. 2000",
+            );
         }
         if !(self.level > 0.5 && self.level < 1.0) {
-            return Err((
-                "level".into(),
-                "must be between 0.5 and 1, e.g. 0.95".into(),
-            ));
+            return bad("level", "must be between 0.5 and 1, e.g. 0.95");
         }
         if !(self.fast_min_speed_mps >= 0.0 && self.fast_min_speed_mps.is_finite()) {
-            return Err((
-                "fast_min_speed_mps".into(),
-                "must be a speed ≥ 0 in m/s, e.g. 0.03".into(),
-            ));
+            return bad(
+                "fast_min_speed_mps",
+                "must be a speed ≥ 0 in m/s, e.g. 0.03",
+            );
         }
         if !(self.k > 0.0 && self.k.is_finite()) {
-            return Err((
-                "k".into(),
-                "must be positive (2.5 for a solid sphere)".into(),
-            ));
+            return bad("k", "must be positive (2.5 for a solid sphere)");
         }
         Ok(())
     }

@@ -5,6 +5,15 @@ use crate::lsq::loss::Loss;
 use crate::physics::Groove;
 use serde::{Deserialize, Serialize};
 
+/// A fit-side param out of range: its key, and what is wrong with a valid value to use
+/// (lowercase; the engine says it at the param's line of pipeline.toml).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("param `{key}`: {message}")]
+pub struct OptionError {
+    pub key: &'static str,
+    pub message: &'static str,
+}
+
 /// How runs are fitted. Defaults are the chapter's groove and a Huber loss.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -53,8 +62,8 @@ impl FitOptions {
     }
 
     /// Check ranges; the error names the key and a valid range.
-    pub fn validate(&self) -> Result<(), (String, String)> {
-        let bad = |key: &str, msg: &str| Err((key.to_string(), msg.to_string()));
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let bad = |key, message| Err(OptionError { key, message });
         if !(self.groove_angle_deg > 0.0 && self.groove_angle_deg < 180.0) {
             return bad(
                 "groove_angle_deg",
@@ -80,5 +89,30 @@ impl FitOptions {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_option_out_of_range_is_a_typed_error_naming_its_key_and_a_valid_value() {
+        assert_eq!(FitOptions::default().validate(), Ok(()));
+        let wide = FitOptions {
+            groove_angle_deg: 190.0,
+            ..FitOptions::default()
+        };
+        let e = wide.validate().unwrap_err();
+        assert_eq!(e.key, "groove_angle_deg");
+        assert_eq!(
+            e.to_string(),
+            "param `groove_angle_deg`: must be between 0 and 180 degrees, e.g. 70.6"
+        );
+        let few = FitOptions {
+            min_frames: 3,
+            ..FitOptions::default()
+        };
+        assert_eq!(few.validate().unwrap_err().key, "min_frames");
     }
 }

@@ -12,7 +12,7 @@
 //! - `settings.rs`: `[remote]` in `pipeline.toml`
 //! - `sync.rs`: `groove push` and `groove pull`
 //!
-//! [`backend`] is what a remote must do (get, exists, create-if-absent; never list), [`file`]
+//! [`backend`] is what a remote must do (get, exists, create-if-absent; never list), [`file`](mod@file)
 //! and `s3` are the two backends, [`cache`] does lookups with sha256 verification and the
 //! counts, [`push`] uploads with bounded concurrency (blobs first, entry last), [`sync`] is
 //! `groove push` / `groove pull`.
