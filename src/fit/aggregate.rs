@@ -26,8 +26,11 @@ pub struct AggregateOptions {
     /// The chapter averages μ over runs faster than this.
     pub fast_min_speed_mps: f64,
     /// k = m R² / I of the particles (for μ_pp from the collisions); keep it equal to the fit
-    /// stage's `k`.
+    /// stage's `k` (`[project] params` sets both).
     pub k: f64,
+    /// Opening angle of the groove, degrees, for the whole-run collision fits (the chapter's
+    /// 70.6 by default; `[project] params` sets it for every stage).
+    pub groove_angle_deg: f64,
 }
 
 impl Default for AggregateOptions {
@@ -37,6 +40,7 @@ impl Default for AggregateOptions {
             level: 0.95,
             fast_min_speed_mps: 0.03,
             k: 2.5,
+            groove_angle_deg: 70.6,
         }
     }
 }
@@ -60,9 +64,7 @@ impl AggregateOptions {
                 "must be a speed ≥ 0 in m/s, e.g. 0.03",
             );
         }
-        if !(self.k > 0.0 && self.k.is_finite()) {
-            return bad("k", "must be positive (2.5 for a solid sphere)");
-        }
+        super::options::check_groove(self.groove_angle_deg, self.k)?;
         Ok(())
     }
 }

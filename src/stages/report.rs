@@ -1,8 +1,11 @@
 //! The `report` stage kind: report.html (self-contained) and report.md from the figures and artifacts.
 
+use super::fit_io::param_error;
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
+use crate::fit::options::check_groove;
+use crate::physics::Groove;
 use crate::report::inputs::{Input, Inputs};
 use crate::report::{render_pages, ReportData};
 use serde::{Deserialize, Serialize};
@@ -17,6 +20,10 @@ pub struct ReportParams {
     /// Seconds since the Unix epoch of the date printed under the title (pass `SOURCE_DATE_EPOCH`);
     /// no date is printed without it, so the report never depends on the clock.
     pub source_date_epoch: Option<i64>,
+    /// Opening angle of the groove, degrees (the chapter's 70.6 by default).
+    pub groove_angle_deg: f64,
+    /// k = m R² / I of the particles (5/2, a solid sphere, by default).
+    pub k: f64,
 }
 
 impl Default for ReportParams {
@@ -24,6 +31,8 @@ impl Default for ReportParams {
         ReportParams {
             title: "groove: micro-particles in a v-groove — the chapter reproduced".into(),
             source_date_epoch: None,
+            groove_angle_deg: 70.6,
+            k: 2.5,
         }
     }
 }
@@ -56,12 +65,15 @@ impl StageKind for Report {
         &["html", "md"]
     }
     fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
-        typed_params::<ReportParams>(params).map(|(_, json)| json)
+        let (p, json) = typed_params::<ReportParams>(params)?;
+        check_groove(p.groove_angle_deg, p.k).map_err(param_error)?;
+        Ok(json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let (p, _) =
             typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
-        let data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
+        let mut data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
+        data.groove = Groove::of_params(p.groove_angle_deg, p.k);
         let figures: BTreeMap<String, String> = match input.inputs.get("figures") {
             Some(Artifact::Collection(m)) => m
                 .iter()

@@ -70,7 +70,9 @@ fn copy_dir(from: &Path, to: &Path) {
 }
 
 fn main() {
-    println!("groove engine overhead (median wall time; DVC 3.67 / Snakemake 9.27 as measured for them)");
+    println!(
+        "groove engine overhead (median wall time; DVC 3.67 / Snakemake 9.27 as measured for them)"
+    );
 
     let small = project(3);
     let full = once(small.path(), &["run"]);

@@ -595,7 +595,9 @@ mod tests {
             particle,
             frame: (0..n as i64).collect(),
             t_s: (0..n).map(|k| k as f64 * 1e-4).collect(),
-            z_m: (0..n).map(|k| particle as f64 * 1e-3 + k as f64 * 1e-5).collect(),
+            z_m: (0..n)
+                .map(|k| particle as f64 * 1e-3 + k as f64 * 1e-5)
+                .collect(),
         };
         Recording {
             info: RunInfo {
@@ -621,6 +623,8 @@ mod tests {
         alone.tracks.pop();
         let missing = PairRun::from_recording(&alone, None).unwrap_err();
         assert_eq!(missing, PairRunError::MissingTrack);
-        assert!(missing.to_string().contains("particle 0 (striker) and 1 (target)"));
+        assert!(missing
+            .to_string()
+            .contains("particle 0 (striker) and 1 (target)"));
     }
 }
