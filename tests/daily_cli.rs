@@ -559,3 +559,54 @@ fn the_groove_angle_set_once_reaches_every_stage_and_gives_back_the_mu_the_data_
         "μ on the wrong groove: {wrong}"
     );
 }
+
+#[test]
+fn diff_defaults_to_the_last_published_bundle_and_the_report_compares_with_a_baseline() {
+    let project = copy_of_base("baseline");
+    ok(
+        &groove(&project, &["publish", "--to", "published"]),
+        "publish",
+    );
+    // with no arguments: the bundle just published against the working reports
+    let said = ok(&groove(&project, &["diff"]), "diff with no arguments");
+    let first = said.lines().next().unwrap();
+    assert!(
+        first.contains("published") && first.ends_with("B = reports"),
+        "{said}"
+    );
+    assert!(said.contains(" 0 of "), "{said}");
+    // the report given the bundle as its baseline, after a param change
+    let toml = project.join("pipeline.toml");
+    let edited = std::fs::read_to_string(&toml)
+        .unwrap()
+        .replace(
+            "kind = \"aggregate\"\n",
+            "kind = \"aggregate\"\nparams = { fast_min_speed_mps = 0.0 }\n",
+        )
+        .replace(
+            "skipped = \"ingest:skipped\" }",
+            "skipped = \"ingest:skipped\", baseline = { path = \"published\", optional = true } }",
+        );
+    assert!(edited.contains("baseline = {"), "{edited}");
+    std::fs::write(&toml, edited).unwrap();
+    ok(&groove(&project, &["run"]), "run with a baseline");
+    let md = std::fs::read_to_string(project.join("reports/report.md")).unwrap();
+    assert!(
+        md.contains("6. Provenance · 7. Compared with the baseline"),
+        "{md}"
+    );
+    let section = md
+        .split("## 7. Compared with the baseline")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no baseline section:\n{md}"));
+    assert!(section.contains("numbers changed"), "{section}");
+    assert!(
+        section.contains("| summary.json | single.materials.316.mu_fast |"),
+        "{section}"
+    );
+    let html = std::fs::read_to_string(project.join("reports/report.html")).unwrap();
+    assert!(html.contains("<a href=\"#baseline\">7. Compared with the baseline</a>"));
+    // without a baseline the report has no such section (the shipped report is unchanged)
+    let base_md = std::fs::read_to_string(base().join("reports/report.md")).unwrap();
+    assert!(!base_md.contains("Compared with the baseline"));
+}

@@ -33,6 +33,9 @@ pub struct ReportData {
     /// The groove of the analysis (the stage's params `groove_angle_deg` and `k`, which
     /// `[project] params` sets for every stage at once); the chapter's by default.
     pub groove: Groove,
+    /// This run's summary.json and diagnosis.json against a baseline's (the report stage's
+    /// optional input `baseline`: an earlier reports folder or published bundle).
+    pub baseline: Option<super::diff::Diff>,
 }
 
 /// One input of a `figures` or `report` stage, unpacked by the stage adapter: a single file, or

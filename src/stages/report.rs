@@ -6,6 +6,7 @@ use crate::engine::stage::{
 };
 use crate::fit::options::check_groove;
 use crate::physics::Groove;
+use crate::report::diff::{compare, Diff, Side, FILES};
 use crate::report::inputs::{Input, Inputs};
 use crate::report::{render_pages, ReportData};
 use serde::{Deserialize, Serialize};
@@ -59,6 +60,7 @@ impl StageKind for Report {
             "validation",
             "provenance",
             "skipped",
+            "baseline",
         ]
     }
     fn outputs(&self) -> &'static [&'static str] {
@@ -74,6 +76,7 @@ impl StageKind for Report {
             typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
         let mut data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
         data.groove = Groove::of_params(p.groove_angle_deg, p.k);
+        data.baseline = baseline(&input.inputs)?;
         let figures: BTreeMap<String, String> = match input.inputs.get("figures") {
             Some(Artifact::Collection(m)) => m
                 .iter()
@@ -88,6 +91,58 @@ impl StageKind for Report {
             ("md".to_string(), Artifact::File(pages.md.into_bytes())),
         ]))
     }
+}
+
+/// This run's summary.json and diagnosis.json (the inputs `summary`, `diagnosis`) against those
+/// of the input `baseline`, a folder of an earlier result (a reports folder or a published
+/// bundle: its top-level files), when it is bound.
+fn baseline(inputs: &BTreeMap<&str, &Artifact>) -> Result<Option<Diff>, StageError> {
+    let Some(given) = inputs.get("baseline") else {
+        return Ok(None);
+    };
+    let Artifact::Collection(items) = given else {
+        return Err(StageError(
+            "input `baseline` must be a folder holding an earlier summary.json and diagnosis.json (a reports folder or a published bundle): bind it as baseline = { path = \"...\", optional = true }".into(),
+        ));
+    };
+    let json = |what: &str, bytes: &[u8]| {
+        serde_json::from_slice::<serde_json::Value>(bytes).map_err(|e| {
+            StageError(format!(
+                "{what} is not JSON ({e}); point `baseline` at a reports folder or a published bundle"
+            ))
+        })
+    };
+    let mut before = Side {
+        label: "the baseline".into(),
+        files: BTreeMap::new(),
+        lock: None,
+    };
+    let mut now = Side {
+        label: "this run".into(),
+        files: BTreeMap::new(),
+        lock: None,
+    };
+    for (file, input) in FILES.into_iter().zip(["summary", "diagnosis"]) {
+        if let Some(bytes) = items.get(file) {
+            before
+                .files
+                .insert(file, json(&format!("the baseline's {file}"), bytes)?);
+        }
+        if let Some(Artifact::File(bytes)) = inputs.get(input) {
+            now.files
+                .insert(file, json(&format!("this run's {file}"), bytes)?);
+        }
+    }
+    if before.files.is_empty() {
+        return Err(StageError(format!(
+            "the baseline folder holds neither summary.json nor diagnosis.json (it holds {}); point `baseline` at a reports folder or a published bundle",
+            items.keys().cloned().collect::<Vec<_>>().join(", ")
+        )));
+    }
+    if let Some(lock) = items.get("pipeline.lock") {
+        before.lock = Some(json("the baseline's pipeline.lock", lock)?);
+    }
+    Ok(Some(compare(&before, &now)))
 }
 
 /// The engine's artifacts as the report reads them: files as bytes, collections as their items.
