@@ -174,3 +174,25 @@ impl Backend for FileRemote {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_write_is_named_a_permission_problem_with_the_fix() {
+        let remote = FileRemote::new(Path::new("/shared/cache"));
+        let refused = remote.io_error(
+            Path::new("/shared/cache/objects/ab"),
+            std::io::Error::from(ErrorKind::PermissionDenied),
+        );
+        let RemoteError::Unavailable(said) = refused else {
+            panic!("{refused}");
+        };
+        assert!(
+            said.starts_with("/shared/cache/objects/ab: permission denied, a permission problem"),
+            "{said}"
+        );
+        assert!(said.contains("[remote] shared = \"group\""), "{said}");
+    }
+}
