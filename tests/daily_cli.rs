@@ -11,50 +11,16 @@
 #[path = "support/files.rs"]
 mod files;
 
-use files::{copy_tree, repo, scratch, text, GROOVE};
+use files::{copy_tree, groove, ok, repo, scratch, synth, text};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 use std::sync::OnceLock;
-
-fn groove(cwd: &Path, args: &[&str]) -> Output {
-    std::process::Command::new(GROOVE)
-        .args(args)
-        .current_dir(cwd)
-        .env_remove("GROOVE_REMOTE")
-        .output()
-        .expect("the groove binary starts")
-}
-
-fn ok(out: &Output, what: &str) -> String {
-    assert!(
-        out.status.success(),
-        "{what} failed ({:?})\nstdout:\n{}\nstderr:\n{}",
-        out.status.code(),
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
 
 /// The dataset, synthesized once.
 fn dataset() -> &'static Path {
     static DATA: OnceLock<PathBuf> = OnceLock::new();
     DATA.get_or_init(|| {
         let out = scratch("daily_cli").join("dataset");
-        let truth = repo().join("tests/fixtures/truths/e2e_small.toml");
-        ok(
-            &groove(
-                scratch("daily_cli"),
-                &[
-                    "synth",
-                    "--truth",
-                    truth.to_str().unwrap(),
-                    "--out",
-                    out.to_str().unwrap(),
-                ],
-            ),
-            "groove synth",
-        );
+        synth(scratch("daily_cli"), "e2e_small", &out);
         out
     })
 }
