@@ -719,3 +719,118 @@ fn the_readme_keeps_its_set_up_and_reference_sections() {
         }
     }
 }
+
+/// Every file below `dir` whose text names a document that is not in the repository (the notes
+/// the code was first written from), as `path: name`.
+fn outside_documents(dir: &Path) -> Vec<String> {
+    const NAMES: [&str; 5] = [
+        "physics.md",
+        "data-format.md",
+        "engine-lessons.md",
+        "scaleout.md",
+        "../shared/",
+    ];
+    let mut found = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if let Ok(text) = fs::read_to_string(&path) {
+                for name in NAMES.iter().filter(|n| text.contains(**n)) {
+                    found.push(format!("{}: {name}", rel(repo(), &path)));
+                }
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+#[test]
+fn no_code_template_or_test_names_a_document_outside_the_repository() {
+    let mut found = outside_documents(&repo().join("src"));
+    found.extend(
+        outside_documents(&repo().join("tests"))
+            .into_iter()
+            .filter(|f| !f.starts_with("tests/architecture.rs")),
+    );
+    assert!(found.is_empty(), "names outside the repository: {found:?}");
+}
+
+#[test]
+fn the_outside_document_check_catches_a_template_naming_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    write(
+        tmp.path(),
+        &[(
+            "src/report/templates/page.md.jinja",
+            "Each defect listed in physics.md.\n",
+        )],
+    );
+    let found = outside_documents(tmp.path());
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].ends_with("page.md.jinja: physics.md"), "{found:?}");
+}
+
+/// The test files (outside `tests/support/` and the benches) that start the groove binary
+/// themselves instead of through the helpers of `tests/support/` (`files::groove`,
+/// `cli::command`, `project::Project`).
+fn own_spawns(tests: &Path) -> Vec<String> {
+    let mut found = Vec::new();
+    for entry in fs::read_dir(tests).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|x| x != "rs") {
+            continue;
+        }
+        let text = fs::read_to_string(&path).unwrap();
+        let n = text.matches("Command::new(GROOVE)").count()
+            + text
+                .matches("Command::new(env!(\"CARGO_BIN_EXE_groove\"))")
+                .count();
+        if n > 0 {
+            found.push(path.file_name().unwrap().to_string_lossy().into_owned());
+        }
+    }
+    found.sort();
+    found
+}
+
+#[test]
+fn the_test_binaries_start_groove_through_the_shared_helpers() {
+    // each of these starts it in a way no helper offers, said beside the name
+    let own = [
+        "architecture.rs",    // this check's own example
+        "engine.rs",          // `--help` of every verb, outside any project
+        "hostile_project.rs", // a timed spawn it kills when it hangs
+        "ingest.rs",          // `synth` of a truth made in the test, output silenced
+        "ingest_campaign.rs", // the same, in Parquet too
+        "reports_current.rs", // the shipped project, exactly as a user runs it
+    ];
+    let found = own_spawns(&repo().join("tests"));
+    let extra: Vec<&String> = found
+        .iter()
+        .filter(|f| !own.contains(&f.as_str()))
+        .collect();
+    assert!(
+        extra.is_empty(),
+        "start groove through tests/support (files::groove, cli::command, project::Project): {extra:?}"
+    );
+}
+
+#[test]
+fn the_own_spawn_check_catches_a_test_starting_the_binary_itself() {
+    let tmp = tempfile::tempdir().unwrap();
+    write(
+        tmp.path(),
+        &[
+            (
+                "mine.rs",
+                "fn groove() { Command::new(env!(\"CARGO_BIN_EXE_groove\")).output(); }\n",
+            ),
+            ("helped.rs", "fn groove() { files::groove(dir, &[]); }\n"),
+        ],
+    );
+    assert_eq!(own_spawns(tmp.path()), ["mine.rs"]);
+}

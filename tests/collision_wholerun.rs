@@ -210,7 +210,7 @@ fn diagnose(recs: &[Recording], seed: u64) -> groove::discover::Diagnosis {
         ..groove::discover::Options::default()
     };
     let mut d = groove::discover::discover(recs, &options);
-    groove::discover::pairs::add_pair_findings(&mut d, recs);
+    groove::discover::pairs::add_pair_findings(&mut d, recs, Groove::CHAPTER);
     d
 }
 

@@ -11,50 +11,16 @@
 #[path = "support/files.rs"]
 mod files;
 
-use files::{copy_tree, repo, scratch, text, GROOVE};
+use files::{copy_tree, groove, ok, repo, scratch, synth, text};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 use std::sync::OnceLock;
-
-fn groove(cwd: &Path, args: &[&str]) -> Output {
-    std::process::Command::new(GROOVE)
-        .args(args)
-        .current_dir(cwd)
-        .env_remove("GROOVE_REMOTE")
-        .output()
-        .expect("the groove binary starts")
-}
-
-fn ok(out: &Output, what: &str) -> String {
-    assert!(
-        out.status.success(),
-        "{what} failed ({:?})\nstdout:\n{}\nstderr:\n{}",
-        out.status.code(),
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
 
 /// The dataset, synthesized once.
 fn dataset() -> &'static Path {
     static DATA: OnceLock<PathBuf> = OnceLock::new();
     DATA.get_or_init(|| {
         let out = scratch("daily_cli").join("dataset");
-        let truth = repo().join("tests/fixtures/truths/e2e_small.toml");
-        ok(
-            &groove(
-                scratch("daily_cli"),
-                &[
-                    "synth",
-                    "--truth",
-                    truth.to_str().unwrap(),
-                    "--out",
-                    out.to_str().unwrap(),
-                ],
-            ),
-            "groove synth",
-        );
+        synth(scratch("daily_cli"), "e2e_small", &out);
         out
     })
 }
@@ -450,4 +416,163 @@ fn positions_in_millimetres_stop_with_the_fix() {
     assert!(err.contains("the positions are not in metres"), "{err}");
     assert!(err.contains("divide them by 1000"), "{err}");
     assert!(!project.join("reports/report.html").exists());
+}
+
+/// μ of every converged single-run fit in `reports/fits.csv`, by run.
+fn converged_mu(project: &Path) -> std::collections::BTreeMap<String, f64> {
+    let csv = std::fs::read_to_string(project.join("reports/fits.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (run, mu, status) = (col("run"), col("mu"), col("status"));
+    lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|f| f[status] == "converged")
+        .map(|f| (f[run].to_string(), f[mu].parse().unwrap()))
+        .collect()
+}
+
+/// The median of `values`.
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+#[test]
+fn the_groove_angle_set_once_reaches_every_stage_and_gives_back_the_mu_the_data_were_made_with() {
+    // the small dataset made on a 90° groove (the chapter's is 70.6°), μ = 0.337 for 316
+    let dir = scratch("daily_cli").join("groove_90");
+    let truth = std::fs::read_to_string(repo().join("tests/fixtures/truths/e2e_small.toml"))
+        .unwrap()
+        .replace("theta_deg = 70.6", "theta_deg = 90.0");
+    assert!(truth.contains("theta_deg = 90.0") && truth.contains("mu = 0.337"));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("truth.toml"), truth).unwrap();
+    let out = dir.join("data").to_str().unwrap().to_string();
+    ok(
+        &groove(&dir, &["synth", "--truth", "truth.toml", "--out", &out]),
+        "synth at 90°",
+    );
+    let pipeline = std::fs::read_to_string(repo().join("pipeline.toml")).unwrap();
+    assert!(pipeline.contains("groove_angle_deg = 70.6"), "{pipeline}");
+    let at = |angle: &str| {
+        std::fs::write(
+            dir.join("pipeline.toml"),
+            pipeline.replace(
+                "groove_angle_deg = 70.6",
+                &format!("groove_angle_deg = {angle}"),
+            ),
+        )
+        .unwrap();
+    };
+    let mu_316 = || {
+        let mu = converged_mu(&dir);
+        let of_316: Vec<f64> = mu
+            .iter()
+            .filter(|(run, _)| run.contains("316"))
+            .map(|(_, mu)| *mu)
+            .collect();
+        assert!(of_316.len() >= 5, "{mu:?}");
+        median(of_316)
+    };
+    at("90");
+    ok(&groove(&dir, &["run"]), "run at 90°");
+    let right = mu_316();
+    assert!(
+        (right / 0.337 - 1.0).abs() < 0.03,
+        "μ on the data's own groove: {right}"
+    );
+    // the report draws and states the groove it was given
+    let md = std::fs::read_to_string(dir.join("reports/report.md")).unwrap();
+    assert!(md.contains("| opening angle θ (°) | 90.0 | 70.6 |"), "{md}");
+    assert!(md.contains("no secondary collision follows"), "{md}");
+    // set once: every stage that fits, simulates or draws the motion takes it, so its key changes
+    at("70.6");
+    let status: serde_json::Value =
+        serde_json::from_str(&ok(&groove(&dir, &["status", "--json"]), "status")).unwrap();
+    for stage in [
+        "fit",
+        "simulate",
+        "aggregate",
+        "discover",
+        "figures",
+        "report",
+    ] {
+        let s = status
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["stage"] == stage)
+            .unwrap();
+        assert!(
+            s["reasons"]
+                .to_string()
+                .contains("param `groove_angle_deg` changed: 90 → 70.6")
+                || s["reasons"]
+                    .to_string()
+                    .contains("param `groove_angle_deg` changed: 90.0 → 70.6"),
+            "{stage}: {s}"
+        );
+    }
+    // on the chapter's groove the same recordings give another μ, far from the one they hold
+    ok(
+        &groove(&dir, &["run", "aggregate"]),
+        "run aggregate at 70.6°",
+    );
+    let wrong = mu_316();
+    assert!(
+        (wrong / 0.337 - 1.0).abs() > 0.1,
+        "μ on the wrong groove: {wrong}"
+    );
+}
+
+#[test]
+fn diff_defaults_to_the_last_published_bundle_and_the_report_compares_with_a_baseline() {
+    let project = copy_of_base("baseline");
+    ok(
+        &groove(&project, &["publish", "--to", "published"]),
+        "publish",
+    );
+    // with no arguments: the bundle just published against the working reports
+    let said = ok(&groove(&project, &["diff"]), "diff with no arguments");
+    let first = said.lines().next().unwrap();
+    assert!(
+        first.contains("published") && first.ends_with("B = reports"),
+        "{said}"
+    );
+    assert!(said.contains(" 0 of "), "{said}");
+    // the report given the bundle as its baseline, after a param change
+    let toml = project.join("pipeline.toml");
+    let edited = std::fs::read_to_string(&toml)
+        .unwrap()
+        .replace(
+            "kind = \"aggregate\"\n",
+            "kind = \"aggregate\"\nparams = { fast_min_speed_mps = 0.0 }\n",
+        )
+        .replace(
+            "skipped = \"ingest:skipped\" }",
+            "skipped = \"ingest:skipped\", baseline = { path = \"published\", optional = true } }",
+        );
+    assert!(edited.contains("baseline = {"), "{edited}");
+    std::fs::write(&toml, edited).unwrap();
+    ok(&groove(&project, &["run"]), "run with a baseline");
+    let md = std::fs::read_to_string(project.join("reports/report.md")).unwrap();
+    assert!(
+        md.contains("6. Provenance · 7. Compared with the baseline"),
+        "{md}"
+    );
+    let section = md
+        .split("## 7. Compared with the baseline")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no baseline section:\n{md}"));
+    assert!(section.contains("numbers changed"), "{section}");
+    assert!(
+        section.contains("| summary.json | single.materials.316.mu_fast |"),
+        "{section}"
+    );
+    let html = std::fs::read_to_string(project.join("reports/report.html")).unwrap();
+    assert!(html.contains("<a href=\"#baseline\">7. Compared with the baseline</a>"));
+    // without a baseline the report has no such section (the shipped report is unchanged)
+    let base_md = std::fs::read_to_string(base().join("reports/report.md")).unwrap();
+    assert!(!base_md.contains("Compared with the baseline"));
 }

@@ -10,10 +10,13 @@
 #[path = "support/files.rs"]
 mod files;
 
-use files::{assert_names, copy_tree, edit_line, repo, scratch, text, tree_hashes, GROOVE};
+use files::cli::RUN_IN_PROJECT;
+use files::{
+    assert_names, copy_tree, edit_line, groove, ok, repo, scratch, synth, text, tree_hashes,
+};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 const SINGLE_RUNS: usize = 16;
 const FITS_HEADER: &str = "run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status";
@@ -46,18 +49,7 @@ fn shared() -> &'static Shared {
     static SHARED: OnceLock<Shared> = OnceLock::new();
     SHARED.get_or_init(|| {
         let dataset = scratch("e2e").join("dataset");
-        let truth = repo().join("tests/fixtures/truths/e2e_small.toml");
-        let out = groove(
-            scratch("e2e"),
-            &[
-                "synth",
-                "--truth",
-                truth.to_str().unwrap(),
-                "--out",
-                dataset.to_str().unwrap(),
-            ],
-        );
-        assert_success(&out, "groove synth");
+        synth(scratch("e2e"), "e2e_small", &dataset);
         let project = new_project("main", &dataset, true);
         let first = run(&project, &[]);
         let reports_after_first = tree_hashes(&project.join("reports"));
@@ -72,38 +64,15 @@ fn shared() -> &'static Shared {
     })
 }
 
-/// Runs the binary in `cwd`.
-fn groove(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(GROOVE)
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the groove binary starts")
-}
-
 /// `groove run --config pipeline.toml --data data --out reports` in the project folder.
 fn run(project: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "run",
-        "--config",
-        "pipeline.toml",
-        "--data",
-        "data",
-        "--out",
-        "reports",
-    ];
+    let mut args = RUN_IN_PROJECT.to_vec();
     args.extend_from_slice(extra);
     groove(project, &args)
 }
 
 fn assert_success(out: &Output, what: &str) {
-    assert!(
-        out.status.success(),
-        "{what} failed ({:?})\nstdout:\n{}\nstderr:\n{}",
-        out.status.code(),
-        text(&out.stdout),
-        text(&out.stderr)
-    );
+    ok(out, what);
 }
 
 /// A project folder: the repo's own pipeline.toml and a copy of the dataset's top-level files

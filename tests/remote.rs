@@ -712,3 +712,114 @@ mod s3 {
         println!("  re-push to s3: {}", line(&re_s3, "s3://"));
     }
 }
+
+/// The mode bits of every folder and file under `dir`, the folder itself included.
+fn modes(dir: &Path) -> (Vec<(PathBuf, u32)>, Vec<(PathBuf, u32)>) {
+    use std::os::unix::fs::PermissionsExt;
+    let (mut dirs, mut regular) = (Vec::new(), Vec::new());
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        dirs.push((
+            d.clone(),
+            std::fs::metadata(&d).unwrap().permissions().mode(),
+        ));
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let mode = std::fs::metadata(&path).unwrap().permissions().mode();
+                regular.push((path, mode));
+            }
+        }
+    }
+    (dirs, regular)
+}
+
+/// Whether every folder under `remote` (not the root, which is the share's) is g+rwx and setgid
+/// and every file g+rw.
+fn group_shared(remote: &Path) -> Result<(), String> {
+    let (dirs, regular) = modes(remote);
+    assert!(
+        regular.len() >= 4 && dirs.len() >= 3,
+        "{dirs:?} {regular:?}"
+    );
+    for (d, mode) in dirs.into_iter().skip(1) {
+        if mode & 0o2070 != 0o2070 {
+            return Err(format!("{}: folder mode {mode:o}", d.display()));
+        }
+    }
+    for (f, mode) in regular {
+        if mode & 0o060 != 0o060 {
+            return Err(format!("{}: file mode {mode:o}", f.display()));
+        }
+    }
+    Ok(())
+}
+
+/// `groove ARGS` in the project under umask 022, which takes group write from what it makes.
+fn under_umask_022(p: &Project, args: &[&str]) {
+    let out = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("umask 022 && exec \"$0\" \"$@\"")
+        .arg(project::GROOVE)
+        .args(args)
+        .current_dir(p.root())
+        .env_remove("GROOVE_REMOTE")
+        .env_remove("GROOVE_REMOTE_READ_ONLY")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "groove {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_remote_shared_with_the_group_gets_group_write_whatever_the_umask() {
+    let scratch = tempfile::tempdir().unwrap();
+    let remote = scratch.path().join("share/cache");
+    std::fs::create_dir_all(&remote).unwrap();
+    let shared = format!(
+        "{PIPELINE}\n[remote]\nurl = \"{}\"\nshared = \"group\"\n",
+        url(&remote)
+    );
+    let a = clone();
+    a.write("pipeline.toml", &shared);
+    under_umask_022(&a, &["run"]);
+    under_umask_022(&a, &["push"]);
+    group_shared(&remote).unwrap();
+    // without the setting, the umask's bits: a colleague could not add to it
+    let plain_remote = scratch.path().join("plain");
+    std::fs::create_dir(&plain_remote).unwrap();
+    let b = clone();
+    under_umask_022(&b, &["run"]);
+    under_umask_022(&b, &["push", "--remote", &url(&plain_remote)]);
+    assert!(group_shared(&plain_remote).is_err());
+    // a remote root that is setgid is shared with the group without the setting
+    use std::os::unix::fs::PermissionsExt;
+    let setgid_remote = scratch.path().join("setgid");
+    std::fs::create_dir(&setgid_remote).unwrap();
+    std::fs::set_permissions(&setgid_remote, std::fs::Permissions::from_mode(0o2775)).unwrap();
+    let c = clone();
+    under_umask_022(&c, &["run"]);
+    under_umask_022(&c, &["push", "--remote", &url(&setgid_remote)]);
+    group_shared(&setgid_remote).unwrap();
+}
+
+#[test]
+fn a_sharing_mode_other_than_group_is_refused_at_its_line() {
+    let p = clone();
+    p.write(
+        "pipeline.toml",
+        &format!("{PIPELINE}\n[remote]\nurl = \"file:///x\"\nshared = \"world\"\n"),
+    );
+    let out = p.groove(&["run"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("shared = \"world\" is not a sharing mode; write shared = \"group\""),
+        "{err}"
+    );
+}

@@ -13,8 +13,9 @@ use groove::ingest::{self, Axis, IngestParams, Ingested};
 use groove::recording::Recording;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+#[path = "support/cli.rs"]
+mod cli;
 #[path = "support/ingest_stage.rs"]
 mod ingest_stage;
 use ingest_stage::folder_files;
@@ -356,9 +357,7 @@ fn manifest_rows_and_files_must_match() {
 // ------------------------------------------------------------ through the binary
 
 fn groove(project: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_groove"))
-        .current_dir(project)
-        .args(args)
+    cli::command(Path::new(env!("CARGO_BIN_EXE_groove")), project, args)
         .output()
         .unwrap()
 }

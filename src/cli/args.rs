@@ -182,7 +182,8 @@ pub enum Verb {
     /// disappeared, and params changed. A and B are result folders (reports/), published bundles
     /// or git revisions (their committed reports/); default A: HEAD, B: the working reports.
     Diff {
-        /// The baseline: a folder or a git revision (default: HEAD).
+        /// The baseline: a folder or a git revision (default: the bundle the last `groove
+        /// publish` wrote, else HEAD).
         #[arg(value_name = "A")]
         a: Option<String>,
         /// The result compared with it: a folder or a git revision (default: the reports folder).

@@ -256,6 +256,15 @@ pub fn dispatch(cli: Cli) -> Result<ExitCode, EngineError> {
                     Ok(ExitCode::from(1))
                 }
                 Published::Written { dir, files } => {
+                    // `groove diff` compares with it by default; a store that cannot be
+                    // written keeps no note (diff then compares with the committed reports)
+                    let _ = std::fs::write(
+                        pipeline.root.join(diff::LAST_PUBLISHED),
+                        std::path::absolute(&dir)
+                            .unwrap_or_else(|_| dir.clone())
+                            .to_string_lossy()
+                            .as_bytes(),
+                    );
                     println!(
                         "groove: published {} files to {}",
                         files.len(),

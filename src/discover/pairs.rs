@@ -745,10 +745,12 @@ pub fn check_pairs(
 }
 
 /// The discover stage's hook: test the collision runs against the diagnosis' final model and
-/// append the findings (each with `where.experiment = "collision"`); notes go to `note`.
+/// append the findings (each with `where.experiment = "collision"`); notes go to `note`. The
+/// pairs are fitted on `groove`, the stage's (its params `groove_angle_deg` and `k`).
 pub fn add_pair_findings(
     diagnosis: &mut crate::artifacts::diagnosis::Diagnosis,
     recordings: &[Recording],
+    groove: Groove,
 ) {
     if !recordings
         .iter()
@@ -756,7 +758,6 @@ pub fn add_pair_findings(
     {
         return;
     }
-    let groove = Groove::CHAPTER;
     let params: BTreeMap<String, f64> = diagnosis
         .model_parameters
         .iter()

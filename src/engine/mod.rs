@@ -79,8 +79,11 @@
 //! seed = 20261122        # u64; each stage gets it mixed with its name (part of every key)
 //! data = "data"          # the dataset folder; ${data} in paths; `--data DIR` replaces it
 //! reports = "reports"    # the report folder; ${reports} in paths; `--out DIR` replaces it
-//! params = { min_frames = 20 }  # inherited by every stage whose kind takes the param,
-//!                               # unless the stage sets its own; one no kind takes is an error
+//! params = { min_frames = 20, groove_angle_deg = 70.6 }
+//!                        # inherited by every stage whose kind takes the param, unless the
+//!                        # stage sets its own; one no kind takes is an error. The groove's
+//!                        # opening angle (70.6°, the chapter's, when not set) and `k` reach
+//!                        # fit, simulate, aggregate, discover, figures and report alike
 //!
 //! [stages.NAME]          # NAME: letters, digits, `_`, `-`
 //! kind = "fit"           # a built-in kind (one file in src/stages/) or "command"

@@ -5,6 +5,7 @@
 //! Theil–Sen lines.
 
 use super::bootstrap::percentile_intervals_in_groups;
+use super::options::OptionError;
 use super::regression::{kept_table, mean_kept, mean_where, RobustMean};
 use super::single::SingleFit;
 use crate::artifacts::run_fit::FitStatus;
@@ -25,8 +26,11 @@ pub struct AggregateOptions {
     /// The chapter averages μ over runs faster than this.
     pub fast_min_speed_mps: f64,
     /// k = m R² / I of the particles (for μ_pp from the collisions); keep it equal to the fit
-    /// stage's `k`.
+    /// stage's `k` (`[project] params` sets both).
     pub k: f64,
+    /// Opening angle of the groove, degrees, for the whole-run collision fits (the chapter's
+    /// 70.6 by default; `[project] params` sets it for every stage).
+    pub groove_angle_deg: f64,
 }
 
 impl Default for AggregateOptions {
@@ -36,37 +40,31 @@ impl Default for AggregateOptions {
             level: 0.95,
             fast_min_speed_mps: 0.03,
             k: 2.5,
+            groove_angle_deg: 70.6,
         }
     }
 }
 
 impl AggregateOptions {
     /// Check ranges; the error names the key and a valid range.
-    pub fn validate(&self) -> Result<(), (String, String)> {
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let bad = |key, message| Err(OptionError { key, message });
         if !(100..=1_000_000).contains(&self.bootstrap_resamples) {
-            return Err((
-                "bootstrap_resamples".into(),
-                "must be between 100 and 1000000, e.g. 2000".into(),
-            ));
+            return bad(
+                "bootstrap_resamples",
+                "must be between 100 and 1000000, e.g. 2000",
+            );
         }
         if !(self.level > 0.5 && self.level < 1.0) {
-            return Err((
-                "level".into(),
-                "must be between 0.5 and 1, e.g. 0.95".into(),
-            ));
+            return bad("level", "must be between 0.5 and 1, e.g. 0.95");
         }
         if !(self.fast_min_speed_mps >= 0.0 && self.fast_min_speed_mps.is_finite()) {
-            return Err((
-                "fast_min_speed_mps".into(),
-                "must be a speed ≥ 0 in m/s, e.g. 0.03".into(),
-            ));
+            return bad(
+                "fast_min_speed_mps",
+                "must be a speed ≥ 0 in m/s, e.g. 0.03",
+            );
         }
-        if !(self.k > 0.0 && self.k.is_finite()) {
-            return Err((
-                "k".into(),
-                "must be positive (2.5 for a solid sphere)".into(),
-            ));
-        }
+        super::options::check_groove(self.groove_angle_deg, self.k)?;
         Ok(())
     }
 }

@@ -4,7 +4,7 @@
 //!
 //! Per group: count, mean, RMS, lag-1 autocorrelation (about zero, over consecutive frames of the
 //! same run in the same group) and the Wald–Wolfowitz runs test of the residual signs (runs summed
-//! over the runs' stretches, z = (R − E[R])/sd[R]; strongly negative z = long same-sign stretches,
+//! over the runs' stretches, `z = (R − E[R])/sd[R]`; strongly negative z = long same-sign stretches,
 //! i.e. structure the model misses).
 
 use super::residuals::RunResiduals;

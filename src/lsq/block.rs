@@ -1,4 +1,4 @@
-//! The block-arrow back-end of the [`lm`](super::lm) driver: shared parameters plus one block of
+//! The block-arrow back-end of the [`lm`] driver: shared parameters plus one block of
 //! own parameters per group of residuals (a run), forward-difference Jacobians per block in
 //! parallel, and the normal equations solved through the Schur complement on the shared
 //! parameters. Residuals are expected whitened (in units of each run's noise), so the cost is a

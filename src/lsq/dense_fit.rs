@@ -1,4 +1,4 @@
-//! The dense back-end of the [`lm`](super::lm) driver: residuals from a closure, forward-difference
+//! The dense back-end of the [`lm`] driver: residuals from a closure, forward-difference
 //! Jacobian columns ([`super::fd`]), normal equations and covariance by [`super::dense`]. For
 //! small problems (a collision run: ≤ ~40 parameters, a few thousand residuals).
 

@@ -10,9 +10,9 @@
 //!
 //! Files of this folder:
 //!
-//! - `block.rs`: The block-arrow back-end of the [`lm`](super::lm) driver
+//! - `block.rs`: The block-arrow back-end of the [`lm`] driver
 //! - `dense.rs`: The dense back-end
-//! - `dense_fit.rs`: The dense back-end of the [`lm`](super::lm) driver
+//! - `dense_fit.rs`: The dense back-end of the [`lm`] driver
 //! - `fd.rs`: Forward-difference Jacobians for models without an analytic one
 //! - `fixed.rs`: The fixed-size, allocation-free back-end
 //! - `golden.rs`: Golden-section search for the minimum of a one-dimensional function

@@ -11,12 +11,29 @@ pub struct Groove {
     pub k: f64,
 }
 
+/// The chapter's groove, what every stage assumes when its params do not say otherwise.
+impl Default for Groove {
+    fn default() -> Groove {
+        Groove::CHAPTER
+    }
+}
+
 impl Groove {
     /// The chapter's groove: θ = 70.6°, solid sphere (k = 5/2).
     pub const CHAPTER: Groove = Groove {
         s: 0.577_857_624_383_505_3,
         k: 2.5,
     };
+
+    /// The groove of opening angle `groove_angle_deg` holding a sphere of inertia factor `k`: a
+    /// stage's params
+    /// `groove_angle_deg` (default 70.6, the chapter's) and `k` (default 2.5).
+    pub fn of_params(groove_angle_deg: f64, k: f64) -> Groove {
+        Groove {
+            k,
+            ..Groove::from_angle_deg(groove_angle_deg)
+        }
+    }
 
     /// `k s²`, the ratio that sets the rolling decay and the collision factor.
     pub fn ks2(&self) -> f64 {

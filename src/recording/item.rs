@@ -72,9 +72,32 @@ pub fn encode(rec: &Recording) -> Vec<u8> {
     out
 }
 
-/// The recording in `bytes`; an error (lowercase, without the item's name) if they are not a
-/// recording item of this version.
-pub fn decode(bytes: &[u8]) -> Result<Recording, String> {
+/// Why bytes are not a recording item of this version (lowercase, without the item's name:
+/// the caller names it and says to rerun the ingest stage).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DecodeError {
+    #[error("it does not start with GROOVREC (an item of an older groove, or not a recording)")]
+    Magic,
+    #[error("it is version {0} of the format; this groove reads version {VERSION}")]
+    Version(u32),
+    #[error("its metadata is not a run's ({0})")]
+    Metadata(String),
+    #[error("it ends after {0} bytes, inside a field (a truncated item)")]
+    Truncated(usize),
+    #[error("track of particle {particle}: a frame segment of length {len} does not fit its {n} samples")]
+    Segment { particle: u32, len: i64, n: usize },
+    #[error("track of particle {particle}: its frame segments hold {held} frames, not {n}")]
+    Frames {
+        particle: u32,
+        held: usize,
+        n: usize,
+    },
+    #[error("{0} bytes follow the last track")]
+    Trailing(usize),
+}
+
+/// The recording in `bytes`; an error if they are not a recording item of this version.
+pub fn decode(bytes: &[u8]) -> Result<Recording, DecodeError> {
     let mut r = Reader { bytes, at: 0 };
     let info = header(&mut r)?;
     let n_tracks = r.u32()? as usize;
@@ -96,17 +119,16 @@ pub fn decode(bytes: &[u8]) -> Result<Recording, String> {
                 || first.checked_add(len - 1).is_none()
                 || frame.len() as i64 + len > n as i64
             {
-                return Err(format!(
-                    "track of particle {particle}: a frame segment of length {len} does not fit its {n} samples"
-                ));
+                return Err(DecodeError::Segment { particle, len, n });
             }
             frame.extend((0..len).map(|k| first + k));
         }
         if frame.len() != n {
-            return Err(format!(
-                "track of particle {particle}: its frame segments hold {} frames, not {n}",
-                frame.len()
-            ));
+            return Err(DecodeError::Frames {
+                particle,
+                held: frame.len(),
+                n,
+            });
         }
         let t_s = floats(r.take(8 * n)?);
         let z_m = floats(r.take(8 * n)?);
@@ -118,35 +140,27 @@ pub fn decode(bytes: &[u8]) -> Result<Recording, String> {
         });
     }
     if r.at != bytes.len() {
-        return Err(format!(
-            "{} bytes follow the last track",
-            bytes.len() - r.at
-        ));
+        return Err(DecodeError::Trailing(bytes.len() - r.at));
     }
     Ok(Recording { info, tracks })
 }
 
 /// The run metadata of a recording item, without decoding its tracks.
-pub fn decode_info(bytes: &[u8]) -> Result<RunInfo, String> {
+pub fn decode_info(bytes: &[u8]) -> Result<RunInfo, DecodeError> {
     header(&mut Reader { bytes, at: 0 })
 }
 
 /// Magic, version and metadata.
-fn header(r: &mut Reader) -> Result<RunInfo, String> {
+fn header(r: &mut Reader) -> Result<RunInfo, DecodeError> {
     if r.take(8).ok() != Some(&MAGIC[..]) {
-        return Err(
-            "it does not start with GROOVREC (an item of an older groove, or not a recording)"
-                .into(),
-        );
+        return Err(DecodeError::Magic);
     }
     let version = r.u32()?;
     if version != VERSION {
-        return Err(format!(
-            "it is version {version} of the format; this groove reads version {VERSION}"
-        ));
+        return Err(DecodeError::Version(version));
     }
     let m = r.u32()? as usize;
-    serde_json::from_slice(r.take(m)?).map_err(|e| format!("its metadata is not a run's ({e})"))
+    serde_json::from_slice(r.take(m)?).map_err(|e| DecodeError::Metadata(e.to_string()))
 }
 
 /// Consecutive frames as (first frame, count).
@@ -179,7 +193,7 @@ struct Reader<'a> {
 }
 
 impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
+    fn take(&mut self, n: usize) -> Result<&'a [u8], DecodeError> {
         let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len());
         let end = end.ok_or_else(|| self.truncated())?;
         let s = &self.bytes[self.at..end];
@@ -191,14 +205,11 @@ impl<'a> Reader<'a> {
         self.bytes.len() - self.at
     }
 
-    fn truncated(&self) -> String {
-        format!(
-            "it ends after {} bytes, inside a field (a truncated item)",
-            self.bytes.len()
-        )
+    fn truncated(&self) -> DecodeError {
+        DecodeError::Truncated(self.bytes.len())
     }
 
-    fn u32(&mut self) -> Result<u32, String> {
+    fn u32(&mut self) -> Result<u32, DecodeError> {
         let b = self.take(4)?;
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
@@ -269,18 +280,23 @@ mod tests {
     #[test]
     fn damaged_items_are_refused_with_the_reason() {
         let bytes = encode(&rec());
-        assert!(decode(b"{\"info\":{}}").unwrap_err().contains("GROOVREC"));
+        let magic = decode(b"{\"info\":{}}").unwrap_err();
+        assert_eq!(magic, DecodeError::Magic);
+        assert!(magic.to_string().contains("GROOVREC"), "{magic}");
         let mut v2 = bytes.clone();
         v2[8] = 2;
-        assert!(decode(&v2).unwrap_err().contains("version 2"));
+        let version = decode(&v2).unwrap_err();
+        assert_eq!(version, DecodeError::Version(2));
+        assert!(version.to_string().contains("version 2"), "{version}");
         for cut in [10, 20, bytes.len() - 1] {
-            assert!(
-                decode(&bytes[..cut]).unwrap_err().contains("truncated"),
-                "cut {cut}"
-            );
+            let e = decode(&bytes[..cut]).unwrap_err();
+            assert_eq!(e, DecodeError::Truncated(cut), "cut {cut}");
+            assert!(e.to_string().contains("truncated"), "cut {cut}: {e}");
         }
         let mut longer = bytes.clone();
         longer.push(0);
-        assert!(decode(&longer).unwrap_err().contains("1 bytes follow"));
+        let trailing = decode(&longer).unwrap_err();
+        assert_eq!(trailing, DecodeError::Trailing(1));
+        assert_eq!(trailing.to_string(), "1 bytes follow the last track");
     }
 }

@@ -6,6 +6,7 @@ use crate::artifacts::summary::WholeRunSummary;
 use crate::artifacts::{
     self, Comparison, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
 };
+use crate::physics::Groove;
 use crate::recording::Recording;
 use std::collections::BTreeMap;
 
@@ -29,6 +30,12 @@ pub struct ReportData {
     pub provenance: Option<Provenance>,
     /// Runs ingest left out, with the reason.
     pub skipped: Vec<(String, String)>,
+    /// The groove of the analysis (the stage's params `groove_angle_deg` and `k`, which
+    /// `[project] params` sets for every stage at once); the chapter's by default.
+    pub groove: Groove,
+    /// This run's summary.json and diagnosis.json against a baseline's (the report stage's
+    /// optional input `baseline`: an earlier reports folder or published bundle).
+    pub baseline: Option<super::diff::Diff>,
 }
 
 /// One input of a `figures` or `report` stage, unpacked by the stage adapter: a single file, or

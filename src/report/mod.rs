@@ -7,6 +7,7 @@
 //! - `chapter.rs`: The chapter's printed values and the constants used to check them
 //! - `collisions.rs`: Collision-run fits read from the per-run fit JSON
 //! - `date.rs`: A calendar date
+//! - `diff.rs`: Two results compared number by number
 //! - `html.rs`: The HTML page (report.html)
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
@@ -28,6 +29,7 @@ pub mod audit;
 pub mod chapter;
 pub mod collisions;
 pub mod date;
+pub mod diff;
 pub mod figures;
 pub mod html;
 pub mod inputs;

@@ -85,10 +85,7 @@ impl StageKind for Aggregate {
             None
         } else {
             let mut c = collision::summarize_seeded(&collisions, opts.k, input.seed);
-            let groove = crate::physics::Groove {
-                s: collision::CollisionOptions::default().s,
-                k: opts.k,
-            };
+            let groove = crate::physics::Groove::of_params(opts.groove_angle_deg, opts.k);
             c.whole_run = Some(collision::whole_summary::analyze(
                 &pair_recordings,
                 groove,

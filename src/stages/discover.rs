@@ -49,7 +49,8 @@ impl StageKind for Discover {
         // consistently), so it reads no per-run fit and a change to `fit` does not rerun it
         let say = |what: &str| input.report(what);
         let mut diagnosis = discover_reporting(&recordings, &opts, &say);
-        crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings);
+        let groove = crate::physics::Groove::of_params(opts.groove_angle_deg, opts.k);
+        crate::discover::pairs::add_pair_findings(&mut diagnosis, &recordings, groove);
         let bytes =
             crate::artifacts::checked_json::to_json_pretty_checked("diagnosis.json", &diagnosis)
                 .map_err(StageError)?;

@@ -1,12 +1,16 @@
 //! Helpers shared by the fit-side stage kinds (fit, aggregate, simulate, compare): reading inputs out of artifacts, writing JSON bytes.
 
 use crate::engine::stage::{Artifact, ParamError, StageError, StageInput, IN_STORE_INPUT};
+use crate::fit::options::OptionError;
 use crate::recording::{self, Recording, RunInfo};
 use std::collections::BTreeMap;
 
-/// A validation failure `(key, message)` as a [`ParamError`].
-pub fn param_error((key, message): (String, String)) -> ParamError {
-    ParamError { key, message }
+/// A fit-side param out of range as the engine's [`ParamError`].
+pub fn param_error(e: OptionError) -> ParamError {
+    ParamError {
+        key: e.key.to_string(),
+        message: e.message.to_string(),
+    }
 }
 
 /// The bytes of the per-item input `name` of a `foreach` stage.
@@ -68,7 +72,7 @@ pub fn run_info(item: &str, bytes: &[u8]) -> Result<RunInfo, StageError> {
     recording::item::decode_info(bytes).map_err(|e| not_a_recording(item, &e))
 }
 
-fn not_a_recording(item: &str, why: &str) -> StageError {
+fn not_a_recording(item: &str, why: &recording::item::DecodeError) -> StageError {
     StageError(format!(
         "run `{item}`: the item is not a recording: {why}; rerun the ingest stage"
     ))

@@ -1,8 +1,12 @@
 //! The `report` stage kind: report.html (self-contained) and report.md from the figures and artifacts.
 
+use super::fit_io::param_error;
 use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
+use crate::fit::options::check_groove;
+use crate::physics::Groove;
+use crate::report::diff::{compare, Diff, Side, FILES};
 use crate::report::inputs::{Input, Inputs};
 use crate::report::{render_pages, ReportData};
 use serde::{Deserialize, Serialize};
@@ -17,6 +21,10 @@ pub struct ReportParams {
     /// Seconds since the Unix epoch of the date printed under the title (pass `SOURCE_DATE_EPOCH`);
     /// no date is printed without it, so the report never depends on the clock.
     pub source_date_epoch: Option<i64>,
+    /// Opening angle of the groove, degrees (the chapter's 70.6 by default).
+    pub groove_angle_deg: f64,
+    /// k = m R² / I of the particles (5/2, a solid sphere, by default).
+    pub k: f64,
 }
 
 impl Default for ReportParams {
@@ -24,6 +32,8 @@ impl Default for ReportParams {
         ReportParams {
             title: "groove: micro-particles in a v-groove — the chapter reproduced".into(),
             source_date_epoch: None,
+            groove_angle_deg: 70.6,
+            k: 2.5,
         }
     }
 }
@@ -50,18 +60,23 @@ impl StageKind for Report {
             "validation",
             "provenance",
             "skipped",
+            "baseline",
         ]
     }
     fn outputs(&self) -> &'static [&'static str] {
         &["html", "md"]
     }
     fn canonical_params(&self, params: &toml::Table) -> Result<serde_json::Value, ParamError> {
-        typed_params::<ReportParams>(params).map(|(_, json)| json)
+        let (p, json) = typed_params::<ReportParams>(params)?;
+        check_groove(p.groove_angle_deg, p.k).map_err(param_error)?;
+        Ok(json)
     }
     fn run(&self, input: &StageInput) -> Result<StageOutputs, StageError> {
         let (p, _) =
             typed_params::<ReportParams>(input.params).map_err(|e| StageError(e.to_string()))?;
-        let data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
+        let mut data = ReportData::from_inputs(&unpack(&input.inputs)).map_err(StageError)?;
+        data.groove = Groove::of_params(p.groove_angle_deg, p.k);
+        data.baseline = baseline(&input.inputs)?;
         let figures: BTreeMap<String, String> = match input.inputs.get("figures") {
             Some(Artifact::Collection(m)) => m
                 .iter()
@@ -76,6 +91,58 @@ impl StageKind for Report {
             ("md".to_string(), Artifact::File(pages.md.into_bytes())),
         ]))
     }
+}
+
+/// This run's summary.json and diagnosis.json (the inputs `summary`, `diagnosis`) against those
+/// of the input `baseline`, a folder of an earlier result (a reports folder or a published
+/// bundle: its top-level files), when it is bound.
+fn baseline(inputs: &BTreeMap<&str, &Artifact>) -> Result<Option<Diff>, StageError> {
+    let Some(given) = inputs.get("baseline") else {
+        return Ok(None);
+    };
+    let Artifact::Collection(items) = given else {
+        return Err(StageError(
+            "input `baseline` must be a folder holding an earlier summary.json and diagnosis.json (a reports folder or a published bundle): bind it as baseline = { path = \"...\", optional = true }".into(),
+        ));
+    };
+    let json = |what: &str, bytes: &[u8]| {
+        serde_json::from_slice::<serde_json::Value>(bytes).map_err(|e| {
+            StageError(format!(
+                "{what} is not JSON ({e}); point `baseline` at a reports folder or a published bundle"
+            ))
+        })
+    };
+    let mut before = Side {
+        label: "the baseline".into(),
+        files: BTreeMap::new(),
+        lock: None,
+    };
+    let mut now = Side {
+        label: "this run".into(),
+        files: BTreeMap::new(),
+        lock: None,
+    };
+    for (file, input) in FILES.into_iter().zip(["summary", "diagnosis"]) {
+        if let Some(bytes) = items.get(file) {
+            before
+                .files
+                .insert(file, json(&format!("the baseline's {file}"), bytes)?);
+        }
+        if let Some(Artifact::File(bytes)) = inputs.get(input) {
+            now.files
+                .insert(file, json(&format!("this run's {file}"), bytes)?);
+        }
+    }
+    if before.files.is_empty() {
+        return Err(StageError(format!(
+            "the baseline folder holds neither summary.json nor diagnosis.json (it holds {}); point `baseline` at a reports folder or a published bundle",
+            items.keys().cloned().collect::<Vec<_>>().join(", ")
+        )));
+    }
+    if let Some(lock) = items.get("pipeline.lock") {
+        before.lock = Some(json("the baseline's pipeline.lock", lock)?);
+    }
+    Ok(Some(compare(&before, &now)))
 }
 
 /// The engine's artifacts as the report reads them: files as bytes, collections as their items.

@@ -31,7 +31,7 @@ pub struct SlopeOrder<const K: usize> {
 }
 
 impl<const K: usize> SlopeOrder<K> {
-    /// Order the pairs of the points (x, ys[k]) by slope; every pair when there are at most
+    /// Order the pairs of the points `(x, ys[k])` by slope; every pair when there are at most
     /// `max_pairs`, otherwise `max_pairs` pairs of distinct points drawn uniformly with `seed`.
     /// Pairs of equal x have no slope and are left out.
     pub fn new(x: &[f64], ys: [&[f64]; K], max_pairs: usize, seed: u64) -> Self {

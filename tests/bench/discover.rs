@@ -83,7 +83,7 @@ fn bench(label: &str, recs: &[Recording], seed: u64, before: (f64, f64)) {
     let (c0, t0) = (cpu_s(), Instant::now());
     let mut d: Diagnosis = discover(recs, &opts);
     let (c1, t1) = (cpu_s(), t0.elapsed().as_secs_f64());
-    add_pair_findings(&mut d, recs);
+    add_pair_findings(&mut d, recs, groove::physics::Groove::CHAPTER);
     let (c2, t2) = (cpu_s(), t0.elapsed().as_secs_f64());
     let accepted: Vec<&str> = d
         .findings

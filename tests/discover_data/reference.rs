@@ -1,5 +1,5 @@
 //! An independent fixed-step RK4 integrator of the discovery models with located switches,
-//! following physics.md: sliding while v ≠ s·v_a, constrained rolling (dv/dt = ks²/(1+ks²)·a)
+//! following the physics module's docs (src/physics): sliding while v ≠ s·v_a, constrained rolling (dv/dt = ks²/(1+ks²)·a)
 //! while the friction needed stays ≤ gμ, rest when a resistance opposing motion holds the
 //! particle. A reference the tests hold `physics::simulate` to (they agree within 1 nm for every
 //! candidate term); no analysis uses it.
@@ -272,7 +272,7 @@ mod tests {
         }
     }
 
-    /// Closed form of physics.md for the baseline, sliding then rolling, v0 > 0.
+    /// Closed form of the physics module's docs for the baseline, sliding then rolling, v0 > 0.
     fn closed_form(m: &SimModel, v0: f64, t: f64) -> f64 {
         let Drag::Quadratic { t_s: tt, .. } = m.drag else {
             unreachable!()

@@ -1,11 +1,16 @@
-//! Folders and tables on disk for the suites that drive the built binary (e2e, hostile_project):
-//! a scratch folder under the target's tmp folder, tree copies and hashes, line and cell edits of
-//! a CSV, and the check that an error message names its place.
+//! Folders and tables on disk for the suites that drive the built binary (e2e, daily_cli,
+//! hostile_project): running the binary, a scratch folder under the target's tmp folder, a
+//! dataset synthesized into it, tree copies and hashes, line and cell edits of a CSV, and the
+//! check that an error message names its place.
 #![allow(dead_code)]
+
+#[path = "cli.rs"]
+pub mod cli;
 
 use groove::engine::hashing::sha256_hex;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::process::Output;
 use std::sync::OnceLock;
 
 pub const GROOVE: &str = env!("CARGO_BIN_EXE_groove");
@@ -33,6 +38,44 @@ pub fn scratch(name: &str) -> &'static Path {
 
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Runs the tests' binary in `cwd` (without the environment's remote settings).
+pub fn groove(cwd: &Path, args: &[&str]) -> Output {
+    cli::command(Path::new(GROOVE), cwd, args)
+        .output()
+        .expect("the groove binary starts")
+}
+
+/// Asserts that `out` is a success (showing what it said otherwise) and gives its stdout.
+pub fn ok(out: &Output, what: &str) -> String {
+    assert!(
+        out.status.success(),
+        "{what} failed ({:?})\nstdout:\n{}\nstderr:\n{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
+/// `groove synth` of the truth fixture `tests/fixtures/truths/NAME.toml` into `out`, run in
+/// `cwd`.
+pub fn synth(cwd: &Path, fixture: &str, out: &Path) {
+    let truth = repo().join(format!("tests/fixtures/truths/{fixture}.toml"));
+    ok(
+        &groove(
+            cwd,
+            &[
+                "synth",
+                "--truth",
+                truth.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        ),
+        "groove synth",
+    );
 }
 
 /// Copies the folder `from` to `to`, recursively.

@@ -432,8 +432,18 @@ fn stage_foreach(
     Ok((Some(first), names))
 }
 
+/// What is wrong with a path of pipeline.toml (the caller says it at the path's line).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+enum PathError {
+    /// `${name}` other than `${data}` and `${reports}`; holds the variable as written.
+    #[error("unknown variable `{0}`; use `${{data}}` or `${{reports}}`")]
+    UnknownVariable(String),
+    #[error("empty path; write a file or folder path")]
+    Empty,
+}
+
 /// `"engine:provenance"`, `"stage:output"`, a path, or `{ path, optional }`.
-fn parse_binding(pipeline: &Pipeline, raw: RawInput) -> Result<InputSpec, String> {
+fn parse_binding(pipeline: &Pipeline, raw: RawInput) -> Result<InputSpec, PathError> {
     match raw {
         RawInput::Text(text) => {
             if text == "engine:provenance" {
@@ -475,7 +485,7 @@ fn finite(value: &toml::Value) -> bool {
 }
 
 /// Expand `${data}` and `${reports}`, resolve against the project root, normalize.
-fn substitute(pipeline: &Pipeline, text: &str) -> Result<PathBuf, String> {
+fn substitute(pipeline: &Pipeline, text: &str) -> Result<PathBuf, PathError> {
     let mut out = text.to_string();
     for (var, value) in [
         ("${data}", &pipeline.data_dir),
@@ -485,12 +495,10 @@ fn substitute(pipeline: &Pipeline, text: &str) -> Result<PathBuf, String> {
     }
     if let Some(start) = out.find("${") {
         let var: String = out[start..].chars().take_while(|&c| c != '}').collect();
-        return Err(format!(
-            "unknown variable `{var}}}`; use `${{data}}` or `${{reports}}`"
-        ));
+        return Err(PathError::UnknownVariable(format!("{var}}}")));
     }
     if out.is_empty() {
-        return Err("empty path; write a file or folder path".into());
+        return Err(PathError::Empty);
     }
     Ok(normalize(&pipeline.root.join(out)))
 }
@@ -727,5 +735,41 @@ impl SharedParams {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pipeline() -> Pipeline {
+        Pipeline {
+            config_path: PathBuf::from("/p/pipeline.toml"),
+            root: PathBuf::from("/p"),
+            seed: 1,
+            data_dir: PathBuf::from("data"),
+            reports_dir: PathBuf::from("reports"),
+            stages: BTreeMap::new(),
+        }
+    }
+
+    #[test]
+    fn a_bad_path_is_a_typed_error_that_says_the_fix() {
+        let p = pipeline();
+        assert_eq!(
+            substitute(&p, "${data}/../x.csv"),
+            Ok(PathBuf::from("/p/x.csv"))
+        );
+        let unknown = substitute(&p, "${dta}/runs.csv").unwrap_err();
+        assert_eq!(unknown, PathError::UnknownVariable("${dta}".into()));
+        assert_eq!(
+            unknown.to_string(),
+            "unknown variable `${dta}`; use `${data}` or `${reports}`"
+        );
+        assert_eq!(substitute(&p, ""), Err(PathError::Empty));
+        assert_eq!(
+            parse_binding(&p, RawInput::Text("${out}/x".into())).unwrap_err(),
+            PathError::UnknownVariable("${out}".into())
+        );
     }
 }

@@ -12,7 +12,7 @@
 //! - `settings.rs`: `[remote]` in `pipeline.toml`
 //! - `sync.rs`: `groove push` and `groove pull`
 //!
-//! [`backend`] is what a remote must do (get, exists, create-if-absent; never list), [`file`]
+//! [`backend`] is what a remote must do (get, exists, create-if-absent; never list), [`file`](mod@file)
 //! and `s3` are the two backends, [`cache`] does lookups with sha256 verification and the
 //! counts, [`push`] uploads with bounded concurrency (blobs first, entry last), [`sync`] is
 //! `groove push` / `groove pull`.
@@ -117,6 +117,10 @@ pub struct Settings {
     pub required: bool,
     /// Concurrent uploads.
     pub jobs: usize,
+    /// `[remote] shared = "group"`: a `file://` remote's folders are made group-writable and
+    /// setgid, its files group-readable and -writable, whatever the umask (also when its root
+    /// folder is setgid).
+    pub shared_group: bool,
 }
 
 /// The default number of concurrent uploads.
@@ -128,11 +132,28 @@ pub fn open(settings: &Settings, base: &Path) -> Result<RemoteCache, EngineError
         read_only: settings.read_only,
         required: settings.required,
     };
-    Ok(RemoteCache::new(backend_for(&settings.url, base)?, mode))
+    let backend = match settings.url.starts_with("file://") {
+        true => Box::new(file_remote(&settings.url, base)?.shared(settings.shared_group)),
+        false => backend_for(&settings.url, base)?,
+    };
+    Ok(RemoteCache::new(backend, mode))
 }
 
 /// The backend of a URL.
 pub fn backend_for(url: &str, base: &Path) -> Result<Box<dyn backend::Backend>, EngineError> {
+    if url.starts_with("file://") {
+        return Ok(Box::new(file_remote(url, base)?));
+    }
+    if let Some(rest) = url.strip_prefix("s3://") {
+        return s3_backend(url, rest);
+    }
+    Err(EngineError::Usage(format!(
+        "remote `{url}` is not a remote URL; write file:///shared/path or s3://bucket/prefix"
+    )))
+}
+
+/// The folder a `file://` URL names, refused inside the project.
+fn file_remote(url: &str, base: &Path) -> Result<file::FileRemote, EngineError> {
     if let Some(path) = url.strip_prefix("file://") {
         if path.is_empty() {
             return Err(EngineError::Usage(format!(
@@ -151,13 +172,10 @@ pub fn backend_for(url: &str, base: &Path) -> Result<Box<dyn backend::Backend>, 
                 }
             )));
         }
-        return Ok(Box::new(file::FileRemote::new(&root)));
-    }
-    if let Some(rest) = url.strip_prefix("s3://") {
-        return s3_backend(url, rest);
+        return Ok(file::FileRemote::new(&root));
     }
     Err(EngineError::Usage(format!(
-        "remote `{url}` is not a remote URL; write file:///shared/path or s3://bucket/prefix"
+        "remote `{url}` is not a file:// URL"
     )))
 }
 

@@ -6,6 +6,7 @@
 //! read_only = false                     # true: look up, never upload
 //! required = false                      # true: a remote error fails the run (exit 2)
 //! jobs = 8                              # concurrent uploads
+//! shared = "group"                      # file://: folders g+rws, files g+rw (a group share)
 //! ```
 //! Precedence: `--remote URL` / `--no-remote`, then `GROOVE_REMOTE`, then `[remote] url`.
 
@@ -30,6 +31,7 @@ struct RawRemote {
     #[serde(default)]
     required: bool,
     jobs: Option<usize>,
+    shared: Option<String>,
 }
 
 /// The command line's say in it.
@@ -60,14 +62,24 @@ pub fn resolve(config_path: &Path, flags: &Flags) -> Result<Option<Settings>, En
     let env_ro = std::env::var(ENV_READ_ONLY)
         .map(|v| matches!(v.as_str(), "1" | "true" | "yes"))
         .unwrap_or(false);
-    let (toml_url, toml_ro, toml_req, jobs) = match &raw {
+    let (toml_url, toml_ro, toml_req, jobs, shared_group) = match &raw {
         Some((r, line)) => {
             if r.jobs == Some(0) {
                 return Err(file.error(*line, "[remote] jobs must be at least 1"));
             }
-            (r.url.clone(), r.read_only, r.required, r.jobs)
+            let shared_group = match r.shared.as_deref() {
+                None => false,
+                Some("group") => true,
+                Some(other) => {
+                    return Err(file.error(
+                        *line,
+                        format!("[remote] shared = \"{other}\" is not a sharing mode; write shared = \"group\" (folders and files writable by the remote's group) or leave it out"),
+                    ))
+                }
+            };
+            (r.url.clone(), r.read_only, r.required, r.jobs, shared_group)
         }
-        None => (None, false, false, None),
+        None => (None, false, false, None, false),
     };
     let Some(url) = flags.url.clone().or(env_url).or(toml_url) else {
         if flags.required {
@@ -82,5 +94,6 @@ pub fn resolve(config_path: &Path, flags: &Flags) -> Result<Option<Settings>, En
         read_only: flags.read_only || env_ro || toml_ro,
         required: flags.required || toml_req,
         jobs: jobs.unwrap_or(DEFAULT_JOBS),
+        shared_group,
     }))
 }

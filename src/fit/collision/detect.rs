@@ -10,7 +10,7 @@ use super::model::TrackData;
 use crate::lsq::dense::ScaledCholesky;
 
 /// Robust position noise (m) from second differences: for equally spaced samples
-/// var(z[i+1] − 2 z[i] + z[i−1]) = 6 σ²; uneven spacing uses the interpolating form.
+/// `var(z[i+1] − 2 z[i] + z[i−1]) = 6 σ²`; uneven spacing uses the interpolating form.
 pub fn noise_scale_m(track: &TrackData) -> f64 {
     let (t, z) = (&track.t_s, &track.z_m);
     let mut d: Vec<f64> = Vec::with_capacity(t.len());

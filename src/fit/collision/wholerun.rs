@@ -114,16 +114,28 @@ fn law_slot(setup: Setup) -> usize {
 
 const MIN_POINTS: usize = 20;
 
+/// Why a collision recording cannot be fitted whole (the run is then left out, with this note).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PairRunError {
+    #[error("needs tracks of particle 0 (striker) and 1 (target)")]
+    MissingTrack,
+    #[error("a track has fewer than {MIN_POINTS} samples")]
+    TooFewSamples,
+}
+
 impl PairRun {
     /// Prepare a recording (particle 0 striker, 1 target; the setup from runs.csv or guessed
     /// from whether the target moves from the first frames).
-    pub fn from_recording(rec: &Recording, setup_hint: Option<Setup>) -> Result<PairRun, String> {
+    pub fn from_recording(
+        rec: &Recording,
+        setup_hint: Option<Setup>,
+    ) -> Result<PairRun, PairRunError> {
         let info = &rec.info;
         let (Some(st), Some(tg)) = (rec.track(0), rec.track(1)) else {
-            return Err("needs tracks of particle 0 (striker) and 1 (target)".into());
+            return Err(PairRunError::MissingTrack);
         };
         if st.t_s.len() < MIN_POINTS || tg.t_s.len() < MIN_POINTS {
-            return Err(format!("a track has fewer than {MIN_POINTS} samples"));
+            return Err(PairRunError::TooFewSamples);
         }
         let head = |z: &[f64]| {
             let mut h = z[..5].to_vec();
@@ -571,4 +583,48 @@ pub fn law_slots(setup: Setup) -> (usize, usize) {
 /// Default start values of a law form's slots.
 pub fn law_start(form: LawForm) -> [f64; 2] {
     form.specs().map(|s| s.start)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{Experiment, RunInfo, Track};
+
+    fn pair(samples: [usize; 2]) -> Recording {
+        let track = |particle: u32, n: usize| Track {
+            particle,
+            frame: (0..n as i64).collect(),
+            t_s: (0..n).map(|k| k as f64 * 1e-4).collect(),
+            z_m: (0..n)
+                .map(|k| particle as f64 * 1e-3 + k as f64 * 1e-5)
+                .collect(),
+        };
+        Recording {
+            info: RunInfo {
+                run: "c01".into(),
+                experiment: Experiment::Collision,
+                material: "316".into(),
+                diameter_m: 3e-4,
+                fps: 10_000.0,
+                setup: Some(Setup::Rolling),
+                extra: Default::default(),
+            },
+            tracks: vec![track(0, samples[0]), track(1, samples[1])],
+        }
+    }
+
+    #[test]
+    fn a_recording_that_cannot_be_fitted_whole_gives_a_typed_reason() {
+        assert!(PairRun::from_recording(&pair([40, 40]), None).is_ok());
+        let short = PairRun::from_recording(&pair([40, 5]), None).unwrap_err();
+        assert_eq!(short, PairRunError::TooFewSamples);
+        assert_eq!(short.to_string(), "a track has fewer than 20 samples");
+        let mut alone = pair([40, 40]);
+        alone.tracks.pop();
+        let missing = PairRun::from_recording(&alone, None).unwrap_err();
+        assert_eq!(missing, PairRunError::MissingTrack);
+        assert!(missing
+            .to_string()
+            .contains("particle 0 (striker) and 1 (target)"));
+    }
 }

@@ -30,13 +30,7 @@ pub fn samples(d: &ReportData, fit: &SingleRow) -> Option<Vec<Sample>> {
     d.residuals
         .get(&fit.run)
         .and_then(trajectory::from_residuals)
-        .or_else(|| {
-            trajectory::from_fit(
-                d.recordings.get(&fit.run)?,
-                fit,
-                crate::physics::Groove::CHAPTER,
-            )
-        })
+        .or_else(|| trajectory::from_fit(d.recordings.get(&fit.run)?, fit, d.groove))
 }
 
 /// Render Fig. 4.2b, or None when no single run has a usable fit.

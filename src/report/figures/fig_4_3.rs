@@ -20,8 +20,8 @@ fn fitted_pieces(
     particle: u32,
     track: &Track,
     z_ref: f64,
+    g: crate::physics::Groove,
 ) -> Vec<Vec<(f64, f64)>> {
-    let g = crate::physics::Groove::CHAPTER;
     let mut pieces: Vec<Vec<(f64, f64)>> = Vec::new();
     let mut cur: Vec<(f64, f64)> = Vec::new();
     let step = (track.t_s.len() / 400).max(1);
@@ -88,6 +88,7 @@ fn render_fig_c(
     t: &Track,
     z_ref: f64,
     impacts: &[f64],
+    g: crate::physics::Groove,
 ) -> Result<String, String> {
     let all_t = s.t_s.iter().chain(&t.t_s).map(|x| x * 1e3);
     let xr = span(all_t, 0.02);
@@ -126,13 +127,13 @@ fn render_fig_c(
         )?;
         draw_fit(
             &mut ch,
-            fitted_pieces(c, 0, s, z_ref),
+            fitted_pieces(c, 0, s, z_ref, g),
             STRIKER_FIT,
             "striker, fitted",
         )?;
         draw_fit(
             &mut ch,
-            fitted_pieces(c, 1, t, z_ref),
+            fitted_pieces(c, 1, t, z_ref, g),
             TARGET_FIT,
             "target, fitted",
         )?;
@@ -158,6 +159,7 @@ fn render_fig_d(
     s: &Track,
     z_ref: f64,
     impacts: &[f64],
+    g: crate::physics::Groove,
 ) -> Result<String, String> {
     let segs: Vec<_> = c.segments.iter().filter(|g| g.particle == 0).collect();
     let rolling_at = |t: f64| {
@@ -220,7 +222,7 @@ fn render_fig_d(
         }
         draw_fit(
             &mut ch,
-            fitted_pieces(c, 0, s, z_ref),
+            fitted_pieces(c, 0, s, z_ref, g),
             STRIKER_FIT,
             "fitted segments",
         )?;
@@ -259,7 +261,7 @@ pub fn render_figs(
         .filter_map(|i| i.t_s)
         .map(|t| t * 1e3)
         .collect();
-    let fig_c = render_fig_c(c, s, t, z_ref, &impacts)?;
-    let fig_d = render_fig_d(c, s, z_ref, &impacts)?;
+    let fig_c = render_fig_c(c, s, t, z_ref, &impacts, d.groove)?;
+    let fig_d = render_fig_d(c, s, z_ref, &impacts, d.groove)?;
     Ok(Some((fig_c, fig_d)))
 }

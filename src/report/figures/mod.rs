@@ -28,14 +28,37 @@ use super::inputs::ReportData;
 use crate::physics::Groove;
 use std::collections::BTreeMap;
 
-/// Which runs the single-trajectory figures show (None: chosen as documented in each figure).
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+/// Which runs the single-trajectory figures show (None: chosen as documented in each figure),
+/// and the groove the fitted curves are drawn on.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FigureOptions {
     /// Run for Fig. 4.2b (default: the single run with v0 closest to 0.025 m/s).
     pub trajectory_run: Option<String>,
     /// Run for Figs. 4.3c–d (default: the first rolling-setup collision run with an impact).
     pub collision_run: Option<String>,
+    /// Opening angle of the groove, degrees (the chapter's 70.6 by default).
+    pub groove_angle_deg: f64,
+    /// k = m R² / I of the particles (5/2, a solid sphere, by default).
+    pub k: f64,
+}
+
+impl Default for FigureOptions {
+    fn default() -> Self {
+        FigureOptions {
+            trajectory_run: None,
+            collision_run: None,
+            groove_angle_deg: 70.6,
+            k: 2.5,
+        }
+    }
+}
+
+impl FigureOptions {
+    /// The groove these options name.
+    pub fn groove(&self) -> Groove {
+        Groove::of_params(self.groove_angle_deg, self.k)
+    }
 }
 
 /// File name of the restitution figure of a material: 4.4b for 316, 4.4c for 440c, else by name.
@@ -59,7 +82,7 @@ pub fn render_all(
     d: &ReportData,
     opts: &FigureOptions,
 ) -> Result<BTreeMap<String, String>, String> {
-    let g = Groove::CHAPTER;
+    let g = d.groove;
     let mut out = BTreeMap::new();
     let mut put = |name: &str, svg: Option<String>| {
         if let Some(s) = svg {

@@ -22,9 +22,9 @@ pub fn render_fig(g: Groove) -> Result<String, String> {
     let bound = bound_deg(g.k);
     let curve: Vec<(f64, f64)> = (0..=160)
         .map(|i| 45.0 + i as f64 * 0.5)
-        .map(|t| (t, factor(t)))
+        .map(|t| (t, Groove::of_params(t, g.k).collision_factor()))
         .collect();
-    let f_here = factor(theta);
+    let f_here = g.collision_factor();
     render(|root| {
         let mut c = linear_chart(
             root,

@@ -71,7 +71,7 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(if d.collisions.is_empty() { NO_COLLISIONS.into() } else { "no impact carries the target's velocity and spin changes".into() });
         return b;
     }
-    let k = Groove::CHAPTER.k;
+    let k = d.groove.k;
     let impacts: Vec<_> = d.collisions.iter().flat_map(|c| &c.impacts).collect();
     let slip = impacts.iter().filter(|i| i.slip == Some(true)).count();
     let stick = impacts.iter().filter(|i| i.slip == Some(false)).count();
@@ -222,15 +222,14 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     b
 }
 
-fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
-    let g = Groove::CHAPTER;
+fn secondary_block(figs: &BTreeMap<String, String>, g: Groove) -> Block {
     let mut b = Block::new(
         "secondary",
         "3.7 Secondary collisions: the factor (1 − ks²)/(1 + ks²) and the 78.5° bound",
     );
     b.figure(figs, "fig_secondary.svg", "The velocity difference of two rolling particles is multiplied by (1 − ks²)/(1 + ks²) per collision and re-acceleration; it stays positive (secondary collisions follow) below the bound.");
     let theta = 2.0 * g.s.asin().to_degrees();
-    let f = secondary::factor(theta);
+    let f = g.collision_factor();
     let bound = secondary::bound_deg(g.k);
     let mut t = Table::new("Eq. 4.18, computed", &["quantity", "ours", "chapter"]);
     t.push(vec![
@@ -254,10 +253,16 @@ fn secondary_block(figs: &BTreeMap<String, String>) -> Block {
         format!("{:.1}", ch::THETA_BOUND_DEG),
     ]);
     b.table(t);
-    b.para(format!(
-        "With θ = {theta:.1}° < {bound:.1}° each collision leaves {:.0} % of the velocity difference, so the pair collides again and again (forever in the ideal model) and ends up rolling about 2R apart.",
-        f * 100.0
-    ));
+    b.para(if theta < bound {
+        format!(
+            "With θ = {theta:.1}° < {bound:.1}° each collision leaves {:.0} % of the velocity difference, so the pair collides again and again (forever in the ideal model) and ends up rolling about 2R apart.",
+            f * 100.0
+        )
+    } else {
+        format!(
+            "With θ = {theta:.1}° ≥ {bound:.1}° the factor is {f:.2}, not positive: after a collision and the re-acceleration the target rolls at least as fast as the striker, so no secondary collision follows."
+        )
+    });
     b
 }
 
@@ -268,6 +273,6 @@ pub fn blocks(d: &ReportData, figs: &BTreeMap<String, String>) -> Vec<Block> {
     out.push(fig_4_4a_block(d, figs));
     out.extend(super::whole_run::block(d, figs));
     out.push(fig_4_4bc_block(d, figs));
-    out.push(secondary_block(figs));
+    out.push(secondary_block(figs, d.groove));
     out
 }

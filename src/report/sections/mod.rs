@@ -3,6 +3,7 @@
 //!
 //! Files of this folder:
 //!
+//! - `baseline.rs`: Section 7, when a baseline is given: this result against an earlier one
 //! - `chapter.rs`: Section 3, single runs: the chapter's figures and tables
 //! - `collisions.rs`: Section 3, collisions: the chapter's figures and tables
 //! - `compare.rs`: Section 3.4.1: the compare stage's residuals of the collision fits
@@ -14,6 +15,7 @@
 //! - `verdict.rs`: Discovery's verdict in one sentence per finding
 //! - `whole_run.rs`: The whole-run collision fits in the report
 
+pub mod baseline;
 pub mod chapter;
 pub mod collisions;
 pub mod compare;
@@ -128,6 +130,8 @@ pub struct Page {
     pub discovery: Block,
     pub audit: Vec<AuditItem>,
     pub provenance: Block,
+    /// Only when the report stage is given a baseline.
+    pub baseline: Option<Block>,
 }
 
 /// Build the page from the data and the rendered figures (by file name).
@@ -149,5 +153,6 @@ pub fn build(
         discovery: discovery::block(d, figs),
         audit: audit(d),
         provenance: provenance::block(d),
+        baseline: baseline::block(d),
     }
 }

@@ -4,7 +4,6 @@ use super::{Block, Table};
 use crate::artifacts::diagnosis::CONTACT_NOT_PHYSICS;
 use crate::artifacts::summary::ProfileVerdict;
 use crate::artifacts::Diagnosis;
-use crate::physics::Groove;
 use crate::report::inputs::ReportData;
 use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
 use crate::report::value::pm;
@@ -82,7 +81,7 @@ pub fn block(d: &ReportData) -> Block {
             s.source.into(),
         ]);
     }
-    if let Some(a) = mu_pp(d, Groove::CHAPTER.k) {
+    if let Some(a) = mu_pp(d, d.groove.k) {
         t.push(vec![
             "μ_pp (particle–particle friction)".into(),
             agg_text(&a),

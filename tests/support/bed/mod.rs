@@ -1,6 +1,8 @@
 //! The randomized discovery bench: datasets drawn from a seed by the independent simulator, each
 //! with a truth kept beside (never inside) the dataset folder, scored against diagnosis.json.
 
+#[path = "../cli.rs"]
+pub mod cli;
 pub mod dataset;
 pub mod draw;
 pub mod limit;

@@ -1,12 +1,12 @@
 //! Running one drawn case through the whole pipeline (`groove run` in a scratch folder) and
 //! turning its diagnosis.json into a result record.
 
+use super::cli::{command, said, RUN_IN_PROJECT};
 use super::draw::Case;
 use super::score::{accepted, score};
 use super::table::Record;
 use crate::indsim::writer::write_dataset;
 use std::path::Path;
-use std::process::Command;
 use std::time::Instant;
 
 /// The discover stage's time from `groove run`'s log ("discover: ran in 12.34 s").
@@ -35,25 +35,11 @@ pub fn run_case(
     std::fs::write(dir.join("truth.json"), truth).map_err(io)?;
     std::fs::copy(pipeline, dir.join("pipeline.toml")).map_err(io)?;
     let started = Instant::now();
-    let out = Command::new(groove)
-        .current_dir(dir)
-        .args([
-            "run",
-            "--config",
-            "pipeline.toml",
-            "--data",
-            "data",
-            "--out",
-            "reports",
-        ])
+    let out = command(groove, dir, &RUN_IN_PROJECT)
         .output()
         .map_err(|e| format!("cannot start {}: {e}", groove.display()))?;
     let run_s = started.elapsed().as_secs_f64();
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let log = said(&out);
     std::fs::write(dir.join("run.log"), &log).map_err(io)?;
     let mut record = Record {
         index: case.index,
