@@ -23,6 +23,7 @@ impl StageKind for Figures {
             "residuals",
             "comparison",
             "diagnosis",
+            "under_accepted",
             "validation",
         ]
     }

@@ -47,6 +47,7 @@ impl StageKind for Report {
             "residuals",
             "comparison",
             "diagnosis",
+            "under_accepted",
             "validation",
             "provenance",
             "skipped",

@@ -10,6 +10,7 @@
 //! - `discovery.rs`: Section 4: discovery
 //! - `provenance.rs`: Section 6: provenance
 //! - `summary.rs`: Section 1: what was analysed
+//! - `under_accepted.rs`: Section 3.6: the chapter's numbers under the physics discovery accepted
 //! - `whole_run.rs`: The whole-run collision fits in the report
 
 pub mod chapter;
@@ -19,6 +20,7 @@ pub mod data;
 pub mod discovery;
 pub mod provenance;
 pub mod summary;
+pub mod under_accepted;
 pub mod whole_run;
 
 use super::audit::{audit, AuditItem};
@@ -135,6 +137,7 @@ pub fn build(
 ) -> Page {
     let mut chapter = chapter::blocks(d, figs);
     chapter.extend(collisions::blocks(d, figs));
+    chapter.extend(under_accepted::block(d, figs));
     Page {
         title: title.into(),
         date,
