@@ -102,9 +102,7 @@ fn collisions_under(
         let model = match single_run_physics(&params, &position, m, groove) {
             Ok(model) => model,
             Err(why) => {
-                notes.push(format!(
-                    "the whole-run fits of {m} are not refitted: {why}"
-                ));
+                notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));
                 continue;
             }
         };
@@ -195,13 +193,7 @@ mod tests {
         for f in &mut d.findings {
             f.accepted = false;
         }
-        let u = under_accepted(
-            &d,
-            &[],
-            None,
-            Groove::CHAPTER,
-            &WholeRunOptions::default(),
-        );
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
         assert!(!u.accepted && u.terms.is_empty());
         assert!(u.single.is_none() && u.collisions.is_none());
         assert!(u.notes[0].contains("nothing is refitted"), "{:?}", u.notes);
@@ -210,13 +202,7 @@ mod tests {
     #[test]
     fn a_saturating_drag_gives_the_drag_line_and_carries_its_term() {
         let d = shipped_diagnosis();
-        let u = under_accepted(
-            &d,
-            &[],
-            None,
-            Groove::CHAPTER,
-            &WholeRunOptions::default(),
-        );
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
         assert!(u.accepted);
         let effects: Vec<&str> = u.terms.iter().map(|t| t.effect.as_str()).collect();
         assert_eq!(effects, ["velocity_dependent_drag"]);

@@ -3,13 +3,13 @@
 //! with the whole-run law chosen under the accepted physics where `refit` made the fits again.
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
+use crate::artifacts::collision_summary::LawForm;
+use crate::physics::Restitution;
+use crate::recording::Setup;
 use crate::report::chapter;
 use crate::report::inputs::ReportData;
 use crate::report::style;
 use crate::report::summary::mu_pp;
-use crate::artifacts::collision_summary::LawForm;
-use crate::physics::Restitution;
-use crate::recording::Setup;
 use plotters::prelude::*;
 
 /// Render Fig. 4.4a, or None without impacts that carry Δv_z and Δv_a of the target.

@@ -42,7 +42,11 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
 /// The profile figure of the whole-run fits made again under the physics discovery accepted,
 /// or None when none was made again (nothing accepted, or the baseline's fits carried it all).
 pub fn render_accepted(d: &ReportData) -> Result<Option<String>, String> {
-    let Some(c) = d.under_accepted.as_ref().and_then(|u| u.collisions.as_ref()) else {
+    let Some(c) = d
+        .under_accepted
+        .as_ref()
+        .and_then(|u| u.collisions.as_ref())
+    else {
         return Ok(None);
     };
     let refitted: Vec<MaterialWholeRun> = c

@@ -97,7 +97,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         terms.join("; ")
     ));
     for n in &u.notes {
-        b.para(format!("{n}; for this material the baseline's numbers stand."));
+        b.para(format!(
+            "{n}; for this material the baseline's numbers stand."
+        ));
     }
     if let Some(s) = &u.single {
         let mut t = Table::new(
@@ -126,10 +128,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
                 (super::summary::agg_text(&a), super::summary::agg_text(&s))
             });
             let (ai, asl) = sm.t_line.map_or(
-                (
-                    "no line (a quadratic drag)".to_string(),
-                    "—".to_string(),
-                ),
+                ("no line (a quadratic drag)".to_string(), "—".to_string()),
                 |l| (est_text(&l.intercept_s), est_text(&l.slope_s_per_mps)),
             );
             lines.push(vec![m.clone(), bi, bs, ai, asl]);
@@ -194,7 +193,10 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
 
 /// Whether some whole-run fit was made again (not only kept from the baseline).
 fn c_refitted(u: &UnderAccepted) -> bool {
-    u.collisions
-        .as_ref()
-        .is_some_and(|c| c.whole_run.materials.iter().any(|m| !c.unchanged.contains(&m.material)))
+    u.collisions.as_ref().is_some_and(|c| {
+        c.whole_run
+            .materials
+            .iter()
+            .any(|m| !c.unchanged.contains(&m.material))
+    })
 }
