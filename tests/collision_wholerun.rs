@@ -666,8 +666,11 @@ fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
 /// added (seed 1). Discovery names the drag and the wave; the baseline whole-run fits, which
 /// leave the wave out, put μ_pp off the truth's 1.4 with an interval that excludes it for at
 /// least one material; the refit, carrying the wave, must give μ_pp within 3 % of 1.4 with 1.4
-/// inside its interval for both materials, and μ_pg of the single runs within 0.005.
+/// inside its interval for both materials, and μ_pg of the single runs within 0.005. Long
+/// (discovery, then the baseline's and the refit's whole-run analyses of both materials under a
+/// wave: more than 7 min of CPU in a dev build), so run on demand with `--ignored`.
 #[test]
+#[ignore]
 fn under_the_accepted_waviness_mu_pp_is_recovered_where_the_baseline_misses_it() {
     use groove::fit::refit::under_accepted;
     let shipped = std::fs::read_to_string(
