@@ -7,7 +7,7 @@ use crate::artifacts::summary::{MaterialWholeRun, ProfileVerdict};
 use crate::artifacts::under_accepted::UnderAccepted;
 use crate::artifacts::Estimate;
 use crate::report::inputs::ReportData;
-use crate::report::summary::{mu_all, t_line};
+use crate::report::summary::{mu_all, t_line, Agg};
 use crate::report::value::{pm, serde_name, sig};
 use std::collections::BTreeMap;
 
@@ -36,6 +36,14 @@ pub fn est_text(e: &Estimate) -> String {
             sig(e.value + 1.96 * se, 4)
         ),
         _ => pm(*e),
+    }
+}
+
+/// `value [lo, hi]` of a baseline aggregate (its bootstrap interval).
+fn agg_cell(a: &Agg) -> String {
+    match a.interval {
+        Some((lo, hi)) => format!("{} [{}, {}]", pm(a.est), sig(lo, 4), sig(hi, 4)),
+        None => pm(a.est),
     }
 }
 
@@ -117,7 +125,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             ],
         );
         for (m, sm) in &s.materials {
-            let base = mu_all(d, m).map_or("—".into(), |a| super::summary::agg_text(&a));
+            let base = mu_all(d, m).map_or("—".into(), |a| agg_cell(&a));
             t.push(vec![
                 m.clone(),
                 base,
@@ -125,7 +133,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
                 "under the accepted physics".into(),
             ]);
             let (bi, bs) = t_line(d, Some(m)).map_or(("—".into(), "—".into()), |(a, s)| {
-                (super::summary::agg_text(&a), super::summary::agg_text(&s))
+                (agg_cell(&a), agg_cell(&s))
             });
             let (ai, asl) = sm.t_line.map_or(
                 ("no line (a quadratic drag)".to_string(), "—".to_string()),
@@ -169,9 +177,11 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             if c.unchanged.contains(&m.material) {
                 b.para(format!("{}: the whole-run fits already carry every accepted term (a saturating drag is their own), so their numbers are the baseline's.", m.material));
             } else {
-                b.para(super::whole_run::mu_pp_words(
-                    &m.material,
-                    &m.profile.verdict,
+                b.para(format!(
+                    "{}: under the accepted physics the μ_pp profile gives {} (95 %); the chapter's 1.4 is {}.",
+                    m.material,
+                    verdict_text(&m.profile.verdict),
+                    if holds_1_4(&m.profile.verdict) { "allowed" } else { "excluded" }
                 ));
                 for n in &m.notes {
                     b.para(format!("{}: {n}.", m.material));
@@ -199,4 +209,14 @@ fn c_refitted(u: &UnderAccepted) -> bool {
             .iter()
             .any(|m| !c.unchanged.contains(&m.material))
     })
+}
+
+/// Whether the profile's verdict allows the chapter's 1.4.
+fn holds_1_4(v: &ProfileVerdict) -> bool {
+    match *v {
+        ProfileVerdict::Interval { lo, hi, .. } => lo <= 1.4 && 1.4 <= hi,
+        ProfileVerdict::LowerBound { lo } => lo <= 1.4,
+        ProfileVerdict::UpperBound { hi } => 1.4 <= hi,
+        ProfileVerdict::Unconstrained => true,
+    }
 }
