@@ -661,3 +661,84 @@ fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
     let mu_pp = f.where_["mu_pp_held"]["value"].as_f64().unwrap();
     assert!((mu_pp - 1.4).abs() < 0.02 * 1.4, "μ_pp held {mu_pp}");
 }
+
+/// The chapter's numbers under the accepted physics: the shipped truth with a 2 mm waviness
+/// added (seed 1). Discovery names the drag and the wave; the baseline whole-run fits, which
+/// leave the wave out, put μ_pp off the truth's 1.4 with an interval that excludes it for at
+/// least one material; the refit, carrying the wave, must give μ_pp within 3 % of 1.4 with 1.4
+/// inside its interval for both materials, and μ_pg of the single runs within 0.005. Long
+/// (discovery, then the baseline's and the refit's whole-run analyses of both materials under a
+/// wave: more than 7 min of CPU in a dev build), so run on demand with `--ignored`.
+#[test]
+#[ignore]
+fn under_the_accepted_waviness_mu_pp_is_recovered_where_the_baseline_misses_it() {
+    use groove::fit::refit::under_accepted;
+    let shipped = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/truth/truth.toml"),
+    )
+    .unwrap();
+    let at = shipped.find("[pair]").unwrap();
+    let wave = "[[physics.terms]]\nterm = \"position_force\"\namp_mps2 = 0.05\nwavelength_m = 2.0e-3\nphase_rad = 0.7\n\n";
+    let text = format!("{}{wave}{}", &shipped[..at], &shipped[at..]);
+    let text = text.replace("seed = 20261122", "seed = 1");
+    let recs = dataset(&text);
+    let started = std::time::Instant::now();
+    let d = diagnose(&recs, 1);
+    let t_discover = started.elapsed().as_secs_f64();
+    let accepted: Vec<(&str, &str)> = d
+        .findings
+        .iter()
+        .filter(|f| f.accepted)
+        .map(|f| (f.effect.as_str(), f.form.as_str()))
+        .collect();
+    assert!(
+        accepted
+            .iter()
+            .any(|(e, f)| *e == "position_dependent_force" && f.starts_with("periodic")),
+        "{accepted:?}"
+    );
+    let opts = WholeRunOptions::default();
+    let baseline = analyze(&recs, Groove::CHAPTER, &opts);
+    let started = std::time::Instant::now();
+    let u = under_accepted(&d, &recs, Some(&baseline), Groove::CHAPTER, &opts);
+    let t_refit = started.elapsed().as_secs_f64();
+    eprintln!("discover {t_discover:.1} s, refit {t_refit:.1} s");
+    assert!(u.accepted);
+    assert!(u
+        .terms
+        .iter()
+        .any(|t| t.effect == "position_dependent_force"));
+    let single = u.single.as_ref().expect("single runs");
+    for (m, truth) in [("316", 0.337), ("440c", 0.293)] {
+        let mu = single.materials[m].mu.value;
+        eprintln!("{m}: μ_pg under the accepted physics {mu:.5} (truth {truth})");
+        assert!((mu - truth).abs() < 0.005, "{m}: μ_pg {mu}");
+    }
+    let interval = |v: &ProfileVerdict| match *v {
+        ProfileVerdict::Interval { estimate, lo, hi } => Some((estimate, lo, hi)),
+        _ => None,
+    };
+    let mut baseline_excludes = 0;
+    for m in &baseline.materials {
+        let b = interval(&m.profile.verdict);
+        eprintln!("{}: baseline μ_pp {:?}", m.material, b);
+        if b.is_some_and(|(_, lo, hi)| !(lo <= 1.4 && 1.4 <= hi)) {
+            baseline_excludes += 1;
+        }
+    }
+    assert!(baseline_excludes > 0, "the baseline should miss 1.4 here");
+    let c = u.collisions.as_ref().expect("collision runs");
+    assert!(c.unchanged.is_empty(), "the wave changes the pair model");
+    assert_eq!(c.whole_run.materials.len(), 2, "{:?}", u.notes);
+    for m in &c.whole_run.materials {
+        let (e, lo, hi) = interval(&m.profile.verdict)
+            .unwrap_or_else(|| panic!("{}: {:?}", m.material, m.profile.verdict));
+        eprintln!(
+            "{}: μ_pp under the accepted physics {e:.3} [{lo:.3}, {hi:.3}], μ_pg {:.5}, RMS/noise {:.3}",
+            m.material, m.mu_pg.value, m.rms_noise
+        );
+        assert!((e - 1.4).abs() < 0.03 * 1.4, "{}: μ_pp {e}", m.material);
+        assert!(lo <= 1.4 && 1.4 <= hi, "{}: [{lo}, {hi}]", m.material);
+        assert!(m.rms_noise < 1.2, "{}: {}", m.material, m.rms_noise);
+    }
+}

@@ -103,6 +103,7 @@ struct Made {
     residuals: BTreeMap<String, Vec<u8>>,
     comparison: Vec<u8>,
     validation: Vec<u8>,
+    under_accepted: Vec<u8>,
 }
 
 fn made() -> Made {
@@ -168,7 +169,19 @@ fn made() -> Made {
         ]),
         None,
     );
+    // the refit under the shipped diagnosis' accepted physics (a saturating drag, which the
+    // whole-run fits already carry: their numbers are kept, nothing is fitted again)
+    let refit = run(
+        &stages::refit::Refit,
+        &BTreeMap::from([
+            ("diagnosis", &diagnosis_a),
+            ("runs", &runs_a),
+            ("summary", &agg["summary"]),
+        ]),
+        None,
+    );
     Made {
+        under_accepted: file(&refit["physics"]).to_vec(),
         skipped: file(&ingest["skipped"]).to_vec(),
         fits,
         summary: file(&agg["summary"]).to_vec(),
@@ -224,6 +237,13 @@ fn every_stage_artifact_is_pinned_and_reads_back_into_its_type() {
 
     golden("validation.json", &m.validation);
     round_trip::<artifacts::Validation>("validation", &m.validation, true);
+
+    golden("under_accepted_physics.json", &m.under_accepted);
+    round_trip::<artifacts::under_accepted::UnderAccepted>(
+        "under_accepted_physics",
+        &m.under_accepted,
+        true,
+    );
 }
 
 #[test]
@@ -237,6 +257,11 @@ fn the_shipped_published_files_read_back_into_their_types() {
     round_trip::<artifacts::Diagnosis>(
         "reports/diagnosis.json",
         &std::fs::read(reports.join("diagnosis.json")).unwrap(),
+        true,
+    );
+    round_trip::<artifacts::under_accepted::UnderAccepted>(
+        "reports/under_accepted_physics.json",
+        &std::fs::read(reports.join("under_accepted_physics.json")).unwrap(),
         true,
     );
     let csv = std::fs::read_to_string(reports.join("fits.csv")).unwrap();

@@ -18,6 +18,7 @@
 //! - `run_fit.rs`: The `fit` stage's item per run
 //! - `skipped.rs`: `ingest:skipped`
 //! - `summary.rs`: The types of summary.json
+//! - `under_accepted.rs`: under_accepted_physics.json (output of `refit`)
 //! - `validation.rs`: The `validate` stage's `validation`
 //!
 //! One file per artifact family: `run_fit` + `collision_fit` (the `fit` stage's item per run),
@@ -69,6 +70,7 @@ pub mod residuals;
 pub mod run_fit;
 pub mod skipped;
 pub mod summary;
+pub mod under_accepted;
 pub mod validation;
 
 pub use comparison::Comparison;

@@ -9,6 +9,7 @@
 //! - `model.rs`: The closed-form baseline as a fit model
 //! - `options.rs`: Options of every fit
 //! - `quality.rs`: Fit quality as data
+//! - `refit.rs`: The chapter's numbers under the physics discovery accepted
 //! - `regression.rs`: Means over runs
 //! - `residual_stats.rs`: Pooled statistics of re-simulation residuals
 //! - `residuals.rs`: Re-simulation of a run with its fitted parameters
@@ -72,6 +73,7 @@ pub mod fits_csv;
 pub mod model;
 pub mod options;
 pub mod quality;
+pub mod refit;
 pub mod regression;
 pub mod residual_stats;
 pub mod residuals;

@@ -3,6 +3,7 @@
 use super::collisions::{self, CollisionRun};
 use super::singles::{self, SingleRow};
 use crate::artifacts::summary::WholeRunSummary;
+use crate::artifacts::under_accepted::UnderAccepted;
 use crate::artifacts::{
     self, Comparison, Diagnosis, Provenance, RunFit, RunResiduals, Skipped, Summary, Validation,
 };
@@ -25,6 +26,8 @@ pub struct ReportData {
     /// The compare stage's pooled residuals (`compare:comparison`).
     pub comparison: Option<Comparison>,
     pub diagnosis: Option<Diagnosis>,
+    /// The chapter's numbers under the accepted physics (`refit:physics`).
+    pub under_accepted: Option<UnderAccepted>,
     /// Absent when the dataset has no truth file (`{"truth": false}`).
     pub validation: Option<Validation>,
     pub provenance: Option<Provenance>,
@@ -81,7 +84,7 @@ impl ReportData {
     }
 
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,
-    /// `fits_csv`, `residuals`, `summary`, `comparison`, `diagnosis`, `validation`, `provenance`, `skipped`.
+    /// `fits_csv`, `residuals`, `summary`, `comparison`, `diagnosis`, `under_accepted`, `validation`, `provenance`, `skipped`.
     pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {
         let mut d = ReportData::default();
         for (name, bytes) in items(inputs, "runs")? {
@@ -119,6 +122,9 @@ impl ReportData {
             .transpose()?;
         d.diagnosis = file(inputs, "diagnosis")?
             .map(|b| artifacts::from_json::<Diagnosis>("diagnosis", b))
+            .transpose()?;
+        d.under_accepted = file(inputs, "under_accepted")?
+            .map(|b| artifacts::from_json::<UnderAccepted>("under_accepted", b))
             .transpose()?;
         d.validation = file(inputs, "validation")?
             .map(|b| artifacts::from_json::<Validation>("validation", b))

@@ -25,6 +25,7 @@ impl StageKind for Figures {
             "residuals",
             "comparison",
             "diagnosis",
+            "under_accepted",
             "validation",
         ]
     }

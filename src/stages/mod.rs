@@ -9,6 +9,7 @@
 //! - `fit.rs`: The `fit` stage kind
 //! - `fit_io.rs`: helpers shared by the fit-side stage kinds
 //! - `ingest.rs`: The `ingest` stage kind
+//! - `refit.rs`: The `refit` stage kind
 //! - `report.rs`: The `report` stage kind
 //! - `simulate.rs`: The `simulate` stage kind
 //! - `validate.rs`: The `validate` stage kind
@@ -27,6 +28,7 @@ pub mod figures;
 pub mod fit;
 pub mod fit_io;
 pub mod ingest;
+pub mod refit;
 pub mod report;
 pub mod simulate;
 pub mod validate;
@@ -42,6 +44,7 @@ pub fn registry() -> Vec<Box<dyn StageKind>> {
         Box::new(simulate::Simulate),
         Box::new(compare::Compare),
         Box::new(discover::Discover),
+        Box::new(refit::Refit),
         Box::new(validate::Validate),
         Box::new(figures::Figures),
         Box::new(report::Report),

@@ -57,6 +57,7 @@ impl StageKind for Report {
             "residuals",
             "comparison",
             "diagnosis",
+            "under_accepted",
             "validation",
             "provenance",
             "skipped",

@@ -85,7 +85,18 @@ pub fn analyze_material(
     groove: Groove,
     opts: &WholeRunOptions,
 ) -> MaterialWholeRun {
-    let spec = FitSpec::new(groove);
+    analyze_material_with(material, runs, &FitSpec::new(groove), opts)
+}
+
+/// The whole-run analysis of the runs of one material under `spec`'s physics (the `refit` stage
+/// carries discovery's accepted terms in `spec.drag`).
+pub fn analyze_material_with(
+    material: &str,
+    runs: &[PairRun],
+    spec: &FitSpec,
+    opts: &WholeRunOptions,
+) -> MaterialWholeRun {
+    let spec = spec.clone();
     let first = fit_group(runs, &spec, None, opts.max_iter);
     let mut notes = Vec::new();
     let choices: Vec<LawChoice> = [Setup::Rolling, Setup::Contact]

@@ -1,7 +1,11 @@
 //! Figs. 4.4a–c: the target's spin change against its velocity change (slope μ_pp·k), and the
-//! coefficient of restitution against impact speed per material, rolling and contact setups.
+//! coefficient of restitution against impact speed per material, rolling and contact setups,
+//! with the whole-run law chosen under the accepted physics where `refit` made the fits again.
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
+use crate::artifacts::collision_summary::LawForm;
+use crate::physics::Restitution;
+use crate::recording::Setup;
 use crate::report::chapter;
 use crate::report::inputs::ReportData;
 use crate::report::style;
@@ -172,8 +176,40 @@ pub fn render_bc(
                     Some(&label),
                 )?;
             }
+            if let Some(law) = accepted_law(d, material, *contact) {
+                let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
+                let curve: Vec<(f64, f64)> = (0..=60)
+                    .map(|i| {
+                        let v = v_hi * i as f64 / 60.0;
+                        (v, law.at(v))
+                    })
+                    .collect();
+                let label = format!("{setup}: whole-run law under the accepted physics");
+                line(&mut c, curve, col, 1, true, Some(&label))?;
+            }
         }
         legend(&mut c, SeriesLabelPosition::LowerLeft)
     })?;
     Ok(Some(svg))
+}
+
+/// The restitution law the whole-run fits chose for `material` and the setup when they were
+/// made again under the physics discovery accepted (`refit`), or None.
+fn accepted_law(d: &ReportData, material: &str, contact: bool) -> Option<Restitution> {
+    let setup = if contact {
+        Setup::Contact
+    } else {
+        Setup::Rolling
+    };
+    let m = crate::report::sections::under_accepted::whole_run_of(d, material)?;
+    let choice = m.restitution.iter().find(|c| c.setup == setup)?;
+    let cand = choice.chosen_candidate()?;
+    let p = cand.ordered();
+    let a = p.first()?.1.value;
+    let b = match (cand.form, p.get(1)) {
+        (LawForm::Saturating, Some((_, e))) => e.value.ln(),
+        (_, Some((_, e))) => e.value,
+        (_, None) => 0.0,
+    };
+    Some(cand.form.law(a, b))
 }

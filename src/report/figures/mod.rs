@@ -101,6 +101,10 @@ pub fn render_all(
     }
     put("fig_4_4a.svg", fig_4_4::render_a(d, g.k)?);
     put("fig_mu_pp_profile.svg", mu_pp_profile::render_fig(d)?);
+    put(
+        "fig_mu_pp_profile_accepted.svg",
+        mu_pp_profile::render_accepted(d)?,
+    );
     let coll_mats: Vec<String> = {
         let mut m: Vec<String> = d.collisions.iter().map(|c| c.material.clone()).collect();
         m.sort();

@@ -1,8 +1,10 @@
 //! The profile of μ_pp beside Fig. 4.4a: per material, the whole-run fit's deviance with μ_pp
 //! held at each value (summary.json → collisions.whole_run), drawn as its square root (a
-//! parabola's root is a V), with the 95 % level and the chapter's 1.4.
+//! parabola's root is a V), with the 95 % level and the chapter's 1.4; and again for the fits made
+//! under the physics discovery accepted (`refit`), when they were made again.
 
 use super::common::{legend, line, linear_chart, render, scatter};
+use crate::artifacts::summary::MaterialWholeRun;
 use crate::report::chapter;
 use crate::report::inputs::ReportData;
 use crate::report::style;
@@ -13,11 +15,12 @@ pub const CLIP: f64 = 12.0;
 
 /// (material, [(μ_pp, deviance)], threshold) of each material with a profile.
 pub fn profiles(d: &ReportData) -> Vec<(String, Vec<(f64, f64)>, f64)> {
-    let Some(whole) = d.whole_run() else {
-        return Vec::new();
-    };
-    whole
-        .materials
+    d.whole_run().map_or_else(Vec::new, |w| of(&w.materials))
+}
+
+/// The profiles of `materials`' whole-run fits.
+fn of(materials: &[MaterialWholeRun]) -> Vec<(String, Vec<(f64, f64)>, f64)> {
+    materials
         .iter()
         .filter_map(|m| {
             let pts: Vec<(f64, f64)> = m
@@ -33,7 +36,33 @@ pub fn profiles(d: &ReportData) -> Vec<(String, Vec<(f64, f64)>, f64)> {
 
 /// Render the profile figure, or None without whole-run profiles.
 pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
-    let profs = profiles(d);
+    draw(profiles(d), "μ_pp profile of the whole-run fits")
+}
+
+/// The profile figure of the whole-run fits made again under the physics discovery accepted,
+/// or None when none was made again (nothing accepted, or the baseline's fits carried it all).
+pub fn render_accepted(d: &ReportData) -> Result<Option<String>, String> {
+    let Some(c) = d
+        .under_accepted
+        .as_ref()
+        .and_then(|u| u.collisions.as_ref())
+    else {
+        return Ok(None);
+    };
+    let refitted: Vec<MaterialWholeRun> = c
+        .whole_run
+        .materials
+        .iter()
+        .filter(|m| !c.unchanged.contains(&m.material))
+        .cloned()
+        .collect();
+    draw(
+        of(&refitted),
+        "μ_pp profile of the whole-run fits under the accepted physics",
+    )
+}
+
+fn draw(profs: Vec<(String, Vec<(f64, f64)>, f64)>, title: &str) -> Result<Option<String>, String> {
     if profs.is_empty() {
         return Ok(None);
     }
@@ -46,7 +75,7 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
     let svg = render(|root| {
         let mut c = linear_chart(
             root,
-            "μ_pp profile of the whole-run fits",
+            title,
             xr,
             yr,
             "log10 μ_pp",

@@ -12,6 +12,7 @@
 //! - `params.rs`: A fitted term's parameters as text
 //! - `provenance.rs`: Section 6: provenance
 //! - `summary.rs`: Section 1: what was analysed
+//! - `under_accepted.rs`: Section 3.6: the chapter's numbers under the physics discovery accepted
 //! - `verdict.rs`: Discovery's verdict in one sentence per finding
 //! - `whole_run.rs`: The whole-run collision fits in the report
 
@@ -24,6 +25,7 @@ pub mod discovery;
 pub mod params;
 pub mod provenance;
 pub mod summary;
+pub mod under_accepted;
 pub mod verdict;
 pub mod whole_run;
 
@@ -143,6 +145,7 @@ pub fn build(
 ) -> Page {
     let mut chapter = chapter::blocks(d, figs);
     chapter.extend(collisions::blocks(d, figs));
+    chapter.extend(under_accepted::block(d, figs));
     Page {
         title: title.into(),
         date,

@@ -2,7 +2,6 @@
 
 use super::{Block, Table};
 use crate::artifacts::diagnosis::CONTACT_NOT_PHYSICS;
-use crate::artifacts::summary::ProfileVerdict;
 use crate::artifacts::Diagnosis;
 use crate::report::inputs::ReportData;
 use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
@@ -56,7 +55,30 @@ pub fn block(d: &ReportData) -> Block {
     let mut t = Table::new("Key parameters (± standard error, [bootstrap interval] where the aggregate stage gives one)", &[
         "quantity", "ours", "chapter", "source",
     ]);
-    for m in &mats {
+    let trusted = super::under_accepted::trusted(d).and_then(|u| u.single.as_ref());
+    for (m, sm) in trusted.into_iter().flat_map(|s| &s.materials) {
+        t.push(vec![
+            format!("μ_pg of {m} (under the accepted physics)"),
+            super::under_accepted::est_text(&sm.mu),
+            crate::report::chapter::mu_for(m).map_or("—".into(), |v| format!("{v:.3}")),
+            "under_accepted_physics.json (3.6)".into(),
+        ]);
+        if let Some(l) = sm.t_line {
+            t.push(vec![
+                format!("drag T(|v|) = T0 + T'|v| of {m}: T0 (s)"),
+                super::under_accepted::est_text(&l.intercept_s),
+                "—".into(),
+                "under_accepted_physics.json (3.6)".into(),
+            ]);
+            t.push(vec![
+                format!("drag T(|v|) = T0 + T'|v| of {m}: T' (s per m/s)"),
+                super::under_accepted::est_text(&l.slope_s_per_mps),
+                "—".into(),
+                "under_accepted_physics.json (3.6)".into(),
+            ]);
+        }
+    }
+    for m in mats.iter().filter(|_| trusted.is_none()) {
         if let Some(a) = mu_fast(d, m) {
             let ch = crate::report::chapter::mu_for(m).map_or("—".into(), |v| format!("{v:.3}"));
             t.push(vec![
@@ -67,7 +89,7 @@ pub fn block(d: &ReportData) -> Block {
             ]);
         }
     }
-    if let Some((a, s)) = t_line(d, None) {
+    if let Some((a, s)) = t_line(d, None).filter(|_| trusted.is_none()) {
         t.push(vec![
             "T(v0) intercept T0, all runs (s)".into(),
             agg_text(&a),
@@ -97,17 +119,15 @@ pub fn block(d: &ReportData) -> Block {
         ]);
     }
     // μ_pp of the whole-run fits: the profile's interval or bound per material
-    for m in d.whole_run().into_iter().flat_map(|w| &w.materials) {
-        let name = &m.material;
-        let text = match m.profile.verdict {
-            ProfileVerdict::Interval { estimate, lo, hi } => {
-                format!("{estimate:.3} [{lo:.3}, {hi:.3}]")
-            }
-            ProfileVerdict::LowerBound { lo } => format!("> {lo:.2}"),
-            ProfileVerdict::UpperBound { hi } => format!("< {hi:.2}"),
-            ProfileVerdict::Unconstrained => "not constrained".into(),
-        };
-        let caveat = if super::whole_run::speed_dependent_friction(d, name).is_some() {
+    // (under the accepted physics where the refit made the fit again: the trusted column)
+    for base in d.whole_run().into_iter().flat_map(|w| &w.materials) {
+        let name = &base.material;
+        let refit = super::under_accepted::whole_run_of(d, name);
+        let m = refit.unwrap_or(base);
+        let text = super::under_accepted::verdict_text(&m.profile.verdict);
+        let caveat = if refit.is_some() {
+            ", under the accepted physics: see 3.6"
+        } else if super::whole_run::speed_dependent_friction(d, name).is_some() {
             "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
         } else if super::whole_run::uncarried_physics(d, name).is_some() {
             "; without the single-run physics discovery accepted: see 3.5.1"
@@ -118,7 +138,11 @@ pub fn block(d: &ReportData) -> Block {
             format!("μ_pp of {name} (whole-run profile, 95 %{caveat})"),
             text,
             "1.4".into(),
-            "summary.json".into(),
+            if refit.is_some() {
+                "under_accepted_physics.json".into()
+            } else {
+                "summary.json".into()
+            },
         ]);
     }
     if !t.rows.is_empty() {

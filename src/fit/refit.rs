@@ -1,0 +1,226 @@
+//! The chapter's numbers under the physics discovery accepted: the single runs' μ_pg and drag line
+//! from discovery's joint fit (which carries every accepted term), and the whole-run pair fits
+//! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
+//! the restitution laws refitted, the μ_pp profile redone).
+
+use super::collision::whole_summary::{analyze_material_with, WholeRunOptions};
+use super::collision::wholerun::{DragSpec, FitSpec, PairRun};
+use crate::artifacts::diagnosis::{Diagnosis, Finding};
+use crate::artifacts::summary::{MaterialWholeRun, WholeRunSummary};
+use crate::artifacts::under_accepted::{
+    CarriedTerm, CollisionsUnder, DragTimeLine, SingleMaterial, SingleUnder, UnderAccepted,
+};
+use crate::artifacts::Estimate;
+use crate::discover::pairs::single_run_physics;
+use crate::physics::{Groove, Term};
+use crate::recording::{Experiment, Recording};
+use std::collections::BTreeMap;
+
+/// The accepted single-run findings: the physics a refit carries (collision findings and the
+/// particle check name no term of the one-particle model).
+pub fn accepted_terms(d: &Diagnosis) -> Vec<&Finding> {
+    d.findings
+        .iter()
+        .filter(|f| {
+            f.accepted
+                && f.where_.get("experiment") != Some(&serde_json::json!("collision"))
+                && f.effect != "particle_differences"
+        })
+        .collect()
+}
+
+/// The single runs of each material under the accepted physics: μ and the drag of discovery's
+/// final joint model (every accepted term fitted jointly over all single runs).
+fn single_under(d: &Diagnosis) -> SingleUnder {
+    let p = &d.model_parameters;
+    let materials = d
+        .materials
+        .iter()
+        .filter_map(|m| {
+            let mu = *p.get(&format!("mu_{m}"))?;
+            let t_line = match (p.get(&format!("t0_s_{m}")), p.get("tp_s_per_mps")) {
+                (Some(t0), Some(tp)) => Some(DragTimeLine {
+                    intercept_s: *t0,
+                    slope_s_per_mps: *tp,
+                }),
+                // a linear drag's line is flat; beside a quadratic drag T is no line in |v|
+                _ if p.contains_key("c_per_m") => None,
+                _ => p.get(&format!("t_s_{m}")).map(|t| DragTimeLine {
+                    intercept_s: *t,
+                    slope_s_per_mps: Estimate::new(0.0, 0.0),
+                }),
+            };
+            Some((m.clone(), SingleMaterial { mu, t_line }))
+        })
+        .collect();
+    SingleUnder {
+        source: "discovery's joint fit of every single run, with every accepted term fitted jointly (μ and the drag time per material, the terms shared)".into(),
+        materials,
+    }
+}
+
+/// The collision runs of `recordings` that read as pair runs, by material.
+fn pair_runs(recordings: &[Recording]) -> BTreeMap<String, Vec<PairRun>> {
+    let mut out: BTreeMap<String, Vec<PairRun>> = BTreeMap::new();
+    for rec in recordings
+        .iter()
+        .filter(|r| r.info.experiment == Experiment::Collision)
+    {
+        if let Ok(run) = PairRun::from_recording(rec, rec.info.setup) {
+            out.entry(rec.info.material.clone()).or_default().push(run);
+        }
+    }
+    out
+}
+
+/// The whole-run fits under the accepted physics; `baseline` (summary.json's
+/// `collisions.whole_run`) gives the materials whose fits already carry it.
+fn collisions_under(
+    d: &Diagnosis,
+    recordings: &[Recording],
+    baseline: Option<&WholeRunSummary>,
+    groove: Groove,
+    opts: &WholeRunOptions,
+    notes: &mut Vec<String>,
+) -> Option<CollisionsUnder> {
+    let by_material = pair_runs(recordings);
+    if by_material.is_empty() {
+        return None;
+    }
+    let params: BTreeMap<String, f64> = d
+        .model_parameters
+        .iter()
+        .map(|(k, v)| (k.clone(), v.value))
+        .collect();
+    let position: Vec<&Finding> = accepted_terms(d)
+        .into_iter()
+        .filter(|f| f.effect == "position_dependent_force")
+        .collect();
+    let mut materials: Vec<MaterialWholeRun> = Vec::new();
+    let mut unchanged = Vec::new();
+    for (m, runs) in &by_material {
+        let model = match single_run_physics(&params, &position, m, groove) {
+            Ok(model) => model,
+            Err(why) => {
+                notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));
+                continue;
+            }
+        };
+        // the pairs' own friction and drag stay free, as in the baseline: what is carried is
+        // every other accepted force
+        let others: Vec<Term> = model
+            .terms
+            .into_iter()
+            .filter(|t| !matches!(t, Term::LinearDrag { .. } | Term::SaturatingDrag { .. }))
+            .collect();
+        let kept = baseline.and_then(|b| b.materials.iter().find(|w| &w.material == m));
+        if let (true, Some(kept)) = (others.is_empty(), kept) {
+            // nothing beyond the drag: the baseline's fit is this very fit
+            materials.push(kept.clone());
+            unchanged.push(m.clone());
+            continue;
+        }
+        let spec = FitSpec {
+            drag: DragSpec::SaturatingWith(others),
+            ..FitSpec::new(groove)
+        };
+        materials.push(analyze_material_with(m, runs, &spec, opts));
+    }
+    Some(CollisionsUnder {
+        whole_run: WholeRunSummary {
+            materials,
+            notes: Vec::new(),
+        },
+        unchanged,
+    })
+}
+
+/// The chapter's numbers under `d`'s accepted physics. Nothing accepted: says so and refits
+/// nothing. `baseline` is summary.json's `collisions.whole_run`, if any.
+pub fn under_accepted(
+    d: &Diagnosis,
+    recordings: &[Recording],
+    baseline: Option<&WholeRunSummary>,
+    groove: Groove,
+    opts: &WholeRunOptions,
+) -> UnderAccepted {
+    let accepted = accepted_terms(d);
+    if accepted.is_empty() {
+        return UnderAccepted {
+            accepted: false,
+            terms: Vec::new(),
+            single: None,
+            collisions: None,
+            notes: vec!["discovery accepted no single-run physics: the baseline's numbers are the analysis' numbers, and nothing is refitted".into()],
+        };
+    }
+    let terms = accepted
+        .iter()
+        .map(|f| CarriedTerm {
+            effect: f.effect.clone(),
+            form: f.form.clone(),
+            parameters: f
+                .parameters
+                .iter()
+                .map(|(k, e)| (k.clone(), e.value))
+                .collect(),
+        })
+        .collect();
+    let mut notes = Vec::new();
+    let single = Some(single_under(d)).filter(|s| !s.materials.is_empty());
+    let collisions = collisions_under(d, recordings, baseline, groove, opts, &mut notes);
+    UnderAccepted {
+        accepted: true,
+        terms,
+        single,
+        collisions,
+        notes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped_diagnosis() -> Diagnosis {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/diagnosis.json");
+        serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn nothing_accepted_says_so_and_copies_nothing() {
+        let mut d = shipped_diagnosis();
+        for f in &mut d.findings {
+            f.accepted = false;
+        }
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
+        assert!(!u.accepted && u.terms.is_empty());
+        assert!(u.single.is_none() && u.collisions.is_none());
+        assert!(u.notes[0].contains("nothing is refitted"), "{:?}", u.notes);
+    }
+
+    #[test]
+    fn a_saturating_drag_gives_the_drag_line_and_carries_its_term() {
+        let d = shipped_diagnosis();
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
+        assert!(u.accepted);
+        let effects: Vec<&str> = u.terms.iter().map(|t| t.effect.as_str()).collect();
+        assert_eq!(effects, ["velocity_dependent_drag"]);
+        let s = u.single.unwrap();
+        for m in ["316", "440c"] {
+            let sm = &s.materials[m];
+            assert_eq!(sm.mu.value, d.model_parameters[&format!("mu_{m}")].value);
+            let line = sm.t_line.expect("a saturating drag has a line");
+            assert_eq!(
+                line.intercept_s.value,
+                d.model_parameters[&format!("t0_s_{m}")].value
+            );
+            assert_eq!(
+                line.slope_s_per_mps.value,
+                d.model_parameters["tp_s_per_mps"].value
+            );
+        }
+        // no recordings: no collision part
+        assert!(u.collisions.is_none());
+    }
+}
