@@ -7,7 +7,6 @@ use crate::engine::stage::{
     typed_params, Artifact, ParamError, StageError, StageInput, StageKind, StageOutputs,
 };
 use crate::fit::collision::whole_summary::WholeRunOptions;
-use crate::fit::collision::CollisionOptions;
 use crate::fit::refit::under_accepted;
 use serde::{Deserialize, Serialize};
 
@@ -15,24 +14,25 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RefitParams {
-    /// k = m R² / I of the particles; keep it equal to the aggregate stage's `k`.
+    /// The groove's opening angle (degrees) and k = m R² / I of the particles; both inherited
+    /// from `[project] params` like every stage that needs the geometry.
+    pub groove_angle_deg: f64,
     pub k: f64,
 }
 
 impl Default for RefitParams {
     fn default() -> Self {
-        RefitParams { k: 2.5 }
+        let chapter = crate::fit::FitOptions::default();
+        RefitParams {
+            groove_angle_deg: chapter.groove_angle_deg,
+            k: chapter.k,
+        }
     }
 }
 
 fn params(table: &toml::Table) -> Result<(RefitParams, serde_json::Value), ParamError> {
     let (p, json): (RefitParams, _) = typed_params(table)?;
-    if !(p.k > 0.0 && p.k.is_finite()) {
-        return Err(param_error((
-            "k".into(),
-            "must be positive (2.5 for a solid sphere)".into(),
-        )));
-    }
+    crate::fit::options::check_groove(p.groove_angle_deg, p.k).map_err(param_error)?;
     Ok((p, json))
 }
 
@@ -86,10 +86,7 @@ impl StageKind for Refit {
                 recordings.push(recording(item, bytes)?);
             }
         }
-        let groove = crate::physics::Groove {
-            s: CollisionOptions::default().s,
-            k: p.k,
-        };
+        let groove = crate::physics::Groove::of_params(p.groove_angle_deg, p.k);
         let baseline = summary
             .as_ref()
             .and_then(|s| s.collisions.as_ref())
