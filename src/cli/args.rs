@@ -180,7 +180,8 @@ pub enum Verb {
     /// Compare two results number by number: every number of summary.json and diagnosis.json
     /// side by side with its change in combined standard errors (σ), findings that appeared or
     /// disappeared, and params changed. A and B are result folders (reports/), published bundles
-    /// or git revisions (their committed reports/); default A: HEAD, B: the working reports.
+    /// or git revisions (their committed reports/); default A: the bundle the last `groove
+    /// publish` wrote, else HEAD; B: the working reports.
     Diff {
         /// The baseline: a folder or a git revision (default: the bundle the last `groove
         /// publish` wrote, else HEAD).
