@@ -6,7 +6,9 @@
 //!
 //! Usage: cargo bench --bench discovery_bed -- --groove BIN [--quick] [--from N] [--to M]
 //!        [--results FILE] [--work DIR] [--keep] [--table] [--draw]
-//! (`--draw` prints the drawn datasets, their effects and true sizes, and runs nothing.)
+//! (`--draw` prints the drawn datasets, their effects and true sizes, and runs nothing;
+//! `--pipeline FILE` runs each dataset with that pipeline.toml instead of this checkout's, for a
+//! binary built from another commit.)
 //! (tests/bench/discovery_bed.sh builds the release binary and calls this.)
 
 #[allow(dead_code)]
@@ -37,11 +39,12 @@ struct Args {
     keep: bool,
     table_only: bool,
     draw_only: bool,
+    pipeline: Option<PathBuf>,
 }
 
 fn usage(msg: &str) -> ! {
     eprintln!("discovery_bed: {msg}");
-    eprintln!("usage: discovery_bed --groove BIN [--quick] [--from N] [--to M] [--results FILE] [--work DIR] [--keep] [--table] [--draw]");
+    eprintln!("usage: discovery_bed --groove BIN [--quick] [--from N] [--to M] [--results FILE] [--work DIR] [--keep] [--table] [--draw] [--pipeline FILE]");
     std::process::exit(2)
 }
 
@@ -57,6 +60,7 @@ fn parse() -> Args {
         keep: false,
         table_only: false,
         draw_only: false,
+        pipeline: None,
     };
     let mut it = std::env::args().skip(1);
     let mut results = None;
@@ -79,6 +83,7 @@ fn parse() -> Args {
             "--keep" => a.keep = true,
             "--table" => a.table_only = true,
             "--draw" => a.draw_only = true,
+            "--pipeline" => a.pipeline = Some(PathBuf::from(value("--pipeline"))),
             "--bench" => {} // passed by `cargo bench`
             other => usage(&format!("unknown argument {other:?}")),
         }
@@ -139,7 +144,10 @@ fn main() {
             .groove
             .clone()
             .unwrap_or_else(|| usage("give the groove binary with --groove BIN or GROOVE_BIN"));
-        let pipeline = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipeline.toml");
+        let pipeline = args
+            .pipeline
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipeline.toml"));
         let indices: Vec<usize> = if args.quick {
             QUICK.to_vec()
         } else {
