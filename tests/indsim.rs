@@ -278,7 +278,7 @@ fn draws_are_deterministic_and_sized_between_one_and_ten_limits() {
         }
         for t in &a.truths {
             assert!(
-                t.multiple > 0.9 && t.multiple < 11.0,
+                (t.multiple > 0.9 || t.at_plausible_max) && t.multiple < 11.0,
                 "dataset {i}: {} at {}× its limit",
                 t.shape,
                 t.multiple

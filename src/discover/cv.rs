@@ -98,6 +98,23 @@ pub fn cross_validate(
     }
 }
 
+/// `cv` with each run charged `gains[i]` (χ², noise units) of held-out error: what a term with a
+/// parameter fitted on the held-out run itself (a phase) takes from that run's noise alone.
+pub fn charged(cv: &CvResult, gains: &[f64], runs: &[RunData]) -> CvResult {
+    let mut per_run = cv.per_run_msn.clone();
+    let (mut sq, mut count) = (0.0, 0usize);
+    for (i, run) in runs.iter().enumerate() {
+        let n = run.n_used().max(1);
+        per_run[i] += gains.get(i).copied().unwrap_or(0.0) / n as f64;
+        sq += per_run[i] * n as f64 * run.sigma_m.powi(2);
+        count += n;
+    }
+    CvResult {
+        cv_rms_m: (sq / count.max(1) as f64).sqrt(),
+        per_run_msn: per_run,
+    }
+}
+
 /// One-sided paired t of the per-run improvement (base − extended); positive: the extension predicts better.
 pub fn paired_t(base: &CvResult, ext: &CvResult) -> f64 {
     let d: Vec<f64> = base

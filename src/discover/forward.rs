@@ -19,6 +19,7 @@ use super::screen::{screen, Control, Screened, REPLICATES};
 use super::Options;
 use crate::artifacts::diagnosis::{CandidateRow, Evidence, Finding, ModelScore};
 use crate::stats::dist::t_upper_quantile;
+use rayon::prelude::*;
 use std::cell::OnceCell;
 use std::collections::BTreeMap;
 
@@ -350,7 +351,28 @@ impl Trials<'_> {
                     "refused: each run's own mu and T take up the misfit it fits (differences between particles), and a phase per run fits any run's own misfit".into(),
                 );
             }
-            let (_, cv, t) = self.held_out(&self.fitted[i]);
+            let (_, mut cv, mut t) = self.held_out(&self.fitted[i]);
+            if matches!(self.all[i], Extra::TimePeriodic { .. }) {
+                // each held-out run's phase is fitted on that run: charge what it takes from
+                // the run's noise alone before comparing
+                let m = &self.fitted[i];
+                let runs = self.set.runs;
+                let gains: Vec<f64> = runs
+                    .par_iter()
+                    .enumerate()
+                    .map(|(r, run)| {
+                        let sim = m.spec.run_model(&m.fit.global, &m.fit.local[r], run);
+                        super::timeforce::noise_gain(
+                            &sim,
+                            &m.fit.local[r],
+                            run,
+                            self.set.opts.seed ^ (r as u64 + 1).wrapping_mul(0x9E37_79B9),
+                        )
+                    })
+                    .collect();
+                cv = super::cv::charged(&cv, &gains, runs);
+                t = paired_t(self.current_cv, &cv);
+            }
             self.cv_of[i] = Some((cv, t));
             trace_took(start, || {
                 format!(

@@ -97,11 +97,38 @@ pub(super) fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
 /// residual without the force, s and c the responses to the force at its amplitude with phase
 /// 0 and π/2, all with the run's z0, t0 and v0 projected out (metres², not noise units).
 pub(super) fn run_sums(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunData) -> [f64; 5] {
+    let Some((e, s, c)) = run_columns(m, idx, l, run) else {
+        return [0.0; 5];
+    };
+    sums(&e, &s, &c)
+}
+
+/// (ss, sc, cc, es, ec) of the three columns.
+fn sums(e: &[f64], s: &[f64], c: &[f64]) -> [f64; 5] {
+    let mut k = [0.0; 5];
+    for j in 0..e.len() {
+        k[0] += s[j] * s[j];
+        k[1] += s[j] * c[j];
+        k[2] += c[j] * c[j];
+        k[3] += e[j] * s[j];
+        k[4] += e[j] * c[j];
+    }
+    k
+}
+
+/// The residual without the force `idx` of `m` and the responses to it at phase 0 and π/2, at
+/// the run's kept samples with its z0, t0 and v0 projected out (metres), and the local basis.
+fn run_columns(
+    m: &SimModel,
+    idx: usize,
+    l: &[f64; N_LOCAL],
+    run: &RunData,
+) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     let Term::TimePeriodicForce {
         amp_mps2, freq_hz, ..
     } = m.terms[idx]
     else {
-        return [0.0; 5];
+        return None;
     };
     let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
     let mut without = m.clone();
@@ -134,16 +161,49 @@ pub(super) fn run_sums(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunDa
         project_out(&basis, &mut x);
         x
     };
-    let (e, s, c) = (column(&run.z_m), column(&zs), column(&zc));
-    let mut k = [0.0; 5];
-    for j in 0..e.len() {
-        k[0] += s[j] * s[j];
-        k[1] += s[j] * c[j];
-        k[2] += c[j] * c[j];
-        k[3] += e[j] * s[j];
-        k[4] += e[j] * c[j];
+    Some((column(&run.z_m), column(&zs), column(&zc)))
+}
+
+/// Noise replicates of [`noise_gain`].
+const GAIN_REPLICATES: usize = 16;
+
+/// What fitting the run's own phase, at the force's amplitude, takes from the run's noise alone:
+/// the mean over replicates of the run's AR(1) noise (its σ and lag-1 correlation, z0, t0, v0
+/// projected out) of the χ² drop (noise units) the best phase gives. A held-out run whose phase
+/// is fitted on itself gains this much whatever the force, so a force with a phase per run is
+/// charged it before its held-out error is compared.
+pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) -> f64 {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let Some((idx, amp, _)) = time_term(m) else {
+        return 0.0;
+    };
+    if amp == 0.0 || !(run.sigma_m > 0.0) {
+        return 0.0;
     }
-    k
+    let Some((e, s, c)) = run_columns(m, idx, l, run) else {
+        return 0.0;
+    };
+    let rho = run.rho1.clamp(-0.95, 0.95);
+    let innov = (1.0 - rho * rho).sqrt();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut total = 0.0;
+    for _ in 0..GAIN_REPLICATES {
+        let mut x: f64 = StandardNormal.sample(&mut rng);
+        let noise: Vec<f64> = (0..e.len())
+            .map(|_| {
+                let out = x * run.sigma_m;
+                let z: f64 = StandardNormal.sample(&mut rng);
+                x = rho * x + innov * z;
+                out
+            })
+            .collect();
+        // the noise is not projected here: s and c are, so its local part does not count
+        let k = sums(&noise, &s, &c);
+        let best = objective(best_phase(&k), &k);
+        total += (-best).max(0.0);
+    }
+    total / GAIN_REPLICATES as f64 / (run.sigma_m * run.sigma_m)
 }
 
 /// Set the phase of the time-periodic force in `m` to the one that fits `run` best.

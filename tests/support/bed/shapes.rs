@@ -57,6 +57,10 @@ pub struct Truth {
     pub sizes: Vec<(String, f64)>,
     /// The size in units of the detection limit.
     pub multiple: f64,
+    /// The size was held at its plausible maximum (see `Effect::plausible_max`), so `multiple`
+    /// may lie below 1: the effect is below what these data can show.
+    #[serde(default)]
+    pub at_plausible_max: bool,
 }
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
@@ -390,6 +394,7 @@ impl Effect {
             forms,
             sizes,
             multiple,
+            at_plausible_max: self.size >= self.plausible_max() * (1.0 - 1e-9),
         }
     }
 }
