@@ -91,6 +91,7 @@ fn scoring_names_the_place_and_form_sizes_within_15_percent_and_counts_anything_
         forms: vec!["tilt".into()],
         sizes: vec![("alpha_deg".into(), 0.1)],
         multiple: 4.0,
+        at_plausible_max: false,
     };
     let doc = |fs: &[&str]| format!(r#"{{"findings": [{}]}}"#, fs.join(","));
     let alone = accepted(&doc(&[&tilt, rejected])).unwrap();
