@@ -309,7 +309,11 @@ fn close(
     failed: usize,
     store_dir: &std::path::Path,
 ) -> Result<(), EngineError> {
-    ctx.hashes.save()?;
+    if let Err(e) = ctx.hashes.save() {
+        // the cache only spares rehashing: a run whose results are all in place does not fail
+        // on it (a full disk would otherwise fail even a no-op)
+        eprintln!("groove: warning: the file-hash cache was not saved ({e}); the next run rehashes what it needs");
+    }
     ctx.store.save_stamps();
     if let Some(p) = ctx.pusher.take() {
         p.finish();

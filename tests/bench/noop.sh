@@ -16,6 +16,9 @@ REPO=$(cd "$(dirname "$0")/../.." && pwd)
 GROOVE=${2:-$REPO/target/debug/groove}
 BASELINE=${3:-}
 ROUNDS=${4:-5}
+# absolute paths: the timed runs happen inside the scratch project
+GROOVE=$(realpath "$GROOVE" 2>/dev/null || echo "$GROOVE")
+[ -z "$BASELINE" ] || BASELINE=$(realpath "$BASELINE" 2>/dev/null || echo "$BASELINE")
 [ -x "$GROOVE" ] || { echo "noop: no groove binary at $GROOVE; run cargo build first" >&2; exit 2; }
 [ -z "$BASELINE" ] || [ -x "$BASELINE" ] || { echo "noop: no baseline binary at $BASELINE" >&2; exit 2; }
 [ -x /usr/bin/time ] || { echo "noop: needs GNU time at /usr/bin/time" >&2; exit 2; }
