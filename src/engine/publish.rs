@@ -139,11 +139,16 @@ pub fn publish(
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "bundle".into());
     let fresh = parent.join(unique_name(&format!(".{name}.groove-new")));
-    for (rel, bytes) in &files {
+    let written = files.iter().try_for_each(|(rel, bytes)| {
         let p = fresh.join(rel);
         let dir = p.parent().expect("bundle files have a parent");
         std::fs::create_dir_all(dir).at(dir)?;
-        std::fs::write(&p, bytes).at(&p)?;
+        std::fs::write(&p, bytes).at(&p)
+    });
+    if let Err(e) = written {
+        // a bundle that could not be written whole (a full disk) leaves nothing beside the target
+        let _ = std::fs::remove_dir_all(&fresh);
+        return Err(e);
     }
     if to.exists() {
         let old = parent.join(unique_name(&format!(".{name}.groove-old")));
