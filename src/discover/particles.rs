@@ -362,7 +362,7 @@ pub fn check(
             let y: Vec<f64> = idx.iter().map(|&i| steps[i][which]).collect();
             let speed: Vec<f64> = v0.iter().map(|v| v.abs()).collect();
             let dir: Vec<f64> = v0.iter().map(|v| v.signum()).collect();
-            // Bonferroni over the four slopes of each material
+            // Bonferroni over the four slopes (μ and T, on speed and on direction) of every material
             let level = alpha / (4 * nm) as f64;
             slope_p(&speed, &y) < level || slope_p(&dir, &y) < level
         })
