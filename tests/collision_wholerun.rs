@@ -608,23 +608,16 @@ fn outliers_after_impacts_are_not_an_impact_misfit_but_a_ringing_is() {
     assert!(f.evidence.lr > 1.3, "mean square ratio {}", f.evidence.lr);
 }
 
-/// Pairs under a 2 mm waviness that the single runs' physics carries: the shipped truth with
-/// the wave added (seed 1), its 440c pairs, held at the physics discovery fitted to that
-/// dataset's single runs (the wave within 0.4 % of the truth). The pair check must not call
-/// it a pair mismatch, the free fit must describe the pairs, and μ_pp with that physics held
-/// must be the truth's 1.4 within 2 %. Before the held fit started the free one, the free fit
-/// from the defaults ended with T0 at a tenth of the single runs', 9× the noise (174 s), and
-/// the pairs were flagged at χ²(3) = 32,063.
-#[test]
-fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
+/// The shipped truth with a 2 mm waviness of 0.05 m/s² added to the single runs' physics,
+/// drawn with seed 1.
+fn shipped_truth_with_a_wave() -> String {
     let shipped = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("data/truth/truth.toml"),
     )
     .unwrap();
     let at = shipped.find("[pair]").unwrap();
     let wave = "[[physics.terms]]\nterm = \"position_force\"\namp_mps2 = 0.05\nwavelength_m = 2.0e-3\nphase_rad = 0.7\n\n";
-    let text = format!("{}{wave}{}", &shipped[..at], &shipped[at..]);
-    let text: String = text
+    format!("{}{wave}{}", &shipped[..at], &shipped[at..])
         .lines()
         .map(|l| {
             if l.starts_with("seed = ") {
@@ -634,8 +627,19 @@ fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
             }
         })
         .collect::<Vec<_>>()
-        .join("\n");
-    let recs = dataset(&text);
+        .join("\n")
+}
+
+/// Pairs under a 2 mm waviness that the single runs' physics carries: the shipped truth with
+/// the wave added (seed 1), its 440c pairs, held at the physics discovery fitted to that
+/// dataset's single runs (the wave within 0.4 % of the truth). The pair check must not call
+/// it a pair mismatch, the free fit must describe the pairs, and μ_pp with that physics held
+/// must be the truth's 1.4 within 2 %. Before the held fit started the free one, the free fit
+/// from the defaults ended with T0 at a tenth of the single runs', 9× the noise (174 s), and
+/// the pairs were flagged at χ²(3) = 32,063.
+#[test]
+fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
+    let recs = dataset(&shipped_truth_with_a_wave());
     let model = physics(
         0.2933781584412408,
         vec![
@@ -673,15 +677,7 @@ fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
 #[ignore]
 fn under_the_accepted_waviness_mu_pp_is_recovered_where_the_baseline_misses_it() {
     use groove::fit::refit::under_accepted;
-    let shipped = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/truth/truth.toml"),
-    )
-    .unwrap();
-    let at = shipped.find("[pair]").unwrap();
-    let wave = "[[physics.terms]]\nterm = \"position_force\"\namp_mps2 = 0.05\nwavelength_m = 2.0e-3\nphase_rad = 0.7\n\n";
-    let text = format!("{}{wave}{}", &shipped[..at], &shipped[at..]);
-    let text = text.replace("seed = 20261122", "seed = 1");
-    let recs = dataset(&text);
+    let recs = dataset(&shipped_truth_with_a_wave());
     let started = std::time::Instant::now();
     let d = diagnose(&recs, 1);
     let t_discover = started.elapsed().as_secs_f64();

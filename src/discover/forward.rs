@@ -361,7 +361,10 @@ impl Trials<'_> {
                     .par_iter()
                     .enumerate()
                     .map(|(r, run)| {
-                        let sim = m.spec.run_model(&m.fit.global, &m.fit.local[r], run);
+                        // the phase is irrelevant here (the responses at 0 and π/2 are taken)
+                        let sim = m
+                            .spec
+                            .sim_model(&m.fit.global, run.material, m.fit.local[r][2]);
                         super::timeforce::noise_gain(
                             &sim,
                             &m.fit.local[r],

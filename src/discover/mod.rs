@@ -124,11 +124,9 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::physics::G_MPS2;
 
-/// The effects tested unless the `discover` stage's `candidates` param says otherwise: every
-/// place's forms, which compete in one screen.
-pub const DEFAULT_EFFECTS: [&str; 9] = EFFECTS;
-
-/// Every candidate effect id the library knows, in the order they are listed.
+/// Every candidate effect id the library knows, in the order they are listed; all are tested
+/// unless the `discover` stage's `candidates` param says otherwise (every place's forms compete
+/// in one screen).
 pub const EFFECTS: [&str; 9] = [
     "velocity_dependent_drag",
     "rolling_resistance",
@@ -177,7 +175,7 @@ impl Default for Options {
             bootstrap_iterations: 4,
             alpha: 0.01,
             folds: 5,
-            candidates: DEFAULT_EFFECTS.iter().map(|s| s.to_string()).collect(),
+            candidates: EFFECTS.iter().map(|s| s.to_string()).collect(),
             nonparametric: true,
             max_terms: 3,
             groove_angle_deg: 70.6,

@@ -63,16 +63,16 @@ pub fn verdict(diag: &Diagnosis) -> Option<String> {
             "Verdict: the baseline misses, and no candidate explains it well enough to be accepted."
                 .to_string()
         } else {
-            "Verdict: nothing missing was found, within the detection limits given below."
+            "Verdict: nothing missing was found, within the detection limits of the candidates tested."
                 .to_string()
         });
     }
     let lines: Vec<String> = accepted.iter().map(|f| sentence(f)).collect();
     Some(format!(
-        "Verdict: {} found. {}",
+        "Verdict: discovery accepted {}. {}",
         match accepted.len() {
-            1 => "one missing piece of physics".to_string(),
-            n => format!("{n} missing pieces of physics"),
+            1 => "one finding".to_string(),
+            n => format!("{n} findings"),
         },
         lines.join(" ")
     ))
