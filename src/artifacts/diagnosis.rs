@@ -143,7 +143,18 @@ pub struct Diagnosis {
     pub runs_used: usize,
     pub materials: Vec<String>,
     pub settings: Settings,
+    /// A slow drift of the tracking noise that every test's null carried (absent: none found).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracking_drift: Option<TrackingDrift>,
     pub note: String,
+}
+
+/// The slow part of the tracking noise: its variance as a multiple of each run's fast noise
+/// variance, and its correlation time.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TrackingDrift {
+    pub variance_ratio: f64,
+    pub time_constant_s: f64,
 }
 
 /// Force maps of the baseline and of the final model.

@@ -22,6 +22,8 @@ pub struct RunData {
     pub sigma_m: f64,
     /// Lag-1 autocorrelation of the run's baseline residuals (for the bootstrap noise).
     pub rho1: f64,
+    /// The dataset's slow tracking noise (`slow_noise.rs`); none until measured.
+    pub slow: super::slow_noise::Slow,
 }
 
 impl RunData {
@@ -75,6 +77,7 @@ pub fn prepare_runs(recordings: &[Recording], min_frames: usize) -> (Vec<RunData
             keep: vec![true; rows.len()],
             sigma_m: 1e-6,
             rho1: 0.0,
+            slow: Default::default(),
         });
     }
     runs.sort_by(|a, b| a.run.cmp(&b.run));

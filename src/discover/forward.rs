@@ -708,6 +708,29 @@ pub fn run_round(
     let all: Vec<&Extra> = entries.iter().chain(probes).collect();
     let ne = entries.len();
     let clock = std::time::Instant::now();
+    // the slow noise read under this round's model: a misfit its terms now explain no longer
+    // counts as noise (the baseline's runs carry what their own fits left)
+    let runs_here: Vec<RunData>;
+    let set = &if current.spec.extras.is_empty() {
+        Setting { ..*set }
+    } else {
+        let slow = super::perrun::slow_noise_under(
+            set.runs,
+            &current.spec,
+            &current.params,
+            &current.fit.global,
+            &current.fit.local,
+        );
+        runs_here = set
+            .runs
+            .iter()
+            .map(|r| RunData { slow, ..r.clone() })
+            .collect();
+        Setting {
+            runs: &runs_here,
+            ..*set
+        }
+    };
     let trace = |what: &str| {
         if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
             eprintln!(

@@ -29,6 +29,7 @@
 //! - `screen.rs`: The screen: every candidate's likelihood-ratio statistic and its parametric-bootstrap null
 //! - `screen_sums.rs`: The screen's linear algebra
 //! - `selection.rs`: The state a discovery carries between its steps (`Ctx`, `Selection`, `Accepted`)
+//! - `slow_noise.rs`: The slow part of the tracking noise, a drift over many frames
 //! - `sim.rs`: one-particle trajectories for the discovery fits
 //! - `spectral.rs`: Spectral search
 //! - `timeforce.rs`: Each run's own phase of a force periodic in time
@@ -114,6 +115,7 @@ pub mod screen;
 mod screen_sums;
 mod selection;
 pub mod sim;
+pub mod slow_noise;
 pub mod spectral;
 pub mod timeforce;
 

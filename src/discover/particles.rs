@@ -24,7 +24,6 @@ use super::model::Model;
 use super::response::{prepare, Prepared};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 
 /// Noise replicates of the check.
@@ -167,20 +166,6 @@ fn wander(b: &RunBasis, y: &[f64]) -> f64 {
     b.slow.iter().map(|s| dot(s, y).powi(2)).sum()
 }
 
-/// AR(1) noise of lag-1 correlation `rho` over `n` samples, unit variance.
-fn ar1(n: usize, rho: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    let innov = (1.0 - rho * rho).sqrt();
-    let mut e: f64 = StandardNormal.sample(rng);
-    (0..n)
-        .map(|_| {
-            let x = e;
-            let z: f64 = StandardNormal.sample(rng);
-            e = rho * e + innov * z;
-            x
-        })
-        .collect()
-}
-
 /// (LR, RES) of one projected residual `y` against the run's basis.
 fn split(b: &RunBasis, y: &[f64]) -> (f64, f64, [f64; 2]) {
     let coords: Vec<f64> = b.q.iter().map(|q| dot(q, y)).collect();
@@ -266,7 +251,8 @@ pub fn check(
             let mut coords = Vec::with_capacity(prep.len());
             for (p, base) in prep.iter().zip(&bases) {
                 let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
-                let mut e = ar1(p.y.len(), rho, &mut rng);
+                let mut e =
+                    super::slow_noise::replicate(p.y.len(), rho, runs[p.run].slow, &mut rng);
                 p.proj.apply(&mut e);
                 let (a, c, coord) = split(base, &e);
                 w += wander(base, &e);

@@ -5,6 +5,7 @@ use super::candidate::predict;
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
 use super::joint::{fit_joint, FitControl};
+use super::slow_noise::{Series, Slow};
 use rayon::prelude::*;
 
 /// One run's own fit.
@@ -148,5 +149,94 @@ pub fn measure_noise(
             fits = fit_each_run(runs, base, base_params, &[], Some(&fits));
         }
     }
+    let slow = slow_of(runs, base, base_params, &[], &fits);
+    runs.iter_mut().for_each(|r| r.slow = slow);
     fits
+}
+
+/// The dataset's slow tracking noise read from each run's own fit under a joint model: `spec`
+/// with its extra terms held at `global`'s values, each run's μ and T started from its
+/// material's and its z0, t0, v0 from `local`.
+pub fn slow_noise_under(
+    runs: &[RunData],
+    spec: &Spec,
+    params: &[ParamInfo],
+    global: &[f64],
+    local: &[[f64; N_LOCAL]],
+) -> Slow {
+    let nm = spec.n_materials;
+    let starts: Vec<PerRunFit> = runs
+        .iter()
+        .zip(local)
+        .map(|(r, l)| PerRunFit {
+            mu: global[r.material],
+            t_s: global[nm + r.material],
+            local: *l,
+            rms_m: 0.0,
+            converged: true,
+        })
+        .collect();
+    let extra_values = &global[2 * nm..];
+    let fits = fit_each_run(runs, spec, params, extra_values, Some(&starts));
+    slow_of(runs, spec, params, extra_values, &fits)
+}
+
+/// The slow noise of the runs' own fits `fits`.
+fn slow_of(
+    runs: &[RunData],
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+    fits: &[PerRunFit],
+) -> Slow {
+    let series: Vec<Series> = runs
+        .par_iter()
+        .zip(fits)
+        .map(|(run, fit)| slow_series(run, base, base_params, extra_values, fit))
+        .collect();
+    super::slow_noise::estimate(&series).0
+}
+
+/// A run's own fit as the slow-noise estimate reads it: the residual at its kept samples in
+/// noise units and the fit's five columns there (each parameter stepped).
+fn slow_series(
+    run: &RunData,
+    base: &Spec,
+    base_params: &[ParamInfo],
+    extra_values: &[f64],
+    fit: &PerRunFit,
+) -> Series {
+    let kept = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .zip(&run.keep)
+            .filter(|p| *p.1)
+            .map(|p| p.0 / run.sigma_m)
+            .collect()
+    };
+    let res = residuals(run, base, base_params, extra_values, fit);
+    let steps: [(usize, f64); 5] = [
+        (0, 1e-4 * fit.mu.abs().max(1e-3)),
+        (1, 1e-4 * fit.t_s.abs().max(1e-4)),
+        (2, 1e-7),
+        (3, 1e-7),
+        (4, 1e-6 * fit.local[2].abs().max(1e-3)),
+    ];
+    let cols = steps
+        .iter()
+        .map(|&(j, h)| {
+            let mut f = fit.clone();
+            match j {
+                0 => f.mu += h,
+                1 => f.t_s += h,
+                _ => f.local[j - 2] += h,
+            }
+            let moved = residuals(run, base, base_params, extra_values, &f);
+            kept(moved.iter().zip(&res).map(|(a, b)| a - b).collect())
+        })
+        .collect();
+    Series {
+        y: kept(res),
+        cols,
+        rho_fast: run.rho1,
+    }
 }

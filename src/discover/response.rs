@@ -362,6 +362,7 @@ mod tests {
             keep: vec![true; t.len()],
             sigma_m: 1e-6,
             rho1: 0.0,
+            slow: Default::default(),
         }
     }
 

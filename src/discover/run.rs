@@ -68,6 +68,7 @@ fn empty(opts: &Options, runs_used: usize, materials: Vec<String>, note: &str) -
         runs_used,
         materials,
         settings: settings(opts),
+        tracking_drift: None,
         note: note.into(),
     }
 }
@@ -528,6 +529,15 @@ pub fn discover_reporting(
     say("testing whether the particles differ");
     // a spread that tracks the runs' speed or direction is physics the model lacks, which the
     // drift probes flag; particles that differ are independent of how hard they were kicked
+    // the slow noise under the final model: what its terms explain is no longer noise
+    let runs_final: Vec<RunData> = if sel.current.spec.extras.is_empty() {
+        runs.clone()
+    } else {
+        let m = &sel.current;
+        let slow =
+            super::perrun::slow_noise_under(&runs, &m.spec, &m.params, &m.fit.global, &m.fit.local);
+        runs.iter().map(|r| RunData { slow, ..r.clone() }).collect()
+    };
     let drift_left = !sel.unexplained.is_empty()
         || sel
             .last_probes
@@ -535,7 +545,7 @@ pub fn discover_reporting(
             .any(|p| p.evidence.p_holm < opts.alpha);
     if let Some(f) = particle_finding(
         &sel.current,
-        &runs,
+        &runs_final,
         &materials,
         opts,
         &final_score,
@@ -573,8 +583,18 @@ pub fn discover_reporting(
         runs_used: runs.len(),
         materials,
         settings: settings(opts),
+        tracking_drift: tracking_drift(&runs_final),
         note: String::new(),
     }
+}
+
+/// The slow tracking noise the runs carry, its correlation time at their median frame rate.
+fn tracking_drift(runs: &[RunData]) -> Option<crate::artifacts::diagnosis::TrackingDrift> {
+    let slow = runs.first()?.slow;
+    (slow.kappa > 0.0).then(|| crate::artifacts::diagnosis::TrackingDrift {
+        variance_ratio: slow.kappa,
+        time_constant_s: -1.0 / slow.rho.ln() / median(runs.iter().map(|r| r.fps).collect()),
+    })
 }
 
 /// The finding of `particles::check` on the final model: accepted when the particles differ,

@@ -1,15 +1,15 @@
 //! The screen's linear algebra: each run's projected residual and noise replicates (`Vectors`),
 //! and the sums over runs and replicates from which a trial's statistic, estimate and null law
-//! are solved (`Sums`), with the AR(1) covariance they need; the shared parameters' information
+//! are solved (`Sums`), with the noise covariance they need; the shared parameters' information
 //! with each run's locals projected out (`shared_information`) also gives the joint fit its
 //! errors where its covariance is singular (`profiled_se`).
 
 use super::data::RunData;
 use super::response::Prepared;
+use super::slow_noise::{cross, replicate};
 use crate::lsq::dense::{chol_inverse, cholesky_jittered};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::StandardNormal;
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -33,18 +33,12 @@ impl Vectors {
                 let mut out = Vec::with_capacity(replicates + 1);
                 out.push(p.y.clone());
                 let rho = run.rho1.clamp(-0.99, 0.99);
-                let innov = (1.0 - rho * rho).sqrt();
                 for b in 0..replicates {
                     let mut rng = ChaCha8Rng::seed_from_u64(
                         seed ^ (((p.run as u64) << 20) | (b as u64 + 1))
                             .wrapping_mul(0x9E37_79B9_7F4A_7C15),
                     );
-                    let mut e: f64 = rng.sample(StandardNormal);
-                    let mut v = Vec::with_capacity(n);
-                    for _ in 0..n {
-                        v.push(e);
-                        e = rho * e + innov * rng.sample::<f64, _>(StandardNormal);
-                    }
+                    let mut v = replicate(n, rho, run.slow, &mut rng);
                     p.proj.apply(&mut v);
                     out.push(v);
                 }
@@ -332,7 +326,7 @@ impl Sums {
                 .collect();
             for a in 0..q {
                 for b in a..q {
-                    let s = ar1_cross(&profiled[a], &profiled[b], rho);
+                    let s = cross(&profiled[a], &profiled[b], rho, runs[p.run].slow);
                     c[a * q + b] += s;
                     if a != b {
                         c[b * q + a] += s;
@@ -380,18 +374,6 @@ pub(super) fn one_sided(q: usize, sign: &[f64]) -> Option<f64> {
     }
 }
 
-/// Σᵢⱼ xᵢ yⱼ ρ^|i−j|: the covariance of x'e and y'e for unit-variance AR(1) noise e of lag-1
-/// correlation ρ, in one pass (sₓ carries Σ_{j<i} xⱼ ρ^(i−1−j)).
-pub(super) fn ar1_cross(x: &[f64], y: &[f64], rho: f64) -> f64 {
-    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
-    for (&xi, &yi) in x.iter().zip(y) {
-        total += xi * yi + rho * (xi * sy + yi * sx);
-        sx = xi + rho * sx;
-        sy = yi + rho * sy;
-    }
-    total
-}
-
 /// The sums of a coherent trial: the same columns' coefficients in every run; `cols(p)` gives a
 /// run's columns (already in noise units with its locals projected) or None where the form
 /// cannot act.
@@ -432,25 +414,6 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_ar1_covariance_in_one_pass_is_the_double_sum() {
-        let x: Vec<f64> = (0..41).map(|i| (i as f64 * 0.37).sin()).collect();
-        let y: Vec<f64> = (0..41).map(|i| 1.0 / (2.0 + i as f64)).collect();
-        for rho in [0.0, 0.6, -0.3] {
-            let mut plain = 0.0;
-            for (i, xi) in x.iter().enumerate() {
-                for (j, yj) in y.iter().enumerate() {
-                    plain += xi * yj * f64::powi(rho, (i as i32 - j as i32).abs());
-                }
-            }
-            let fast = ar1_cross(&x, &y, rho);
-            assert!(
-                (fast - plain).abs() < 1e-12 * (1.0 + plain.abs()),
-                "ρ {rho}: {fast} {plain}"
-            );
-        }
-    }
 
     #[test]
     fn the_four_chain_dot_products_agree_with_the_plain_sums() {

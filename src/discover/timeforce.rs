@@ -168,13 +168,12 @@ fn run_columns(
 const GAIN_REPLICATES: usize = 16;
 
 /// What fitting the run's own phase, at the force's amplitude, takes from the run's noise alone:
-/// the mean over replicates of the run's AR(1) noise (its σ and lag-1 correlation, z0, t0, v0
-/// projected out) of the χ² drop (noise units) the best phase gives. A held-out run whose phase
+/// the mean over replicates of the run's noise (its σ, lag-1 correlation and the dataset's slow
+/// noise; z0, t0, v0 projected out) of the χ² drop (noise units) the best phase gives. A held-out run whose phase
 /// is fitted on itself gains this much whatever the force, so a force with a phase per run is
 /// charged it before its held-out error is compared.
 pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) -> f64 {
     use rand::SeedableRng;
-    use rand_distr::{Distribution, StandardNormal};
     let Some((idx, amp, _)) = time_term(m) else {
         return 0.0;
     };
@@ -185,19 +184,11 @@ pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) ->
         return 0.0;
     };
     let rho = run.rho1.clamp(-0.95, 0.95);
-    let innov = (1.0 - rho * rho).sqrt();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut total = 0.0;
     for _ in 0..GAIN_REPLICATES {
-        let mut x: f64 = StandardNormal.sample(&mut rng);
-        let noise: Vec<f64> = (0..e.len())
-            .map(|_| {
-                let out = x * run.sigma_m;
-                let z: f64 = StandardNormal.sample(&mut rng);
-                x = rho * x + innov * z;
-                out
-            })
-            .collect();
+        let mut noise = super::slow_noise::replicate(e.len(), rho, run.slow, &mut rng);
+        noise.iter_mut().for_each(|x| *x *= run.sigma_m);
         // the noise is not projected here: s and c are, so its local part does not count
         let k = sums(&noise, &s, &c);
         let best = objective(best_phase(&k), &k);

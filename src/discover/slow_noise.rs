@@ -1,0 +1,313 @@
+//! The slow part of the tracking noise: a drift over many frames (a sub-pixel estimator that
+//! wanders, camera shake, slow illumination changes) that a run's local cubic cannot see, since
+//! the cubic takes it for a trend. Unmodelled, it reads as physics: a smooth column (a drag, a
+//! distortion, a drift of T with |v0|) collects far more of it than white noise gives, and a
+//! force periodic in time with a phase per run fits it in every run.
+//!
+//! Each run's noise, in units of its measured σ, is modelled as its fast AR(1) (σ = 1, lag-1 ρ
+//! from `noise.rs`) plus an independent slow AR(1) of variance κ and lag-1 correlation ρ_s per
+//! kept sample, κ and ρ_s shared by the runs of a dataset (one tracker, one camera). They are
+//! measured on each run's own fit (its μ, T, z0, t0, v0 free, so a misfit that a run's own μ
+//! and T take up is not read as noise): the residual's projections on a run's slowest cosines,
+//! with the fit's columns projected out of them, have expectations `A + κ·B(ρ_s)` (`cross`);
+//! κ is the maximum of the Gaussian quasi-likelihood over a grid of ρ_s, and is kept only when
+//! it beats κ = 0 by the χ²₂ 1 % point, so a white or AR(1) noise keeps exactly its old model.
+//! A physical misfit left in the runs' own fits raises κ a little, which makes every test a
+//! little more cautious, never less.
+
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+/// A dataset's slow noise: variance (in units of each run's σ²) and lag-1 correlation per
+/// kept sample. κ = 0 is no slow noise.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Slow {
+    pub kappa: f64,
+    pub rho: f64,
+}
+
+/// The χ²₂ 1 % point: the quasi-likelihood ratio κ must reach to be kept.
+const KEEP_LR: f64 = 9.21;
+/// Slow cosines per run (at most; a short run has fewer).
+const PROBES: usize = 12;
+/// Kept samples per probe at least (a run of 60 samples has 6 probes).
+const SAMPLES_PER_PROBE: usize = 10;
+
+/// Σᵢⱼ xᵢ yⱼ ρ^|i−j|: the covariance of x'e and y'e for unit-variance AR(1) noise e of lag-1
+/// correlation ρ, in one pass (sₓ carries Σ_{j<i} xⱼ ρ^(i−1−j)).
+pub fn ar1_cross(x: &[f64], y: &[f64], rho: f64) -> f64 {
+    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
+    for (&xi, &yi) in x.iter().zip(y) {
+        total += xi * yi + rho * (xi * sy + yi * sx);
+        sx = xi + rho * sx;
+        sy = yi + rho * sy;
+    }
+    total
+}
+
+/// The covariance of x'e and y'e for a run's whole noise model (noise units).
+pub fn cross(x: &[f64], y: &[f64], rho_fast: f64, slow: Slow) -> f64 {
+    let fast = ar1_cross(x, y, rho_fast);
+    if slow.kappa > 0.0 {
+        fast + slow.kappa * ar1_cross(x, y, slow.rho)
+    } else {
+        fast
+    }
+}
+
+/// One replicate of a run's noise over `n` kept samples (noise units): the fast AR(1) and, when
+/// there is one, the slow AR(1) drawn after it (so a dataset without slow noise draws exactly
+/// the numbers it always drew).
+pub fn replicate(n: usize, rho_fast: f64, slow: Slow, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let mut v = ar1(n, rho_fast, 1.0, rng);
+    if slow.kappa > 0.0 {
+        let s = ar1(n, slow.rho, slow.kappa.sqrt(), rng);
+        v.iter_mut().zip(s).for_each(|(a, b)| *a += b);
+    }
+    v
+}
+
+/// Stationary AR(1) of lag-1 correlation ρ and standard deviation `sd`.
+fn ar1(n: usize, rho: f64, sd: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let rho = rho.clamp(-0.999_999, 0.999_999);
+    let innov = (1.0 - rho * rho).sqrt();
+    let mut e: f64 = rng.sample(StandardNormal);
+    (0..n)
+        .map(|_| {
+            let x = sd * e;
+            e = rho * e + innov * rng.sample::<f64, _>(StandardNormal);
+            x
+        })
+        .collect()
+}
+
+/// One run as the estimate sees it: its own fit's residual at its kept samples in noise units,
+/// that fit's columns there (any scaling), and its fast noise's lag-1 correlation.
+pub struct Series {
+    pub y: Vec<f64>,
+    pub cols: Vec<Vec<f64>>,
+    pub rho_fast: f64,
+}
+
+/// One probe of one run: the observed square, the fast model's expectation and the slow
+/// model's expectation per unit κ at each trial ρ_s.
+struct Probe {
+    obs: f64,
+    fast: f64,
+    slow: Vec<f64>,
+}
+
+/// Trial time constants of the slow noise, in kept samples.
+fn trial_rhos() -> Vec<f64> {
+    (0..13).map(|i| (-1.0 / 2f64.powi(i + 1)).exp()).collect()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// An orthonormal basis (Gram–Schmidt, twice) of the columns.
+fn basis(cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    for c in cols {
+        let mut x = c.clone();
+        let norm0 = dot(&x, &x).sqrt();
+        if !(norm0 > 0.0) {
+            continue;
+        }
+        for _ in 0..2 {
+            for qi in &q {
+                let p = dot(qi, &x);
+                x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+            }
+        }
+        let norm = dot(&x, &x).sqrt();
+        if norm > 1e-9 * norm0 {
+            x.iter_mut().for_each(|a| *a /= norm);
+            q.push(x);
+        }
+    }
+    q
+}
+
+/// The probes of one run: its slowest cosines with its fit's columns projected out.
+fn probes(s: &Series, rhos: &[f64]) -> Vec<Probe> {
+    let n = s.y.len();
+    let k_max = PROBES.min(n / SAMPLES_PER_PROBE);
+    let q = basis(&s.cols);
+    (1..=k_max)
+        .filter_map(|k| {
+            let mut u: Vec<f64> = (0..n)
+                .map(|i| (std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / n as f64).cos())
+                .collect();
+            for qi in &q {
+                let p = dot(qi, &u);
+                u.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+            }
+            let norm = dot(&u, &u).sqrt();
+            if !(norm > 1e-6 * (n as f64).sqrt()) {
+                return None;
+            }
+            u.iter_mut().for_each(|a| *a /= norm);
+            let fast = ar1_cross(&u, &u, s.rho_fast);
+            let slow = rhos.iter().map(|&r| ar1_cross(&u, &u, r)).collect();
+            let b = dot(&u, &s.y);
+            Some(Probe {
+                obs: b * b,
+                fast,
+                slow,
+            })
+        })
+        .collect()
+}
+
+/// The quasi-log-likelihood of κ at trial `j`: −½ Σ (ln E + obs/E), E = fast + κ·slow.
+fn loglik(ps: &[Probe], j: usize, kappa: f64) -> f64 {
+    -0.5 * ps
+        .iter()
+        .map(|p| {
+            let e = (p.fast + kappa * p.slow[j]).max(1e-300);
+            e.ln() + p.obs / e
+        })
+        .sum::<f64>()
+}
+
+/// The slow noise of a dataset and its quasi-likelihood ratio against none (0 when none kept).
+pub fn estimate(series: &[Series]) -> (Slow, f64) {
+    let rhos = trial_rhos();
+    let ps: Vec<Probe> = series.iter().flat_map(|s| probes(s, &rhos)).collect();
+    if ps.len() < 8 {
+        return (Slow::default(), 0.0);
+    }
+    let l0 = loglik(&ps, 0, 0.0);
+    let mut best = (Slow::default(), 0.0);
+    for (j, &rho) in rhos.iter().enumerate() {
+        // κ on a log scale from a hundredth of the white variance to 10⁶ of it
+        let f = |s: f64| -loglik(&ps, j, s.exp());
+        let s = crate::lsq::golden::minimize(f, (1e-2f64).ln(), (1e6f64).ln(), 60);
+        let lr = 2.0 * (loglik(&ps, j, s.exp()) - l0);
+        if lr > best.1 {
+            best = (
+                Slow {
+                    kappa: s.exp(),
+                    rho,
+                },
+                lr,
+            );
+        }
+    }
+    if best.1 >= KEEP_LR {
+        best
+    } else {
+        (Slow::default(), best.1.max(0.0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// `runs` series of `n` samples: fast AR(1) of correlation 0.3 plus a slow one, the fit's
+    /// columns a constant, a line and a decaying exponential, projected out of the residual.
+    fn dataset(runs: usize, n: usize, slow: Slow, seed: u64) -> Vec<Series> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..runs)
+            .map(|_| {
+                let cols: Vec<Vec<f64>> = vec![
+                    vec![1.0; n],
+                    (0..n).map(|i| i as f64 / n as f64).collect(),
+                    (0..n)
+                        .map(|i| (-(i as f64) / (0.4 * n as f64)).exp())
+                        .collect(),
+                ];
+                let mut y = replicate(n, 0.3, slow, &mut rng);
+                for qi in basis(&cols) {
+                    let p = dot(&qi, &y);
+                    y.iter_mut().zip(&qi).for_each(|(a, b)| *a -= p * b);
+                }
+                Series {
+                    y,
+                    cols,
+                    rho_fast: 0.3,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_fast_noise_alone_keeps_no_slow_part_on_most_datasets() {
+        let kept = (0..40)
+            .filter(|&s| estimate(&dataset(30, 400, Slow::default(), s)).0.kappa > 0.0)
+            .count();
+        // the χ²₂ 1 % point over 13 trial time constants: a few percent at most
+        assert!(kept <= 3, "{kept} of 40 null datasets kept a slow noise");
+    }
+
+    #[test]
+    fn a_slow_drift_is_measured_within_its_errors() {
+        // a drift of the white noise's variance over 40 samples (ρ_s = e^(−1/40))
+        let truth = Slow {
+            kappa: 1.0,
+            rho: (-1.0f64 / 40.0).exp(),
+        };
+        for seed in 0..5 {
+            let (s, lr) = estimate(&dataset(40, 500, truth, 100 + seed));
+            assert!(lr > 50.0, "seed {seed}: lr {lr}");
+            // the grid's time constants are a factor 2 apart
+            let tau = -1.0 / s.rho.ln();
+            assert!((16.0..=128.0).contains(&tau), "seed {seed}: τ {tau}");
+            // κ traded against τ along the grid: the variance within a factor 2.5
+            assert!(
+                (0.4..2.5).contains(&s.kappa),
+                "seed {seed}: κ {} at τ {tau}",
+                s.kappa
+            );
+        }
+    }
+
+    #[test]
+    fn the_ar1_covariance_in_one_pass_is_the_double_sum() {
+        let x: Vec<f64> = (0..41).map(|i| (i as f64 * 0.37).sin()).collect();
+        let y: Vec<f64> = (0..41).map(|i| 1.0 / (2.0 + i as f64)).collect();
+        for rho in [0.0, 0.6, -0.3] {
+            let mut plain = 0.0;
+            for (i, xi) in x.iter().enumerate() {
+                for (j, yj) in y.iter().enumerate() {
+                    plain += xi * yj * f64::powi(rho, (i as i32 - j as i32).abs());
+                }
+            }
+            let fast = ar1_cross(&x, &y, rho);
+            assert!(
+                (fast - plain).abs() < 1e-12 * (1.0 + plain.abs()),
+                "ρ {rho}: {fast} {plain}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_model_covariance_is_the_replicates_covariance() {
+        let slow = Slow {
+            kappa: 2.0,
+            rho: 0.97,
+        };
+        let n = 120;
+        let x: Vec<f64> = (0..n).map(|i| (i as f64 / 17.0).sin()).collect();
+        let y: Vec<f64> = (0..n).map(|i| 1.0 - i as f64 / n as f64).collect();
+        let want = cross(&x, &y, 0.4, slow);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let b = 20_000;
+        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+        for _ in 0..b {
+            let e = replicate(n, 0.4, slow, &mut rng);
+            let (a, c) = (dot(&x, &e), dot(&y, &e));
+            sxy += a * c;
+            sxx += a * a;
+            syy += c * c;
+        }
+        let got = sxy / b as f64;
+        let se = (sxx * syy).sqrt() / b as f64 / (b as f64).sqrt() * 2.0;
+        assert!((got - want).abs() < 4.0 * se, "{got} against {want} ± {se}");
+    }
+}
