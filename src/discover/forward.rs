@@ -535,7 +535,12 @@ impl Trials<'_> {
             self.round,
             self.all[s].effect().unwrap_or("probe")
         ));
-        let sc = screen_round(self.round, &self.fitted[s], &probes, self.set);
+        let runs_s = runs_under(&self.fitted[s], self.set);
+        let set_s = Setting {
+            runs: runs_s.as_deref().unwrap_or(self.set.runs),
+            ..*self.set
+        };
+        let sc = screen_round(self.round, &self.fitted[s], &probes, &set_s);
         holm(&sc.p).iter().any(|p| *p < self.set.opts.alpha)
     }
 
@@ -692,6 +697,28 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
     }
 }
 
+/// The runs with the slow tracking noise read under `model` (None for the baseline, whose runs
+/// carry it): a misfit that the model's terms explain no longer counts as noise, so each model
+/// is judged against the noise its own fit leaves.
+fn runs_under(model: &Model, set: &Setting) -> Option<Vec<RunData>> {
+    if model.spec.extras.is_empty() {
+        return None;
+    }
+    let slow = super::perrun::slow_noise_under(
+        set.runs,
+        &model.spec,
+        &model.params,
+        &model.fit.global,
+        &model.fit.local,
+    );
+    Some(
+        set.runs
+            .iter()
+            .map(|r| RunData { slow, ..r.clone() })
+            .collect(),
+    )
+}
+
 /// Test `entries` (candidate terms) and `probes` against `current`: screen all, fit the
 /// strongest significant candidates in full, cross-validate, prefer the simpler of equals, and
 /// write every row. `props` are the proposals of the current residuals (starts of the forms
@@ -708,28 +735,10 @@ pub fn run_round(
     let all: Vec<&Extra> = entries.iter().chain(probes).collect();
     let ne = entries.len();
     let clock = std::time::Instant::now();
-    // the slow noise read under this round's model: a misfit its terms now explain no longer
-    // counts as noise (the baseline's runs carry what their own fits left)
-    let runs_here: Vec<RunData>;
-    let set = &if current.spec.extras.is_empty() {
-        Setting { ..*set }
-    } else {
-        let slow = super::perrun::slow_noise_under(
-            set.runs,
-            &current.spec,
-            &current.params,
-            &current.fit.global,
-            &current.fit.local,
-        );
-        runs_here = set
-            .runs
-            .iter()
-            .map(|r| RunData { slow, ..r.clone() })
-            .collect();
-        Setting {
-            runs: &runs_here,
-            ..*set
-        }
+    let runs_here = runs_under(current, set);
+    let set = &Setting {
+        runs: runs_here.as_deref().unwrap_or(set.runs),
+        ..*set
     };
     let trace = |what: &str| {
         if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {

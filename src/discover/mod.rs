@@ -51,7 +51,8 @@
 //!
 //!    Every place's forms compete in one screen, so the data decide the place, not an order.
 //! 2. **Map.** Each single run is fitted alone (its noise level, lag-1 correlation and outliers
-//!    come from what a sliding local cubic leaves). A joint model shares μ and T per material and
+//!    come from what a sliding local cubic leaves; a slow drift of the tracker, shared by the
+//!    dataset, from the runs' own fits under each round's model: `slow_noise.rs`). A joint model shares μ and T per material and
 //!    any accepted terms over all runs, with z0, t0, v0 per run. Its residuals, projected off each
 //!    run's z0, t0, v0, are regressed on each run's linear response to extra forces
 //!    (`response.rs`): a force map against lab z, signed v, time since the kick and the phase
@@ -63,7 +64,7 @@
 //!    spline in one variable is the fallback (`unexplained`). Parameters are in SI units.
 //! 4. **Decide.** Each candidate's first-order likelihood ratio (`screen.rs`, maximised over a
 //!    searched form's trials) is compared with its null from replicates of each run's measured
-//!    AR(1) noise pushed through the same projections, or with a computed law for named terms
+//!    noise (its AR(1) and the slow drift) pushed through the same projections, or with a computed law for named terms
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict

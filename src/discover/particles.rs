@@ -31,8 +31,8 @@ const REPLICATES: usize = 200;
 
 /// Smallest `F` said to be a difference between particles: the runs' own μ and T must take up
 /// half as much again as the noise gives them. A tracker noise that wanders over many frames
-/// lifts `F` above 1 by itself (the replicates' AR(1) noise does not wander), by up to a third on
-/// the correlated-noise nulls of the test bed.
+/// lifts `F` above 1 by itself where its replicates do not wander alike (before the slow drift
+/// was measured, by up to a third on the correlated-noise nulls of the test bed).
 pub const MIN_RATIO: f64 = 1.5;
 
 /// Largest ratio of the data's energy to the noise's in slow shapes that a run's own μ and T

@@ -1,0 +1,99 @@
+//! Discovery stays silent on recordings of the independent simulator (tests/support/indsim) with
+//! nothing missing, whatever the tracker noise does: correlated over frames (AR(1) with lag-1
+//! correlation 0.5-0.9 beside a white part), drifting over 5-30 ms (an Ornstein-Uhlenbeck
+//! wander of 0.5-1.5 σ), growing with speed (motion blur) and locked to a sub-pixel grid. Each
+//! noise model is drawn afresh (its parameters and the dataset) for every seed; a single
+//! acceptance is a failure, and the message lists every one.
+
+#[allow(dead_code)]
+#[path = "support/indsim/mod.rs"]
+mod indsim;
+
+#[allow(dead_code)]
+#[path = "support/bed/mod.rs"]
+mod bed;
+
+use bed::draw::{case, Size};
+use bed::score::accepted;
+use groove::discover::{discover, Options};
+use groove::ingest::{ingest, IngestParams};
+use std::collections::BTreeMap;
+
+/// 12 single runs per material of 50 ms.
+const SIZE: Size = Size {
+    singles_per_material: 12,
+    duration_s: 0.05,
+};
+
+/// What discovery accepts on the null drawn with `seed` in `noise` (place/effect: form).
+fn accepted_on_null(seed: u64, noise: &str) -> Vec<String> {
+    let c = case(seed, SIZE, noise, &[], false);
+    assert!(c.truths.is_empty(), "a case drawn with no shapes is a null");
+    let dir = tempfile::tempdir().unwrap();
+    indsim::writer::write_dataset(dir.path(), &c.spec.render(false)).unwrap();
+    let mut files = BTreeMap::new();
+    for f in ["runs.csv", "trajectories.csv"] {
+        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
+    }
+    let recordings = ingest(&files, &IngestParams::default())
+        .expect("an indsim dataset ingests")
+        .recordings;
+    let d = discover(
+        &recordings,
+        &Options {
+            seed,
+            ..Options::default()
+        },
+    );
+    accepted(&serde_json::to_string(&d).unwrap())
+        .unwrap()
+        .iter()
+        .map(|a| format!("{}/{}: {}", a.place, a.effect, a.form))
+        .collect()
+}
+
+/// Every seed of `seeds` silent in `noise`.
+fn silent(noise: &str, seeds: std::ops::Range<u64>) {
+    let loud: Vec<String> = seeds
+        .clone()
+        .filter_map(|s| {
+            let a = accepted_on_null(s, noise);
+            (!a.is_empty()).then(|| format!("seed {s}: {a:?}"))
+        })
+        .collect();
+    assert!(
+        loud.is_empty(),
+        "{noise} noise: {} of {} nulls accepted physics: {loud:#?}",
+        loud.len(),
+        seeds.end - seeds.start
+    );
+}
+
+/// Seeds per noise model: 20 (`GROOVE_NULL_SEEDS` sets fewer for a quick look).
+fn seeds() -> std::ops::Range<u64> {
+    let n = std::env::var("GROOVE_NULL_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20);
+    1000..1000 + n
+}
+
+#[test]
+fn correlated_noise_nulls_are_silent() {
+    silent("ar1", seeds());
+}
+
+#[test]
+fn drifting_noise_nulls_are_silent() {
+    silent("drift", seeds());
+}
+
+#[test]
+fn speed_dependent_noise_nulls_are_silent() {
+    silent("blur", seeds());
+}
+
+#[test]
+fn quantized_noise_nulls_are_silent() {
+    silent("locked", seeds());
+}
