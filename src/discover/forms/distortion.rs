@@ -1,5 +1,5 @@
-//! The camera distorts positions: z_meas = z + a₂P₂(x) + a₃P₃(x), x over the observed stretch
-//! (the linear part is a length scale, which μ and T absorb exactly).
+//! The camera distorts positions: z_meas = z + a₂P₂(x) + a₃P₃(x), x over the observed stretch (the
+//! linear part is a length scale, which μ and T absorb exactly).
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::Estimate;

@@ -1,5 +1,5 @@
-//! A force in z as a Fourier series over the observed range: a(z) = Σ_k a_k sin(πk(z−z_min)/span)
-//! + b_k cos(πk(z−z_min)/span), k = 1..harmonics.
+//! A force in z as a Fourier series over the observed range: a(z) = Σ_k a_k sin(πk(z−z_min)/span) +
+//! b_k cos(πk(z−z_min)/span), k = 1..harmonics.
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::{Estimate, Finding};

@@ -1,5 +1,5 @@
-//! μ of the slip speed, saturating: μ(u) = μ∞·(1 − exp(−|u|/v_c)), v_c per material (fitted as
-//! ln v_c; a material whose v_c runs to the lower bound keeps a constant μ).
+//! μ of the slip speed, saturating: μ(u) = μ∞·(1 − exp(−|u|/v_c)), v_c per material (fitted as ln
+//! v_c; a material whose v_c runs to the lower bound keeps a constant μ).
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::Estimate;
