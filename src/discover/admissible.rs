@@ -10,7 +10,6 @@
 //! in words instead of reported as a propulsion. Forces that depend on position (a potential) or
 //! on time (a drive) carry no sign rule.
 
-use super::candidate::Extra;
 use super::estimates::scale_at_bound;
 use super::model::Model;
 use super::sim::{Drag, SimModel};
@@ -47,18 +46,7 @@ pub fn speed_acceleration(sim: &SimModel, v: f64) -> f64 {
 /// in the speed range the runs cover (per material), or None.
 fn not_passive(m: &Model) -> Option<String> {
     // the baseline's linear drag is passive: only a speed term can make the sum push
-    let speed_term = m.spec.extras.iter().any(|e| {
-        matches!(
-            e,
-            Extra::QuadraticDrag
-                | Extra::SaturatingDrag
-                | Extra::RollingResistance
-                | Extra::Spline {
-                    variable: Variable::V,
-                    ..
-                }
-        )
-    });
+    let speed_term = m.spec.extras.iter().any(|e| e.speed_dependent());
     if !speed_term {
         return None;
     }

@@ -13,7 +13,6 @@ use super::candidate::Extra;
 use super::model::Model;
 use super::null_distribution::NullFit;
 use super::screen::Typical;
-use super::G_MPS2;
 use crate::artifacts::diagnosis::DetectionLimit;
 use std::f64::consts::FRAC_PI_2;
 
@@ -59,26 +58,11 @@ pub fn detection_limit(
         Some(Typical::Se { at, .. }) | Some(Typical::PerRun { at, .. }) => format!(" {at}"),
         None => String::new(),
     };
-    let (name, unit, se_size, scale) = match e {
-        Extra::QuadraticDrag => ("c_per_m", "1/m", se[off], 1.0),
-        Extra::SaturatingDrag => ("tp_s_per_mps", "s²/m", se[off], 1.0),
-        Extra::RollingResistance => ("deceleration_mps2", "m/s²", se[off], G_MPS2),
-        Extra::GrooveTilt => ("alpha_deg", "°", se[off], 1.0),
-        Extra::PeriodicZ { .. } => (
-            "amplitude_mps2",
-            "m/s²",
-            typical_se.unwrap_or(se[off + 1].hypot(se[off + 2]) / 2f64.sqrt()),
-            1.0,
-        ),
-        Extra::Localized { .. } => ("amplitude_mps2", "m/s²", typical_se.unwrap_or(se[off]), 1.0),
-        Extra::TimePeriodic { .. } => ("amplitude_mps2", "m/s²", se[off + 1], 1.0),
-        _ => return None,
-    };
+    let (name, unit, se_size, scale) = e.detection_size(&se[off..], typical_se)?;
     let c = critical_lr(null, level);
-    let value = match (e, typical) {
-        (Extra::TimePeriodic { .. }, Some(Typical::PerRun { a, floor, .. })) => {
-            floored_time_limit(a, *floor, c)?
-        }
+    // a phase per run: only a force periodic in time is searched so (`Typical::PerRun`)
+    let value = match typical {
+        Some(Typical::PerRun { a, floor, .. }) => floored_time_limit(a, *floor, c)?,
         _ => {
             if !(se_size.is_finite() && se_size > 0.0) {
                 return None;
@@ -101,7 +85,7 @@ pub fn detection_limit(
 }
 
 /// The amplitude of a force periodic in time, with its own phase in each run, that the screen's
-/// statistic `S = (Σ|b_r|)²/Σa_r` (`screen::time_periodic`) exceeds the critical value `c` with
+/// statistic `S = (Σ|b_r|)²/Σa_r` (`forms/time_periodic.rs`) exceeds the critical value `c` with
 /// 90 % power, `a_r` each run's information at the typical frequency. In each run's noise units
 /// |b_r|/√a_r follows a Rice law of parameter ν_r = A√a_r (a run's projection at its best phase),
 /// with mean R(ν) and variance 2 + ν² − R(ν)², so √S has mean Σ√a_r R(ν_r)/√Σa and variance

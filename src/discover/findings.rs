@@ -268,27 +268,30 @@ fn unique_parameter_names(spec: &Spec, names: &[&str]) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::discover::candidate::Extra;
+    use crate::discover::forms::{Localized, TimePeriodic};
 
     /// A bump and a vibration both have `amplitude_mps2`, two bumps all three names: every
     /// parameter keeps a name of its own, the first the plain one.
     #[test]
     fn parameters_named_alike_by_two_terms_all_keep_a_name() {
-        let bump = Extra::Localized {
+        let bump: Extra = Localized {
             z_lo: 0.0,
             z_hi: 0.01,
             w_lo: 1e-4,
             w_hi: 1e-3,
-        };
+        }
+        .into();
         let spec = Spec {
             n_materials: 1,
             s: 1.0,
             k: 2.5,
             extras: vec![
                 bump.clone(),
-                Extra::TimePeriodic {
+                TimePeriodic {
                     f_lo: 10.0,
                     f_hi: 500.0,
-                },
+                }
+                .into(),
                 bump,
             ],
         };

@@ -5,6 +5,7 @@
 //! in `model.rs`, the parameters as reported in `estimates.rs`.
 
 use super::admissible::refusal;
+use super::candidate::prepare;
 use super::candidate::{Extra, N_LOCAL};
 use super::cv::{cross_validate, folds, paired_t, CvResult};
 use super::data::RunData;
@@ -13,8 +14,8 @@ use super::estimates::reported_parameters;
 use super::holm::holm;
 use super::model::{data_starts, Model};
 use super::null_distribution::{empirical_p, NullFit};
-use super::proposal::{needs_proposal, propose, wanted_for, Proposals, Ranges};
-use super::response::prepare;
+use super::proposal::{needs_proposal, propose, wanted_for};
+use super::ranges::{Proposals, Ranges};
 use super::screen::{screen, Control, Screened, REPLICATES};
 use super::Options;
 use crate::artifacts::diagnosis::{CandidateRow, Evidence, Finding, ModelScore};
@@ -300,7 +301,7 @@ impl Trials<'_> {
         let n = e.params().len();
         let fitted = &self.fitted[i].fit.global;
         let mut starts = vec![clamp_to(e, &fitted[fitted.len() - n..])];
-        if needs_proposal(e) || matches!(e, Extra::Spline { .. }) {
+        if e.searched() {
             starts.extend(data_starts(e, self.props.get()));
         } else {
             starts.extend(data_starts(e, &Proposals::default()));
@@ -340,10 +341,7 @@ impl Trials<'_> {
             let start = std::time::Instant::now();
             self.fitted[i] = self.full(i);
             self.refused[i] = refusal(&self.fitted[i]);
-            if self.refused[i].is_none()
-                && matches!(self.all[i], Extra::TimePeriodic { .. })
-                && self.particles_differ()
-            {
+            if self.refused[i].is_none() && self.all[i].run_phase() && self.particles_differ() {
                 // a phase per run fits whatever misfit a run has of its own; when each run's own
                 // μ and T take that misfit up, it is a difference between particles, said by the
                 // particle check on the final model
@@ -352,7 +350,7 @@ impl Trials<'_> {
                 );
             }
             let (_, mut cv, mut t) = self.held_out(&self.fitted[i]);
-            if matches!(self.all[i], Extra::TimePeriodic { .. }) {
+            if self.all[i].run_phase() {
                 // each held-out run's phase is fitted on that run: charge what it takes from
                 // the run's noise alone before comparing
                 let m = &self.fitted[i];
@@ -431,18 +429,13 @@ impl Trials<'_> {
         // sign and rank below the saturating form of the same effect)
         // and of the incumbent's place: a searched force stands in for named forces, not for a
         // friction law or a distortion (those compete with it in the screen on their own)
-        let place = |e: &Extra| {
-            e.effect()
-                .and_then(crate::artifacts::diagnosis::Effect::from_id)
-                .map(|e| e.place())
-        };
+        let place = |e: &Extra| (e.effect().is_some()).then(|| e.place());
         let incumbent_place = incumbent.as_ref().and_then(|(b, _)| place(self.all[*b]));
         let named: Vec<usize> = order
             .iter()
             .copied()
             .filter(|&i| {
-                !needs_proposal(self.all[i])
-                    && !matches!(self.all[i], Extra::Spline { .. })
+                !self.all[i].searched()
                     && incumbent_place.is_none_or(|p| place(self.all[i]) == Some(p))
             })
             .collect();

@@ -196,7 +196,7 @@ pub fn fit_joint(
                 (true, true) => {
                     let se = profiled.get_or_insert_with(|| {
                         let prep =
-                            super::response::prepare(spec, params, &res.shared, &local, runs);
+                            super::candidate::prepare(spec, params, &res.shared, &local, runs);
                         super::screen_sums::profiled_se(&prep)
                     });
                     se[i] * scale.sqrt()

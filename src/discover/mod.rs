@@ -3,7 +3,7 @@
 //! Files of this folder:
 //!
 //! - `admissible.rs`: Whether a fitted term is physics (its search resolved it; a dissipation never pushes)
-//! - `candidate.rs`: The candidate physics library and the joint model's parameter layout
+//! - `candidate.rs`: The joint model's parameter layout (`Spec`), a run's physics and predictions
 //! - `cv.rs`: Leave-runs-out cross-validation of the simulated trajectories
 //! - `data.rs`: The runs discovery works on
 //! - `detection.rs`: Detection limits
@@ -23,6 +23,7 @@
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
 //! - `proposal.rs`: Proposals: from the residuals of the current model
+//! - `ranges.rs`: What the data allow the forms to take, and what the residuals propose
 //! - `residual_structure.rs`: Where a model misses
 //! - `response.rs`: Linear response of a fitted run to a small extra acceleration
 //! - `run.rs`: The whole discovery on a set of recordings
@@ -34,6 +35,7 @@
 //! - `spectral.rs`: Spectral search
 //! - `timeforce.rs`: Each run's own phase of a force periodic in time
 //! - `forcemap/`: The force map: the missing acceleration as a smooth function of one variable
+//! - `forms/`: The forms of missing physics, one file each, and their registry
 //!
 //! # The method, in six steps
 //!
@@ -61,7 +63,9 @@
 //! 3. **Forms.** Drags (quadratic, saturating), a rolling resistance, a tilt, forces periodic or
 //!    localized in lab z, a force periodic in time with a phase per run (`timeforce.rs`), μ(u) of
 //!    the slip speed (saturating or linear), μ by direction, μ along the groove, a distortion; a
-//!    spline in one variable is the fallback (`unexplained`). Parameters are in SI units.
+//!    spline in one variable is the fallback (`unexplained`). Each form is a type in a file of
+//!    `forms/` (`Form`: place, parameters in SI units with bounds and sign, how it enters the
+//!    integrator, its screen, its sentence and estimates), listed once in its registry.
 //! 4. **Decide.** Each candidate's first-order likelihood ratio (`screen.rs`, maximised over a
 //!    searched form's trials) is compared with its null from replicates of each run's measured
 //!    noise (its AR(1) and the slow drift) pushed through the same projections, or with a computed law for named terms
@@ -96,6 +100,7 @@ pub mod drift;
 pub mod estimates;
 mod findings;
 pub mod forcemap;
+pub mod forms;
 pub mod forward;
 pub mod holm;
 pub mod joint;
@@ -109,6 +114,7 @@ mod pairs_impact;
 mod particles;
 pub mod perrun;
 pub mod proposal;
+pub mod ranges;
 pub mod residual_structure;
 pub mod response;
 pub mod run;

@@ -4,7 +4,8 @@ use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
 use super::cv::CvResult;
 use super::data::RunData;
 use super::joint::{fit_joint, FitControl, Fitted};
-use super::proposal::{needs_proposal, starts as proposal_starts, Proposals};
+use super::proposal::{needs_proposal, starts as proposal_starts};
+use super::ranges::Proposals;
 use crate::artifacts::diagnosis::ModelScore;
 use rayon::prelude::*;
 
@@ -104,30 +105,17 @@ impl Model {
     }
 }
 
-/// Starting values of a term's parameters: where it vanishes, plus a few for a nonlinear scale.
-fn extra_starts(extra: &Extra) -> Vec<Vec<f64>> {
-    match extra {
-        Extra::VelocityFriction { materials } => [1e-4f64, 2e-3, 2e-2]
-            .iter()
-            .map(|v| vec![v.ln(); *materials])
-            .collect(),
-        e => vec![e.params().iter().map(|p| p.start).collect()],
-    }
-}
-
 /// Starts of a term on the data: proposed from the residuals where the form needs it, the
-/// force map's spline (and zero) for the nonparametric term, else `extra_starts`.
+/// force map's spline (and its own starts) for another searched form, else the form's own.
 pub fn data_starts(extra: &Extra, props: &Proposals) -> Vec<Vec<f64>> {
     if needs_proposal(extra) {
         return proposal_starts(extra, props);
     }
-    match extra {
-        Extra::Spline { .. } => {
-            let mut s = proposal_starts(extra, props);
-            s.extend(extra_starts(extra));
-            s.dedup();
-            s
-        }
-        e => extra_starts(e),
+    if extra.searched() {
+        let mut s = proposal_starts(extra, props);
+        s.extend(extra.starts());
+        s.dedup();
+        return s;
     }
+    extra.starts()
 }

@@ -14,6 +14,7 @@
 //! correlates the residuals within a run) points at the impact model itself (restitution law,
 //! spin transfer; `pairs_impact.rs`).
 
+use super::forms;
 use super::holm::holm;
 use super::pairs_impact::{
     impact_decision, impact_p_value, split_by_impact, ALPHA, IMPACT_WINDOW_S,
@@ -49,11 +50,12 @@ const WORSE: f64 = 1e-6;
 
 /// The one-particle physics the single runs support, per material, from a diagnosis' final
 /// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`) and its accepted position forces (a wave or a bump fixed in the lab, from their
-/// findings). Err, saying why, for a material whose physics the pair fit cannot carry.
+/// `alpha_deg`) and its accepted forces fixed in the lab (a wave or a bump, read back from their
+/// findings by `forms::lab_forces`). Err, saying why, for a material whose physics the pair fit
+/// cannot carry.
 pub fn single_run_physics(
     params: &BTreeMap<String, f64>,
-    position_findings: &[&Finding],
+    lab_forces: &[Result<Term, String>],
     material: &str,
     groove: Groove,
 ) -> Result<Model, String> {
@@ -98,32 +100,8 @@ pub fn single_run_physics(
     }
     // forces fixed in the lab act on the pairs as on the single runs: held at the findings'
     // values (the same z, so the same force)
-    for f in position_findings {
-        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
-        if let (Some(amp), Some(centre), Some(width)) =
-            (value("amplitude_mps2"), value("centre_m"), value("width_m"))
-        {
-            terms.push(Term::LocalizedForce {
-                amp_mps2: amp,
-                centre_m: centre,
-                width_m: width,
-            });
-        } else if let (Some(amp), Some(wavelength), Some(phase)) = (
-            value("amplitude_mps2"),
-            value("wavelength_m"),
-            value("phase_rad"),
-        ) {
-            terms.push(Term::PositionForce {
-                amp_mps2: amp,
-                wavelength_m: wavelength,
-                phase_rad: phase,
-            });
-        } else {
-            return Err(format!(
-                "the accepted model has a position force ({}) the pair fit does not carry",
-                f.form
-            ));
-        }
+    for f in lab_forces {
+        terms.push(f.clone()?);
     }
     Ok(Model {
         groove,
@@ -777,15 +755,11 @@ pub fn add_pair_findings(
             .unwrap_or(0.0)
             * inflation(rho).sqrt()
     };
-    let position_findings: Vec<&Finding> = diagnosis
-        .findings
-        .iter()
-        .filter(|f| f.accepted && f.effect == "position_dependent_force")
-        .collect();
+    let lab_forces = forms::lab_forces(diagnosis.findings.iter().filter(|f| f.accepted));
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
-        match single_run_physics(&params, &position_findings, m, groove) {
+        match single_run_physics(&params, &lab_forces, m, groove) {
             Ok(model) => {
                 let t_key = if params.contains_key(&format!("t0_s_{m}")) {
                     format!("t0_s_{m}")
@@ -833,6 +807,7 @@ pub fn add_pair_findings(
 mod tests {
     use super::single_run_physics;
     use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
+    use crate::discover::forms::{lab_forces, Form, PeriodicZ};
     use crate::discover::pairs_impact::impact_decision;
     use crate::physics::{Groove, Term};
     use std::collections::BTreeMap;
@@ -850,7 +825,7 @@ mod tests {
         Finding {
             effect: "position_dependent_force".into(),
             accepted: true,
-            form: "periodic in z".into(),
+            form: PeriodicZ::default().form(),
             parameters: p,
             evidence: Evidence::default(),
             where_: BTreeMap::new(),
@@ -875,7 +850,8 @@ mod tests {
         .map(|(k, v)| (k.to_string(), v))
         .collect();
         let wave = wave_finding();
-        let model = single_run_physics(&params, &[&wave], "316", Groove::CHAPTER).unwrap();
+        let held = lab_forces([&wave]);
+        let model = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap();
         assert!(model.terms.contains(&Term::PositionForce {
             amp_mps2: 0.05,
             wavelength_m: 2e-3,
@@ -883,7 +859,7 @@ mod tests {
         }));
         assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
         params.insert("frequency_hz".into(), 120.0);
-        let why = single_run_physics(&params, &[&wave], "316", Groove::CHAPTER).unwrap_err();
+        let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
         assert!(why.contains("force in time"), "{why}");
     }
 

@@ -19,9 +19,10 @@
 //! each run's squared step less its noise variance, weighted by the inverse squared noise
 //! variance, since a slow run hardly knows its μ), per material.
 
+use super::candidate::prepare;
 use super::data::RunData;
 use super::model::Model;
-use super::response::{prepare, Prepared};
+use super::response::Prepared;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;

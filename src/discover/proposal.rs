@@ -1,215 +1,22 @@
 //! Proposals: from the residuals of the current model, where the named forms that need a
 //! starting point should start (periodogram peaks in z and t, a matched-filter scan for a
-//! localized bump, the force maps for the spline), and the ranges those forms may take.
+//! localized bump, the force maps for the spline); the ranges those forms may take are in
+//! `ranges.rs`.
 //!
 //! The same function runs on the data and on every bootstrap replicate, so a candidate started
 //! from the best of many trial wavelengths is judged against a null searched the same way.
 
-use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
+use super::candidate::{prepare, Extra, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::forcemap::{force_map, phase_map, ForceMap};
-use super::response::{dot, prepare, Prepared};
-use super::spectral::{f_grid, k_grid, t_spectrum, z_spectrum, Spectrum};
+use super::forcemap::{force_map, phase_map};
+use super::ranges::{bump_column, bump_trials, Proposals, Ranges, Wanted};
+use super::response::{dot, Prepared};
+use super::spectral::{f_grid, k_grid, t_spectrum, z_spectrum};
 use crate::physics::Variable;
 use rayon::prelude::*;
-use std::f64::consts::TAU;
 
 /// Knot intervals of a force map and of the spline fallback.
 pub const MAP_SEGMENTS: usize = 16;
-
-/// What the data allow the new forms to take: the observed lab range, wavelengths, frequencies.
-#[derive(Clone, Debug)]
-pub struct Ranges {
-    pub z_lo: f64,
-    pub z_hi: f64,
-    /// Median distance between consecutive samples (m).
-    pub dz_med: f64,
-    pub lambda_min_m: f64,
-    /// Longest time since the kick (s) and the highest frequency searched (Nyquist, Hz).
-    pub duration_s: f64,
-    pub f_max_hz: f64,
-    /// The runs' median early speed (m/s): the reference of a friction varying with slip speed.
-    pub v_ref_mps: f64,
-}
-
-impl Ranges {
-    pub fn of(runs: &[RunData]) -> Ranges {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        let mut steps = Vec::new();
-        let mut duration: f64 = 0.0;
-        let mut fps = f64::INFINITY;
-        let mut speeds = Vec::new();
-        for r in runs {
-            let kept: Vec<(f64, f64)> = r
-                .t_s
-                .iter()
-                .zip(&r.z_m)
-                .zip(&r.keep)
-                .filter(|(_, k)| **k)
-                .map(|((t, z), _)| (*t, *z))
-                .collect();
-            for w in kept.windows(2) {
-                steps.push((w[1].1 - w[0].1).abs());
-            }
-            // the run's early speed: over its first few kept samples
-            if let (Some(a), Some(b)) =
-                (kept.first(), kept.get(5.min(kept.len().saturating_sub(1))))
-            {
-                if b.0 > a.0 {
-                    speeds.push(((b.1 - a.1) / (b.0 - a.0)).abs());
-                }
-            }
-            for (t, z) in &kept {
-                lo = lo.min(*z);
-                hi = hi.max(*z);
-                duration = duration.max(*t);
-            }
-            if r.fps > 0.0 {
-                fps = fps.min(r.fps);
-            }
-        }
-        steps.sort_by(f64::total_cmp);
-        let dz_med = steps.get(steps.len() / 2).copied().unwrap_or(1e-6);
-        let span = (hi - lo).max(1e-6);
-        speeds.sort_by(f64::total_cmp);
-        let v_ref = speeds.get(speeds.len() / 2).copied().unwrap_or(0.0);
-        Ranges {
-            z_lo: lo,
-            z_hi: hi,
-            dz_med,
-            lambda_min_m: (2.0 * dz_med).max(span / 100.0),
-            duration_s: duration.max(1e-3),
-            f_max_hz: if fps.is_finite() { 0.5 * fps } else { 5e3 },
-            v_ref_mps: if v_ref > 0.0 { v_ref } else { 0.01 },
-        }
-    }
-
-    pub fn span(&self) -> f64 {
-        (self.z_hi - self.z_lo).max(1e-6)
-    }
-
-    pub fn z_ref(&self) -> f64 {
-        0.5 * (self.z_lo + self.z_hi)
-    }
-
-    /// The new named forms with their ranges.
-    pub fn periodic_z(&self) -> Extra {
-        Extra::PeriodicZ {
-            z_ref_m: self.z_ref(),
-            k_lo: 0.5 * TAU / self.span(),
-            k_hi: 1.5 * TAU / self.lambda_min_m,
-        }
-    }
-
-    /// μ varying along the observed stretch of groove.
-    pub fn friction_position(&self) -> Extra {
-        Extra::FrictionPosition {
-            z_mid_m: self.z_ref(),
-            half_span_m: 0.5 * self.span(),
-        }
-    }
-
-    /// μ varying with the slip speed, about the runs' median early speed.
-    pub fn friction_slip(&self) -> Extra {
-        Extra::FrictionSlip {
-            u_ref_mps: self.v_ref_mps,
-        }
-    }
-
-    /// The camera's positions distorted over the observed stretch.
-    pub fn distortion(&self) -> Extra {
-        Extra::Distortion {
-            z_mid_m: self.z_ref(),
-            half_span_m: 0.5 * self.span(),
-        }
-    }
-
-    pub fn localized(&self) -> Extra {
-        Extra::Localized {
-            z_lo: self.z_lo,
-            z_hi: self.z_hi,
-            w_lo: self.w_lo(),
-            w_hi: 0.5 * self.span(),
-        }
-    }
-
-    fn w_lo(&self) -> f64 {
-        (2.0 * self.dz_med).max(self.span() / 200.0)
-    }
-
-    pub fn time_periodic(&self) -> Extra {
-        Extra::TimePeriodic {
-            // three periods in the longest run at least: slower, a force in time is one smooth
-            // push per run, which drag, tilt or a force in z explain as well
-            f_lo: 3.0 / self.duration_s,
-            f_hi: 1.05 * self.f_max_hz,
-        }
-    }
-
-    /// The spline fallback in `var` on the map's knots.
-    pub fn spline(&self, map: &ForceMap, var: Variable) -> Option<Extra> {
-        let (lo, dx, segments, _) = map.spline.clone()?;
-        Some(Extra::Spline {
-            variable: var,
-            lo,
-            dx,
-            segments,
-        })
-    }
-}
-
-/// Everything the current model's residuals propose.
-#[derive(Clone, Debug, Default)]
-pub struct Proposals {
-    pub z: Option<Spectrum>,
-    pub t: Option<Spectrum>,
-    /// (amplitude m/s², centre m, width m), best first.
-    pub bumps: Vec<[f64; 3]>,
-    pub maps: Vec<ForceMap>,
-}
-
-/// What is needed from the residuals.
-#[derive(Clone, Copy, Debug)]
-pub struct Wanted {
-    pub z: bool,
-    pub t: bool,
-    pub bump: bool,
-    /// Force maps (with the folds of the cross-validation).
-    pub maps: bool,
-}
-
-/// Trial (centre, width) of a Gaussian bump: widths doubling from `w_lo` (at least 1/160 of the
-/// span) up to a quarter of the span (and `w_hi`), centres every half width over the range.
-pub fn bump_trials(rg: &Ranges, w_lo: f64, w_hi: f64) -> Vec<(f64, f64)> {
-    let mut trials = Vec::new();
-    let mut w = w_lo.max(0.05 * rg.span() / 8.0);
-    while w <= (0.25 * rg.span()).min(w_hi) {
-        let mut c = rg.z_lo;
-        while c <= rg.z_hi {
-            trials.push((c, w));
-            c += 0.5 * w;
-        }
-        w *= 2.0;
-    }
-    trials
-}
-
-/// A run's response to a unit Gaussian bump at (c, w) in lab z, in noise units with its locals
-/// projected out; None when the run never comes within three widths of it.
-pub fn bump_column(p: &Prepared, c: f64, w: f64) -> Option<Vec<f64>> {
-    let z = p.track.variable(Variable::Z);
-    if !z.iter().any(|zz| (zz - c).abs() < 3.0 * w) {
-        return None;
-    }
-    let f: Vec<f64> = z
-        .iter()
-        .map(|zz| {
-            let u = (zz - c) / w;
-            (-0.5 * u * u).exp()
-        })
-        .collect();
-    Some(p.column(p.track.respond_values(&f)))
-}
 
 /// Matched-filter scan for a Gaussian bump: widths doubling from the smallest, centres every
 /// half width; the two best separated (centre, width) with their least-squares amplitude.
@@ -306,27 +113,20 @@ pub fn propose(
     Proposals { z, t, bumps, maps }
 }
 
-/// The proposals a term needs.
+/// The proposals the terms need.
 pub fn wanted_for(extras: &[&Extra]) -> Wanted {
-    Wanted {
-        z: extras.iter().any(|e| matches!(e, Extra::PeriodicZ { .. })),
-        t: extras
-            .iter()
-            .any(|e| matches!(e, Extra::TimePeriodic { .. })),
-        bump: extras.iter().any(|e| matches!(e, Extra::Localized { .. })),
-        maps: false,
-    }
+    extras
+        .iter()
+        .fold(Wanted::default(), |w, e| w.or(e.wanted()))
 }
 
 /// True when the term's starting values come from the residuals.
 pub fn needs_proposal(e: &Extra) -> bool {
-    matches!(
-        e,
-        Extra::PeriodicZ { .. } | Extra::Localized { .. } | Extra::TimePeriodic { .. }
-    )
+    e.wanted().any()
 }
 
-/// Starting values of a proposed term's parameters (several: the best peaks).
+/// Starting values of a proposed term's parameters (several: the best peaks), held inside its
+/// bounds; where it vanishes when nothing is proposed.
 pub fn starts(e: &Extra, p: &Proposals) -> Vec<Vec<f64>> {
     let clamp = |v: Vec<f64>| -> Vec<f64> {
         v.iter()
@@ -334,34 +134,7 @@ pub fn starts(e: &Extra, p: &Proposals) -> Vec<Vec<f64>> {
             .map(|(x, q)| x.clamp(q.lo, q.hi))
             .collect()
     };
-    let out: Vec<Vec<f64>> = match e {
-        Extra::PeriodicZ { .. } => {
-            p.z.iter()
-                .flat_map(|s| s.peaks.iter())
-                .map(|pk| clamp(vec![pk.omega, pk.coef[0], pk.coef[1]]))
-                .collect()
-        }
-        Extra::Localized { .. } => p.bumps.iter().map(|b| clamp(b.to_vec())).collect(),
-        Extra::TimePeriodic { .. } => {
-            p.t.iter()
-                .flat_map(|s| s.peaks.iter())
-                .map(|pk| clamp(vec![pk.omega / TAU, pk.coef[0].max(1e-3)]))
-                .collect()
-        }
-        Extra::Spline { variable, .. } => {
-            let name = match variable {
-                Variable::Z => "z",
-                Variable::V => "v",
-                Variable::T => "t",
-            };
-            p.maps
-                .iter()
-                .filter(|m| m.variable == name)
-                .filter_map(|m| m.spline.as_ref().map(|s| s.3.clone()))
-                .collect()
-        }
-        _ => vec![],
-    };
+    let out: Vec<Vec<f64>> = e.proposed(p).into_iter().map(clamp).collect();
     if out.is_empty() {
         vec![e.params().iter().map(|q| q.start).collect()]
     } else {

@@ -284,68 +284,6 @@ impl Prepared {
     }
 }
 
-/// Prepare every run of a fitted joint model for regressions of its residuals.
-pub fn prepare(
-    spec: &super::candidate::Spec,
-    params: &[super::candidate::ParamInfo],
-    global: &[f64],
-    local: &[[f64; super::candidate::N_LOCAL]],
-    runs: &[RunData],
-) -> Vec<Prepared> {
-    use rayon::prelude::*;
-    runs.par_iter()
-        .zip(local.par_iter())
-        .enumerate()
-        .map(|(i, (run, l))| {
-            let model = spec.run_model(global, l, run);
-            let track = Track::new(&model, l[0], l[1], l[2], run);
-            let mut pred = vec![0.0; run.t_s.len()];
-            let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
-            model.simulate(l[0], l[2], &tt, &mut pred, None, None);
-            let mut cols = track.local_columns();
-            for c in cols.iter_mut() {
-                c.iter_mut().for_each(|x| *x *= track.w);
-            }
-            let proj = Projector::new(&cols);
-            let mut y: Vec<f64> = (0..run.t_s.len())
-                .filter(|k| run.keep[*k])
-                .map(|k| (run.z_m[k] - pred[k]) * track.w)
-                .collect();
-            proj.apply(&mut y);
-            let affecting = spec.affecting(run.material);
-            let glob: Vec<Vec<f64>> = (0..global.len())
-                .map(|j| {
-                    let n = y.len();
-                    if !affecting.contains(&j) || params[j].hi <= params[j].lo {
-                        return vec![0.0; n];
-                    }
-                    let mut g = global.to_vec();
-                    let mut h = params[j].step;
-                    if g[j] + h > params[j].hi {
-                        h = -h;
-                    }
-                    g[j] += h;
-                    let mut z = vec![0.0; run.t_s.len()];
-                    super::candidate::predict(spec, &g, l, run, &mut z);
-                    let mut c: Vec<f64> = (0..run.t_s.len())
-                        .filter(|k| run.keep[*k])
-                        .map(|k| (z[k] - pred[k]) / h * track.w)
-                        .collect();
-                    proj.apply(&mut c);
-                    c
-                })
-                .collect();
-            Prepared {
-                track,
-                proj,
-                y,
-                glob,
-                run: i,
-            }
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -5,11 +5,13 @@ use super::cv::{cross_validate, CvResult};
 use super::data::{prepare_runs, RunData};
 use super::findings::{drift_of, findings_of, model_parameters};
 use super::forcemap::ForceMap;
+use super::forms;
 use super::forward::{fold_of, median_speed, run_round, LazyProposals, Round, Setting};
 use super::locate::locate;
 use super::model::Model;
 use super::perrun::{measure_noise, PerRunFit};
-use super::proposal::{propose, wanted_for, Proposals, Ranges, Wanted};
+use super::proposal::{propose, wanted_for};
+use super::ranges::{Proposals, Ranges, Wanted};
 use super::selection::{Accepted, Ctx, Selection};
 use super::Options;
 use crate::artifacts::diagnosis::{Diagnosis, ForceMaps, ModelScore, Settings};
@@ -19,37 +21,6 @@ use std::collections::BTreeMap;
 
 fn median(mut v: Vec<f64>) -> f64 {
     crate::stats::upper_median(&mut v)
-}
-
-fn library(opts: &Options, n_materials: usize, rg: &Ranges) -> Vec<Extra> {
-    let mut out = Vec::new();
-    for c in &opts.candidates {
-        match c.as_str() {
-            "velocity_dependent_drag" => {
-                out.push(Extra::QuadraticDrag);
-                out.push(Extra::SaturatingDrag);
-            }
-            "rolling_resistance" => out.push(Extra::RollingResistance),
-            "groove_tilt" => out.push(Extra::GrooveTilt),
-            // μ of the slip speed: saturating, and linear (rising or falling)
-            "velocity_dependent_friction" => {
-                out.push(Extra::VelocityFriction {
-                    materials: n_materials,
-                });
-                out.push(rg.friction_slip());
-            }
-            "direction_dependent_friction" => out.push(Extra::FrictionDirection),
-            "position_dependent_friction" => out.push(rg.friction_position()),
-            "position_distortion" => out.push(rg.distortion()),
-            "position_dependent_force" => {
-                out.push(rg.periodic_z());
-                out.push(rg.localized());
-            }
-            "time_dependent_force" => out.push(rg.time_periodic()),
-            _ => {}
-        }
-    }
-    out
 }
 
 fn empty(opts: &Options, runs_used: usize, materials: Vec<String>, note: &str) -> Diagnosis {
@@ -217,12 +188,12 @@ impl Selection {
     /// The library's candidates not yet accepted: one cause, one term, so a named effect is not
     /// added twice, except position forces of another form (a waviness and a bump).
     fn candidates_left(&self, ctx: &Ctx) -> Vec<Extra> {
-        library(ctx.opts, ctx.materials.len(), ctx.rg)
+        forms::library(&ctx.opts.candidates, ctx.materials.len(), ctx.rg)
             .into_iter()
             .filter(|e| {
                 !self.accepted.iter().any(|a| {
                     if e.effect() == Some("position_dependent_force") {
-                        std::mem::discriminant(&a.extra) == std::mem::discriminant(e)
+                        a.extra.name() == e.name()
                     } else {
                         Some(a.row.effect.as_str()) == e.effect()
                     }
@@ -320,11 +291,7 @@ impl Selection {
 /// the library is exhausted or at `max_terms`.
 fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
     let vref = median_speed(&baseline.fit.local);
-    let probes = vec![
-        Extra::SpeedDriftT { v_ref_mps: vref },
-        Extra::SpeedDriftMu { v_ref_mps: vref },
-        Extra::DirectionAsymmetry,
-    ];
+    let probes = forms::probes(vref);
     let mut sel = Selection::new(baseline, base_cv);
     loop {
         sel.round += 1;
@@ -419,7 +386,7 @@ fn model_what_is_left(sel: &mut Selection, ctx: &Ctx) -> (Option<Accepted>, Vec<
         "v" => Variable::V,
         _ => Variable::T,
     };
-    let Some(spline) = ctx.rg.spline(&map, var) else {
+    let Some(spline) = forms::Spline::on(&map, var).map(Extra::from) else {
         return (None, props.maps);
     };
     sel.round += 1;
@@ -608,13 +575,7 @@ fn particle_finding(
     score: &ModelScore,
     drift_left: bool,
 ) -> Option<crate::artifacts::diagnosis::Finding> {
-    if materials.len() > 1
-        && current
-            .spec
-            .extras
-            .iter()
-            .any(|e| matches!(e, Extra::VelocityFriction { .. }))
-    {
+    if materials.len() > 1 && current.spec.extras.iter().any(|e| e.per_material()) {
         return None;
     }
     let c = super::particles::check(
@@ -709,6 +670,7 @@ fn particle_finding(
 mod tests {
     use super::*;
     use crate::artifacts::diagnosis::CandidateRow;
+    use crate::discover::forms::{GrooveTilt, QuadraticDrag, RollingResistance, SaturatingDrag};
     use crate::discover::null_distribution::NullFit;
     use std::collections::BTreeMap;
     use std::sync::Mutex;
@@ -737,7 +699,7 @@ mod tests {
     /// one-sided (the drags and the resistance: 0 half the time) or not (the tilt, the probes).
     #[test]
     fn a_named_terms_computed_null_is_the_law_of_its_replicates() {
-        use super::super::response::prepare;
+        use super::super::candidate::prepare;
         let recs = null_small();
         let opts = Options::default();
         let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
@@ -750,15 +712,13 @@ mod tests {
             &runs,
         );
         let vref = median_speed(&baseline.fit.local);
-        let named = [
-            Extra::QuadraticDrag,
-            Extra::SaturatingDrag,
-            Extra::RollingResistance,
-            Extra::GrooveTilt,
-            Extra::SpeedDriftT { v_ref_mps: vref },
-            Extra::SpeedDriftMu { v_ref_mps: vref },
-            Extra::DirectionAsymmetry,
+        let mut named: Vec<Extra> = vec![
+            QuadraticDrag.into(),
+            SaturatingDrag.into(),
+            RollingResistance.into(),
+            GrooveTilt.into(),
         ];
+        named.extend(forms::probes(vref));
         let refs: Vec<&Extra> = named.iter().collect();
         let b = 3000;
         // as measured (white), then as if every run's noise had a lag-1 correlation of 0.6

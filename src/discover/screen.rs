@@ -19,15 +19,14 @@
 
 use super::candidate::{predict, Extra, N_LOCAL};
 use super::data::RunData;
+use super::forms::Search;
 use super::model::Model;
 use super::null_distribution::{ExactNull, NullFit};
-use super::proposal::{bump_column, bump_trials, Ranges};
+use super::ranges::Ranges;
 use super::response::Prepared;
-use super::screen_sums::{best_of, coherent, coherent_sums, dot, dot2, one_sided, Trial, Vectors};
-use super::spectral::{f_grid, k_grid};
-use crate::physics::{spline_basis, spline_n_basis};
+pub use super::screen_sums::Typical;
+use super::screen_sums::{best_of, coherent_sums, one_sided, Trial, Vectors};
 use rayon::prelude::*;
-use std::f64::consts::TAU;
 use std::ops::Range;
 
 /// Noise replicates drawn for each screen (the data is replicate 0).
@@ -90,35 +89,6 @@ pub struct Screened {
     /// term with one secant (`secant`), whose statistic is a quadratic form in the Gaussian
     /// noise; None for a searched form or a maximum over trial scales.
     pub exact: Option<ExactNull>,
-}
-
-/// The information about a searched form's size at its most sensitive trial (the grid's trial
-/// of most information: a long wavelength, a wide bump, a low frequency), with that trial in
-/// words; not the trial the data liked best, whose information can be anything from the grid's
-/// best to its worst (a frequency near the Nyquist limit hardly moves the positions).
-#[derive(Clone, Debug)]
-pub enum Typical {
-    /// Standard error of the size (an amplitude) of a form coherent over the runs.
-    Se { se: f64, at: String },
-    /// Each run's information a_r about the amplitude of a force periodic in time with a phase
-    /// per run (`time_periodic`), and the data's noise floor there (≥ 1: how far the data's
-    /// statistic runs above the replicates' around that frequency, `noise_floor.rs`).
-    PerRun { a: Vec<f64>, floor: f64, at: String },
-}
-
-/// The trial of least standard error `se_of(trial's se)` (the first of equals).
-fn most_sensitive(
-    trials: &[Option<Trial>],
-    se_of: impl Fn(&[f64]) -> f64,
-) -> Option<(f64, &Trial)> {
-    let mut best: Option<(f64, &Trial)> = None;
-    for t in trials.iter().flatten() {
-        let se = se_of(&t.2);
-        if se.is_finite() && best.is_none_or(|b| se < b.0) {
-            best = Some((se, t));
-        }
-    }
-    best
 }
 
 /// Secant columns of a named term: each parameter stepped from where the term vanishes; with
@@ -201,44 +171,6 @@ pub struct Control<'a> {
     pub say: &'a (dyn Fn(&str) + Sync),
 }
 
-/// True for a form searched over a grid of trials (its screen costs a pass over every trial and
-/// run per replicate, so its replicates come in batches).
-fn searched(e: &Extra) -> bool {
-    matches!(
-        e,
-        Extra::PeriodicZ { .. }
-            | Extra::Localized { .. }
-            | Extra::TimePeriodic { .. }
-            | Extra::Spline { .. }
-    )
-}
-
-/// The statistic of searched form `e` on the replicates `reps` (0 is the data).
-fn searched_trial(
-    e: &Extra,
-    prep: &[Prepared],
-    v: &Vectors,
-    rg: &Ranges,
-    reps: Range<usize>,
-) -> (Option<Trial>, Option<Typical>) {
-    match e {
-        Extra::PeriodicZ {
-            k_lo,
-            k_hi,
-            z_ref_m,
-        } => periodic_z(prep, v, rg, *z_ref_m, *k_lo, *k_hi, reps),
-        Extra::Localized { w_lo, w_hi, .. } => localized(prep, v, rg, *w_lo, *w_hi, reps),
-        Extra::TimePeriodic { f_lo, f_hi } => time_periodic(prep, v, rg, *f_lo, *f_hi, reps),
-        Extra::Spline {
-            variable,
-            lo,
-            dx,
-            segments,
-        } => (spline(prep, v, *variable, *lo, *dx, *segments, reps), None),
-        _ => (None, None),
-    }
-}
-
 /// A named term's statistic on every replicate: along its secant, with its law under the noise
 /// model (the friction law at a few trial scales, the best kept: a maximum, whose law is left to
 /// the replicates).
@@ -250,15 +182,18 @@ fn named_trial(
     null_pred: &[Vec<f64>],
     v: &Vectors,
 ) -> (Option<Trial>, Option<ExactNull>) {
-    if let Extra::VelocityFriction { materials } = e {
-        let lo = e.params()[0].lo;
-        let theta0 = vec![lo; *materials];
-        let trials: Vec<Option<Trial>> = [1e-3f64, 3e-3, 1e-2, 3e-2]
+    if let Some((theta0, trials)) = e.scale_trials() {
+        let trials: Vec<Option<Trial>> = trials
             .par_iter()
-            .map(|vc| {
-                let steps: Vec<(usize, f64)> = (0..*materials).map(|m| (m, vc.ln())).collect();
-                secant(current, e, &theta0, &steps, runs, prep, null_pred, v).map(
-                    |((lr, _, se), _)| (lr, vec![vc.ln(); *materials], vec![f64::NAN; se.len()]),
+            .map(|steps| {
+                secant(current, e, &theta0, steps, runs, prep, null_pred, v).map(
+                    |((lr, _, se), _)| {
+                        let mut est = theta0.clone();
+                        for &(j, to) in steps {
+                            est[j] = to;
+                        }
+                        (lr, est, vec![f64::NAN; se.len()])
+                    },
                 )
             })
             .collect();
@@ -322,13 +257,21 @@ pub fn screen(
         .enumerate()
         .map(|(i, e)| {
             let name = short(e);
-            let (t, typical, exact) = if searched(e) {
+            let (t, typical, exact) = if e.searched() {
                 (ctl.say)(&format!(
                     "candidate {}/{n} {name}: replicates 0/{} done",
                     i + 1,
                     nrep - 1
                 ));
-                let (t, typical) = searched_trial(e, prep, &v, rg, first.clone());
+                let search = |reps: Range<usize>| {
+                    e.search(&Search {
+                        prep,
+                        v: &v,
+                        rg,
+                        reps,
+                    })
+                };
+                let (t, typical) = search(first.clone());
                 let t = t.map(|(mut lr, est, se)| {
                     let df = e.null_df(runs.len());
                     if first.end < nrep && !clearly_null(&lr, df, ctl.alpha) {
@@ -338,9 +281,7 @@ pub fn screen(
                             first.end - 1,
                             nrep - 1
                         ));
-                        if let (Some((more, _, _)), _) =
-                            searched_trial(e, prep, &v, rg, first.end..nrep)
-                        {
+                        if let (Some((more, _, _)), _) = search(first.end..nrep) {
                             lr.extend(more);
                         }
                     }
@@ -366,204 +307,6 @@ pub fn screen(
             })
         })
         .collect()
-}
-
-fn periodic_z(
-    prep: &[Prepared],
-    v: &Vectors,
-    rg: &Ranges,
-    z_ref: f64,
-    k_lo: f64,
-    k_hi: f64,
-    reps: Range<usize>,
-) -> (Option<Trial>, Option<Typical>) {
-    let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
-        .into_iter()
-        .filter(|k| *k >= k_lo && *k <= k_hi)
-        .collect();
-    let trials: Vec<Option<Trial>> = ks
-        .par_iter()
-        .map(|&k| {
-            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
-                let z = p.track.variable(crate::physics::Variable::Z);
-                let fs: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).sin()).collect();
-                let fc: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).cos()).collect();
-                Some(vec![
-                    p.column(p.track.respond_values(&fs)),
-                    p.column(p.track.respond_values(&fc)),
-                ])
-            })?;
-            Some((
-                lr,
-                vec![k, b[0], b[1]],
-                vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
-            ))
-        })
-        .collect();
-    let typical =
-        most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(|(se, t)| Typical::Se {
-            se,
-            at: format!("at a wavelength of {:.3} mm", 1e3 * TAU / t.1[0]),
-        });
-    (best_of(trials, reps.len()), typical)
-}
-
-fn localized(
-    prep: &[Prepared],
-    v: &Vectors,
-    rg: &Ranges,
-    w_lo: f64,
-    w_hi: f64,
-    reps: Range<usize>,
-) -> (Option<Trial>, Option<Typical>) {
-    let trials = bump_trials(rg, w_lo, w_hi);
-    let out: Vec<Option<Trial>> = trials
-        .par_iter()
-        .map(|&(c, w)| {
-            let (lr, b, var) = coherent(prep, v, 1, reps.clone(), &[], |p| {
-                bump_column(p, c, w).map(|x| vec![x])
-            })?;
-            Some((
-                lr,
-                vec![b[0], c, w],
-                vec![var[0].sqrt(), f64::NAN, f64::NAN],
-            ))
-        })
-        .collect();
-    let typical = most_sensitive(&out, |se| se[0]).map(|(se, t)| Typical::Se {
-        se,
-        at: format!(
-            "of width {:.3} mm at z = {:.2} mm",
-            1e3 * t.1[2],
-            1e3 * t.1[1]
-        ),
-    });
-    (best_of(out, reps.len()), typical)
-}
-
-/// A force periodic in time with one amplitude and each run's own phase. Per run the (sin, cos)
-/// responses carry information a_r (half the trace of their normal matrix, the two being nearly
-/// orthogonal over many periods) and the data project to |b_r| at the best phase; a shared
-/// amplitude α drops χ² by Σ(2α|b_r| − α²a_r), at best (Σ|b_r|)²/Σa_r. A free amplitude per run
-/// would absorb any structure at all one run at a time; the shared one does not.
-fn time_periodic(
-    prep: &[Prepared],
-    v: &Vectors,
-    rg: &Ranges,
-    f_lo: f64,
-    f_hi: f64,
-    reps: Range<usize>,
-) -> (Option<Trial>, Option<Typical>) {
-    let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
-        .into_iter()
-        .filter(|f| *f >= f_lo && *f <= f_hi)
-        .collect();
-    let nrep = reps.len();
-    // the data (replicate 0) is scanned in every batch, for the noise floor below
-    let data_in = reps.start == 0;
-    let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = fs
-        .par_iter()
-        .map(|&f| {
-            let mut sb = vec![0.0; nrep];
-            let mut s0 = 0.0;
-            let mut info = Vec::with_capacity(prep.len());
-            for (p, yr) in prep.iter().zip(&v.y) {
-                let (rs, rc) = p.track.respond_time(TAU * f);
-                let xs = p.column(rs);
-                let xc = p.column(rc);
-                let a = 0.5 * (dot(&xs, &xs) + dot(&xc, &xc));
-                if a <= 0.0 {
-                    continue;
-                }
-                info.push(a);
-                for (s, yb) in sb.iter_mut().zip(&yr[reps.clone()]) {
-                    let (bs, bc) = dot2(&xs, &xc, yb);
-                    *s += bs.hypot(bc);
-                }
-                if !data_in {
-                    let (bs, bc) = dot2(&xs, &xc, &yr[0]);
-                    s0 += bs.hypot(bc);
-                }
-            }
-            let sa: f64 = info.iter().sum();
-            if sa <= 0.0 {
-                return (None, info, f64::NAN);
-            }
-            let data = if data_in { sb[0] } else { s0 };
-            let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
-            (
-                Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
-                info,
-                data * data / sa,
-            )
-        })
-        .collect();
-    // the replicates raised to the noise floor the data show around each frequency: with
-    // tracking noise of lag-1 correlation 0.6 the data's statistic ran about 10 % above the
-    // AR(1) replicates' at every frequency, and the largest of them passed for a vibration
-    let ratio: Vec<Option<f64>> = out
-        .iter()
-        .map(|(t, _, data)| {
-            let reps_lr = &t.as_ref()?.0[usize::from(data_in)..];
-            let mean = reps_lr.iter().sum::<f64>() / reps_lr.len().max(1) as f64;
-            (mean > 0.0 && !reps_lr.is_empty()).then(|| data / mean)
-        })
-        .collect();
-    let floor = super::noise_floor::local_floor(&ratio);
-    for ((t, _, _), k) in out.iter_mut().zip(&floor) {
-        if let Some((lr, _, _)) = t {
-            for x in &mut lr[usize::from(data_in)..] {
-                *x *= k;
-            }
-        }
-    }
-    // the most sensitive frequency: the most information over the runs
-    let mut top: Option<(f64, usize)> = None;
-    for (i, (t, info, _)) in out.iter().enumerate() {
-        let sa: f64 = info.iter().sum();
-        if t.is_some() && top.is_none_or(|b| sa > b.0) {
-            top = Some((sa, i));
-        }
-    }
-    let typical = top.map(|(_, i)| Typical::PerRun {
-        a: out[i].1.clone(),
-        floor: floor[i],
-        at: format!(
-            "at {:.0} Hz (higher at higher frequencies, as f² far above)",
-            fs[i]
-        ),
-    });
-    (
-        best_of(out.into_iter().map(|(t, _, _)| t).collect(), nrep),
-        typical,
-    )
-}
-
-fn spline(
-    prep: &[Prepared],
-    v: &Vectors,
-    var: crate::physics::Variable,
-    lo: f64,
-    dx: f64,
-    segments: usize,
-    reps: Range<usize>,
-) -> Option<Trial> {
-    let nb = spline_n_basis(segments);
-    let (lr, b, vv) = coherent(prep, v, nb, reps, &[], |p| {
-        let x = p.track.variable(var);
-        Some(
-            (0..nb)
-                .map(|j| {
-                    let f: Vec<f64> = x
-                        .iter()
-                        .map(|xv| spline_basis(lo, dx, segments, j, *xv))
-                        .collect();
-                    p.column(p.track.respond_values(&f))
-                })
-                .collect(),
-        )
-    })?;
-    Some((lr, b, vv.iter().map(|x| x.sqrt()).collect()))
 }
 
 #[cfg(test)]

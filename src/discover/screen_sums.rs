@@ -411,6 +411,35 @@ where
     coherent_sums(prep, v, q, reps, cols).solve(v, sign)
 }
 
+/// The information about a searched form's size at its most sensitive trial (the grid's trial
+/// of most information: a long wavelength, a wide bump, a low frequency), with that trial in
+/// words; not the trial the data liked best, whose information can be anything from the grid's
+/// best to its worst (a frequency near the Nyquist limit hardly moves the positions).
+#[derive(Clone, Debug)]
+pub enum Typical {
+    /// Standard error of the size (an amplitude) of a form coherent over the runs.
+    Se { se: f64, at: String },
+    /// Each run's information a_r about the amplitude of a force periodic in time with a phase
+    /// per run (`time_periodic`), and the data's noise floor there (≥ 1: how far the data's
+    /// statistic runs above the replicates' around that frequency, `noise_floor.rs`).
+    PerRun { a: Vec<f64>, floor: f64, at: String },
+}
+
+/// The trial of least standard error `se_of(trial's se)` (the first of equals).
+pub(super) fn most_sensitive(
+    trials: &[Option<Trial>],
+    se_of: impl Fn(&[f64]) -> f64,
+) -> Option<(f64, &Trial)> {
+    let mut best: Option<(f64, &Trial)> = None;
+    for t in trials.iter().flatten() {
+        let se = se_of(&t.2);
+        if se.is_finite() && best.is_none_or(|b| se < b.0) {
+            best = Some((se, t));
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@ use super::data::RunData;
 use super::forcemap::ForceMap;
 use super::model::Model;
 use super::null_distribution::NullFit;
-use super::proposal::Ranges;
+use super::ranges::Ranges;
 use super::spectral::Spectrum;
 use super::Options;
 use crate::artifacts::diagnosis::{CandidateRow, ModelScore};

@@ -11,21 +11,19 @@ use crate::artifacts::under_accepted::{
     CarriedTerm, CollisionsUnder, DragTimeLine, SingleMaterial, SingleUnder, UnderAccepted,
 };
 use crate::artifacts::Estimate;
+use crate::discover::forms;
 use crate::discover::pairs::single_run_physics;
 use crate::physics::{Groove, Term};
 use crate::recording::{Experiment, Recording};
 use std::collections::BTreeMap;
 
-/// The accepted single-run findings: the physics a refit carries (collision findings and the
-/// particle check name no term of the one-particle model).
+/// The accepted single-run findings: the physics a refit carries, the findings a form of
+/// discovery wrote (collision findings and the particle check name no term of the one-particle
+/// model).
 pub fn accepted_terms(d: &Diagnosis) -> Vec<&Finding> {
     d.findings
         .iter()
-        .filter(|f| {
-            f.accepted
-                && f.where_.get("experiment") != Some(&serde_json::json!("collision"))
-                && f.effect != "particle_differences"
-        })
+        .filter(|f| f.accepted && forms::read(f).is_some())
         .collect()
 }
 
@@ -92,14 +90,11 @@ fn collisions_under(
         .iter()
         .map(|(k, v)| (k.clone(), v.value))
         .collect();
-    let position: Vec<&Finding> = accepted_terms(d)
-        .into_iter()
-        .filter(|f| f.effect == "position_dependent_force")
-        .collect();
+    let lab_forces = forms::lab_forces(accepted_terms(d));
     let mut materials: Vec<MaterialWholeRun> = Vec::new();
     let mut unchanged = Vec::new();
     for (m, runs) in &by_material {
-        let model = match single_run_physics(&params, &position, m, groove) {
+        let model = match single_run_physics(&params, &lab_forces, m, groove) {
             Ok(model) => model,
             Err(why) => {
                 notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));

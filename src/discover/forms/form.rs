@@ -1,0 +1,259 @@
+//! What a term of the joint model is (`Form`): its place, parameters, how it enters the physics,
+//! its screen, its starts, and how the report says it.
+
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::discover::data::RunData;
+use crate::discover::ranges::{Proposals, Ranges, Wanted};
+use crate::discover::response::Prepared;
+use crate::discover::screen_sums::{Trial, Typical, Vectors};
+use crate::discover::sim::SimModel;
+use crate::physics::Term;
+use std::collections::BTreeMap;
+use std::ops::Range;
+
+/// Name, start, bounds and finite-difference step of one parameter (SI units, named with them).
+#[derive(Clone, Debug)]
+pub struct ParamInfo {
+    pub name: String,
+    pub start: f64,
+    pub lo: f64,
+    pub hi: f64,
+    pub step: f64,
+}
+
+/// A parameter: name, start (where the term vanishes, or nearly), bounds and step. The bounds
+/// carry the physical sign: a dissipation starts at its lower bound, zero.
+pub fn p(name: &str, start: f64, lo: f64, hi: f64, step: f64) -> ParamInfo {
+    ParamInfo {
+        name: name.to_string(),
+        start,
+        lo,
+        hi,
+        step,
+    }
+}
+
+/// Where a term enters the equations of motion (a probe only locates a mismatch).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Place {
+    Force,
+    Friction,
+    Measurement,
+    Probe,
+}
+
+impl Place {
+    /// As `where.place` of a finding says it.
+    pub fn id(self) -> &'static str {
+        match self {
+            Place::Force => "force",
+            Place::Friction => "friction",
+            Place::Measurement => "measurement",
+            Place::Probe => "probe",
+        }
+    }
+}
+
+/// The physics of one run while the terms enter it in turn (`Spec::sim_model`): μ and T of the
+/// run's material, a quadratic or saturating drag's parameter, and the model the rest is put in.
+pub struct Entry {
+    pub model: SimModel,
+    pub mu: f64,
+    pub t_s: f64,
+    /// c of a quadratic drag (0: none).
+    pub quad: f64,
+    /// T' of a saturating drag, which turns T into T0.
+    pub tp: Option<f64>,
+    pub material: usize,
+    pub v0_mps: f64,
+}
+
+/// A fitted term's values, as the report reads them.
+pub struct Fitted<'a> {
+    /// The term's values and standard errors (its slice of the global vector, and on).
+    pub x: &'a [f64],
+    pub se: &'a [f64],
+    /// The whole global vector and its errors: μ per material, then T per material.
+    pub global: &'a [f64],
+    pub global_se: &'a [f64],
+    pub n_materials: usize,
+    pub materials: &'a [String],
+    /// The term's parameters as the model names them.
+    pub params: &'a [ParamInfo],
+}
+
+/// What a searched form's screen works on: the prepared runs, the noise replicates (`reps` of
+/// them, 0 the data) and the ranges the data allow.
+pub struct Search<'a> {
+    pub prep: &'a [Prepared],
+    pub v: &'a Vectors,
+    pub rg: &'a Ranges,
+    pub reps: Range<usize>,
+}
+
+/// A finding of `diagnosis.json` read back as the form that wrote it (`forms::read`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reading {
+    /// The form's name (`Form::name`).
+    pub form: &'static str,
+    pub place: Place,
+    /// The force the form puts on a particle at a place in the lab, held at the finding's values
+    /// (so that other experiments in the same groove can carry it); Err says why it cannot be
+    /// carried. None for a form that is no force fixed in the lab.
+    pub lab_force: Option<Result<Term, String>>,
+}
+
+/// One form of missing physics (or a drift probe). Every method but the first few has the
+/// answer of most forms as its default.
+pub trait Form: std::fmt::Debug + Send + Sync {
+    /// The form's own name (`periodic_z`), unique in the registry.
+    fn name(&self) -> &'static str;
+    /// The diagnosis effect id, or None for a probe.
+    fn effect(&self) -> Option<&'static str>;
+    fn place(&self) -> Place;
+    /// A short label of the form, with its formula (written as a finding's `form`).
+    fn form(&self) -> String;
+    /// What the term's size is called in words ("a groove tilt").
+    fn size_name(&self) -> &'static str;
+    /// Parameters of the term, starting at the value that makes it vanish (or nearly).
+    fn params(&self) -> Vec<ParamInfo>;
+    /// How the term enters the physics of a run, at its values `x`.
+    fn enter(&self, x: &[f64], e: &mut Entry);
+    /// The fitted term's parameters in SI units with physical names.
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate>;
+
+    /// The form as the library offers it for data of these ranges (None: never offered).
+    fn offer(_n_materials: usize, _rg: &Ranges) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        None
+    }
+    /// The form as a drift probe about the runs' median speed (None: no probe).
+    fn probe(_v_ref_mps: f64) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        None
+    }
+    /// The parameters as named in a model of `materials` (a term per material names them).
+    fn named_params(&self, _materials: &[String]) -> Vec<ParamInfo> {
+        self.params()
+    }
+    /// True for a term with parameters per material (a friction law that one run's own fit
+    /// cannot carry).
+    fn per_material(&self) -> bool {
+        false
+    }
+    /// The name the per-material drag time takes beside this term (`t0_s` of a saturating drag).
+    fn drag_time_name(&self) -> Option<&'static str> {
+        None
+    }
+    /// Degrees of freedom that bound the shape of the gamma law fitted to the term's bootstrap
+    /// null (`NullFit::from_replicates`): its parameter count unless the form says otherwise.
+    fn null_df(&self, _runs: usize) -> f64 {
+        self.params().len() as f64
+    }
+    /// True when z0 enters other than as an additive offset.
+    fn position_dependent(&self) -> bool {
+        false
+    }
+    /// True when the term has a phase of its own in each run (profiled in `Spec::run_model`).
+    fn run_phase(&self) -> bool {
+        false
+    }
+    /// True for an acceleration that depends on the particle's speed alone (a dissipation: the
+    /// sum of such terms must oppose the motion, `admissible.rs`).
+    fn speed_dependent(&self) -> bool {
+        false
+    }
+
+    /// True for a form searched over a grid of trials (a scale: wavelength, width, frequency,
+    /// or a spline's coefficients) rather than screened along its secant.
+    fn searched(&self) -> bool {
+        false
+    }
+    /// A searched form's statistic on the replicates `s.reps` (its response columns regressed
+    /// on the prepared runs), with the information about its size at its most sensitive trial.
+    fn search(&self, _s: &Search) -> (Option<Trial>, Option<Typical>) {
+        (None, None)
+    }
+    /// A named form screened at a few trial scales (the best kept) instead of one secant: where
+    /// its parameters start and, per trial, the parameters stepped and where to.
+    fn scale_trials(&self) -> Option<(Vec<f64>, Vec<Vec<(usize, f64)>>)> {
+        None
+    }
+
+    /// What the form's starts need from the residuals.
+    fn wanted(&self) -> Wanted {
+        Wanted::default()
+    }
+    /// Starting values proposed by the residuals (unclamped; empty when none).
+    fn proposed(&self, _p: &Proposals) -> Vec<Vec<f64>> {
+        vec![]
+    }
+    /// The form's own starting values: where it vanishes, plus a few for a nonlinear scale.
+    fn starts(&self) -> Vec<Vec<f64>> {
+        vec![self.params().iter().map(|p| p.start).collect()]
+    }
+
+    /// A parameter (`k`, at `x`) that ended at a bound in words, or None for the usual sentence.
+    fn bound_note(
+        &self,
+        _k: usize,
+        _x: f64,
+        _info: &ParamInfo,
+        _lower: bool,
+        _materials: &[String],
+    ) -> Option<String> {
+        None
+    }
+    /// True when a parameter that starts at its bound and ends there is still said (it is no
+    /// term that vanishes there).
+    fn notes_start_bound(&self) -> bool {
+        false
+    }
+    /// A searched scale: its parameter index and what it is called.
+    fn scale(&self) -> Option<(usize, &'static str)> {
+        None
+    }
+    /// Why the scale (at `x`) ran to the fine end of its search, or None where it did not.
+    fn scale_at_fine_end(&self, _x: f64, _lower: bool) -> Option<String> {
+        None
+    }
+    /// The reported parameters adjusted with where the runs go (a spline's size over the data).
+    fn report_over_runs(
+        &self,
+        _x: &[f64],
+        _runs: &[RunData],
+        _out: &mut BTreeMap<String, Estimate>,
+    ) {
+    }
+    /// The size the detection limit is stated for: (parameter, unit, its standard error, scale to
+    /// the reported unit), from the term's standard errors `se` and a searched form's standard
+    /// error at its most sensitive trial; None for a form without one size.
+    fn detection_size(
+        &self,
+        _se: &[f64],
+        _typical_se: Option<f64>,
+    ) -> Option<(&'static str, &'static str, f64, f64)> {
+        None
+    }
+    /// True when finding `f` was written by this form (its effect and its label).
+    fn reads(&self, f: &Finding) -> bool {
+        Some(f.effect.as_str()) == self.effect() && f.form == self.form()
+    }
+    /// The force fixed in the lab that a finding of this form holds, read from its parameters.
+    fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
+        None
+    }
+}
+
+/// Each parameter of `form` as fitted, under its own name.
+pub fn as_fitted(form: &dyn Form, f: &Fitted) -> BTreeMap<String, Estimate> {
+    form.params()
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (p.name.clone(), Estimate::new(f.x[k], f.se[k])))
+        .collect()
+}

@@ -1,0 +1,50 @@
+//! A groove tilt: a = −g·sin α, of a fixed sign in the lab.
+
+use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::Estimate;
+use crate::discover::ranges::Ranges;
+use crate::discover::G_MPS2;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GrooveTilt;
+
+
+impl Form for GrooveTilt {
+    fn offer(_n_materials: usize, _rg: &Ranges) -> Option<Self> {
+        Some(GrooveTilt)
+    }
+    fn name(&self) -> &'static str {
+        "groove_tilt"
+    }
+    fn effect(&self) -> Option<&'static str> {
+        Some("groove_tilt")
+    }
+    fn place(&self) -> Place {
+        Place::Force
+    }
+    fn form(&self) -> String {
+        "tilt: a = -g sin(alpha)".into()
+    }
+    fn size_name(&self) -> &'static str {
+        "a groove tilt"
+    }
+    fn params(&self) -> Vec<ParamInfo> {
+        vec![p("alpha_deg", 0.0, -10.0, 10.0, 1e-4)]
+    }
+    fn enter(&self, x: &[f64], e: &mut Entry) {
+        e.model.tilt_mps2 = -G_MPS2 * x[0].to_radians().sin();
+    }
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
+        let mut out = BTreeMap::new();
+        out.insert("alpha_deg".into(), Estimate::new(f.x[0], f.se[0]));
+        out
+    }
+    fn detection_size(
+        &self,
+        se: &[f64],
+        _typical_se: Option<f64>,
+    ) -> Option<(&'static str, &'static str, f64, f64)> {
+        Some(("alpha_deg", "°", se[0], 1.0))
+    }
+}

@@ -1,0 +1,59 @@
+//! A quadratic drag: a = −v/T − c·v|v|, c of either sign (the total must still oppose the motion).
+
+use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::Estimate;
+use crate::discover::ranges::Ranges;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct QuadraticDrag;
+
+
+impl Form for QuadraticDrag {
+    fn offer(_n_materials: usize, _rg: &Ranges) -> Option<Self> {
+        Some(QuadraticDrag)
+    }
+    fn name(&self) -> &'static str {
+        "quadratic_drag"
+    }
+    fn effect(&self) -> Option<&'static str> {
+        Some("velocity_dependent_drag")
+    }
+    fn place(&self) -> Place {
+        Place::Force
+    }
+    fn form(&self) -> String {
+        "quadratic: a = -v/T - c v|v|".into()
+    }
+    fn size_name(&self) -> &'static str {
+        "a quadratic drag coefficient"
+    }
+    fn params(&self) -> Vec<ParamInfo> {
+        vec![p("c_per_m", 0.0, -1e3, 1e3, 1e-2)]
+    }
+    fn enter(&self, x: &[f64], e: &mut Entry) {
+        e.quad = x[0];
+    }
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
+        let mut out = BTreeMap::new();
+        out.insert("c_per_m".into(), Estimate::new(f.x[0], f.se[0]));
+        let nm = f.n_materials;
+        for (k, name) in f.materials.iter().enumerate() {
+            out.insert(
+                format!("t_s_{name}"),
+                Estimate::new(f.global[nm + k], f.global_se[nm + k]),
+            );
+        }
+        out
+    }
+    fn speed_dependent(&self) -> bool {
+        true
+    }
+    fn detection_size(
+        &self,
+        se: &[f64],
+        _typical_se: Option<f64>,
+    ) -> Option<(&'static str, &'static str, f64, f64)> {
+        Some(("c_per_m", "1/m", se[0], 1.0))
+    }
+}

@@ -1,0 +1,62 @@
+//! A saturating drag: a = −v/(T0 + T'|v|), T' ≥ 0; the per-material T become T0.
+
+use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::Estimate;
+use crate::discover::ranges::Ranges;
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SaturatingDrag;
+
+
+impl Form for SaturatingDrag {
+    fn offer(_n_materials: usize, _rg: &Ranges) -> Option<Self> {
+        Some(SaturatingDrag)
+    }
+    fn name(&self) -> &'static str {
+        "saturating_drag"
+    }
+    fn effect(&self) -> Option<&'static str> {
+        Some("velocity_dependent_drag")
+    }
+    fn place(&self) -> Place {
+        Place::Force
+    }
+    fn form(&self) -> String {
+        "saturating: a = -v/(T0 + T'|v|)".into()
+    }
+    fn size_name(&self) -> &'static str {
+        "a saturating drag slope T'"
+    }
+    fn params(&self) -> Vec<ParamInfo> {
+        vec![p("tp_s_per_mps", 0.0, 0.0, 1e3, 1e-3)]
+    }
+    fn enter(&self, x: &[f64], e: &mut Entry) {
+        e.tp = Some(x[0]);
+    }
+    fn drag_time_name(&self) -> Option<&'static str> {
+        Some("t0_s")
+    }
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
+        let mut out = BTreeMap::new();
+        out.insert("tp_s_per_mps".into(), Estimate::new(f.x[0], f.se[0]));
+        let nm = f.n_materials;
+        for (k, name) in f.materials.iter().enumerate() {
+            out.insert(
+                format!("t0_s_{name}"),
+                Estimate::new(f.global[nm + k], f.global_se[nm + k]),
+            );
+        }
+        out
+    }
+    fn speed_dependent(&self) -> bool {
+        true
+    }
+    fn detection_size(
+        &self,
+        se: &[f64],
+        _typical_se: Option<f64>,
+    ) -> Option<(&'static str, &'static str, f64, f64)> {
+        Some(("tp_s_per_mps", "s²/m", se[0], 1.0))
+    }
+}

@@ -1,0 +1,217 @@
+//! The nonparametric fallback: a cubic B-spline force in one variable (z, v or t) with
+//! `segments` knot intervals, reported as `unexplained` (no named form).
+
+use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::discover::data::RunData;
+use crate::discover::forcemap::ForceMap;
+use crate::discover::ranges::Proposals;
+use crate::discover::screen_sums::{coherent, Trial, Typical};
+use crate::physics::{spline_basis, spline_n_basis, SplineForce, Term, Variable};
+use std::collections::BTreeMap;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spline {
+    pub variable: Variable,
+    pub lo: f64,
+    pub dx: f64,
+    pub segments: usize,
+}
+
+impl Default for Spline {
+    fn default() -> Self {
+        Spline {
+            variable: Variable::Z,
+            lo: 0.0,
+            dx: 1.0,
+            segments: 1,
+        }
+    }
+}
+
+impl Spline {
+    /// The spline in `var` on a force map's knots.
+    pub fn on(map: &ForceMap, var: Variable) -> Option<Spline> {
+        let (lo, dx, segments, _) = map.spline.clone()?;
+        Some(Spline {
+            variable: var,
+            lo,
+            dx,
+            segments,
+        })
+    }
+
+
+    fn force(&self, coefs: &[f64]) -> SplineForce {
+        SplineForce {
+            variable: self.variable,
+            lo_x: self.lo,
+            dx: self.dx,
+            coefs_mps2: coefs[..self.segments + 3].to_vec(),
+        }
+    }
+
+    fn hi(&self) -> f64 {
+        self.lo + self.dx * self.segments as f64
+    }
+}
+
+impl Form for Spline {
+    fn name(&self) -> &'static str {
+        "spline"
+    }
+    fn effect(&self) -> Option<&'static str> {
+        Some("unexplained")
+    }
+    fn place(&self) -> Place {
+        Place::Force
+    }
+    fn form(&self) -> String {
+        format!(
+            "spline in {}: a = cubic B-spline with {} coefficients (no named form)",
+            self.variable.label(),
+            self.segments + 3
+        )
+    }
+    fn size_name(&self) -> &'static str {
+        "a smooth force"
+    }
+    fn params(&self) -> Vec<ParamInfo> {
+        (0..self.segments + 3)
+            .map(|j| p(&format!("coef{j}_mps2"), 0.0, -20.0, 20.0, 1e-4))
+            .collect()
+    }
+    fn enter(&self, x: &[f64], e: &mut Entry) {
+        e.model.terms.push(Term::Spline(self.force(x)));
+    }
+    fn position_dependent(&self) -> bool {
+        self.variable == Variable::Z
+    }
+    fn speed_dependent(&self) -> bool {
+        self.variable == Variable::V
+    }
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
+        let est = Estimate::new;
+        let sp = self.force(f.x);
+        let (lo, hi) = (self.lo, self.hi());
+        let (mut peak, mut at, mut ss) = (0.0f64, lo, 0.0);
+        for j in 0..=200 {
+            let x = lo + (hi - lo) * j as f64 / 200.0;
+            let a = sp.at(x);
+            ss += a * a;
+            if a.abs() > peak {
+                peak = a.abs();
+                at = x;
+            }
+        }
+        let mut out = BTreeMap::new();
+        out.insert("peak_accel_mps2".into(), est(peak, f64::NAN));
+        out.insert("rms_accel_mps2".into(), est((ss / 201.0).sqrt(), f64::NAN));
+        out.insert("x_at_peak".into(), est(at, 0.0));
+        out.insert("x_lo".into(), est(lo, 0.0));
+        out.insert("x_hi".into(), est(hi, 0.0));
+        out
+    }
+    fn searched(&self) -> bool {
+        true
+    }
+    fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
+        let (var, lo, dx, segments) = (self.variable, self.lo, self.dx, self.segments);
+        let nb = spline_n_basis(segments);
+        let trial = coherent(s.prep, s.v, nb, s.reps.clone(), &[], |p| {
+            let x = p.track.variable(var);
+            Some(
+                (0..nb)
+                    .map(|j| {
+                        let f: Vec<f64> = x
+                            .iter()
+                            .map(|xv| spline_basis(lo, dx, segments, j, *xv))
+                            .collect();
+                        p.column(p.track.respond_values(&f))
+                    })
+                    .collect(),
+            )
+        })
+        .map(|(lr, b, vv)| (lr, b, vv.iter().map(|x| x.sqrt()).collect()));
+        (trial, None)
+    }
+    fn proposed(&self, p: &Proposals) -> Vec<Vec<f64>> {
+        let name = match self.variable {
+            Variable::Z => "z",
+            Variable::V => "v",
+            Variable::T => "t",
+        };
+        p.maps
+            .iter()
+            .filter(|m| m.variable == name)
+            .filter_map(|m| m.spline.as_ref().map(|s| s.3.clone()))
+            .collect()
+    }
+    /// Its size where the runs go: peak (and where), RMS and the fraction of its range that
+    /// holds data, over the points of its range within half a knot spacing of a sample. Over a
+    /// gap between the runs the spline is held by its penalty alone and may swing far (13 m/s²
+    /// at 6–7.4 mm on the shipped data, where no run went): that is no size of the data.
+    fn report_over_runs(&self, x: &[f64], runs: &[RunData], out: &mut BTreeMap<String, Estimate>) {
+        let size = size_where_runs_go(&self.force(x), self.hi(), runs);
+        let est = |v: f64| Estimate::new(v, f64::NAN);
+        out.insert("peak_accel_mps2".into(), est(size.peak));
+        out.insert("rms_accel_mps2".into(), est(size.rms));
+        out.insert("x_at_peak".into(), Estimate::new(size.at, 0.0));
+        out.insert("covered_fraction".into(), Estimate::new(size.covered, 0.0));
+    }
+    fn reads(&self, f: &Finding) -> bool {
+        Some(f.effect.as_str()) == self.effect() && f.form.starts_with("spline in ")
+    }
+}
+
+struct SplineSize {
+    peak: f64,
+    at: f64,
+    rms: f64,
+    covered: f64,
+}
+
+fn size_where_runs_go(sp: &SplineForce, hi: f64, runs: &[RunData]) -> SplineSize {
+    let mut xs: Vec<f64> = Vec::new();
+    for r in runs {
+        let kept = |j: usize| r.keep[j];
+        match sp.variable {
+            Variable::Z => xs.extend((0..r.z_m.len()).filter(|&j| kept(j)).map(|j| r.z_m[j])),
+            Variable::T => xs.extend((0..r.t_s.len()).filter(|&j| kept(j)).map(|j| r.t_s[j])),
+            Variable::V => {
+                // a velocity over four frames: its noise is far below a knot spacing
+                let h = 4;
+                xs.extend((0..r.z_m.len().saturating_sub(h)).filter_map(|j| {
+                    let dt = r.t_s[j + h] - r.t_s[j];
+                    (kept(j) && kept(j + h) && dt > 0.0).then(|| (r.z_m[j + h] - r.z_m[j]) / dt)
+                }))
+            }
+        }
+    }
+    xs.retain(|x| x.is_finite());
+    xs.sort_by(f64::total_cmp);
+    let near = |x: f64| {
+        let k = xs.partition_point(|s| *s < x - 0.5 * sp.dx);
+        k < xs.len() && xs[k] <= x + 0.5 * sp.dx
+    };
+    let (mut peak, mut at, mut ss, mut n) = (0.0f64, sp.lo_x, 0.0, 0usize);
+    for j in 0..=200 {
+        let x = sp.lo_x + (hi - sp.lo_x) * j as f64 / 200.0;
+        if !near(x) {
+            continue;
+        }
+        let a = sp.at(x);
+        n += 1;
+        ss += a * a;
+        if a.abs() > peak {
+            peak = a.abs();
+            at = x;
+        }
+    }
+    SplineSize {
+        peak,
+        at,
+        rms: (ss / n.max(1) as f64).sqrt(),
+        covered: n as f64 / 201.0,
+    }
+}
