@@ -98,9 +98,13 @@ struct Probe {
     slow: Vec<f64>,
 }
 
-/// Trial time constants of the slow noise, in kept samples.
+/// Trial time constants of the slow noise, in kept samples: 8 to 8192, a factor 2 apart. A
+/// correlation shorter than 8 samples is the fast noise's, which the local cubic's window of
+/// 41 measures; a slow part allowed there stood in for a fast AR(1) read too weakly (a white
+/// part beside a correlated one) with a large variance at 2 samples, and overstated the noise
+/// everywhere but where the fast one fell short.
 fn trial_rhos() -> Vec<f64> {
-    (0..13).map(|i| (-1.0 / 2f64.powi(i + 1)).exp()).collect()
+    (3..14).map(|i| (-1.0 / 2f64.powi(i)).exp()).collect()
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -195,6 +199,26 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
                 },
                 lr,
             );
+        }
+    }
+    // the grid's time constants are a factor 2 apart, and the variance a smooth column (a run's
+    // μ or T) collects from the drift goes as κτ: refine τ between the best one's neighbours
+    if best.1 > 0.0 {
+        let j = rhos.iter().position(|r| *r == best.0.rho).unwrap_or(0);
+        let tau = |r: f64| -1.0 / r.ln();
+        let lo = tau(rhos[j.saturating_sub(1)]).ln();
+        let hi = tau(rhos[(j + 1).min(rhos.len() - 1)]).ln();
+        let profile = |ln_tau: f64| -> (f64, f64, f64) {
+            let rho = (-1.0 / ln_tau.exp()).exp();
+            let local: Vec<Probe> = series.iter().flat_map(|s| probes(s, &[rho])).collect();
+            let f = |s: f64| -loglik(&local, 0, s.exp());
+            let s = crate::lsq::golden::minimize(f, (1e-2f64).ln(), (1e6f64).ln(), 60);
+            (rho, s.exp(), 2.0 * (loglik(&local, 0, s.exp()) - l0))
+        };
+        let ln_tau = crate::lsq::golden::minimize(|x| -profile(x).2, lo, hi, 30);
+        let (rho, kappa, lr) = profile(ln_tau);
+        if lr > best.1 {
+            best = (Slow { kappa, rho }, lr);
         }
     }
     if best.1 >= KEEP_LR {
