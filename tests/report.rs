@@ -457,6 +457,44 @@ fn html_is_self_contained_well_formed_and_has_every_figure() {
     assert!(html.contains("|v0| &gt; 0.03"), "text is HTML-escaped");
 }
 
+/// The page's text without its inline figures and style sheet.
+fn text_outside_svg_and_style(html: &str) -> String {
+    let mut out = String::new();
+    let mut rest = html;
+    loop {
+        let next = ["<svg", "<style>"]
+            .iter()
+            .filter_map(|open| rest.find(open).map(|i| (i, *open)))
+            .min();
+        let Some((i, open)) = next else {
+            out.push_str(rest);
+            return out;
+        };
+        out.push_str(&rest[..i]);
+        let close = if open == "<svg" { "</svg>" } else { "</style>" };
+        let end = rest[i..].find(close).expect("closed") + i + close.len();
+        rest = &rest[end..];
+    }
+}
+
+#[test]
+fn the_shipped_html_shows_no_markdown_markup() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/");
+    let html = std::fs::read_to_string(format!("{dir}report.html")).unwrap();
+    let md = std::fs::read_to_string(format!("{dir}report.md")).unwrap();
+    // the Markdown page has emphasis and code spans, the HTML page shows them as elements
+    assert!(md.contains("**saturating** (chosen)") && md.contains("`after`"));
+    assert!(html.contains("<strong>saturating</strong> (chosen)"));
+    assert!(html.contains("<code>after</code>"));
+    let text = text_outside_svg_and_style(&html);
+    for mark in ["**", "`", "](", "\\|"] {
+        let at = text
+            .find(mark)
+            .map(|i| text[i..].chars().take(80).collect::<String>());
+        assert_eq!(at, None, "report.html shows Markdown {mark:?}");
+    }
+}
+
 #[test]
 fn two_renders_are_byte_identical() {
     let f = fixture(true, true);
