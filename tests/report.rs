@@ -495,6 +495,115 @@ fn the_shipped_html_shows_no_markdown_markup() {
     }
 }
 
+/// The summary paragraph (section 1) of a Markdown page.
+fn summary_of(md: &str) -> &str {
+    let start = md.find("## 1. Summary").expect("a summary");
+    let end = md[start..].find("## 2.").map_or(md.len(), |e| start + e);
+    &md[start..end]
+}
+
+/// Discovery run through its stage on `f`'s recordings with `params`; its diagnosis.json.
+fn diagnosis_of(f: &Fixture, params: &str) -> Vec<u8> {
+    let kind = groove::stages::registry()
+        .into_iter()
+        .find(|k| k.kind() == "discover")
+        .expect("discover registered");
+    let runs = Artifact::Collection(f.runs.clone());
+    let params: toml::Table = toml::from_str(params).unwrap();
+    let input = StageInput {
+        params: &params,
+        inputs: [("runs", &runs)].into_iter().collect(),
+        item: None,
+        seed: 1,
+        progress: None,
+        put_item: None,
+        memo: None,
+    };
+    let Artifact::File(bytes) = kind
+        .run(&input)
+        .expect("discover runs")
+        .remove("diagnosis")
+        .unwrap()
+    else {
+        panic!("diagnosis is a file")
+    };
+    bytes
+}
+
+#[test]
+fn below_the_discovery_floor_the_summary_says_discovery_did_not_run() {
+    let mut f = fixture(false, false);
+    f.files
+        .insert("diagnosis", diagnosis_of(&f, "min_frames = 12"));
+    let (_, html, md) = render(&f, None);
+    let summary = summary_of(&md);
+    assert!(
+        summary.contains(
+            "Discovery did not run: 6 single runs with at least 12 frames, fewer than the 10"
+        ),
+        "{summary}"
+    );
+    assert!(!summary.contains("found nothing missing"), "{summary}");
+    assert!(!html.contains("Discovery found nothing missing"));
+}
+
+#[test]
+fn a_clean_discovery_gives_its_detection_limits_in_the_summary() {
+    let mut f = fixture(true, true);
+    let mut diag: Value = serde_json::from_slice(&f.files["diagnosis"]).unwrap();
+    diag["mismatch"] = json!(false);
+    for list in ["findings", "candidates"] {
+        for c in diag[list].as_array_mut().unwrap() {
+            c["accepted"] = json!(false);
+        }
+    }
+    diag["candidates"][2]["evidence"]["detection_limit"] = json!({"parameter": "alpha_deg",
+        "value": 0.0213, "text": "a groove tilt above 0.0213 ° would have been found"});
+    f.files
+        .insert("diagnosis", serde_json::to_vec(&diag).unwrap());
+    let (_, _, md) = render(&f, None);
+    let summary = summary_of(&md);
+    assert!(
+        summary.contains("Discovery found nothing missing in 6 single runs")
+            && summary
+                .contains("it would have found a groove tilt above 0.0213 ° (its detection limits"),
+        "{summary}"
+    );
+    // without any limit, the summary says the power is not known
+    diag["candidates"][2]["evidence"]
+        .as_object_mut()
+        .unwrap()
+        .remove("detection_limit");
+    f.files
+        .insert("diagnosis", serde_json::to_vec(&diag).unwrap());
+    let (_, _, md) = render(&f, None);
+    assert!(
+        summary_of(&md).contains("gave no detection limit"),
+        "{}",
+        summary_of(&md)
+    );
+}
+
+#[test]
+fn counts_of_one_are_singular() {
+    let mut f = fixture(false, false);
+    f.runs.retain(|name, _| name == "s316_a.json");
+    f.fits.retain(|name, _| name == "s316_a.json");
+    let csv = String::from_utf8(f.files["fits_csv"].clone()).unwrap();
+    let kept: String = csv
+        .lines()
+        .filter(|l| l.starts_with("run,") || l.starts_with("s316_a,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    f.files.insert("fits_csv", kept.into_bytes());
+    let (_, _, md) = render(&f, None);
+    let summary = summary_of(&md);
+    assert!(
+        summary.contains("Analysed 1 recorded run: 1 single-particle run with a baseline fit and 0 collision runs"),
+        "{summary}"
+    );
+}
+
 #[test]
 fn two_renders_are_byte_identical() {
     let f = fixture(true, true);

@@ -134,8 +134,7 @@ pub fn block(d: &ReportData) -> Block {
     let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
     if !d.singles.is_empty() {
         b.para(format!(
-            "{} of {} single runs move in −z; the fits handle both directions.",
-            n_neg,
+            "Single runs moving in −z: {n_neg} of {}; the fits handle both directions.",
             d.singles.len()
         ));
     }

@@ -641,7 +641,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 
 /// "a groove tilt above 0.02 ° would have been found", one per form, from the last round that
 /// tested it.
-fn detection_limits(diag: &Diagnosis) -> Vec<String> {
+pub fn detection_limits(diag: &Diagnosis) -> Vec<String> {
     let mut by_form: BTreeMap<String, String> = BTreeMap::new();
     let mut order: Vec<String> = Vec::new();
     for c in &diag.candidates {
