@@ -343,11 +343,43 @@ const ALL_FIGURES: [&str; 11] = [
 
 #[test]
 fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
-    let (figs, _, _) = render(&fixture(true, true), None);
+    let (mut figs, _, _) = render(&fixture(true, true), None);
+    let csv: BTreeMap<String, String> = figs
+        .iter()
+        .filter(|(k, _)| k.ends_with(".csv"))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    figs.retain(|k, _| k.ends_with(".svg"));
     let names: Vec<&str> = figs.keys().map(String::as_str).collect();
     let mut want = ALL_FIGURES.to_vec();
     want.sort();
     assert_eq!(names, want);
+    // every figure of data points has its CSV, one row a point, and each point a title
+    for (name, svg) in &figs {
+        let points = svg.matches("<circle class=\"pt\"").count();
+        let rows = csv
+            .get(&name.replace(".svg", ".csv"))
+            .map_or(0, |c| c.lines().count() - 1);
+        assert_eq!(rows, points, "{name}: CSV rows against titled points");
+        assert_eq!(svg.matches("<title>").count(), points, "{name}");
+    }
+    for want in [
+        "fig_4_2c.csv",
+        "fig_4_2d.csv",
+        "fig_4_4a.csv",
+        "fig_4_4b.csv",
+        "fig_discovery_cv.csv",
+    ] {
+        assert!(csv.contains_key(want), "{want} missing: {:?}", csv.keys());
+    }
+    assert!(
+        csv["fig_4_2c.csv"]
+            .starts_with("series,run,initial speed |v0| (m/s),fitted drag time T (s)\n")
+            && csv["fig_4_2c.csv"].contains("\n316: fitted T,s316_a,0.025,"),
+        "{}",
+        csv["fig_4_2c.csv"]
+    );
+    assert!(figs["fig_4_2c.svg"].contains("<title>run s316_a, 316: fitted T: initial speed |v0| (m/s) = 0.025; fitted drag time T (s) = "));
     for (name, svg) in &figs {
         assert!(svg.contains("<svg"), "{name}");
         well_formed(svg).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -397,7 +429,7 @@ fn markdown_has_every_section_in_order_and_the_numbers() {
         pos.windows(2).all(|w| w[0] < w[1]),
         "chapter figures out of order"
     );
-    for name in figs.keys() {
+    for name in figs.keys().filter(|k| k.ends_with(".svg")) {
         assert!(
             md.contains(&format!("](figures/{name})")),
             "report.md does not reference {name}"
@@ -443,8 +475,10 @@ fn html_is_self_contained_well_formed_and_has_every_figure() {
     ] {
         assert!(!html.contains(bad), "report.html contains {bad:?}");
     }
-    assert_eq!(html.matches("<svg").count(), figs.len());
-    for name in figs.keys() {
+    let svgs: Vec<&String> = figs.keys().filter(|k| k.ends_with(".svg")).collect();
+    assert_eq!(html.matches("<svg").count(), svgs.len());
+    assert!(html.contains("<a href=\"figures/fig_4_2c.csv\">Data (CSV)</a>"));
+    for name in svgs {
         assert!(
             html.contains(&format!(
                 "<figure id=\"{}\">",
@@ -604,6 +638,192 @@ fn counts_of_one_are_singular() {
     );
 }
 
+/// The value of attribute `name` in the text of one tag.
+fn attr_of(tag: &str, name: &str) -> Option<f64> {
+    let key = format!(" {name}=\"");
+    let i = tag.find(&key)? + key.len();
+    tag[i..].split('"').next()?.parse().ok()
+}
+
+/// What a figure's layout gets wrong: a legend box over a data point, a text past the canvas.
+fn layout_faults(name: &str, svg: &str) -> Vec<String> {
+    let mut faults = Vec::new();
+    let (w, h) = (
+        attr_of(svg, "width").unwrap_or(0.0),
+        attr_of(svg, "height").unwrap_or(0.0),
+    );
+    let tags: Vec<&str> = svg.split('<').skip(1).collect();
+    // legend boxes: the half-opaque white rectangles the legend is drawn on
+    let boxes: Vec<[f64; 4]> = tags
+        .iter()
+        .filter(|t| t.starts_with("rect ") && t.contains("opacity=\"0.85\" fill=\"#FFFFFF\""))
+        .filter_map(|t| {
+            Some([
+                attr_of(t, "x")?,
+                attr_of(t, "y")?,
+                attr_of(t, "width")?,
+                attr_of(t, "height")?,
+            ])
+        })
+        .collect();
+    let points: Vec<(f64, f64)> = tags
+        .iter()
+        .filter(|t| t.starts_with("circle class=\"pt\""))
+        .filter_map(|t| Some((attr_of(t, "cx")?, attr_of(t, "cy")?)))
+        .collect();
+    for b in &boxes {
+        // a marker reaches 5 px from its point
+        if let Some(p) = points.iter().find(|p| {
+            p.0 > b[0] - 5.0
+                && p.0 < b[0] + b[2] + 5.0
+                && p.1 > b[1] - 5.0
+                && p.1 < b[1] + b[3] + 5.0
+        }) {
+            faults.push(format!(
+                "{name}: legend box {b:?} covers the data point at {p:?}"
+            ));
+        }
+    }
+    // every text inside the canvas (its width estimated at 0.55 em a character, a sans-serif
+    // digit's width)
+    for (i, t) in tags.iter().enumerate() {
+        if !t.starts_with("text ") {
+            continue;
+        }
+        let text = t.split_once('>').map_or("", |(_, rest)| rest.trim());
+        let text = text
+            .replace("&apos;", "'")
+            .replace("&quot;", "\"")
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&amp;", "&");
+        let (Some(x), Some(y), Some(size)) =
+            (attr_of(t, "x"), attr_of(t, "y"), attr_of(t, "font-size"))
+        else {
+            continue;
+        };
+        let len = text.chars().count() as f64 * 0.55 * size;
+        let (lo, hi) = if t.contains("rotate(") {
+            (y - len / 2.0, y + len / 2.0)
+        } else if t.contains("text-anchor=\"end\"") {
+            (x - len, x)
+        } else if t.contains("text-anchor=\"middle\"") {
+            (x - len / 2.0, x + len / 2.0)
+        } else {
+            (x, x + len)
+        };
+        let room = if t.contains("rotate(") { h } else { w };
+        if lo < 0.0 || hi > room || y < 0.0 || y > h {
+            faults.push(format!(
+                "{name}: text {text:?} (tag {i}) runs past the canvas: {lo:.0}..{hi:.0} of {room}"
+            ));
+        }
+    }
+    assert!(w > 0.0 && h > 0.0, "{name}: no canvas size");
+    faults
+}
+
+#[test]
+fn no_legend_covers_a_point_and_no_label_leaves_the_canvas() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/figures");
+    let mut figs: BTreeMap<String, String> = BTreeMap::new();
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "svg") {
+            let name = format!("shipped {}", path.file_name().unwrap().to_string_lossy());
+            figs.insert(name, std::fs::read_to_string(&path).unwrap());
+        }
+    }
+    assert!(figs.len() >= 11, "the shipped figures: {:?}", figs.keys());
+    let (fixture_figs, _, _) = render(&fixture(true, true), None);
+    for (k, v) in fixture_figs
+        .into_iter()
+        .filter(|(k, _)| k.ends_with(".svg"))
+    {
+        figs.insert(format!("fixture {k}"), v);
+    }
+    let faults: Vec<String> = figs.iter().flat_map(|(k, v)| layout_faults(k, v)).collect();
+    assert!(faults.is_empty(), "{}", faults.join("\n"));
+}
+
+/// The texts of an SVG, in order.
+fn texts_of(svg: &str) -> Vec<String> {
+    svg.split("<text ")
+        .skip(1)
+        .filter_map(|t| {
+            Some(
+                t.split_once('>')?
+                    .1
+                    .split("</text>")
+                    .next()?
+                    .trim()
+                    .to_string(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_shipped_figures_draw_what_the_report_chose_and_each_tick_once() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/");
+    let read = |f: &str| std::fs::read_to_string(format!("{dir}{f}")).unwrap();
+    let md = read("report.md");
+    // the table chooses the saturating law for every material and setup; the figures draw it
+    assert_eq!(md.matches("**saturating** (chosen)").count(), 4);
+    for fig in ["figures/fig_4_4b.svg", "figures/fig_4_4c.svg"] {
+        let texts = texts_of(&read(fig));
+        for setup in ["rolling", "in contact"] {
+            let want = format!("{setup}: saturating law, chosen by the whole-run fit");
+            assert!(texts.contains(&want), "{fig}: no {want:?} in {texts:?}");
+        }
+        assert!(
+            !texts.iter().any(|t| t.contains("C = 1 −")),
+            "{fig}: {texts:?}"
+        );
+    }
+    // the μ_pp profile on a linear axis, each interval marked
+    let texts = texts_of(&read("figures/fig_mu_pp_profile.svg"));
+    assert!(
+        texts.contains(&"μ_pp (particle–particle friction)".to_string()),
+        "{texts:?}"
+    );
+    assert!(!texts.iter().any(|t| t.contains("log10")), "{texts:?}");
+    for m in ["316", "440c"] {
+        assert!(
+            texts
+                .iter()
+                .any(|t| t.starts_with(&format!("{m}: 95 % interval ["))),
+            "{m}: {texts:?}"
+        );
+    }
+    // the log axis of Fig. 4.2c (its labels end at the axis) writes each tick once
+    let svg = read("figures/fig_4_2c.svg");
+    let y_labels: Vec<&str> = svg
+        .split("<text ")
+        .filter(|t| t.contains("text-anchor=\"end\""))
+        .collect();
+    let texts = texts_of(&format!("<text {}", y_labels.join("<text ")));
+    let ticks: Vec<&String> = texts.iter().filter(|t| t.parse::<f64>().is_ok()).collect();
+    assert!(ticks.len() >= 3, "{ticks:?}");
+    let mut unique = ticks.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(ticks.len(), unique.len(), "{ticks:?}");
+}
+
+#[test]
+fn the_layout_check_catches_a_covered_point_and_a_clipped_label() {
+    let svg = r##"<svg width="100" height="50"><rect x="10" y="10" width="30" height="20" opacity="0.85" fill="#FFFFFF" stroke="none"/>
+<text x="95" y="40" text-anchor="middle" font-size="10">110.0</text>
+<circle class="pt" cx="20" cy="15" r="6"><title>run a</title></circle></svg>"##;
+    let faults = layout_faults("t", svg);
+    assert_eq!(faults.len(), 2, "{faults:?}");
+    let fine = svg
+        .replace("cx=\"20\"", "cx=\"60\"")
+        .replace("x=\"95\"", "x=\"80\"");
+    assert_eq!(layout_faults("t", &fine), Vec::<String>::new());
+}
+
 #[test]
 fn two_renders_are_byte_identical() {
     let f = fixture(true, true);
@@ -656,7 +876,10 @@ fn stage_kinds_run_through_the_contract() {
     let Artifact::Collection(items) = &out["figures"] else {
         panic!("figures is a collection")
     };
-    assert_eq!(items.len(), ALL_FIGURES.len());
+    assert_eq!(
+        items.keys().filter(|k| k.ends_with(".svg")).count(),
+        ALL_FIGURES.len()
+    );
     let mut a2 = a.clone();
     a2.insert("figures".into(), out["figures"].clone());
     let p: toml::Table = toml::from_str("source_date_epoch = 86400").unwrap();

@@ -61,6 +61,8 @@ pub struct FigureRef {
     pub name: String,
     pub caption: String,
     pub svg: String,
+    /// The file of its data points beside it (`fig_4_2c.csv`), when it has any.
+    pub data: Option<String>,
 }
 
 /// One piece of a block, in reading order.
@@ -107,10 +109,12 @@ impl Block {
     pub fn figure(&mut self, figs: &BTreeMap<String, String>, name: &str, caption: &str) -> bool {
         match figs.get(name) {
             Some(svg) => {
+                let csv = name.replace(".svg", ".csv");
                 self.items.push(Item::Figure(FigureRef {
                     name: name.into(),
                     caption: caption.into(),
                     svg: svg.clone(),
+                    data: figs.contains_key(&csv).then_some(csv),
                 }));
                 true
             }
