@@ -825,6 +825,55 @@ fn the_layout_check_catches_a_covered_point_and_a_clipped_label() {
 }
 
 #[test]
+fn sections_open_with_what_they_found_and_fold_their_statistics() {
+    let (_, html, md) = render(&fixture(true, true), None);
+    // the verdict first, under the heading, in both pages
+    for (id, start) in [
+        (
+            "summary",
+            "Discovery found missing physics and accepted: velocity dependent drag",
+        ),
+        (
+            "data",
+            "6 single-particle runs with a baseline fit and 4 collision runs",
+        ),
+        ("fig-4-2c", "The drag time T rises with |v0|"),
+        (
+            "fig-4-2d",
+            "The friction coefficient μ_pg of the runs faster than 0.03 m/s: 316 ",
+        ),
+        ("discovery", "Verdict: discovery accepted one finding."),
+    ] {
+        let at = html.find(&format!("<section id=\"{id}\">")).expect(id);
+        let after_heading = html[at..]
+            .split_once("</h")
+            .unwrap()
+            .1
+            .split_once('\n')
+            .unwrap()
+            .1;
+        assert!(
+            after_heading.starts_with(&format!("<p class=\"lead\">{start}")),
+            "{id}: {}",
+            &after_heading[..200.min(after_heading.len())]
+        );
+        assert!(md.contains(&format!("\n\n{start}")), "{id} in report.md");
+    }
+    // discovery's tables folded in the HTML page, in full in the Markdown
+    let disc = &html[html.find("<section id=\"discovery\">").unwrap()..];
+    let disc = &disc[..disc.find("</section>").unwrap()];
+    assert!(disc.matches("<table>").count() >= 2, "{disc}");
+    assert_eq!(
+        disc.matches("<details>").count(),
+        disc.matches("<table>").count()
+    );
+    assert!(disc.contains("<details>\n<summary>Every candidate tested"));
+    assert!(md.contains("*Every candidate tested: evidence and fitted size"));
+    assert!(md.contains("| 2 | groove tilt | g sin(alpha) | no |"));
+    well_formed(&html).unwrap();
+}
+
+#[test]
 fn two_renders_are_byte_identical() {
     let f = fixture(true, true);
     let a = render(&f, Some(0));

@@ -65,6 +65,7 @@ pub fn block(d: &ReportData) -> Option<Block> {
         };
         t.push(cells(label, &bin.stats));
     }
+    t.folded = true;
     b.table(t);
     Some(b)
 }

@@ -130,6 +130,18 @@ pub fn block(d: &ReportData) -> Block {
             Some("no recordings reached the report (the ingest stage's runs are empty)".into());
         return b;
     }
+    let n_coll = d.collisions.len();
+    let noise = median(d.singles.iter().filter_map(|r| r.rms_m).collect());
+    b.lead = Some(format!(
+        "{} with a baseline fit and {}, materials {}{}.",
+        crate::report::value::count(d.singles.len(), "single-particle run"),
+        crate::report::value::count(n_coll, "collision run"),
+        d.materials().join(", "),
+        noise.map_or(String::new(), |rms| format!(
+            "; the single runs' positions scatter {:.2} µm (median residual RMS) about their fits",
+            rms * 1e6
+        ))
+    ));
     b.table(runs_table(&groups));
     let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
     if !d.singles.is_empty() {

@@ -154,24 +154,25 @@ pub fn block(d: &ReportData) -> Block {
     if !t.rows.is_empty() {
         b.table(t);
     }
+    // what discovery found leads the summary
     match &d.diagnosis {
-        None => b.para("Discovery did not run for this report (no diagnosis.json)."),
+        None => b.lead = Some("Discovery did not run for this report (no diagnosis.json).".into()),
         Some(diag) => {
             let acc = accepted_findings(diag);
-            if diag.candidates.is_empty() && diag.findings.is_empty() {
-                b.para(untested(diag));
+            b.lead = Some(if diag.candidates.is_empty() && diag.findings.is_empty() {
+                untested(diag)
             } else if acc.is_empty() {
-                b.para(if diag.mismatch {
+                if diag.mismatch {
                     "Discovery located a mismatch between the baseline and the recordings but accepted no candidate physics; see section 4.".to_string()
                 } else {
                     clean(diag)
-                });
+                }
             } else {
-                b.para(format!(
+                format!(
                     "Discovery found missing physics and accepted: {}.",
                     acc.join("; ")
-                ));
-            }
+                )
+            });
             if let Some(text) = contact_warning(diag) {
                 b.para(text);
             }

@@ -226,6 +226,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             }
         }
     }
+    laws.folded = true;
     b.table(laws);
     let mut res = Table::new(
         "Pair residuals of the whole-run fits, RMS in units of the noise (mean over runs), by phase of the particle and by time since the last impact",
@@ -254,6 +255,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             }
         }
     }
+    res.folded = true;
     b.table(res);
     Some(b)
 }
