@@ -138,7 +138,7 @@ pub fn block(d: &ReportData) -> Block {
         crate::report::value::count(n_coll, "collision run"),
         d.materials().join(", "),
         noise.map_or(String::new(), |rms| format!(
-            "; the single runs' positions scatter {:.2} µm (median residual RMS) about their fits",
+            "; the single runs' positions scatter {:.2} µm about their fits (the median residual RMS of the robust baseline fits, where a few tracking outliers per run are down-weighted, not removed)",
             rms * 1e6
         ))
     ));
@@ -148,12 +148,6 @@ pub fn block(d: &ReportData) -> Block {
         b.para(format!(
             "Single runs moving in −z: {n_neg} of {}; the fits handle both directions.",
             d.singles.len()
-        ));
-    }
-    if let Some(rms) = median(d.singles.iter().filter_map(|r| r.rms_m).collect()) {
-        b.para(format!(
-            "Noise estimate: the median residual RMS of the single-run baseline fits is {:.2} µm (robust fits; a few tracking outliers per run are down-weighted, not removed).",
-            rms * 1e6
         ));
     }
     let failed = failed_singles(d);
