@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Render a report.html in headless Chromium (Debian's `chromium`, installed with apt-get when absent):
-# fail on any console error, and write a screenshot as a test artifact.
+# fail on any console error, and write screenshots as test artifacts: a desktop window 1280 px
+# wide (SCREENSHOT.png) and a narrow one 800 px wide (SCREENSHOT-800.png).
 #
 #   tests/browser.sh [REPORT.html] [SCREENSHOT.png]
 #
@@ -34,12 +35,16 @@ flags=(--headless --no-sandbox --disable-gpu --disable-quic --no-first-run
 # the page's DOM after load: proves it parsed and rendered its figures
 dom="$("$browser" "${flags[@]}" --dump-dom "$url" 2>>"$log")"
 n_svg="$(grep -o '<svg' <<<"$dom" | wc -l)"
+narrow="${shot%.png}-800.png"
 "$browser" "${flags[@]}" --window-size=1280,2400 --screenshot="$shot" "$url" 2>>"$log" >/dev/null
+"$browser" "${flags[@]}" --window-size=800,2400 --screenshot="$narrow" "$url" 2>>"$log" >/dev/null
 
 if grep -E "Uncaught|ERROR:CONSOLE" "$log" >&2; then
   echo "FAIL: console errors while rendering $html" >&2
   exit 1
 fi
-[ -s "$shot" ] || { echo "FAIL: no screenshot written to $shot" >&2; exit 1; }
+for f in "$shot" "$narrow"; do
+  [ -s "$f" ] || { echo "FAIL: no screenshot written to $f" >&2; exit 1; }
+done
 [ "$n_svg" -gt 0 ] || { echo "FAIL: the rendered page has no inline SVG figure" >&2; exit 1; }
-echo "ok: $html rendered with no console errors, $n_svg inline figures; screenshot $shot"
+echo "ok: $html rendered with no console errors, $n_svg inline figures; screenshots $shot, $narrow"

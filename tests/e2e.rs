@@ -381,8 +381,20 @@ fn the_report_and_its_figures_exist() {
         "no SVG in reports/figures"
     );
     for f in &figures {
-        let svg = read(&s.project, &format!("reports/figures/{f}"));
-        assert!(svg.contains("<svg"), "{f} is not an SVG");
+        let text = read(&s.project, &format!("reports/figures/{f}"));
+        if f.ends_with(".csv") {
+            // a figure's data points beside it
+            assert!(
+                text.starts_with("series,run,"),
+                "{f} is not a figure's data"
+            );
+            assert!(
+                figures.contains(&f.replace(".csv", ".svg")),
+                "{f} has no figure"
+            );
+        } else {
+            assert!(text.contains("<svg"), "{f} is not an SVG");
+        }
     }
     // every figure the Markdown links to is there
     let md = read(&s.project, "reports/report.md");
@@ -392,7 +404,7 @@ fn the_report_and_its_figures_exist() {
             .chars()
             .take_while(|c| c.is_alphanumeric() || "._-".contains(*c))
             .collect();
-        if name.ends_with(".svg") {
+        if name.ends_with(".svg") || name.ends_with(".csv") {
             linked += 1;
             assert!(
                 figures.contains(&name),

@@ -39,6 +39,10 @@ pub fn render(page: &Page) -> Result<String, String> {
         .map_err(|e| format!("template syntax: {e}"))?;
     env.set_syntax(syntax);
     env.set_auto_escape_callback(|_| AutoEscape::Html);
+    // every text of the page is Markdown (as report.md prints it): rendered, never shown raw
+    env.add_filter("md", |s: String| {
+        minijinja::Value::from_safe_string(super::md_html::inline(&s))
+    });
     env.add_template("report.html", TEMPLATE)
         .map_err(|e| format!("html template: {e}"))?;
     env.get_template("report.html")

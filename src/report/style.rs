@@ -10,6 +10,8 @@ pub const CAPTION_PX: u32 = 26;
 pub const LABEL_PX: u32 = 22;
 pub const TICK_PX: u32 = 19;
 pub const LEGEND_PX: u32 = 18;
+/// Room right of the plot for the last tick label of the x axis, half of it past the last tick.
+pub const MARGIN_RIGHT: u32 = 34;
 
 pub const BLACK: RGBColor = RGBColor(20, 20, 20);
 pub const GREY: RGBColor = RGBColor(120, 120, 120);

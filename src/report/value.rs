@@ -24,6 +24,15 @@ pub fn serde_name<T: serde::Serialize>(x: &T) -> String {
     }
 }
 
+/// `n` and the noun, plural unless n is 1: "1 recorded run", "3 recorded runs".
+pub fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
 /// Format a number with `digits` significant digits, plain notation where readable.
 pub fn sig(x: f64, digits: usize) -> String {
     if !x.is_finite() {

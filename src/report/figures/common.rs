@@ -15,10 +15,15 @@ pub fn render(draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res) -> Resu
         let root =
             SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        draw(&root).map_err(|e| format!("drawing a figure failed: {e}"))?;
+        super::marks::open();
+        let drawn = draw(&root).map_err(|e| format!("drawing a figure failed: {e}"));
+        if let Err(e) = drawn {
+            super::marks::close(String::new());
+            return Err(e);
+        }
         root.present().map_err(|e| e.to_string())?;
     }
-    Ok(out)
+    Ok(super::marks::close(out))
 }
 
 /// A linear chart with caption, axis descriptions (with units) and a light grid.
@@ -33,9 +38,11 @@ pub fn linear_chart<'a, 'b>(
     ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     Box<dyn std::error::Error>,
 > {
+    super::marks::axes(x_desc, y_desc);
     let mut chart = ChartBuilder::on(root)
         .caption(caption, (style::FONT, style::CAPTION_PX))
         .margin(14)
+        .margin_right(style::MARGIN_RIGHT)
         .x_label_area_size(56)
         .y_label_area_size(84)
         .build_cartesian_2d(x.0..x.1, y.0..y.1)?;
@@ -69,6 +76,24 @@ where
     scatter_sized(chart, pts, marker, colour, filled, label, 5)
 }
 
+/// `scatter` of one point per run, each point titled with its run (`runs[i]` is `pts[i]`'s).
+#[allow(clippy::too_many_arguments)]
+pub fn scatter_runs<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    runs: &[String],
+    marker: Marker,
+    colour: RGBColor,
+    filled: bool,
+    label: Option<&str>,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    draw_points(chart, pts, Some(runs), marker, colour, filled, label, 5)
+}
+
 /// `scatter` with marker radius `r` pixels (small markers for dense trajectories).
 pub fn scatter_sized<'a, 'b: 'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
@@ -83,6 +108,44 @@ where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
+    draw_points(chart, pts, None, marker, colour, filled, label, r)
+}
+
+/// Draw the points with their marker, note each (pixel, run, values) for its title and the CSV,
+/// and the label for the legend.
+#[allow(clippy::too_many_arguments)]
+fn draw_points<'a, 'b: 'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
+    pts: &[(f64, f64)],
+    runs: Option<&[String]>,
+    marker: Marker,
+    colour: RGBColor,
+    filled: bool,
+    label: Option<&str>,
+    r: i32,
+) -> Res
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let area = chart.plotting_area().get_pixel_range();
+    for (i, &(x, y)) in pts.iter().enumerate() {
+        let px = chart.backend_coord(&(x, y));
+        // a point outside the axes' ranges is not drawn (plotters clips it)
+        if !area.0.contains(&px.0) || !area.1.contains(&px.1) || !x.is_finite() || !y.is_finite() {
+            continue;
+        }
+        super::marks::add(super::marks::Mark {
+            px,
+            series: label.unwrap_or("").to_string(),
+            run: runs.and_then(|r| r.get(i)).cloned().unwrap_or_default(),
+            x,
+            y,
+        });
+    }
+    if let Some(label) = label {
+        super::marks::label(label);
+    }
     let st = if filled {
         colour.filled()
     } else {
@@ -167,6 +230,7 @@ where
         chart.draw_series(LineSeries::new(pts, st))?
     };
     if let Some(label) = label {
+        super::marks::label(label);
         // a dashed sample is two short strokes, a solid one a single stroke
         let gap = if dashed { (7, 12) } else { (18, 18) };
         anno.label(label).legend(move |(x, y)| {
@@ -178,7 +242,8 @@ where
     Ok(())
 }
 
-/// Draw the legend box in the given corner.
+/// Draw the legend box in the given corner, or, when a data point lies under it there, in the
+/// first place of the plot where none does (else where the fewest do).
 pub fn legend<'a, 'b: 'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
     pos: SeriesLabelPosition,
@@ -187,15 +252,74 @@ where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
 {
+    use SeriesLabelPosition::*;
+    let (w, h) = legend_size(&super::marks::labels())?;
+    let (base, dim) = (
+        chart.plotting_area().get_base_pixel(),
+        chart.plotting_area().dim_in_pixel(),
+    );
+    let place = |p: &SeriesLabelPosition| -> (i32, i32) {
+        let x = match p {
+            UpperLeft | MiddleLeft | LowerLeft => 5,
+            UpperMiddle | MiddleMiddle | LowerMiddle => (dim.0 as i32 - w) / 2,
+            _ => dim.0 as i32 - w - 5,
+        };
+        let y = match p {
+            UpperLeft | UpperMiddle | UpperRight => 5,
+            MiddleLeft | MiddleMiddle | MiddleRight => (dim.1 as i32 - h) / 2,
+            _ => dim.1 as i32 - h - 5,
+        };
+        (x, y)
+    };
+    let points = super::marks::drawn();
+    let covered = |(x, y): (i32, i32)| {
+        let (x0, y0) = (base.0 + x - 7, base.1 + y - 7);
+        points
+            .iter()
+            .filter(|p| p.0 >= x0 && p.0 <= x0 + w + 14 && p.1 >= y0 && p.1 <= y0 + h + 14)
+            .count()
+    };
+    let order = [
+        pos,
+        UpperRight,
+        UpperLeft,
+        LowerRight,
+        LowerLeft,
+        UpperMiddle,
+        LowerMiddle,
+        MiddleRight,
+        MiddleLeft,
+    ];
+    let spot = order
+        .iter()
+        .map(place)
+        .enumerate()
+        .min_by_key(|(i, at)| (covered(*at), *i))
+        .map(|(_, at)| at)
+        .unwrap_or((5, 5));
     chart
         .configure_series_labels()
-        .position(pos)
+        .position(Coordinate(spot.0, spot.1))
         .label_font((style::FONT, style::LEGEND_PX))
         .background_style(WHITE.mix(0.85))
         .border_style(style::GREY)
         .margin(10)
         .draw()?;
     Ok(())
+}
+
+/// The legend box's size in pixels for these labels, as plotters lays it out (label text, the
+/// 30-pixel sample area and a 10-pixel margin on each side).
+fn legend_size(labels: &[String]) -> Result<(i32, i32), Box<dyn std::error::Error>> {
+    let font: TextStyle = (style::FONT, style::LEGEND_PX).into_font().into();
+    let mut text = MultiLineText::<_, &str>::new((0, 0), &font);
+    for l in labels {
+        text.push_line(l.as_str());
+    }
+    let (w, h) = text
+        .estimate_dimension()
+        .map_err(|e| format!("legend text: {e:?}"))?;
+    Ok((w + 30 + 20, h + 20))
 }
 
 /// A padded range covering `values` (and `extra`); a sensible unit range when empty or flat.

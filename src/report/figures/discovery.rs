@@ -38,6 +38,7 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
                 (style::FONT, style::CAPTION_PX),
             )
             .margin(14)
+            .margin_right(style::MARGIN_RIGHT)
             .x_label_area_size(64)
             .y_label_area_size(84)
             .build_cartesian_2d(-0.5..n - 0.5, 0.0..y_hi.max(1e-3))?;
@@ -81,6 +82,25 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
         }))?
         .label("extended (pale: not accepted)")
         .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], style::AFTER.filled()));
+        // each bar's top is a data point: titled with its candidate, a row of the CSV
+        super::marks::axes("candidate", "cross-validated RMS of z (µm)");
+        for (series, off, v) in [("baseline", -0.18, 2), ("extended", 0.18, 3)] {
+            super::marks::label(if v == 2 {
+                series
+            } else {
+                "extended (pale: not accepted)"
+            });
+            for (i, r) in rows.iter().enumerate() {
+                let y = if v == 2 { r.2 } else { r.3 } * 1e6;
+                super::marks::add(super::marks::Mark {
+                    px: c.backend_coord(&(i as f64 + off, y)),
+                    series: series.into(),
+                    run: names[i].clone(),
+                    x: i as f64,
+                    y,
+                });
+            }
+        }
         legend(&mut c, SeriesLabelPosition::UpperRight)
     })?;
     Ok(Some(svg))

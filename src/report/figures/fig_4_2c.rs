@@ -1,7 +1,7 @@
 //! Fig. 4.2c: fitted drag time T against |v0| for each material, our regression lines, the chapter's
 //! line T = 0.052 + 1.10 v0, and the free-air Stokes time (2.2 s) on a log axis so all fit.
 
-use super::common::{legend, line, render, scatter, span};
+use super::common::{legend, line, render, scatter_runs, span};
 use crate::report::chapter;
 use crate::report::inputs::ReportData;
 use crate::report::style;
@@ -26,6 +26,22 @@ fn log_label(y: &f64) -> String {
     } else {
         String::new()
     }
+}
+
+/// The ticks of a log axis from `lo` to `hi`: 1, 2 and 5 times each power of ten, each once.
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    for e in e0..=e1 {
+        for k in [1.0, 2.0, 5.0] {
+            // the decimal text parsed back: 1e-1 * 2 prints 0.2, not 0.20000000000000001
+            let v: f64 = format!("{k}e{e}").parse().unwrap_or(f64::NAN);
+            if v >= lo && v <= hi {
+                out.push(v);
+            }
+        }
+    }
+    out
 }
 
 /// Render Fig. 4.2c, or None without single-run fits.
@@ -60,15 +76,22 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
         * 0.7;
     let y_hi = stokes * 1.6;
     let svg = render(|root| {
+        super::marks::axes("initial speed |v0| (m/s)", "fitted drag time T (s)");
         let mut c = ChartBuilder::on(root)
             .caption(
                 "Fig. 4.2c: drag time T against initial speed",
                 (style::FONT, style::CAPTION_PX),
             )
             .margin(14)
+            .margin_right(style::MARGIN_RIGHT)
             .x_label_area_size(56)
             .y_label_area_size(84)
-            .build_cartesian_2d(0.0..x_max, (y_lo..y_hi).log_scale())?;
+            .build_cartesian_2d(
+                0.0..x_max,
+                (y_lo..y_hi)
+                    .log_scale()
+                    .with_key_points(log_ticks(y_lo, y_hi)),
+            )?;
         c.configure_mesh()
             .x_desc("initial speed |v0| (m/s)")
             .y_desc("fitted drag time T (s, log scale)")
@@ -84,15 +107,17 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
                 .singles_of(m)
                 .map(|r| (r.v0_mps.value.abs(), r.t_drag_s.value))
                 .collect();
+            let runs: Vec<String> = d.singles_of(m).map(|r| r.run.clone()).collect();
             let bars: Vec<(f64, f64, f64)> = d
                 .singles_of(m)
                 .filter_map(|r| Some((r.v0_mps.value.abs(), r.t_drag_s.value, r.t_drag_s.se?)))
                 .filter(|(_, t, e)| t - e > y_lo && t + e < y_hi)
                 .collect();
             super::common::error_bars(&mut c, &bars, col)?;
-            scatter(
+            scatter_runs(
                 &mut c,
                 &pts,
+                &runs,
                 style::marker(m, false),
                 col,
                 true,
@@ -126,4 +151,17 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
         legend(&mut c, SeriesLabelPosition::MiddleLeft)
     })?;
     Ok(Some(svg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_log_tick_is_there_once() {
+        let t = log_ticks(0.035, 3.5);
+        assert_eq!(t, vec![0.05, 0.1, 0.2, 0.5, 1.0, 2.0]);
+        let labels: Vec<String> = t.iter().map(log_label).collect();
+        assert_eq!(labels, ["0.05", "0.1", "0.2", "0.5", "1", "2"]);
+    }
 }

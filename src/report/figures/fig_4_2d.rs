@@ -1,7 +1,9 @@
 //! Fig. 4.2d: fitted μ_pg against |v0| for each material, our means for |v0| > 0.03 m/s (solid) and the
 //! chapter's means (dashed).
 
-use super::common::{error_bars, legend, line, linear_chart, render, robust_span, scatter, span};
+use super::common::{
+    error_bars, legend, line, linear_chart, render, robust_span, scatter_runs, span,
+};
 use crate::report::inputs::ReportData;
 use crate::report::summary::mu_fast;
 use crate::report::{chapter, style};
@@ -56,6 +58,11 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
                 .singles_of(m)
                 .map(|r| (r.v0_mps.value.abs(), r.mu.value))
                 .collect();
+            let runs: Vec<String> = d
+                .singles_of(m)
+                .filter(|r| inside(r.mu.value))
+                .map(|r| r.run.clone())
+                .collect();
             let pts: Vec<(f64, f64)> = all.iter().copied().filter(|p| inside(p.1)).collect();
             let off = all.len() - pts.len();
             let bars: Vec<(f64, f64, f64)> = d
@@ -69,9 +76,10 @@ pub fn render_fig(d: &ReportData) -> Result<Option<String>, String> {
             } else {
                 format!("{m}: fitted μ_pg")
             };
-            scatter(
+            scatter_runs(
                 &mut c,
                 &pts,
+                &runs,
                 style::marker(m, false),
                 col,
                 true,

@@ -4,12 +4,14 @@
 
 use super::common::{legend, line, linear_chart, render, scatter, span};
 use crate::artifacts::collision_summary::LawForm;
+use crate::artifacts::summary::MaterialWholeRun;
 use crate::physics::Restitution;
 use crate::recording::Setup;
 use crate::report::chapter;
 use crate::report::inputs::ReportData;
 use crate::report::style;
 use crate::report::summary::mu_pp;
+use crate::report::value::serde_name;
 use plotters::prelude::*;
 
 /// Render Fig. 4.4a, or None without impacts that carry Δv_z and Δv_a of the target.
@@ -161,12 +163,23 @@ pub fn render_bc(
                 true,
                 Some(&format!("{material}, {setup}")),
             )?;
+            // the law the whole-run fit chose (the report's table), else the linear one
+            let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
+            let chosen = d
+                .whole_run()
+                .and_then(|w| w.materials.iter().find(|m| m.material == material))
+                .and_then(|m| law_of(m, *contact));
             let fitted = crate::report::summary::restitution_curve(d, material, *contact)
                 .map(|(a, _)| a.est.value);
-            if let Some(a) = fitted.or_else(|| restitution_slope(p)) {
+            if let Some((law, form)) = chosen {
+                let label = format!(
+                    "{setup}: {} law, chosen by the whole-run fit",
+                    serde_name(&form)
+                );
+                line(&mut c, law_curve(&law, v_hi), col, 2, false, Some(&label))?;
+            } else if let Some(a) = fitted.or_else(|| restitution_slope(p)) {
                 let label = format!("{setup}: C = 1 − {a:.2}·v");
                 // drawn over the measured speeds only, not extrapolated
-                let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
                 line(
                     &mut c,
                     vec![(0.0, 1.0), (v_hi, 1.0 - a * v_hi)],
@@ -176,16 +189,11 @@ pub fn render_bc(
                     Some(&label),
                 )?;
             }
-            if let Some(law) = accepted_law(d, material, *contact) {
-                let v_hi = p.iter().map(|q| q.0).fold(0.0, f64::max);
-                let curve: Vec<(f64, f64)> = (0..=60)
-                    .map(|i| {
-                        let v = v_hi * i as f64 / 60.0;
-                        (v, law.at(v))
-                    })
-                    .collect();
+            let accepted = crate::report::sections::under_accepted::whole_run_of(d, material)
+                .and_then(|m| law_of(m, *contact));
+            if let Some((law, _)) = accepted {
                 let label = format!("{setup}: whole-run law under the accepted physics");
-                line(&mut c, curve, col, 1, true, Some(&label))?;
+                line(&mut c, law_curve(&law, v_hi), col, 1, true, Some(&label))?;
             }
         }
         legend(&mut c, SeriesLabelPosition::LowerLeft)
@@ -193,15 +201,24 @@ pub fn render_bc(
     Ok(Some(svg))
 }
 
-/// The restitution law the whole-run fits chose for `material` and the setup when they were
-/// made again under the physics discovery accepted (`refit`), or None.
-fn accepted_law(d: &ReportData, material: &str, contact: bool) -> Option<Restitution> {
+/// `law` sampled from 0 to `v_hi` (the measured speeds only, not extrapolated).
+fn law_curve(law: &Restitution, v_hi: f64) -> Vec<(f64, f64)> {
+    (0..=60)
+        .map(|i| {
+            let v = v_hi * i as f64 / 60.0;
+            (v, law.at(v))
+        })
+        .collect()
+}
+
+/// The restitution law a material's whole-run fit chose for the setup (the baseline's fit, or
+/// the one made again under the physics discovery accepted), and its form; None without one.
+fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)> {
     let setup = if contact {
         Setup::Contact
     } else {
         Setup::Rolling
     };
-    let m = crate::report::sections::under_accepted::whole_run_of(d, material)?;
     let choice = m.restitution.iter().find(|c| c.setup == setup)?;
     let cand = choice.chosen_candidate()?;
     let p = cand.ordered();
@@ -211,5 +228,5 @@ fn accepted_law(d: &ReportData, material: &str, contact: bool) -> Option<Restitu
         (_, Some((_, e))) => e.value,
         (_, None) => 0.0,
     };
-    Some(cand.form.law(a, b))
+    Some((cand.form.law(a, b), cand.form))
 }

@@ -10,6 +10,7 @@
 //! - `fig_4_3.rs`: Figs. 4.3c–d: striker and target trajectories
 //! - `fig_4_4.rs`: Figs. 4.4a–c: spin change against velocity change, restitution
 //! - `forcemap.rs`: force-map figures
+//! - `marks.rs`: The data points of a figure: titles, CSV rows, the legend's place
 //! - `mu_pp_profile.rs`: The profile of μ_pp beside Fig. 4.4a
 //! - `secondary.rs`: The secondary-collision factor
 
@@ -21,6 +22,7 @@ pub mod fig_4_2d;
 pub mod fig_4_3;
 pub mod fig_4_4;
 pub mod forcemap;
+pub mod marks;
 pub mod mu_pp_profile;
 pub mod secondary;
 
@@ -76,7 +78,8 @@ pub fn restitution_name(material: &str) -> (String, String) {
     }
 }
 
-/// Render every figure the data allows, by file name (`fig_4_2b.svg` → SVG text). Parts without data
+/// Render every figure the data allows, by file name (`fig_4_2b.svg` → SVG text, and
+/// `fig_4_2b.csv` → its data points when it has any). Parts without data
 /// (no collision runs, no diagnosis) are simply absent; the report says why.
 pub fn render_all(
     d: &ReportData,
@@ -84,8 +87,12 @@ pub fn render_all(
 ) -> Result<BTreeMap<String, String>, String> {
     let g = d.groove;
     let mut out = BTreeMap::new();
+    // each figure's data points beside it, as `<name>.csv`
     let mut put = |name: &str, svg: Option<String>| {
         if let Some(s) = svg {
+            if let Some(csv) = marks::csv_of(&s) {
+                out.insert(name.replace(".svg", ".csv"), csv);
+            }
             out.insert(name.to_string(), s);
         }
     };

@@ -116,6 +116,19 @@ fn fig_4_2c_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         return b;
     }
     let stokes = ch::stokes_time_s(ch::RADIUS_M, ch::DENSITY_KG_M3, ch::AIR_VISCOSITY_PA_S);
+    if let Some((a, s)) = t_line(d, None) {
+        let trend = if s.est.value > 0.0 { "rises" } else { "falls" };
+        b.lead = Some(format!(
+            "The drag time T {trend} with |v0|: T = {} s + {} s per m/s · |v0| over all runs, against the chapter's 0.052 + 1.10·v0{}.",
+            crate::report::value::pm(a.est),
+            crate::report::value::pm(s.est),
+            if a.est.value * 10.0 < stokes {
+                format!("; far below the {stokes:.1} s of drag in free air")
+            } else {
+                String::new()
+            }
+        ));
+    }
     b.para(format!(
         "The Stokes time of a 150 µm steel sphere in free air is m/(6πηR) = {stokes:.1} s (ρ = 7900 kg/m³, η = 1.81e-5 Pa·s). The chapter's 0.074 s is wrong: it is what its own line T = 0.052 + 1.10·v0 gives at v0 = 0.02 m/s. The measured T is some 40× shorter, so the dissipation is not free-air drag."
     ));
@@ -167,6 +180,21 @@ fn fig_4_2d_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     if !b.figure(figs, "fig_4_2d.svg", "Fig. 4.2d: fitted μ_pg per run against |v0|; solid lines our means for |v0| > 0.03 m/s (dotted vertical line), dashed lines the chapter's.") {
         b.missing = Some("no single runs with a converged fit in this dataset".into());
         return b;
+    }
+    let fast: Vec<String> = d
+        .materials()
+        .iter()
+        .filter_map(|m| {
+            let a = mu_fast(d, m)?;
+            let chv = ch::mu_for(m).map_or(String::new(), |v| format!(" (chapter {v:.3})"));
+            Some(format!("{m} {}{chv}", crate::report::value::pm(a.est)))
+        })
+        .collect();
+    if !fast.is_empty() {
+        b.lead = Some(format!(
+            "The friction coefficient μ_pg of the runs faster than 0.03 m/s: {}.",
+            fast.join(", ")
+        ));
     }
     let mut t = table(d, "Fig. 4.2d: μ_pg per material", &["material", "quantity"]);
     for m in d.materials() {

@@ -158,7 +158,7 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     let mut any = false;
     for m in &mats {
         let (name, fig) = restitution_name(m);
-        any |= b.figure(figs, &name, &format!("Fig. {fig}: C = (v2' − v1')/(v1 − v2) against impact speed for {m}, rolling pairs and pairs initially in contact; lines C = 1 − a·v."));
+        any |= b.figure(figs, &name, &format!("Fig. {fig}: C = (v2' − v1')/(v1 − v2) against impact speed for {m}, rolling pairs and pairs initially in contact; solid lines: the law each setup's whole-run fit chose (the table of 3.5.1), or C = 1 − a·v without a whole-run fit."));
     }
     if !any {
         b.missing = Some(NO_COLLISIONS.into());

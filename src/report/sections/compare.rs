@@ -30,8 +30,8 @@ pub fn block(d: &ReportData) -> Option<Block> {
         "3.4.1 Residuals of the collision fits by phase and by time since impact",
     );
     b.para(format!(
-        "The compare stage pools the residuals of the {} collision runs' piecewise fits (both particles, each piece re-simulated from its fitted start state; outlier frames left out) by the phase of the fitted motion and by the time since the last fitted impact. A group whose RMS or autocorrelation stands out is where the pieces and the impact rule miss something.",
-        pairs.n_runs
+        "The compare stage pools the residuals of the piecewise fits of {} (both particles, each piece re-simulated from its fitted start state; outlier frames left out) by the phase of the fitted motion and by the time since the last fitted impact. A group whose RMS or autocorrelation stands out is where the pieces and the impact rule miss something.",
+        crate::report::value::count(pairs.n_runs, "collision run")
     ));
     let mut t = Table::new(
         "Residuals of the per-run collision fits (compare stage): by phase, then by time since the last impact",
@@ -65,6 +65,7 @@ pub fn block(d: &ReportData) -> Option<Block> {
         };
         t.push(cells(label, &bin.stats));
     }
+    t.folded = true;
     b.table(t);
     Some(b)
 }

@@ -130,19 +130,24 @@ pub fn block(d: &ReportData) -> Block {
             Some("no recordings reached the report (the ingest stage's runs are empty)".into());
         return b;
     }
+    let n_coll = d.collisions.len();
+    let noise = median(d.singles.iter().filter_map(|r| r.rms_m).collect());
+    b.lead = Some(format!(
+        "{} with a baseline fit and {}, materials {}{}.",
+        crate::report::value::count(d.singles.len(), "single-particle run"),
+        crate::report::value::count(n_coll, "collision run"),
+        d.materials().join(", "),
+        noise.map_or(String::new(), |rms| format!(
+            "; the single runs' positions scatter {:.2} µm about their fits (the median residual RMS of the robust baseline fits, where a few tracking outliers per run are down-weighted, not removed)",
+            rms * 1e6
+        ))
+    ));
     b.table(runs_table(&groups));
     let n_neg = d.singles.iter().filter(|r| r.v0_mps.value < 0.0).count();
     if !d.singles.is_empty() {
         b.para(format!(
-            "{} of {} single runs move in −z; the fits handle both directions.",
-            n_neg,
+            "Single runs moving in −z: {n_neg} of {}; the fits handle both directions.",
             d.singles.len()
-        ));
-    }
-    if let Some(rms) = median(d.singles.iter().filter_map(|r| r.rms_m).collect()) {
-        b.para(format!(
-            "Noise estimate: the median residual RMS of the single-run baseline fits is {:.2} µm (robust fits; a few tracking outliers per run are down-weighted, not removed).",
-            rms * 1e6
         ));
     }
     let failed = failed_singles(d);

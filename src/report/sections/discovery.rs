@@ -509,16 +509,14 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     let mismatch = diag.mismatch;
     let accepted: Vec<&Finding> = diag.findings.iter().filter(|f| f.accepted).collect();
     if diag.candidates.is_empty() && diag.findings.is_empty() {
-        b.para(if diag.note.is_empty() {
+        b.lead = Some(if diag.note.is_empty() {
             "Discovery tested nothing on this dataset, so nothing can be said about missing physics.".to_string()
         } else {
-            format!("{}.", diag.note.trim_end_matches('.'))
+            format!("{}.", capitalize(diag.note.trim_end_matches('.')))
         });
         return b;
     }
-    if let Some(v) = super::verdict::verdict(diag) {
-        b.para(v);
-    }
+    b.lead = super::verdict::verdict(diag);
     b.para(if mismatch {
         "The baseline misses systematically: the per-run fits and residuals, pooled over runs, show structure beyond the noise."
     } else {
@@ -636,12 +634,14 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         Some(f) => format!("Comparison with the chapter's correction (Eq. 4.8): {}", compare_with_eq_4_8(d, f)),
         None => "Comparison with the chapter's correction (Eq. 4.8): with nothing accepted there is no extended model to compare; Eq. 4.8's v/T0 − v²/L is in any case unphysical above L/T0 ≈ 48 mm/s (see the audit).".into(),
     });
+    // the statistics behind the verdict, in full in report.md and diagnosis.json
+    b.fold_tables();
     b
 }
 
 /// "a groove tilt above 0.02 ° would have been found", one per form, from the last round that
 /// tested it.
-fn detection_limits(diag: &Diagnosis) -> Vec<String> {
+pub fn detection_limits(diag: &Diagnosis) -> Vec<String> {
     let mut by_form: BTreeMap<String, String> = BTreeMap::new();
     let mut order: Vec<String> = Vec::new();
     for c in &diag.candidates {

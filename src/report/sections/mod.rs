@@ -40,6 +40,9 @@ pub struct Table {
     pub caption: String,
     pub headers: Vec<String>,
     pub rows: Vec<Vec<String>>,
+    /// A table of statistics behind a finding: folded under its caption in HTML (`<details>`),
+    /// in full in the Markdown.
+    pub folded: bool,
 }
 
 impl Table {
@@ -48,6 +51,7 @@ impl Table {
             caption: caption.into(),
             headers: headers.iter().map(|h| h.to_string()).collect(),
             rows: Vec::new(),
+            folded: false,
         }
     }
     pub fn push(&mut self, cells: Vec<String>) {
@@ -61,6 +65,8 @@ pub struct FigureRef {
     pub name: String,
     pub caption: String,
     pub svg: String,
+    /// The file of its data points beside it (`fig_4_2c.csv`), when it has any.
+    pub data: Option<String>,
 }
 
 /// One piece of a block, in reading order.
@@ -77,6 +83,8 @@ pub enum Item {
 pub struct Block {
     pub id: String,
     pub heading: String,
+    /// What the part found, in one or two sentences: printed first, under the heading.
+    pub lead: Option<String>,
     pub items: Vec<Item>,
     /// Why this part has no figure or numbers (e.g. "no collision runs in this dataset").
     pub missing: Option<String>,
@@ -96,6 +104,14 @@ impl Block {
     pub fn table(&mut self, t: Table) {
         self.items.push(Item::Table(t));
     }
+    /// Fold every table of this block (statistics behind its lead) in the HTML page.
+    pub fn fold_tables(&mut self) {
+        for i in &mut self.items {
+            if let Item::Table(t) = i {
+                t.folded = true;
+            }
+        }
+    }
     /// The figures of this block.
     pub fn figures_mut(&mut self) -> impl Iterator<Item = &mut FigureRef> {
         self.items.iter_mut().filter_map(|i| match i {
@@ -107,10 +123,12 @@ impl Block {
     pub fn figure(&mut self, figs: &BTreeMap<String, String>, name: &str, caption: &str) -> bool {
         match figs.get(name) {
             Some(svg) => {
+                let csv = name.replace(".svg", ".csv");
                 self.items.push(Item::Figure(FigureRef {
                     name: name.into(),
                     caption: caption.into(),
                     svg: svg.clone(),
+                    data: figs.contains_key(&csv).then_some(csv),
                 }));
                 true
             }

@@ -5,7 +5,7 @@ use crate::artifacts::diagnosis::CONTACT_NOT_PHYSICS;
 use crate::artifacts::Diagnosis;
 use crate::report::inputs::ReportData;
 use crate::report::summary::{mu_fast, mu_pp, t_line, Agg};
-use crate::report::value::pm;
+use crate::report::value::{count, pm};
 
 /// `value ± se [lo, hi]` of an aggregate.
 pub fn agg_text(a: &Agg) -> String {
@@ -48,9 +48,15 @@ pub fn block(d: &ReportData) -> Block {
     let n_coll = d.collisions.len();
     let mats = d.materials();
     b.para(format!(
-        "Analysed {} recorded runs: {n_single} single-particle runs with a baseline fit and {n_coll} collision runs, materials {}.",
-        d.recordings.len().max(n_single + n_coll),
-        if mats.is_empty() { "none".to_string() } else { mats.join(", ") }
+        "Analysed {}: {} with a baseline fit and {}, materials {}.",
+        count(d.recordings.len().max(n_single + n_coll), "recorded run"),
+        count(n_single, "single-particle run"),
+        count(n_coll, "collision run"),
+        if mats.is_empty() {
+            "none".to_string()
+        } else {
+            mats.join(", ")
+        }
     ));
     let mut t = Table::new("Key parameters (± standard error, [bootstrap interval] where the aggregate stage gives one)", &[
         "quantity", "ours", "chapter", "source",
@@ -148,28 +154,65 @@ pub fn block(d: &ReportData) -> Block {
     if !t.rows.is_empty() {
         b.table(t);
     }
+    // what discovery found leads the summary
     match &d.diagnosis {
-        None => b.para("Discovery did not run for this report (no diagnosis.json)."),
+        None => b.lead = Some("Discovery did not run for this report (no diagnosis.json).".into()),
         Some(diag) => {
             let acc = accepted_findings(diag);
-            if acc.is_empty() {
-                b.para(if diag.mismatch {
-                    "Discovery located a mismatch between the baseline and the recordings but accepted no candidate physics; see section 4."
+            b.lead = Some(if diag.candidates.is_empty() && diag.findings.is_empty() {
+                untested(diag)
+            } else if acc.is_empty() {
+                if diag.mismatch {
+                    "Discovery located a mismatch between the baseline and the recordings but accepted no candidate physics; see section 4.".to_string()
                 } else {
-                    "Discovery found nothing missing: the baseline (Coulomb friction plus linear drag) explains the recordings within their noise."
-                });
+                    clean(diag)
+                }
             } else {
-                b.para(format!(
+                format!(
                     "Discovery found missing physics and accepted: {}.",
                     acc.join("; ")
-                ));
-            }
+                )
+            });
             if let Some(text) = contact_warning(diag) {
                 b.para(text);
             }
         }
     }
     b
+}
+
+/// The summary of a discovery that tested nothing (too few runs): it says so, and why.
+fn untested(diag: &Diagnosis) -> String {
+    let note = diag.note.trim().trim_end_matches('.');
+    if note.is_empty() {
+        "Discovery tested nothing on this dataset, so nothing can be said about missing physics; see section 4.".into()
+    } else {
+        let mut c = note.chars();
+        let first: String = c.next().into_iter().flat_map(char::to_uppercase).collect();
+        format!("{first}{}; see section 4.", c.as_str())
+    }
+}
+
+/// The summary of a clean discovery: nothing found, within the detection limits it had on these
+/// runs (its power), or with no limit to give.
+fn clean(diag: &Diagnosis) -> String {
+    let limits = super::discovery::detection_limits(diag);
+    let runs = count(diag.runs_used, "single run");
+    if limits.is_empty() {
+        format!("Discovery found nothing missing in {runs}, but gave no detection limit, so how small a missing term it could have missed is not known; see section 4.")
+    } else {
+        let sizes: Vec<&str> = limits
+            .iter()
+            .map(|l| l.trim_end_matches(" would have been found"))
+            .collect();
+        let list = match sizes.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => sizes.join(""),
+        };
+        format!(
+            "Discovery found nothing missing in {runs}: the baseline (Coulomb friction plus linear drag) explains the recordings within their noise; it would have found {list} (its detection limits, section 4)."
+        )
+    }
 }
 
 /// A warning when the pair test found the pairs touching at another distance than the diameter

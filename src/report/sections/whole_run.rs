@@ -151,7 +151,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     b.figure(
         figs,
         "fig_mu_pp_profile.svg",
-        "μ_pp profile: square root of the whole-run fit's deviance above its best (divided by the larger of the run dispersion and the residuals' scale times their serial-correlation factor), μ_pp held at each value (clipped at 12); dashed: the 95 % level and the chapter's 1.4.",
+        "μ_pp profile: square root of the whole-run fit's deviance above its best (divided by the larger of the run dispersion and the residuals' scale times their serial-correlation factor), μ_pp held at each value (clipped at 12), on a linear μ_pp axis around the minimum; shaded, with a bar on the axis: each material's 95 % interval; dashed: the 95 % level and the chapter's 1.4 (where it lies on the axis).",
     );
     let mut t = Table::new(
         "Whole-run fits per material",
@@ -226,6 +226,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             }
         }
     }
+    laws.folded = true;
     b.table(laws);
     let mut res = Table::new(
         "Pair residuals of the whole-run fits, RMS in units of the noise (mean over runs), by phase of the particle and by time since the last impact",
@@ -254,6 +255,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             }
         }
     }
+    res.folded = true;
     b.table(res);
     Some(b)
 }
