@@ -15,6 +15,7 @@
 //! A physical misfit left in the runs' own fits raises κ a little, which makes every test a
 //! little more cautious, never less.
 
+use crate::lsq::dense::{orthonormal_basis, project_out};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -111,44 +112,17 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// An orthonormal basis (Gram–Schmidt, twice) of the columns.
-fn basis(cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let mut q: Vec<Vec<f64>> = Vec::new();
-    for c in cols {
-        let mut x = c.clone();
-        let norm0 = dot(&x, &x).sqrt();
-        if !(norm0 > 0.0) {
-            continue;
-        }
-        for _ in 0..2 {
-            for qi in &q {
-                let p = dot(qi, &x);
-                x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
-            }
-        }
-        let norm = dot(&x, &x).sqrt();
-        if norm > 1e-9 * norm0 {
-            x.iter_mut().for_each(|a| *a /= norm);
-            q.push(x);
-        }
-    }
-    q
-}
-
 /// The probes of one run: its slowest cosines with its fit's columns projected out.
 fn probes(s: &Series, rhos: &[f64]) -> Vec<Probe> {
     let n = s.y.len();
     let k_max = PROBES.min(n / SAMPLES_PER_PROBE);
-    let q = basis(&s.cols);
+    let q = orthonormal_basis(s.cols.clone());
     (1..=k_max)
         .filter_map(|k| {
             let mut u: Vec<f64> = (0..n)
                 .map(|i| (std::f64::consts::PI * k as f64 * (i as f64 + 0.5) / n as f64).cos())
                 .collect();
-            for qi in &q {
-                let p = dot(qi, &u);
-                u.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
-            }
+            project_out(&q, &mut u);
             let norm = dot(&u, &u).sqrt();
             if !(norm > 1e-6 * (n as f64).sqrt()) {
                 return None;
@@ -247,10 +221,7 @@ mod tests {
                         .collect(),
                 ];
                 let mut y = replicate(n, 0.3, slow, &mut rng);
-                for qi in basis(&cols) {
-                    let p = dot(&qi, &y);
-                    y.iter_mut().zip(&qi).for_each(|(a, b)| *a -= p * b);
-                }
+                project_out(&orthonormal_basis(cols.clone()), &mut y);
                 Series {
                     y,
                     cols,

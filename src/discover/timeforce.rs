@@ -15,6 +15,7 @@
 
 use super::data::{RunData, N_LOCAL};
 use super::sim::SimModel;
+use crate::lsq::dense::{orthonormal_basis, project_out};
 use crate::physics::Term;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -22,38 +23,6 @@ fn simulate(m: &SimModel, l: &[f64; N_LOCAL], tt: &[f64]) -> Vec<f64> {
     let mut z = vec![0.0; tt.len()];
     m.simulate(l[0], l[2], tt, &mut z, None, None);
     z
-}
-
-/// An orthonormal basis (Gram–Schmidt, twice) of the run's local columns at its kept samples.
-fn local_basis(cols: [Vec<f64>; 3]) -> Vec<Vec<f64>> {
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let mut q: Vec<Vec<f64>> = Vec::new();
-    for mut x in cols {
-        let norm0 = dot(&x, &x).sqrt();
-        if !(norm0 > 0.0) {
-            continue;
-        }
-        for _ in 0..2 {
-            for qi in &q {
-                let p = dot(qi, &x);
-                x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
-            }
-        }
-        let norm = dot(&x, &x).sqrt();
-        if norm > 1e-9 * norm0 {
-            x.iter_mut().for_each(|a| *a /= norm);
-            q.push(x);
-        }
-    }
-    q
-}
-
-/// `x` with its components along the orthonormal `basis` removed.
-fn project_out(basis: &[Vec<f64>], x: &mut [f64]) {
-    for qi in basis {
-        let p: f64 = qi.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
-        x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
-    }
 }
 
 /// Sum of squares of `e − cos φ·s − sin φ·c` from the sums (ss, sc, cc, es, ec).
@@ -140,7 +109,7 @@ fn run_columns(
     let dv = 1e-6 * l[2].abs().max(1e-3);
     let zv = simulate(&without, &[l[0], l[1], l[2] + dv], &tt);
     let kept: Vec<usize> = (0..tt.len()).filter(|&i| run.keep[i]).collect();
-    let basis = local_basis([
+    let basis = orthonormal_basis(vec![
         vec![1.0; kept.len()],
         kept.iter().map(|&i| v[i]).collect(),
         kept.iter().map(|&i| (zv[i] - z0[i]) / dv).collect(),

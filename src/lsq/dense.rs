@@ -1,6 +1,40 @@
 //! The dense back-end: Cholesky factor, solve and inverse of small symmetric positive-definite
 //! systems stored row-major (n×n in one slice), and the normal equations of a Jacobian stored by
-//! columns. A matrix that is not positive definite gives `None`; nothing here invents a factor.
+//! columns; an orthonormal basis of a few columns and the projection off it. A matrix that is
+//! not positive definite gives `None`; nothing here invents a factor.
+
+/// An orthonormal basis of `cols` (Gram–Schmidt, twice): a column that is zero, or within 1e-9
+/// of its norm in the span of those before it, adds nothing.
+pub fn orthonormal_basis(cols: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let mut q: Vec<Vec<f64>> = Vec::new();
+    for mut x in cols {
+        let norm0 = dot(&x, &x).sqrt();
+        if !(norm0 > 0.0) {
+            continue;
+        }
+        for _ in 0..2 {
+            for qi in &q {
+                let p = dot(qi, &x);
+                x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+            }
+        }
+        let norm = dot(&x, &x).sqrt();
+        if norm > 1e-9 * norm0 {
+            x.iter_mut().for_each(|a| *a /= norm);
+            q.push(x);
+        }
+    }
+    q
+}
+
+/// `x` with its components along the orthonormal `basis` removed.
+pub fn project_out(basis: &[Vec<f64>], x: &mut [f64]) {
+    for qi in basis {
+        let p: f64 = qi.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+        x.iter_mut().zip(qi).for_each(|(a, b)| *a -= p * b);
+    }
+}
 
 /// Cholesky factor L (lower, row-major) of a symmetric positive-definite matrix, or None.
 pub fn cholesky(a: &[f64], n: usize) -> Option<Vec<f64>> {
