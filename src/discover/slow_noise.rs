@@ -10,8 +10,9 @@
 //! measured on each run's own fit (its μ, T, z0, t0, v0 free, so a misfit that a run's own μ
 //! and T take up is not read as noise): the residual's projections on a run's slowest cosines,
 //! with the fit's columns projected out of them, have expectations `A + κ·B(ρ_s)` (`cross`);
-//! κ is the maximum of the Gaussian quasi-likelihood over a grid of ρ_s, and is kept only when
-//! it beats κ = 0 by the χ²₂ 1 % point, so a white or AR(1) noise keeps exactly its old model.
+//! κ and ρ_s maximise the Gaussian quasi-likelihood (a grid of time constants from 8 samples,
+//! refined between its points), and κ is kept only when it beats κ = 0 by the χ²₂ 1 % point, so
+//! a white or AR(1) noise keeps exactly its old model.
 //! A physical misfit left in the runs' own fits raises κ a little, which makes every test a
 //! little more cautious, never less.
 
@@ -161,7 +162,7 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
     let l0 = loglik(&ps, 0, 0.0);
     let mut best = (Slow::default(), 0.0);
     for (j, &rho) in rhos.iter().enumerate() {
-        // κ on a log scale from a hundredth of the white variance to 10⁶ of it
+        // κ on a log scale from a hundredth of each run's σ² to 10⁶ of it
         let f = |s: f64| -loglik(&ps, j, s.exp());
         let s = crate::lsq::golden::minimize(f, (1e-2f64).ln(), (1e6f64).ln(), 60);
         let lr = 2.0 * (loglik(&ps, j, s.exp()) - l0);
