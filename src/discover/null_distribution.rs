@@ -161,7 +161,7 @@ mod tests {
 
     /// A statistic far from zero with a narrow spread (a force in time with a phase per run:
     /// (Σ|b_r|)²/Σa_r over 96 runs, one Rayleigh draw each) gets a law as narrow as its
-    /// replicates when its degrees of freedom say so (`Extra::null_df`: two per run); bounded
+    /// replicates when its degrees of freedom say so (`Form::null_df`: two per run); bounded
     /// by two, the law's tail at a real signal's statistic was a hundred times too heavy.
     #[test]
     fn a_statistic_of_one_rayleigh_draw_per_run_keeps_its_narrow_law() {

@@ -446,8 +446,9 @@ pub fn discover_reporting(
             runs.len(),
             materials,
             &format!(
-                "discovery did not run: {} single runs with at least {} frames, fewer than the {} a joint model with {}-fold cross-validation needs; nothing was tested, so nothing can be said about missing physics",
+                "discovery did not run: {} single run{} with at least {} frames, fewer than the {} a joint model with {}-fold cross-validation needs; nothing was tested, so nothing can be said about missing physics",
                 runs.len(),
+                if runs.len() == 1 { "" } else { "s" },
                 opts.min_frames,
                 2 * opts.folds.max(2),
                 opts.folds
@@ -690,6 +691,19 @@ mod tests {
         crate::ingest::ingest(&files, &crate::ingest::IngestParams::default())
             .unwrap()
             .recordings
+    }
+
+    #[test]
+    fn too_few_runs_say_so_with_the_count_in_words() {
+        let recs = null_small();
+        let singles: Vec<Recording> = recs
+            .into_iter()
+            .filter(|r| r.info.experiment == crate::recording::Experiment::Single)
+            .collect();
+        for (n, want) in [(1, "1 single run with"), (3, "3 single runs with")] {
+            let d = discover(&singles[..n], &Options::default());
+            assert!(d.note.contains(want), "{n} runs: {}", d.note);
+        }
     }
 
     /// A named term's null law is computed from its columns and the noise model, and is the law
