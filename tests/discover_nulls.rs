@@ -15,10 +15,8 @@ mod indsim;
 mod bed;
 
 use bed::draw::{case, Size};
+use bed::in_process::discover_case;
 use bed::score::accepted;
-use groove::discover::{discover, Options};
-use groove::ingest::{ingest, IngestParams};
-use std::collections::BTreeMap;
 
 /// 12 single runs per material of 50 ms.
 const SIZE: Size = Size {
@@ -30,22 +28,7 @@ const SIZE: Size = Size {
 fn accepted_on_null(seed: u64, noise: &str) -> Vec<String> {
     let c = case(seed, SIZE, noise, &[], false);
     assert!(c.truths.is_empty(), "a case drawn with no shapes is a null");
-    let dir = tempfile::tempdir().unwrap();
-    indsim::writer::write_dataset(dir.path(), &c.spec.render(false)).unwrap();
-    let mut files = BTreeMap::new();
-    for f in ["runs.csv", "trajectories.csv"] {
-        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
-    }
-    let recordings = ingest(&files, &IngestParams::default())
-        .expect("an indsim dataset ingests")
-        .recordings;
-    let d = discover(
-        &recordings,
-        &Options {
-            seed,
-            ..Options::default()
-        },
-    );
+    let d = discover_case(&c, seed);
     let said = |a: &bed::score::Accepted| {
         // the particle check's own words (its ratio and p), for the failure message
         let why = d

@@ -14,11 +14,9 @@ mod indsim;
 mod bed;
 
 use bed::draw::{case, Size};
+use bed::in_process::discover_case;
 use bed::score::{accepted, names, score};
 use bed::shapes::SHAPES;
-use groove::discover::{discover, Options};
-use groove::ingest::{ingest, IngestParams};
-use std::collections::BTreeMap;
 
 /// 12 single runs per material of 50 ms.
 const SIZE: Size = Size {
@@ -37,22 +35,7 @@ fn shape(name: &str) -> usize {
 /// what it accepted (place/effect: form) and whether that names the truth alone.
 fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, Vec<String>) {
     let c = case(seed, SIZE, noise, &[(shape(name), multiple)], false);
-    let dir = tempfile::tempdir().unwrap();
-    indsim::writer::write_dataset(dir.path(), &c.spec.render(false)).unwrap();
-    let mut files = BTreeMap::new();
-    for f in ["runs.csv", "trajectories.csv"] {
-        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
-    }
-    let recordings = ingest(&files, &IngestParams::default())
-        .expect("an indsim dataset ingests")
-        .recordings;
-    let d = discover(
-        &recordings,
-        &Options {
-            seed,
-            ..Options::default()
-        },
-    );
+    let d = discover_case(&c, seed);
     let found = accepted(&serde_json::to_string(&d).unwrap()).unwrap();
     let mut said: Vec<String> = found
         .iter()

@@ -5,6 +5,7 @@
 pub mod cli;
 pub mod dataset;
 pub mod draw;
+pub mod in_process;
 pub mod limit;
 pub mod pipeline;
 pub mod score;

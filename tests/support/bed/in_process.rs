@@ -1,0 +1,29 @@
+//! One drawn case through ingest and discovery in this process (no `groove run`): the tests that
+//! fix a seed use it, the bench runs the whole pipeline instead (`pipeline.rs`).
+
+use super::draw::Case;
+use crate::indsim::writer::write_dataset;
+use groove::discover::{discover, Diagnosis, Options};
+use groove::ingest::{ingest, IngestParams};
+use std::collections::BTreeMap;
+
+/// The case's dataset written in the interchange format, ingested as any dataset is, and
+/// discovered with the default options and `seed`.
+pub fn discover_case(c: &Case, seed: u64) -> Diagnosis {
+    let dir = tempfile::tempdir().unwrap();
+    write_dataset(dir.path(), &c.spec.render(false)).unwrap();
+    let mut files = BTreeMap::new();
+    for f in ["runs.csv", "trajectories.csv"] {
+        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
+    }
+    let recordings = ingest(&files, &IngestParams::default())
+        .expect("an indsim dataset ingests")
+        .recordings;
+    discover(
+        &recordings,
+        &Options {
+            seed,
+            ..Options::default()
+        },
+    )
+}
