@@ -528,7 +528,7 @@ impl Trials<'_> {
             self.round,
             self.all[s].effect().unwrap_or("probe")
         ));
-        let runs_s = runs_under(&self.fitted[s], self.set);
+        let runs_s = runs_under(&self.fitted[s], self.set.runs);
         let set_s = Setting {
             runs: runs_s.as_deref().unwrap_or(self.set.runs),
             ..*self.set
@@ -693,23 +693,18 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
 /// The runs with the slow tracking noise read under `model` (None for the baseline, whose runs
 /// carry it): a misfit that the model's terms explain no longer counts as noise, so each model
 /// is judged against the noise its own fit leaves.
-fn runs_under(model: &Model, set: &Setting) -> Option<Vec<RunData>> {
+pub fn runs_under(model: &Model, runs: &[RunData]) -> Option<Vec<RunData>> {
     if model.spec.extras.is_empty() {
         return None;
     }
     let slow = super::perrun::slow_noise_under(
-        set.runs,
+        runs,
         &model.spec,
         &model.params,
         &model.fit.global,
         &model.fit.local,
     );
-    Some(
-        set.runs
-            .iter()
-            .map(|r| RunData { slow, ..r.clone() })
-            .collect(),
-    )
+    Some(runs.iter().map(|r| RunData { slow, ..r.clone() }).collect())
 }
 
 /// Test `entries` (candidate terms) and `probes` against `current`: screen all, fit the
@@ -728,7 +723,7 @@ pub fn run_round(
     let all: Vec<&Extra> = entries.iter().chain(probes).collect();
     let ne = entries.len();
     let clock = std::time::Instant::now();
-    let runs_here = runs_under(current, set);
+    let runs_here = runs_under(current, set.runs);
     let set = &Setting {
         runs: runs_here.as_deref().unwrap_or(set.runs),
         ..*set

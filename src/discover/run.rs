@@ -6,7 +6,7 @@ use super::data::{prepare_runs, RunData};
 use super::findings::{drift_of, findings_of, model_parameters};
 use super::forcemap::ForceMap;
 use super::forms;
-use super::forward::{fold_of, median_speed, run_round, LazyProposals, Round, Setting};
+use super::forward::{fold_of, median_speed, run_round, runs_under, LazyProposals, Round, Setting};
 use super::locate::locate;
 use super::model::Model;
 use super::perrun::{measure_noise, PerRunFit};
@@ -498,14 +498,7 @@ pub fn discover_reporting(
     // a spread that tracks the runs' speed or direction is physics the model lacks, which the
     // drift probes flag; particles that differ are independent of how hard they were kicked
     // the slow noise under the final model: what its terms explain is no longer noise
-    let runs_final: Vec<RunData> = if sel.current.spec.extras.is_empty() {
-        runs.clone()
-    } else {
-        let m = &sel.current;
-        let slow =
-            super::perrun::slow_noise_under(&runs, &m.spec, &m.params, &m.fit.global, &m.fit.local);
-        runs.iter().map(|r| RunData { slow, ..r.clone() }).collect()
-    };
+    let runs_final = runs_under(&sel.current, &runs).unwrap_or_else(|| runs.clone());
     let drift_left = !sel.unexplained.is_empty()
         || sel
             .last_probes

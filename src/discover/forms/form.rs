@@ -257,3 +257,18 @@ pub fn as_fitted(form: &dyn Form, f: &Fitted) -> BTreeMap<String, Estimate> {
         .map(|(k, p)| (p.name.clone(), Estimate::new(f.x[k], f.se[k])))
         .collect()
 }
+
+/// A drag form's parameters as fitted, with each material's drag time beside them under its
+/// `drag_time_name` (`t_s` when the form leaves T as it is), suffixed with the material.
+pub fn with_drag_times(form: &dyn Form, f: &Fitted) -> BTreeMap<String, Estimate> {
+    let name = form.drag_time_name().unwrap_or("t_s");
+    let mut out = as_fitted(form, f);
+    let nm = f.n_materials;
+    for (k, material) in f.materials.iter().enumerate() {
+        out.insert(
+            format!("{name}_{material}"),
+            Estimate::new(f.global[nm + k], f.global_se[nm + k]),
+        );
+    }
+    out
+}

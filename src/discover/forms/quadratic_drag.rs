@@ -1,6 +1,6 @@
 //! A quadratic drag: a = −v/T − c·v|v|, c of either sign (the total must still oppose the motion).
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
+use super::form::{p, with_drag_times, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
@@ -35,16 +35,7 @@ impl Form for QuadraticDrag {
         e.quad = x[0];
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
-        let mut out = BTreeMap::new();
-        out.insert("c_per_m".into(), Estimate::new(f.x[0], f.se[0]));
-        let nm = f.n_materials;
-        for (k, name) in f.materials.iter().enumerate() {
-            out.insert(
-                format!("t_s_{name}"),
-                Estimate::new(f.global[nm + k], f.global_se[nm + k]),
-            );
-        }
-        out
+        with_drag_times(self, f)
     }
     fn speed_dependent(&self) -> bool {
         true

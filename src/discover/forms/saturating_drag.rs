@@ -1,6 +1,6 @@
 //! A saturating drag: a = −v/(T0 + T'|v|), T' ≥ 0; the per-material T become T0.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
+use super::form::{p, with_drag_times, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
@@ -38,16 +38,7 @@ impl Form for SaturatingDrag {
         Some("t0_s")
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
-        let mut out = BTreeMap::new();
-        out.insert("tp_s_per_mps".into(), Estimate::new(f.x[0], f.se[0]));
-        let nm = f.n_materials;
-        for (k, name) in f.materials.iter().enumerate() {
-            out.insert(
-                format!("t0_s_{name}"),
-                Estimate::new(f.global[nm + k], f.global_se[nm + k]),
-            );
-        }
-        out
+        with_drag_times(self, f)
     }
     fn speed_dependent(&self) -> bool {
         true
