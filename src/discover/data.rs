@@ -20,10 +20,13 @@ pub struct RunData {
     pub keep: Vec<bool>,
     /// Noise scale of the run (metres), from its own baseline fit; 1 µm until measured.
     pub sigma_m: f64,
-    /// Lag-1 autocorrelation of the run's baseline residuals (for the bootstrap noise).
-    pub rho1: f64,
+    /// The shape of the run's fast noise (`noise.rs`): white until measured.
+    pub fast: super::noise_model::Fast,
+    /// The fast noise's σ at each kept sample over `sigma_m` when it grows with speed
+    /// (`blur.rs`); empty is 1 everywhere.
+    pub scale: Vec<f64>,
     /// The dataset's slow tracking noise (`slow_noise.rs`); none until measured.
-    pub slow: super::slow_noise::Slow,
+    pub slow: super::noise_model::Slow,
 }
 
 impl RunData {
@@ -76,7 +79,8 @@ pub fn prepare_runs(recordings: &[Recording], min_frames: usize) -> (Vec<RunData
             z_m: rows.iter().map(|r| r.1).collect(),
             keep: vec![true; rows.len()],
             sigma_m: 1e-6,
-            rho1: 0.0,
+            fast: Default::default(),
+            scale: Vec::new(),
             slow: Default::default(),
         });
     }

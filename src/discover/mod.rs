@@ -3,6 +3,7 @@
 //! Files of this folder:
 //!
 //! - `admissible.rs`: Whether a fitted term is physics (its search resolved it; a dissipation never pushes)
+//! - `blur.rs`: Tracking noise that grows with speed (motion blur)
 //! - `candidate.rs`: The joint model's parameter layout (`Spec`), a run's physics and predictions
 //! - `cv.rs`: Leave-runs-out cross-validation of the simulated trajectories
 //! - `data.rs`: The runs discovery works on
@@ -16,6 +17,7 @@
 //! - `locate.rs`: Residuals of a fitted joint model with the model's phase
 //! - `model.rs`: A fitted joint model
 //! - `noise.rs`: A run's camera noise
+//! - `noise_model.rs`: A run's tracking noise as every test's null draws it
 //! - `noise_floor.rs`: The noise floor of a scan over frequencies measured on the data itself
 //! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
 //! - `pairs.rs`: Discovery on pairs
@@ -92,6 +94,7 @@
 //! output).
 
 pub mod admissible;
+pub mod blur;
 pub mod candidate;
 pub mod cv;
 pub mod data;
@@ -108,6 +111,7 @@ pub mod locate;
 pub mod model;
 pub mod noise;
 pub mod noise_floor;
+pub mod noise_model;
 pub mod null_distribution;
 pub mod pairs;
 mod pairs_impact;

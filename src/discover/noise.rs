@@ -1,14 +1,24 @@
-//! A run's camera noise (σ and lag-1 ρ) and its tracking outliers, measured from what a sliding
-//! local cubic leaves of the run's baseline residuals, so that a misfit of the baseline that is
-//! slow next to the frame rate (a run that comes to rest, a slow force) is not read as noise.
+//! A run's camera noise (σ and the shape of its fast part) and its tracking outliers, measured
+//! from what a sliding local cubic leaves of the run's baseline residuals, so that a misfit of
+//! the baseline that is slow next to the frame rate (a run that comes to rest, a slow force) is
+//! not read as noise.
 //!
 //! The local cubic is a linear filter: each detrended residual is d_i = Σ_a g_ia e_a over the
 //! samples of its window. Under AR(1) noise of scale σ and lag-1 correlation ρ (over consecutive
-//! kept samples) E[Σ d_i²] and E[Σ d_i d_{i+1}] are σ² times polynomials in ρ whose coefficients
-//! come from the filter rows, so both moments are matched exactly: the cubic's share of the
-//! noise, the shorter windows' at the ends and a correlated noise's share in the trend are all
-//! taken into account rather than guessed.
+//! kept samples) E[Σ d_i d_{i+k}] are σ² times polynomials in ρ whose coefficients come from the
+//! filter rows, so the moments are matched exactly: the cubic's share of the noise, the shorter
+//! windows' at the ends and a correlated noise's share in the trend are all taken into account
+//! rather than guessed.
+//!
+//! Lags 0 and 1 give the plain AR(1). A sub-pixel tracker often makes a white part beside a
+//! correlated one (a share w of white noise, 1 − w of an AR(1) of larger ρ), which the plain
+//! AR(1) of the same lag-1 correlation describes too flatly: it gives the slow shapes of a fit
+//! (a run's μ and T) several times too little noise. Lag 2 tells the two apart: the white-plus-
+//! AR(1) reading matches lags 0, 1 and 2, and `lag2_z` says how far lag 2 lies above what the
+//! plain AR(1) gives it. One run cannot tell a small white part; the dataset's runs (one tracker)
+//! decide together (`mixed_wanted`), and each then takes its own white-plus-AR(1) reading.
 
+use super::noise_model::Fast;
 use crate::lsq::dense::{chol_solve, cholesky_jittered};
 
 /// Samples on each side of the one being detrended (the window holds 2·HALF + 1 samples).
@@ -22,11 +32,53 @@ const OUTLIER_SIGMAS: f64 = 5.0;
 /// Below this many kept samples the local cubic leaves too little to measure.
 const MIN_SAMPLES: usize = 12;
 
+/// Student's t the runs' lag-2 excesses must reach together for the white-plus-AR(1) reading to
+/// be taken (each run's excess in its Bartlett errors; their scatter from run to run, not
+/// Bartlett's, is the mean's error, since a detrended series is not quite an AR(1)).
+const MIXED_T: f64 = 4.0;
+
 /// What one run's noise measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Noise {
+    /// The plain AR(1) reading.
     pub sigma_m: f64,
-    pub rho1: f64,
+    pub fast: Fast,
+    /// The white-plus-AR(1) reading (σ and shape), when lags 0–2 admit one.
+    pub mixed: Option<(f64, Fast)>,
+    /// Lag 2 of the detrended residual above what the plain AR(1) gives it, in standard errors
+    /// (0 where not measured).
+    pub lag2_z: f64,
+}
+
+impl Noise {
+    fn plain(sigma_m: f64, rho: f64) -> Noise {
+        Noise {
+            sigma_m,
+            fast: Fast::ar1(rho),
+            mixed: None,
+            lag2_z: 0.0,
+        }
+    }
+
+    /// σ and shape as taken: the white-plus-AR(1) reading where the dataset wants it.
+    pub fn taken(&self, mixed: bool) -> (f64, Fast) {
+        match (mixed, self.mixed) {
+            (true, Some(m)) => m,
+            _ => (self.sigma_m, self.fast),
+        }
+    }
+}
+
+/// Whether the dataset's runs, together, ask for a white part beside the correlated one.
+pub fn mixed_wanted(noises: &[Noise]) -> bool {
+    let z: Vec<f64> = noises.iter().map(|m| m.lag2_z).collect();
+    let n = z.len() as f64;
+    if z.len() < 4 {
+        return false;
+    }
+    let mean = z.iter().sum::<f64>() / n;
+    let sd = (z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    mean / (sd / n.sqrt()).max(1e-12) > MIXED_T
 }
 
 /// The windows' filter rows over a series: for sample i, its window's first index and the weights
@@ -135,26 +187,23 @@ impl Filter {
             .collect()
     }
 
-    /// Coefficients by lag d of E[Σ d_i d_{i+k}] / σ² = Σ_d c[d] ρ^d, for k = 0 and k = 1.
-    fn moment_coefficients(&self) -> (Vec<f64>, Vec<f64>) {
+    /// Coefficients by lag d of E[Σ d_i d_{i+k}] / σ² = Σ_d c_k[d] ρ^d, for k = 0, 1, 2.
+    fn moment_coefficients(&self) -> [Vec<f64>; 3] {
         let w = self.g.first().map_or(0, Vec::len);
-        let mut c0 = vec![0.0; w + 2];
-        let mut c1 = vec![0.0; w + 2];
+        let mut c: [Vec<f64>; 3] = std::array::from_fn(|_| vec![0.0; w + 3]);
         for (i, (g, &l)) in self.g.iter().zip(&self.lo).enumerate() {
-            for (a, ga) in g.iter().enumerate() {
-                for (b, gb) in g.iter().enumerate() {
-                    c0[a.abs_diff(b)] += ga * gb;
-                }
-            }
-            if let (Some(h), Some(&lh)) = (self.g.get(i + 1), self.lo.get(i + 1)) {
+            for (k, ck) in c.iter_mut().enumerate() {
+                let (Some(h), Some(&lh)) = (self.g.get(i + k), self.lo.get(i + k)) else {
+                    continue;
+                };
                 for (a, ga) in g.iter().enumerate() {
                     for (b, hb) in h.iter().enumerate() {
-                        c1[(l + a).abs_diff(lh + b)] += ga * hb;
+                        ck[(l + a).abs_diff(lh + b)] += ga * hb;
                     }
                 }
             }
         }
-        (c0, c1)
+        c
     }
 }
 
@@ -162,11 +211,13 @@ fn poly(c: &[f64], rho: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, ci| acc * rho + ci)
 }
 
-/// σ and ρ of AR(1) noise whose filtered values are `d`, by matching Σ d² and Σ d_i d_{i+1}.
+/// σ and ρ of AR(1) noise whose filtered values are `d`, by matching Σ d² and Σ d_i d_{i+1};
+/// then the white-plus-AR(1) reading that matches Σ d_i d_{i+2} as well.
 fn match_moments(f: &Filter, d: &[f64]) -> Noise {
     let a0: f64 = d.iter().map(|x| x * x).sum();
     let a1: f64 = d.windows(2).map(|p| p[0] * p[1]).sum();
-    let (c0, c1) = f.moment_coefficients();
+    let a2: f64 = d.windows(3).map(|p| p[0] * p[2]).sum();
+    let [c0, c1, c2] = f.moment_coefficients();
     let ratio = |rho: f64| poly(&c1, rho) / poly(&c0, rho);
     let target = a1 / a0.max(1e-300);
     // the ratio rises with ρ: bisect within [0, RHO_MAX], the ends taken as they are (and
@@ -187,9 +238,38 @@ fn match_moments(f: &Filter, d: &[f64]) -> Noise {
         }
         0.5 * (lo + hi)
     };
+    let plain = Noise::plain((a0 / poly(&c0, rho).max(1e-300)).sqrt().max(1e-12), rho);
+    if !(a0 > 0.0) {
+        return plain;
+    }
+    let (r1, r2) = (a1 / a0, a2 / a0);
+    // lag 2's excess over the plain AR(1), against its sampling error (Bartlett's for an AR(1))
+    let n = d.len() as f64;
+    let se = ((1.0 + 2.0 * rho * rho - 3.0 * rho.powi(4)).max(0.1) / n).sqrt();
+    let lag2_z = (r2 - poly(&c2, rho) / poly(&c0, rho)) / se;
+    // white share w beside an AR(1) of correlation ρ' ≥ ρ keeping lag 1 matched; ρ' then
+    // matches lag 2 as nearly as it can
+    let at = |c: &[f64], w: f64, r: f64| w * c[0] + (1.0 - w) * poly(c, r);
+    let share = |r: f64| {
+        let den = c1[0] - poly(&c1, r) - r1 * (c0[0] - poly(&c0, r));
+        let w = (r1 * poly(&c0, r) - poly(&c1, r)) / den;
+        (den.abs() > 1e-300 && (0.0..1.0).contains(&w)).then_some(w)
+    };
+    let mismatch = |r: f64| share(r).map(|w| (at(&c2, w, r) / at(&c0, w, r) - r2).abs());
+    let steps = 400;
+    let best = (0..=steps)
+        .map(|i| rho + (RHO_MAX - rho) * i as f64 / steps as f64)
+        .filter_map(|r| mismatch(r).map(|m| (r, m)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    let mixed = best.and_then(|(r, _)| {
+        let w = share(r)?;
+        let s = (a0 / at(&c0, w, r).max(1e-300)).sqrt().max(1e-12);
+        Some((s, Fast { rho: r, white: w }))
+    });
     Noise {
-        sigma_m: (a0 / poly(&c0, rho).max(1e-300)).sqrt().max(1e-12),
-        rho1: rho,
+        mixed,
+        lag2_z,
+        ..plain
     }
 }
 
@@ -206,12 +286,33 @@ fn short_series(res: &[f64], keep: &mut [bool]) -> Noise {
         .map(|p| *p.0)
         .collect();
     let dof = (kept.len() as f64 - 5.0).max(1.0);
-    Noise {
-        sigma_m: (kept.iter().map(|r| r * r).sum::<f64>() / dof)
+    Noise::plain(
+        (kept.iter().map(|r| r * r).sum::<f64>() / dof)
             .sqrt()
             .max(1e-12),
-        rho1: super::residual_structure::lag1_autocorrelation(&kept).clamp(0.0, RHO_MAX),
+        super::residual_structure::lag1_autocorrelation(&kept).clamp(0.0, RHO_MAX),
+    )
+}
+
+/// What the local cubic leaves of `y` at times `t` (kept samples), and for each sample
+/// Σ_a g_ia² and Σ_a g_ia² x_a: the variance it leaves there of unit white noise, and of white
+/// noise whose variance at sample a is x_a. None for a series too short to detrend.
+pub fn detrended(t: &[f64], y: &[f64], x: &[f64]) -> Option<[Vec<f64>; 3]> {
+    if t.len() < MIN_SAMPLES {
+        return None;
     }
+    let f = filter(t);
+    let d = f.apply(y);
+    let (gamma, h) =
+        f.g.iter()
+            .zip(&f.lo)
+            .map(|(g, &l)| {
+                g.iter().zip(&x[l..]).fold((0.0, 0.0), |(a, b), (gi, xi)| {
+                    (a + gi * gi, b + gi * gi * xi)
+                })
+            })
+            .unzip();
+    Some([d, gamma, h])
 }
 
 /// Measure a run's noise from its baseline residuals `res` at times `t`, flagging as outliers
@@ -297,7 +398,7 @@ mod tests {
                     "gaussian noise has no 5σ outliers here"
                 );
                 sig.push(m.sigma_m);
-                rhos.push(m.rho1);
+                rhos.push(m.fast.rho);
             }
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             // one run of 2,500 samples measures σ to about 2 % and ρ to about 0.03 at ρ = 0.6
@@ -314,6 +415,66 @@ mod tests {
             for s in &sig {
                 assert!((s / 1e-6 - 1.0).abs() < 0.1, "one run's σ {s:e}");
             }
+        }
+    }
+
+    /// A share `w` of white noise beside an AR(1) of correlation ρ, of total scale σ.
+    fn mixture(n: usize, sigma: f64, rho: f64, w: f64, seed: u64) -> Vec<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5151);
+        ar1(n, sigma * (1.0 - w).sqrt(), rho, seed)
+            .into_iter()
+            .map(|a| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                a + sigma * w.sqrt() * z
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_white_part_beside_a_correlated_one_is_read_from_lag_two() {
+        // half white, half AR(0.9): the plain AR(1) of the same lag-1 correlation (about 0.45)
+        // gives the slowest shapes a quarter of the noise they carry
+        let n = 2500;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-4).collect();
+        let noises: Vec<Noise> = (0..20)
+            .map(|rep| {
+                let e = mixture(n, 1e-6, 0.9, 0.5, 300 + rep);
+                let res: Vec<f64> = t.iter().zip(&e).map(|(t, e)| misfit(*t) + e).collect();
+                measure(&t, &res, &mut vec![true; n])
+            })
+            .collect();
+        assert!(mixed_wanted(&noises));
+        let taken: Vec<(f64, Fast)> = noises.iter().map(|m| m.taken(true)).collect();
+        let mean = |f: &dyn Fn(&(f64, Fast)) -> f64| taken.iter().map(f).sum::<f64>() / 20.0;
+        let (s, w, r) = (mean(&|m| m.0), mean(&|m| m.1.white), mean(&|m| m.1.rho));
+        eprintln!("σ {s:e}, white share {w}, ρ {r}");
+        assert!((s / 1e-6 - 1.0).abs() < 0.08, "σ {s:e}");
+        assert!((w - 0.5).abs() < 0.1, "white share {w}");
+        assert!((r - 0.9).abs() < 0.05, "ρ {r}");
+    }
+
+    #[test]
+    fn a_plain_ar1_or_white_noise_wants_no_white_part() {
+        let n = 500;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 1e-4).collect();
+        for rho in [0.0, 0.6, 0.9] {
+            let wanted = (0..20)
+                .filter(|&d| {
+                    let noises: Vec<Noise> = (0..24)
+                        .map(|k| {
+                            let e = ar1(n, 1e-6, rho, 1000 * d + k);
+                            let res: Vec<f64> =
+                                t.iter().zip(&e).map(|(t, e)| misfit(*t) + e).collect();
+                            measure(&t, &res, &mut vec![true; n])
+                        })
+                        .collect();
+                    mixed_wanted(&noises)
+                })
+                .count();
+            assert!(
+                wanted <= 1,
+                "ρ {rho}: {wanted} of 20 datasets wanted a white part"
+            );
         }
     }
 
@@ -350,7 +511,7 @@ mod tests {
         let flagged: Vec<usize> = (0..n).filter(|i| !keep[*i]).collect();
         assert_eq!(flagged, bad);
         assert!((m.sigma_m / 1e-6 - 1.0).abs() < 0.1, "σ {:e}", m.sigma_m);
-        assert!((m.rho1 - 0.2).abs() < 0.1, "ρ {}", m.rho1);
+        assert!((m.fast.rho - 0.2).abs() < 0.1, "ρ {}", m.fast.rho);
     }
 
     #[test]
@@ -358,13 +519,7 @@ mod tests {
         let t: Vec<f64> = (0..200).map(|i| i as f64 * 1e-4).collect();
         let mut keep = vec![true; 200];
         let m = measure(&t, &[0.0; 200], &mut keep);
-        assert_eq!(
-            m,
-            Noise {
-                sigma_m: 1e-12,
-                rho1: 0.0
-            }
-        );
+        assert_eq!(m, Noise::plain(1e-12, 0.0));
         assert!(keep.iter().all(|k| *k));
     }
 
@@ -375,7 +530,7 @@ mod tests {
         let mut keep = vec![true; 8];
         let m = measure(&t, &res, &mut keep);
         assert!(!keep[7] && keep[..7].iter().all(|k| *k));
-        assert_eq!(m.rho1, 0.0);
+        assert_eq!(m.fast.rho, 0.0);
         assert!((m.sigma_m - (7e-12f64 / 2.0).sqrt()).abs() < 1e-15);
     }
 }

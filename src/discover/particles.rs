@@ -251,9 +251,8 @@ pub fn check(
             let (mut l, mut r, mut w) = (0.0, 0.0, 0.0);
             let mut coords = Vec::with_capacity(prep.len());
             for (p, base) in prep.iter().zip(&bases) {
-                let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
-                let mut e =
-                    super::slow_noise::replicate(p.y.len(), rho, runs[p.run].slow, &mut rng);
+                let noise = super::noise_model::RunNoise::of(&runs[p.run]);
+                let mut e = noise.replicate(p.y.len(), &mut rng);
                 p.proj.apply(&mut e);
                 let (a, c, coord) = split(base, &e);
                 w += wander(base, &e);

@@ -5,7 +5,8 @@ use super::candidate::predict;
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
 use super::joint::{fit_joint, FitControl};
-use super::slow_noise::{Series, Slow};
+use super::noise_model::Slow;
+use super::slow_noise::Series;
 use rayon::prelude::*;
 
 /// One run's own fit.
@@ -138,17 +139,32 @@ pub fn measure_noise(
     base_params: &[ParamInfo],
 ) -> Vec<PerRunFit> {
     let mut fits = fit_each_run(runs, base, base_params, &[], None);
+    let mut noises = Vec::new();
     for pass in 0..2 {
-        runs.par_iter_mut().zip(&fits).for_each(|(run, fit)| {
-            let res = residuals(run, base, base_params, &[], fit);
-            let noise = super::noise::measure(&run.t_s, &res, &mut run.keep);
-            run.sigma_m = noise.sigma_m;
-            run.rho1 = noise.rho1;
-        });
+        noises = runs
+            .par_iter_mut()
+            .zip(&fits)
+            .map(|(run, fit)| {
+                let res = residuals(run, base, base_params, &[], fit);
+                let noise = super::noise::measure(&run.t_s, &res, &mut run.keep);
+                (run.sigma_m, run.fast) = (noise.sigma_m, noise.fast);
+                noise
+            })
+            .collect();
         if pass == 0 {
             fits = fit_each_run(runs, base, base_params, &[], Some(&fits));
         }
     }
+    let mixed = super::noise::mixed_wanted(&noises);
+    for (run, noise) in runs.iter_mut().zip(&noises) {
+        (run.sigma_m, run.fast) = noise.taken(mixed);
+    }
+    let res: Vec<Vec<f64>> = runs
+        .par_iter()
+        .zip(&fits)
+        .map(|(run, fit)| residuals(run, base, base_params, &[], fit))
+        .collect();
+    super::blur::measure(runs, &res);
     let slow = slow_of(runs, base, base_params, &[], &fits);
     runs.iter_mut().for_each(|r| r.slow = slow);
     fits
@@ -237,6 +253,7 @@ fn slow_series(
     Series {
         y: kept(res),
         cols,
-        rho_fast: run.rho1,
+        fast: run.fast,
+        scale: run.scale.clone(),
     }
 }

@@ -299,7 +299,8 @@ mod tests {
             z_m: vec![0.0; t.len()],
             keep: vec![true; t.len()],
             sigma_m: 1e-6,
-            rho1: 0.0,
+            fast: Default::default(),
+            scale: Vec::new(),
             slow: Default::default(),
         }
     }

@@ -731,7 +731,8 @@ mod tests {
         // as measured (white), then as if every run's noise had a lag-1 correlation of 0.6
         for rho in [None, Some(0.6)] {
             if let Some(rho) = rho {
-                runs.iter_mut().for_each(|r| r.rho1 = rho);
+                runs.iter_mut()
+                    .for_each(|r| r.fast = super::super::noise_model::Fast::ar1(rho));
             }
             check_named_laws(&named, &refs, &baseline, &runs, &prep, b);
         }
@@ -774,7 +775,7 @@ mod tests {
                 (mean - law.mean).abs() < 4.0 * se,
                 "{} (ρ {}): replicates' mean {mean:.4}, law's {:.4} ± {se:.4}",
                 e.form(),
-                runs[0].rho1,
+                runs[0].fast.rho,
                 law.mean
             );
             for level in [0.05, 0.01] {
@@ -785,7 +786,7 @@ mod tests {
                     (above - level).abs() < 4.0 * sd,
                     "{} (ρ {}): {above:.4} of the replicates above the law's {level} point {c:.3}",
                     e.form(),
-                    runs[0].rho1
+                    runs[0].fast.rho
                 );
             }
         }

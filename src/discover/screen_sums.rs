@@ -5,8 +5,8 @@
 //! errors where its covariance is singular (`profiled_se`).
 
 use super::data::RunData;
+use super::noise_model::RunNoise;
 use super::response::Prepared;
-use super::slow_noise::{cross, replicate};
 use crate::lsq::dense::{chol_inverse, cholesky_jittered};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -32,13 +32,13 @@ impl Vectors {
                 let n = p.y.len();
                 let mut out = Vec::with_capacity(replicates + 1);
                 out.push(p.y.clone());
-                let rho = run.rho1.clamp(-0.99, 0.99);
+                let noise = RunNoise::of(run);
                 for b in 0..replicates {
                     let mut rng = ChaCha8Rng::seed_from_u64(
                         seed ^ (((p.run as u64) << 20) | (b as u64 + 1))
                             .wrapping_mul(0x9E37_79B9_7F4A_7C15),
                     );
-                    let mut v = replicate(n, rho, run.slow, &mut rng);
+                    let mut v = noise.replicate(n, &mut rng);
                     p.proj.apply(&mut v);
                     out.push(v);
                 }
@@ -307,7 +307,7 @@ impl Sums {
         let mut c = vec![0.0; q * q];
         for p in prep {
             let Some(x) = cols(p) else { continue };
-            let rho = runs[p.run].rho1.clamp(-0.99, 0.99);
+            let noise = RunNoise::of(&runs[p.run]);
             let profiled: Vec<Vec<f64>> = (0..q)
                 .map(|a| {
                     let mut col = x[a].clone();
@@ -326,7 +326,7 @@ impl Sums {
                 .collect();
             for a in 0..q {
                 for b in a..q {
-                    let s = cross(&profiled[a], &profiled[b], rho, runs[p.run].slow);
+                    let s = noise.cross(&profiled[a], &profiled[b]);
                     c[a * q + b] += s;
                     if a != b {
                         c[b * q + a] += s;

@@ -16,18 +16,8 @@
 //! A physical misfit left in the runs' own fits raises κ a little, which makes every test a
 //! little more cautious, never less.
 
+use super::noise_model::{ar1_cross, Fast, RunNoise, Slow};
 use crate::lsq::dense::{orthonormal_basis, project_out};
-use rand::Rng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::StandardNormal;
-
-/// A dataset's slow noise: variance (in units of each run's σ²) and lag-1 correlation per
-/// kept sample. κ = 0 is no slow noise.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Slow {
-    pub kappa: f64,
-    pub rho: f64,
-}
 
 /// The χ²₂ 1 % point: the quasi-likelihood ratio κ must reach to be kept.
 const KEEP_LR: f64 = 9.21;
@@ -36,60 +26,14 @@ const PROBES: usize = 12;
 /// Kept samples per probe at least (a run of 60 samples has 6 probes).
 const SAMPLES_PER_PROBE: usize = 10;
 
-/// Σᵢⱼ xᵢ yⱼ ρ^|i−j|: the covariance of x'e and y'e for unit-variance AR(1) noise e of lag-1
-/// correlation ρ, in one pass (sₓ carries Σ_{j<i} xⱼ ρ^(i−1−j)).
-pub fn ar1_cross(x: &[f64], y: &[f64], rho: f64) -> f64 {
-    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
-    for (&xi, &yi) in x.iter().zip(y) {
-        total += xi * yi + rho * (xi * sy + yi * sx);
-        sx = xi + rho * sx;
-        sy = yi + rho * sy;
-    }
-    total
-}
-
-/// The covariance of x'e and y'e for a run's whole noise model (noise units).
-pub fn cross(x: &[f64], y: &[f64], rho_fast: f64, slow: Slow) -> f64 {
-    let fast = ar1_cross(x, y, rho_fast);
-    if slow.kappa > 0.0 {
-        fast + slow.kappa * ar1_cross(x, y, slow.rho)
-    } else {
-        fast
-    }
-}
-
-/// One replicate of a run's noise over `n` kept samples (noise units): the fast AR(1) and, when
-/// there is one, the slow AR(1) drawn after it (so a dataset without slow noise draws exactly
-/// the numbers it always drew).
-pub fn replicate(n: usize, rho_fast: f64, slow: Slow, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    let mut v = ar1(n, rho_fast, 1.0, rng);
-    if slow.kappa > 0.0 {
-        let s = ar1(n, slow.rho, slow.kappa.sqrt(), rng);
-        v.iter_mut().zip(s).for_each(|(a, b)| *a += b);
-    }
-    v
-}
-
-/// Stationary AR(1) of lag-1 correlation ρ and standard deviation `sd`.
-fn ar1(n: usize, rho: f64, sd: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    let rho = rho.clamp(-0.999_999, 0.999_999);
-    let innov = (1.0 - rho * rho).sqrt();
-    let mut e: f64 = rng.sample(StandardNormal);
-    (0..n)
-        .map(|_| {
-            let x = sd * e;
-            e = rho * e + innov * rng.sample::<f64, _>(StandardNormal);
-            x
-        })
-        .collect()
-}
-
 /// One run as the estimate sees it: its own fit's residual at its kept samples in noise units,
-/// that fit's columns there (any scaling), and its fast noise's lag-1 correlation.
+/// that fit's columns there (any scaling), and its fast noise (its shape and its scale by
+/// sample).
 pub struct Series {
     pub y: Vec<f64>,
     pub cols: Vec<Vec<f64>>,
-    pub rho_fast: f64,
+    pub fast: Fast,
+    pub scale: Vec<f64>,
 }
 
 /// One probe of one run: the observed square, the fast model's expectation and the slow
@@ -129,7 +73,12 @@ fn probes(s: &Series, rhos: &[f64]) -> Vec<Probe> {
                 return None;
             }
             u.iter_mut().for_each(|a| *a /= norm);
-            let fast = ar1_cross(&u, &u, s.rho_fast);
+            let fast = RunNoise {
+                fast: s.fast,
+                slow: Slow::default(),
+                scale: &s.scale,
+            }
+            .fast_cross(&u, &u);
             let slow = rhos.iter().map(|&r| ar1_cross(&u, &u, r)).collect();
             let b = dot(&u, &s.y);
             Some(Probe {
@@ -207,6 +156,7 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
 
     /// `runs` series of `n` samples: fast AR(1) of correlation 0.3 plus a slow one, the fit's
     /// columns a constant, a line and a decaying exponential, projected out of the residual.
@@ -221,12 +171,18 @@ mod tests {
                         .map(|i| (-(i as f64) / (0.4 * n as f64)).exp())
                         .collect(),
                 ];
-                let mut y = replicate(n, 0.3, slow, &mut rng);
+                let noise = RunNoise {
+                    fast: Fast::ar1(0.3),
+                    slow,
+                    scale: &[],
+                };
+                let mut y = noise.replicate(n, &mut rng);
                 project_out(&orthonormal_basis(cols.clone()), &mut y);
                 Series {
                     y,
                     cols,
-                    rho_fast: 0.3,
+                    fast: Fast::ar1(0.3),
+                    scale: Vec::new(),
                 }
             })
             .collect()
@@ -261,49 +217,5 @@ mod tests {
                 s.kappa
             );
         }
-    }
-
-    #[test]
-    fn the_ar1_covariance_in_one_pass_is_the_double_sum() {
-        let x: Vec<f64> = (0..41).map(|i| (i as f64 * 0.37).sin()).collect();
-        let y: Vec<f64> = (0..41).map(|i| 1.0 / (2.0 + i as f64)).collect();
-        for rho in [0.0, 0.6, -0.3] {
-            let mut plain = 0.0;
-            for (i, xi) in x.iter().enumerate() {
-                for (j, yj) in y.iter().enumerate() {
-                    plain += xi * yj * f64::powi(rho, (i as i32 - j as i32).abs());
-                }
-            }
-            let fast = ar1_cross(&x, &y, rho);
-            assert!(
-                (fast - plain).abs() < 1e-12 * (1.0 + plain.abs()),
-                "ρ {rho}: {fast} {plain}"
-            );
-        }
-    }
-
-    #[test]
-    fn the_model_covariance_is_the_replicates_covariance() {
-        let slow = Slow {
-            kappa: 2.0,
-            rho: 0.97,
-        };
-        let n = 120;
-        let x: Vec<f64> = (0..n).map(|i| (i as f64 / 17.0).sin()).collect();
-        let y: Vec<f64> = (0..n).map(|i| 1.0 - i as f64 / n as f64).collect();
-        let want = cross(&x, &y, 0.4, slow);
-        let mut rng = ChaCha8Rng::seed_from_u64(7);
-        let b = 20_000;
-        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-        for _ in 0..b {
-            let e = replicate(n, 0.4, slow, &mut rng);
-            let (a, c) = (dot(&x, &e), dot(&y, &e));
-            sxy += a * c;
-            sxx += a * a;
-            syy += c * c;
-        }
-        let got = sxy / b as f64;
-        let se = (sxx * syy).sqrt() / b as f64 / (b as f64).sqrt() * 2.0;
-        assert!((got - want).abs() < 4.0 * se, "{got} against {want} ± {se}");
     }
 }

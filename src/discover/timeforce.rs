@@ -137,8 +137,8 @@ fn run_columns(
 const GAIN_REPLICATES: usize = 16;
 
 /// What fitting the run's own phase, at the force's amplitude, takes from the run's noise alone:
-/// the mean over replicates of the run's noise (its σ, lag-1 correlation and the dataset's slow
-/// noise; z0, t0, v0 projected out) of the χ² drop (noise units) the best phase gives. A held-out run whose phase
+/// the mean over replicates of the run's noise (its σ, its fast noise's shape and the dataset's
+/// slow noise; z0, t0, v0 projected out) of the χ² drop (noise units) the best phase gives. A held-out run whose phase
 /// is fitted on itself gains this much whatever the force, so a force with a phase per run is
 /// charged it before its held-out error is compared.
 pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) -> f64 {
@@ -152,11 +152,11 @@ pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) ->
     let Some((e, s, c)) = run_columns(m, idx, l, run) else {
         return 0.0;
     };
-    let rho = run.rho1.clamp(-0.95, 0.95);
+    let model = super::noise_model::RunNoise::of(run);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut total = 0.0;
     for _ in 0..GAIN_REPLICATES {
-        let mut noise = super::slow_noise::replicate(e.len(), rho, run.slow, &mut rng);
+        let mut noise = model.replicate(e.len(), &mut rng);
         noise.iter_mut().for_each(|x| *x *= run.sigma_m);
         // the noise is not projected here: s and c are, so its local part does not count
         let k = sums(&noise, &s, &c);
