@@ -42,7 +42,7 @@ fn rms_ratio(truth: &Truth, shape: &Shape, seed: u64) -> f64 {
             extras: vec![],
         };
         let params = spec.global_params(&materials);
-        let fits = measure_noise(&mut runs, &spec, &params);
+        let (fits, _) = measure_noise(&mut runs, &spec, &params);
         let fits = fit_each_run(&runs, &spec, &params, &[], Some(&fits));
         fits.iter().map(|f| f.rms_m).collect()
     };

@@ -146,7 +146,17 @@ pub struct Diagnosis {
     /// A slow drift of the tracking noise that every test's null carried (absent: none found).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tracking_drift: Option<TrackingDrift>,
+    /// A tracking noise growing with speed that every test's null carried (absent: none found).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracking_blur: Option<TrackingBlur>,
     pub note: String,
+}
+
+/// The tracking noise's growth with speed (motion blur): its σ² is σ₀² + (c·v)², c in metres per
+/// m/s (seconds), shared by the runs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TrackingBlur {
+    pub noise_per_speed_s: f64,
 }
 
 /// The slow part of the tracking noise: its variance as a multiple of each run's fast noise

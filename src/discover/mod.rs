@@ -24,6 +24,7 @@
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
+//! - `position_order.rs`: Whether the runs' own μ or T follow where each run slides
 //! - `proposal.rs`: Proposals: from the residuals of the current model
 //! - `ranges.rs`: What the data allow the forms to take, and what the residuals propose
 //! - `residual_structure.rs`: Where a model misses
@@ -54,8 +55,10 @@
 //!      with nothing missing from the equations (`particles.rs`), tested after the terms.
 //!
 //!    Every place's forms compete in one screen, so the data decide the place, not an order.
-//! 2. **Map.** Each single run is fitted alone (its noise level, lag-1 correlation and outliers
-//!    come from what a sliding local cubic leaves; a slow drift of the tracker, shared by the
+//! 2. **Map.** Each single run is fitted alone (its noise level, its fast noise's shape — an
+//!    AR(1), beside a white part when the runs' lag 2 asks for one — and its outliers come from
+//!    what a sliding local cubic leaves; a noise growing with speed, shared by the dataset, from
+//!    the same: `blur.rs`; a slow drift of the tracker, shared by the
 //!    dataset, from the runs' own fits under each round's model: `slow_noise.rs`). A joint model shares μ and T per material and
 //!    any accepted terms over all runs, with z0, t0, v0 per run. Its residuals, projected off each
 //!    run's z0, t0, v0, are regressed on each run's linear response to extra forces
@@ -70,7 +73,7 @@
 //!    integrator, its screen, its sentence and estimates), listed once in its registry.
 //! 4. **Decide.** Each candidate's first-order likelihood ratio (`screen.rs`, maximised over a
 //!    searched form's trials) is compared with its null from replicates of each run's measured
-//!    noise (its AR(1) and the slow drift) pushed through the same projections, or with a computed law for named terms
+//!    noise (`noise_model.rs`: its fast part, its blur and the slow drift) pushed through the same projections, or with a computed law for named terms
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
@@ -117,6 +120,7 @@ pub mod pairs;
 mod pairs_impact;
 mod particles;
 pub mod perrun;
+mod position_order;
 pub mod proposal;
 pub mod ranges;
 pub mod residual_structure;

@@ -14,7 +14,7 @@ use crate::stats::dist::gamma_q;
 use serde::Serialize;
 
 /// The first two moments of a named term's statistic c'A⁻¹c under the replicates' noise model
-/// (each run's AR(1) over its kept samples), with c = X̃'y and X̃ the term's columns with the
+/// (each run's noise model over its kept samples, `noise_model.rs`), with c = X̃'y and X̃ the term's columns with the
 /// shared parameters profiled out: c ~ N(0, C), C = Σ_runs X̃'ΣX̃, so the statistic is a sum of
 /// χ²₁ draws weighted by the eigenvalues of A⁻¹C (exactly λχ²₁ for one column; one weight per
 /// column, all 1, for white noise). `one_sided`: a parameter starting at its bound, whose

@@ -3,8 +3,9 @@
 //!
 //! Around the final joint model, each run's residual (in noise units, its z0, t0 and v0 projected
 //! out) is regressed on that run's own μ and T columns. The statistic `LR` is the χ² those
-//! per-run parameters take up; `RES` is what is left. Each run's measured noise (σ and lag-1
-//! correlation) is pushed through the same projections in replicates, which give both their laws.
+//! per-run parameters take up; `RES` is what is left. Each run's measured noise (`noise_model.rs`:
+//! σ, the fast part's shape, its growth with speed and the slow drift) is pushed through the same
+//! projections in replicates, which give both their laws.
 //! The test is on the ratio `F = (LR/E LR₀)/(RES/E RES₀)`: a noise larger than measured inflates
 //! both alike, while particles that differ raise `LR` alone. The particles are said to differ only
 //! when `F` lies beyond the replicates' at level α (a normal tail on ln F of the replicates), is
@@ -13,7 +14,9 @@
 //! run's own μ and T cannot take up, and that is no difference between particles. Nor is a noise
 //! that wanders over many frames, which a run's own μ and T take up as well: the data's energy in
 //! slow shapes that a run's μ and T cannot make (Legendre degrees 2–5, orthogonal to them) must
-//! stay within `WANDER_LIMIT` of the noise's, or the check says it cannot decide.
+//! stay within `WANDER_LIMIT` of the noise's, or the check says it cannot decide. Nor is a
+//! friction or force that varies along the groove, which gives runs sliding over the same stretch
+//! the same μ: the runs' steps are tested for order in position (`position_order.rs`).
 //!
 //! The size is the spread of the per-run estimates beyond their own errors (method of moments:
 //! each run's squared step less its noise variance, weighted by the inverse squared noise
@@ -78,6 +81,10 @@ pub struct Check {
     /// to run (a between-run test: the drift probes' null is the noise alone, and particles that
     /// differ make any per-run slope look significant against it).
     pub drift_beyond_scatter: bool,
+    /// The p-value (Bonferroni over μ and T of every material) that the runs' own μ or T follow
+    /// where each run slides (`position_order.rs`): a friction or force varying along the
+    /// groove, not particles that differ.
+    pub position_p: f64,
 }
 
 /// One run's orthonormal basis of its own μ and T columns (noise units, locals projected out),
@@ -146,6 +153,18 @@ fn basis(p: &Prepared, mu_col: usize, t_col: usize) -> RunBasis {
         }
     }
     RunBasis { q, slow, back }
+}
+
+/// The mean lab position of a run's sliding (of its whole track when it never slides).
+fn sliding_position(t: &super::response::Track) -> f64 {
+    let sliding: Vec<f64> =
+        t.z.iter()
+            .zip(&t.phase)
+            .filter(|p| *p.1 == crate::physics::Phase::Sliding)
+            .map(|p| *p.0)
+            .collect();
+    let z = if sliding.is_empty() { &t.z } else { &sliding };
+    z.iter().sum::<f64>() / z.len().max(1) as f64
 }
 
 /// The Legendre polynomial of degree `n` at `x`.
@@ -353,7 +372,28 @@ pub fn check(
             slope_p(&speed, &y) < level || slope_p(&dir, &y) < level
         })
     });
+    // each run's steps in units of their noise error, against where the run slides
+    let slide_z: Vec<f64> = prep.iter().map(|p| sliding_position(&p.track)).collect();
+    let position_p = (0..nm)
+        .flat_map(|k| [(k, 0), (k, 1)])
+        .map(|(k, which)| {
+            let (z, y): (Vec<f64>, Vec<f64>) = (0..runs.len())
+                .filter(|&i| runs[i].material == k)
+                .filter_map(|i| {
+                    let v = reps
+                        .iter()
+                        .map(|r| step(&bases[i], &r.2[i])[which].powi(2))
+                        .sum::<f64>()
+                        / n;
+                    (v > 0.0).then(|| (slide_z[i], steps[i][which] / v.sqrt()))
+                })
+                .unzip();
+            super::position_order::p_value(&z, &y, seed ^ (2 * k + which) as u64)
+        })
+        .fold(1.0f64, f64::min)
+        * (2 * nm) as f64;
     Some(Check {
+        position_p: position_p.min(1.0),
         drift_beyond_scatter,
         lr,
         lr_null_mean: lr0,

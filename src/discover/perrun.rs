@@ -132,12 +132,13 @@ pub fn residuals(
 }
 
 /// Measure each run's noise and flag its outliers from its baseline fit, twice (`noise::measure`:
-/// what a local cubic leaves of the residuals, so a slow misfit of the baseline is not noise).
+/// what a local cubic leaves of the residuals, so a slow misfit of the baseline is not noise),
+/// then the dataset's noise growing with speed (`blur.rs`, returned when seen) and slow drift.
 pub fn measure_noise(
     runs: &mut [RunData],
     base: &Spec,
     base_params: &[ParamInfo],
-) -> Vec<PerRunFit> {
+) -> (Vec<PerRunFit>, Option<super::blur::Blur>) {
     let mut fits = fit_each_run(runs, base, base_params, &[], None);
     let mut noises = Vec::new();
     for pass in 0..2 {
@@ -164,10 +165,10 @@ pub fn measure_noise(
         .zip(&fits)
         .map(|(run, fit)| residuals(run, base, base_params, &[], fit))
         .collect();
-    super::blur::measure(runs, &res);
+    let blur = super::blur::measure(runs, &res);
     let slow = slow_of(runs, base, base_params, &[], &fits);
     runs.iter_mut().for_each(|r| r.slow = slow);
-    fits
+    (fits, blur)
 }
 
 /// The dataset's slow tracking noise read from each run's own fit under a joint model: `spec`

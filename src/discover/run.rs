@@ -40,6 +40,7 @@ fn empty(opts: &Options, runs_used: usize, materials: Vec<String>, note: &str) -
         materials,
         settings: settings(opts),
         tracking_drift: None,
+        tracking_blur: None,
         note: note.into(),
     }
 }
@@ -59,7 +60,7 @@ fn fit_baseline(
     runs: &mut [RunData],
     materials: &[String],
     opts: &Options,
-) -> (Model, Vec<PerRunFit>) {
+) -> (Model, Vec<PerRunFit>, Option<super::blur::Blur>) {
     let s = (opts.groove_angle_deg.to_radians() / 2.0).sin();
     let base_spec = Spec {
         n_materials: materials.len(),
@@ -68,7 +69,7 @@ fn fit_baseline(
         extras: vec![],
     };
     let base_params = base_spec.global_params(materials);
-    let per_run = measure_noise(runs, &base_spec, &base_params);
+    let (per_run, blur) = measure_noise(runs, &base_spec, &base_params);
     // each material's median μ, then each material's median T (the global parameters' order)
     let of_material = |m: usize, field: fn(&PerRunFit) -> f64| {
         median(
@@ -102,7 +103,7 @@ fn fit_baseline(
             from_runs
         }
     };
-    (baseline, per_run)
+    (baseline, per_run, blur)
 }
 
 impl Ctx<'_> {
@@ -459,7 +460,7 @@ pub fn discover_reporting(
         "fitting the baseline model to {} runs",
         runs.len()
     ));
-    let (baseline, per_run) = fit_baseline(&mut runs, &materials, opts);
+    let (baseline, per_run, blur) = fit_baseline(&mut runs, &materials, opts);
     let fold = fold_of(&runs, &baseline.fit.local, opts.folds);
     let rg = Ranges::of(&runs);
     let ctx = Ctx {
@@ -545,6 +546,9 @@ pub fn discover_reporting(
         materials,
         settings: settings(opts),
         tracking_drift: tracking_drift(&runs_final),
+        tracking_blur: blur.map(|b| crate::artifacts::diagnosis::TrackingBlur {
+            noise_per_speed_s: b.gain_s,
+        }),
         note: String::new(),
     }
 }
@@ -594,7 +598,13 @@ fn particle_finding(
     // the drift probes' null is the noise alone: particles that differ make a per-run slope
     // look significant against it, so a drift counts only beyond the runs' scatter
     let drift_left = drift_left && c.drift_beyond_scatter;
-    let decision = if c.differ && drift_left {
+    let follows_position = c.position_p < opts.alpha;
+    let decision = if c.differ && follows_position {
+        format!(
+            "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but runs that slide over the same stretch of groove take the same values (p = {:.2e}): a friction or a force that varies along the groove, not particles that differ",
+            c.f, c.p_value, c.position_p
+        )
+    } else if c.differ && drift_left {
         format!(
             "rejected: the runs' own mu and T take up {:.2}x what the noise gives them (p = {:.2e}), but they drift with the runs' speed or direction beyond their scatter from run to run: physics the model lacks, not particles that differ",
             c.f, c.p_value
@@ -635,9 +645,13 @@ fn particle_finding(
         "wander_ratio".to_string(),
         serde_json::json!(c.wander_ratio),
     );
+    w.insert(
+        "position_order_p".to_string(),
+        serde_json::json!(c.position_p),
+    );
     Some(crate::artifacts::diagnosis::Finding {
         effect: "particle_differences".into(),
-        accepted: c.differ && !drift_left,
+        accepted: c.differ && !drift_left && !follows_position,
         form: "mu (friction) and T (drag) of each particle scatter about the material's".into(),
         parameters,
         evidence: crate::artifacts::diagnosis::Evidence {
@@ -710,7 +724,7 @@ mod tests {
         let recs = null_small();
         let opts = Options::default();
         let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
-        let (baseline, _) = fit_baseline(&mut runs, &materials, &opts);
+        let (baseline, _, _) = fit_baseline(&mut runs, &materials, &opts);
         let prep = prepare(
             &baseline.spec,
             &baseline.params,

@@ -8,8 +8,9 @@
 //! periodic in time at each trial frequency with a phase per run, a spline). Each run's z0, t0, v0
 //! are projected out and the shared parameters (μ, T, accepted terms) profiled, so the statistic
 //! is the drop in χ² a refit would give to first order. The same statistic, maximised over the
-//! same trials, is computed on replicates of each run's measured noise (Gaussian: its σ and lag-1
-//! correlation, and the dataset's slow drift, `slow_noise.rs`) pushed through the same projections: the null of a searched form carries
+//! same trials, is computed on replicates of each run's measured noise (Gaussian, as
+//! `noise_model.rs` draws it: σ, the fast part's shape and growth with speed, and the dataset's
+//! slow drift) pushed through the same projections: the null of a searched form carries
 //! its look-elsewhere effect, for a few dot products per trial instead of a nonlinear refit per
 //! replicate. Only the candidates the screen finds significant are fitted in full.
 //!

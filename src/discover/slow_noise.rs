@@ -4,15 +4,16 @@
 //! distortion, a drift of T with |v0|) collects far more of it than white noise gives, and a
 //! force periodic in time with a phase per run fits it in every run.
 //!
-//! Each run's noise, in units of its measured σ, is modelled as its fast AR(1) (σ = 1, lag-1 ρ
-//! from `noise.rs`) plus an independent slow AR(1) of variance κ and lag-1 correlation ρ_s per
+//! Each run's noise, in units of its measured σ, is modelled as its fast part (`noise.rs`,
+//! `blur.rs`) plus an independent slow AR(1) of variance κ and lag-1 correlation ρ_s per
 //! kept sample, κ and ρ_s shared by the runs of a dataset (one tracker, one camera). They are
 //! measured on each run's own fit (its μ, T, z0, t0, v0 free, so a misfit that a run's own μ
 //! and T take up is not read as noise): the residual's projections on a run's slowest cosines,
-//! with the fit's columns projected out of them, have expectations `A + κ·B(ρ_s)` (`cross`);
+//! with the fit's columns projected out of them, have expectations `A + κ·B(ρ_s)`
+//! (`noise_model.rs`);
 //! κ and ρ_s maximise the Gaussian quasi-likelihood (a grid of time constants from 8 samples,
 //! refined between its points), and κ is kept only when it beats κ = 0 by the χ²₂ 1 % point, so
-//! a white or AR(1) noise keeps exactly its old model.
+//! a noise without a slow part keeps exactly its fast model.
 //! A physical misfit left in the runs' own fits raises κ a little, which makes every test a
 //! little more cautious, never less.
 

@@ -30,7 +30,7 @@ impl Form for FrictionPosition {
         Place::Friction
     }
     fn form(&self) -> String {
-        "mu along the groove: mu (1 + p1 P1(x) + p2 P2(x)), fixed in the lab".into()
+        "mu(z) along the groove: mu (1 + p1 P1(x) + p2 P2(x)), fixed in the lab".into()
     }
     fn size_name(&self) -> &'static str {
         "a variation of friction along the groove"

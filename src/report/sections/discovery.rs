@@ -525,6 +525,9 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     if let Some(t) = &diag.tracking_drift {
         b.para(tracking_drift_text(t));
     }
+    if let Some(t) = &diag.tracking_blur {
+        b.para(tracking_blur_text(t));
+    }
     let limits = detection_limits(diag);
     if !limits.is_empty() {
         b.para(format!(
@@ -653,6 +656,14 @@ fn tracking_drift_text(t: &crate::artifacts::diagnosis::TrackingDrift) -> String
     )
 }
 
+/// The tracking noise's growth with speed in words: a measurement, not physics.
+fn tracking_blur_text(t: &crate::artifacts::diagnosis::TrackingBlur) -> String {
+    format!(
+        "The tracking noise grows with the particle's speed, as motion blur makes it: its variance is that at rest plus ({:.2} µm per m/s × speed)², the same for every run. Every test's null carries it, so it is reported as noise, not physics; it weighs most on what acts while the particles are fast (the sliding friction, differences between particles).",
+        1e6 * t.noise_per_speed_s
+    )
+}
+
 pub fn detection_limits(diag: &Diagnosis) -> Vec<String> {
     let mut by_form: BTreeMap<String, String> = BTreeMap::new();
     let mut order: Vec<String> = Vec::new();
@@ -683,6 +694,16 @@ fn capitalize(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_noise_growing_with_speed_is_said_as_noise_with_its_size() {
+        let t = crate::artifacts::diagnosis::TrackingBlur {
+            noise_per_speed_s: 4.96e-6,
+        };
+        let text = super::tracking_blur_text(&t);
+        assert!(text.contains("4.96 µm per m/s"), "{text}");
+        assert!(text.contains("noise, not physics"), "{text}");
+    }
 
     #[test]
     fn a_slow_drift_of_the_tracking_noise_is_said_as_noise_with_its_size() {
