@@ -30,6 +30,15 @@ pub struct RunData {
 }
 
 impl RunData {
+    /// The noise the run carries, as every test's null draws it.
+    pub fn noise(&self) -> super::noise_model::RunNoise<'_> {
+        super::noise_model::RunNoise {
+            fast: self.fast,
+            slow: self.slow,
+            scale: &self.scale,
+        }
+    }
+
     /// Number of samples used in fits.
     pub fn n_used(&self) -> usize {
         self.keep.iter().filter(|k| **k).count()

@@ -13,7 +13,6 @@
 //! A run whose noise has no white part, no scale and no slow part draws exactly the random
 //! numbers that a plain AR(1) draws.
 
-use super::data::RunData;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -67,15 +66,6 @@ pub struct RunNoise<'a> {
 }
 
 impl<'a> RunNoise<'a> {
-    /// The noise `run` carries.
-    pub fn of(run: &'a RunData) -> RunNoise<'a> {
-        RunNoise {
-            fast: run.fast,
-            slow: run.slow,
-            scale: &run.scale,
-        }
-    }
-
     /// The scale over `n` samples, when it applies to them.
     fn scale_for(&self, n: usize) -> Option<&[f64]> {
         (self.scale.len() == n).then_some(self.scale)

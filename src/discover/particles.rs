@@ -270,7 +270,7 @@ pub fn check(
             let (mut l, mut r, mut w) = (0.0, 0.0, 0.0);
             let mut coords = Vec::with_capacity(prep.len());
             for (p, base) in prep.iter().zip(&bases) {
-                let noise = super::noise_model::RunNoise::of(&runs[p.run]);
+                let noise = runs[p.run].noise();
                 let mut e = noise.replicate(p.y.len(), &mut rng);
                 p.proj.apply(&mut e);
                 let (a, c, coord) = split(base, &e);

@@ -5,7 +5,6 @@
 //! errors where its covariance is singular (`profiled_se`).
 
 use super::data::RunData;
-use super::noise_model::RunNoise;
 use super::response::Prepared;
 use crate::lsq::dense::{chol_inverse, cholesky_jittered};
 use rand::SeedableRng;
@@ -32,7 +31,7 @@ impl Vectors {
                 let n = p.y.len();
                 let mut out = Vec::with_capacity(replicates + 1);
                 out.push(p.y.clone());
-                let noise = RunNoise::of(run);
+                let noise = run.noise();
                 for b in 0..replicates {
                     let mut rng = ChaCha8Rng::seed_from_u64(
                         seed ^ (((p.run as u64) << 20) | (b as u64 + 1))
@@ -307,7 +306,7 @@ impl Sums {
         let mut c = vec![0.0; q * q];
         for p in prep {
             let Some(x) = cols(p) else { continue };
-            let noise = RunNoise::of(&runs[p.run]);
+            let noise = runs[p.run].noise();
             let profiled: Vec<Vec<f64>> = (0..q)
                 .map(|a| {
                     let mut col = x[a].clone();

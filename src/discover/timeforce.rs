@@ -152,7 +152,7 @@ pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) ->
     let Some((e, s, c)) = run_columns(m, idx, l, run) else {
         return 0.0;
     };
-    let model = super::noise_model::RunNoise::of(run);
+    let model = run.noise();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut total = 0.0;
     for _ in 0..GAIN_REPLICATES {
