@@ -594,6 +594,13 @@ fn particle_finding(
         parameters.insert(format!("t_sd_s_{m}"), est(s.t_sd, f64::NAN));
         parameters.insert(format!("mu_se_run_{m}"), est(s.mu_se, f64::NAN));
         parameters.insert(format!("t_se_run_s_{m}"), est(s.t_se, f64::NAN));
+        // the spreads relative to the material's values; a drag time goes as the radius squared
+        // (a viscous drag on a sphere of the same steel: m/(6πηR) ∝ R²), so radii that differ
+        // by δR/R give drag times that differ by twice that
+        let (mu_rel, t_rel) = (s.mu_sd / s.mu, s.t_sd / s.t_s);
+        parameters.insert(format!("mu_sd_rel_{m}"), est(mu_rel, f64::NAN));
+        parameters.insert(format!("t_sd_rel_{m}"), est(t_rel, f64::NAN));
+        parameters.insert(format!("size_sd_rel_{m}"), est(0.5 * t_rel, f64::NAN));
     }
     // the drift probes' null is the noise alone: particles that differ make a per-run slope
     // look significant against it, so a drift counts only beyond the runs' scatter
