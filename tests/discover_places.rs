@@ -32,14 +32,15 @@ fn shape(name: &str) -> usize {
 }
 
 /// Draws `name` at `multiple`× its limit in `noise`, runs discovery through ingest, and returns
-/// what it accepted (place/effect: form) and whether that names the truth alone.
-fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, Vec<String>) {
+/// what it accepted (place/effect: form, and its parameters), whether that names the truth alone,
+/// and the worst relative error of the sizes it gives for the truth's (per material, say).
+fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, f64, Vec<String>) {
     let c = case(seed, SIZE, noise, &[(shape(name), multiple)], false);
     let d = discover_case(&c, seed);
     let found = accepted(&serde_json::to_string(&d).unwrap()).unwrap();
     let mut said: Vec<String> = found
         .iter()
-        .map(|a| format!("{}/{}: {}", a.place, a.effect, a.form))
+        .map(|a| format!("{}/{}: {} {:?}", a.place, a.effect, a.form, a.parameters))
         .collect();
     // what the particle check said, for the failure message
     said.extend(
@@ -49,15 +50,38 @@ fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, Vec<S
             .map(|f| format!("(particle check: {})", f.evidence.decision)),
     );
     let s = score(&found, &c.truths);
+    said.push(format!("(truth: {:?})", c.truths[0].sizes));
     assert_eq!(s.named, found.len() == 1 && names(&found[0], &c.truths[0]));
-    (s.named, said)
+    let worst = c.truths[0]
+        .sizes
+        .iter()
+        .flat_map(|(size, truth)| {
+            found
+                .iter()
+                .flat_map(|a| a.parameters.iter())
+                .filter(move |p| p.0.starts_with(size.as_str()))
+                .map(move |p| (p.1 / truth - 1.0).abs())
+        })
+        .fold(f64::NAN, f64::max);
+    (s.named, worst, said)
 }
 
 fn assert_named(seed: u64, noise: &str, name: &str) {
-    let (named, said) = discovered(seed, noise, name, 8.0);
+    let (named, _, said) = discovered(seed, noise, name, 8.0);
     assert!(
         named,
         "{name} in {noise} noise (seed {seed}): accepted {said:?}"
+    );
+}
+
+/// Named, and each material's spread (relative to its μ, or the radii's) within 40 % of the
+/// drawn one: the standard deviation of 12 particles is known to about 21 % from the sample
+/// alone, the noise aside.
+fn assert_named_and_sized(seed: u64, noise: &str, name: &str) {
+    let (named, worst, said) = discovered(seed, noise, name, 8.0);
+    assert!(
+        named && worst < 0.4,
+        "{name} in {noise} noise (seed {seed}): named {named}, worst size error {worst:.2}: {said:?}"
     );
 }
 
@@ -87,12 +111,13 @@ fn a_measurement_is_named_a_measurement_distortion() {
 }
 
 #[test]
-#[ignore = "a known miss: at 8x its limit a spread of mu leaves 5.5x the noise's energy in slow shapes a run's own linearized mu and T cannot make, so the particle check reads it as a wandering tracker and a force in time with a phase per run takes the misfit; the check needs each run refitted with its own mu and T"]
 fn particles_that_differ_are_named_so_mu() {
-    assert_named(6, "white", "mu_spread");
+    // before each run was refitted with its own μ and T, the first order left 5.5× the noise's
+    // energy in slow shapes here, read as a wandering tracker
+    assert_named_and_sized(6, "white", "mu_spread");
 }
 
 #[test]
 fn particles_that_differ_are_named_so_size() {
-    assert_named(7, "ar1", "size_spread");
+    assert_named_and_sized(7, "ar1", "size_spread");
 }

@@ -18,9 +18,10 @@
 //! friction or force that varies along the groove, which gives runs sliding over the same stretch
 //! the same μ: the runs' steps are tested for order in position (`position_order.rs`).
 //!
-//! The size is the spread of the per-run estimates beyond their own errors (method of moments:
-//! each run's squared step less its noise variance, weighted by the inverse squared noise
-//! variance, since a slow run hardly knows its μ), per material.
+//! The size is the spread of the per-run estimates beyond their own errors, per material (Paule
+//! and Mandel's estimate: each run weighted by its noise variance plus the spread's). Each run's
+//! step is its own fit's, refitted in full with the model's terms held, where that goes further
+//! than the first order: a large spread leaves much of itself beyond the first order.
 
 use super::candidate::prepare;
 use super::data::RunData;
@@ -155,6 +156,72 @@ fn basis(p: &Prepared, mu_col: usize, t_col: usize) -> RunBasis {
     RunBasis { q, slow, back }
 }
 
+/// Each run's own fit under the model `m` (μ and T free, the extra terms held): its residual in
+/// noise units with the locals projected out, and its step (δμ, δT) from the material's values;
+/// None where the fit did not converge.
+fn own_fits(m: &Model, runs: &[RunData], prep: &[Prepared]) -> Vec<Option<(Vec<f64>, [f64; 2])>> {
+    let nm = m.spec.n_materials;
+    let (g, l) = (&m.fit.global, &m.fit.local);
+    let fits = super::perrun::fits_under(runs, &m.spec, &m.params, g, l);
+    prep.par_iter()
+        .map(|p| {
+            let (run, f) = (&runs[p.run], &fits[p.run]);
+            if !f.converged {
+                return None;
+            }
+            let r = super::perrun::residuals(run, &m.spec, &m.params, &g[2 * nm..], f);
+            let mut y: Vec<f64> = r
+                .iter()
+                .zip(&run.keep)
+                .filter(|q| *q.1)
+                .map(|q| q.0 / run.sigma_m)
+                .collect();
+            p.proj.apply(&mut y);
+            let k = run.material;
+            Some((y, [f.mu - g[k], f.t_s - g[nm + k]]))
+        })
+        .collect()
+}
+
+/// The variance τ² of the true values behind estimates `d` of noise variances `v` (Paule and
+/// Mandel: the τ² at which the weighted scatter Σ w (d − d̄)², w = 1/(v + τ²), is n − 1, its
+/// expectation), 0 when the scatter is within the noise. Weights 1/v² instead let the one run
+/// that knows its μ best decide the spread alone, a third of the truth on the test bed.
+fn paule_mandel(dv: &[(f64, f64)]) -> f64 {
+    let q = |tau2: f64| {
+        let w: Vec<f64> = dv.iter().map(|p| 1.0 / (p.1 + tau2)).collect();
+        let sw: f64 = w.iter().sum();
+        let mean = dv.iter().zip(&w).map(|(p, w)| w * p.0).sum::<f64>() / sw;
+        dv.iter()
+            .zip(&w)
+            .map(|(p, w)| w * (p.0 - mean).powi(2))
+            .sum::<f64>()
+    };
+    let target = dv.len() as f64 - 1.0;
+    if dv.len() < 2 || q(0.0) <= target {
+        return 0.0;
+    }
+    // Q falls as τ² grows: bracket, then bisect on a log scale
+    let mut hi = dv
+        .iter()
+        .map(|p| p.0 * p.0 + p.1)
+        .fold(0.0, f64::max)
+        .max(1e-300);
+    while q(hi) > target {
+        hi *= 4.0;
+    }
+    let mut lo = hi * 1e-12;
+    for _ in 0..80 {
+        let mid = (lo * hi).sqrt();
+        if q(mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo * hi).sqrt()
+}
+
 /// The mean lab position of a run's sliding (of its whole track when it never slides).
 fn sliding_position(t: &super::response::Track) -> f64 {
     let sliding: Vec<f64> =
@@ -259,9 +326,23 @@ pub fn check(
         .zip(&bases)
         .map(|(p, b)| split(b, &p.y))
         .collect();
-    let lr: f64 = data.iter().map(|d| d.0).sum();
-    let wander_data: f64 = prep.iter().zip(&bases).map(|(p, b)| wander(b, &p.y)).sum();
-    let res: f64 = data.iter().map(|d| d.1).sum();
+    // each run's own μ and T refitted in full: where the particles differ much, the first order
+    // leaves part of what they take up in the residual, read as slow noise
+    let nl = own_fits(m, runs, &prep);
+    let n_res = |i: usize| match &nl[i] {
+        Some((y, _)) => data[i].1.min(dot(y, y)),
+        None => data[i].1,
+    };
+    let lr: f64 = (0..prep.len())
+        .map(|i| dot(&prep[i].y, &prep[i].y) - n_res(i))
+        .sum();
+    let res: f64 = (0..prep.len()).map(n_res).sum();
+    let wander_data: f64 = (0..prep.len())
+        .map(|i| match &nl[i] {
+            Some((y, _)) if dot(y, y) < data[i].1 => wander(&bases[i], y),
+            _ => wander(&bases[i], &prep[i].y),
+        })
+        .sum();
     let reps: Vec<(f64, f64, Vec<[f64; 2]>, f64)> = (0..REPLICATES)
         .into_par_iter()
         .map(|b| {
@@ -302,13 +383,21 @@ pub fn check(
     } else {
         1.0
     };
-    // per material: the per-run steps (δμ, δT) on the data and their noise variance
     let step = |base: &RunBasis, c: &[f64; 2]| -> [f64; 2] {
         [
             base.back[0][0] * c[0] + base.back[0][1] * c[1],
             base.back[1][0] * c[0] + base.back[1][1] * c[1],
         ]
     };
+    // each run's step (δμ, δT) on the data: its own fit's where that fit went further than the
+    // first order, else the first order's
+    let steps: Vec<[f64; 2]> = (0..prep.len())
+        .map(|i| match &nl[i] {
+            Some((y, s)) if dot(y, y) < data[i].1 => *s,
+            _ => step(&bases[i], &data[i].2),
+        })
+        .collect();
+    // per material: the per-run steps (δμ, δT) on the data and their noise variance
     let spreads: Vec<Spread> = (0..nm)
         .map(|k| {
             let idx: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].material == k).collect();
@@ -316,31 +405,22 @@ pub fn check(
             // spread is the weighted excess of the squared steps over their noise variances,
             // weights 1/v² (a slow run hardly knows its μ and counts little)
             let spread = |which: usize| -> (f64, f64) {
-                let (mut num, mut den) = (0.0, 0.0);
-                let mut ses: Vec<f64> = Vec::new();
-                for &i in &idx {
-                    let d = step(&bases[i], &data[i].2)[which];
-                    let v = reps
-                        .iter()
-                        .map(|r| step(&bases[i], &r.2[i])[which].powi(2))
-                        .sum::<f64>()
-                        / n;
-                    if !(v > 0.0) {
-                        continue;
-                    }
-                    let w = 1.0 / (v * v);
-                    num += w * (d * d - v);
-                    den += w;
-                    ses.push(v.sqrt());
-                }
+                let dv: Vec<(f64, f64)> = idx
+                    .iter()
+                    .map(|&i| {
+                        let v = reps
+                            .iter()
+                            .map(|r| step(&bases[i], &r.2[i])[which].powi(2))
+                            .sum::<f64>()
+                            / n;
+                        (steps[i][which], v)
+                    })
+                    .filter(|p| p.1 > 0.0)
+                    .collect();
+                let mut ses: Vec<f64> = dv.iter().map(|p| p.1.sqrt()).collect();
                 ses.sort_by(f64::total_cmp);
                 let typical = ses.get(ses.len() / 2).copied().unwrap_or(f64::NAN);
-                let sd = if den > 0.0 {
-                    (num / den).max(0.0).sqrt()
-                } else {
-                    0.0
-                };
-                (sd, typical)
+                (paule_mandel(&dv).sqrt(), typical)
             };
             let ((mu_sd, mu_se), (t_sd, t_se)) = (spread(0), spread(1));
             Spread {
@@ -354,11 +434,6 @@ pub fn check(
                 t_se,
             }
         })
-        .collect();
-    let steps: Vec<[f64; 2]> = data
-        .iter()
-        .zip(&bases)
-        .map(|(d, b)| step(b, &d.2))
         .collect();
     let drift_beyond_scatter = (0..nm).any(|k| {
         let idx: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].material == k).collect();

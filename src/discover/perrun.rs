@@ -171,9 +171,8 @@ pub fn measure_noise(
     (fits, blur)
 }
 
-/// The dataset's slow tracking noise read from each run's own fit under a joint model: `spec`
-/// with its extra terms held at `global`'s values, each run's μ and T started from its
-/// material's and its z0, t0, v0 from `local`.
+/// The dataset's slow tracking noise read from each run's own fit under a joint model
+/// (`fits_under`).
 pub fn slow_noise_under(
     runs: &[RunData],
     spec: &Spec,
@@ -181,6 +180,19 @@ pub fn slow_noise_under(
     global: &[f64],
     local: &[[f64; N_LOCAL]],
 ) -> Slow {
+    let fits = fits_under(runs, spec, params, global, local);
+    slow_of(runs, spec, params, &global[2 * spec.n_materials..], &fits)
+}
+
+/// Each run's own fit under a joint model: `spec` with its extra terms held at `global`'s
+/// values, each run's μ and T started from its material's and its z0, t0, v0 from `local`.
+pub fn fits_under(
+    runs: &[RunData],
+    spec: &Spec,
+    params: &[ParamInfo],
+    global: &[f64],
+    local: &[[f64; N_LOCAL]],
+) -> Vec<PerRunFit> {
     let nm = spec.n_materials;
     let starts: Vec<PerRunFit> = runs
         .iter()
@@ -193,9 +205,7 @@ pub fn slow_noise_under(
             converged: true,
         })
         .collect();
-    let extra_values = &global[2 * nm..];
-    let fits = fit_each_run(runs, spec, params, extra_values, Some(&starts));
-    slow_of(runs, spec, params, extra_values, &fits)
+    fit_each_run(runs, spec, params, &global[2 * nm..], Some(&starts))
 }
 
 /// The slow noise of the runs' own fits `fits`.
