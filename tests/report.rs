@@ -228,7 +228,8 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
         let provenance = json!({"groove_version": "0.1.0", "code_commit": "0123456789abcdef0123456789abcdef01234567",
             "fingerprints": {"figures": "aa11", "report": "bb22"}, "seed": 20261122,
             "inputs": [{"path": "data/runs.csv", "sha256": "c0ffee"}, {"path": "data/trajectories.csv", "sha256": "beef"}],
-            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}]});
+            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}],
+            "params": {"fit": {"max_iter": 200, "min_frames": 20}, "report": {"title": "groove report", "source_date_epoch": null}}});
         files.insert("summary", serde_json::to_vec(&summary).unwrap());
         files.insert("diagnosis", serde_json::to_vec(&diagnosis).unwrap());
         files.insert("validation", serde_json::to_vec(&validation).unwrap());

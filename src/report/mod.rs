@@ -19,6 +19,7 @@
 //! - `truth.rs`: Truth values from the validate stage's `validation`
 //! - `value.rs`: Numbers as the report prints them
 //! - `figures/`: every figure of the report
+//! - `own/`: The user's own notes, figures and tables for the report
 //! - `sections/`: The report's content as plain data
 //!
 //! Upstream artifacts are read as their contract types (`crate::artifacts`): per-run fits, fits.csv,
@@ -36,6 +37,7 @@ pub mod html;
 pub mod inputs;
 pub mod markdown;
 pub mod md_html;
+pub mod own;
 pub mod sections;
 pub mod singles;
 pub mod style;

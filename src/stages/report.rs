@@ -62,6 +62,8 @@ impl StageKind for Report {
             "provenance",
             "skipped",
             "baseline",
+            "notes",
+            "additional",
         ]
     }
     fn outputs(&self) -> &'static [&'static str] {

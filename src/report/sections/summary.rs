@@ -67,20 +67,20 @@ pub fn block(d: &ReportData) -> Block {
             format!("μ_pg of {m} (under the accepted physics)"),
             super::under_accepted::est_text(&sm.mu),
             crate::report::chapter::mu_for(m).map_or("—".into(), |v| format!("{v:.3}")),
-            "under_accepted_physics.json (3.6)".into(),
+            "under_accepted_physics.json (3.8)".into(),
         ]);
         if let Some(l) = sm.t_line {
             t.push(vec![
                 format!("drag T(|v|) = T0 + T'|v| of {m}: T0 (s)"),
                 super::under_accepted::est_text(&l.intercept_s),
                 "—".into(),
-                "under_accepted_physics.json (3.6)".into(),
+                "under_accepted_physics.json (3.8)".into(),
             ]);
             t.push(vec![
                 format!("drag T(|v|) = T0 + T'|v| of {m}: T' (s per m/s)"),
                 super::under_accepted::est_text(&l.slope_s_per_mps),
                 "—".into(),
-                "under_accepted_physics.json (3.6)".into(),
+                "under_accepted_physics.json (3.8)".into(),
             ]);
         }
     }
@@ -132,7 +132,7 @@ pub fn block(d: &ReportData) -> Block {
         let m = refit.unwrap_or(base);
         let text = super::under_accepted::verdict_text(&m.profile.verdict);
         let caveat = if refit.is_some() {
-            ", under the accepted physics: see 3.6"
+            ", under the accepted physics: see 3.8"
         } else if super::whole_run::speed_dependent_friction(d, name).is_some() {
             "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
         } else if super::whole_run::uncarried_physics(d, name).is_some() {
