@@ -25,7 +25,7 @@ fn key(title: &str) -> String {
 
 /// `a heading` → `note-a-heading`, unique among `taken`.
 fn anchor(heading: &str, taken: &mut BTreeSet<String>) -> String {
-    let mut slug = String::from("note");
+    let mut slug = String::from("note-");
     for c in heading.chars().flat_map(char::to_lowercase) {
         if c.is_ascii_alphanumeric() {
             slug.push(c);
