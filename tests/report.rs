@@ -981,3 +981,31 @@ fn item_bytes(rec: &serde_json::Value) -> Vec<u8> {
     let rec: groove::recording::Recording = serde_json::from_value(rec.clone()).unwrap();
     groove::recording::item::encode(&rec)
 }
+
+#[test]
+fn fitted_trajectories_carry_their_residuals_below_on_the_same_time_axis() {
+    let (figs, _, _) = render(&fixture(true, true), None);
+    for name in ["fig_4_2b.svg", "fig_4_3c.svg"] {
+        let svg = &figs[name];
+        assert!(
+            texts_of(svg).iter().any(|t| t == "data − model (µm)"),
+            "{name} has no residual strip"
+        );
+        let height = attr_of(&svg[..svg.find('>').unwrap()], "height").unwrap();
+        // small dots in the strip, below the chart's standard 500 px
+        let below = svg
+            .split("<circle ")
+            .skip(1)
+            .filter(|c| {
+                attr_of(&format!(" {c}"), "cy").is_some_and(|y| y > 500.0 && y < height)
+                    && attr_of(&format!(" {c}"), "r") == Some(2.0)
+            })
+            .count();
+        assert!(below >= 5, "{name}: {below} residual points");
+        assert!(
+            layout_faults(name, svg).is_empty(),
+            "{:?}",
+            layout_faults(name, svg)
+        );
+    }
+}

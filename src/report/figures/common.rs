@@ -10,10 +10,17 @@ pub type Res = Result<(), Box<dyn std::error::Error>>;
 
 /// Render one figure into an SVG string of the standard size.
 pub fn render(draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res) -> Result<String, String> {
+    render_high(style::FIG_H, draw)
+}
+
+/// Render one figure of the standard width and `height` pixels high.
+pub fn render_high(
+    height: u32,
+    draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res,
+) -> Result<String, String> {
     let mut out = String::new();
     {
-        let root =
-            SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (style::FIG_W, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         super::marks::open();
         let drawn = draw(&root).map_err(|e| format!("drawing a figure failed: {e}"));

@@ -28,7 +28,7 @@ fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(NO_COLLISIONS.into());
         return b;
     };
-    b.figure(figs, "fig_4_3c.svg", "Fig. 4.3c: striker (grey) and target (teal) positions with the fitted segments (dark lines); dashed lines mark the fitted impacts.");
+    b.figure(figs, "fig_4_3c.svg", "Fig. 4.3c: striker (grey) and target (teal) positions with the fitted segments (dark lines); dashed lines mark the fitted impacts. Below, on the same time axis, each particle's residuals: data − fitted segments in µm, where a segment is fitted.");
     b.figure(figs, "fig_4_3d.svg", "Fig. 4.3d: the striker's samples by segment: sliding (green) and rolling (magenta), before (circles) and after (triangles) the impact; the black line is the fitted motion.");
     b.para(format!(
         "Run {} ({}, {} setup). After the impact the striker's spin exceeds v/s, so friction pushes it forward again (v − s·v_a < 0): it catches up with the target and the pair ends up rolling about 2R apart, as secondary collisions predict.",
