@@ -122,3 +122,37 @@ fn provenance_lists_every_stages_params_as_run() {
         .collect();
     assert!(names.windows(2).all(|w| w[0] <= w[1]), "{names:?}");
 }
+
+#[test]
+fn the_chapter_audit_and_provenance_sections_open_with_what_they_found() {
+    let html = shipped("report.html");
+    for (id, needles) in [
+        ("fig-4-2b", &["slides for", "µm RMS"][..]),
+        ("fig-4-3", &["hits the target at t = ", "µm RMS"][..]),
+        ("fig-4-4a", &["μ_pp"][..]),
+        ("fig-4-4bc", &["slower half", "faster"][..]),
+        ("secondary", &["% of the velocity difference"][..]),
+        (
+            "audit",
+            &["statements of the chapter do not hold as printed"][..],
+        ),
+        ("provenance", &["at commit", "input files"][..]),
+    ] {
+        let at = html
+            .find(&format!("<section id=\"{id}\""))
+            .unwrap_or_else(|| panic!("no section {id}"));
+        let rest = &html[at..];
+        let heading_end = rest.find("</h").unwrap();
+        let after = rest[heading_end..].split_once('\n').unwrap().1;
+        assert!(
+            after.starts_with("<p class=\"lead\">"),
+            "{id} opens with {:?}",
+            &after[..after.len().min(80)]
+        );
+        let lead = &after[..after.find("</p>").unwrap()];
+        assert!(lead.chars().any(|c| c.is_ascii_digit()), "{id}: {lead}");
+        for n in needles {
+            assert!(lead.contains(n), "{id}: {lead} lacks {n:?}");
+        }
+    }
+}

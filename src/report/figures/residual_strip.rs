@@ -27,7 +27,7 @@ fn limit(series: &[Series]) -> f64 {
         .collect();
     a.sort_by(f64::total_cmp);
     let q = a
-        .get(((a.len() as f64 * 0.99) as usize).min(a.len().saturating_sub(1)))
+        .get((a.len().saturating_sub(1) as f64 * 0.99) as usize)
         .copied()
         .unwrap_or(0.0);
     if q > 0.0 {

@@ -10,6 +10,7 @@
 //! - `compare.rs`: Section 3.4.1: the compare stage's residuals of the collision fits
 //! - `data.rs`: Section 2: the data
 //! - `discovery.rs`: Section 4: discovery
+//! - `leads.rs`: The opening sentences of sections 3.1, 3.4–3.7, 5 and 6
 //! - `params.rs`: A fitted term's parameters as text
 //! - `provenance.rs`: Section 6: provenance
 //! - `stage_params.rs`: Section 6's table of every stage's params as run
@@ -26,6 +27,7 @@ pub mod collisions;
 pub mod compare;
 pub mod data;
 pub mod discovery;
+pub mod leads;
 pub mod params;
 pub mod provenance;
 pub mod stage_params;
@@ -184,6 +186,8 @@ pub struct Page {
     pub chapter_notes: Vec<Note>,
     pub discovery: Block,
     pub audit: Vec<AuditItem>,
+    /// What the audit found, in one sentence.
+    pub audit_lead: Option<String>,
     /// The user's notes whose headings name section 5 itself.
     pub audit_notes: Vec<Note>,
     pub provenance: Block,
@@ -206,6 +210,7 @@ pub fn build(
     let mut chapter = chapter::blocks(d, figs);
     chapter.extend(collisions::blocks(d, figs));
     chapter.extend(under_accepted::block(d, figs));
+    let audit_items = audit(d);
     let mut page = Page {
         title: title.into(),
         date,
@@ -215,7 +220,8 @@ pub fn build(
         chapter,
         chapter_notes: Vec::new(),
         discovery: discovery::block(d, figs),
-        audit: audit(d),
+        audit_lead: leads::audit(&audit_items),
+        audit: audit_items,
         audit_notes: Vec::new(),
         provenance: provenance::block(d),
         baseline: baseline::block(d),

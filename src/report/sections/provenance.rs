@@ -13,6 +13,7 @@ pub fn block(d: &ReportData) -> Block {
         );
         return b;
     };
+    b.lead = Some(super::leads::provenance(p));
     let mut t = Table::new("Code and seed", &["item", "value"]);
     t.push(vec!["groove version".into(), p.groove_version.clone()]);
     t.push(vec!["code commit".into(), p.code_commit.clone()]);

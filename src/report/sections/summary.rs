@@ -27,8 +27,14 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
         .filter(|f| f.accepted)
         .map(|f| {
             let bounds = super::discovery::at_bound(&f.where_);
+            let tie = super::verdict::tied_with(f).map_or(String::new(), |other| {
+                format!(
+                    "; but these data cannot tell {} from {other}, which predicts held-out runs as well",
+                    f.form
+                )
+            });
             format!(
-                "{} ({}): {}{}",
+                "{} ({}): {}{}{tie}",
                 f.effect.replace('_', " "),
                 f.form,
                 super::params::params_text(&f.parameters),
@@ -248,6 +254,38 @@ fn contact_warning(diag: &Diagnosis) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shipped diagnosis with its accepted drag tied with another form: the summary's lead
+    /// says the data cannot tell the two apart.
+    #[test]
+    fn a_tie_is_said_in_the_summary_as_undecidable() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/diagnosis.json");
+        let mut diag: Diagnosis =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let f = diag
+            .findings
+            .iter_mut()
+            .find(|f| f.accepted)
+            .expect("an accepted finding");
+        let form = f.form.clone();
+        let d = ReportData {
+            diagnosis: Some(diag.clone()),
+            ..ReportData::default()
+        };
+        let lead = block(&d).lead.unwrap();
+        assert!(!lead.contains("cannot tell"), "{lead}");
+        let f = diag.findings.iter_mut().find(|f| f.accepted).unwrap();
+        f.evidence.decision = "accepted: strongest term passing both tests; tied with quadratic: these data cannot tell them apart, and this one, simpler or stronger, is in the model".into();
+        let d = ReportData {
+            diagnosis: Some(diag),
+            ..ReportData::default()
+        };
+        let lead = block(&d).lead.unwrap();
+        assert!(
+            lead.contains(&format!("these data cannot tell {form} from quadratic")),
+            "{lead}"
+        );
+    }
 
     /// The shipped diagnosis has no contact warning; with its 316 pair test decided as a contact
     /// distance, the summary names the material and the factor.
