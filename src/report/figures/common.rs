@@ -173,29 +173,25 @@ where
                 + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
         }))?,
     };
+    // the legend's sample of a series is the very element its points are drawn with (shape,
+    // size, filled or open), so the legend shows what the plot shows
     if let Some(label) = label {
-        anno.label(label).legend(move |(x, y)| {
-            EmptyElement::at((x + 8, y)) + Polygon::new(legend_shape(marker), st)
-        });
+        let anno = anno.label(label);
+        let at = |(x, y): (i32, i32)| EmptyElement::at((x + 8, y));
+        match marker {
+            Marker::Circle => anno.legend(move |p| at(p) + Circle::new((0, 0), r, st)),
+            Marker::Square => {
+                anno.legend(move |p| at(p) + Rectangle::new([(1 - r, 1 - r), (r - 1, r - 1)], st))
+            }
+            Marker::Triangle => {
+                anno.legend(move |p| at(p) + TriangleMarker::new((0, 0), r + 1, st))
+            }
+            Marker::Diamond => anno.legend(move |p| {
+                at(p) + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
+            }),
+        };
     }
     Ok(())
-}
-
-fn legend_shape(marker: Marker) -> Vec<(i32, i32)> {
-    match marker {
-        Marker::Circle => (0..12)
-            .map(|i| {
-                let a = i as f64 * std::f64::consts::PI / 6.0;
-                (
-                    (5.0 * a.cos()).round() as i32,
-                    (5.0 * a.sin()).round() as i32,
-                )
-            })
-            .collect(),
-        Marker::Square => vec![(-4, -4), (4, -4), (4, 4), (-4, 4)],
-        Marker::Triangle => vec![(0, -6), (5, 3), (-5, 3)],
-        Marker::Diamond => vec![(0, -6), (6, 0), (0, 6), (-6, 0)],
-    }
 }
 
 /// Vertical error bars of ±`err` at each (x, y).

@@ -75,6 +75,7 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
         (resid(true), style::ROLLING),
     ];
     let svg = render_high(TALL_H, |whole| {
+        super::marks::figure_run(&fit.run);
         let (root, below) = whole.split_vertically(style::FIG_H);
         residual_strip::draw(&below, xr, &strip)?;
         let root = &root;

@@ -121,6 +121,7 @@ fn render_fig_c(
         (residuals(c, 1, t, g), TARGET),
     ];
     render_high(TALL_H, |whole| {
+        super::marks::figure_run(&c.run);
         let (root, below) = whole.split_vertically(style::FIG_H);
         residual_strip::draw(&below, xr, &strip)?;
         let root = &root;
@@ -199,6 +200,7 @@ fn render_fig_d(
     let sy = span(s.z_m.iter().map(|z| (z - z_ref) * 1e3), 0.05);
     let cap_d = format!("Fig. 4.3d: striker's motion segments, run {}", c.run);
     render(|root| {
+        super::marks::figure_run(&c.run);
         let mut ch = linear_chart(
             root,
             &cap_d,
