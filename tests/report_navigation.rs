@@ -156,3 +156,38 @@ fn the_chapter_audit_and_provenance_sections_open_with_what_they_found() {
         }
     }
 }
+
+#[test]
+fn formulas_are_mathml_in_html_and_tex_in_markdown() {
+    let html = shipped("report.html");
+    let md = shipped("report.md");
+    let audit = &html[html.find("<section id=\"audit\"").unwrap()
+        ..html.find("<section id=\"provenance\"").unwrap()];
+    // every item's printed and correct form that holds a formula shows it as native MathML
+    let dds: Vec<&str> = audit
+        .split("<dd>")
+        .skip(1)
+        .map(|d| &d[..d.find("</dd>").unwrap()])
+        .collect();
+    assert_eq!(dds.len(), 12, "six items, printed and holds");
+    assert!(
+        dds.iter().filter(|d| d.contains("<math>")).count() >= 8,
+        "{dds:?}"
+    );
+    assert!(
+        audit.contains("<mi>T</mi><mi>e</mi></msub>")
+            || audit.contains("<msub><mi>T</mi><mi>e</mi></msub>")
+    );
+    assert!(!html.contains("<script"), "MathML needs no script");
+    // no TeX is left to read outside the formulas
+    let outside: String = html
+        .split("<math")
+        .map(|p| p.split_once("</math>").map_or(p, |x| x.1))
+        .collect();
+    assert!(
+        !outside.contains("\\mu") && !outside.contains("_{"),
+        "TeX shown as text"
+    );
+    // the Markdown keeps the TeX, which a forge renders
+    assert!(md.contains(r"- Printed: $T = m/6\pi\mu R = 0.074$"));
+}

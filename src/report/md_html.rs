@@ -10,9 +10,23 @@
 
 use pulldown_cmark::{html, Event, Options, Parser, Tag, TagEnd};
 
-/// The Markdown extensions report.md relies on where it is read (a forge): strikethrough only.
+/// The Markdown extensions report.md relies on where it is read (a forge): strikethrough and
+/// formulas between dollar signs (drawn as MathML here, `super::mathml`).
 fn options() -> Options {
-    Options::ENABLE_STRIKETHROUGH
+    Options::ENABLE_STRIKETHROUGH | Options::ENABLE_MATH
+}
+
+/// A formula as MathML, markup the page makes itself (the TeX's own characters are escaped).
+fn math(ev: Event) -> Event {
+    match ev {
+        Event::InlineMath(t) => Event::InlineHtml(super::mathml::inline(&t).into()),
+        Event::DisplayMath(t) => Event::Html(
+            super::mathml::inline(&t)
+                .replacen("<math>", "<math display=\"block\">", 1)
+                .into(),
+        ),
+        ev => ev,
+    }
 }
 
 /// The HTML of one piece of inline Markdown text (no enclosing `<p>`), escaped for HTML.
@@ -35,7 +49,7 @@ pub fn inline(text: &str) -> String {
             // raw HTML is text here: the page's markup is the template's alone
             Event::Html(s) | Event::InlineHtml(s) => events.push(Event::Text(s)),
             Event::SoftBreak | Event::HardBreak => events.push(Event::Text(" ".into())),
-            ev => events.push(ev),
+            ev => events.push(math(ev)),
         }
     }
     let mut out = String::with_capacity(text.len() + 16);
@@ -68,7 +82,7 @@ pub fn block(text: &str) -> String {
                 in_image = false;
                 events.push(Event::End(TagEnd::Link));
             }
-            ev => events.push(ev),
+            ev => events.push(math(ev)),
         }
     }
     let mut out = String::with_capacity(text.len() + 64);
@@ -115,6 +129,15 @@ mod tests {
         );
         // an identifier's underscores are no emphasis, as on a forge
         assert_eq!(inline("v_ref_mps = 0.06"), "v_ref_mps = 0.06");
+    }
+
+    #[test]
+    fn formulas_between_dollar_signs_become_mathml() {
+        assert_eq!(
+            inline("with $T_e$ and ${data}/x"),
+            "with <math><msub><mi>T</mi><mi>e</mi></msub></math> and ${data}/x"
+        );
+        assert!(block("$$a<b$$").contains("<math display=\"block\"><mrow><mi>a</mi><mo>&lt;</mo>"));
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //! - `html.rs`: The HTML page (report.html)
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
+//! - `mathml.rs`: Formulas as MathML
 //! - `md_html.rs`: The page's Markdown text rendered to HTML
 //! - `singles.rs`: Per-run fits of single runs
 //! - `style.rs`: Colours, marker shapes and font sizes shared by every figure
@@ -36,6 +37,7 @@ pub mod figures;
 pub mod html;
 pub mod inputs;
 pub mod markdown;
+pub mod mathml;
 pub mod md_html;
 pub mod own;
 pub mod sections;

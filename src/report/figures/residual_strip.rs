@@ -84,7 +84,7 @@ mod tests {
             style::BLACK,
         )];
         let lim = limit(&s);
-        assert!(lim >= 2.0 && lim < 90.0, "{lim}");
+        assert!((2.0..90.0).contains(&lim), "{lim}");
         assert_eq!(limit(&[]), 1.0);
     }
 }
