@@ -136,7 +136,7 @@ fn the_chapter_audit_and_provenance_sections_open_with_what_they_found() {
             "audit",
             &["statements of the chapter do not hold as printed"][..],
         ),
-        ("provenance", &["at commit", "input files"][..]),
+        ("provenance", &["with seed", "input files"][..]),
     ] {
         let at = html
             .find(&format!("<section id=\"{id}\""))

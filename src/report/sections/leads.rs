@@ -188,9 +188,8 @@ pub fn audit(items: &[crate::report::audit::AuditItem]) -> Option<String> {
 /// 6: what made this report, in one sentence.
 pub fn provenance(p: &crate::artifacts::Provenance) -> String {
     format!(
-        "Made by groove {} at commit {} with seed {} from {} input file{} through {} upstream stage{}; the same inputs and code give a byte-identical report.",
+        "Made by groove {} with seed {} from {} input file{} through {} upstream stage{}, each named below by its hash, code commit and params; the same inputs and code give a byte-identical report.",
         p.groove_version,
-        p.code_commit.get(..12).unwrap_or(&p.code_commit),
         p.seed,
         p.inputs.len(),
         if p.inputs.len() == 1 { "" } else { "s" },
