@@ -277,7 +277,7 @@ fn a_validation_without_truth_and_a_provenance_record_keep_their_shape() {
     let none = serde_json::to_string(&artifacts::Validation::no_truth()).unwrap();
     assert_eq!(none, r#"{"truth":false}"#);
     // the engine's layout (engine::provenance), field for field
-    let p = br#"{"groove_version":"0.1.0","code_commit":"abc","fingerprints":{"fit":"f1"},"seed":7,"inputs":[{"path":"${data}/runs.csv","sha256":"00"}],"stages":[{"stage":"fit","kind":"fit","key":"k"}]}"#;
+    let p = br#"{"groove_version":"0.1.0","code_commit":"abc","fingerprints":{"fit":"f1"},"seed":7,"inputs":[{"path":"${data}/runs.csv","sha256":"00"}],"stages":[{"stage":"fit","kind":"fit","key":"k"}],"params":{"fit":{"max_iter":200},"report":{"title":"t"}}}"#;
     round_trip::<artifacts::Provenance>("provenance", p, false);
     let renamed = String::from_utf8_lossy(p).replace("code_commit", "commit");
     assert!(

@@ -228,7 +228,8 @@ fn fixture(with_collisions: bool, with_extras: bool) -> Fixture {
         let provenance = json!({"groove_version": "0.1.0", "code_commit": "0123456789abcdef0123456789abcdef01234567",
             "fingerprints": {"figures": "aa11", "report": "bb22"}, "seed": 20261122,
             "inputs": [{"path": "data/runs.csv", "sha256": "c0ffee"}, {"path": "data/trajectories.csv", "sha256": "beef"}],
-            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}]});
+            "stages": [{"stage": "fit", "kind": "fit", "key": "k1"}, {"stage": "report", "kind": "report", "key": "k2"}],
+            "params": {"fit": {"max_iter": 200, "min_frames": 20}, "report": {"title": "groove report", "source_date_epoch": null}}});
         files.insert("summary", serde_json::to_vec(&summary).unwrap());
         files.insert("diagnosis", serde_json::to_vec(&diagnosis).unwrap());
         files.insert("validation", serde_json::to_vec(&validation).unwrap());
@@ -979,4 +980,157 @@ fn the_checker_catches_broken_nesting() {
 fn item_bytes(rec: &serde_json::Value) -> Vec<u8> {
     let rec: groove::recording::Recording = serde_json::from_value(rec.clone()).unwrap();
     groove::recording::item::encode(&rec)
+}
+
+#[test]
+fn fitted_trajectories_carry_their_residuals_below_on_the_same_time_axis() {
+    let (figs, _, _) = render(&fixture(true, true), None);
+    for name in ["fig_4_2b.svg", "fig_4_3c.svg"] {
+        let svg = &figs[name];
+        assert!(
+            texts_of(svg).iter().any(|t| t == "data − model (µm)"),
+            "{name} has no residual strip"
+        );
+        let height = attr_of(&svg[..svg.find('>').unwrap()], "height").unwrap();
+        // small dots in the strip, below the chart's standard 500 px
+        let below = svg
+            .split("<circle ")
+            .skip(1)
+            .filter(|c| {
+                attr_of(&format!(" {c}"), "cy").is_some_and(|y| y > 500.0 && y < height)
+                    && attr_of(&format!(" {c}"), "r") == Some(2.0)
+            })
+            .count();
+        assert!(below >= 5, "{name}: {below} residual points");
+        assert!(
+            layout_faults(name, svg).is_empty(),
+            "{:?}",
+            layout_faults(name, svg)
+        );
+    }
+}
+
+/// The attribute `name` of a tag as text.
+fn attr_text<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+    let key = format!(" {name}=\"");
+    let i = tag.find(&key)? + key.len();
+    tag[i..].split('"').next()
+}
+
+/// A marker's look: element, size or shape, fill and stroke; and where it sits.
+fn marker_of(tag: &str) -> Option<(String, (f64, f64))> {
+    let paint = format!(
+        "fill={:?} stroke={:?} width={:?}",
+        attr_text(tag, "fill"),
+        attr_text(tag, "stroke"),
+        attr_text(tag, "stroke-width")
+    );
+    if tag.starts_with("circle ") && !tag.contains("class=\"pt\"") {
+        let at = (attr_of(tag, "cx")?, attr_of(tag, "cy")?);
+        return Some((format!("circle r={:?} {paint}", attr_of(tag, "r")), at));
+    }
+    // a rectangle by its paint alone: a bar chart's legend shows a swatch of its bars' colour
+    if tag.starts_with("rect ") {
+        let at = (attr_of(tag, "x")?, attr_of(tag, "y")?);
+        return Some((format!("rect {paint}"), at));
+    }
+    if tag.starts_with("polygon ") {
+        let pts: Vec<(f64, f64)> = attr_text(tag, "points")?
+            .split_whitespace()
+            .filter_map(|p| {
+                let (x, y) = p.split_once(',')?;
+                Some((x.parse().ok()?, y.parse().ok()?))
+            })
+            .collect();
+        let first = *pts.first()?;
+        let shape: Vec<(f64, f64)> = pts.iter().map(|p| (p.0 - first.0, p.1 - first.1)).collect();
+        return Some((format!("polygon {shape:?} {paint}"), first));
+    }
+    None
+}
+
+/// Legend samples with no plotted marker of the same look.
+fn legend_marker_faults(name: &str, svg: &str) -> Vec<String> {
+    let tags: Vec<&str> = svg.split('<').skip(1).collect();
+    let boxes: Vec<[f64; 4]> = tags
+        .iter()
+        .filter(|t| t.starts_with("rect ") && t.contains("opacity=\"0.85\" fill=\"#FFFFFF\""))
+        .filter_map(|t| {
+            Some([
+                attr_of(t, "x")?,
+                attr_of(t, "y")?,
+                attr_of(t, "width")?,
+                attr_of(t, "height")?,
+            ])
+        })
+        .collect();
+    let inside = |p: (f64, f64)| {
+        boxes
+            .iter()
+            .any(|b| p.0 > b[0] && p.0 < b[0] + b[2] && p.1 > b[1] && p.1 < b[1] + b[3])
+    };
+    let (mut samples, mut plotted) = (Vec::new(), Vec::new());
+    for t in &tags {
+        if let Some((look, at)) = marker_of(t) {
+            if inside(at) {
+                samples.push(look);
+            } else {
+                plotted.push(look);
+            }
+        }
+    }
+    samples
+        .into_iter()
+        .filter(|s| !plotted.contains(s))
+        .map(|s| format!("{name}: the legend shows {s}, which no plotted marker is"))
+        .collect()
+}
+
+#[test]
+fn legend_markers_are_the_plotted_markers_and_points_name_their_run() {
+    let mut figs: BTreeMap<String, String> = BTreeMap::new();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/figures");
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "svg") {
+            let name = format!("shipped {}", path.file_name().unwrap().to_string_lossy());
+            figs.insert(name, std::fs::read_to_string(&path).unwrap());
+        }
+    }
+    let (fixture_figs, _, _) = render(&fixture(true, true), None);
+    for (k, v) in fixture_figs.iter().filter(|(k, _)| k.ends_with(".svg")) {
+        figs.insert(format!("fixture {k}"), v.clone());
+    }
+    let faults: Vec<String> = figs
+        .iter()
+        .flat_map(|(k, v)| legend_marker_faults(k, v))
+        .collect();
+    assert!(faults.is_empty(), "{}", faults.join("\n"));
+    // the check sees a filled legend sample beside open plotted circles
+    let bad = r##"<svg><rect x="0" y="0" width="50" height="20" opacity="0.85" fill="#FFFFFF" stroke="none"/>
+<circle cx="10" cy="10" r="5" opacity="1" fill="#FF0000" stroke="none"/>
+<circle cx="80" cy="80" r="5" opacity="1" fill="none" stroke="#FF0000" stroke-width="2"/></svg>"##;
+    assert_eq!(legend_marker_faults("t", bad).len(), 1);
+    // every point of a figure of runs names its run in its title
+    for name in [
+        "fig_4_2b",
+        "fig_4_3c",
+        "fig_4_3d",
+        "fig_4_4a",
+        "fig_4_4b",
+        "fig_4_4c",
+        "fig_discovery_drift",
+    ] {
+        let csv = std::fs::read_to_string(dir.join(format!("{name}.csv"))).unwrap();
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert!(!rows.is_empty(), "{name}");
+        let svg = &figs[&format!("shipped {name}.svg")];
+        let titles = svg.matches("<title>run ").count();
+        assert_eq!(
+            titles,
+            rows.len(),
+            "{name}: {titles} of {} points name their run",
+            rows.len()
+        );
+    }
 }

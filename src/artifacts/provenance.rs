@@ -1,5 +1,5 @@
-//! `engine:provenance` as its readers see it: the code, the seed, every data input's hash and every
-//! upstream stage's key. The engine writes it (`engine::provenance`, which knows no analysis); this
+//! `engine:provenance` as its readers see it: the code, the seed, every data input's hash, every
+//! upstream stage's key and every stage's params as run. The engine writes it (`engine::provenance`, which knows no analysis); this
 //! type is the contract the report reads, pinned against the engine's bytes by `tests/contracts.rs`.
 
 use serde::{Deserialize, Serialize};
@@ -16,6 +16,9 @@ pub struct Provenance {
     pub seed: u64,
     pub inputs: Vec<InputHash>,
     pub stages: Vec<StageKeyRecord>,
+    /// The checked params (defaults filled in) of the reading stage and every stage upstream,
+    /// by stage name.
+    pub params: BTreeMap<String, serde_json::Value>,
 }
 
 /// A data input read upstream, with the sha256 of its bytes.

@@ -1,5 +1,5 @@
-//! The `engine:provenance` input: a JSON record of the code, the seed, every data input's hash
-//! and every upstream stage's key. Sorted and free of times, so it changes only when they do.
+//! The `engine:provenance` input: a JSON record of the code, the seed, every data input's hash,
+//! every upstream stage's key and the params every stage ran with (this one's too). Sorted and free of times, so it changes only when they do.
 
 use super::context::{Context, Evaluated};
 use super::dag;
@@ -17,6 +17,8 @@ struct Provenance {
     seed: u64,
     inputs: Vec<InputHash>,
     stages: Vec<StageKeyRecord>,
+    /// The checked params (defaults filled in) of this stage and every stage upstream, by name.
+    params: BTreeMap<String, serde_json::Value>,
 }
 
 #[derive(Serialize, PartialEq, Eq, PartialOrd, Ord)]
@@ -38,8 +40,10 @@ pub fn record(ctx: &Context, spec: &StageSpec, done: &BTreeMap<String, Evaluated
     let ancestors = dag::with_ancestors(pipeline, std::slice::from_ref(&spec.name));
     let mut inputs = BTreeSet::new();
     let mut stages = Vec::new();
+    let mut params = BTreeMap::new();
     for name in &ancestors {
         let stage = &pipeline.stages[name];
+        params.insert(name.clone(), stage.canonical_params.clone());
         for input in stage.inputs.values() {
             let InputSpec::Path { path, .. } = input else {
                 continue;
@@ -82,6 +86,7 @@ pub fn record(ctx: &Context, spec: &StageSpec, done: &BTreeMap<String, Evaluated
         seed: pipeline.seed,
         inputs: inputs.into_iter().collect(),
         stages,
+        params,
     };
     let mut bytes = serde_json::to_vec_pretty(&record).expect("provenance serializes");
     bytes.push(b'\n');

@@ -44,8 +44,8 @@ pub fn eq_4_6(g: Groove) -> AuditItem {
     AuditItem {
         id: "eq_4_6",
         title: "Eq. 4.6, second branch: a velocity, and the wrong decay time".into(),
-        printed: "e^{−t/T}(s v0 + gTμ − e^{t1/T} gTμ)/s = v(t1)·e^{−(t−t1)/T}".into(),
-        correct: "z(t) = z1 + v1·Te·(1 − e^{−(t−t1)/Te}), Te = T(1 + ks²)/ks²".into(),
+        printed: r"$e^{-t/T}(s v_0 + gT\mu - e^{t_1/T} gT\mu)/s = v(t_1) \cdot e^{-(t-t_1)/T}$".into(),
+        correct: r"$z(t) = z_1 + v_1 T_e (1 - e^{-(t-t_1)/T_e})$, $T_e = T(1 + ks^2)/ks^2$".into(),
         numbers: vec![
             row("example (316, v0 = 0.025 m/s, μ = 0.337, T from the chapter's line)", format!("T = {t_drag:.4} s, t1 = {:.2} ms", t1 * 1e3)),
             row("Te/T = (1 + ks²)/ks²", format!("{:.3}", te / t_drag)),
@@ -77,8 +77,8 @@ pub fn eq_4_7(d: &ReportData) -> AuditItem {
     AuditItem {
         id: "eq_4_7",
         title: "Eqs. 4.7–4.8: the quadratic correction turns drag into propulsion".into(),
-        printed: "v/T0 − v²/L with T0 = 0.052 s, L = 2.5 mm".into(),
-        correct: "a form that stays dissipative over the measured range, e.g. v/(T0 + T'|v|)".into(),
+        printed: r"$v/T_0 - v^2/L$ with $T_0$ = 0.052 s, $L$ = 2.5 mm".into(),
+        correct: r"a form that stays dissipative over the measured range, e.g. $v/(T_0 + T'|v|)$".into(),
         numbers: vec![
             row("L implied by T0²/T' (mm)", format!("{:.3}", chapter::T0_S.powi(2) / chapter::T_SLOPE_S_PER_MPS * 1e3)),
             row("sign change at v = L/T0 (mm/s)", format!("{:.1}", v_star * 1e3)),
@@ -128,8 +128,8 @@ pub fn stokes(d: &ReportData) -> AuditItem {
     AuditItem {
         id: "stokes",
         title: "Stokes time: 2.2 s, not 0.074 s".into(),
-        printed: "T = m/6πμR = 0.074".into(),
-        correct: format!("m/(6πηR) = {ts:.2} s"),
+        printed: r"$T = m/6\pi\mu R = 0.074$".into(),
+        correct: format!(r"$m/(6\pi\eta R)$ = {ts:.2} s"),
         numbers,
         verdict: "free-air drag is some 40× too weak to explain the measured T; the dissipation comes from the support \
                   (contact, rolling losses, air squeezed near the walls), and 0.074 s is the chapter's own T line at 0.02 m/s"
@@ -171,8 +171,8 @@ pub fn eq_4_15(g: Groove) -> AuditItem {
     AuditItem {
         id: "eq_4_15",
         title: "Eqs. 4.15 and 4.17: the second term multiplies u2, not u1".into(),
-        printed: "v_z1⁽²⁾ = [(1 − sμk)u1 + (ks² + sμk)u1]/(ks² + 1), and likewise in 4.17".into(),
-        correct: "the second term of each line multiplies u2; then v_z1⁽²⁾ − v_z2⁽²⁾ = (1 − ks²)/(1 + ks²)·(u1 − u2)".into(),
+        printed: r"$v_{z1}^{(2)} = [(1 - s\mu k)u_1 + (ks^2 + s\mu k)u_1]/(ks^2 + 1)$, and likewise in 4.17".into(),
+        correct: r"the second term of each line multiplies $u_2$; then $v_{z1}^{(2)} - v_{z2}^{(2)} = (1 - ks^2)/(1 + ks^2) \cdot (u_1 - u_2)$".into(),
         numbers: vec![
             row("example: u1, u2 (mm/s)", format!("{:.1}, {:.1}", u1 * 1e3, u2 * 1e3)),
             row("slip formulas (Eq. 4.14): physics steady state v_z1, v_z2 (mm/s)", fmt(w1, w2)),
@@ -199,7 +199,7 @@ pub fn citation(g: Groove) -> AuditItem {
         id: "citation_4_13",
         title: "After Eq. 4.16: the stick/slip test is Eq. 4.13, not Eq. 4.9".into(),
         printed: "“If Eq. (4.9) does not hold …”".into(),
-        correct: "stick when |v_a1 + v_a2| < 2μ_pp k (v_z1 − v_z2) (Eq. 4.13); slip otherwise".into(),
+        correct: r"stick when $|v_{a1} + v_{a2}| < 2\mu_{pp} k (v_{z1} - v_{z2})$ (Eq. 4.13); slip otherwise".into(),
         numbers: vec![
             row("rolling striker into a resting target: |v_a1 + v_a2| / u1 = 1/s", format!("{lhs:.3}")),
             row("2μ_pp·k with μ_pp = 1.4", format!("{rhs:.2}")),

@@ -25,7 +25,8 @@ pub fn render(page: &Page) -> Result<String, String> {
         .chain(std::iter::once(&mut page.data))
         .chain(page.chapter.iter_mut())
         .chain(std::iter::once(&mut page.discovery))
-        .chain(std::iter::once(&mut page.provenance));
+        .chain(std::iter::once(&mut page.provenance))
+        .chain(page.baseline.iter_mut());
     for b in all {
         for f in b.figures_mut() {
             f.svg = inline_svg(&f.svg);
@@ -42,6 +43,10 @@ pub fn render(page: &Page) -> Result<String, String> {
     // every text of the page is Markdown (as report.md prints it): rendered, never shown raw
     env.add_filter("md", |s: String| {
         minijinja::Value::from_safe_string(super::md_html::inline(&s))
+    });
+    // the user's notes: whole Markdown documents
+    env.add_filter("block", |s: String| {
+        minijinja::Value::from_safe_string(super::md_html::block(&s))
     });
     env.add_template("report.html", TEMPLATE)
         .map_err(|e| format!("html template: {e}"))?;

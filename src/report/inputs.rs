@@ -39,6 +39,9 @@ pub struct ReportData {
     /// This run's summary.json and diagnosis.json against a baseline's (the report stage's
     /// optional input `baseline`: an earlier reports folder or published bundle).
     pub baseline: Option<super::diff::Diff>,
+    /// The user's notes file and own figures and tables (the report stage's optional inputs
+    /// `notes` and `additional`).
+    pub own: super::own::Own,
 }
 
 /// One input of a `figures` or `report` stage, unpacked by the stage adapter: a single file, or
@@ -72,6 +75,26 @@ fn items<'a>(inputs: &Inputs<'a>, name: &str) -> Result<Vec<(&'a str, &'a [u8])>
     }
 }
 
+/// The user's `notes` file and `additional` folder, each checked to be bound to the right thing.
+fn own(inputs: &Inputs) -> Result<super::own::Own, String> {
+    let notes = match inputs.get("notes") {
+        Some(Input::Items(_)) => return Err(format!(
+            "{} is a folder; bind it to one Markdown file: notes = {{ path = \"notes.md\", optional = true }}",
+            super::own::NOTES
+        )),
+        Some(Input::File(b)) => Some(*b),
+        None => None,
+    };
+    let additional = match inputs.get("additional") {
+        Some(Input::File(_)) => return Err(
+            "input `additional` of the report stage is one file; bind it to a folder of figures and tables: a `command` stage's folder output (additional = \"<stage>:<output>\") or a folder path".into(),
+        ),
+        Some(Input::Items(m)) => m.clone(),
+        None => Vec::new(),
+    };
+    super::own::read(notes, &additional)
+}
+
 impl ReportData {
     /// The whole-run collision fits of summary.json (`collisions.whole_run`), if any.
     pub fn whole_run(&self) -> Option<&WholeRunSummary> {
@@ -84,7 +107,8 @@ impl ReportData {
     }
 
     /// Read the artifacts a `figures` or `report` stage receives. Known input names: `runs`, `fits`,
-    /// `fits_csv`, `residuals`, `summary`, `comparison`, `diagnosis`, `under_accepted`, `validation`, `provenance`, `skipped`.
+    /// `fits_csv`, `residuals`, `summary`, `comparison`, `diagnosis`, `under_accepted`, `validation`, `provenance`, `skipped`,
+    /// `notes` (a Markdown file of the user's), `additional` (a folder of the user's figures and tables).
     pub fn from_inputs(inputs: &Inputs) -> Result<ReportData, String> {
         let mut d = ReportData::default();
         for (name, bytes) in items(inputs, "runs")? {
@@ -137,6 +161,7 @@ impl ReportData {
             let list: Vec<Skipped> = artifacts::from_json("skipped", b)?;
             d.skipped = list.into_iter().map(|s| (s.run, s.reason)).collect();
         }
+        d.own = own(inputs)?;
         Ok(d)
     }
 

@@ -22,6 +22,7 @@ pub fn render(page: &Page) -> Result<String, String> {
     env.set_syntax(syntax);
     env.set_auto_escape_callback(|_| AutoEscape::None);
     env.add_filter("cell", cell);
+    env.add_filter("hashes", |n: usize| "#".repeat(n));
     env.add_template("report.md", TEMPLATE)
         .map_err(|e| format!("markdown template: {e}"))?;
     let out = env

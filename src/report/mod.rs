@@ -11,6 +11,7 @@
 //! - `html.rs`: The HTML page (report.html)
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
+//! - `mathml.rs`: Formulas as MathML
 //! - `md_html.rs`: The page's Markdown text rendered to HTML
 //! - `singles.rs`: Per-run fits of single runs
 //! - `style.rs`: Colours, marker shapes and font sizes shared by every figure
@@ -19,6 +20,7 @@
 //! - `truth.rs`: Truth values from the validate stage's `validation`
 //! - `value.rs`: Numbers as the report prints them
 //! - `figures/`: every figure of the report
+//! - `own/`: The user's own notes, figures and tables for the report
 //! - `sections/`: The report's content as plain data
 //!
 //! Upstream artifacts are read as their contract types (`crate::artifacts`): per-run fits, fits.csv,
@@ -35,7 +37,9 @@ pub mod figures;
 pub mod html;
 pub mod inputs;
 pub mod markdown;
+pub mod mathml;
 pub mod md_html;
+pub mod own;
 pub mod sections;
 pub mod singles;
 pub mod style;

@@ -1,4 +1,31 @@
 //! The `report` stage kind: report.html (self-contained) and report.md from the figures and artifacts.
+//!
+//! Your own sections: two optional inputs add the user's material to the report.
+//!
+//! ```toml
+//! [stages.growth]                       # any `command` stage writing a folder of figures and tables
+//! kind = "command"
+//! cmd = "python3 scripts/growth.py {in.fits} {out.plots}"
+//! inputs = { fits = "aggregate:fits_csv", script = "scripts/growth.py" }
+//! outputs = { plots = "${reports}/additional" }  # report.md shows its figures from additional/
+//!
+//! [stages.report]
+//! inputs = { figures = "figures:figures", notes = { path = "notes.md", optional = true }, additional = "growth:plots", … }
+//! ```
+//!
+//! - `notes`: a Markdown file. Its highest headings cut it into parts; a part whose heading is
+//!   the title of a section or subsection (its number optional, case ignored: `## Discovery`,
+//!   `## Fig. 4.2c: drag time T against v0`) is printed at the end of that section, the others and
+//!   the text before the first heading in "Additional analyses". Raw HTML shows as text and
+//!   images as links, so report.html stays one file that loads nothing.
+//! - `additional`: a folder (a `command` stage's folder output, or a path): `NAME.svg` and
+//!   `NAME.png` are figures, `NAME.csv` a table (at most 200 rows shown), `NAME.md` or `NAME.txt`
+//!   the caption of what is called NAME; shown in "Additional analyses" in file-name order, the
+//!   figures inside report.html as `data:` addresses and beside report.md under `additional/`.
+//!
+//! Both are hashed like every input: editing the notes reruns the report alone. A file the page
+//! cannot show (not UTF-8, another format, a ragged CSV, a caption of nothing) fails the stage
+//! with a message naming it and the fix (exit 2); the last good report stays.
 
 use super::fit_io::param_error;
 use crate::engine::stage::{
@@ -62,6 +89,8 @@ impl StageKind for Report {
             "provenance",
             "skipped",
             "baseline",
+            "notes",
+            "additional",
         ]
     }
     fn outputs(&self) -> &'static [&'static str] {

@@ -10,10 +10,17 @@ pub type Res = Result<(), Box<dyn std::error::Error>>;
 
 /// Render one figure into an SVG string of the standard size.
 pub fn render(draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res) -> Result<String, String> {
+    render_high(style::FIG_H, draw)
+}
+
+/// Render one figure of the standard width and `height` pixels high.
+pub fn render_high(
+    height: u32,
+    draw: impl FnOnce(&DrawingArea<SVGBackend, Shift>) -> Res,
+) -> Result<String, String> {
     let mut out = String::new();
     {
-        let root =
-            SVGBackend::with_string(&mut out, (style::FIG_W, style::FIG_H)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut out, (style::FIG_W, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         super::marks::open();
         let drawn = draw(&root).map_err(|e| format!("drawing a figure failed: {e}"));
@@ -166,29 +173,25 @@ where
                 + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
         }))?,
     };
+    // the legend's sample of a series is the very element its points are drawn with (shape,
+    // size, filled or open), so the legend shows what the plot shows
     if let Some(label) = label {
-        anno.label(label).legend(move |(x, y)| {
-            EmptyElement::at((x + 8, y)) + Polygon::new(legend_shape(marker), st)
-        });
+        let anno = anno.label(label);
+        let at = |(x, y): (i32, i32)| EmptyElement::at((x + 8, y));
+        match marker {
+            Marker::Circle => anno.legend(move |p| at(p) + Circle::new((0, 0), r, st)),
+            Marker::Square => {
+                anno.legend(move |p| at(p) + Rectangle::new([(1 - r, 1 - r), (r - 1, r - 1)], st))
+            }
+            Marker::Triangle => {
+                anno.legend(move |p| at(p) + TriangleMarker::new((0, 0), r + 1, st))
+            }
+            Marker::Diamond => anno.legend(move |p| {
+                at(p) + Polygon::new(vec![(0, -r - 1), (r + 1, 0), (0, r + 1), (-r - 1, 0)], st)
+            }),
+        };
     }
     Ok(())
-}
-
-fn legend_shape(marker: Marker) -> Vec<(i32, i32)> {
-    match marker {
-        Marker::Circle => (0..12)
-            .map(|i| {
-                let a = i as f64 * std::f64::consts::PI / 6.0;
-                (
-                    (5.0 * a.cos()).round() as i32,
-                    (5.0 * a.sin()).round() as i32,
-                )
-            })
-            .collect(),
-        Marker::Square => vec![(-4, -4), (4, -4), (4, 4), (-4, 4)],
-        Marker::Triangle => vec![(0, -6), (5, 3), (-5, 3)],
-        Marker::Diamond => vec![(0, -6), (6, 0), (0, 6), (-6, 0)],
-    }
 }
 
 /// Vertical error bars of ±`err` at each (x, y).

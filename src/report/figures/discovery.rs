@@ -1,7 +1,7 @@
 //! Discovery figures: held-out error of the baseline and of each candidate's extended model, and the
 //! drift (fitted T against |v0|) before and after the accepted physics, when diagnosis.json has it.
 
-use super::common::{legend, line, linear_chart, render, scatter, span};
+use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::diagnosis::{Diagnosis, DriftPoint};
 use crate::report::style::{self, Marker};
 use plotters::prelude::*;
@@ -116,6 +116,14 @@ fn points(list: &[DriftPoint]) -> Points {
         .collect()
 }
 
+/// The runs of the points `points` keeps, in its order.
+fn runs_of(list: &[DriftPoint]) -> Vec<String> {
+    list.iter()
+        .filter(|p| finite(p.v0_mps).is_some() && finite(p.t_s).is_some())
+        .map(|p| p.run.clone())
+        .collect()
+}
+
 /// The T-vs-v0 drift before and after (per-run T of the baseline and of the extended model).
 pub fn drift(diag: &Diagnosis) -> Option<(Points, Points)> {
     let dr = diag.drift.as_ref()?;
@@ -128,6 +136,11 @@ pub fn render_drift(diag: &Diagnosis) -> Result<Option<String>, String> {
     let Some((before, after)) = drift(diag) else {
         return Ok(None);
     };
+    let (runs_before, runs_after) = diag
+        .drift
+        .as_ref()
+        .map(|dr| (runs_of(&dr.before), runs_of(&dr.after)))
+        .unwrap_or_default();
     let abs = |p: &[(f64, f64)]| p.iter().map(|(x, y)| (x.abs(), *y)).collect::<Vec<_>>();
     let (before, after) = (abs(&before), abs(&after));
     let xr = (0.0, span(before.iter().chain(&after).map(|p| p.0), 0.05).1);
@@ -141,17 +154,19 @@ pub fn render_drift(diag: &Diagnosis) -> Result<Option<String>, String> {
             "initial speed |v0| (m/s)",
             "drag time T (s)",
         )?;
-        scatter(
+        scatter_runs(
             &mut c,
             &before,
+            &runs_before,
             Marker::Circle,
             style::BEFORE,
             false,
             Some("baseline fit: T per run"),
         )?;
-        scatter(
+        scatter_runs(
             &mut c,
             &after,
+            &runs_after,
             Marker::Circle,
             style::AFTER,
             true,

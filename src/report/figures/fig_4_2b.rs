@@ -1,6 +1,7 @@
 //! Fig. 4.2b: one single-run trajectory, sliding and rolling samples marked, with the fitted baseline.
 
-use super::common::{legend, line, linear_chart, render, scatter_sized, span};
+use super::common::{legend, line, linear_chart, render_high, scatter_sized, span};
+use super::residual_strip::{self, TALL_H};
 use crate::report::inputs::ReportData;
 use crate::report::singles::SingleRow;
 use crate::report::style::{self, Marker};
@@ -61,7 +62,23 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
         "Fig. 4.2b: run {} ({}), v0 = {:.4} m/s",
         fit.run, fit.material, fit.v0_mps.value
     );
-    let svg = render(|root| {
+    // data − model, µm, by phase, on the strip under the chart
+    let resid = |rolling: bool| -> Vec<(f64, f64)> {
+        s.iter()
+            .step_by(step)
+            .filter(|p| p.rolling == rolling)
+            .map(|p| (ms(p.t_s), (p.z_obs_m - p.z_fit_m) * 1e6))
+            .collect()
+    };
+    let strip = [
+        (resid(false), style::SLIDING),
+        (resid(true), style::ROLLING),
+    ];
+    let svg = render_high(TALL_H, |whole| {
+        super::marks::figure_run(&fit.run);
+        let (root, below) = whole.split_vertically(style::FIG_H);
+        residual_strip::draw(&below, xr, &strip)?;
+        let root = &root;
         let mut c = linear_chart(
             root,
             &caption,

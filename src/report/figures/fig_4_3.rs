@@ -1,7 +1,8 @@
 //! Figs. 4.3c–d: a collision run's striker and target trajectories, and the striker's four motion
 //! segments (sliding and rolling, before and after the impact).
 
-use super::common::{legend, line, linear_chart, render, scatter_sized, span};
+use super::common::{legend, line, linear_chart, render, render_high, scatter_sized, span};
+use super::residual_strip::{self, TALL_H};
 use crate::recording::Track;
 use crate::report::collisions::CollisionRun;
 use crate::report::inputs::ReportData;
@@ -69,6 +70,23 @@ pub fn choose<'a>(d: &'a ReportData, wanted: Option<&str>) -> Option<&'a Collisi
         .or_else(|| d.collisions.iter().find(has_tracks))
 }
 
+/// Data − fitted model of `particle` (ms, µm) where the fit is defined, as many samples as drawn.
+fn residuals(
+    c: &CollisionRun,
+    particle: u32,
+    track: &Track,
+    g: crate::physics::Groove,
+) -> Vec<(f64, f64)> {
+    let step = (track.t_s.len() / 200).max(1);
+    track
+        .t_s
+        .iter()
+        .zip(&track.z_m)
+        .step_by(step)
+        .filter_map(|(&t, &z)| Some((t * 1e3, (z - c.fitted_z_m(particle, t, g)?) * 1e6)))
+        .collect()
+}
+
 fn pts(t: &Track, z_ref: f64, keep: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
     let step = (t.t_s.len() / 200).max(1);
     t.t_s
@@ -98,7 +116,15 @@ fn render_fig_c(
         "Fig. 4.3c: collision run {} ({}, {setup})",
         c.run, c.material
     );
-    render(|root| {
+    let strip = [
+        (residuals(c, 0, s, g), STRIKER),
+        (residuals(c, 1, t, g), TARGET),
+    ];
+    render_high(TALL_H, |whole| {
+        super::marks::figure_run(&c.run);
+        let (root, below) = whole.split_vertically(style::FIG_H);
+        residual_strip::draw(&below, xr, &strip)?;
+        let root = &root;
         let mut ch = linear_chart(
             root,
             &cap_c,
@@ -174,6 +200,7 @@ fn render_fig_d(
     let sy = span(s.z_m.iter().map(|z| (z - z_ref) * 1e3), 0.05);
     let cap_d = format!("Fig. 4.3d: striker's motion segments, run {}", c.run);
     render(|root| {
+        super::marks::figure_run(&c.run);
         let mut ch = linear_chart(
             root,
             &cap_d,

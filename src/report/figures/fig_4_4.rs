@@ -2,7 +2,7 @@
 //! coefficient of restitution against impact speed per material, rolling and contact setups,
 //! with the whole-run law chosen under the accepted physics where `refit` made the fits again.
 
-use super::common::{legend, line, linear_chart, render, scatter, span};
+use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::collision_summary::LawForm;
 use crate::artifacts::summary::MaterialWholeRun;
 use crate::physics::Restitution;
@@ -21,16 +21,21 @@ pub fn render_a(d: &ReportData, k: f64) -> Result<Option<String>, String> {
     let mut groups = Vec::new();
     for (i, m) in mats.iter().enumerate() {
         for slip in [true, false] {
-            let p: Vec<(f64, f64)> = d
+            let (runs, p): (Vec<String>, Vec<(f64, f64)>) = d
                 .collisions
                 .iter()
                 .filter(|c| &c.material == m)
-                .flat_map(|c| &c.impacts)
-                .filter(|im| im.slip.unwrap_or(true) == slip)
-                .filter_map(|im| Some((im.dvz_target_mps? * 1e3, im.dva_target_mps? * 1e3)))
-                .collect();
+                .flat_map(|c| c.impacts.iter().map(move |im| (&c.run, im)))
+                .filter(|(_, im)| im.slip.unwrap_or(true) == slip)
+                .filter_map(|(run, im)| {
+                    Some((
+                        run.clone(),
+                        (im.dvz_target_mps? * 1e3, im.dva_target_mps? * 1e3),
+                    ))
+                })
+                .unzip();
             any |= !p.is_empty();
-            groups.push((m.clone(), i, slip, p));
+            groups.push((m.clone(), i, slip, p, runs));
         }
     }
     if !any {
@@ -57,13 +62,14 @@ pub fn render_a(d: &ReportData, k: f64) -> Result<Option<String>, String> {
             "target velocity change Δv_z (mm/s)",
             "target spin change Δv_a (mm/s)",
         )?;
-        for (m, i, slip, p) in &groups {
+        for (m, i, slip, p, runs) in &groups {
             if p.is_empty() {
                 continue;
             }
             let col = style::material_colour(m, *i);
             let label = format!("{m}, {}", if *slip { "slip" } else { "stick" });
-            scatter(&mut c, p, style::marker(m, false), col, *slip, Some(&label))?;
+            let mk = style::marker(m, false);
+            scatter_runs(&mut c, p, runs, mk, col, *slip, Some(&label))?;
         }
         if let Some(sl) = slope_ours {
             let label = format!("ours: slope μ_pp·k = {sl:.2} (μ_pp = {:.2})", sl / k);
@@ -104,19 +110,21 @@ pub fn render_bc(
     index: usize,
     fig: &str,
 ) -> Result<Option<String>, String> {
-    let series: Vec<(bool, Vec<(f64, f64)>)> = [false, true]
+    let with_runs: Vec<(bool, Vec<(f64, f64)>, Vec<String>)> = [false, true]
         .into_iter()
         .map(|contact| {
-            let p = d
+            let (runs, p) = d
                 .collisions
                 .iter()
                 .filter(|c| c.material == material && c.contact == contact)
-                .flat_map(|c| &c.impacts)
-                .filter_map(|i| Some((i.speed_mps, i.restitution?)))
-                .collect();
-            (contact, p)
+                .flat_map(|c| c.impacts.iter().map(move |i| (&c.run, i)))
+                .filter_map(|(run, i)| Some((run.clone(), (i.speed_mps, i.restitution?))))
+                .unzip();
+            (contact, p, runs)
         })
         .collect();
+    let series: Vec<(bool, Vec<(f64, f64)>)> =
+        with_runs.iter().map(|(c, p, _)| (*c, p.clone())).collect();
     if series.iter().all(|(_, p)| p.is_empty()) {
         return Ok(None);
     }
@@ -149,15 +157,16 @@ pub fn render_bc(
             true,
             None,
         )?;
-        for (contact, p) in &series {
+        for (contact, p, runs) in &with_runs {
             if p.is_empty() {
                 continue;
             }
             let col = style::setup_colour(material, *contact, index);
             let setup = if *contact { "in contact" } else { "rolling" };
-            scatter(
+            scatter_runs(
                 &mut c,
                 p,
+                runs,
                 style::marker(material, *contact),
                 col,
                 true,

@@ -27,6 +27,8 @@ struct Open {
     y_desc: String,
     marks: Vec<Mark>,
     labels: Vec<String>,
+    /// The run every point belongs to, in a figure of one run (Figs. 4.2b, 4.3c–d).
+    run: String,
 }
 
 thread_local! {
@@ -48,11 +50,23 @@ pub fn axes(x_desc: &str, y_desc: &str) {
     });
 }
 
-/// Add one drawn point.
-pub fn add(m: Mark) {
+/// Add one drawn point (of the figure's run when it names none).
+pub fn add(mut m: Mark) {
     OPEN.with(|o| {
         if let Some(o) = o.borrow_mut().as_mut() {
+            if m.run.is_empty() {
+                m.run.clone_from(&o.run);
+            }
             o.marks.push(m);
+        }
+    });
+}
+
+/// The run every point of the figure being drawn belongs to (a figure of one run).
+pub fn figure_run(run: &str) {
+    OPEN.with(|o| {
+        if let Some(o) = o.borrow_mut().as_mut() {
+            o.run = run.into();
         }
     });
 }

@@ -12,6 +12,7 @@
 //! - `forcemap.rs`: force-map figures
 //! - `marks.rs`: The data points of a figure: titles, CSV rows, the legend's place
 //! - `mu_pp_profile.rs`: The profile of μ_pp beside Fig. 4.4a
+//! - `residual_strip.rs`: The strip of residuals under a fitted-trajectory figure
 //! - `secondary.rs`: The secondary-collision factor
 
 pub mod common;
@@ -24,6 +25,7 @@ pub mod fig_4_4;
 pub mod forcemap;
 pub mod marks;
 pub mod mu_pp_profile;
+pub mod residual_strip;
 pub mod secondary;
 
 use super::inputs::ReportData;

@@ -64,9 +64,10 @@ fn fig_4_2b_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some("no single runs with a converged fit in this dataset".into());
         return b;
     };
-    b.figure(figs, "fig_4_2b.svg", "Fig. 4.2b: observed positions (green sliding, magenta rolling) and the fitted baseline (black); the dashed line marks the switch to rolling.");
+    b.lead = Some(super::leads::trajectory(d, fit));
+    b.figure(figs, "fig_4_2b.svg", "Fig. 4.2b: observed positions (green sliding, magenta rolling) and the fitted baseline (black); the dashed line marks the switch to rolling. Below, on the same time axis, the residuals: data − fitted baseline in µm.");
     b.para(format!(
-        "Run {} ({}) is the run whose |v0| is closest to the chapter's example of 0.025 m/s. The particle slides (its spin builds up under Coulomb friction) until v = s·v_a at t1, then rolls without sliding, decaying with Te = T(1 + ks²)/ks² ≈ 2.2 T.",
+        "Run {} ({}) is the run whose |v0| is closest to the chapter's example of 0.025 m/s. The particle slides (its spin builds up under Coulomb friction) until v = s·v_a at t1, then rolls without sliding, decaying with $T_e = T(1 + ks^2)/ks^2 \\approx 2.2\\,T$.",
         fit.run, fit.material
     ));
     let mut t = table(d, "Fig. 4.2b: the example run", &["quantity"]);

@@ -28,7 +28,8 @@ fn fig_4_3_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(NO_COLLISIONS.into());
         return b;
     };
-    b.figure(figs, "fig_4_3c.svg", "Fig. 4.3c: striker (grey) and target (teal) positions with the fitted segments (dark lines); dashed lines mark the fitted impacts.");
+    b.lead = Some(super::leads::collision(d, c));
+    b.figure(figs, "fig_4_3c.svg", "Fig. 4.3c: striker (grey) and target (teal) positions with the fitted segments (dark lines); dashed lines mark the fitted impacts. Below, on the same time axis, each particle's residuals: data − fitted segments in µm, where a segment is fitted.");
     b.figure(figs, "fig_4_3d.svg", "Fig. 4.3d: the striker's samples by segment: sliding (green) and rolling (magenta), before (circles) and after (triangles) the impact; the black line is the fitted motion.");
     b.para(format!(
         "Run {} ({}, {} setup). After the impact the striker's spin exceeds v/s, so friction pushes it forward again (v − s·v_a < 0): it catches up with the target and the pair ends up rolling about 2R apart, as secondary collisions predict.",
@@ -71,6 +72,7 @@ fn fig_4_4a_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(if d.collisions.is_empty() { NO_COLLISIONS.into() } else { "no impact carries the target's velocity and spin changes".into() });
         return b;
     }
+    b.lead = super::leads::mu_pp(d);
     let k = d.groove.k;
     let impacts: Vec<_> = d.collisions.iter().flat_map(|c| &c.impacts).collect();
     let slip = impacts.iter().filter(|i| i.slip == Some(true)).count();
@@ -164,6 +166,7 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         b.missing = Some(NO_COLLISIONS.into());
         return b;
     }
+    b.lead = super::leads::restitution(d);
     let mut t = Table::new(
         "Figs. 4.4b–c: restitution C = 1 − a·v per material and setup",
         &[
@@ -253,16 +256,7 @@ fn secondary_block(figs: &BTreeMap<String, String>, g: Groove) -> Block {
         format!("{:.1}", ch::THETA_BOUND_DEG),
     ]);
     b.table(t);
-    b.para(if theta < bound {
-        format!(
-            "With θ = {theta:.1}° < {bound:.1}° each collision leaves {:.0} % of the velocity difference, so the pair collides again and again (forever in the ideal model) and ends up rolling about 2R apart.",
-            f * 100.0
-        )
-    } else {
-        format!(
-            "With θ = {theta:.1}° ≥ {bound:.1}° the factor is {f:.2}, not positive: after a collision and the re-acceleration the target rolls at least as fast as the striker, so no secondary collision follows."
-        )
-    });
+    b.lead = Some(super::leads::secondary(g, theta, bound));
     b
 }
 

@@ -3,28 +3,36 @@
 //!
 //! Files of this folder:
 //!
+//! - `additional.rs`: The user's own sections: notes placed by their headings, "Additional analyses"
 //! - `baseline.rs`: Section 7, when a baseline is given: this result against an earlier one
 //! - `chapter.rs`: Section 3, single runs: the chapter's figures and tables
 //! - `collisions.rs`: Section 3, collisions: the chapter's figures and tables
 //! - `compare.rs`: Section 3.4.1: the compare stage's residuals of the collision fits
 //! - `data.rs`: Section 2: the data
 //! - `discovery.rs`: Section 4: discovery
+//! - `leads.rs`: The opening sentences of sections 3.1, 3.4–3.7, 5 and 6
 //! - `params.rs`: A fitted term's parameters as text
 //! - `provenance.rs`: Section 6: provenance
+//! - `stage_params.rs`: Section 6's table of every stage's params as run
 //! - `summary.rs`: Section 1: what was analysed
-//! - `under_accepted.rs`: Section 3.6: the chapter's numbers under the physics discovery accepted
+//! - `toc.rs`: The table of contents: every section and subsection with its anchor
+//! - `under_accepted.rs`: Section 3.8: the chapter's numbers under the physics discovery accepted
 //! - `verdict.rs`: Discovery's verdict in one sentence per finding
 //! - `whole_run.rs`: The whole-run collision fits in the report
 
+pub mod additional;
 pub mod baseline;
 pub mod chapter;
 pub mod collisions;
 pub mod compare;
 pub mod data;
 pub mod discovery;
+pub mod leads;
 pub mod params;
 pub mod provenance;
+pub mod stage_params;
 pub mod summary;
+pub mod toc;
 pub mod under_accepted;
 pub mod verdict;
 pub mod whole_run;
@@ -73,9 +81,34 @@ pub struct FigureRef {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Item {
-    Para { text: String },
+    Para {
+        text: String,
+    },
     Table(Table),
     Figure(FigureRef),
+    /// A figure of the user's (`additional` input): `name` beside report.md under `additional/`,
+    /// `data` its bytes in base64 for the HTML page's `data:` address.
+    Image {
+        name: String,
+        caption: String,
+        mime: String,
+        data: String,
+    },
+    /// Markdown of the user's (`notes` input), blocks and all, shown as written.
+    Markdown {
+        text: String,
+    },
+}
+
+/// A part of the user's notes placed under a section: its heading, anchor, level and Markdown
+/// (its own headings already moved below `level`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Note {
+    pub id: String,
+    pub heading: String,
+    /// The heading level it is printed at (3: under a section, 4: under a subsection).
+    pub level: usize,
+    pub body: String,
 }
 
 /// One section or subsection: paragraphs, tables and figures in the order they were added.
@@ -88,6 +121,8 @@ pub struct Block {
     pub items: Vec<Item>,
     /// Why this part has no figure or numbers (e.g. "no collision runs in this dataset").
     pub missing: Option<String>,
+    /// The user's notes whose headings name this part, printed after it.
+    pub notes: Vec<Note>,
 }
 
 impl Block {
@@ -147,11 +182,22 @@ pub struct Page {
     pub summary: Block,
     pub data: Block,
     pub chapter: Vec<Block>,
+    /// The user's notes whose headings name section 3 itself.
+    pub chapter_notes: Vec<Note>,
     pub discovery: Block,
     pub audit: Vec<AuditItem>,
+    /// What the audit found, in one sentence.
+    pub audit_lead: Option<String>,
+    /// The user's notes whose headings name section 5 itself.
+    pub audit_notes: Vec<Note>,
     pub provenance: Block,
     /// Only when the report stage is given a baseline.
     pub baseline: Option<Block>,
+    /// The user's own figures, tables and notes no section's heading names (inputs `notes`,
+    /// `additional`); only when there are any.
+    pub additional: Option<Block>,
+    /// Every section and subsection with its anchor, in reading order.
+    pub toc: Vec<toc::Entry>,
 }
 
 /// Build the page from the data and the rendered figures (by file name).
@@ -164,16 +210,25 @@ pub fn build(
     let mut chapter = chapter::blocks(d, figs);
     chapter.extend(collisions::blocks(d, figs));
     chapter.extend(under_accepted::block(d, figs));
-    Page {
+    let audit_items = audit(d);
+    let mut page = Page {
         title: title.into(),
         date,
         has_truth: d.validation.is_some(),
         summary: summary::block(d),
         data: data::block(d),
         chapter,
+        chapter_notes: Vec::new(),
         discovery: discovery::block(d, figs),
-        audit: audit(d),
+        audit_lead: leads::audit(&audit_items),
+        audit: audit_items,
+        audit_notes: Vec::new(),
         provenance: provenance::block(d),
         baseline: baseline::block(d),
-    }
+        additional: None,
+        toc: Vec::new(),
+    };
+    additional::place(&mut page, &d.own);
+    page.toc = toc::of(&page);
+    page
 }

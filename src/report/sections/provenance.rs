@@ -1,4 +1,5 @@
-//! Section 6: provenance — groove version and commit, every input's hash, each stage's key, seeds.
+//! Section 6: provenance — groove version and commit, every input's hash, each stage's key and
+//! params, seeds.
 
 use super::{Block, Table};
 use crate::report::inputs::ReportData;
@@ -12,6 +13,7 @@ pub fn block(d: &ReportData) -> Block {
         );
         return b;
     };
+    b.lead = Some(super::leads::provenance(p));
     let mut t = Table::new("Code and seed", &["item", "value"]);
     t.push(vec!["groove version".into(), p.groove_version.clone()]);
     t.push(vec!["code commit".into(), p.code_commit.clone()]);
@@ -27,6 +29,9 @@ pub fn block(d: &ReportData) -> Block {
         t.push(vec![s.stage.clone(), s.kind.clone(), s.key.clone()]);
     }
     b.table(t);
+    if let Some(t) = super::stage_params::table(p) {
+        b.table(t);
+    }
     let mut t = Table::new(
         "Code fingerprint of each stage kind",
         &["kind", "fingerprint"],

@@ -27,8 +27,14 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
         .filter(|f| f.accepted)
         .map(|f| {
             let bounds = super::discovery::at_bound(&f.where_);
+            let tie = super::verdict::tied_with(f).map_or(String::new(), |other| {
+                format!(
+                    "; but these data cannot tell {} from {other}, which predicts held-out runs as well",
+                    f.form
+                )
+            });
             format!(
-                "{} ({}): {}{}",
+                "{} ({}): {}{}{tie}",
                 f.effect.replace('_', " "),
                 f.form,
                 super::params::params_text(&f.parameters),
@@ -67,20 +73,20 @@ pub fn block(d: &ReportData) -> Block {
             format!("μ_pg of {m} (under the accepted physics)"),
             super::under_accepted::est_text(&sm.mu),
             crate::report::chapter::mu_for(m).map_or("—".into(), |v| format!("{v:.3}")),
-            "under_accepted_physics.json (3.6)".into(),
+            "under_accepted_physics.json (3.8)".into(),
         ]);
         if let Some(l) = sm.t_line {
             t.push(vec![
                 format!("drag T(|v|) = T0 + T'|v| of {m}: T0 (s)"),
                 super::under_accepted::est_text(&l.intercept_s),
                 "—".into(),
-                "under_accepted_physics.json (3.6)".into(),
+                "under_accepted_physics.json (3.8)".into(),
             ]);
             t.push(vec![
                 format!("drag T(|v|) = T0 + T'|v| of {m}: T' (s per m/s)"),
                 super::under_accepted::est_text(&l.slope_s_per_mps),
                 "—".into(),
-                "under_accepted_physics.json (3.6)".into(),
+                "under_accepted_physics.json (3.8)".into(),
             ]);
         }
     }
@@ -132,7 +138,7 @@ pub fn block(d: &ReportData) -> Block {
         let m = refit.unwrap_or(base);
         let text = super::under_accepted::verdict_text(&m.profile.verdict);
         let caveat = if refit.is_some() {
-            ", under the accepted physics: see 3.6"
+            ", under the accepted physics: see 3.8"
         } else if super::whole_run::speed_dependent_friction(d, name).is_some() {
             "; assumes a constant μ_pg, which discovery rejected for this material: see 3.5.1"
         } else if super::whole_run::uncarried_physics(d, name).is_some() {
@@ -248,6 +254,38 @@ fn contact_warning(diag: &Diagnosis) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shipped diagnosis with its accepted drag tied with another form: the summary's lead
+    /// says the data cannot tell the two apart.
+    #[test]
+    fn a_tie_is_said_in_the_summary_as_undecidable() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/diagnosis.json");
+        let mut diag: Diagnosis =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let f = diag
+            .findings
+            .iter_mut()
+            .find(|f| f.accepted)
+            .expect("an accepted finding");
+        let form = f.form.clone();
+        let d = ReportData {
+            diagnosis: Some(diag.clone()),
+            ..ReportData::default()
+        };
+        let lead = block(&d).lead.unwrap();
+        assert!(!lead.contains("cannot tell"), "{lead}");
+        let f = diag.findings.iter_mut().find(|f| f.accepted).unwrap();
+        f.evidence.decision = "accepted: strongest term passing both tests; tied with quadratic: these data cannot tell them apart, and this one, simpler or stronger, is in the model".into();
+        let d = ReportData {
+            diagnosis: Some(diag),
+            ..ReportData::default()
+        };
+        let lead = block(&d).lead.unwrap();
+        assert!(
+            lead.contains(&format!("these data cannot tell {form} from quadratic")),
+            "{lead}"
+        );
+    }
 
     /// The shipped diagnosis has no contact warning; with its 316 pair test decided as a contact
     /// distance, the summary names the material and the factor.

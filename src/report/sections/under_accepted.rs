@@ -1,4 +1,4 @@
-//! Section 3.6: the chapter's numbers under the physics discovery accepted (`refit`), beside the
+//! Section 3.8: the chapter's numbers under the physics discovery accepted (`refit`), beside the
 //! baseline's, with which the report trusts and why; and the helpers by which the summary's key
 //! parameters and 3.5.1 take the trusted column.
 
@@ -89,7 +89,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let u = d.under_accepted.as_ref()?;
     let mut b = Block::new(
         "under-accepted",
-        "3.6 The chapter's numbers under the physics discovery accepted",
+        "3.8 The chapter's numbers under the physics discovery accepted",
     );
     if !u.accepted {
         b.para("Discovery accepted no single-run physics, so nothing was refitted: the baseline's numbers above are the analysis' numbers.");

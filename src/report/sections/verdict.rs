@@ -22,6 +22,14 @@ fn place_words(f: &Finding) -> &'static str {
     }
 }
 
+/// The forms an accepted finding is tied with, as its decision names them (`… tied with a and
+/// b: these data cannot tell them apart …`): forms that passed both tests and predict held-out
+/// runs as well.
+pub fn tied_with(f: &Finding) -> Option<&str> {
+    let rest = f.evidence.decision.split("tied with ").nth(1)?;
+    Some(rest.split(':').next().unwrap_or(rest))
+}
+
 /// One sentence for an accepted finding.
 fn sentence(f: &Finding) -> String {
     let mut s = format!(
@@ -42,8 +50,7 @@ fn sentence(f: &Finding) -> String {
             after * 1e6
         ));
     }
-    if let Some(rest) = f.evidence.decision.split("tied with ").nth(1) {
-        let other = rest.split(':').next().unwrap_or(rest);
+    if let Some(other) = tied_with(f) {
         s.push_str(&format!(
             "; tied with {other}: these data cannot tell the two apart, and this one is in the model"
         ));

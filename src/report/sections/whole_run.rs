@@ -58,7 +58,7 @@ pub fn speed_dependent_friction(d: &ReportData, material: &str) -> Option<String
 /// `material`, with μ_pp of discovery's pair check, which held that physics, or None.
 pub fn uncarried_physics(d: &ReportData, material: &str) -> Option<String> {
     if super::under_accepted::whole_run_of(d, material).is_some() {
-        // the refit carried it: 3.6 gives the numbers under it, no caveat is needed
+        // the refit carried it: 3.8 gives the numbers under it, no caveat is needed
         return None;
     }
     uncarried_words(&d.diagnosis.as_ref()?.findings, material)
@@ -191,7 +191,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         if let Some(words) = uncarried_physics(d, name) {
             b.para(words);
         } else if super::under_accepted::whole_run_of(d, name).is_some() {
-            b.para(format!("{name}: these are the baseline's fits; under the physics discovery accepted they are in 3.6, and the report trusts those."));
+            b.para(format!("{name}: these are the baseline's fits; under the physics discovery accepted they are in 3.8, and the report trusts those."));
         }
         if let Some(w) = not_fitted_words(&m.profile) {
             b.para(format!("{name}: {w}."));
