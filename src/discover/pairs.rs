@@ -432,6 +432,7 @@ fn test_material(
     (model, single_se): &(Model, [f64; 3]),
     groove: Groove,
     max_iter: usize,
+    blur_s: f64,
 ) -> Draft {
     // the free fit frees μ_pg and the drag only: the single runs' other forces (a tilt, a
     // resistance, a wave, a bump) stay held in it, or a bump the pairs cross would read as a
@@ -455,7 +456,7 @@ fn test_material(
     // the single runs' values carry their own errors: compare them with the pairs' by a
     // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
     // treat the single runs' values as exact
-    let split = split_by_impact(runs, &free);
+    let split = split_by_impact(runs, &free, blur_s);
     let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
     let contact = contact_fit(runs, model, &held, groove, max_iter);
     let inflate = inflation(split.lag1) * misfit(&[&free, &contact], n_pts);
@@ -688,11 +689,13 @@ fn impact_finding(d: &Draft, p_holm: f64) -> Finding {
 
 /// Test the collision runs of `recordings` against the single-run physics `physics` (per
 /// material); materials without collision runs or without physics are skipped with a note.
+/// `blur_s`: the tracking noise's growth with speed the single runs measured (0: none).
 pub fn check_pairs(
     recordings: &[Recording],
     physics: &BTreeMap<String, (Model, [f64; 3])>,
     groove: Groove,
     max_iter: usize,
+    blur_s: f64,
 ) -> (Vec<Finding>, Vec<String>) {
     let mut notes = Vec::new();
     let mut drafts = Vec::new();
@@ -703,7 +706,9 @@ pub fn check_pairs(
             ));
             continue;
         };
-        drafts.push(test_material(material, runs, single, groove, max_iter));
+        drafts.push(test_material(
+            material, runs, single, groove, max_iter, blur_s,
+        ));
     }
     let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
     let p_imp = holm(&drafts.iter().map(|d| d.p_impact).collect::<Vec<_>>());
@@ -772,7 +777,11 @@ pub fn add_pair_findings(
             Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
         }
     }
-    let (mut findings, more) = check_pairs(recordings, &physics, groove, 80);
+    let blur_s = diagnosis
+        .tracking_blur
+        .as_ref()
+        .map_or(0.0, |b| b.noise_per_speed_s);
+    let (mut findings, more) = check_pairs(recordings, &physics, groove, 80, blur_s);
     for f in &mut findings {
         f.where_.insert("place".into(), serde_json::json!("pair"));
     }

@@ -42,7 +42,24 @@ pub(super) struct ImpactSplit {
 const MIN_SAMPLES: usize = 4;
 
 /// Split the free fit's residuals by time since the last impact.
-pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ImpactSplit {
+/// Each sample's noise scale over the track's mean, when the tracking noise grows with speed as
+/// σ² = σ₀² + (c·v)² (c = `blur_s`, the single runs' `blur.rs`): fast particles just after an
+/// impact have a larger noise, which is no misfit. Empty when c = 0.
+fn speed_scale(v: &[f64], sigma_m: f64, blur_s: f64) -> Vec<f64> {
+    if !(blur_s > 0.0) || v.is_empty() {
+        return Vec::new();
+    }
+    let c2 = blur_s * blur_s;
+    let mean_v2 = v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64;
+    let base = (sigma_m * sigma_m - c2 * mean_v2).max(0.05 * sigma_m * sigma_m);
+    let var: Vec<f64> = v.iter().map(|x| base + c2 * x * x).collect();
+    let mean = var.iter().sum::<f64>() / var.len() as f64;
+    var.iter().map(|x| (x / mean).sqrt()).collect()
+}
+
+/// The split of the whole-run fit `fit`'s residuals, each sample whitened by its noise (the
+/// run's σ, grown with speed by `blur_s` where the single runs measured that).
+pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit, blur_s: f64) -> ImpactSplit {
     let (mut near, mut far) = ((0.0, 0usize), (0.0, 0usize));
     let mut log_ratios = Vec::new();
     let mut worst: Option<(String, f64)> = None;
@@ -51,9 +68,17 @@ pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ImpactSplit {
         let (rel, traj) = simulate_run(run, &fit.spec, &fit.result.shared, own);
         let (mut rn, mut rf) = ((0.0, 0usize), (0.0, 0usize));
         for p in 0..2 {
+            let v: Vec<f64> = run.samples[p]
+                .iter()
+                .map(|&(i, _)| traj.particles[p].v_mps[i])
+                .collect();
+            let scale = speed_scale(&v, run.sigma_m, blur_s);
             let r: Vec<f64> = run.samples[p]
                 .iter()
-                .map(|&(i, zd)| (traj.particles[p].z_m[i] - zd) / run.sigma_m)
+                .enumerate()
+                .map(|(k, &(i, zd))| {
+                    (traj.particles[p].z_m[i] - zd) / run.sigma_m / scale.get(k).unwrap_or(&1.0)
+                })
                 .collect();
             let clipped: Vec<f64> = r.iter().map(|x| x.clamp(-10.0, 10.0)).collect();
             cross += clipped.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
