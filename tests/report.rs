@@ -654,19 +654,7 @@ fn layout_faults(name: &str, svg: &str) -> Vec<String> {
         attr_of(svg, "height").unwrap_or(0.0),
     );
     let tags: Vec<&str> = svg.split('<').skip(1).collect();
-    // legend boxes: the half-opaque white rectangles the legend is drawn on
-    let boxes: Vec<[f64; 4]> = tags
-        .iter()
-        .filter(|t| t.starts_with("rect ") && t.contains("opacity=\"0.85\" fill=\"#FFFFFF\""))
-        .filter_map(|t| {
-            Some([
-                attr_of(t, "x")?,
-                attr_of(t, "y")?,
-                attr_of(t, "width")?,
-                attr_of(t, "height")?,
-            ])
-        })
-        .collect();
+    let boxes = legend_boxes(&tags);
     let points: Vec<(f64, f64)> = tags
         .iter()
         .filter(|t| t.starts_with("circle class=\"pt\""))
@@ -1049,11 +1037,9 @@ fn marker_of(tag: &str) -> Option<(String, (f64, f64))> {
     None
 }
 
-/// Legend samples with no plotted marker of the same look.
-fn legend_marker_faults(name: &str, svg: &str) -> Vec<String> {
-    let tags: Vec<&str> = svg.split('<').skip(1).collect();
-    let boxes: Vec<[f64; 4]> = tags
-        .iter()
+/// Legend boxes: the half-opaque white rectangles the legend is drawn on (x, y, width, height).
+fn legend_boxes(tags: &[&str]) -> Vec<[f64; 4]> {
+    tags.iter()
         .filter(|t| t.starts_with("rect ") && t.contains("opacity=\"0.85\" fill=\"#FFFFFF\""))
         .filter_map(|t| {
             Some([
@@ -1063,7 +1049,13 @@ fn legend_marker_faults(name: &str, svg: &str) -> Vec<String> {
                 attr_of(t, "height")?,
             ])
         })
-        .collect();
+        .collect()
+}
+
+/// Legend samples with no plotted marker of the same look.
+fn legend_marker_faults(name: &str, svg: &str) -> Vec<String> {
+    let tags: Vec<&str> = svg.split('<').skip(1).collect();
+    let boxes = legend_boxes(&tags);
     let inside = |p: (f64, f64)| {
         boxes
             .iter()
