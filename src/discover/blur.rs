@@ -19,6 +19,7 @@
 
 use super::data::RunData;
 use super::noise::{detrended, HALF};
+use super::response::dot;
 
 /// Standard errors the slope must lie above zero for the blur to be kept.
 const Z_KEEP: f64 = 4.0;
@@ -45,13 +46,9 @@ struct Series {
 }
 
 impl Series {
-    fn dot(a: &[f64], b: &[f64]) -> f64 {
-        a.iter().zip(b).map(|(x, y)| x * y).sum()
-    }
-
     /// h with γ projected out.
     fn h_tilde(&self) -> Vec<f64> {
-        let k = Self::dot(&self.gamma, &self.h) / Self::dot(&self.gamma, &self.gamma);
+        let k = dot(&self.gamma, &self.h) / dot(&self.gamma, &self.gamma);
         self.h
             .iter()
             .zip(&self.gamma)
@@ -62,7 +59,7 @@ impl Series {
     /// σ₀² given the slope c².
     fn base(&self, c2: f64) -> f64 {
         let g = &self.gamma;
-        (Self::dot(g, &self.d2) - c2 * Self::dot(g, &self.h)) / Self::dot(g, g)
+        (dot(g, &self.d2) - c2 * dot(g, &self.h)) / dot(g, g)
     }
 }
 
@@ -114,8 +111,8 @@ fn slope(all: &[&Series]) -> Option<(f64, f64)> {
     let tilde: Vec<Vec<f64>> = all.iter().map(|s| s.h_tilde()).collect();
     let (mut num, mut den) = (0.0, 0.0);
     for (s, t) in all.iter().zip(&tilde) {
-        num += s.w * Series::dot(t, &s.d2);
-        den += s.w * Series::dot(t, t);
+        num += s.w * dot(t, &s.d2);
+        den += s.w * dot(t, t);
     }
     if !(den > 0.0) {
         return None;
@@ -137,6 +134,12 @@ fn slope(all: &[&Series]) -> Option<(f64, f64)> {
     (se > 0.0).then(|| (c2, c2 / se))
 }
 
+/// Each sample's noise σ over the root mean square of the track's, from the samples' variances.
+pub fn relative(var: &[f64]) -> Vec<f64> {
+    let mean = var.iter().sum::<f64>() / var.len().max(1) as f64;
+    var.iter().map(|v| (v / mean).sqrt()).collect()
+}
+
 /// Measure the dataset's blur from the runs' baseline residuals `res` and give each run its
 /// scale by kept sample; None (and every scale left empty) when no blur is seen.
 pub fn measure(runs: &mut [RunData], res: &[Vec<f64>]) -> Option<Blur> {
@@ -151,11 +154,9 @@ pub fn measure(runs: &mut [RunData], res: &[Vec<f64>]) -> Option<Blur> {
         // σ₀² and c² are in the white noise's units; the scale is their ratio to the run's
         // mean over its kept samples, which the run's σ measures whatever the noise's shape
         let var: Vec<f64> = s.v2.iter().map(|v2| s.base(c2) + c2 * v2).collect();
-        let mean = var.iter().sum::<f64>() / var.len() as f64;
-        let floor = FLOOR * mean;
+        let floor = FLOOR * var.iter().sum::<f64>() / var.len() as f64;
         let var: Vec<f64> = var.iter().map(|v| v.max(floor)).collect();
-        let mean = var.iter().sum::<f64>() / var.len() as f64;
-        run.scale = var.iter().map(|v| (v / mean).sqrt()).collect();
+        run.scale = relative(&var);
     }
     Some(Blur {
         gain_s: c2.sqrt(),

@@ -51,10 +51,10 @@ fn speed_scale(v: &[f64], sigma_m: f64, blur_s: f64) -> Vec<f64> {
     }
     let c2 = blur_s * blur_s;
     let mean_v2 = v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64;
+    // the run's σ is its noise's mean over the track: what the speeds leave of it is σ₀²
     let base = (sigma_m * sigma_m - c2 * mean_v2).max(0.05 * sigma_m * sigma_m);
     let var: Vec<f64> = v.iter().map(|x| base + c2 * x * x).collect();
-    let mean = var.iter().sum::<f64>() / var.len() as f64;
-    var.iter().map(|x| (x / mean).sqrt()).collect()
+    super::blur::relative(&var)
 }
 
 /// The split of the whole-run fit `fit`'s residuals, each sample whitened by its noise (the
