@@ -479,6 +479,7 @@ fn a_particle_at_rest_starts_when_a_force_in_time_outgrows_the_hold() {
         restitution: Restitution::Constant(0.9),
         mu_pp: 0.3,
         radius_m: 150e-6,
+        force: None,
     };
     let far = State {
         z_m: 0.01,
@@ -590,6 +591,7 @@ fn rolling_pair(
         restitution: Restitution::Constant(1.0),
         mu_pp,
         radius_m: 150e-6,
+        force: None,
     };
     let init = [
         State {
@@ -665,6 +667,7 @@ fn pair_ends_up_rolling_2r_apart() {
             },
             mu_pp: 1.4,
             radius_m: 150e-6,
+            force: None,
         };
         let (s, r) = (
             State {
@@ -707,6 +710,7 @@ fn contact_pair_collides_at_once() {
         restitution: Restitution::Constant(0.8),
         mu_pp: 1.4,
         radius_m: 150e-6,
+        force: None,
     };
     let init = [
         State {

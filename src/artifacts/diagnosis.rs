@@ -301,6 +301,8 @@ pub const CONTACT_NOT_PHYSICS: &str = "not friction or drag";
 pub enum Effect {
     /// μ differs by the direction of motion.
     DirectionDependentFriction,
+    /// Collision runs only: a force between the two particles before they touch.
+    ForceBetweenParticles,
     GrooveTilt,
     /// Collision runs only: the impacts do something the impulse rule misses.
     ImpactSpecificMismatch,
@@ -323,8 +325,9 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in id order.
-    pub const ALL: [Effect; 13] = [
+    pub const ALL: [Effect; 14] = [
         Effect::DirectionDependentFriction,
+        Effect::ForceBetweenParticles,
         Effect::GrooveTilt,
         Effect::ImpactSpecificMismatch,
         Effect::PairPhysicsMismatch,
@@ -343,6 +346,7 @@ impl Effect {
     pub fn id(self) -> &'static str {
         match self {
             Effect::DirectionDependentFriction => "direction_dependent_friction",
+            Effect::ForceBetweenParticles => "force_between_particles",
             Effect::GrooveTilt => "groove_tilt",
             Effect::ImpactSpecificMismatch => "impact_specific_mismatch",
             Effect::PairPhysicsMismatch => "pair_physics_mismatch",
@@ -372,7 +376,9 @@ impl Effect {
             | Effect::VelocityDependentFriction => "friction",
             Effect::PositionDistortion => "measurement",
             Effect::ParticleDifferences => "particles",
-            Effect::ImpactSpecificMismatch | Effect::PairPhysicsMismatch => "pair",
+            Effect::ForceBetweenParticles
+            | Effect::ImpactSpecificMismatch
+            | Effect::PairPhysicsMismatch => "pair",
             Effect::GrooveTilt
             | Effect::PositionDependentForce
             | Effect::RollingResistance

@@ -21,6 +21,7 @@
 //! - `noise_floor.rs`: The noise floor of a scan over frequencies measured on the data itself
 //! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
 //! - `pairs.rs`: Discovery on pairs
+//! - `pair_force.rs`: The test for a force between the two particles of a pair
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
@@ -91,7 +92,8 @@
 //!    gain; the force maps, periodograms and residuals before and after go in `diagnosis.json`.
 //!    The collision runs are checked by `pairs.rs`: the pairs fitted with μ_pg and drag held at
 //!    the single runs' accepted physics against free (Wald χ², a contact-distance fit that names
-//!    a length calibration), and residuals after impacts (`pairs_impact.rs`).
+//!    a length calibration), residuals after impacts (`pairs_impact.rs`), and a force between the
+//!    particles before they touch, in their separation (`pair_force.rs`).
 //!
 //! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times on stderr (not in any
 //! output).
@@ -116,6 +118,7 @@ pub mod noise;
 pub mod noise_floor;
 pub mod noise_model;
 pub mod null_distribution;
+mod pair_force;
 pub mod pairs;
 mod pairs_impact;
 mod particles;

@@ -16,14 +16,15 @@
 
 use super::forms;
 use super::holm::holm;
+use super::pair_force::{test_force, ForceTest};
 use super::pairs_impact::{
     impact_decision, impact_p_value, split_by_impact, ALPHA, IMPACT_WINDOW_S,
 };
 use crate::artifacts::diagnosis::{Effect, CONTACT_NOT_PHYSICS as NOT_PHYSICS};
 use crate::artifacts::diagnosis::{Estimate as Value, Evidence, Finding, ModelScore};
 use crate::fit::collision::wholerun::{
-    fit_group, fit_group_with, DragSpec, FitSpec, GroupFit, PairRun, CONTACT, LN_T0, MU_PG, MU_PP,
-    TP,
+    fit_group, fit_group_with, DragSpec, FitSpec, GroupFit, PairForceShape, PairRun, CONTACT,
+    LN_T0, MU_PG, MU_PP, TP,
 };
 use crate::lsq::Termination;
 use crate::physics::{Friction, Groove, Model, Term};
@@ -240,6 +241,10 @@ struct Draft {
     n_runs_tested: usize,
     /// The run whose residuals concentrate most after its impacts, with its ratio.
     worst: Option<(String, f64)>,
+    /// How much the pairs' residuals inflate a fit's variances (lag-1 correlation, misfit).
+    inflate: f64,
+    /// The force between the particles carried in every fit (an accepted one), if any.
+    carried: Option<(PairForceShape, [f64; 3])>,
 }
 
 impl Draft {
@@ -255,13 +260,18 @@ impl Draft {
     }
 }
 
-/// The pair model with the drag and every other single-run force held at `model`'s.
-fn held_spec(model: &Model, groove: Groove) -> FitSpec {
+/// The pair model with the drag and every other single-run force held at `model`'s, and the
+/// force between the particles `carried` (fitted in every fit, from these values) if any.
+fn held_spec(model: &Model, groove: Groove, carried: Carried) -> FitSpec {
     FitSpec {
         drag: DragSpec::Held(model.terms.clone()),
+        pair_force: carried,
         ..FitSpec::new(groove)
     }
 }
+
+/// A force between the particles carried in the pair fits: its shape and (A, ln λ, n).
+type Carried = Option<(PairForceShape, [f64; 3])>;
 
 /// Whether a fit with the single runs' physics held moves shared slot `i`: every slot but μ_pg
 /// and the drag's.
@@ -284,9 +294,10 @@ fn held_from_defaults(
     runs: &[PairRun],
     model: &Model,
     groove: Groove,
+    carried: Carried,
     max_iter: usize,
 ) -> GroupFit {
-    let spec = held_spec(model, groove);
+    let spec = held_spec(model, groove, carried);
     let mut shared: Vec<f64> = spec
         .shared_specs(None, runs)
         .iter()
@@ -307,7 +318,7 @@ fn held_fit(
 ) -> GroupFit {
     let mut start = free.clone();
     start.result.shared[MU_PG] = single_mu(model);
-    let held_spec = held_spec(model, groove);
+    let held_spec = held_spec(model, groove, free.spec.pair_force);
     // μ_pg held too: the pairs are asked to move with the single runs' friction and drag
     let mut held = fit_group_with(
         runs,
@@ -375,7 +386,7 @@ fn held_and_free(
     max_iter: usize,
 ) -> (GroupFit, GroupFit) {
     let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
-    let mut held = held_from_defaults(runs, model, groove, max_iter);
+    let mut held = held_from_defaults(runs, model, groove, free_spec.pair_force, max_iter);
     let mut free = free_from_held(runs, free_spec, model, &held, max_iter);
     if free
         .as_ref()
@@ -413,7 +424,7 @@ fn contact_fit(
 ) -> GroupFit {
     let spec = FitSpec {
         free_contact: true,
-        ..held_spec(model, groove)
+        ..held_spec(model, groove, held.spec.pair_force)
     };
     fit_group_with(
         runs,
@@ -433,6 +444,7 @@ fn test_material(
     groove: Groove,
     max_iter: usize,
     blur_s: f64,
+    carried: Carried,
 ) -> Draft {
     // the free fit frees μ_pg and the drag only: the single runs' other forces (a tilt, a
     // resistance, a wave, a bump) stay held in it, or a bump the pairs cross would read as a
@@ -449,6 +461,7 @@ fn test_material(
         } else {
             DragSpec::SaturatingWith(others)
         },
+        pair_force: carried,
         ..FitSpec::new(groove)
     };
     let (held, free) = held_and_free(runs, &free_spec, model, groove, max_iter);
@@ -490,6 +503,8 @@ fn test_material(
         n_near: split.n_near,
         n_runs_tested: split.log_ratios.len(),
         worst: split.worst,
+        inflate,
+        carried,
     }
 }
 
@@ -699,20 +714,54 @@ pub fn check_pairs(
 ) -> (Vec<Finding>, Vec<String>) {
     let mut notes = Vec::new();
     let mut drafts = Vec::new();
-    for (material, runs) in &pair_runs_by_material(recordings) {
+    let by_material = pair_runs_by_material(recordings);
+    for (material, runs) in &by_material {
         let Some(single) = physics.get(material) else {
             notes.push(format!(
                 "collision runs of {material}: no single-run physics of this material to test"
             ));
             continue;
         };
-        drafts.push(test_material(
-            material, runs, single, groove, max_iter, blur_s,
+        drafts.push((
+            runs,
+            single,
+            test_material(material, runs, single, groove, max_iter, blur_s, None),
         ));
     }
+    // a force between the particles, from each material's held fit; an accepted one is carried
+    // into both tests of that material, made again (the force would read as a mismatch of
+    // friction and drag or as a misfit after impacts)
+    let forces: Vec<ForceTest> = drafts
+        .iter()
+        .map(|(runs, _, d)| {
+            test_force(
+                &d.material,
+                runs,
+                &d.held,
+                &not_physics,
+                d.inflate,
+                max_iter,
+            )
+        })
+        .collect();
+    let p_force = holm(&forces.iter().map(|f| f.p).collect::<Vec<_>>());
+    let mut findings = Vec::new();
+    let drafts: Vec<Draft> = drafts
+        .into_iter()
+        .zip(&forces)
+        .zip(&p_force)
+        .map(|(((runs, single, d), force), &p)| {
+            findings.push(force.finding(p, d.n_pts, d.sigma));
+            if force.decision(p).0 {
+                let carried = Some(force.chosen.carried());
+                test_material(&d.material, runs, single, groove, max_iter, blur_s, carried)
+            } else {
+                d
+            }
+        })
+        .collect();
     let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
     let p_imp = holm(&drafts.iter().map(|d| d.p_impact).collect::<Vec<_>>());
-    let mut findings = Vec::new();
     for (k, d) in drafts.iter().enumerate() {
         let physics = physics_finding(d, p_phys[k]);
         if physics.evidence.decision.starts_with(NOT_PHYSICS) {

@@ -14,6 +14,7 @@
 //! - `mode.rs`: The motion modes of one particle
 //! - `model.rs`: A one-particle model (groove, friction law, extra terms) and the particle state
 //! - `pair.rs`: Two equal particles in one groove
+//! - `pair_force.rs`: A force between the two particles of a pair that acts before they touch
 //! - `phase.rs`: The three motion phases of a particle in the groove
 //! - `restitution.rs`: The coefficient of restitution C as a function of the impact speed
 //! - `rk.rs`: One Dormand–Prince 5(4) step for an autonomous ODE
@@ -139,6 +140,7 @@ pub mod impulse;
 mod mode;
 mod model;
 mod pair;
+mod pair_force;
 mod phase;
 mod restitution;
 mod rk;
@@ -154,6 +156,7 @@ pub use friction_variation::FrictionVariation;
 pub use groove::Groove;
 pub use model::{Model, State};
 pub use pair::{simulate_pair, Impact, PairParams, PairTrajectory, V_TOGETHER_MPS};
+pub use pair_force::PairForce;
 pub use phase::Phase;
 pub use restitution::Restitution;
 pub use simulate::simulate;

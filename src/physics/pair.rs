@@ -8,6 +8,7 @@
 use super::advance::{advance, Sampler};
 use super::impulse::collide;
 use super::mode::{start, Mode};
+use super::pair_force::PairForce;
 use super::rk::Tolerance;
 use super::{Model, Phase, Restitution, State, SwitchEvent, Trajectory};
 use serde::{Deserialize, Serialize};
@@ -33,6 +34,27 @@ pub struct PairParams {
     /// Particle–particle Coulomb friction.
     pub mu_pp: f64,
     pub radius_m: f64,
+    /// A force between the particles before they touch (none in the chapter's model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<PairForce>,
+}
+
+impl PairParams {
+    /// The accelerations from the pair force on particles 0 and 1 in state `y` (particle `l`
+    /// at lower z), 0 without one.
+    fn ext(&self, y: &[f64], (l, r): (usize, usize)) -> [f64; 2] {
+        let Some(f) = self.force else {
+            return [0.0, 0.0];
+        };
+        let two_r = 2.0 * self.radius_m;
+        let gap = y[3 * r] - y[3 * l] - two_r;
+        let approach = y[3 * l + 1] - y[3 * r + 1];
+        let [al, ar] = f.on_particle(gap, gap <= CONTACT_SLACK * two_r, approach);
+        let mut out = [0.0; 2];
+        out[l] = al;
+        out[r] = ar;
+        out
+    }
 }
 
 /// One impact: time, states of both particles just before and just after.
@@ -98,7 +120,19 @@ pub fn simulate_pair(
     let mut modes = [Mode::Rest; 2];
     let mut y = [0.0; 6];
     for i in 0..2 {
-        let (m, yi) = start(model, init[i].z_m, init[i].v_mps, init[i].va_mps, 0.0);
+        y[3 * i] = init[i].z_m;
+        y[3 * i + 1] = init[i].v_mps;
+    }
+    let ext0 = pair.ext(&y, (l, r));
+    for i in 0..2 {
+        let (m, yi) = start(
+            model,
+            init[i].z_m,
+            init[i].v_mps,
+            init[i].va_mps,
+            0.0,
+            ext0[i],
+        );
         modes[i] = m;
         y[3 * i..3 * i + 3].copy_from_slice(&yi);
     }
@@ -119,6 +153,7 @@ pub fn simulate_pair(
         }
         let phases = [modes[0].phase(), modes[1].phase()];
         let ms = modes;
+        // at rest the pair force is fixed too (neither moves), so rest lasts as for one particle
         let both_rest = ms[0].absorbing(model) && ms[1].absorbing(model);
         let (p0, p1) = out.particles.split_at_mut(1);
         let mut sampler = Sampler {
@@ -138,13 +173,15 @@ pub fn simulate_pair(
         }
         let stop = advance(
             &|yy: &[f64; 7]| {
-                let a: [f64; 3] = ms[0].rhs(model, &[yy[0], yy[1], yy[2]], yy[6]);
-                let b: [f64; 3] = ms[1].rhs(model, &[yy[3], yy[4], yy[5]], yy[6]);
+                let e = pair.ext(yy, (l, r));
+                let a: [f64; 3] = ms[0].rhs(model, &[yy[0], yy[1], yy[2]], yy[6], e[0]);
+                let b: [f64; 3] = ms[1].rhs(model, &[yy[3], yy[4], yy[5]], yy[6], e[1]);
                 [a[0], a[1], a[2], b[0], b[1], b[2], 1.0]
             },
             &|yy: &[f64; 7]| {
-                let a = ms[0].events(model, &[yy[0], yy[1], yy[2]], yy[6]);
-                let b = ms[1].events(model, &[yy[3], yy[4], yy[5]], yy[6]);
+                let e = pair.ext(yy, (l, r));
+                let a = ms[0].events(model, &[yy[0], yy[1], yy[2]], yy[6], e[0]);
+                let b = ms[1].events(model, &[yy[3], yy[4], yy[5]], yy[6], e[1]);
                 let gap = yy[3 * r] - yy[3 * l] - two_r;
                 [a[0], a[1], b[0], b[1], gap + CONTACT_SLACK * two_r]
             },
@@ -169,9 +206,10 @@ pub fn simulate_pair(
                 y[3 * r] = mid + 0.5 * two_r;
             }
             Some(e) => {
+                let ext = pair.ext(&y, (l, r));
                 let i = e / 2;
                 let yi = [y[3 * i], y[3 * i + 1], y[3 * i + 2]];
-                let (m, y_new) = modes[i].after_event(model, e % 2, &yi, t);
+                let (m, y_new) = modes[i].after_event(model, e % 2, &yi, t, ext[i]);
                 note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
                 modes[i] = m;
                 y[3 * i..3 * i + 3].copy_from_slice(&y_new);
@@ -180,9 +218,9 @@ pub fn simulate_pair(
                 // past zero, would not fire again, so it is taken here too
                 let j = 1 - i;
                 let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
-                let ej = modes[j].events(model, &yj, t);
+                let ej = modes[j].events(model, &yj, t, ext[j]);
                 if let Some(k) = (0..ej.len()).find(|&k| ej[k] < 0.0) {
-                    let (m, y_new) = modes[j].after_event(model, k, &yj, t);
+                    let (m, y_new) = modes[j].after_event(model, k, &yj, t, ext[j]);
                     note_switch(&mut out.particles[j], t, modes[j], m, &y_new);
                     modes[j] = m;
                     y[3 * j..3 * j + 3].copy_from_slice(&y_new);
@@ -237,7 +275,12 @@ fn impact(
         (c, kick.slip, kick.v, kick.va)
     };
     for (idx, p) in [l, r].into_iter().enumerate() {
-        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx], t_s);
+        y[3 * p + 1] = v_new[idx];
+        y[3 * p + 2] = va_new[idx];
+    }
+    let ext = pair.ext(y, (l, r));
+    for (idx, p) in [l, r].into_iter().enumerate() {
+        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx], t_s, ext[p]);
         let from = modes[p];
         note_switch_phase(&mut out.particles[p], t_s, from, m, &yi);
         modes[p] = m;
@@ -292,6 +335,7 @@ mod tests {
             restitution: Restitution::Constant(0.9),
             mu_pp: 1.4,
             radius_m: 150e-6,
+            force: None,
         };
         let s = Groove::CHAPTER.s;
         let init = [

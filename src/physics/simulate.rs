@@ -33,7 +33,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
     let Some(&t_end) = t_s.last() else {
         return traj;
     };
-    let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps, 0.0);
+    let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps, 0.0, 0.0);
     let mut t = 0.0;
     let mut h = 1e-4;
     let mut next = 0;
@@ -54,10 +54,10 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
         };
         let stop = advance(
             &|yy: &[f64; 4]| {
-                let d = m.rhs(model, &head(yy), yy[3]);
+                let d = m.rhs(model, &head(yy), yy[3], 0.0);
                 [d[0], d[1], d[2], 1.0]
             },
-            &|yy: &[f64; 4]| m.events(model, &head(yy), yy[3]),
+            &|yy: &[f64; 4]| m.events(model, &head(yy), yy[3], 0.0),
             t,
             with_t(&y, t),
             t_end,
@@ -69,7 +69,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
         next = sampler.next;
         t = stop.t_s;
         let Some(k) = stop.event else { break };
-        let (new_mode, new_y) = mode.after_event(model, k, &head(&stop.y), t);
+        let (new_mode, new_y) = mode.after_event(model, k, &head(&stop.y), t, 0.0);
         let slip_flip = matches!((mode, new_mode), (Mode::Slide { d: a, .. }, Mode::Slide { d: b, .. }) if a != b);
         if new_mode.phase() != phase || slip_flip {
             traj.events.push(SwitchEvent {

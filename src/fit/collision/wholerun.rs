@@ -16,7 +16,8 @@ use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
 use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
-    simulate_pair, Friction, Groove, Model, PairParams, PairTrajectory, Restitution, State, Term,
+    simulate_pair, Friction, Groove, Model, PairForce, PairParams, PairTrajectory, Restitution,
+    State, Term,
 };
 use crate::recording::{Recording, Setup};
 
@@ -98,7 +99,22 @@ pub const MU_PP: usize = 3;
 pub const LAW: usize = 4;
 /// The contact distance over the diameter in runs.csv (held at 1 unless `FitSpec::free_contact`).
 pub const CONTACT: usize = 8;
-pub const N_SHARED: usize = 9;
+/// The force between the particles (`FitSpec::pair_force`; held at 0 without one): its
+/// amplitude A at contact (m/s², > 0 repulsive), ln of its range λ (m), and the power law's n.
+pub const PF_AMP: usize = 9;
+pub const PF_LN_RANGE: usize = 10;
+pub const PF_EXPONENT: usize = 11;
+pub const N_SHARED: usize = 12;
+
+/// Start values of a force between the particles, (A, ln λ, n): none, over 40 µm, n = 3.
+pub const PAIR_FORCE_START: [f64; 3] = [0.0, -10.126631103850338, 3.0];
+
+/// The shape of a force between the particles fitted with the pairs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairForceShape {
+    Exponential,
+    PowerLaw,
+}
 /// Indices of the own parameters of a run.
 pub const Z1: usize = 0;
 pub const GAP: usize = 1;
@@ -274,6 +290,9 @@ pub struct FitSpec {
     pub mu_pp_held: Option<f64>,
     /// Fit the contact distance (`CONTACT`, a factor on the diameter) instead of holding it at 1.
     pub free_contact: bool,
+    /// A force between the particles of this shape, fitted (`PF_AMP`…) from these start values
+    /// of (A, ln λ, n); none when None.
+    pub pair_force: Option<(PairForceShape, [f64; 3])>,
 }
 
 impl FitSpec {
@@ -284,6 +303,20 @@ impl FitSpec {
             laws: [LawForm::Saturating, LawForm::Saturating],
             mu_pp_held: None,
             free_contact: false,
+            pair_force: None,
+        }
+    }
+
+    /// The force between the particles at shared parameters `p` (None without one).
+    pub fn force(&self, p: &[f64]) -> Option<PairForce> {
+        let (amp_mps2, range_m) = (p[PF_AMP], p[PF_LN_RANGE].exp());
+        match self.pair_force?.0 {
+            PairForceShape::Exponential => Some(PairForce::Exponential { amp_mps2, range_m }),
+            PairForceShape::PowerLaw => Some(PairForce::PowerLaw {
+                amp_mps2,
+                range_m,
+                exponent: p[PF_EXPONENT],
+            }),
         }
     }
 
@@ -334,6 +367,7 @@ impl FitSpec {
             restitution: self.law_form(setup).law(p[i], p[i + 1]),
             mu_pp: p[MU_PP],
             radius_m: 0.5 * diameter_m * FitSpec::contact(p),
+            force: self.force(p),
         }
     }
 
@@ -366,6 +400,20 @@ impl FitSpec {
         } else {
             hold(contact, 1.0)
         });
+        // a force between the particles: |A| up to 100 g, λ from 1 µm to 2 mm, n from 1.2 to 12
+        let [a0, ln_l0, n0] = self.pair_force.map_or(PAIR_FORCE_START, |(_, s)| s);
+        let force = [
+            spec(a0, -1000.0, 1000.0, 1e-4),
+            spec(ln_l0, 1e-6f64.ln(), 2e-3f64.ln(), 1e-4),
+            spec(n0, 1.2, 12.0, 1e-4),
+        ];
+        match self.pair_force {
+            None => out.extend(force.map(|f| hold(f, f.start))),
+            Some((PairForceShape::Exponential, _)) => {
+                out.extend([force[0], force[1], hold(force[2], force[2].start)])
+            }
+            Some((PairForceShape::PowerLaw, _)) => out.extend(force),
+        }
         match self.drag {
             DragSpec::Saturating | DragSpec::SaturatingWith(_) => {}
             DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
@@ -412,7 +460,7 @@ impl BlockProblem for Problem<'_> {
         residuals(&self.runs[b], self.spec, shared, own, out);
     }
     fn uses(&self, b: usize, i: usize) -> bool {
-        if i < LAW || i == CONTACT {
+        if i < LAW || i >= CONTACT {
             return true;
         }
         let slot = law_slot(self.runs[b].setup);

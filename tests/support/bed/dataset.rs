@@ -4,7 +4,7 @@
 use crate::indsim::camera::{Camera, Frame};
 use crate::indsim::model::Physics;
 use crate::indsim::noise::Noise;
-use crate::indsim::pair::{simulate_pair, PairModel};
+use crate::indsim::pair::{simulate_pair, Between, PairModel};
 use crate::indsim::run::{simulate, DT_S};
 use crate::indsim::writer::RecordedRun;
 use rand::SeedableRng;
@@ -45,8 +45,8 @@ pub struct DatasetSpec {
     pub camera: Camera,
     pub noise: Noise,
     pub mu_pp: f64,
-    /// A force between the two particles of a collision run: (A m/s², range m).
-    pub pair_force: Option<(f64, f64)>,
+    /// A force between the two particles of a collision run.
+    pub pair_force: Option<Between>,
 }
 
 impl DatasetSpec {

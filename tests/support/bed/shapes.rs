@@ -4,6 +4,7 @@
 
 use super::dataset::DatasetSpec;
 use crate::indsim::effects::{Drag, Force, FrictionLaw};
+use crate::indsim::pair::Between;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -298,8 +299,18 @@ impl Effect {
                     }
                 }
             }
-            "pair_force" => spec.pair_force = Some((x, p[0])),
-            "pair_force_attractive" => spec.pair_force = Some((-x, p[0])),
+            "pair_force" => {
+                spec.pair_force = Some(Between::Screened {
+                    amp: x,
+                    range: p[0],
+                })
+            }
+            "pair_force_attractive" => {
+                spec.pair_force = Some(Between::Screened {
+                    amp: -x,
+                    range: p[0],
+                })
+            }
             other => unreachable!("no shape {other}"),
         }
     }

@@ -15,8 +15,49 @@ pub struct PairModel {
     /// Restitution C(v) = c0 + (1 − c0) exp(−v/v_ref), v the approach speed.
     pub c0: f64,
     pub v_ref_mps: f64,
-    /// A force between the two: A exp(−(gap)/λ) on each, pushing apart when A > 0 (m/s², m).
-    pub force: Option<(f64, f64)>,
+    /// A force between the two, on each along the line of centres, pushing apart when > 0.
+    pub force: Option<Between>,
+}
+
+/// Shapes of a force between the two particles in their gap s (surface to surface).
+#[derive(Clone, Copy, Debug)]
+pub enum Between {
+    /// `amp e^{−s/range}` (m/s², m).
+    Screened { amp: f64, range: f64 },
+    /// `amp (d/(d + s))^p`: a softened inverse power.
+    InversePower { amp: f64, d: f64, p: f64 },
+    /// A liquid bridge: `amp (1 − s/rupture)` until it ruptures at `rupture`, nothing beyond.
+    Bridge { amp: f64, rupture: f64 },
+}
+
+impl Between {
+    pub fn at(&self, gap: f64) -> f64 {
+        let s = gap.max(0.0);
+        match *self {
+            Between::Screened { amp, range } => amp * (-s / range).exp(),
+            Between::InversePower { amp, d, p } => amp * (d / (d + s)).powf(p),
+            Between::Bridge { amp, rupture } => {
+                if s < rupture {
+                    amp * (1.0 - s / rupture)
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// The work per unit mass over the whole range, ∫₀^∞ a ds (by quadrature: this simulator
+    /// keeps no closed forms of the fitting code's).
+    pub fn work(&self) -> f64 {
+        let (mut sum, mut prev) = (0.0, (0.0, self.at(0.0)));
+        for k in 1..=200_000 {
+            let s = 1e-8 * 1e7f64.powf(k as f64 / 200_000.0);
+            let a = self.at(s);
+            sum += 0.5 * (a + prev.1) * (s - prev.0);
+            prev = (s, a);
+        }
+        sum
+    }
 }
 
 impl PairModel {
@@ -66,9 +107,9 @@ pub fn simulate_pair(
     let n = (z0[1] - z0[0]).signum();
     let ext = |parts: &[Particle; 2]| -> [f64; 2] {
         match m.force {
-            Some((a, lambda)) => {
+            Some(b) => {
                 let gap = n * (parts[1].x.z - parts[0].x.z) - 2.0 * m.radius_m;
-                let f = a * (-gap.max(0.0) / lambda).exp();
+                let f = b.at(gap);
                 [-n * f, n * f]
             }
             None => [0.0, 0.0],
