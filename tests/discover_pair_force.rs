@@ -97,41 +97,121 @@ fn summary(findings: &[Finding]) -> String {
         .join("\n")
 }
 
+/// The accepted findings of `effect` by material, with their work (m²/s²).
+fn accepted_work(findings: &[Finding], effect: &str) -> BTreeMap<String, f64> {
+    findings
+        .iter()
+        .filter(|f| f.accepted && f.effect == effect)
+        .map(|f| {
+            let m = f.where_["material"].as_str().unwrap().to_string();
+            let w = f
+                .parameters
+                .get("pair_work_m2ps2")
+                .map_or(f64::NAN, |e| e.value);
+            (m, w)
+        })
+        .collect()
+}
+
+/// Five forces (attractive and repulsive; screened, inverse-power and bridge shapes; ranges 20 to
+/// 200 µm) in five tracker noises, each in rolling pairs of one material and touching pairs of
+/// the other. Every force named has its work within 25 %; at least 7 of the 10 (force, material)
+/// pairs are named; no pair is said to move under friction or drag of its own. Known misses: an
+/// attraction that holds touching pairs together after the kick rubs at their contact, which the
+/// pair model does not carry (their misfit then concentrates after impacts, and the impact test
+/// says so); in motion-blurred tracks the fit, which weighs every sample alike, can end at a
+/// weaker force that held-out runs do not confirm.
 #[test]
-#[ignore]
-fn probe() {
-    let shapes = [
-        Between::Screened {
-            amp: -3.0,
-            range: 50e-6,
-        },
-        Between::Screened {
-            amp: 1.5,
-            range: 150e-6,
-        },
-        Between::InversePower {
-            amp: -4.0,
-            d: 30e-6,
-            p: 3.0,
-        },
-        Between::Bridge {
-            amp: -2.0,
-            rupture: 100e-6,
-        },
+fn a_force_between_the_particles_is_named_with_its_work() {
+    let cases = [
+        (
+            "white",
+            Between::Screened {
+                amp: -3.0,
+                range: 50e-6,
+            },
+        ),
+        (
+            "ar1",
+            Between::Screened {
+                amp: 1.5,
+                range: 150e-6,
+            },
+        ),
+        (
+            "blur",
+            Between::InversePower {
+                amp: -4.0,
+                d: 30e-6,
+                p: 3.0,
+            },
+        ),
+        (
+            "outliers",
+            Between::Bridge {
+                amp: -2.0,
+                rupture: 100e-6,
+            },
+        ),
+        (
+            "mixture",
+            Between::Screened {
+                amp: 6.0,
+                range: 20e-6,
+            },
+        ),
     ];
-    for (k, b) in shapes.into_iter().enumerate() {
-        let c = pairs_case(100 + k as u64, "white", Some(b));
-        let t = std::time::Instant::now();
-        let f = pair_findings(&c);
-        eprintln!(
-            "{b:?} work {:.3e} ({:.0} s)\n{}\n",
-            b.work(),
-            t.elapsed().as_secs_f64(),
-            summary(&f)
-        );
+    let (mut named, mut wrong, mut report) = (0, Vec::new(), Vec::new());
+    for (k, (noise, b)) in cases.into_iter().enumerate() {
+        let c = pairs_case(100 + k as u64, noise, Some(b));
+        let findings = pair_findings(&c);
+        let truth = b.work();
+        report.push(format!(
+            "{b:?} in {noise} (work {truth:.3e}):\n{}",
+            summary(&findings)
+        ));
+        let found = accepted_work(&findings, "force_between_particles");
+        for (m, w) in &found {
+            if (w - truth).abs() > 0.25 * truth.abs() {
+                wrong.push(format!("{b:?}, {m}: work {w:.3e} against {truth:.3e}"));
+            }
+        }
+        named += found.len();
+        for m in accepted_work(&findings, "pair_physics_mismatch").keys() {
+            wrong.push(format!(
+                "{b:?}, {m}: said to move under friction or drag of its own"
+            ));
+        }
     }
-    let c = pairs_case(7, "mixture", None);
-    let t = std::time::Instant::now();
-    let f = pair_findings(&c);
-    eprintln!("null ({:.0} s)\n{}", t.elapsed().as_secs_f64(), summary(&f));
+    eprintln!("{}", report.join("\n"));
+    assert!(wrong.is_empty(), "{wrong:#?}\n{}", report.join("\n"));
+    assert!(named >= 7, "{named}/10 named:\n{}", report.join("\n"));
+}
+
+/// Pairs with nothing between them, in ten seeds over the tracker noises (correlated, blurred,
+/// locked to the pixel grid, with outliers, drifting, all at once): no force between the
+/// particles is accepted.
+#[test]
+fn pairs_with_nothing_between_them_stay_silent() {
+    let noises = [
+        "white", "ar1", "drift", "blur", "locked", "outliers", "mixture", "ar1", "blur", "mixture",
+    ];
+    let mut loud = Vec::new();
+    for (k, noise) in noises.into_iter().enumerate() {
+        let c = pairs_case(300 + k as u64, noise, None);
+        let findings = pair_findings(&c);
+        if !accepted_work(&findings, "force_between_particles").is_empty() {
+            loud.push(format!(
+                "seed {} ({noise}):\n{}",
+                300 + k,
+                summary(&findings)
+            ));
+        }
+    }
+    assert!(
+        loud.is_empty(),
+        "{}/10 accepted a force:\n{}",
+        loud.len(),
+        loud.join("\n")
+    );
 }

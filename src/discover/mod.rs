@@ -118,7 +118,7 @@ pub mod noise;
 pub mod noise_floor;
 pub mod noise_model;
 pub mod null_distribution;
-mod pair_force;
+pub mod pair_force;
 pub mod pairs;
 mod pairs_impact;
 mod particles;

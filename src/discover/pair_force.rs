@@ -21,8 +21,8 @@
 use super::pairs_impact::ALPHA;
 use crate::artifacts::diagnosis::{Effect, Estimate as Value, Evidence, Finding, ModelScore};
 use crate::fit::collision::wholerun::{
-    fit_group_with, fit_own_only, residuals, FitSpec, GroupFit, PairForceShape, PairRun,
-    PAIR_FORCE_START, PF_AMP, PF_EXPONENT, PF_LN_RANGE,
+    fit_group_with, fit_own_only, FitSpec, GroupFit, PairForceShape, PairRun, PAIR_FORCE_START,
+    PF_AMP, PF_EXPONENT, PF_LN_RANGE,
 };
 use crate::stats::dist::chi2_sf;
 use std::collections::BTreeMap;
@@ -35,17 +35,13 @@ const SCAN_RANGES_M: [f64; 4] = [10e-6, 30e-6, 100e-6, 300e-6];
 const SCAN_AMPS_MPS2: [f64; 4] = [0.3, 1.0, 3.0, 10.0];
 const STARTS: usize = 2;
 
-/// Huber's ρ at 3 (the whole-run fits' own loss) of a whitened residual.
-fn huber(r: f64) -> f64 {
-    const K: f64 = 3.0;
-    if r.abs() <= K {
-        r * r
-    } else {
-        2.0 * K * r.abs() - K * K
-    }
-}
+/// Iterations of the runs' own parameters at each point of the scan.
+const SCAN_ITERATIONS: usize = 4;
 
-/// The held fit's loss with a force of `shape` at `start` (A, ln λ, n) added, nothing refitted.
+/// The held fit's loss with a force of `shape` at `start` (A, ln λ, n) added, the runs' own
+/// parameters (kick, gap, kick time) refitted briefly: the held fit's own values have absorbed
+/// what they could of the force (its kick speeds, its impact laws), and judged at them the true
+/// force scored worse than none on touching pairs.
 fn scan_cost(runs: &[PairRun], held: &GroupFit, shape: PairForceShape, start: [f64; 3]) -> f64 {
     let spec = FitSpec {
         pair_force: Some((shape, start)),
@@ -55,13 +51,15 @@ fn scan_cost(runs: &[PairRun], held: &GroupFit, shape: PairForceShape, start: [f
     shared[PF_AMP] = start[0];
     shared[PF_LN_RANGE] = start[1];
     shared[PF_EXPONENT] = start[2];
-    let mut cost = 0.0;
-    for (run, own) in runs.iter().zip(&held.result.own) {
-        let mut r = vec![0.0; run.n_samples()];
-        residuals(run, &spec, &shared, own, &mut r);
-        cost += r.iter().map(|&x| huber(x)).sum::<f64>();
-    }
-    cost
+    fit_group_with(
+        runs,
+        &spec,
+        &shared,
+        Some(held.result.own.as_slice()),
+        &|_| false,
+        SCAN_ITERATIONS,
+    )
+    .cost()
 }
 
 /// The best `STARTS` points of the scan for `shape`.
@@ -85,6 +83,29 @@ const ONE_PARAM_CHI2: f64 = 6.635;
 
 /// A parameter within this fraction of its interval's width from a bound is at the bound.
 const AT_BOUND: f64 = 1e-3;
+
+/// The shape's name in diagnosis.json.
+fn shape_name(shape: PairForceShape) -> &'static str {
+    match shape {
+        PairForceShape::Exponential => "exponential",
+        PairForceShape::PowerLaw => "power law",
+    }
+}
+
+/// The force an accepted finding of this test names, to carry in a pair fit: its shape and
+/// (A, ln λ, n) read back from its parameters. None for any other finding.
+pub fn carried_from(f: &Finding) -> Option<(PairForceShape, [f64; 3])> {
+    if f.effect != Effect::ForceBetweenParticles.id() || !f.accepted {
+        return None;
+    }
+    let get = |k: &str| f.parameters.get(k).map(|e| e.value);
+    let (a, range) = (get("pair_amplitude_mps2")?, get("pair_range_m")?);
+    let (shape, n) = match get("pair_exponent") {
+        Some(n) => (PairForceShape::PowerLaw, n),
+        None => (PairForceShape::Exponential, PAIR_FORCE_START[2]),
+    };
+    Some((shape, [a, range.ln(), n]))
+}
 
 /// One shape's fit over all runs.
 #[derive(Clone, Debug)]
@@ -395,6 +416,14 @@ impl ForceTest {
         if let Some([a, b]) = self.held_out {
             where_.insert("held_out_chi2_gain".into(), serde_json::json!([a, b]));
         }
+        where_.insert(
+            "other_shape_chi2".into(),
+            serde_json::json!({
+                "shape": shape_name(self.other.shape),
+                "chi2": self.other.fit.cost(),
+                "chi2_chosen": self.chosen.fit.cost(),
+            }),
+        );
         let score = |f: &GroupFit, n: usize, terms: &str| ModelScore {
             cv_rms_m: f64::NAN,
             rms_m: (f.cost() / n_pts.max(1) as f64).sqrt() * sigma,

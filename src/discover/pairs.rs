@@ -535,6 +535,12 @@ fn physics_finding(d: &Draft, p_holm: f64) -> Finding {
     where_.insert("experiment".to_string(), serde_json::json!("collision"));
     where_.insert("material".to_string(), serde_json::json!(d.material));
     where_.insert("n_runs".to_string(), serde_json::json!(d.n_runs));
+    if d.carried.is_some() {
+        where_.insert(
+            "with_force_between_particles".to_string(),
+            serde_json::json!(true),
+        );
+    }
     where_.insert(
         "deviance_gain".to_string(),
         serde_json::json!(held.cost() - free.cost()),

@@ -1,7 +1,8 @@
 //! The chapter's numbers under the physics discovery accepted: the single runs' μ_pg and drag line
 //! from discovery's joint fit (which carries every accepted term), and the whole-run pair fits
 //! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
-//! the restitution laws refitted, the μ_pp profile redone).
+//! the restitution laws refitted, the μ_pp profile redone), and a force between the particles
+//! that the pairs of a material were found to feel carried into that material's fits.
 
 use super::collision::whole_summary::{analyze_material_with, WholeRunOptions};
 use super::collision::wholerun::{DragSpec, FitSpec, PairRun};
@@ -12,6 +13,7 @@ use crate::artifacts::under_accepted::{
 };
 use crate::artifacts::Estimate;
 use crate::discover::forms;
+use crate::discover::pair_force::carried_from;
 use crate::discover::pairs::single_run_physics;
 use crate::physics::{Groove, Term};
 use crate::recording::{Experiment, Recording};
@@ -108,8 +110,14 @@ fn collisions_under(
             .into_iter()
             .filter(|t| !matches!(t, Term::LinearDrag { .. } | Term::SaturatingDrag { .. }))
             .collect();
+        // an accepted force between this material's particles is carried too, from its values
+        let force = d
+            .findings
+            .iter()
+            .filter(|f| f.where_.get("material").and_then(|v| v.as_str()) == Some(m.as_str()))
+            .find_map(carried_from);
         let kept = baseline.and_then(|b| b.materials.iter().find(|w| &w.material == m));
-        if let (true, Some(kept)) = (others.is_empty(), kept) {
+        if let (true, None, Some(kept)) = (others.is_empty(), force, kept) {
             // nothing beyond the drag: the baseline's fit is this very fit
             materials.push(kept.clone());
             unchanged.push(m.clone());
@@ -117,6 +125,7 @@ fn collisions_under(
         }
         let spec = FitSpec {
             drag: DragSpec::SaturatingWith(others),
+            pair_force: force,
             ..FitSpec::new(groove)
         };
         materials.push(analyze_material_with(m, runs, &spec, opts));
@@ -139,14 +148,16 @@ pub fn under_accepted(
     groove: Groove,
     opts: &WholeRunOptions,
 ) -> UnderAccepted {
-    let accepted = accepted_terms(d);
+    // the single runs' terms, then any force between the particles of a material's pairs
+    let mut accepted = accepted_terms(d);
+    accepted.extend(d.findings.iter().filter(|f| carried_from(f).is_some()));
     if accepted.is_empty() {
         return UnderAccepted {
             accepted: false,
             terms: Vec::new(),
             single: None,
             collisions: None,
-            notes: vec!["discovery accepted no single-run physics: the baseline's numbers are the analysis' numbers, and nothing is refitted".into()],
+            notes: vec!["discovery accepted no physics: the baseline's numbers are the analysis' numbers, and nothing is refitted".into()],
         };
     }
     let terms = accepted

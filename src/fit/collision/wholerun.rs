@@ -400,11 +400,13 @@ impl FitSpec {
         } else {
             hold(contact, 1.0)
         });
-        // a force between the particles: |A| up to 100 g, λ from 1 µm to 2 mm, n from 1.2 to 12
+        // a force between the particles: |A| up to 100 g, λ from 5 µm (a frame's travel at a few
+        // cm/s: shorter, it acts as a change of restitution, and the integrator crawls through
+        // it) to 2 mm, n from 1.2 to 12
         let [a0, ln_l0, n0] = self.pair_force.map_or(PAIR_FORCE_START, |(_, s)| s);
         let force = [
             spec(a0, -1000.0, 1000.0, 1e-4),
-            spec(ln_l0, 1e-6f64.ln(), 2e-3f64.ln(), 1e-4),
+            spec(ln_l0, 5e-6f64.ln(), 2e-3f64.ln(), 1e-4),
             spec(n0, 1.2, 12.0, 1e-4),
         ];
         match self.pair_force {

@@ -41,8 +41,30 @@ pub fn place_of(finding: &Value) -> String {
     .to_string()
 }
 
-/// The accepted findings of a diagnosis.json text.
+/// The accepted findings of a diagnosis.json text. Findings of one effect made material by
+/// material (the collision runs' tests) are one finding: the effect found, with every material's
+/// sizes and forms.
 pub fn accepted(diagnosis: &str) -> Result<Vec<Accepted>, String> {
+    let mut out: Vec<Accepted> = Vec::new();
+    for (per_material, a) in accepted_each(diagnosis)? {
+        match out
+            .iter_mut()
+            .find(|o| per_material && o.place == a.place && o.effect == a.effect)
+        {
+            Some(o) => {
+                if !o.form.contains(&a.form) {
+                    o.form = format!("{} | {}", o.form, a.form);
+                }
+                o.parameters.extend(a.parameters);
+            }
+            None => out.push(a),
+        }
+    }
+    Ok(out)
+}
+
+/// Each accepted finding, and whether it is one material's (`where.material`).
+fn accepted_each(diagnosis: &str) -> Result<Vec<(bool, Accepted)>, String> {
     let d: Value = serde_json::from_str(diagnosis)
         .map_err(|e| format!("diagnosis.json does not parse: {e}"))?;
     let findings = d
@@ -52,32 +74,38 @@ pub fn accepted(diagnosis: &str) -> Result<Vec<Accepted>, String> {
     Ok(findings
         .iter()
         .filter(|f| f.get("accepted").and_then(Value::as_bool) == Some(true))
-        .map(|f| Accepted {
-            place: place_of(f),
-            effect: f
-                .get("effect")
-                .and_then(Value::as_str)
-                .unwrap_or("")
-                .to_string(),
-            form: f
-                .get("form")
-                .and_then(Value::as_str)
-                .unwrap_or("")
-                .to_string(),
-            parameters: f
-                .get("parameters")
-                .and_then(Value::as_object)
-                .map(|m| {
-                    m.iter()
-                        .filter_map(|(k, v)| {
-                            Some((
-                                k.clone(),
-                                v.get("value").and_then(Value::as_f64).or(v.as_f64())?,
-                            ))
+        .map(|f| {
+            let per_material = f.get("where").and_then(|w| w.get("material")).is_some();
+            (
+                per_material,
+                Accepted {
+                    place: place_of(f),
+                    effect: f
+                        .get("effect")
+                        .and_then(Value::as_str)
+                        .unwrap_or("")
+                        .to_string(),
+                    form: f
+                        .get("form")
+                        .and_then(Value::as_str)
+                        .unwrap_or("")
+                        .to_string(),
+                    parameters: f
+                        .get("parameters")
+                        .and_then(Value::as_object)
+                        .map(|m| {
+                            m.iter()
+                                .filter_map(|(k, v)| {
+                                    Some((
+                                        k.clone(),
+                                        v.get("value").and_then(Value::as_f64).or(v.as_f64())?,
+                                    ))
+                                })
+                                .collect()
                         })
-                        .collect()
-                })
-                .unwrap_or_default(),
+                        .unwrap_or_default(),
+                },
+            )
         })
         .collect())
 }
