@@ -3,6 +3,7 @@
 //!
 //! Files of this folder:
 //!
+//! - `accepted_curve.rs`: One single run's fitted curve under the physics discovery accepted
 //! - `audit.rs`: The equation audit
 //! - `chapter.rs`: The chapter's printed values and the constants used to check them
 //! - `collisions.rs`: Collision-run fits read from the per-run fit JSON
@@ -28,6 +29,7 @@
 //! the report says so. The report imports nothing from the engine: the stage adapters
 //! (`stages::report`, `stages::figures`) unpack the engine's artifacts into `inputs::Input`.
 
+pub mod accepted_curve;
 pub mod audit;
 pub mod chapter;
 pub mod collisions;
