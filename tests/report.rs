@@ -1131,7 +1131,10 @@ fn legend_markers_are_the_plotted_markers_and_points_name_their_run() {
         "fig_discovery_drift",
     ] {
         let csv = std::fs::read_to_string(dir.join(format!("{name}.csv"))).unwrap();
-        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        // a residual strip's points are rows of their own CSV
+        let strip =
+            std::fs::read_to_string(dir.join(format!("{name}_residuals.csv"))).unwrap_or_default();
+        let rows: Vec<&str> = csv.lines().skip(1).chain(strip.lines().skip(1)).collect();
         assert!(!rows.is_empty(), "{name}");
         let svg = &figs[&format!("shipped {name}.svg")];
         let titles = svg.matches("<title>run ").count();
@@ -1290,4 +1293,62 @@ fn under_accepted_physics_the_trajectory_is_fitted_again_and_its_strip_shows_tha
     assert!(!texts_of(&figs["fig_4_2b.svg"])
         .iter()
         .any(|t| t == "fitted under the accepted physics"));
+}
+
+/// The part of a page from `from` up to `to` (or its end).
+fn between<'a>(page: &'a str, from: &str, to: &str) -> &'a str {
+    let start = page.find(from).unwrap_or_else(|| panic!("no {from:?}"));
+    let end = page[start..].find(to).map_or(page.len(), |e| start + e);
+    &page[start..end]
+}
+
+#[test]
+fn discovery_forms_are_formulas_in_the_summary_and_the_discovery_section() {
+    let (_, html, md) = render(&fixture_with_accepted_drag(), None);
+    let text = text_outside_svg_and_style(&html);
+    // the drag law as diagnosis.json writes it is shown as MathML: T with subscript 0, |v|
+    let t0 = "<msub><mi>T</mi><mn>0</mn></msub>";
+    for (from, to) in [
+        ("<section id=\"summary\">", "<section id=\"data\">"),
+        ("<section id=\"discovery\">", "<section id=\"audit\">"),
+        (
+            "<section id=\"under-accepted\">",
+            "<section id=\"discovery\">",
+        ),
+    ] {
+        let part = between(&text, from, to);
+        assert!(
+            part.contains(t0) && part.contains("<mo>|</mo><mi>v</mi><mo>|</mo>"),
+            "{from}: no MathML drag law"
+        );
+        for ascii in ["T0 + T'|v|", "a = -v/(", "T(|v|)"] {
+            assert!(!part.contains(ascii), "{from}: {ascii:?} in plain text");
+        }
+    }
+    // figure and table captions with a formula
+    let fig_4_2c = between(
+        &text,
+        "<section id=\"fig-4-2c\">",
+        "<section id=\"fig-4-2d\">",
+    );
+    assert!(
+        fig_4_2c.contains("<caption>Fig. 4.2c: the <math>"),
+        "4.2c table caption"
+    );
+    let fig_4_4 = between(
+        &text,
+        "<section id=\"fig-4-4bc\">",
+        "<section id=\"secondary\">",
+    );
+    assert!(
+        fig_4_4.contains("<figcaption>Fig. 4.4b: <math>"),
+        "4.4b caption"
+    );
+    // the Markdown keeps the formulas between dollar signs, no pipe inside to break a table
+    let summary = summary_of(&md);
+    assert!(
+        summary.contains(r"(saturating: $a = -v/(T_0 + T'\lvert v\rvert)$)"),
+        "{summary}"
+    );
+    assert!(md.contains(r"| drag $T(\lvert v\rvert) = T_0 + T'\lvert v\rvert$ of 316: $T_0$ (s) |"));
 }

@@ -64,6 +64,7 @@ fn symbol(name: &str) -> Option<(&'static str, &'static str)> {
         "pm" => ("mo", "±"),
         "to" | "rightarrow" => ("mo", "→"),
         "infty" => ("mi", "∞"),
+        "lvert" | "rvert" | "vert" => ("mo", "|"),
         "ldots" | "dots" => ("mo", "…"),
         _ => return None,
     })

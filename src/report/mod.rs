@@ -10,6 +10,7 @@
 //! - `date.rs`: A calendar date
 //! - `diff.rs`: Two results compared number by number
 //! - `html.rs`: The HTML page (report.html)
+//! - `formula.rs`: Discovery's forms written as formulas
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
 //! - `mathml.rs`: Formulas as MathML
@@ -36,6 +37,7 @@ pub mod collisions;
 pub mod date;
 pub mod diff;
 pub mod figures;
+pub mod formula;
 pub mod html;
 pub mod inputs;
 pub mod markdown;

@@ -139,11 +139,11 @@ fn fig_4_2c_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         ));
     }
     b.para(format!(
-        "The Stokes time of a 150 µm steel sphere in free air is m/(6πηR) = {stokes:.1} s (ρ = 7900 kg/m³, η = 1.81e-5 Pa·s). The chapter's 0.074 s is wrong: it is what its own line T = 0.052 + 1.10·v0 gives at v0 = 0.02 m/s. The measured T is some 40× shorter, so the dissipation is not free-air drag."
+        "The Stokes time of a 150 µm steel sphere in free air is $m/(6\\pi\\eta R)$ = {stokes:.1} s (ρ = 7900 kg/m³, η = 1.81e-5 Pa·s). The chapter's 0.074 s is wrong: it is what its own line $T = 0.052 + 1.10\\,v_0$ gives at v0 = 0.02 m/s. The measured T is some 40× shorter, so the dissipation is not free-air drag."
     ));
     let mut t = table(
         d,
-        "Fig. 4.2c: the T = T0 + T'·|v0| line",
+        "Fig. 4.2c: the $T = T_0 + T'\\lvert v_0\\rvert$ line",
         &["material", "quantity"],
     );
     let mut mats: Vec<Option<String>> = d
