@@ -1,6 +1,9 @@
 //! Report tests: figures and pages rendered from small hand-made artifacts; content, self-containment,
 //! well-formedness and byte-identical re-rendering.
 
+#[path = "support/files.rs"]
+mod files;
+
 use groove::engine::stage::{Artifact, StageInput};
 use groove::physics::{Baseline, Groove};
 use groove::report::{render_figures, render_pages, FigureOptions, ReportData};
@@ -736,8 +739,49 @@ fn no_legend_covers_a_point_and_no_label_leaves_the_canvas() {
     {
         figs.insert(format!("fixture {k}"), v);
     }
+    // and a report of few runs, made by the shipped pipeline end to end
+    let ten = ten_run_figures();
+    assert!(ten.len() >= 11, "the 10-run figures: {:?}", ten.keys());
+    for (k, v) in ten {
+        figs.insert(format!("10-run {k}"), v);
+    }
     let faults: Vec<String> = figs.iter().flat_map(|(k, v)| layout_faults(k, v)).collect();
     assert!(faults.is_empty(), "{}", faults.join("\n"));
+}
+
+/// Every figure of the report the shipped pipeline makes of a small dataset: 10 single runs of
+/// 30 ms and two collision runs of each setup and material (tests/fixtures/truths/report_ten.toml),
+/// synthesized and run through the built binary.
+fn ten_run_figures() -> BTreeMap<String, String> {
+    let dir = files::scratch("report");
+    let project = dir.join("ten");
+    let _ = std::fs::remove_dir_all(&project);
+    std::fs::create_dir_all(&project).unwrap();
+    files::synth(dir, "report_ten", &project.join("data"));
+    std::fs::copy(
+        files::repo().join("pipeline.toml"),
+        project.join("pipeline.toml"),
+    )
+    .unwrap();
+    files::ok(
+        &files::groove(&project, &files::cli::RUN_IN_PROJECT),
+        "groove run on the 10-run dataset",
+    );
+    let runs = std::fs::read_to_string(project.join("data/runs.csv")).unwrap();
+    assert_eq!(
+        runs.lines().filter(|l| l.contains(",single,")).count(),
+        10,
+        "{runs}"
+    );
+    std::fs::read_dir(project.join("reports/figures"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read_to_string(&p).unwrap())
+        })
+        .collect()
 }
 
 /// The texts of an SVG, in order.
