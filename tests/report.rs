@@ -900,10 +900,10 @@ fn sections_open_with_what_they_found_and_fold_their_statistics() {
     // discovery's tables folded in the HTML page, in full in the Markdown
     let disc = &html[html.find("<section id=\"discovery\">").unwrap()..];
     let disc = &disc[..disc.find("</section>").unwrap()];
-    assert!(disc.matches("<table>").count() >= 2, "{disc}");
+    assert!(disc.matches("<table").count() >= 2, "{disc}");
     assert_eq!(
         disc.matches("<details>").count(),
-        disc.matches("<table>").count()
+        disc.matches("<table").count()
     );
     assert!(disc.contains("<details>\n<summary>Every candidate tested"));
     assert!(md.contains("*Every candidate tested: evidence and fitted size"));
