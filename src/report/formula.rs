@@ -90,7 +90,8 @@ mod tests {
         }
         let html = crate::report::mathml::inline(r"a = -v/(T_0 + T'\lvert v\rvert)");
         assert!(
-            html.contains("<msub><mi>T</mi><mn>0</mn></msub>") && html.contains("<mo>|</mo>"),
+            html.contains("<msub><mi>T</mi><mn>0</mn></msub>")
+                && html.contains("<mo lspace=\"0\" rspace=\"0\">|</mo><mi>v</mi>"),
             "{html}"
         );
         assert!(!html.contains("mtext>\\"), "{html}");
