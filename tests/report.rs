@@ -1325,6 +1325,14 @@ fn under_accepted_physics_the_trajectory_is_fitted_again_and_its_strip_shows_tha
         baseline_worst > 10.0 * worst,
         "baseline {baseline_worst} µm, accepted {worst} µm"
     );
+    // the section's opening says how closely each model follows the run
+    let lead = between(&md, "### 3.1 ", "### 3.2 ");
+    assert!(
+        lead.contains("Fitted again under the physics discovery accepted")
+            && lead.contains("against ")
+            && lead.contains("the residuals below are this fit's"),
+        "{lead}"
+    );
     // both pages say which curve is which and link the strip's data
     for page in [&html, &md] {
         assert!(page.contains("the run fitted under the physics discovery accepted"));
