@@ -1,6 +1,9 @@
 //! Report tests: figures and pages rendered from small hand-made artifacts; content, self-containment,
 //! well-formedness and byte-identical re-rendering.
 
+#[path = "support/files.rs"]
+mod files;
+
 use groove::engine::stage::{Artifact, StageInput};
 use groove::physics::{Baseline, Groove};
 use groove::report::{render_figures, render_pages, FigureOptions, ReportData};
@@ -355,16 +358,21 @@ fn every_figure_renders_as_well_formed_svg_with_labelled_axes() {
     let mut want = ALL_FIGURES.to_vec();
     want.sort();
     assert_eq!(names, want);
-    // every figure of data points has its CSV, one row a point, and each point a title
+    // every figure of data points has its CSV (a residual strip's points their own), one row a
+    // point, and each point a title
     for (name, svg) in &figs {
         let points = svg.matches("<circle class=\"pt\"").count();
-        let rows = csv
-            .get(&name.replace(".svg", ".csv"))
-            .map_or(0, |c| c.lines().count() - 1);
+        let rows: usize = ["", "_residuals"]
+            .iter()
+            .filter_map(|part| csv.get(&name.replace(".svg", &format!("{part}.csv"))))
+            .map(|c| c.lines().count() - 1)
+            .sum();
         assert_eq!(rows, points, "{name}: CSV rows against titled points");
         assert_eq!(svg.matches("<title>").count(), points, "{name}");
     }
     for want in [
+        "fig_4_2b_residuals.csv",
+        "fig_4_3c_residuals.csv",
         "fig_4_2c.csv",
         "fig_4_2d.csv",
         "fig_4_4a.csv",
@@ -731,8 +739,49 @@ fn no_legend_covers_a_point_and_no_label_leaves_the_canvas() {
     {
         figs.insert(format!("fixture {k}"), v);
     }
+    // and a report of few runs, made by the shipped pipeline end to end
+    let ten = ten_run_figures();
+    assert!(ten.len() >= 11, "the 10-run figures: {:?}", ten.keys());
+    for (k, v) in ten {
+        figs.insert(format!("10-run {k}"), v);
+    }
     let faults: Vec<String> = figs.iter().flat_map(|(k, v)| layout_faults(k, v)).collect();
     assert!(faults.is_empty(), "{}", faults.join("\n"));
+}
+
+/// Every figure of the report the shipped pipeline makes of a small dataset: 10 single runs of
+/// 30 ms and two collision runs of each setup and material (tests/fixtures/truths/report_ten.toml),
+/// synthesized and run through the built binary.
+fn ten_run_figures() -> BTreeMap<String, String> {
+    let dir = files::scratch("report");
+    let project = dir.join("ten");
+    let _ = std::fs::remove_dir_all(&project);
+    std::fs::create_dir_all(&project).unwrap();
+    files::synth(dir, "report_ten", &project.join("data"));
+    std::fs::copy(
+        files::repo().join("pipeline.toml"),
+        project.join("pipeline.toml"),
+    )
+    .unwrap();
+    files::ok(
+        &files::groove(&project, &files::cli::RUN_IN_PROJECT),
+        "groove run on the 10-run dataset",
+    );
+    let runs = std::fs::read_to_string(project.join("data/runs.csv")).unwrap();
+    assert_eq!(
+        runs.lines().filter(|l| l.contains(",single,")).count(),
+        10,
+        "{runs}"
+    );
+    std::fs::read_dir(project.join("reports/figures"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read_to_string(&p).unwrap())
+        })
+        .collect()
 }
 
 /// The texts of an SVG, in order.
@@ -851,10 +900,10 @@ fn sections_open_with_what_they_found_and_fold_their_statistics() {
     // discovery's tables folded in the HTML page, in full in the Markdown
     let disc = &html[html.find("<section id=\"discovery\">").unwrap()..];
     let disc = &disc[..disc.find("</section>").unwrap()];
-    assert!(disc.matches("<table>").count() >= 2, "{disc}");
+    assert!(disc.matches("<table").count() >= 2, "{disc}");
     assert_eq!(
         disc.matches("<details>").count(),
-        disc.matches("<table>").count()
+        disc.matches("<table").count()
     );
     assert!(disc.contains("<details>\n<summary>Every candidate tested"));
     assert!(md.contains("*Every candidate tested: evidence and fitted size"));
@@ -990,6 +1039,18 @@ fn fitted_trajectories_carry_their_residuals_below_on_the_same_time_axis() {
             })
             .count();
         assert!(below >= 5, "{name}: {below} residual points");
+        // each of them titled (run and values), and in the strip's own CSV
+        let titled = svg
+            .split("<circle class=\"pt\"")
+            .skip(1)
+            .filter(|c| {
+                attr_of(&format!(" {c}"), "cy").is_some_and(|y| y > 500.0)
+                    && c.contains("data − model (µm) = ")
+            })
+            .count();
+        assert_eq!(titled, below, "{name}: titled residual points");
+        let strip = &figs[&name.replace(".svg", "_residuals.csv")];
+        assert_eq!(strip.lines().count() - 1, below, "{name}: {strip}");
         assert!(
             layout_faults(name, svg).is_empty(),
             "{:?}",
@@ -1114,7 +1175,10 @@ fn legend_markers_are_the_plotted_markers_and_points_name_their_run() {
         "fig_discovery_drift",
     ] {
         let csv = std::fs::read_to_string(dir.join(format!("{name}.csv"))).unwrap();
-        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        // a residual strip's points are rows of their own CSV
+        let strip =
+            std::fs::read_to_string(dir.join(format!("{name}_residuals.csv"))).unwrap_or_default();
+        let rows: Vec<&str> = csv.lines().skip(1).chain(strip.lines().skip(1)).collect();
         assert!(!rows.is_empty(), "{name}");
         let svg = &figs[&format!("shipped {name}.svg")];
         let titles = svg.matches("<title>run ").count();
@@ -1125,4 +1189,218 @@ fn legend_markers_are_the_plotted_markers_and_points_name_their_run() {
             rows.len()
         );
     }
+}
+
+/// The fixture with discovery accepting a saturating drag, run s316_a (Fig. 4.2b's) recorded
+/// under it (μ 0.337, T0 54 ms, T' 2.66 s/(m/s)) while its baseline fit keeps a linear drag, and
+/// the refit's `under_accepted` giving the material's μ and drag line.
+fn fixture_with_accepted_drag() -> Fixture {
+    use groove::physics::{simulate, Friction, Model, State, Term};
+    let mut f = fixture(true, true);
+    let (mu, t0_s, tp) = (0.337, 0.054, 2.66);
+    let model = Model {
+        groove: Groove::CHAPTER,
+        friction: Friction::Constant { mu },
+        variation: Default::default(),
+        terms: vec![Term::SaturatingDrag {
+            t0_s,
+            tp_s_per_mps: tp,
+        }],
+    };
+    let (z0, t_kick, v0) = (1.0e-3, 4.0e-5, 0.025);
+    let t: Vec<f64> = (0..400).map(|i| i as f64 * 1e-4).collect();
+    let tt: Vec<f64> = t.iter().map(|x| x + t_kick).collect();
+    let init = State {
+        z_m: z0,
+        v_mps: v0,
+        va_mps: 0.0,
+    };
+    let z: Vec<f64> = simulate(&model, init, &tt)
+        .z_m
+        .iter()
+        .zip(&t)
+        .map(|(z, ti)| z + 2e-7 * (ti * 7919.0).sin())
+        .collect();
+    let (rec, mut fit, _) = single("s316_a", "316", v0, mu, 0.0795);
+    let mut rec = rec;
+    rec["tracks"][0]["z_m"] = json!(z);
+    // the baseline's own fit of this run: a linear drag at the T its speed gives
+    fit["t_drag_s"] = json!(t0_s + tp * v0);
+    f.runs.insert("s316_a.json".into(), item_bytes(&rec));
+    f.fits
+        .insert("s316_a.json".into(), serde_json::to_vec(&fit).unwrap());
+    let mut diag: Value = serde_json::from_slice(&f.files["diagnosis"]).unwrap();
+    let e = |v: f64, se: f64| json!({"value": v, "stderr": se});
+    diag["findings"][0]["form"] = json!("saturating: a = -v/(T0 + T'|v|)");
+    diag["findings"][0]["parameters"] =
+        json!({"t0_s_316": e(t0_s, 1e-4), "t0_s_440c": e(0.05, 1e-4), "tp_s_per_mps": e(tp, 0.01)});
+    diag["model_parameters"] = json!({"mu_316": e(mu, 4e-4), "mu_440c": e(0.293, 3e-4),
+        "t0_s_316": e(t0_s, 1e-4), "t0_s_440c": e(0.05, 1e-4), "tp_s_per_mps": e(tp, 0.01)});
+    f.files
+        .insert("diagnosis", serde_json::to_vec(&diag).unwrap());
+    let est = |v: f64, se: f64| json!({"value": v, "se": se});
+    let line = |t0: f64| json!({"intercept_s": est(t0, 1e-4), "slope_s_per_mps": est(tp, 0.01)});
+    let under = json!({"accepted": true,
+        "terms": [{"effect": "velocity_dependent_drag", "form": "saturating: a = -v/(T0 + T'|v|)",
+                   "parameters": {"t0_s_316": t0_s, "t0_s_440c": 0.05, "tp_s_per_mps": tp}}],
+        "single": {"source": "discovery's joint fit", "materials": {
+            "316": {"mu": est(mu, 4e-4), "t_line": line(t0_s)},
+            "440c": {"mu": est(0.293, 3e-4), "t_line": line(0.05)}}},
+        "collisions": null, "notes": []});
+    f.files
+        .insert("under_accepted", serde_json::to_vec(&under).unwrap());
+    f
+}
+
+/// The (t, value) rows of a figure's CSV for one series.
+fn csv_rows(csv: &str, series: &str) -> Vec<(f64, f64)> {
+    csv.lines()
+        .skip(1)
+        .filter(|l| l.starts_with(&format!("{series},")))
+        .filter_map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            Some((c[2].parse().ok()?, c[3].parse().ok()?))
+        })
+        .collect()
+}
+
+#[test]
+fn under_accepted_physics_the_trajectory_is_fitted_again_and_its_strip_shows_that_fit() {
+    let f = fixture_with_accepted_drag();
+    let (figs, html, md) = render(&f, None);
+    let svg = &figs["fig_4_2b.svg"];
+    let texts = texts_of(svg);
+    assert!(
+        texts
+            .iter()
+            .any(|t| t == "fitted under the accepted physics")
+            && texts.iter().any(|t| t == "fitted baseline"),
+        "{texts:?}"
+    );
+    assert!(
+        layout_faults("fig_4_2b", svg).is_empty(),
+        "{:?}",
+        layout_faults("fig_4_2b", svg)
+    );
+    // the strip's points: titled, in their own CSV, and the accepted model's residuals (the data
+    // were recorded under it: 0.2 µm of ripple), while the baseline misses the run by far more
+    assert!(
+        svg.contains("<title>run s316_a, sliding: time t (ms) = "),
+        "no titled strip point"
+    );
+    let strip = &figs["fig_4_2b_residuals.csv"];
+    assert!(
+        strip.starts_with("series,run,time t (ms),data − model (µm)\n"),
+        "{strip}"
+    );
+    let resid: Vec<f64> = ["sliding", "rolling"]
+        .iter()
+        .flat_map(|s| csv_rows(strip, s))
+        .map(|p| p.1)
+        .collect();
+    assert!(resid.len() >= 100, "{} residual rows", resid.len());
+    let worst = resid.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    assert!(worst < 0.5, "the strip's worst residual is {worst} µm");
+    let rec: Value = {
+        let r = groove::recording::item::decode(&f.runs["s316_a.json"]).unwrap();
+        serde_json::to_value(r).unwrap()
+    };
+    let fit: Value = serde_json::from_slice(&f.fits["s316_a.json"]).unwrap();
+    let b = Baseline {
+        mu: fit["mu"].as_f64().unwrap(),
+        t_drag_s: fit["t_drag_s"].as_f64().unwrap(),
+        groove: Groove::CHAPTER,
+    };
+    let baseline_worst = rec["tracks"][0]["t_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(rec["tracks"][0]["z_m"].as_array().unwrap())
+        .map(|(t, z)| {
+            let (t, z) = (t.as_f64().unwrap(), z.as_f64().unwrap());
+            (z - 1.0e-3 - b.state(0.025, t + 4.0e-5).0).abs() * 1e6
+        })
+        .fold(0.0f64, f64::max);
+    assert!(
+        baseline_worst > 10.0 * worst,
+        "baseline {baseline_worst} µm, accepted {worst} µm"
+    );
+    // the section's opening says how closely each model follows the run
+    let lead = between(&md, "### 3.1 ", "### 3.2 ");
+    assert!(
+        lead.contains("Fitted again under the physics discovery accepted")
+            && lead.contains("against ")
+            && lead.contains("the residuals below are this fit's"),
+        "{lead}"
+    );
+    // both pages say which curve is which and link the strip's data
+    for page in [&html, &md] {
+        assert!(page.contains("the run fitted under the physics discovery accepted"));
+        assert!(page.contains("figures/fig_4_2b_residuals.csv"));
+    }
+    // without the refit, the figure is the baseline's alone, as before
+    let mut plain = fixture(true, true);
+    plain.files.remove("under_accepted");
+    let (figs, _, _) = render(&plain, None);
+    assert!(!texts_of(&figs["fig_4_2b.svg"])
+        .iter()
+        .any(|t| t == "fitted under the accepted physics"));
+}
+
+/// The part of a page from `from` up to `to` (or its end).
+fn between<'a>(page: &'a str, from: &str, to: &str) -> &'a str {
+    let start = page.find(from).unwrap_or_else(|| panic!("no {from:?}"));
+    let end = page[start..].find(to).map_or(page.len(), |e| start + e);
+    &page[start..end]
+}
+
+#[test]
+fn discovery_forms_are_formulas_in_the_summary_and_the_discovery_section() {
+    let (_, html, md) = render(&fixture_with_accepted_drag(), None);
+    let text = text_outside_svg_and_style(&html);
+    // the drag law as diagnosis.json writes it is shown as MathML: T with subscript 0, |v|
+    let t0 = "<msub><mi>T</mi><mn>0</mn></msub>";
+    for (from, to) in [
+        ("<section id=\"summary\">", "<section id=\"data\">"),
+        ("<section id=\"discovery\">", "<section id=\"audit\">"),
+        (
+            "<section id=\"under-accepted\">",
+            "<section id=\"discovery\">",
+        ),
+    ] {
+        let part = between(&text, from, to);
+        assert!(
+            part.contains(t0) && part.contains("<mo lspace=\"0\" rspace=\"0\">|</mo><mi>v</mi><mo lspace=\"0\" rspace=\"0\">|</mo>"),
+            "{from}: no MathML drag law"
+        );
+        for ascii in ["T0 + T'|v|", "a = -v/(", "T(|v|)"] {
+            assert!(!part.contains(ascii), "{from}: {ascii:?} in plain text");
+        }
+    }
+    // figure and table captions with a formula
+    let fig_4_2c = between(
+        &text,
+        "<section id=\"fig-4-2c\">",
+        "<section id=\"fig-4-2d\">",
+    );
+    assert!(
+        fig_4_2c.contains("<caption>Fig. 4.2c: the <math>"),
+        "4.2c table caption"
+    );
+    let fig_4_4 = between(
+        &text,
+        "<section id=\"fig-4-4bc\">",
+        "<section id=\"secondary\">",
+    );
+    assert!(
+        fig_4_4.contains("<figcaption>Fig. 4.4b: <math>"),
+        "4.4b caption"
+    );
+    // the Markdown keeps the formulas between dollar signs, no pipe inside to break a table
+    let summary = summary_of(&md);
+    assert!(
+        summary.contains(r"(saturating: $a = -v/(T_0 + T'\lvert v\rvert)$)"),
+        "{summary}"
+    );
+    assert!(md.contains(r"| drag $T(\lvert v\rvert) = T_0 + T'\lvert v\rvert$ of 316: $T_0$ (s) |"));
 }

@@ -191,3 +191,22 @@ fn formulas_are_mathml_in_html_and_tex_in_markdown() {
     // the Markdown keeps the TeX, which a forge renders
     assert!(md.contains(r"- Printed: $T = m/6\pi\mu R = 0.074$"));
 }
+
+#[test]
+fn wide_tables_scroll_in_their_own_box_and_keep_their_words_whole() {
+    let html = shipped("report.html");
+    let css = &html[html.find("<style>").unwrap()..html.find("</style>").unwrap()];
+    // no rule lets a cell break a word to fit (tests/browser.sh measures it at 800 px)
+    for breaking in ["break-word", "break-all", "anywhere"] {
+        assert!(!css.contains(breaking), "the style sheet has {breaking:?}");
+    }
+    assert!(css.contains(".table-box { overflow-x: auto;"), "{css}");
+    // every table of the report's own sections sits in its box (the notes' tables scroll themselves)
+    let tables = html.matches("<table").count();
+    let boxed = html.matches("<div class=\"table-box\">\n<table").count();
+    assert!(tables > 20, "{tables} tables");
+    assert_eq!(boxed, tables, "tables outside a scrolling box");
+    assert!(css.contains("section.note table { display: block; overflow-x: auto;"));
+    // a table of many columns keeps a readable width and scrolls on a narrow window
+    assert!(html.contains("<table class=\"wide\">") && css.contains("table.wide { min-width:"));
+}

@@ -82,9 +82,14 @@ impl Parser {
                 self.at += 1;
                 break;
             }
-            let Some(base) = self.atom() else {
+            let Some(mut base) = self.atom() else {
                 continue;
             };
+            // a sign after an operator or an opening (`a = -v`, `(-x`) is unary, set tight
+            if base == "<mo>−</mo>" && items.last().is_none_or(|p: &String| p.starts_with("<mo"))
+            {
+                base = "<mo form=\"prefix\">−</mo>".into();
+            }
             items.push(self.scripts(base));
         }
         items
@@ -166,6 +171,8 @@ impl Parser {
             };
         }
         match name.as_str() {
+            // an absolute value's bars, set tight against what they enclose
+            "lvert" | "rvert" | "vert" => "<mo lspace=\"0\" rspace=\"0\">|</mo>".into(),
             "frac" => {
                 let (a, b) = (self.argument(), self.argument());
                 format!("<mfrac>{a}{b}</mfrac>")
@@ -210,7 +217,19 @@ mod tests {
         );
         assert_eq!(
             inline("e^{-(t - t_1)/T} < x_{z1}^{(2)}"),
-            "<math><mrow><msup><mi>e</mi><mrow><mo>−</mo><mo>(</mo><mi>t</mi><mo>−</mo><msub><mi>t</mi><mn>1</mn></msub><mo>)</mo><mo>/</mo><mi>T</mi></mrow></msup><mo>&lt;</mo><msubsup><mi>x</mi><mrow><mi>z</mi><mn>1</mn></mrow><mrow><mo>(</mo><mn>2</mn><mo>)</mo></mrow></msubsup></mrow></math>"
+            "<math><mrow><msup><mi>e</mi><mrow><mo form=\"prefix\">−</mo><mo>(</mo><mi>t</mi><mo>−</mo><msub><mi>t</mi><mn>1</mn></msub><mo>)</mo><mo>/</mo><mi>T</mi></mrow></msup><mo>&lt;</mo><msubsup><mi>x</mi><mrow><mi>z</mi><mn>1</mn></mrow><mrow><mo>(</mo><mn>2</mn><mo>)</mo></mrow></msubsup></mrow></math>"
+        );
+    }
+
+    #[test]
+    fn a_sign_after_an_operator_is_unary_and_bars_are_tight() {
+        assert_eq!(
+            inline("a = -v - b"),
+            "<math><mrow><mi>a</mi><mo>=</mo><mo form=\"prefix\">−</mo><mi>v</mi><mo>−</mo><mi>b</mi></mrow></math>"
+        );
+        assert_eq!(
+            inline("\\lvert v\\rvert"),
+            "<math><mrow><mo lspace=\"0\" rspace=\"0\">|</mo><mi>v</mi><mo lspace=\"0\" rspace=\"0\">|</mo></mrow></math>"
         );
     }
 

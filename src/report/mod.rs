@@ -3,12 +3,14 @@
 //!
 //! Files of this folder:
 //!
+//! - `accepted_curve.rs`: One single run's fitted curve under the physics discovery accepted
 //! - `audit.rs`: The equation audit
 //! - `chapter.rs`: The chapter's printed values and the constants used to check them
 //! - `collisions.rs`: Collision-run fits read from the per-run fit JSON
 //! - `date.rs`: A calendar date
 //! - `diff.rs`: Two results compared number by number
 //! - `html.rs`: The HTML page (report.html)
+//! - `formula.rs`: Discovery's forms written as formulas
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
 //! - `mathml.rs`: Formulas as MathML
@@ -28,12 +30,14 @@
 //! the report says so. The report imports nothing from the engine: the stage adapters
 //! (`stages::report`, `stages::figures`) unpack the engine's artifacts into `inputs::Input`.
 
+pub mod accepted_curve;
 pub mod audit;
 pub mod chapter;
 pub mod collisions;
 pub mod date;
 pub mod diff;
 pub mod figures;
+pub mod formula;
 pub mod html;
 pub mod inputs;
 pub mod markdown;

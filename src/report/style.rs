@@ -23,6 +23,8 @@ pub const ROLLING: RGBColor = RGBColor(200, 30, 140);
 /// Before / after a discovered term.
 pub const BEFORE: RGBColor = RGBColor(120, 120, 120);
 pub const AFTER: RGBColor = RGBColor(0, 140, 70);
+/// A curve drawn under the physics discovery accepted, beside the baseline's (black).
+pub const ACCEPTED: RGBColor = RGBColor(230, 120, 0);
 
 const M316_ROLLING: RGBColor = RGBColor(205, 35, 35);
 const M316_CONTACT: RGBColor = RGBColor(240, 140, 0);

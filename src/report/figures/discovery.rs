@@ -5,6 +5,7 @@ use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::diagnosis::{Diagnosis, DriftPoint};
 use crate::report::style::{self, Marker};
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
@@ -31,6 +32,19 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
     let n = rows.len() as f64;
     let y_hi = rows.iter().flat_map(|r| [r.2, r.3]).fold(0.0, f64::max) * 1e6 * 1.25;
     let names: Vec<String> = rows.iter().map(|r| r.0.replace('_', " ")).collect();
+    // each candidate's name wrapped to its category's width under its bars, the right margin
+    // wide enough for the last
+    let font = style::TICK_PX - 2;
+    let (mut margin_right, mut lines) = (style::MARGIN_RIGHT, Vec::new());
+    for _ in 0..2 {
+        let width = category_px(margin_right, rows.len()) - 10.0;
+        lines = names.iter().map(|n| wrap(n, width, font)).collect();
+        let half_last = lines.last().map_or(0.0, |l: &Vec<String>| {
+            l.iter().map(|t| text_px(t, font)).fold(0.0, f64::max) / 2.0
+        });
+        margin_right = right_margin(half_last, rows.len());
+    }
+    let n_lines = lines.iter().map(Vec::len).max().unwrap_or(1) as u32;
     let svg = render(|root| {
         let mut c = ChartBuilder::on(root)
             .caption(
@@ -38,21 +52,14 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
                 (style::FONT, style::CAPTION_PX),
             )
             .margin(14)
-            .margin_right(style::MARGIN_RIGHT)
-            .x_label_area_size(64)
+            .margin_right(margin_right)
+            .x_label_area_size(8 + n_lines * (font + 3) + 34)
             .y_label_area_size(84)
             .build_cartesian_2d(-0.5..n - 0.5, 0.0..y_hi.max(1e-3))?;
         c.configure_mesh()
             .disable_x_mesh()
             .x_labels(rows.len())
-            .x_label_formatter(&|x| {
-                let i = x.round();
-                if (x - i).abs() < 0.01 && i >= 0.0 && (i as usize) < names.len() {
-                    names[i as usize].clone()
-                } else {
-                    String::new()
-                }
-            })
+            .x_label_formatter(&|_| String::new())
             .y_desc("cross-validated RMS of z (µm)")
             .x_desc("candidate physics")
             .label_style((style::FONT, style::TICK_PX - 2))
@@ -65,6 +72,19 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
                 (i as f64 + off + 0.17, v * 1e6),
             ]
         };
+        for (i, l) in lines.iter().enumerate() {
+            let (x, y) = c.backend_coord(&(i as f64, 0.0));
+            for (k, t) in l.iter().enumerate() {
+                let st = TextStyle::from((style::FONT, font).into_font())
+                    .color(&style::BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top));
+                root.draw(&Text::new(
+                    t.clone(),
+                    (x, y + 8 + k as i32 * (font as i32 + 3)),
+                    st,
+                ))?;
+            }
+        }
         c.draw_series(
             rows.iter()
                 .enumerate()
@@ -104,6 +124,41 @@ pub fn render_cv(diag: &Diagnosis) -> Result<Option<String>, String> {
         legend(&mut c, SeriesLabelPosition::UpperRight)
     })?;
     Ok(Some(svg))
+}
+
+/// A label broken at spaces into lines of at most `width` px (a longer word keeps its own line).
+fn wrap(name: &str, width: f64, font: u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in name.split(' ') {
+        match lines.last_mut() {
+            Some(l) if text_px(&format!("{l} {word}"), font) <= width => {
+                l.push(' ');
+                l.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
+}
+
+/// The width in pixels of one of `n` categories with the right margin `margin_right`.
+fn category_px(margin_right: u32, n: usize) -> f64 {
+    (f64::from(style::FIG_W) - 14.0 - 84.0 - f64::from(margin_right)) / n.max(1) as f64
+}
+
+/// A text's width in pixels at `font` px, as wide as a sans-serif's digits (0.55 em each).
+fn text_px(text: &str, font: u32) -> f64 {
+    text.chars().count() as f64 * 0.55 * f64::from(font)
+}
+
+/// The right margin that holds half of the last of `n` category labels (`half` px) inside the
+/// canvas: its centre sits half a category in from the plot's right edge.
+fn right_margin(half: f64, n: usize) -> u32 {
+    // the canvas less the left margin and the y labels' area
+    let w0 = f64::from(style::FIG_W) - 14.0 - 84.0;
+    let k = 1.0 / (2.0 * n.max(1) as f64);
+    let need = ((half + 4.0 - w0 * k) / (1.0 - k)).ceil();
+    (need.max(0.0) as u32).max(style::MARGIN_RIGHT)
 }
 
 /// (x, y) points of a figure.
@@ -187,4 +242,31 @@ pub fn render_drift(diag: &Diagnosis) -> Result<Option<String>, String> {
         legend(&mut c, SeriesLabelPosition::UpperLeft)
     })?;
     Ok(Some(svg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_wrap_to_their_category_and_the_last_fits_the_canvas() {
+        let font = 17;
+        assert_eq!(
+            wrap("velocity dependent friction", 100.0, font),
+            ["velocity", "dependent", "friction"]
+        );
+        assert_eq!(wrap("groove tilt", 200.0, font), ["groove tilt"]);
+        // the last label's centre: half a category in from the plot's right edge
+        for n in 1..9 {
+            for half in [20.0, 60.0, 120.0] {
+                let m = right_margin(half, n);
+                let centre = f64::from(style::FIG_W) - f64::from(m) - category_px(m, n) / 2.0;
+                assert!(
+                    centre + half <= f64::from(style::FIG_W),
+                    "n {n}, half {half}: margin {m}"
+                );
+                assert!(m >= style::MARGIN_RIGHT);
+            }
+        }
+    }
 }

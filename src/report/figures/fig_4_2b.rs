@@ -1,4 +1,6 @@
-//! Fig. 4.2b: one single-run trajectory, sliding and rolling samples marked, with the fitted baseline.
+//! Fig. 4.2b: one single-run trajectory, sliding and rolling samples marked, with the fitted baseline
+//! and, when discovery accepted physics, the run fitted under it (the model the report trusts,
+//! whose residuals the strip below then shows).
 
 use super::common::{legend, line, linear_chart, render_high, scatter_sized, span};
 use super::residual_strip::{self, TALL_H};
@@ -34,6 +36,9 @@ pub fn samples(d: &ReportData, fit: &SingleRow) -> Option<Vec<Sample>> {
         .or_else(|| trajectory::from_fit(d.recordings.get(&fit.run)?, fit, d.groove))
 }
 
+/// The legend label of the curve under the accepted physics (the report's caption looks for it).
+pub const ACCEPTED_LABEL: &str = "fitted under the accepted physics";
+
 /// Render Fig. 4.2b, or None when no single run has a usable fit.
 pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>, String> {
     let Some(fit) = choose(d, wanted) else {
@@ -55,24 +60,36 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
     };
     let (sliding, rolling) = (pick(false), pick(true));
     let curve: Vec<(f64, f64)> = s.iter().map(|p| (ms(p.t_s), mm(p.z_fit_m))).collect();
+    let accepted = crate::report::accepted_curve::curve(d, fit, &s);
+    let accepted_curve: Option<Vec<(f64, f64)>> = accepted
+        .as_ref()
+        .map(|z| s.iter().zip(z).map(|(p, &z)| (ms(p.t_s), mm(z))).collect());
+    // the trusted model's fitted position at each sample: the accepted physics' when drawn
+    let trusted = |i: usize| accepted.as_ref().map_or(s[i].z_fit_m, |z| z[i]);
     let switch = s.iter().find(|p| p.rolling).map(|p| ms(p.t_s));
     let xr = span(s.iter().map(|p| ms(p.t_s)), 0.03);
-    let yr = span(s.iter().flat_map(|p| [mm(p.z_obs_m), mm(p.z_fit_m)]), 0.06);
+    let yr = span(
+        s.iter()
+            .enumerate()
+            .flat_map(|(i, p)| [mm(p.z_obs_m), mm(p.z_fit_m), mm(trusted(i))]),
+        0.06,
+    );
     let caption = format!(
         "Fig. 4.2b: run {} ({}), v0 = {:.4} m/s",
         fit.run, fit.material, fit.v0_mps.value
     );
-    // data − model, µm, by phase, on the strip under the chart
+    // data − the trusted model, µm, by phase, on the strip under the chart
     let resid = |rolling: bool| -> Vec<(f64, f64)> {
         s.iter()
+            .enumerate()
             .step_by(step)
-            .filter(|p| p.rolling == rolling)
-            .map(|p| (ms(p.t_s), (p.z_obs_m - p.z_fit_m) * 1e6))
+            .filter(|(_, p)| p.rolling == rolling)
+            .map(|(i, p)| (ms(p.t_s), (p.z_obs_m - trusted(i)) * 1e6))
             .collect()
     };
     let strip = [
-        (resid(false), style::SLIDING),
-        (resid(true), style::ROLLING),
+        (resid(false), style::SLIDING, "sliding"),
+        (resid(true), style::ROLLING, "rolling"),
     ];
     let svg = render_high(TALL_H, |whole| {
         super::marks::figure_run(&fit.run);
@@ -113,6 +130,9 @@ pub fn render_fig(d: &ReportData, wanted: Option<&str>) -> Result<Option<String>
             false,
             Some("fitted baseline"),
         )?;
+        if let Some(acc) = accepted_curve {
+            line(&mut c, acc, style::ACCEPTED, 2, true, Some(ACCEPTED_LABEL))?;
+        }
         if let Some(t1) = switch {
             line(
                 &mut c,

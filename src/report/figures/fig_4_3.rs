@@ -117,8 +117,8 @@ fn render_fig_c(
         c.run, c.material
     );
     let strip = [
-        (residuals(c, 0, s, g), STRIKER),
-        (residuals(c, 1, t, g), TARGET),
+        (residuals(c, 0, s, g), STRIKER, "striker"),
+        (residuals(c, 1, t, g), TARGET, "target"),
     ];
     render_high(TALL_H, |whole| {
         super::marks::figure_run(&c.run);

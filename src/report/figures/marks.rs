@@ -21,14 +21,47 @@ pub struct Mark {
     pub y: f64,
 }
 
+/// The points of one part of a figure, with the axes they are read on: the chart itself
+/// (`name` empty) or a strip under it (`residuals`).
 #[derive(Debug, Default)]
-struct Open {
+struct Group {
+    name: String,
     x_desc: String,
     y_desc: String,
     marks: Vec<Mark>,
+}
+
+#[derive(Debug, Default)]
+struct Open {
+    /// The chart's group first, then the named parts in the order they were opened.
+    groups: Vec<Group>,
+    /// The group points go to.
+    current: usize,
     labels: Vec<String>,
     /// The run every point belongs to, in a figure of one run (Figs. 4.2b, 4.3c–d).
     run: String,
+}
+
+impl Open {
+    /// Make the group `name` current (opened with these axes if new).
+    fn switch(&mut self, name: &str, x_desc: &str, y_desc: &str) {
+        if self.groups.is_empty() {
+            self.groups.push(Group::default());
+        }
+        let i = match self.groups.iter().position(|g| g.name == name) {
+            Some(i) => i,
+            None => {
+                self.groups.push(Group {
+                    name: name.into(),
+                    ..Group::default()
+                });
+                self.groups.len() - 1
+            }
+        };
+        self.groups[i].x_desc = x_desc.into();
+        self.groups[i].y_desc = y_desc.into();
+        self.current = i;
+    }
 }
 
 thread_local! {
@@ -40,12 +73,17 @@ pub fn open() {
     OPEN.with(|o| *o.borrow_mut() = Some(Open::default()));
 }
 
-/// The axes' descriptions of the figure being drawn (the CSV's column names).
+/// The axes' descriptions of the chart being drawn (the CSV's column names); its points follow.
 pub fn axes(x_desc: &str, y_desc: &str) {
+    part("", x_desc, y_desc);
+}
+
+/// A part of the figure with axes of its own (a residual strip: `name` "residuals"); the points
+/// that follow are its own, written to `<figure>_<name>.csv`.
+pub fn part(name: &str, x_desc: &str, y_desc: &str) {
     OPEN.with(|o| {
         if let Some(o) = o.borrow_mut().as_mut() {
-            o.x_desc = x_desc.into();
-            o.y_desc = y_desc.into();
+            o.switch(name, x_desc, y_desc);
         }
     });
 }
@@ -57,7 +95,11 @@ pub fn add(mut m: Mark) {
             if m.run.is_empty() {
                 m.run.clone_from(&o.run);
             }
-            o.marks.push(m);
+            if o.groups.is_empty() {
+                o.groups.push(Group::default());
+            }
+            let i = o.current;
+            o.groups[i].marks.push(m);
         }
     });
 }
@@ -88,27 +130,50 @@ pub fn labels() -> Vec<String> {
 /// The points drawn so far in the figure being drawn.
 pub fn drawn() -> Vec<(i32, i32)> {
     OPEN.with(|o| {
-        o.borrow()
-            .as_ref()
-            .map_or(Vec::new(), |o| o.marks.iter().map(|m| m.px).collect())
+        o.borrow().as_ref().map_or(Vec::new(), |o| {
+            o.groups
+                .iter()
+                .flat_map(|g| g.marks.iter().map(|m| m.px))
+                .collect()
+        })
     })
 }
 
-/// Stop collecting; `svg` with the points appended as titled, invisible circles.
+/// Stop collecting; `svg` with the points appended as titled, invisible circles, one group per
+/// part of the figure.
 pub fn close(svg: String) -> String {
     let Some(open) = OPEN.with(|o| o.borrow_mut().take()) else {
         return svg;
     };
-    if open.marks.is_empty() {
+    let groups: String = open
+        .groups
+        .iter()
+        .filter(|g| !g.marks.is_empty())
+        .map(group_svg)
+        .collect();
+    if groups.is_empty() {
         return svg;
     }
-    let (xd, yd) = (name_or(&open.x_desc, "x"), name_or(&open.y_desc, "y"));
+    match svg.rfind("</svg>") {
+        Some(i) => format!("{}{groups}{}", &svg[..i], &svg[i..]),
+        None => svg,
+    }
+}
+
+/// One part's points as an SVG group of titled circles.
+fn group_svg(grp: &Group) -> String {
+    let (xd, yd) = (name_or(&grp.x_desc, "x"), name_or(&grp.y_desc, "y"));
+    let part = if grp.name.is_empty() {
+        String::new()
+    } else {
+        format!(" data-part=\"{}\"", esc(&grp.name))
+    };
     let mut g = format!(
-        "<g class=\"data-points\" data-x=\"{}\" data-y=\"{}\" fill=\"#000000\" fill-opacity=\"0\" stroke=\"none\">\n",
+        "<g class=\"data-points\"{part} data-x=\"{}\" data-y=\"{}\" fill=\"#000000\" fill-opacity=\"0\" stroke=\"none\">\n",
         esc(xd),
         esc(yd)
     );
-    for m in &open.marks {
+    for m in &grp.marks {
         let (x, y) = (num(m.x), num(m.y));
         let mut title = String::new();
         if !m.run.is_empty() {
@@ -130,10 +195,7 @@ pub fn close(svg: String) -> String {
         ));
     }
     g.push_str("</g>\n");
-    match svg.rfind("</svg>") {
-        Some(i) => format!("{}{g}{}", &svg[..i], &svg[i..]),
-        None => svg,
-    }
+    g
 }
 
 fn name_or<'a>(s: &'a str, default: &'a str) -> &'a str {
@@ -185,26 +247,40 @@ fn field(s: &str) -> String {
     }
 }
 
-/// The figure's data points as CSV (series, run, x, y; the header names the axes), or None when
-/// the figure has no data points.
+/// The chart's data points as CSV (series, run, x, y; the header names the axes), or None when
+/// the chart has no data points.
 pub fn csv_of(svg: &str) -> Option<String> {
-    let start = svg.find("<g class=\"data-points\"")?;
-    let head_end = svg[start..].find('>')? + start;
-    let head = &svg[start..head_end];
-    let (xd, yd) = (unesc(attr(head, "data-x")?), unesc(attr(head, "data-y")?));
-    let mut out = format!("series,run,{},{}\n", field(&xd), field(&yd));
-    let end = svg[start..].find("</g>")? + start;
-    for tag in svg[head_end..end].split("<circle ").skip(1) {
-        let get = |n: &str| attr(&format!(" {tag}"), n).map(unesc).unwrap_or_default();
-        out.push_str(&format!(
-            "{},{},{},{}\n",
-            field(&get("data-series")),
-            field(&get("data-run")),
-            get("data-vx"),
-            get("data-vy")
-        ));
+    csv_parts(svg).remove("")
+}
+
+/// Every part's data points as CSV, by part name ("" for the chart itself, `residuals` for a
+/// residual strip).
+pub fn csv_parts(svg: &str) -> std::collections::BTreeMap<String, String> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut rest = svg;
+    while let Some(start) = rest.find("<g class=\"data-points\"") {
+        let g = &rest[start..];
+        let Some(head_end) = g.find('>') else { break };
+        let Some(end) = g.find("</g>") else { break };
+        let head = &g[..head_end];
+        if let (Some(xd), Some(yd)) = (attr(head, "data-x"), attr(head, "data-y")) {
+            let name = attr(head, "data-part").map(unesc).unwrap_or_default();
+            let mut csv = format!("series,run,{},{}\n", field(&unesc(xd)), field(&unesc(yd)));
+            for tag in g[head_end..end].split("<circle ").skip(1) {
+                let get = |n: &str| attr(&format!(" {tag}"), n).map(unesc).unwrap_or_default();
+                csv.push_str(&format!(
+                    "{},{},{},{}\n",
+                    field(&get("data-series")),
+                    field(&get("data-run")),
+                    get("data-vx"),
+                    get("data-vy")
+                ));
+            }
+            out.insert(name, csv);
+        }
+        rest = &g[end..];
     }
-    Some(out)
+    out
 }
 
 #[cfg(test)]
@@ -241,5 +317,39 @@ mod tests {
         });
         assert_eq!(close("<svg></svg>".into()), "<svg></svg>");
         assert_eq!(csv_of("<svg></svg>"), None);
+    }
+
+    #[test]
+    fn a_strip_keeps_its_points_apart_with_its_own_axes() {
+        open();
+        figure_run("r1");
+        part("residuals", "time t (ms)", "data − model (µm)");
+        let mark = |x: f64, y: f64, series: &str| Mark {
+            px: (x as i32, y as i32),
+            series: series.into(),
+            run: String::new(),
+            x,
+            y,
+        };
+        add(mark(1.0, -2.5, "sliding"));
+        axes("time t (ms)", "z (mm)");
+        add(mark(1.0, 0.5, "observed"));
+        let svg = close("<svg>\n</svg>\n".into());
+        assert!(
+            svg.contains(
+                "<title>run r1, sliding: time t (ms) = 1; data − model (µm) = -2.5</title>"
+            ),
+            "{svg}"
+        );
+        let parts = csv_parts(&svg);
+        assert_eq!(parts.len(), 2, "{parts:?}");
+        assert_eq!(
+            parts[""],
+            "series,run,time t (ms),z (mm)\nobserved,r1,1,0.5\n"
+        );
+        assert_eq!(
+            parts["residuals"],
+            "series,run,time t (ms),data − model (µm)\nsliding,r1,1,-2.5\n"
+        );
     }
 }

@@ -81,7 +81,8 @@ pub fn restitution_name(material: &str) -> (String, String) {
 }
 
 /// Render every figure the data allows, by file name (`fig_4_2b.svg` → SVG text, and
-/// `fig_4_2b.csv` → its data points when it has any). Parts without data
+/// `fig_4_2b.csv` → its data points when it has any, `fig_4_2b_residuals.csv` → its residual
+/// strip's). Parts without data
 /// (no collision runs, no diagnosis) are simply absent; the report says why.
 pub fn render_all(
     d: &ReportData,
@@ -89,11 +90,16 @@ pub fn render_all(
 ) -> Result<BTreeMap<String, String>, String> {
     let g = d.groove;
     let mut out = BTreeMap::new();
-    // each figure's data points beside it, as `<name>.csv`
+    // each figure's data points beside it, as `<name>.csv`, and a strip's as `<name>_<part>.csv`
     let mut put = |name: &str, svg: Option<String>| {
         if let Some(s) = svg {
-            if let Some(csv) = marks::csv_of(&s) {
-                out.insert(name.replace(".svg", ".csv"), csv);
+            for (part, csv) in marks::csv_parts(&s) {
+                let suffix = if part.is_empty() {
+                    String::new()
+                } else {
+                    format!("_{part}")
+                };
+                out.insert(name.replace(".svg", &format!("{suffix}.csv")), csv);
             }
             out.insert(name.to_string(), s);
         }

@@ -15,14 +15,18 @@ pub const Y_DESC: &str = "data − model (µm)";
 /// A figure's canvas height with its residual strip.
 pub const TALL_H: u32 = style::FIG_H + STRIP_H;
 
-/// One series of residuals: (t ms, residual µm) and its colour.
-pub type Series = (Vec<(f64, f64)>, RGBColor);
+/// One series of residuals: (t ms, residual µm), its colour and its name (each point's title and
+/// CSV row say it: "sliding", "striker").
+pub type Series = (Vec<(f64, f64)>, RGBColor, &'static str);
+
+/// The part name of the strip's points (`marks::part`): they go to `<figure>_residuals.csv`.
+pub const PART: &str = "residuals";
 
 /// A symmetric y range holding 99 % of the residuals, never empty.
 fn limit(series: &[Series]) -> f64 {
     let mut a: Vec<f64> = series
         .iter()
-        .flat_map(|(p, _)| p.iter().map(|q| q.1.abs()))
+        .flat_map(|(p, _, _)| p.iter().map(|q| q.1.abs()))
         .filter(|v| v.is_finite())
         .collect();
     a.sort_by(f64::total_cmp);
@@ -61,10 +65,26 @@ pub fn draw(area: &DrawingArea<SVGBackend, Shift>, x: (f64, f64), series: &[Seri
         vec![(x.0, 0.0), (x.1, 0.0)],
         style::BLACK.stroke_width(1),
     ))?;
-    for (pts, colour) in series {
+    super::marks::part(PART, "time t (ms)", Y_DESC);
+    for (pts, colour, name) in series {
+        let shown: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .copied()
+            .collect();
+        for &(t, r) in &shown {
+            // each point titled with its own value, drawn on the edge when beyond the range
+            super::marks::add(super::marks::Mark {
+                px: c.backend_coord(&(t, r.clamp(-lim, lim))),
+                series: (*name).to_string(),
+                run: String::new(),
+                x: t,
+                y: r,
+            });
+        }
         c.draw_series(
-            pts.iter()
-                .filter(|p| p.0.is_finite() && p.1.is_finite())
+            shown
+                .iter()
                 .map(|p| Circle::new((p.0, p.1.clamp(-lim, lim)), 2, colour.filled())),
         )?;
     }
@@ -82,6 +102,7 @@ mod tests {
                 .map(|i| (i as f64, if i == 50 { 90.0 } else { (i % 5) as f64 - 2.0 }))
                 .collect(),
             style::BLACK,
+            "sliding",
         )];
         let lim = limit(&s);
         assert!((2.0..90.0).contains(&lim), "{lim}");

@@ -65,7 +65,15 @@ fn fig_4_2b_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         return b;
     };
     b.lead = Some(super::leads::trajectory(d, fit));
-    b.figure(figs, "fig_4_2b.svg", "Fig. 4.2b: observed positions (green sliding, magenta rolling) and the fitted baseline (black); the dashed line marks the switch to rolling. Below, on the same time axis, the residuals: data − fitted baseline in µm.");
+    let under_accepted = figs
+        .get("fig_4_2b.svg")
+        .is_some_and(|svg| svg.contains(fig_4_2b::ACCEPTED_LABEL));
+    let caption = if under_accepted {
+        "Fig. 4.2b: observed positions (green sliding, magenta rolling), the fitted baseline (black) and the run fitted under the physics discovery accepted (orange, dashed: the material's μ and drag from section 3.8, every accepted term carried, the run's own start fitted); the grey dashed line marks the baseline's switch to rolling. Below, on the same time axis, the residuals of the model the report trusts: data − the fit under the accepted physics, in µm."
+    } else {
+        "Fig. 4.2b: observed positions (green sliding, magenta rolling) and the fitted baseline (black); the dashed line marks the switch to rolling. Below, on the same time axis, the residuals: data − fitted baseline in µm."
+    };
+    b.figure(figs, "fig_4_2b.svg", caption);
     b.para(format!(
         "Run {} ({}) is the run whose |v0| is closest to the chapter's example of 0.025 m/s. The particle slides (its spin builds up under Coulomb friction) until v = s·v_a at t1, then rolls without sliding, decaying with $T_e = T(1 + ks^2)/ks^2 \\approx 2.2\\,T$.",
         fit.run, fit.material
@@ -131,11 +139,11 @@ fn fig_4_2c_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         ));
     }
     b.para(format!(
-        "The Stokes time of a 150 µm steel sphere in free air is m/(6πηR) = {stokes:.1} s (ρ = 7900 kg/m³, η = 1.81e-5 Pa·s). The chapter's 0.074 s is wrong: it is what its own line T = 0.052 + 1.10·v0 gives at v0 = 0.02 m/s. The measured T is some 40× shorter, so the dissipation is not free-air drag."
+        "The Stokes time of a 150 µm steel sphere in free air is $m/(6\\pi\\eta R)$ = {stokes:.1} s (ρ = 7900 kg/m³, η = 1.81e-5 Pa·s). The chapter's 0.074 s is wrong: it is what its own line $T = 0.052 + 1.10\\,v_0$ gives at v0 = 0.02 m/s. The measured T is some 40× shorter, so the dissipation is not free-air drag."
     ));
     let mut t = table(
         d,
-        "Fig. 4.2c: the T = T0 + T'·|v0| line",
+        "Fig. 4.2c: the $T = T_0 + T'\\lvert v_0\\rvert$ line",
         &["material", "quantity"],
     );
     let mut mats: Vec<Option<String>> = d

@@ -160,7 +160,7 @@ fn fig_4_4bc_block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
     let mut any = false;
     for m in &mats {
         let (name, fig) = restitution_name(m);
-        any |= b.figure(figs, &name, &format!("Fig. {fig}: C = (v2' − v1')/(v1 − v2) against impact speed for {m}, rolling pairs and pairs initially in contact; solid lines: the law each setup's whole-run fit chose (the table of 3.5.1), or C = 1 − a·v without a whole-run fit."));
+        any |= b.figure(figs, &name, &format!("Fig. {fig}: $C = (v_2' - v_1')/(v_1 - v_2)$ against impact speed for {m}, rolling pairs and pairs initially in contact; solid lines: the law each setup's whole-run fit chose (the table of 3.5.1), or $C = 1 - a v$ without a whole-run fit."));
     }
     if !any {
         b.missing = Some(NO_COLLISIONS.into());
@@ -230,7 +230,7 @@ fn secondary_block(figs: &BTreeMap<String, String>, g: Groove) -> Block {
         "secondary",
         "3.7 Secondary collisions: the factor (1 − ks²)/(1 + ks²) and the 78.5° bound",
     );
-    b.figure(figs, "fig_secondary.svg", "The velocity difference of two rolling particles is multiplied by (1 − ks²)/(1 + ks²) per collision and re-acceleration; it stays positive (secondary collisions follow) below the bound.");
+    b.figure(figs, "fig_secondary.svg", "The velocity difference of two rolling particles is multiplied by $(1 - ks^2)/(1 + ks^2)$ per collision and re-acceleration; it stays positive (secondary collisions follow) below the bound.");
     let theta = 2.0 * g.s.asin().to_degrees();
     let f = g.collision_factor();
     let bound = secondary::bound_deg(g.k);

@@ -433,10 +433,10 @@ fn compare_with_eq_4_8(d: &ReportData, f: &Finding) -> String {
             let t0 = param_text(f, "t0_s", "s");
             let tp = param_text(f, "tp_s_per_mps", "s per m/s");
             let per_run = crate::report::summary::t_line(d, None)
-                .map(|(_, b)| format!(" The per-run linear-drag fits average T0 + T'|v| over a run whose speed decays from v0, so their T rises with v0 with a smaller slope ({} s per m/s here, 1.10 in the chapter) than the T' of the law itself.", sig(b.est.value, 3)))
+                .map(|(_, b)| format!(" The per-run linear-drag fits average $T_0 + T'\\lvert v\\rvert$ over a run whose speed decays from $v_0$, so their $T$ rises with $v_0$ with a smaller slope ({} s per m/s here, 1.10 in the chapter) than the T' of the law itself.", sig(b.est.value, 3)))
                 .unwrap_or_default();
             format!(
-                "The accepted drag v/(T0 + T'|v|) is the form the chapter's line T = T0 + T'·v0 suggests before Eq. 4.7 truncates it. Ours: T0 = {}, T' = {} (chapter 0.052 s and 1.10 s per m/s).{per_run} Unlike Eq. 4.8's v/T0 − v²/L, it stays dissipative at every speed; Eq. 4.8 turns into propulsion above L/T0 = {v_star:.0} mm/s.",
+                "The accepted drag $v/(T_0 + T'\\lvert v\\rvert)$ is the form the chapter's line $T = T_0 + T' v_0$ suggests before Eq. 4.7 truncates it. Ours: T0 = {}, T' = {} (chapter 0.052 s and 1.10 s per m/s).{per_run} Unlike Eq. 4.8's $v/T_0 - v^2/L$, it stays dissipative at every speed; Eq. 4.8 turns into propulsion above $L/T_0$ = {v_star:.0} mm/s.",
                 t0.unwrap_or_else(|| "—".into()),
                 tp.unwrap_or_else(|| "—".into())
             )
@@ -581,7 +581,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
         t.push(vec![
             f.round.to_string(),
             f.effect.replace('_', " "),
-            f.form.to_string(),
+            crate::report::formula::form(f.form),
             (if f.accepted { "yes" } else { "no" }).into(),
             params_text(f.parameters),
             evidence_text(f.effect, f.evidence),

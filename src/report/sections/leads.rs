@@ -32,13 +32,44 @@ pub fn trajectory(d: &ReportData, fit: &SingleRow) -> String {
         )
     });
     format!(
-        "Run {} ({}, v0 = {} m/s){slide} the baseline with μ_pg = {} and T = {} s follows it{rms}.",
+        "Run {} ({}, v0 = {} m/s){slide} the baseline with μ_pg = {} and T = {} s follows it{rms}.{}",
         fit.run,
         fit.material,
         sig(fit.v0_mps.value, 3),
         sig(fit.mu.value, 3),
         sig(fit.t_drag_s.value, 3),
+        under_accepted(d, fit)
     )
+}
+
+/// 3.1, when discovery accepted physics: how closely the run's fit under it follows the run,
+/// beside the baseline's curve over the same samples.
+fn under_accepted(d: &ReportData, fit: &SingleRow) -> String {
+    let Some(s) = crate::report::figures::fig_4_2b::samples(d, fit) else {
+        return String::new();
+    };
+    let Some(z) = crate::report::accepted_curve::curve(d, fit, &s) else {
+        return String::new();
+    };
+    // the residuals' robust scale (1.4826 × median |r|: a tracking outlier does not set it)
+    let scale = |f: &dyn Fn(usize) -> f64| {
+        let r: Vec<f64> = (0..s.len()).map(|i| (s[i].z_obs_m - f(i)).abs()).collect();
+        median(r).map_or(f64::NAN, |m| 1.4826 * m)
+    };
+    let (accepted, baseline) = (scale(&|i| z[i]), scale(&|i| s[i].z_fit_m));
+    let head = "Fitted again under the physics discovery accepted (section 3.8: the material's μ and drag, the run's own start), its residuals";
+    if (accepted - baseline).abs() < 0.05 * baseline {
+        format!(
+            " {head} scatter as much as about the baseline's curve ({:.2} µm, 1.4826 × median |residual|): on this run the two models differ by less than the noise. The residuals below are this fit's.",
+            accepted * 1e6
+        )
+    } else {
+        format!(
+            " {head} scatter {:.2} µm (1.4826 × median |residual|), against {:.2} µm about the baseline's curve over the same frames; the residuals below are this fit's.",
+            accepted * 1e6,
+            baseline * 1e6
+        )
+    }
 }
 
 /// RMS (m) of data − fitted segments of both particles of `c`, where a segment is fitted.

@@ -75,6 +75,8 @@ pub struct FigureRef {
     pub svg: String,
     /// The file of its data points beside it (`fig_4_2c.csv`), when it has any.
     pub data: Option<String>,
+    /// The file of its residual strip's points (`fig_4_2b_residuals.csv`), when it has one.
+    pub residuals: Option<String>,
 }
 
 /// One piece of a block, in reading order.
@@ -159,11 +161,13 @@ impl Block {
         match figs.get(name) {
             Some(svg) => {
                 let csv = name.replace(".svg", ".csv");
+                let strip = name.replace(".svg", "_residuals.csv");
                 self.items.push(Item::Figure(FigureRef {
                     name: name.into(),
                     caption: caption.into(),
                     svg: svg.clone(),
                     data: figs.contains_key(&csv).then_some(csv),
+                    residuals: figs.contains_key(&strip).then_some(strip),
                 }));
                 true
             }

@@ -30,13 +30,13 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
             let tie = super::verdict::tied_with(f).map_or(String::new(), |other| {
                 format!(
                     "; but these data cannot tell {} from {other}, which predicts held-out runs as well",
-                    f.form
+                    crate::report::formula::form(&f.form)
                 )
             });
             format!(
                 "{} ({}): {}{}{tie}",
                 f.effect.replace('_', " "),
-                f.form,
+                crate::report::formula::form(&f.form),
                 super::params::params_text(&f.parameters),
                 if bounds.is_empty() {
                     String::new()
@@ -77,13 +77,19 @@ pub fn block(d: &ReportData) -> Block {
         ]);
         if let Some(l) = sm.t_line {
             t.push(vec![
-                format!("drag T(|v|) = T0 + T'|v| of {m}: T0 (s)"),
+                format!(
+                    "drag {} of {m}: $T_0$ (s)",
+                    crate::report::formula::DRAG_LINE
+                ),
                 super::under_accepted::est_text(&l.intercept_s),
                 "—".into(),
                 "under_accepted_physics.json (3.8)".into(),
             ]);
             t.push(vec![
-                format!("drag T(|v|) = T0 + T'|v| of {m}: T' (s per m/s)"),
+                format!(
+                    "drag {} of {m}: $T'$ (s per m/s)",
+                    crate::report::formula::DRAG_LINE
+                ),
                 super::under_accepted::est_text(&l.slope_s_per_mps),
                 "—".into(),
                 "under_accepted_physics.json (3.8)".into(),
@@ -282,7 +288,10 @@ mod tests {
         };
         let lead = block(&d).lead.unwrap();
         assert!(
-            lead.contains(&format!("these data cannot tell {form} from quadratic")),
+            lead.contains(&format!(
+                "these data cannot tell {} from quadratic",
+                crate::report::formula::form(&form)
+            )),
             "{lead}"
         );
     }

@@ -98,7 +98,13 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let terms: Vec<String> = u
         .terms
         .iter()
-        .map(|t| format!("{} ({})", t.effect.replace('_', " "), t.form))
+        .map(|t| {
+            format!(
+                "{} ({})",
+                t.effect.replace('_', " "),
+                crate::report::formula::form(&t.form)
+            )
+        })
         .collect();
     b.para(format!(
         "Discovery accepted {}. The single runs' μ_pg and drag come from its joint fit of every single run with these terms fitted jointly; the whole-run pair fits are made again with every accepted force other than the drag held at its fitted values (μ_pg, the saturating drag, μ_pp and the restitution laws refitted, the μ_pp profile redone). The report trusts this column: discovery accepted each term by its likelihood ratio against a null from the runs' own noise and by better predictions of held-out runs, so the baseline leaves out physics the recordings show, and its numbers can be biased by it. The baseline column is kept for comparison with the chapter.",
@@ -115,7 +121,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
             &["material", "baseline", "under the accepted physics", "trusted"],
         );
         let mut lines = Table::new(
-            "Drag time: the baseline's T-vs-|v0| line over the runs (linear drag per run) and, under the accepted physics, the drag's own T(|v|) = T0 + T'|v| (a different quantity: the drag time at the particle's speed)",
+            "Drag time: the baseline's T-vs-|v0| line over the runs (linear drag per run) and, under the accepted physics, the drag's own $T(\\lvert v\\rvert) = T_0 + T'\\lvert v\\rvert$ (a different quantity: the drag time at the particle's speed)",
             &[
                 "material",
                 "baseline T0 (s)",

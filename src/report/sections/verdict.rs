@@ -36,7 +36,7 @@ fn sentence(f: &Finding) -> String {
         "In {}: {}, {}",
         place_words(f),
         f.effect.replace('_', " "),
-        f.form
+        crate::report::formula::form(&f.form)
     );
     let params = params_text(&f.parameters);
     if !params.is_empty() {

@@ -73,7 +73,13 @@ fn uncarried_words(findings: &[Finding], material: &str) -> Option<String> {
                 && f.effect != "velocity_dependent_friction"
                 && !(f.effect == "velocity_dependent_drag" && f.form.starts_with("saturating"))
         })
-        .map(|f| format!("{} ({})", f.effect.replace('_', " "), f.form))
+        .map(|f| {
+            format!(
+                "{} ({})",
+                f.effect.replace('_', " "),
+                crate::report::formula::form(&f.form)
+            )
+        })
         .collect();
     if names.is_empty() {
         return None;
@@ -146,7 +152,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     let mats = &d.whole_run()?.materials;
     let mut b = Block::new("whole-run", "3.5.1 μ_pp and restitution from whole runs");
     b.para(
-        "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag v/(T0 + T'|v|), μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the larger of the runs' dispersion (how much more the runs disagree than their noise says) and the residuals' own estimate of the same: their scale (mean ψ²/mean ψ′ of the Huber-clipped whitened residuals, above 1 when the noise estimates are low) times the serial-correlation factor (1 + ρ)/(1 − ρ), ρ the pooled lag-1 autocorrelation of the best fit's residuals weighted by their sensitivity to μ_pp (the μ_pp score): successive positions of a sliding sphere miss the model together, so the samples carry less independent information than their number says.",
+        "Each material's collision runs are fitted together, every run over its whole recording: the event-driven two-particle model (every impact, first and secondary, and the sliding and rolling of both particles between them) with shared μ_pg, drag $v/(T_0 + T'\\lvert v\\rvert)$, μ_pp and one restitution law per setup, and per run the kick speed, kick time, start position and gap. The secondary impacts slip, so the whole runs say what the first (stick) impacts cannot. The profile holds μ_pp at each value and refits everything else; its deviance is divided by the larger of the runs' dispersion (how much more the runs disagree than their noise says) and the residuals' own estimate of the same: their scale (mean ψ²/mean ψ′ of the Huber-clipped whitened residuals, above 1 when the noise estimates are low) times the serial-correlation factor (1 + ρ)/(1 − ρ), ρ the pooled lag-1 autocorrelation of the best fit's residuals weighted by their sensitivity to μ_pp (the μ_pp score): successive positions of a sliding sphere miss the model together, so the samples carry less independent information than their number says.",
     );
     b.figure(
         figs,
