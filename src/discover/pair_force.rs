@@ -381,9 +381,14 @@ impl ForceTest {
             Some([a, b]) => {
                 let f = self.force();
                 let kind = if f.amplitude_mps2() < 0.0 { "an attraction" } else { "a repulsion" };
+                let tie = if self.tie {
+                    format!("; tied with {}: these data cannot tell them apart, and this one, the simpler, is in the model", shape_name(self.other.shape))
+                } else {
+                    String::new()
+                };
                 (
                     true,
-                    format!("{kind} between the particles before they touch: confirmed on held-out runs (χ² gains {a:.1} and {b:.1} on the two halves)"),
+                    format!("{kind} between the particles before they touch: confirmed on held-out runs (χ² gains {a:.1} and {b:.1} on the two halves){tie}"),
                 )
             }
         }
@@ -483,5 +488,69 @@ impl ForceTest {
             },
             extended: score(&self.chosen.fit, k, form),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn finding(accepted: bool, exponent: Option<f64>) -> Finding {
+        let mut parameters = BTreeMap::new();
+        parameters.insert("pair_amplitude_mps2".into(), Value::new(-2.5, 0.1));
+        parameters.insert("pair_range_m".into(), Value::new(40e-6, 1e-6));
+        if let Some(n) = exponent {
+            parameters.insert("pair_exponent".into(), Value::new(n, 0.1));
+        }
+        Finding {
+            effect: Effect::ForceBetweenParticles.id().into(),
+            accepted,
+            form: String::new(),
+            parameters,
+            evidence: Evidence::default(),
+            where_: BTreeMap::new(),
+            baseline: ModelScore::default(),
+            extended: ModelScore::default(),
+        }
+    }
+
+    #[test]
+    fn an_accepted_force_is_read_back_in_its_shape_and_nothing_else_is() {
+        let (shape, p) = carried_from(&finding(true, None)).expect("accepted");
+        assert_eq!(shape, PairForceShape::Exponential);
+        assert_eq!(p[0], -2.5);
+        assert!((p[1].exp() - 40e-6).abs() < 1e-18);
+        let (shape, p) = carried_from(&finding(true, Some(4.0))).expect("accepted");
+        assert_eq!((shape, p[2]), (PairForceShape::PowerLaw, 4.0));
+        assert!(carried_from(&finding(false, None)).is_none());
+        let mut other = finding(true, None);
+        other.effect = Effect::PairPhysicsMismatch.id().into();
+        assert!(carried_from(&other).is_none());
+    }
+
+    #[test]
+    fn a_fit_parameter_at_its_bound_is_named() {
+        let spec = FitSpec {
+            pair_force: Some((PairForceShape::Exponential, PAIR_FORCE_START)),
+            ..FitSpec::new(crate::physics::Groove::CHAPTER)
+        };
+        let specs = spec.shared_specs(None, &[]);
+        let mut shared: Vec<f64> = specs.iter().map(|s| s.start).collect();
+        shared[PF_AMP] = -1.0;
+        let fit = |shared: Vec<f64>| GroupFit {
+            spec: spec.clone(),
+            result: crate::lsq::block::BlockResult {
+                shared,
+                own: Vec::new(),
+                shared_cov: Vec::new(),
+                own_se: Vec::new(),
+                block_cost: Vec::new(),
+                termination: crate::lsq::Termination::SmallStep,
+                iterations: 0,
+            },
+        };
+        assert_eq!(at_bound(&fit(shared.clone())), None);
+        shared[PF_LN_RANGE] = specs[PF_LN_RANGE].lower;
+        assert_eq!(at_bound(&fit(shared)), Some("range"));
     }
 }

@@ -33,8 +33,14 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
                     crate::report::formula::form(&f.form)
                 )
             });
+            let pairs = f
+                .where_
+                .get("material")
+                .and_then(|v| v.as_str())
+                .filter(|_| f.where_.get("experiment").and_then(|v| v.as_str()) == Some("collision"))
+                .map_or(String::new(), |m| format!(" in the {m} pairs"));
             format!(
-                "{} ({}): {}{}{tie}",
+                "{}{pairs} ({}): {}{}{tie}",
                 f.effect.replace('_', " "),
                 crate::report::formula::form(&f.form),
                 super::params::params_text(&f.parameters),

@@ -4,8 +4,17 @@
 use super::params::params_text;
 use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
 
-/// The words a finding's place is said in.
-fn place_words(f: &Finding) -> &'static str {
+/// The words a finding's place is said in, with the material of a collision finding.
+fn place_words(f: &Finding) -> String {
+    let words = place_name(f);
+    match f.where_.get("material").and_then(|v| v.as_str()) {
+        Some(m) if words == "the collisions" => format!("the collisions of the {m} pairs"),
+        _ => words.to_string(),
+    }
+}
+
+/// The words of a finding's place.
+fn place_name(f: &Finding) -> &'static str {
     let place = f
         .where_
         .get("place")
