@@ -309,8 +309,9 @@ impl FitSpec {
 
     /// The force between the particles at shared parameters `p` (None without one).
     pub fn force(&self, p: &[f64]) -> Option<PairForce> {
+        let (shape, _) = self.pair_force?;
         let (amp_mps2, range_m) = (p[PF_AMP], p[PF_LN_RANGE].exp());
-        match self.pair_force?.0 {
+        match shape {
             PairForceShape::Exponential => Some(PairForce::Exponential { amp_mps2, range_m }),
             PairForceShape::PowerLaw => Some(PairForce::PowerLaw {
                 amp_mps2,
