@@ -463,7 +463,7 @@ impl BlockProblem for Problem<'_> {
         residuals(&self.runs[b], self.spec, shared, own, out);
     }
     fn uses(&self, b: usize, i: usize) -> bool {
-        if i < LAW || i >= CONTACT {
+        if !(LAW..CONTACT).contains(&i) {
             return true;
         }
         let slot = law_slot(self.runs[b].setup);
