@@ -190,7 +190,9 @@ fn a_force_between_the_particles_is_named_with_its_work() {
 
 /// Pairs with nothing between them, in ten seeds over the tracker noises (correlated, blurred,
 /// locked to the pixel grid, with outliers, drifting, all at once): no force between the
-/// particles is accepted.
+/// particles is accepted. (Not asserted, because it is not so yet: the pairs' impact test accepts
+/// a misfit after impacts on seed 306, mixture noise, 1.91×, a known false accept of that test
+/// in noise that grows with speed.)
 #[test]
 fn pairs_with_nothing_between_them_stay_silent() {
     let noises = [

@@ -24,6 +24,8 @@ use crate::fit::collision::wholerun::{
     fit_group_with, fit_own_only, residuals, FitSpec, GroupFit, PairForceShape, PairRun,
     PAIR_FORCE_START, PF_AMP, PF_EXPONENT, PF_LN_RANGE,
 };
+use crate::lsq::block::huber_rho;
+use crate::lsq::Termination;
 use crate::stats::dist::chi2_sf;
 use std::collections::BTreeMap;
 
@@ -37,31 +39,33 @@ use std::collections::BTreeMap;
 const SCAN_RANGES_M: [f64; 4] = [10e-6, 30e-6, 100e-6, 300e-6];
 const SCAN_AMPS_MPS2: [f64; 4] = [0.3, 1.0, 3.0, 10.0];
 
-/// Huber's ρ at 3 (the whole-run fits' own loss) of a whitened residual.
-fn huber(r: f64) -> f64 {
-    const K: f64 = 3.0;
-    if r.abs() <= K {
-        r * r
-    } else {
-        2.0 * K * r.abs() - K * K
-    }
-}
-
-/// The held fit's loss with an exponential force at `start` (A, ln λ, n) added, nothing refitted.
-fn scan_cost(runs: &[PairRun], held: &GroupFit, start: [f64; 3]) -> f64 {
+/// The held fit's spec and shared values with a force of `shape` at `start` (A, ln λ, n) added.
+fn with_force(held: &GroupFit, shape: PairForceShape, start: [f64; 3]) -> (FitSpec, Vec<f64>) {
     let spec = FitSpec {
-        pair_force: Some((PairForceShape::Exponential, start)),
+        pair_force: Some((shape, start)),
         ..held.spec.clone()
     };
     let mut shared = held.result.shared.clone();
     shared[PF_AMP] = start[0];
     shared[PF_LN_RANGE] = start[1];
     shared[PF_EXPONENT] = start[2];
+    (spec, shared)
+}
+
+/// A shared slot of the force.
+fn force_slot(i: usize) -> bool {
+    i == PF_AMP || i == PF_LN_RANGE || i == PF_EXPONENT
+}
+
+/// The held fit's loss (the whole-run fits' Huber deviance at 3) with an exponential force at
+/// `start` added, nothing refitted.
+fn scan_cost(runs: &[PairRun], held: &GroupFit, start: [f64; 3]) -> f64 {
+    let (spec, shared) = with_force(held, PairForceShape::Exponential, start);
     let mut cost = 0.0;
     for (run, own) in runs.iter().zip(&held.result.own) {
         let mut r = vec![0.0; run.n_samples()];
         residuals(run, &spec, &shared, own, &mut r);
-        cost += r.iter().map(|&x| huber(x)).sum::<f64>();
+        cost += r.iter().map(|&x| huber_rho(x, 3.0)).sum::<f64>();
     }
     cost
 }
@@ -162,20 +166,13 @@ fn fit_shape(
     free: &dyn Fn(usize) -> bool,
     max_iter: usize,
 ) -> GroupFit {
-    let spec = FitSpec {
-        pair_force: Some((shape, start)),
-        ..held.spec.clone()
-    };
-    let mut shared = held.result.shared.clone();
-    shared[PF_AMP] = start[0];
-    shared[PF_LN_RANGE] = start[1];
-    shared[PF_EXPONENT] = start[2];
+    let (spec, shared) = with_force(held, shape, start);
     fit_group_with(
         runs,
         &spec,
         &shared,
         Some(held.result.own.as_slice()),
-        &|i| free(i) || i == PF_AMP || i == PF_LN_RANGE || i == PF_EXPONENT,
+        &|i| free(i) || force_slot(i),
         max_iter,
     )
 }
@@ -210,7 +207,7 @@ fn held_out(
             &chosen.fit.spec,
             &chosen.fit.result.shared,
             Some(own(&chosen.fit, &train).as_slice()),
-            &|i| free(i) || i == PF_AMP || i == PF_LN_RANGE || i == PF_EXPONENT,
+            &|i| free(i) || force_slot(i),
             max_iter,
         );
         let held_train = fit_group_with(
@@ -361,8 +358,20 @@ impl ForceTest {
         (var.max(0.0) * self.inflate).sqrt()
     }
 
-    /// Accepted at Holm p-value `p_holm`, and the decision in words.
+    /// Accepted at Holm p-value `p_holm`, and the decision in words, with the force fit's end
+    /// when it stopped at its iteration limit rather than converging.
     pub fn decision(&self, p_holm: f64) -> (bool, String) {
+        let (accepted, words) = self.verdict(p_holm);
+        if self.chosen.fit.result.termination == Termination::MaxIterations {
+            return (
+                accepted,
+                format!("{words} (the force fit stopped at its iteration limit, not converged)"),
+            );
+        }
+        (accepted, words)
+    }
+
+    fn verdict(&self, p_holm: f64) -> (bool, String) {
         if p_holm >= ALPHA {
             return (
                 false,
@@ -445,7 +454,7 @@ impl ForceTest {
         if self.tie {
             where_.insert(
                 "tie".into(),
-                serde_json::json!("exponential or power law: these data cannot tell them apart; the exponential, the simpler, is the model"),
+                serde_json::json!("exponential or power law: these data cannot tell them apart; the exponential, the simpler, is the one reported"),
             );
         }
         if let Some([a, b]) = self.held_out {
