@@ -160,6 +160,8 @@ fn rolling_pair(mu_pp: f64) -> Vec<indsim::pair::Impact> {
         c0: 1.0,
         v_ref_mps: 1.0,
         force: None,
+        law: None,
+        mu_pp_weakening_mps: None,
     };
     let (_, impacts) = simulate_pair([&p, &p], &m, [0.0, 2e-3], 0.06, 0.2, DT_S);
     impacts
@@ -204,6 +206,8 @@ fn restitution_measured_from_the_impulse_is_the_law() {
         c0: 0.8,
         v_ref_mps: 0.15,
         force: None,
+        law: None,
+        mu_pp_weakening_mps: None,
     };
     let (fine, impacts) = simulate_pair([&p, &p], &m, [0.001, 0.0013], 0.2, 0.03, DT_S);
     let i = impacts[0];

@@ -306,6 +306,8 @@ pub enum Effect {
     GrooveTilt,
     /// Collision runs only: the impacts do something the impulse rule misses.
     ImpactSpecificMismatch,
+    /// Collision runs only: μ_pp depends on the slip speed at the contact.
+    PairFrictionSlipSpeed,
     /// Collision runs only: the pairs' friction or drag differ from the single runs'.
     PairPhysicsMismatch,
     /// μ or T differ from particle to particle beyond the runs' noise, nothing else missing.
@@ -315,6 +317,8 @@ pub enum Effect {
     PositionDependentForce,
     /// μ varies along the groove (fixed in the lab).
     PositionDependentFriction,
+    /// Collision runs only: the coefficient of restitution follows a law outside the candidates.
+    RestitutionLaw,
     RollingResistance,
     /// A force that depends on the time since the kick (e.g. a vibration), not on z or v.
     TimeDependentForce,
@@ -325,16 +329,18 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, in id order.
-    pub const ALL: [Effect; 14] = [
+    pub const ALL: [Effect; 16] = [
         Effect::DirectionDependentFriction,
         Effect::ForceBetweenParticles,
         Effect::GrooveTilt,
         Effect::ImpactSpecificMismatch,
+        Effect::PairFrictionSlipSpeed,
         Effect::PairPhysicsMismatch,
         Effect::ParticleDifferences,
         Effect::PositionDependentForce,
         Effect::PositionDependentFriction,
         Effect::PositionDistortion,
+        Effect::RestitutionLaw,
         Effect::RollingResistance,
         Effect::TimeDependentForce,
         Effect::Unexplained,
@@ -349,11 +355,13 @@ impl Effect {
             Effect::ForceBetweenParticles => "force_between_particles",
             Effect::GrooveTilt => "groove_tilt",
             Effect::ImpactSpecificMismatch => "impact_specific_mismatch",
+            Effect::PairFrictionSlipSpeed => "pair_friction_slip_speed",
             Effect::PairPhysicsMismatch => "pair_physics_mismatch",
             Effect::ParticleDifferences => "particle_differences",
             Effect::PositionDependentForce => "position_dependent_force",
             Effect::PositionDependentFriction => "position_dependent_friction",
             Effect::PositionDistortion => "position_distortion",
+            Effect::RestitutionLaw => "restitution_law",
             Effect::RollingResistance => "rolling_resistance",
             Effect::TimeDependentForce => "time_dependent_force",
             Effect::Unexplained => "unexplained",
@@ -378,7 +386,9 @@ impl Effect {
             Effect::ParticleDifferences => "particles",
             Effect::ForceBetweenParticles
             | Effect::ImpactSpecificMismatch
-            | Effect::PairPhysicsMismatch => "pair",
+            | Effect::PairFrictionSlipSpeed
+            | Effect::PairPhysicsMismatch
+            | Effect::RestitutionLaw => "pair",
             Effect::GrooveTilt
             | Effect::PositionDependentForce
             | Effect::RollingResistance

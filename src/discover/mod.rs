@@ -39,6 +39,7 @@
 //! - `spectral.rs`: Spectral search
 //! - `timeforce.rs`: Each run's own phase of a force periodic in time
 //! - `forcemap/`: The force map: the missing acceleration as a smooth function of one variable
+//! - `impact/`: The impact laws of the pairs (restitution, μ_pp against slip speed), read from the impacts
 //! - `forms/`: The forms of missing physics, one file each, and their registry
 //!
 //! # The method, in six steps
@@ -93,7 +94,8 @@
 //!    The collision runs are checked by `pairs.rs`: the pairs fitted with μ_pg and drag held at
 //!    the single runs' accepted physics against free (Wald χ², a contact-distance fit that names
 //!    a length calibration), residuals after impacts (`pairs_impact.rs`), and a force between the
-//!    particles before they touch, in their separation (`pair_force.rs`).
+//!    particles before they touch, in their separation (`pair_force.rs`); the impacts' own C and
+//!    μ_pp against their speeds, a map beside the chapter's candidate laws (`impact/`).
 //!
 //! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times on stderr (not in any
 //! output).
@@ -111,6 +113,7 @@ pub mod forcemap;
 pub mod forms;
 pub mod forward;
 pub mod holm;
+pub mod impact;
 pub mod joint;
 pub mod locate;
 pub mod model;

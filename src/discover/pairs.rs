@@ -16,6 +16,7 @@
 
 use super::forms;
 use super::holm::holm;
+use super::impact::test_impact_laws;
 use super::pair_force::{test_force, ForceTest};
 use super::pairs_impact::{
     impact_decision, impact_p_value, split_by_impact, ALPHA, IMPACT_WINDOW_S,
@@ -766,6 +767,15 @@ pub fn check_pairs(
             }
         })
         .collect();
+    // the impacts' own laws; a material whose pairs feel a force keeps the force
+    let forced: Vec<String> = drafts
+        .iter()
+        .zip(&forces)
+        .zip(&p_force)
+        .filter(|((_, f), &p)| f.decision(p).0)
+        .map(|((d, _), _)| d.material.clone())
+        .collect();
+    findings.extend(test_impact_laws(recordings, groove, &forced));
     let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
     let p_imp = holm(&drafts.iter().map(|d| d.p_impact).collect::<Vec<_>>());
     for (k, d) in drafts.iter().enumerate() {

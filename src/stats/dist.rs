@@ -1,8 +1,9 @@
 //! Tail probabilities and quantiles for the tests, from `statrs`: the χ² and gamma tails of the
 //! likelihood-ratio nulls, the normal tail of the runs test, and the Student t quantile of the
-//! paired cross-validation test and of the impact test over runs.
+//! paired cross-validation test and of the impact test over runs, and the F tail of the per-impact
+//! law tests.
 
-use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal, StudentsT};
 use statrs::function::gamma::checked_gamma_ur;
 
 /// Upper regularized incomplete gamma Q(a, x) = Γ(a, x)/Γ(a); 1 for x ≤ 0, NaN for a ≤ 0.
@@ -43,6 +44,18 @@ pub fn t_sf(t: f64, df: f64) -> f64 {
     }
 }
 
+/// P(F > f) for Fisher's F with `d1` and `d2` degrees of freedom (both > 0); 1 for f ≤ 0, NaN
+/// otherwise.
+pub fn f_sf(f: f64, d1: f64, d2: f64) -> f64 {
+    if f <= 0.0 {
+        return 1.0;
+    }
+    match FisherSnedecor::new(d1, d2) {
+        Ok(d) => d.sf(f),
+        _ => f64::NAN,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -57,6 +70,9 @@ mod tests {
         assert!((normal_sf(-1.0) - 0.841_344_7).abs() < 1e-6);
         // one-sided 5 % points of t: 6.314 (1 df), 2.015 (5 df), 1.697 (30 df)
         assert!((t_upper_quantile(0.05, 1.0) - 6.313_752).abs() < 1e-4);
+        // F(2, 10) upper 5 % point 4.103, F(1, 20) 1 % point 8.096
+        assert!((f_sf(4.102_821, 2.0, 10.0) - 0.05).abs() < 1e-6);
+        assert!((f_sf(8.095_958, 1.0, 20.0) - 0.01).abs() < 1e-6);
         assert!((t_upper_quantile(0.05, 5.0) - 2.015_048).abs() < 1e-5);
         assert!((t_upper_quantile(0.05, 30.0) - 1.697_261).abs() < 1e-5);
         assert!(t_upper_quantile(0.05, 0.0).is_nan());

@@ -4,7 +4,7 @@
 use crate::indsim::camera::{Camera, Frame};
 use crate::indsim::model::Physics;
 use crate::indsim::noise::Noise;
-use crate::indsim::pair::{simulate_pair, Between, PairModel};
+use crate::indsim::pair::{simulate_pair, Between, Law, PairModel};
 use crate::indsim::run::{simulate, DT_S};
 use crate::indsim::writer::RecordedRun;
 use rand::SeedableRng;
@@ -47,6 +47,10 @@ pub struct DatasetSpec {
     pub mu_pp: f64,
     /// A force between the two particles of a collision run.
     pub pair_force: Option<Between>,
+    /// A restitution law for every collision other than the materials' saturating ones.
+    pub restitution_law: Option<Law>,
+    /// μ_pp falling with the slip speed at the contact (its scale u0, m/s).
+    pub mu_pp_weakening_mps: Option<f64>,
 }
 
 impl DatasetSpec {
@@ -63,6 +67,8 @@ impl DatasetSpec {
             c0,
             v_ref_mps,
             force: self.pair_force,
+            law: self.restitution_law,
+            mu_pp_weakening_mps: self.mu_pp_weakening_mps,
         }
     }
 

@@ -194,6 +194,8 @@ fn base(
         noise,
         mu_pp: 1.4,
         pair_force: None,
+        restitution_law: None,
+        mu_pp_weakening_mps: None,
     }
 }
 

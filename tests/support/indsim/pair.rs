@@ -17,6 +17,32 @@ pub struct PairModel {
     pub v_ref_mps: f64,
     /// A force between the two, on each along the line of centres, pushing apart when > 0.
     pub force: Option<Between>,
+    /// A restitution law other than the saturating one above (None: that one).
+    pub law: Option<Law>,
+    /// μ_pp falls with the slip speed u at the contact as μ_pp/(1 + u/u0) (None: constant).
+    pub mu_pp_weakening_mps: Option<f64>,
+}
+
+/// Restitution laws outside the saturating one, in this simulator's own forms.
+#[derive(Clone, Copy, Debug)]
+pub enum Law {
+    /// Viscoelastic spheres to second order in v^(1/5): `1 − a v^0.2 + 0.6 a² v^0.4`.
+    Viscoelastic { a: f64 },
+    /// Adhesion at low speed and yield at high: `c (1 − e^{−(v/v_a)²}) e^{−v/v_p}`.
+    Humped { c: f64, v_a: f64, v_p: f64 },
+    /// Sticking below a speed: `c (1 − e^{−(v − v_s)/w})` above `v_s`, a floor of 0.05 below.
+    Sticky { c: f64, v_s: f64, w: f64 },
+}
+
+impl Law {
+    pub fn at(&self, v: f64) -> f64 {
+        let v = v.abs();
+        match *self {
+            Law::Viscoelastic { a } => 1.0 - a * v.powf(0.2) + 0.6 * a * a * v.powf(0.4),
+            Law::Humped { c, v_a, v_p } => c * (1.0 - (-(v / v_a).powi(2)).exp()) * (-v / v_p).exp(),
+            Law::Sticky { c, v_s, w } => (c * (1.0 - (-(v - v_s).max(0.0) / w).exp())).max(0.05),
+        }
+    }
 }
 
 /// Shapes of a force between the two particles in their gap s (surface to surface).
@@ -62,7 +88,18 @@ impl Between {
 
 impl PairModel {
     pub fn restitution(&self, v: f64) -> f64 {
-        self.c0 + (1.0 - self.c0) * (-v.abs() / self.v_ref_mps).exp()
+        match self.law {
+            Some(l) => l.at(v),
+            None => self.c0 + (1.0 - self.c0) * (-v.abs() / self.v_ref_mps).exp(),
+        }
+    }
+
+    /// μ_pp at slip speed `u` (m/s) at the contact.
+    pub fn mu_pp_at(&self, u: f64) -> f64 {
+        match self.mu_pp_weakening_mps {
+            Some(u0) => self.mu_pp / (1.0 + u.abs() / u0),
+            None => self.mu_pp,
+        }
     }
 }
 
@@ -81,8 +118,9 @@ pub fn impulse(m: &PairModel, a: &mut Particle, b: &mut Particle, n: f64) {
     let j = 0.5 * (1.0 + m.restitution(v1 - v2)) * (v1 - v2);
     let (v1n, v2n) = (v1 - j, v2 + j);
     let sum = w1 + w2;
-    let (w1n, w2n) = if sum.abs() >= 2.0 * m.mu_pp * 2.5 * j {
-        let dw = sum.signum() * m.mu_pp * 2.5 * j;
+    let mu = m.mu_pp_at(sum);
+    let (w1n, w2n) = if sum.abs() >= 2.0 * mu * 2.5 * j {
+        let dw = sum.signum() * mu * 2.5 * j;
         (w1 - dw, w2 - dw)
     } else {
         (0.5 * (w1 - w2), 0.5 * (w2 - w1))
