@@ -1,4 +1,10 @@
-//! Probe (temporary): the per-impact C and μ_pp of the collision fit on independent-simulator pairs.
+//! The impacts' own laws on recordings of the independent simulator (tests/support/indsim): a
+//! coefficient of restitution outside the chapter's candidate laws (a hump — adhesion at low
+//! speed, losses growing above — and a sticking threshold, in that simulator's own forms) must be
+//! named as a restitution law (`restitution_law`, place `pair`), μ_pp weakening with the slip speed
+//! as `pair_friction_slip_speed` with its size; pairs whose restitution is the chapter's
+//! saturating law and whose μ_pp is constant (sticking or slipping) stay silent on 20 seeds over
+//! six tracker noises. Rates, not fixtures: each test runs over the noises and asserts a count.
 
 #[allow(dead_code)]
 #[path = "support/indsim/mod.rs"]
@@ -12,8 +18,8 @@ use bed::dataset::RunSpec;
 use bed::draw::{case, Case, Size};
 use groove::artifacts::diagnosis::Finding;
 use groove::discover::impact::test_impact_laws;
-use groove::physics::Groove;
 use groove::ingest::{ingest, IngestParams};
+use groove::physics::Groove;
 use groove::recording::Recording;
 use indsim::pair::Law;
 use indsim::writer::write_dataset;
@@ -90,21 +96,19 @@ fn summary(findings: &[Finding]) -> String {
         .iter()
         .map(|f| {
             format!(
-                "{} {:?} {} {}: F {:.2} p {:.2e} ph {:.2e} | {} | {} | {}",
+                "{} {} {} {}: {} | {}",
                 f.where_["material"],
-                f.where_.get("setup"),
+                f.where_
+                    .get("setup")
+                    .map_or(String::new(), |s| s.to_string()),
                 f.effect,
                 if f.accepted { "ACCEPTED" } else { "no" },
-                f.evidence.lr,
-                f.evidence.p_value,
-                f.evidence.p_holm,
+                f.evidence.decision,
                 f.parameters
                     .iter()
                     .map(|(k, v)| format!("{k} = {:.4}", v.value))
                     .collect::<Vec<_>>()
                     .join(", "),
-                f.evidence.decision,
-                f.form
             )
         })
         .collect::<Vec<_>>()
@@ -113,95 +117,136 @@ fn summary(findings: &[Finding]) -> String {
 
 const NOISES: [&str; 6] = ["white", "ar1", "blur", "locked", "outliers", "mixture"];
 
-/// The impact-law findings of a case with `law` and μ_pp (`u0`: weakening with slip speed).
-fn law_findings(seed: u64, noise: &str, law: Option<Law>, mu_pp: f64, u0: Option<f64>) -> (Case, Vec<Finding>) {
-    let mut c = pairs_case(seed, noise, 10);
+/// The impact-law findings of a case of `n` pairs per material and setup with `law` (None: the
+/// materials' saturating laws), μ_pp and its weakening scale `u0`.
+fn law_findings(
+    seed: u64,
+    noise: &str,
+    n: usize,
+    law: Option<Law>,
+    mu_pp: f64,
+    u0: Option<f64>,
+) -> Vec<Finding> {
+    let mut c = pairs_case(seed, noise, n);
     c.spec.restitution_law = law;
     c.spec.mu_pp = mu_pp;
     c.spec.mu_pp_weakening_mps = u0;
-    let recs = recordings(&c);
-    let f = test_impact_laws(&recs, Groove::CHAPTER, &[]);
-    (c, f)
+    test_impact_laws(&recordings(&c), Groove::CHAPTER, &[])
 }
 
 fn accepted<'a>(f: &'a [Finding], effect: &str) -> Vec<&'a Finding> {
-    f.iter().filter(|f| f.accepted && f.effect == effect).collect()
+    f.iter()
+        .filter(|f| f.accepted && f.effect == effect)
+        .collect()
 }
 
-/// The largest difference between an accepted restitution finding's map and the true law at
-/// the map's speeds.
-fn map_error(f: &Finding, law: &Law) -> f64 {
+/// A finding's map: (speed, value) at its nodes.
+fn map_of(f: &Finding) -> Vec<(f64, f64)> {
     let m = &f.where_["map"];
     let speeds: Vec<f64> = serde_json::from_value(m["speeds_mps"].clone()).unwrap();
     let values: Vec<f64> = serde_json::from_value(m["values"].clone()).unwrap();
-    speeds
-        .iter()
-        .zip(&values)
-        .map(|(v, c)| (c - law.at(*v)).abs())
-        .fold(0.0, f64::max)
+    speeds.into_iter().zip(values).collect()
 }
 
+/// Two laws outside the candidates, in six tracker noises each, 12 pairs per material and setup
+/// (as the shipped data): at least 10 of the 12 datasets name a restitution law, and every
+/// accepted map lies within 0.05 of the true C at half of its nodes or more. Known: at the
+/// slowest secondary impacts of the rolling setup (about 10 mm/s, where these laws nearly stick)
+/// the runs' own fits read C high, so a map's lowest node can be far off.
 #[test]
-#[ignore]
-fn probe() {
+fn restitution_laws_outside_the_candidates_are_named() {
     let laws = [
-        ("humped", Law::Humped { c: 0.95, v_a: 0.05, v_p: 0.4 }),
-        ("sticky", Law::Sticky { c: 0.85, v_s: 0.01, w: 0.02 }),
-        ("visco", Law::Viscoelastic { a: 0.5 }),
+        Law::Humped {
+            c: 0.95,
+            v_a: 0.05,
+            v_p: 0.4,
+        },
+        Law::Sticky {
+            c: 0.85,
+            v_s: 0.01,
+            w: 0.02,
+        },
     ];
-    let mut lines = Vec::new();
-    for (k, (label, law)) in laws.iter().enumerate() {
+    let (mut named, mut wrong, mut report) = (0, Vec::new(), Vec::new());
+    for (k, law) in laws.iter().enumerate() {
         for (j, noise) in NOISES.iter().enumerate() {
-            let seed = 500 + 10 * k as u64 + j as u64;
-            let (_, f) = law_findings(seed, noise, Some(*law), 1.4, None);
+            let f = law_findings(
+                500 + 10 * k as u64 + j as u64,
+                noise,
+                12,
+                Some(*law),
+                1.4,
+                None,
+            );
             let acc = accepted(&f, "restitution_law");
-            lines.push(format!(
-                "{label} {noise}: {} groups named; map errors {:?}\n{}",
-                acc.len(),
-                acc.iter().map(|f| format!("{:.3}", map_error(f, law))).collect::<Vec<_>>(),
+            named += usize::from(!acc.is_empty());
+            for a in &acc {
+                let map = map_of(a);
+                let close = map
+                    .iter()
+                    .filter(|(v, c)| (c - law.at(*v)).abs() <= 0.05)
+                    .count();
+                if 2 * close < map.len() {
+                    wrong.push(format!("{law:?} in {noise}: map {map:?}"));
+                }
+            }
+            report.push(format!("{law:?} in {noise}:\n{}", summary(&f)));
+        }
+    }
+    eprintln!("{}\nnamed in {named}/12 datasets", report.join("\n"));
+    assert!(wrong.is_empty(), "{wrong:#?}");
+    assert!(named >= 10, "{named}/12 named:\n{}", report.join("\n"));
+}
+
+/// μ_pp = 0.3/(1 + u/50 mm/s) in six tracker noises, 16 pairs per material and setup (only the
+/// rolling setup's impacts slip): at least 4 of the 6 datasets name it, and every accepted map
+/// gives μ_pp within 15 % of the truth at its median node.
+#[test]
+fn mu_pp_weakening_with_slip_speed_is_named_and_sized() {
+    let truth = |u: f64| 0.3 / (1.0 + u / 0.05);
+    let (mut named, mut wrong, mut report) = (0, Vec::new(), Vec::new());
+    for (j, noise) in NOISES.iter().enumerate() {
+        let f = law_findings(600 + j as u64, noise, 16, None, 0.3, Some(0.05));
+        let acc = accepted(&f, "pair_friction_slip_speed");
+        named += usize::from(!acc.is_empty());
+        for a in &acc {
+            let map = map_of(a);
+            let (u, mu) = map[map.len() / 2];
+            if (mu / truth(u) - 1.0).abs() > 0.15 {
+                wrong.push(format!(
+                    "{noise}: μ_pp {mu:.3} at {u:.3} m/s against {:.3}",
+                    truth(u)
+                ));
+            }
+        }
+        report.push(format!("{noise}:\n{}", summary(&f)));
+    }
+    eprintln!("{}\nnamed in {named}/6 datasets", report.join("\n"));
+    assert!(wrong.is_empty(), "{wrong:#?}");
+    assert!(named >= 4, "{named}/6 named:\n{}", report.join("\n"));
+}
+
+/// The chapter's saturating restitution and a constant μ_pp (1.4: every impact sticks; 0.2: the
+/// rolling setup's impacts slip) on 20 seeds over six tracker noises: no impact law is accepted.
+#[test]
+fn impact_law_nulls_stay_silent() {
+    let mut loud = Vec::new();
+    for seed in 0..20u64 {
+        let noise = NOISES[seed as usize % NOISES.len()];
+        let mu = if seed % 2 == 0 { 1.4 } else { 0.2 };
+        let f = law_findings(700 + seed, noise, 12, None, mu, None);
+        if f.iter().any(|f| f.accepted) {
+            loud.push(format!(
+                "seed {} ({noise}, μ_pp {mu}):\n{}",
+                700 + seed,
                 summary(&f)
             ));
         }
     }
-    for (j, noise) in NOISES.iter().enumerate() {
-        let (_, f) = law_findings(600 + j as u64, noise, None, 0.3, Some(0.05));
-        lines.push(format!("weakening {noise}: {} named\n{}", accepted(&f, "pair_friction_slip_speed").len(), summary(&f)));
-    }
-    for seed in 0..20u64 {
-        let noise = NOISES[seed as usize % 6];
-        let mu = if seed % 2 == 0 { 1.4 } else { 0.2 };
-        let (_, f) = law_findings(700 + seed, noise, None, mu, None);
-        let loud: Vec<_> = f.iter().filter(|f| f.accepted).collect();
-        lines.push(format!("null {seed} {noise} mu {mu}: {} loud\n{}", loud.len(), summary(&f)));
-    }
-    eprintln!("{}", lines.join("\n"));
-}
-
-#[test]
-#[ignore]
-fn probe_one() {
-    let seed: u64 = std::env::var("SEED").unwrap().parse().unwrap();
-    let noise = std::env::var("NOISE").unwrap();
-    let mu: f64 = std::env::var("MU").unwrap().parse().unwrap();
-    let c = {
-        let mut c = pairs_case(seed, &noise, 10);
-        c.spec.mu_pp = mu;
-        c.spec.mu_pp_weakening_mps = std::env::var("U0").ok().map(|v| v.parse().unwrap());
-        c
-    };
-    let recs = recordings(&c);
-    for r in recs.iter().filter(|r| r.info.experiment == groove::recording::Experiment::Collision) {
-        let f = groove::fit::collision::fit_collision(r, &groove::fit::collision::CollisionOptions::default());
-        for im in &f.impacts {
-            if im.contact == groove::artifacts::collision_fit::Contact::Slip {
-                eprintln!(
-                    "{} #{} v {:.4} dvz {:.4}±{:.5} dva {:.4}±{:.5} S {:.4} mu {:.3}",
-                    f.run, im.index, im.impact_speed_mps.value, im.target_dvz_mps.value,
-                    im.target_dvz_mps.se.unwrap_or(f64::NAN), im.target_dva_mps.value,
-                    im.target_dva_mps.se.unwrap_or(f64::NAN), im.spin_sum_before_mps,
-                    im.target_dva_mps.value.abs() / (2.5 * im.target_dvz_mps.value)
-                );
-            }
-        }
-    }
+    assert!(
+        loud.is_empty(),
+        "{}/20 accepted an impact law:\n{}",
+        loud.len(),
+        loud.join("\n")
+    );
 }

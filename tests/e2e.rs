@@ -20,8 +20,10 @@ use std::process::Output;
 use std::sync::OnceLock;
 const SINGLE_RUNS: usize = 16;
 const FITS_HEADER: &str = "run,material,v0_mps,v0_se,mu,mu_se,T_s,T_se,t1_s,rms_m,status";
-const EFFECT_IDS: [&str; 14] = [
+const EFFECT_IDS: [&str; 16] = [
     "force_between_particles",
+    "restitution_law",
+    "pair_friction_slip_speed",
     "particle_differences",
     "direction_dependent_friction",
     "position_dependent_friction",

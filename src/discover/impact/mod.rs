@@ -17,7 +17,8 @@
 //! outliers, left out and counted. Then it is named: the named forms (adhesion
 //! C = a √(1 − (v_s/v)²), viscoelastic 1 − C = a v^(1/5), a power law, adhesion with losses
 //! growing with speed; μ_pp linear in
-//! the slip speed or weakening as a/(1 + u/u0)) that fit as well as the map (F test p ≥ 0.05),
+//! the slip speed or weakening as a/(1 + u/u0)) that fit as well as the map (F test p ≥ 0.05)
+//! with no parameter at the end of its search,
 //! fewest parameters first; two that fit equally are a tie, said in words; none: the map is the
 //! answer, its values reported. Too few impacts (fewer than 8 with their own C, 6 slipping ones)
 //! is said in words, not tested.
@@ -31,10 +32,10 @@ mod points;
 pub mod weighted;
 
 use super::holm::holm;
-use crate::stats::abs_scale;
 use crate::artifacts::diagnosis::{Effect, Estimate as Value, Evidence, Finding, ModelScore};
 use crate::physics::Groove;
 use crate::recording::{Recording, Setup};
+use crate::stats::abs_scale;
 use points::impact_points;
 use std::collections::BTreeMap;
 use weighted::{f_test, fit, map_nodes, Fit, Pt, Shape};
@@ -192,13 +193,19 @@ fn leave_each_run_out(pts: &[Pt], candidate: Shape, nodes: &[f64], s2: f64) -> (
 
 /// The named form that describes the map (fits as well by the F test, or by χ² within the scatter
 /// when it has as many parameters), fewest parameters first, and another tied with it.
-fn name_form(law: Law, pts: &[Pt], map: &Fit, candidate: &Fit, s2: f64) -> (Option<Fit>, Option<Fit>) {
+fn name_form(
+    law: Law,
+    pts: &[Pt],
+    map: &Fit,
+    candidate: &Fit,
+    s2: f64,
+) -> (Option<Fit>, Option<Fit>) {
     let n = pts.len();
     let mut describing: Vec<Fit> = law
         .named()
         .iter()
         .filter_map(|&s| fit(s, pts, &[]))
-        .filter(|f| f.chi2 < candidate.chi2)
+        .filter(|f| !f.at_bound && f.chi2 < candidate.chi2)
         .filter(|f| {
             if f.k() < map.k() {
                 f_test(f, map, n).1 >= FORM_P
@@ -210,9 +217,9 @@ fn name_form(law: Law, pts: &[Pt], map: &Fit, candidate: &Fit, s2: f64) -> (Opti
     describing.sort_by(|a, b| a.k().cmp(&b.k()).then(a.chi2.total_cmp(&b.chi2)));
     let mut it = describing.into_iter();
     let best = it.next();
-    let tie = best.as_ref().and_then(|b| {
-        it.find(|f| f.k() == b.k() && f.chi2 - b.chi2 < TIE_CHI2 * s2)
-    });
+    let tie = best
+        .as_ref()
+        .and_then(|b| it.find(|f| f.k() == b.k() && f.chi2 - b.chi2 < TIE_CHI2 * s2));
     (best, tie)
 }
 
@@ -309,7 +316,7 @@ fn test_group(law: Law, all: &[Pt]) -> Result<Tested, String> {
 
 impl LawTest {
     fn p(&self) -> f64 {
-        self.outcome.as_ref().map_or(1.0, |t| t.p)
+        self.outcome.as_ref().map_or(f64::NAN, |t| t.p)
     }
 
     fn min_size(&self) -> f64 {
@@ -370,7 +377,10 @@ impl LawTest {
         }
         let shape = self.shape_words(t);
         let tie = t.tie.as_ref().map_or(String::new(), |o| {
-            format!("; tied with the {} form: these data cannot tell them apart", shape_name(o.shape))
+            format!(
+                "; tied with the {} form: these data cannot tell them apart",
+                shape_name(o.shape)
+            )
         });
         (
             true,
@@ -436,8 +446,9 @@ impl LawTest {
 
     fn speed_range(&self) -> (f64, f64) {
         let pts = self.outcome.as_ref().map_or(&self.pts, |t| &t.pts);
-        pts.iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), q| (a.min(q.x), b.max(q.x)))
+        pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), q| {
+            (a.min(q.x), b.max(q.x))
+        })
     }
 
     /// The named form's parameters with their errors (the map's values when none is named).
@@ -501,13 +512,19 @@ impl LawTest {
             ModelScore::default(),
         );
         let mut form = match self.law {
-            Law::Restitution => "restitution law C(v) beyond the candidates (constant, linear, saturating)".to_string(),
+            Law::Restitution => {
+                "restitution law C(v) beyond the candidates (constant, linear, saturating)"
+                    .to_string()
+            }
             Law::SlipFriction => "μ_pp depending on the slip speed at the contact".to_string(),
         };
         if let Ok(t) = &self.outcome {
             let (lo, hi) = self.speed_range();
             where_.insert("speed_range_mps".into(), serde_json::json!([lo, hi]));
-            where_.insert("candidate".into(), serde_json::json!(shape_name(t.candidate.shape)));
+            where_.insert(
+                "candidate".into(),
+                serde_json::json!(shape_name(t.candidate.shape)),
+            );
             where_.insert("largest_departure".into(), serde_json::json!(t.size));
             where_.insert(
                 "map".into(),
@@ -523,7 +540,11 @@ impl LawTest {
             if let Some(o) = &t.tie {
                 where_.insert(
                     "tie".into(),
-                    serde_json::json!(format!("{} or {}: these data cannot tell them apart", t.named.as_ref().map_or("?", |n| shape_name(n.0.shape)), shape_name(o.shape))),
+                    serde_json::json!(format!(
+                        "{} or {}: these data cannot tell them apart",
+                        t.named.as_ref().map_or("?", |n| shape_name(n.0.shape)),
+                        shape_name(o.shape)
+                    )),
                 );
             }
             evidence.lr = t.f;
@@ -552,7 +573,11 @@ impl LawTest {
             effect: self.law.effect().id().into(),
             accepted,
             form,
-            parameters: if accepted { self.parameters() } else { BTreeMap::new() },
+            parameters: if accepted {
+                self.parameters()
+            } else {
+                BTreeMap::new()
+            },
             evidence,
             where_,
             baseline,
@@ -565,7 +590,11 @@ impl LawTest {
 /// collision runs of `recordings` on `groove`; `forced` names the materials whose pairs were
 /// found to feel a force between the particles (their impacts' speeds carry it, so a departure of
 /// C is not told apart from it). Findings carry `where.experiment = "collision"`.
-pub fn test_impact_laws(recordings: &[Recording], groove: Groove, forced: &[String]) -> Vec<Finding> {
+pub fn test_impact_laws(
+    recordings: &[Recording],
+    groove: Groove,
+    forced: &[String],
+) -> Vec<Finding> {
     let pts = impact_points(recordings, groove);
     let caveat = |m: &str| {
         forced.iter().any(|f| f == m).then(|| {
@@ -585,7 +614,10 @@ pub fn test_impact_laws(recordings: &[Recording], groove: Groove, forced: &[Stri
         })
         .collect();
     let materials: Vec<&String> = pts.restitution.keys().map(|(m, _)| m).collect();
-    for m in materials.into_iter().collect::<std::collections::BTreeSet<_>>() {
+    for m in materials
+        .into_iter()
+        .collect::<std::collections::BTreeSet<_>>()
+    {
         let p = pts.slip.get(m).cloned().unwrap_or_default();
         let mut t = LawTest {
             law: Law::SlipFriction,
@@ -607,13 +639,31 @@ pub fn test_impact_laws(recordings: &[Recording], groove: Groove, forced: &[Stri
     }
     let mut findings = Vec::new();
     for law in [Law::Restitution, Law::SlipFriction] {
+        // Holm over the groups tested; one not tested has no p
         let group: Vec<&LawTest> = tests.iter().filter(|t| t.law == law).collect();
-        let p_holm = holm(&group.iter().map(|t| t.p()).collect::<Vec<_>>());
-        for (t, p) in group.into_iter().zip(p_holm) {
+        let tested: Vec<f64> = group
+            .iter()
+            .filter(|t| t.outcome.is_ok())
+            .map(|t| t.p())
+            .collect();
+        let mut adjusted = holm(&tested).into_iter();
+        for t in group {
+            let p = if t.outcome.is_ok() {
+                adjusted.next().unwrap_or(f64::NAN)
+            } else {
+                f64::NAN
+            };
             let mut f = t.finding(p);
-            if let Some(&u) = pts.unphysical.get(&t.material) {
-                if t.law == Law::Restitution {
-                    f.where_.insert("left_out_unphysical".into(), serde_json::json!(u));
+            for (key, tally) in [
+                ("left_out_unphysical", &pts.unphysical),
+                ("left_out_unresolved", &pts.unresolved),
+            ] {
+                let law = match t.law {
+                    Law::Restitution => "restitution",
+                    Law::SlipFriction => "slip",
+                };
+                if let Some(&u) = tally.get(&(t.material.clone(), law)) {
+                    f.where_.insert(key.into(), serde_json::json!(u));
                 }
             }
             findings.push(f);

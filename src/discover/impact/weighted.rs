@@ -47,6 +47,8 @@ pub struct Fit {
     pub p: Vec<f64>,
     pub nodes: Vec<f64>,
     pub chi2: f64,
+    /// A nonlinear parameter ended at the end of its search: the data do not fix it.
+    pub at_bound: bool,
 }
 
 fn adhesion(x: f64, b: f64) -> f64 {
@@ -114,7 +116,9 @@ impl Fit {
 
     /// Σ ((y − law)/se)² over `pts`.
     pub fn chi2_on(&self, pts: &[Pt]) -> f64 {
-        pts.iter().map(|q| ((q.y - self.at(q.x)) / q.se).powi(2)).sum()
+        pts.iter()
+            .map(|q| ((q.y - self.at(q.x)) / q.se).powi(2))
+            .sum()
     }
 
     /// Standard errors of the parameters from the curvature of χ², scaled by `s2` (the
@@ -243,9 +247,9 @@ pub fn map_nodes(pts: &[Pt], k: usize) -> Vec<f64> {
 /// `shape` fitted to `pts` (a map through `nodes`); None when fewer points than parameters or
 /// the fit is not determined.
 pub fn fit(shape: Shape, pts: &[Pt], nodes: &[f64]) -> Option<Fit> {
-    let (xmin, xmax) = pts
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), q| (a.min(q.x), b.max(q.x)));
+    let (xmin, xmax) = pts.iter().fold((f64::INFINITY, 0.0f64), |(a, b), q| {
+        (a.min(q.x), b.max(q.x))
+    });
     if pts.is_empty() || !(xmin > 0.0) || (shape == Shape::Map && nodes.len() < 2) {
         return None;
     }
@@ -258,13 +262,22 @@ pub fn fit(shape: Shape, pts: &[Pt], nodes: &[f64]) -> Option<Fit> {
     let chi = |theta: &[f64]| amplitudes(shape, theta, &nodes, pts).map_or(f64::INFINITY, |a| a.1);
     let (wide_lo, wide_hi) = ((xmin / 30.0).ln(), (xmax * 30.0).ln());
     let (stick_lo, stick_hi) = ((xmin * 1e-3).ln(), (xmin * 0.999).ln());
+    let mut at_bound = false;
+    let mut edge = |u: f64, lo: f64, hi: f64| {
+        at_bound |= (u - lo).min(hi - u) < 1e-3 * (hi - lo);
+        u
+    };
     let theta: Vec<f64> = match shape {
         Shape::Constant | Shape::Linear | Shape::Viscoelastic | Shape::Map => Vec::new(),
         Shape::Saturating | Shape::Weakening => {
-            vec![search_1d(&|u| chi(&[u.exp()]), wide_lo, wide_hi).exp()]
+            let u = search_1d(&|u| chi(&[u.exp()]), wide_lo, wide_hi);
+            vec![edge(u, wide_lo, wide_hi).exp()]
         }
-        Shape::Adhesive => vec![search_1d(&|u| chi(&[u.exp()]), stick_lo, stick_hi).exp()],
-        Shape::PowerLaw => vec![search_1d(&|p| chi(&[p]), -2.0, 2.0)],
+        Shape::Adhesive => {
+            let u = search_1d(&|u| chi(&[u.exp()]), stick_lo, stick_hi);
+            vec![edge(u, stick_lo, stick_hi).exp()]
+        }
+        Shape::PowerLaw => vec![edge(search_1d(&|p| chi(&[p]), -2.0, 2.0), -2.0, 2.0)],
         Shape::AdhesiveYield => {
             let (mut b, mut c) = (stick_lo, wide_hi);
             let mut best = f64::INFINITY;
@@ -282,6 +295,8 @@ pub fn fit(shape: Shape, pts: &[Pt], nodes: &[f64]) -> Option<Fit> {
                 b = minimize(|u| chi(&[u.exp(), c.exp()]), stick_lo, stick_hi, 40);
                 c = minimize(|u| chi(&[b.exp(), u.exp()]), (xmin / 3.0).ln(), wide_hi, 40);
             }
+            edge(b, stick_lo, stick_hi);
+            edge(c, (xmin / 3.0).ln(), wide_hi);
             vec![b.exp(), c.exp()]
         }
     };
@@ -292,6 +307,7 @@ pub fn fit(shape: Shape, pts: &[Pt], nodes: &[f64]) -> Option<Fit> {
         p,
         nodes,
         chi2,
+        at_bound,
     })
 }
 
@@ -330,16 +346,28 @@ mod tests {
     fn each_named_shape_recovers_its_parameters() {
         let pts = points(|x| 0.9 * adhesion(x, 0.015));
         let f = fit(Shape::Adhesive, &pts, &[]).unwrap();
-        assert!((f.p[0] - 0.9).abs() < 0.01 && (f.p[1] - 0.015).abs() < 5e-4, "{f:?}");
+        assert!(
+            (f.p[0] - 0.9).abs() < 0.01 && (f.p[1] - 0.015).abs() < 5e-4,
+            "{f:?}"
+        );
         let pts = points(|x| 0.3 + 0.7 * (-x / 0.05).exp());
         let f = fit(Shape::Saturating, &pts, &[]).unwrap();
-        assert!((f.p[0] - 0.3).abs() < 0.01 && (f.p[1] - 0.05).abs() < 2e-3, "{f:?}");
+        assert!(
+            (f.p[0] - 0.3).abs() < 0.01 && (f.p[1] - 0.05).abs() < 2e-3,
+            "{f:?}"
+        );
         let pts = points(|x| 0.5 / (1.0 + x / 0.04));
         let f = fit(Shape::Weakening, &pts, &[]).unwrap();
-        assert!((f.p[0] - 0.5).abs() < 0.01 && (f.p[1] - 0.04).abs() < 2e-3, "{f:?}");
+        assert!(
+            (f.p[0] - 0.5).abs() < 0.01 && (f.p[1] - 0.04).abs() < 2e-3,
+            "{f:?}"
+        );
         let pts = points(|x| 0.8 * adhesion(x, 0.012) * (-x / 0.2).exp());
         let f = fit(Shape::AdhesiveYield, &pts, &[]).unwrap();
-        assert!((f.p[1] - 0.012).abs() < 1e-3 && (f.p[2] / 0.2 - 1.0).abs() < 0.1, "{f:?}");
+        assert!(
+            (f.p[1] - 0.012).abs() < 1e-3 && (f.p[2] / 0.2 - 1.0).abs() < 0.1,
+            "{f:?}"
+        );
         // the scatter is ±1 se: χ² ≈ n
         assert!((f.chi2 - 24.0).abs() < 6.0, "{}", f.chi2);
     }
@@ -364,9 +392,18 @@ mod tests {
         let pts = points(|x| 0.9 - 1.5 * x);
         let f = fit(Shape::Linear, &pts, &[]).unwrap();
         let se = f.standard_errors(&pts, 1.0);
-        let tight: Vec<Pt> = pts.iter().map(|q| Pt { se: q.se / 10.0, ..*q }).collect();
+        let tight: Vec<Pt> = pts
+            .iter()
+            .map(|q| Pt {
+                se: q.se / 10.0,
+                ..*q
+            })
+            .collect();
         let g = fit(Shape::Linear, &tight, &[]).unwrap();
         let se2 = g.standard_errors(&tight, 1.0);
-        assert!(se[0] > 0.0 && (se[0] / se2[0] - 10.0).abs() < 0.1, "{se:?} {se2:?}");
+        assert!(
+            se[0] > 0.0 && (se[0] / se2[0] - 10.0).abs() < 0.1,
+            "{se:?} {se2:?}"
+        );
     }
 }

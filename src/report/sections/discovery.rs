@@ -150,7 +150,8 @@ fn truth_block(b: &mut Block, d: &ReportData, diag: &Diagnosis, validation: &Val
 }
 
 /// What decided a finding when no bootstrap null was simulated (`bootstrap_replicates` = 0): the
-/// collision-run tests of `discover/pairs.rs`, decided by a χ² or Student's t over runs. The statistic's
+/// collision-run tests of `discover/pairs.rs`, decided by a χ², a Student's t over runs or an F
+/// test over impacts. The statistic's
 /// name and the law, or None for a bootstrap-decided candidate.
 fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
     if e.bootstrap_replicates > 0 {
@@ -160,6 +161,13 @@ fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
     Some(match Effect::from_id(effect) {
         Some(Effect::ImpactSpecificMismatch) => format!(
             "t test over runs: mean-square residual within 5 ms of an impact over the rest, typical run = {stat}"
+        ),
+        Some(Effect::RestitutionLaw | Effect::PairFrictionSlipSpeed) if !e.lr.is_finite() => {
+            "not tested".into()
+        }
+        Some(Effect::RestitutionLaw | Effect::PairFrictionSlipSpeed) => format!(
+            "F test over the impacts' own values: a map in ln speed against the candidate law, {} more parameters, F = {stat}",
+            e.extra_params
         ),
         _ => format!("χ² test: χ²({}) = {stat}", e.extra_params),
     })
@@ -189,7 +197,7 @@ pub fn evidence_text(effect: &str, e: &Evidence) -> String {
 /// The collision-run findings (`where.experiment` = `collision`), one row per material and test.
 fn collision_table(diag: &Diagnosis) -> Option<Table> {
     let mut t = Table::new(
-        "Collision runs: do the pairs move under the single runs' physics? (whole-run pair fits, per material; Holm over materials, α = 0.01)",
+        "Collision runs: do the pairs move under the single runs' physics, and do their impacts follow the chapter's laws? (whole-run pair fits per material; the impacts' own C per material and setup, μ_pp per material; Holm within each test, α = 0.01)",
         &["material", "test", "evidence", "accepted"],
     );
     for f in &diag.findings {
@@ -201,8 +209,12 @@ fn collision_table(diag: &Diagnosis) -> Option<Table> {
             .get("material")
             .and_then(Value::as_str)
             .unwrap_or("?");
+        let material = match f.where_.get("setup").and_then(Value::as_str) {
+            Some(setup) => format!("{material} ({setup})"),
+            None => material.to_string(),
+        };
         t.push(vec![
-            material.to_string(),
+            material,
             f.effect.replace('_', " "),
             evidence_text(&f.effect, &f.evidence),
             (if f.accepted { "yes" } else { "no" }).into(),

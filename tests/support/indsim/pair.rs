@@ -39,7 +39,9 @@ impl Law {
         let v = v.abs();
         match *self {
             Law::Viscoelastic { a } => 1.0 - a * v.powf(0.2) + 0.6 * a * a * v.powf(0.4),
-            Law::Humped { c, v_a, v_p } => c * (1.0 - (-(v / v_a).powi(2)).exp()) * (-v / v_p).exp(),
+            Law::Humped { c, v_a, v_p } => {
+                c * (1.0 - (-(v / v_a).powi(2)).exp()) * (-v / v_p).exp()
+            }
             Law::Sticky { c, v_s, w } => (c * (1.0 - (-(v - v_s).max(0.0) / w).exp())).max(0.05),
         }
     }
