@@ -113,6 +113,17 @@ impl Law {
     }
 }
 
+/// The score of a law not fitted: no numbers (a zero would read as a perfect fit).
+fn no_score() -> ModelScore {
+    ModelScore {
+        cv_rms_m: f64::NAN,
+        rms_m: f64::NAN,
+        chi2: f64::NAN,
+        n_global_params: 0,
+        terms: Vec::new(),
+    }
+}
+
 /// What a group's test found.
 #[derive(Debug)]
 struct Tested {
@@ -508,8 +519,8 @@ impl LawTest {
                 decision,
                 ..Evidence::default()
             },
-            ModelScore::default(),
-            ModelScore::default(),
+            no_score(),
+            no_score(),
         );
         let mut form = match self.law {
             Law::Restitution => {
