@@ -411,7 +411,8 @@ fn every_kind_fingerprints_what_it_uses_and_nothing_it_does_not() {
     let discover = used("discover");
     assert!(discover.contains("discover/mod.rs") && discover.contains("physics/mod.rs"));
     assert!(
-        // discovery on pairs fits collision runs itself (fit/collision); it reads no per-run fit
+        // discovery on pairs fits collision runs itself (fit/collision: whole runs, and each
+        // run's own impacts); it reads no per-run fit of the fit stage
         !discover
             .iter()
             .any(|f| f.starts_with("fit/") && !f.starts_with("fit/collision/")),

@@ -8,7 +8,8 @@
 
 use super::weighted::Pt;
 use crate::artifacts::collision_fit::Contact;
-use crate::fit::collision::{fit_collision, CollisionOptions};
+use crate::fit::collision::fit::fit_collision;
+use crate::fit::collision::options::CollisionOptions;
 use crate::physics::Groove;
 use crate::recording::{Experiment, Recording, Setup};
 use std::collections::BTreeMap;

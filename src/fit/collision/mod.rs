@@ -31,12 +31,12 @@
 
 pub mod curves;
 pub mod detect;
-mod fit;
+pub mod fit;
 pub mod impulse;
 pub mod model;
 pub mod motion;
 pub mod mu_pp;
-mod options;
+pub mod options;
 pub mod plan;
 pub mod profile;
 mod report;
