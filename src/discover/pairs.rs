@@ -709,6 +709,36 @@ fn impact_finding(d: &Draft, p_holm: f64) -> Finding {
     }
 }
 
+/// A restitution law that passed where a force was accepted (`where.tied_with`) is a tie: the
+/// force's finding says so too.
+fn say_ties_with_the_force(findings: &mut [Finding], laws: &[Finding]) {
+    let force_id = Effect::ForceBetweenParticles.id();
+    for law in laws
+        .iter()
+        .filter(|l| l.where_.get("tied_with") == Some(&serde_json::json!(force_id)))
+    {
+        let Some(force) = findings.iter_mut().find(|f| {
+            f.effect == force_id
+                && f.accepted
+                && f.where_.get("material") == law.where_.get("material")
+        }) else {
+            continue;
+        };
+        let setup = law
+            .where_
+            .get("setup")
+            .and_then(|s| s.as_str())
+            .unwrap_or("");
+        force.evidence.decision.push_str(&format!(
+            "; tied with a restitution law outside the candidates in the {setup} setup: the impacts' own C departs from the chapter's laws as a contact that sticks at low speed would, which reads the same at the impacts; the force is the one in the model"
+        ));
+        force.where_.insert(
+            "tied_with".into(),
+            serde_json::json!(Effect::RestitutionLaw.id()),
+        );
+    }
+}
+
 /// Test the collision runs of `recordings` against the single-run physics `physics` (per
 /// material); materials without collision runs or without physics are skipped with a note.
 /// `blur_s`: the tracking noise's growth with speed the single runs measured (0: none).
@@ -775,7 +805,9 @@ pub fn check_pairs(
         .filter(|((_, f), &p)| f.decision(p).0)
         .map(|((d, _), _)| d.material.clone())
         .collect();
-    findings.extend(test_impact_laws(recordings, groove, &forced));
+    let laws = test_impact_laws(recordings, groove, &forced);
+    say_ties_with_the_force(&mut findings, &laws);
+    findings.extend(laws);
     let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
     let p_imp = holm(&drafts.iter().map(|d| d.p_impact).collect::<Vec<_>>());
     for (k, d) in drafts.iter().enumerate() {
@@ -935,6 +967,42 @@ mod tests {
         params.insert("frequency_hz".into(), 120.0);
         let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
         assert!(why.contains("force in time"), "{why}");
+    }
+
+    #[test]
+    fn a_restitution_law_tied_with_the_force_is_said_on_the_force() {
+        let finding = |effect: &str, accepted: bool, material: &str| Finding {
+            effect: effect.into(),
+            accepted,
+            form: String::new(),
+            parameters: BTreeMap::new(),
+            evidence: Evidence {
+                decision: "an attraction".into(),
+                ..Evidence::default()
+            },
+            where_: [("material".to_string(), serde_json::json!(material))].into(),
+            baseline: ModelScore::default(),
+            extended: ModelScore::default(),
+        };
+        let mut findings = vec![
+            finding("force_between_particles", true, "316"),
+            finding("force_between_particles", true, "440c"),
+        ];
+        let mut law = finding("restitution_law", false, "316");
+        law.where_.insert(
+            "tied_with".into(),
+            serde_json::json!("force_between_particles"),
+        );
+        law.where_
+            .insert("setup".into(), serde_json::json!("rolling"));
+        super::say_ties_with_the_force(&mut findings, &[law]);
+        assert!(findings[0]
+            .evidence
+            .decision
+            .contains("tied with a restitution law"));
+        assert_eq!(findings[0].where_["tied_with"], "restitution_law");
+        // the other material's force is not touched
+        assert_eq!(findings[1].evidence.decision, "an attraction");
     }
 
     #[test]

@@ -20,7 +20,10 @@
 //! the slip speed or weakening as a/(1 + u/u0)) that fit as well as the map (F test p ≥ 0.05)
 //! with no parameter at the end of its search,
 //! fewest parameters first; two that fit equally are a tie, said in words; none: the map is the
-//! answer, its values reported. Too few impacts (fewer than 8 with their own C, 6 slipping ones)
+//! answer, its values reported. Where a force between the particles was accepted for the
+//! material, a restitution law that passes is a tie with it, said on both findings (an attraction
+//! of short range slows the parting pair as a sticking contact does), and the force is kept.
+//! Too few impacts (fewer than 8 with their own C, 6 slipping ones)
 //! is said in words, not tested.
 //!
 //! Files of this folder:
@@ -112,6 +115,10 @@ impl Law {
         }
     }
 }
+
+/// Said when a force between the particles was accepted for the material: a short-range
+/// attraction slows the parting pair as a contact that sticks at low speed does.
+const TIED_WITH_FORCE: &str = "the force between the particles accepted for these pairs reads the same at the impacts (an attraction of short range slows the parting pair as a contact that sticks at low speed does): these tests do not tell the two apart, and the force, tested on the whole runs, is the one in the model";
 
 /// The score of a law not fitted: no numbers (a zero would read as a perfect fit).
 fn no_score() -> ModelScore {
@@ -380,13 +387,13 @@ impl LawTest {
                 format!("significant in all impacts (p Holm {p_holm:.1e}) and on held-out runs, but one run carries it: without that run's impacts p Holm is {p_one:.2}"),
             );
         }
+        let shape = self.shape_words(t);
         if let Some(c) = &self.caveat {
             return (
                 false,
-                format!("the impacts' {q} departs from the {cand} law by up to {size_words}, confirmed on held-out runs (χ² gain {g:.1}, {g1:.1} without the run that gains most), but {c}"),
+                format!("{shape}; confirmed on held-out runs (χ² gain {g:.1}, {g1:.1} without the run that gains most), but {c}"),
             );
         }
-        let shape = self.shape_words(t);
         let tie = t.tie.as_ref().map_or(String::new(), |o| {
             format!(
                 "; tied with the {} form: these data cannot tell them apart",
@@ -501,6 +508,12 @@ impl LawTest {
     fn finding(&self, p_holm: f64) -> Finding {
         let (accepted, decision) = self.decision(p_holm);
         let mut where_ = BTreeMap::new();
+        if decision.ends_with(TIED_WITH_FORCE) {
+            where_.insert(
+                "tied_with".into(),
+                serde_json::json!(Effect::ForceBetweenParticles.id()),
+            );
+        }
         where_.insert("experiment".into(), serde_json::json!("collision"));
         where_.insert("material".into(), serde_json::json!(self.material));
         if let Some(s) = self.setup {
@@ -608,9 +621,10 @@ pub fn test_impact_laws(
 ) -> Vec<Finding> {
     let pts = impact_points(recordings, groove);
     let caveat = |m: &str| {
-        forced.iter().any(|f| f == m).then(|| {
-            "the force between the particles accepted for these pairs also changes the speeds read at contact: the two explanations are not told apart here, and the force, tested on the whole runs, is the one kept".to_string()
-        })
+        forced
+            .iter()
+            .any(|f| f == m)
+            .then(|| TIED_WITH_FORCE.to_string())
     };
     let mut tests: Vec<LawTest> = pts
         .restitution
