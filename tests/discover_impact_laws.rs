@@ -16,16 +16,13 @@ mod bed;
 
 use bed::dataset::RunSpec;
 use bed::draw::{case, Case, Size};
+use bed::in_process::ingest_case;
 use groove::artifacts::diagnosis::Finding;
 use groove::discover::impact::test_impact_laws;
-use groove::ingest::{ingest, IngestParams};
 use groove::physics::Groove;
-use groove::recording::Recording;
 use indsim::pair::Law;
-use indsim::writer::write_dataset;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::collections::BTreeMap;
 
 const SIZE: Size = Size {
     singles_per_material: 2,
@@ -79,18 +76,6 @@ fn pairs_case(seed: u64, noise: &str, n: usize) -> Case {
     c
 }
 
-fn recordings(c: &Case) -> Vec<Recording> {
-    let dir = tempfile::tempdir().unwrap();
-    write_dataset(dir.path(), &c.spec.render(false)).unwrap();
-    let mut files = BTreeMap::new();
-    for f in ["runs.csv", "trajectories.csv"] {
-        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
-    }
-    ingest(&files, &IngestParams::default())
-        .expect("an indsim dataset ingests")
-        .recordings
-}
-
 fn summary(findings: &[Finding]) -> String {
     findings
         .iter()
@@ -131,7 +116,7 @@ fn law_findings(
     c.spec.restitution_law = law;
     c.spec.mu_pp = mu_pp;
     c.spec.mu_pp_weakening_mps = u0;
-    test_impact_laws(&recordings(&c), Groove::CHAPTER, &[])
+    test_impact_laws(&ingest_case(&c), Groove::CHAPTER, &[])
 }
 
 fn accepted<'a>(f: &'a [Finding], effect: &str) -> Vec<&'a Finding> {
@@ -264,7 +249,7 @@ fn a_law_beside_an_accepted_force_is_a_tie_not_a_second_finding() {
     };
     let mut c = pairs_case(511, "ar1", 12);
     c.spec.restitution_law = Some(law);
-    let recs = recordings(&c);
+    let recs = ingest_case(&c);
     let alone = test_impact_laws(&recs, Groove::CHAPTER, &[]);
     let passed: Vec<String> = accepted(&alone, "restitution_law")
         .iter()

@@ -15,14 +15,12 @@ mod indsim;
 mod bed;
 
 use bed::draw::{case, Case, Size};
+use bed::in_process::ingest_case;
 use groove::artifacts::diagnosis::Finding;
 use groove::discover::pairs::check_pairs;
-use groove::ingest::{ingest, IngestParams};
 use groove::physics::{Friction, Groove, Model, Term};
-use groove::recording::Recording;
 use indsim::effects::Drag;
 use indsim::pair::Between;
-use indsim::writer::write_dataset;
 use std::collections::BTreeMap;
 
 /// The single runs hardly matter here: a few, short.
@@ -37,18 +35,6 @@ fn pairs_case(seed: u64, noise: &str, force: Option<Between>) -> Case {
     let mut c = case(seed, SIZE, noise, &[], true);
     c.spec.pair_force = force;
     c
-}
-
-fn recordings(c: &Case) -> Vec<Recording> {
-    let dir = tempfile::tempdir().unwrap();
-    write_dataset(dir.path(), &c.spec.render(false)).unwrap();
-    let mut files = BTreeMap::new();
-    for f in ["runs.csv", "trajectories.csv"] {
-        files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
-    }
-    ingest(&files, &IngestParams::default())
-        .expect("an indsim dataset ingests")
-        .recordings
 }
 
 /// Each material's single-run physics as the pair check takes it: μ and the linear drag.
@@ -72,7 +58,7 @@ fn single_physics(c: &Case) -> BTreeMap<String, (Model, [f64; 3])> {
 }
 
 fn pair_findings(c: &Case) -> Vec<Finding> {
-    let recs = recordings(c);
+    let recs = ingest_case(c);
     check_pairs(&recs, &single_physics(c), Groove::CHAPTER, 80, 0.0).0
 }
 

@@ -5,22 +5,27 @@ use super::draw::Case;
 use crate::indsim::writer::write_dataset;
 use groove::discover::{discover, Diagnosis, Options};
 use groove::ingest::{ingest, IngestParams};
+use groove::recording::Recording;
 use std::collections::BTreeMap;
 
-/// The case's dataset written in the interchange format, ingested as any dataset is, and
-/// discovered with the default options and `seed`.
-pub fn discover_case(c: &Case, seed: u64) -> Diagnosis {
+/// The case's dataset written in the interchange format and ingested as any dataset is.
+pub fn ingest_case(c: &Case) -> Vec<Recording> {
     let dir = tempfile::tempdir().unwrap();
     write_dataset(dir.path(), &c.spec.render(false)).unwrap();
     let mut files = BTreeMap::new();
     for f in ["runs.csv", "trajectories.csv"] {
         files.insert(f.to_string(), std::fs::read(dir.path().join(f)).unwrap());
     }
-    let recordings = ingest(&files, &IngestParams::default())
+    ingest(&files, &IngestParams::default())
         .expect("an indsim dataset ingests")
-        .recordings;
+        .recordings
+}
+
+/// The case's dataset ingested (`ingest_case`) and discovered with the default options and
+/// `seed`.
+pub fn discover_case(c: &Case, seed: u64) -> Diagnosis {
     discover(
-        &recordings,
+        &ingest_case(c),
         &Options {
             seed,
             ..Options::default()
