@@ -1,9 +1,11 @@
 //! Figs. 4.4a–c: the target's spin change against its velocity change (slope μ_pp·k), and the
 //! coefficient of restitution against impact speed per material, rolling and contact setups,
-//! with the whole-run law chosen under the accepted physics where `refit` made the fits again.
+//! with the whole-run law chosen under the accepted physics where `refit` made the fits again,
+//! and the impacts' own law (discovery's map) where discovery accepted one outside the candidates.
 
 use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::collision_summary::LawForm;
+use crate::artifacts::diagnosis::Effect;
 use crate::artifacts::summary::MaterialWholeRun;
 use crate::physics::Restitution;
 use crate::recording::Setup;
@@ -204,10 +206,30 @@ pub fn render_bc(
                 let label = format!("{setup}: whole-run law under the accepted physics");
                 line(&mut c, law_curve(&law, v_hi), col, 1, true, Some(&label))?;
             }
+            if let Some(map) = impact_law_map(d, material, *contact) {
+                let label = format!("{setup}: the impacts' own law, accepted by discovery (map)");
+                line(&mut c, map, col, 3, true, Some(&label))?;
+            }
         }
         legend(&mut c, SeriesLabelPosition::LowerLeft)
     })?;
     Ok(Some(svg))
+}
+
+/// The map of C against impact speed of an accepted restitution law outside the candidates
+/// (discovery's `restitution_law` finding for this material and setup), at its nodes.
+fn impact_law_map(d: &ReportData, material: &str, contact: bool) -> Option<Vec<(f64, f64)>> {
+    let setup = if contact { "contact" } else { "rolling" };
+    let f = d.diagnosis.as_ref()?.findings.iter().find(|f| {
+        f.accepted
+            && f.effect == Effect::RestitutionLaw.id()
+            && f.where_.get("material").and_then(|m| m.as_str()) == Some(material)
+            && f.where_.get("setup").and_then(|s| s.as_str()) == Some(setup)
+    })?;
+    let map = f.where_.get("map")?;
+    let speeds: Vec<f64> = serde_json::from_value(map.get("speeds_mps")?.clone()).ok()?;
+    let values: Vec<f64> = serde_json::from_value(map.get("values")?.clone()).ok()?;
+    Some(speeds.into_iter().zip(values).collect())
 }
 
 /// `law` sampled from 0 to `v_hi` (the measured speeds only, not extrapolated).
@@ -238,4 +260,52 @@ fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)>
         (_, None) => 0.0,
     };
     Some((cand.form.law(a, b), cand.form))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::artifacts::diagnosis::Diagnosis;
+
+    /// The shipped diagnosis with its 316 rolling-setup restitution test made accepted: the map
+    /// is drawn for that material and setup only.
+    #[test]
+    fn an_accepted_impact_law_is_drawn_for_its_material_and_setup() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/diagnosis.json");
+        let mut diag: Diagnosis =
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let f = diag
+            .findings
+            .iter_mut()
+            .find(|f| {
+                f.effect == "restitution_law"
+                    && f.where_["material"] == "316"
+                    && f.where_["setup"] == "rolling"
+            })
+            .expect("the shipped diagnosis tests the 316 rolling impacts");
+        let nodes = f.where_["map"]["values"].as_array().unwrap().len();
+        let d = ReportData {
+            diagnosis: Some(diag.clone()),
+            ..ReportData::default()
+        };
+        assert_eq!(
+            impact_law_map(&d, "316", false),
+            None,
+            "not accepted: not drawn"
+        );
+        diag.findings
+            .iter_mut()
+            .find(|f| f.effect == "restitution_law" && f.where_["setup"] == "rolling")
+            .unwrap()
+            .accepted = true;
+        let d = ReportData {
+            diagnosis: Some(diag),
+            ..ReportData::default()
+        };
+        let map = impact_law_map(&d, "316", false).expect("drawn");
+        assert!(map.len() == nodes && nodes >= 3, "{map:?}");
+        assert!(map.windows(2).all(|w| w[0].0 < w[1].0), "{map:?}");
+        assert_eq!(impact_law_map(&d, "316", true), None);
+        assert_eq!(impact_law_map(&d, "440c", false), None);
+    }
 }
