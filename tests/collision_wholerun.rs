@@ -800,9 +800,13 @@ fn under_the_accepted_waviness_mu_pp_is_recovered_where_the_baseline_misses_it()
     assert_recovered_under_accepted(&t, "position_dependent_force");
 }
 
-/// The same with the groove tilted by 0.2° instead (seed 1): discovery names the tilt, and the
-/// refit carrying it gives μ_pg within 0.005 and μ_pp within 3 % of the truth for both
-/// materials. Long, like the waviness test, so run on demand with `--ignored`.
+/// The same with the groove tilted by 0.2° instead (seed 1): discovery names the tilt; the
+/// baseline whole-run fits, which leave it out, miss 1.4 for both materials (measured: 316 at
+/// 1.048 [0.978, 1.152], 440c at 0.858 [0.857, 0.896]); the refit carrying the tilt gives μ_pg
+/// within 0.005 and μ_pp within 3 % of the truth for both (1.400 [1.397, 1.403] each). About
+/// 2 min in a dev build on 2 busy cores (discovery 56 s, the baseline 36 s, the refit 16 s: a
+/// tilt acts alike on both particles of a pair, so its pair simulations cost no more than the
+/// baseline's), so run on demand with `--ignored` like the waviness test.
 #[test]
 #[ignore]
 fn under_the_accepted_tilt_mu_pp_is_recovered_where_the_baseline_misses_it() {
@@ -812,9 +816,10 @@ fn under_the_accepted_tilt_mu_pp_is_recovered_where_the_baseline_misses_it() {
         "{:?}",
         t.accepted
     );
-    assert!(
-        !baseline_misses(&t).is_empty(),
-        "the baseline should miss 1.4 here"
+    assert_eq!(
+        baseline_misses(&t),
+        ["316", "440c"],
+        "the baseline should miss 1.4 for both materials here"
     );
     assert_recovered_under_accepted(&t, "groove_tilt");
 }

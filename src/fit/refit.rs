@@ -2,7 +2,9 @@
 //! from discovery's joint fit (which carries every accepted term), and the whole-run pair fits
 //! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
 //! the restitution laws refitted, the μ_pp profile redone), and a force between the particles
-//! that the pairs of a material were found to feel carried into that material's fits.
+//! that the pairs of a material were found to feel carried into that material's fits. Those
+//! fits start from the baseline's (summary.json's `collisions.whole_run`: its shared values,
+//! chosen laws and each run's kick; `collision::warm_start`), not from the defaults.
 
 use super::collision::warm_start::from_summary;
 use super::collision::whole_summary::{analyze_material_from, WholeRunOptions};
