@@ -79,3 +79,66 @@ pub fn from_summary(earlier: &MaterialWholeRun, runs: &[PairRun], spec: &FitSpec
         .collect();
     Start { spec, shared, own }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::artifacts::Summary;
+    use crate::fit::collision::wholerun::fit_group_with;
+    use crate::ingest::{read_dataset_dir, IngestParams};
+    use crate::physics::Groove;
+    use crate::recording::Experiment;
+    use std::path::Path;
+
+    /// The shipped 316 pair runs and their part of the shipped summary.json.
+    fn shipped_316() -> (Vec<PairRun>, MaterialWholeRun) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let recs = read_dataset_dir(&root.join("data"), &IngestParams::default()).unwrap();
+        let runs: Vec<PairRun> = recs
+            .iter()
+            .filter(|r| r.info.experiment == Experiment::Collision && r.info.material == "316")
+            .map(|r| PairRun::from_recording(r, r.info.setup).unwrap())
+            .collect();
+        let summary: Summary =
+            serde_json::from_slice(&std::fs::read(root.join("reports/summary.json")).unwrap())
+                .unwrap();
+        let whole = summary.collisions.unwrap().whole_run.unwrap();
+        let m = whole.materials.into_iter().find(|m| m.material == "316");
+        (runs, m.unwrap())
+    }
+
+    #[test]
+    fn the_start_is_the_earlier_fit_and_a_fit_from_it_stays_there() {
+        let (runs, earlier) = shipped_316();
+        let s = from_summary(&earlier, &runs, &FitSpec::new(Groove::CHAPTER));
+        assert_eq!(s.shared[MU_PG], earlier.mu_pg.value);
+        assert_eq!(s.shared[MU_PP], earlier.mu_pp.value);
+        assert!((s.shared[LN_T0].exp() - earlier.t0_s.value).abs() < 1e-15);
+        for (r, o) in runs.iter().zip(&s.own) {
+            let row = earlier.runs.iter().find(|w| w.run == r.run).unwrap();
+            assert_eq!((o[V0], o[T_KICK]), (row.v0_mps.value, row.t_kick_s));
+        }
+        // the same physics from that start: the earlier optimum, reached again at once
+        let fit = fit_group_with(&runs, &s.spec, &s.shared, Some(&s.own), &|_| true, 80);
+        assert!(
+            fit.cost() <= earlier.deviance + 1.0 && fit.result.iterations < earlier.iterations,
+            "deviance {} (earlier {}), {} iterations (earlier {})",
+            fit.cost(),
+            earlier.deviance,
+            fit.result.iterations,
+            earlier.iterations
+        );
+    }
+
+    #[test]
+    fn an_undetermined_value_or_a_run_the_summary_lacks_keeps_the_default() {
+        let (runs, mut earlier) = shipped_316();
+        earlier.mu_pp.value = f64::NAN;
+        let gone = earlier.runs.remove(0);
+        let s = from_summary(&earlier, &runs, &FitSpec::new(Groove::CHAPTER));
+        let defaults = s.spec.shared_specs(None, &runs);
+        assert_eq!(s.shared[MU_PP], defaults[MU_PP].start);
+        let i = runs.iter().position(|r| r.run == gone.run).unwrap();
+        assert_eq!(s.own[i], runs[i].own_start().to_vec());
+    }
+}
