@@ -2,9 +2,12 @@
 //! from discovery's joint fit (which carries every accepted term), and the whole-run pair fits
 //! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
 //! the restitution laws refitted, the μ_pp profile redone), and a force between the particles
-//! that the pairs of a material were found to feel carried into that material's fits.
+//! that the pairs of a material were found to feel carried into that material's fits. Those
+//! fits start from the baseline's (summary.json's `collisions.whole_run`: its shared values,
+//! chosen laws and each run's kick; `collision::warm_start`), not from the defaults.
 
-use super::collision::whole_summary::{analyze_material_with, WholeRunOptions};
+use super::collision::warm_start::from_summary;
+use super::collision::whole_summary::{analyze_material_from, WholeRunOptions};
 use super::collision::wholerun::{DragSpec, FitSpec, PairRun};
 use crate::artifacts::diagnosis::{Diagnosis, Finding};
 use crate::artifacts::summary::{MaterialWholeRun, WholeRunSummary};
@@ -128,7 +131,9 @@ fn collisions_under(
             pair_force: force,
             ..FitSpec::new(groove)
         };
-        materials.push(analyze_material_with(m, runs, &spec, opts));
+        // the baseline's fit of these runs is the start: the accepted terms move it little
+        let start = kept.map(|k| from_summary(k, runs, &spec));
+        materials.push(analyze_material_from(m, runs, &spec, opts, start.as_ref()));
     }
     Some(CollisionsUnder {
         whole_run: WholeRunSummary {

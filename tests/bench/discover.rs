@@ -4,6 +4,9 @@
 //!
 //!     RAYON_NUM_THREADS=2 cargo test --locked --features s3 --bench discover
 
+mod cpu;
+
+use cpu::cpu_s;
 use groove::discover::pairs::add_pair_findings;
 use groove::discover::{discover, Diagnosis, Options};
 use groove::ingest::{ingest, IngestParams};
@@ -24,24 +27,6 @@ const BEFORE: [(&str, f64, f64); 3] = [
     ("60 runs, tilt + waviness", 22.8, 47.0),
     ("60 runs, nothing missing", 8.6, 17.6),
 ];
-
-/// CPU time (user + system) of this process so far, from /proc/self/stat (clock ticks of
-/// 1/100 s); NaN where that file does not exist.
-fn cpu_s() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return f64::NAN;
-    };
-    let Some(rest) = stat.rsplit(')').next() else {
-        return f64::NAN;
-    };
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    // after the command: state is field 3, utime 14 and stime 15 (1-based over the whole line)
-    let tick = |i: usize| f.get(i - 3).and_then(|x| x.parse::<f64>().ok());
-    match (tick(14), tick(15)) {
-        (Some(u), Some(s)) => (u + s) / 100.0,
-        _ => f64::NAN,
-    }
-}
 
 fn read_dataset(dir: &Path) -> Vec<Recording> {
     let mut files = BTreeMap::new();

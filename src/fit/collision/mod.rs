@@ -20,6 +20,7 @@
 //! - `start.rs`: Starting plans of the joint fit
 //! - `summary.rs`: `summarize`: the collision results of a dataset
 //! - `trajectory.rs`: The fitted model trajectory of a collision run
+//! - `warm_start.rs`: The start of a whole-run fit from an earlier analysis of the same runs
 //! - `whole_summary.rs`: The whole-run collision analysis of a dataset
 //! - `wholerun.rs`: Whole-run pair fits
 //!
@@ -45,6 +46,7 @@ mod secondary;
 mod start;
 pub mod summary;
 mod trajectory;
+pub mod warm_start;
 pub mod whole_summary;
 pub mod wholerun;
 

@@ -4,12 +4,13 @@
 
 use super::profile::{default_grid, profile_and_lowest};
 use super::restitution_law::{choose_law, with_chosen};
+use super::warm_start::{carry_laws, Start};
 use super::wholerun::{
-    fit_group, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK,
-    V0,
+    fit_group, fit_group_with, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG,
+    MU_PP, TP, T_KICK, V0,
 };
 use crate::artifacts::collision_summary::{
-    LawChoice, LawForm, MaterialWholeRun, MuPpProfile, ProfileVerdict, WholeRun, WholeRunSummary,
+    LawChoice, MaterialWholeRun, MuPpProfile, ProfileVerdict, WholeRun, WholeRunSummary,
 };
 use crate::artifacts::estimate::Estimate;
 use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
@@ -96,8 +97,32 @@ pub fn analyze_material_with(
     spec: &FitSpec,
     opts: &WholeRunOptions,
 ) -> MaterialWholeRun {
-    let spec = spec.clone();
-    let first = fit_group(runs, &spec, None, opts.max_iter);
+    analyze_material_from(material, runs, spec, opts, None)
+}
+
+/// `analyze_material_with`, the joint fit started from `start` (an earlier analysis of the same
+/// runs, whose law forms its spec carries) instead of the defaults when given.
+pub fn analyze_material_from(
+    material: &str,
+    runs: &[PairRun],
+    spec: &FitSpec,
+    opts: &WholeRunOptions,
+    start: Option<&Start>,
+) -> MaterialWholeRun {
+    let (spec, first) = match start {
+        Some(s) => (
+            s.spec.clone(),
+            fit_group_with(
+                runs,
+                &s.spec,
+                &s.shared,
+                Some(&s.own),
+                &|_| true,
+                opts.max_iter,
+            ),
+        ),
+        None => (spec.clone(), fit_group(runs, spec, None, opts.max_iter)),
+    };
     let mut notes = Vec::new();
     let choices: Vec<LawChoice> = [Setup::Rolling, Setup::Contact]
         .into_iter()
@@ -109,18 +134,7 @@ pub fn analyze_material_with(
     } else {
         let mut start = first.clone();
         // carry the chosen forms' all-runs values into the start
-        for c in &choices {
-            let (ia, ib) = super::wholerun::law_slots(c.setup);
-            if let Some(cand) = c.chosen_candidate() {
-                let p = cand.ordered();
-                start.result.shared[ia] = p.first().map_or(f64::NAN, |(_, e)| e.value);
-                start.result.shared[ib] = match (c.chosen, p.get(1)) {
-                    (LawForm::Saturating, Some((_, e))) => e.value.ln(),
-                    (_, Some((_, e))) => e.value,
-                    (_, None) => 0.0,
-                };
-            }
-        }
+        carry_laws(&mut start.result.shared, &choices);
         let refit = fit_group(runs, &chosen, Some(&start), opts.max_iter);
         if refit.cost() <= first.cost() + 50.0 || !first.converged() {
             refit

@@ -213,6 +213,11 @@ impl PairRun {
         })
     }
 
+    /// Start values of the own parameters (z1, gap, v0, t_kick) read from the tracks.
+    pub fn own_start(&self) -> [f64; 4] {
+        self.start
+    }
+
     pub fn n_samples(&self) -> usize {
         self.samples[0].len() + self.samples[1].len()
     }
