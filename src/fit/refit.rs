@@ -9,7 +9,7 @@
 use super::collision::warm_start::from_summary;
 use super::collision::whole_summary::{analyze_material_from, WholeRunOptions};
 use super::collision::wholerun::{DragSpec, FitSpec, PairRun};
-use crate::artifacts::diagnosis::{Diagnosis, Finding};
+use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
 use crate::artifacts::summary::{MaterialWholeRun, WholeRunSummary};
 use crate::artifacts::under_accepted::{
     CarriedTerm, CollisionsUnder, DragTimeLine, SingleMaterial, SingleUnder, UnderAccepted,
@@ -29,6 +29,27 @@ pub fn accepted_terms(d: &Diagnosis) -> Vec<&Finding> {
     d.findings
         .iter()
         .filter(|f| f.accepted && forms::read(f).is_some())
+        .collect()
+}
+
+/// Notes for the impact laws discovery accepted (a restitution law outside the candidates, μ_pp
+/// depending on the slip speed): the whole-run fits hold the chapter's candidate laws and one
+/// μ_pp, so these are reported by discovery and drawn, not carried.
+fn impact_laws_not_carried(d: &Diagnosis) -> Vec<String> {
+    d.findings
+        .iter()
+        .filter(|f| f.accepted)
+        .filter_map(|f| {
+            let m = f.where_.get("material")?.as_str()?;
+            match Effect::from_id(&f.effect)? {
+                Effect::RestitutionLaw => {
+                    let setup = f.where_.get("setup").and_then(|s| s.as_str()).unwrap_or("");
+                    Some(format!("the restitution law discovery found outside the candidates for the {m} pairs ({setup} setup) is not carried: the whole-run fits choose among the chapter's candidate laws; its map is in the discovery section and in Figs. 4.4b–c"))
+                }
+                Effect::PairFrictionSlipSpeed => Some(format!("μ_pp of the {m} pairs depending on the slip speed, which discovery accepted, is not carried: the whole-run fits hold one μ_pp per material")),
+                _ => None,
+            }
+        })
         .collect()
 }
 
@@ -156,13 +177,21 @@ pub fn under_accepted(
     // the single runs' terms, then any force between the particles of a material's pairs
     let mut accepted = accepted_terms(d);
     accepted.extend(d.findings.iter().filter(|f| carried_from(f).is_some()));
+    let not_carried = impact_laws_not_carried(d);
     if accepted.is_empty() {
+        let lead = if not_carried.is_empty() {
+            "discovery accepted no physics: the baseline's numbers are the analysis' numbers, and nothing is refitted"
+        } else {
+            "discovery accepted no physics the refit carries: the baseline's numbers are the analysis' numbers, and nothing is refitted"
+        };
         return UnderAccepted {
             accepted: false,
             terms: Vec::new(),
             single: None,
             collisions: None,
-            notes: vec!["discovery accepted no physics: the baseline's numbers are the analysis' numbers, and nothing is refitted".into()],
+            notes: std::iter::once(lead.to_string())
+                .chain(not_carried)
+                .collect(),
         };
     }
     let terms = accepted
@@ -177,7 +206,7 @@ pub fn under_accepted(
                 .collect(),
         })
         .collect();
-    let mut notes = Vec::new();
+    let mut notes = not_carried;
     let single = Some(single_under(d)).filter(|s| !s.materials.is_empty());
     let collisions = collisions_under(d, recordings, baseline, groove, opts, &mut notes);
     UnderAccepted {
@@ -208,6 +237,29 @@ mod tests {
         assert!(!u.accepted && u.terms.is_empty());
         assert!(u.single.is_none() && u.collisions.is_none());
         assert!(u.notes[0].contains("nothing is refitted"), "{:?}", u.notes);
+    }
+
+    #[test]
+    fn an_accepted_impact_law_is_said_not_carried() {
+        let mut d = shipped_diagnosis();
+        for f in &mut d.findings {
+            f.accepted = f.effect == "restitution_law" && f.where_["material"] == "316";
+        }
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
+        assert!(!u.accepted && u.terms.is_empty());
+        assert!(
+            u.notes[0].contains("no physics the refit carries"),
+            "{:?}",
+            u.notes
+        );
+        // one note per accepted group (316: rolling and contact)
+        let laws = u
+            .notes
+            .iter()
+            .filter(|n| n.contains("is not carried"))
+            .count();
+        assert_eq!(laws, 2, "{:?}", u.notes);
+        assert!(u.notes.iter().any(|n| n.contains("rolling setup")));
     }
 
     #[test]
