@@ -399,6 +399,13 @@ impl Effect {
     }
 }
 
+/// The shipped diagnosis (`reports/diagnosis.json`), for tests that change a finding of it.
+#[cfg(test)]
+pub(crate) fn shipped() -> Diagnosis {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/reports/diagnosis.json");
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -222,14 +222,9 @@ pub fn under_accepted(
 mod tests {
     use super::*;
 
-    fn shipped_diagnosis() -> Diagnosis {
-        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/diagnosis.json");
-        serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
-    }
-
     #[test]
     fn nothing_accepted_says_so_and_copies_nothing() {
-        let mut d = shipped_diagnosis();
+        let mut d = crate::artifacts::diagnosis::shipped();
         for f in &mut d.findings {
             f.accepted = false;
         }
@@ -241,7 +236,7 @@ mod tests {
 
     #[test]
     fn an_accepted_impact_law_is_said_not_carried() {
-        let mut d = shipped_diagnosis();
+        let mut d = crate::artifacts::diagnosis::shipped();
         for f in &mut d.findings {
             f.accepted = f.effect == "restitution_law" && f.where_["material"] == "316";
         }
@@ -264,7 +259,7 @@ mod tests {
 
     #[test]
     fn a_saturating_drag_gives_the_drag_line_and_carries_its_term() {
-        let d = shipped_diagnosis();
+        let d = crate::artifacts::diagnosis::shipped();
         let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
         assert!(u.accepted);
         let effects: Vec<&str> = u.terms.iter().map(|t| t.effect.as_str()).collect();
