@@ -710,27 +710,34 @@ fn impact_finding(d: &Draft, p_holm: f64) -> Finding {
 }
 
 /// A restitution law that passed where a force was accepted (`where.tied_with`) is a tie: the
-/// force's finding says so too.
+/// force's finding says so too, once, naming the setups.
 fn say_ties_with_the_force(findings: &mut [Finding], laws: &[Finding]) {
     let force_id = Effect::ForceBetweenParticles.id();
+    let mut setups: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
     for law in laws
         .iter()
         .filter(|l| l.where_.get("tied_with") == Some(&serde_json::json!(force_id)))
     {
+        let material = law.where_.get("material").and_then(|m| m.as_str());
+        let setup = law.where_.get("setup").and_then(|s| s.as_str());
+        if let (Some(m), Some(s)) = (material, setup) {
+            setups.entry(m).or_default().push(s);
+        }
+    }
+    for (material, setups) in setups {
         let Some(force) = findings.iter_mut().find(|f| {
             f.effect == force_id
                 && f.accepted
-                && f.where_.get("material") == law.where_.get("material")
+                && f.where_.get("material").and_then(|m| m.as_str()) == Some(material)
         }) else {
             continue;
         };
-        let setup = law
-            .where_
-            .get("setup")
-            .and_then(|s| s.as_str())
-            .unwrap_or("");
+        let which = match setups.as_slice() {
+            [one] => format!("the {one} setup"),
+            _ => format!("the {} setups", setups.join(" and ")),
+        };
         force.evidence.decision.push_str(&format!(
-            "; tied with a restitution law outside the candidates in the {setup} setup: the impacts' own C departs from the chapter's laws as a contact that sticks at low speed would, which reads the same at the impacts; the force is the one in the model"
+            "; tied with a restitution law outside the candidates in {which}: the impacts' own C departs from the chapter's laws as a contact that sticks at low speed would, which reads the same at the impacts; the force is the one in the model"
         ));
         force.where_.insert(
             "tied_with".into(),
@@ -995,11 +1002,14 @@ mod tests {
         );
         law.where_
             .insert("setup".into(), serde_json::json!("rolling"));
-        super::say_ties_with_the_force(&mut findings, &[law]);
-        assert!(findings[0]
-            .evidence
-            .decision
-            .contains("tied with a restitution law"));
+        let mut contact = law.clone();
+        contact
+            .where_
+            .insert("setup".into(), serde_json::json!("contact"));
+        super::say_ties_with_the_force(&mut findings, &[law, contact]);
+        let d = &findings[0].evidence.decision;
+        assert!(d.contains("in the rolling and contact setups"), "{d}");
+        assert_eq!(d.matches("tied with").count(), 1, "{d}");
         assert_eq!(findings[0].where_["tied_with"], "restitution_law");
         // the other material's force is not touched
         assert_eq!(findings[1].evidence.decision, "an attraction");
