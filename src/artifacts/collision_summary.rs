@@ -143,6 +143,20 @@ impl LawCandidate {
             .filter_map(|n| self.parameters.get(*n).map(|e| (*n, e)))
             .collect()
     }
+
+    /// The values of the law's two fit slots (`LawForm::law`'s a and b): a saturating law's
+    /// v_ref through its logarithm, the fitted slot; b is 0 for a one-parameter law, a is None
+    /// when the first parameter is missing.
+    pub fn slots(&self) -> Option<[f64; 2]> {
+        let p = self.ordered();
+        let a = p.first()?.1.value;
+        let b = match (self.form, p.get(1)) {
+            (LawForm::Saturating, Some((_, e))) => e.value.ln(),
+            (_, Some((_, e))) => e.value,
+            (_, None) => 0.0,
+        };
+        Some([a, b])
+    }
 }
 
 impl LawChoice {

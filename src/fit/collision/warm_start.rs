@@ -6,7 +6,7 @@
 
 use super::restitution_law::with_chosen;
 use super::wholerun::{law_slots, FitSpec, PairRun, LN_T0, MU_PG, MU_PP, TP, T_KICK, V0, Z1};
-use crate::artifacts::collision_summary::{LawChoice, LawForm, MaterialWholeRun};
+use crate::artifacts::collision_summary::{LawChoice, MaterialWholeRun};
 use crate::recording::Setup;
 
 /// Where a whole-run fit starts: its spec (the earlier fit's law forms), the shared values and
@@ -24,13 +24,9 @@ pub fn carry_laws(shared: &mut [f64], choices: &[LawChoice]) {
     for c in choices {
         let (ia, ib) = law_slots(c.setup);
         if let Some(cand) = c.chosen_candidate() {
-            let p = cand.ordered();
-            shared[ia] = p.first().map_or(f64::NAN, |(_, e)| e.value);
-            shared[ib] = match (c.chosen, p.get(1)) {
-                (LawForm::Saturating, Some((_, e))) => e.value.ln(),
-                (_, Some((_, e))) => e.value,
-                (_, None) => 0.0,
-            };
+            let [a, b] = cand.slots().unwrap_or([f64::NAN, 0.0]);
+            shared[ia] = a;
+            shared[ib] = b;
         }
     }
 }

@@ -252,13 +252,7 @@ fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)>
     };
     let choice = m.restitution.iter().find(|c| c.setup == setup)?;
     let cand = choice.chosen_candidate()?;
-    let p = cand.ordered();
-    let a = p.first()?.1.value;
-    let b = match (cand.form, p.get(1)) {
-        (LawForm::Saturating, Some((_, e))) => e.value.ln(),
-        (_, Some((_, e))) => e.value,
-        (_, None) => 0.0,
-    };
+    let [a, b] = cand.slots()?;
     Some((cand.form.law(a, b), cand.form))
 }
 
