@@ -363,7 +363,9 @@ impl LawTest {
         if !(p_holm < ALPHA) {
             return (
                 false,
-                format!("the {cand} law describes the impacts' {q} (p Holm {p_holm:.2})"),
+                format!(
+                    "no departure of the impacts' {q} from the {cand} law (p Holm {p_holm:.2})"
+                ),
             );
         }
         if t.size < self.min_size() {
