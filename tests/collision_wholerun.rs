@@ -175,7 +175,7 @@ fn physics(mu: f64, terms: Vec<Term>) -> BTreeMap<String, (Model, [f64; 3])> {
 #[test]
 fn pairs_under_a_drag_the_single_runs_do_not_share_are_flagged() {
     let finding = |recs: &[Recording], model: BTreeMap<String, (Model, [f64; 3])>| {
-        let (findings, _) = check_pairs(recs, &model, Groove::CHAPTER, 80, 0.0);
+        let (findings, _) = check_pairs(recs, &model, Groove::CHAPTER, 80);
         findings
             .into_iter()
             .find(|f| f.effect == "pair_physics_mismatch")
@@ -551,7 +551,7 @@ fn impact_finding(recs: &[Recording]) -> groove::artifacts::diagnosis::Finding {
             tp_s_per_mps: 2.66,
         }],
     );
-    let (findings, _) = check_pairs(recs, &model, Groove::CHAPTER, 80, 0.0);
+    let (findings, _) = check_pairs(recs, &model, Groove::CHAPTER, 80);
     findings
         .into_iter()
         .find(|f| f.effect == "impact_specific_mismatch")
@@ -665,7 +665,7 @@ fn pairs_under_a_carried_waviness_are_not_a_pair_mismatch() {
             },
         ],
     );
-    let (findings, _) = check_pairs(&recs, &model, Groove::CHAPTER, 80, 0.0);
+    let (findings, _) = check_pairs(&recs, &model, Groove::CHAPTER, 80);
     let f = findings
         .iter()
         .find(|f| f.effect == "pair_physics_mismatch")

@@ -444,7 +444,6 @@ fn test_material(
     (model, single_se): &(Model, [f64; 3]),
     groove: Groove,
     max_iter: usize,
-    blur_s: f64,
     carried: Carried,
 ) -> Draft {
     // the free fit frees μ_pg and the drag only: the single runs' other forces (a tilt, a
@@ -470,7 +469,7 @@ fn test_material(
     // the single runs' values carry their own errors: compare them with the pairs' by a
     // Wald χ² over (μ_pg, T0, T') with both covariances; the deviance gain alone would
     // treat the single runs' values as exact
-    let split = split_by_impact(runs, &free, blur_s);
+    let split = split_by_impact(runs, &free);
     let n_pts: usize = runs.iter().map(PairRun::n_samples).sum();
     let contact = contact_fit(runs, model, &held, groove, max_iter);
     let inflate = inflation(split.lag1) * misfit(&[&free, &contact], n_pts);
@@ -748,13 +747,11 @@ fn say_ties_with_the_force(findings: &mut [Finding], laws: &[Finding]) {
 
 /// Test the collision runs of `recordings` against the single-run physics `physics` (per
 /// material); materials without collision runs or without physics are skipped with a note.
-/// `blur_s`: the tracking noise's growth with speed the single runs measured (0: none).
 pub fn check_pairs(
     recordings: &[Recording],
     physics: &BTreeMap<String, (Model, [f64; 3])>,
     groove: Groove,
     max_iter: usize,
-    blur_s: f64,
 ) -> (Vec<Finding>, Vec<String>) {
     let mut notes = Vec::new();
     let mut drafts = Vec::new();
@@ -769,7 +766,7 @@ pub fn check_pairs(
         drafts.push((
             runs,
             single,
-            test_material(material, runs, single, groove, max_iter, blur_s, None),
+            test_material(material, runs, single, groove, max_iter, None),
         ));
     }
     // a force between the particles, from each material's held fit; an accepted one is carried
@@ -798,7 +795,7 @@ pub fn check_pairs(
             findings.push(force.finding(p, d.n_pts, d.sigma));
             if force.decision(p).0 {
                 let carried = Some(force.chosen.carried());
-                test_material(&d.material, runs, single, groove, max_iter, blur_s, carried)
+                test_material(&d.material, runs, single, groove, max_iter, carried)
             } else {
                 d
             }
@@ -881,11 +878,7 @@ pub fn add_pair_findings(
             Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
         }
     }
-    let blur_s = diagnosis
-        .tracking_blur
-        .as_ref()
-        .map_or(0.0, |b| b.noise_per_speed_s);
-    let (mut findings, more) = check_pairs(recordings, &physics, groove, 80, blur_s);
+    let (mut findings, more) = check_pairs(recordings, &physics, groove, 80);
     for f in &mut findings {
         f.where_.insert("place".into(), serde_json::json!("pair"));
     }

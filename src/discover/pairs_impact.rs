@@ -1,6 +1,7 @@
 //! The impact-specific test of the collision runs: the whole-run pair fit's residuals split by
-//! time since the last impact, a misfit concentrated in the milliseconds after impacts (isolated
-//! tracking outliers left out; Student's t over the runs' log ratios) and its decision in words.
+//! time since the last impact, a misfit concentrated in the milliseconds after impacts beyond what
+//! the tracker's noise there gives (isolated tracking outliers left out; Student's t over the
+//! runs' log ratios) and its decision in words.
 
 use crate::fit::collision::wholerun::{simulate_run, GroupFit, PairRun};
 use crate::stats::dist::t_sf;
@@ -22,7 +23,8 @@ const NEIGHBOUR_SIGMA: f64 = 2.0;
 /// The residuals after impacts against the rest, pooled and run by run.
 pub(super) struct ImpactSplit {
     /// Mean squared whitened residual within `IMPACT_WINDOW_S` after an impact over that
-    /// elsewhere (isolated tracking outliers left out), in the typical run: the geometric mean
+    /// elsewhere (isolated tracking outliers left out) carried to the near side's speeds by the
+    /// noise's growth with speed (`split_by_impact`), in the typical run: the geometric mean
     /// of the runs' ratios (pooled when no run has samples on both sides). One run fitted badly
     /// at its start (−13σ for 5 ms) made the pooled ratio 1.59× on a null.
     pub(super) ratio: f64,
@@ -30,8 +32,8 @@ pub(super) struct ImpactSplit {
     pub(super) worst: Option<(String, f64)>,
     /// Samples within the window.
     pub(super) n_near: usize,
-    /// ln(near / far) of each run with at least `MIN_SAMPLES` samples on both sides: the runs
-    /// are the independent units (residuals within a run are correlated by any misfit).
+    /// ln(near / expected near) of each run with at least `MIN_SAMPLES` samples on both sides:
+    /// the runs are the independent units (residuals within a run are correlated by any misfit).
     pub(super) log_ratios: Vec<f64>,
     /// Lag-1 autocorrelation of the whitened residuals, pooled over the tracks (each residual
     /// clipped at 10σ).
@@ -41,86 +43,200 @@ pub(super) struct ImpactSplit {
 /// Samples a run needs on each side of the split to give its own ratio.
 const MIN_SAMPLES: usize = 4;
 
-/// Split the free fit's residuals by time since the last impact.
-/// Each sample's noise scale over the track's mean, when the tracking noise grows with speed as
-/// σ² = σ₀² + (c·v)² (c = `blur_s`, the single runs' `blur.rs`): fast particles just after an
-/// impact have a larger noise, which is no misfit. Empty when c = 0.
-fn speed_scale(v: &[f64], sigma_m: f64, blur_s: f64) -> Vec<f64> {
-    if !(blur_s > 0.0) || v.is_empty() {
-        return Vec::new();
-    }
-    let c2 = blur_s * blur_s;
-    let mean_v2 = v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64;
-    // the run's σ is its noise's mean over the track: what the speeds leave of it is σ₀²
-    let base = (sigma_m * sigma_m - c2 * mean_v2).max(0.05 * sigma_m * sigma_m);
-    let var: Vec<f64> = v.iter().map(|x| base + c2 * x * x).collect();
-    super::blur::relative(&var)
+/// A squared whitened residual, or a squared second difference in units of its white-noise
+/// variance (6), counts at most this much: ten standard deviations.
+const CAP: f64 = 100.0;
+
+/// Sums of a side of the split: squared residuals and squared speeds.
+#[derive(Clone, Copy, Default)]
+struct Side {
+    u: f64,
+    v2: f64,
+    n: usize,
 }
 
-/// The split of the whole-run fit `fit`'s residuals, each sample whitened by its noise (the
-/// run's σ, grown with speed by `blur_s` where the single runs measured that).
-pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit, blur_s: f64) -> ImpactSplit {
-    let (mut near, mut far) = ((0.0, 0usize), (0.0, 0usize));
+impl Side {
+    fn add(&mut self, u: f64, v2: f64) {
+        self.u += u;
+        self.v2 += v2;
+        self.n += 1;
+    }
+    fn merge(&mut self, o: &Side) {
+        self.u += o.u;
+        self.v2 += o.v2;
+        self.n += o.n;
+    }
+    fn mean(&self) -> f64 {
+        self.u / self.n.max(1) as f64
+    }
+    fn mean_v2(&self) -> f64 {
+        self.v2 / self.n.max(1) as f64
+    }
+}
+
+/// Least-squares sums of the second differences' squares y against the squared speed x, away
+/// from impacts: the noise's growth with speed.
+#[derive(Clone, Copy, Default)]
+struct Growth {
+    n: f64,
+    x: f64,
+    y: f64,
+    xx: f64,
+    xy: f64,
+}
+
+impl Growth {
+    fn add(&mut self, x: f64, y: f64) {
+        self.n += 1.0;
+        self.x += x;
+        self.y += y;
+        self.xx += x * x;
+        self.xy += x * y;
+    }
+    fn merge(&mut self, o: &Growth) {
+        self.n += o.n;
+        self.x += o.x;
+        self.y += o.y;
+        self.xx += o.xx;
+        self.xy += o.xy;
+    }
+    /// The slope of the noise's variance in v² (whitened units per (m/s)²), never below 0.
+    fn slope(&self) -> f64 {
+        let var = self.xx - self.x * self.x / self.n.max(1.0);
+        if self.n < MIN_SAMPLES as f64 || !(var > 0.0) {
+            return 0.0;
+        }
+        ((self.xy - self.x * self.y / self.n) / var).max(0.0)
+    }
+}
+
+/// One run's (or the pooled runs') sums.
+#[derive(Clone, Copy, Default)]
+struct Bins {
+    near: Side,
+    far: Side,
+    growth: Growth,
+}
+
+impl Bins {
+    fn merge(&mut self, o: &Bins) {
+        self.near.merge(&o.near);
+        self.far.merge(&o.far);
+        self.growth.merge(&o.growth);
+    }
+
+    /// ln of the mean square after impacts over what the noise gives there: the far side's mean
+    /// square carried to the near side's speeds by the noise's growth with speed (its level
+    /// elsewhere kept at least a tenth of the far mean square). None without enough samples.
+    fn log_ratio(&self) -> Option<f64> {
+        let enough = |s: &Side| s.n >= MIN_SAMPLES && s.u > 0.0;
+        if !(enough(&self.near) && enough(&self.far)) {
+            return None;
+        }
+        let b = self.growth.slope();
+        let far = self.far.mean();
+        let base = (far - b * self.far.mean_v2()).max(0.1 * far);
+        let expected = base + b * self.near.mean_v2();
+        Some((self.near.mean() / expected).ln())
+    }
+}
+
+/// The split of the whole-run fit `fit`'s residuals (whitened by each run's σ) by time since the
+/// last impact, the mean square after impacts measured against what the tracker's noise gives
+/// there.
+///
+/// Motion blur makes the tracks noisier where the particles are fast, which is just after
+/// impacts: whitened by one σ per run, a null with blur and correlated noise read 1.9× (one
+/// material of ten null seeds). So the noise's growth with speed is learned in each run away
+/// from its impacts, from the residuals' second differences r[k−1] − 2r[k] + r[k+1] over
+/// consecutive frames (a smooth misfit hardly bends them, while white noise fills them) against
+/// the model's squared speed; the far side's mean square, carried to the near side's speeds by
+/// that growth, is what the noise alone gives after the impacts. A misfit after impacts, even
+/// one as quick as a ringing, is not in what the noise is learned from. Second differences across
+/// an impact or the kick (where the model's kink and the data's need not fall in the same frame)
+/// or through an isolated outlier are left out.
+pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ImpactSplit {
+    let mut pooled = Bins::default();
     let mut log_ratios = Vec::new();
     let mut worst: Option<(String, f64)> = None;
     let (mut cross, mut square) = (0.0, 0.0);
     for (run, own) in runs.iter().zip(&fit.result.own) {
         let (rel, traj) = simulate_run(run, &fit.spec, &fit.result.shared, own);
-        let (mut rn, mut rf) = ((0.0, 0usize), (0.0, 0usize));
+        let mut bins = Bins::default();
+        let close = |t: f64| {
+            traj.impacts
+                .iter()
+                .any(|im| !im.joined && t >= im.t_s && t - im.t_s < IMPACT_WINDOW_S)
+        };
+        // a kink of the model between two times: an impact, or the kick (rel leaves 0)
+        let kink = |a: f64, b: f64| {
+            a <= 0.0 && b > 0.0 || traj.impacts.iter().any(|im| a < im.t_s && im.t_s <= b)
+        };
         for p in 0..2 {
-            let v: Vec<f64> = run.samples[p]
+            let s = &run.samples[p];
+            let track = &traj.particles[p];
+            let r: Vec<f64> = s
                 .iter()
-                .map(|&(i, _)| traj.particles[p].v_mps[i])
-                .collect();
-            let scale = speed_scale(&v, run.sigma_m, blur_s);
-            let r: Vec<f64> = run.samples[p]
-                .iter()
-                .enumerate()
-                .map(|(k, &(i, zd))| {
-                    (traj.particles[p].z_m[i] - zd) / run.sigma_m / scale.get(k).unwrap_or(&1.0)
-                })
+                .map(|&(i, zd)| (track.z_m[i] - zd) / run.sigma_m)
                 .collect();
             let clipped: Vec<f64> = r.iter().map(|x| x.clamp(-10.0, 10.0)).collect();
             cross += clipped.windows(2).map(|w| w[0] * w[1]).sum::<f64>();
             square += clipped.iter().map(|x| x * x).sum::<f64>();
-            for (k, &(i, _)) in run.samples[p].iter().enumerate() {
-                let calm = |j: Option<usize>| {
-                    j.and_then(|j| r.get(j))
-                        .is_none_or(|x| x.abs() < NEIGHBOUR_SIGMA)
-                };
-                if r[k].abs() > OUTLIER_SIGMA && calm(k.checked_sub(1)) && calm(Some(k + 1)) {
+            let calm = |j: Option<usize>| {
+                j.and_then(|j| r.get(j))
+                    .is_none_or(|x| x.abs() < NEIGHBOUR_SIGMA)
+            };
+            let outlier: Vec<bool> = (0..r.len())
+                .map(|k| r[k].abs() > OUTLIER_SIGMA && calm(k.checked_sub(1)) && calm(Some(k + 1)))
+                .collect();
+            for (k, &(i, _)) in s.iter().enumerate() {
+                if outlier[k] {
                     continue;
                 }
-                let u = (r[k] * r[k]).min(100.0);
-                let close = traj
-                    .impacts
-                    .iter()
-                    .any(|im| !im.joined && rel[i] >= im.t_s && rel[i] - im.t_s < IMPACT_WINDOW_S);
-                let bin = if close { &mut rn } else { &mut rf };
-                bin.0 += u;
-                bin.1 += 1;
+                let u = (r[k] * r[k]).min(CAP);
+                let v2 = track.v_mps[i] * track.v_mps[i];
+                let side = if close(rel[i]) {
+                    &mut bins.near
+                } else {
+                    &mut bins.far
+                };
+                side.add(u, v2);
+            }
+            for k in 1..s.len().saturating_sub(1) {
+                let (a, i, b) = (s[k - 1].0, s[k].0, s[k + 1].0);
+                let consecutive = a + 1 == i && i + 1 == b;
+                if !consecutive
+                    || close(rel[i])
+                    || outlier[k - 1..=k + 1].iter().any(|&o| o)
+                    || kink(rel[a], rel[b])
+                {
+                    continue;
+                }
+                let d2 = r[k - 1] - 2.0 * r[k] + r[k + 1];
+                bins.growth
+                    .add(track.v_mps[i] * track.v_mps[i], (d2 * d2 / 6.0).min(CAP));
             }
         }
-        if rn.1 >= MIN_SAMPLES && rf.1 >= MIN_SAMPLES && rn.0 > 0.0 && rf.0 > 0.0 {
-            let l = (rn.0 / rn.1 as f64 / (rf.0 / rf.1 as f64)).ln();
+        if let Some(l) = bins.log_ratio() {
             if worst.as_ref().is_none_or(|(_, w)| l > *w) {
                 worst = Some((run.run.clone(), l));
             }
             log_ratios.push(l);
         }
-        near = (near.0 + rn.0, near.1 + rn.1);
-        far = (far.0 + rf.0, far.1 + rf.1);
+        pooled.merge(&bins);
     }
-    let mean = |b: (f64, usize)| b.0 / b.1.max(1) as f64;
     let ratio = if log_ratios.is_empty() {
-        mean(near) / mean(far).max(1e-12)
+        // too few samples for the noise's own ratio: the residuals' alone
+        pooled
+            .log_ratio()
+            .map_or(pooled.near.mean() / pooled.far.mean().max(1e-12), f64::exp)
     } else {
         (log_ratios.iter().sum::<f64>() / log_ratios.len() as f64).exp()
     };
     ImpactSplit {
         ratio,
         worst: worst.map(|(r, l)| (r, l.exp())),
-        n_near: near.1,
+        n_near: pooled.near.n,
         log_ratios,
         lag1: if square > 0.0 { cross / square } else { 0.0 },
     }
