@@ -122,6 +122,7 @@ pub mod noise_floor;
 pub mod noise_model;
 pub mod null_distribution;
 pub mod pair_force;
+mod pair_noise;
 pub mod pairs;
 mod pairs_impact;
 mod particles;
