@@ -10,7 +10,8 @@
 //! of freeing friction and drag is reported beside). Then the residuals
 //! of the free fit are split by time since the last impact: a misfit concentrated in the
 //! milliseconds after impacts (the mean squared whitened residual, isolated tracking outliers left
-//! out, against the rest of the run; Student's t over the runs' log ratios, since a misfit
+//! out, against what the tracking noise gives there, its growth with speed learned from the rest
+//! of the run; Student's t over the runs' log ratios, since a misfit
 //! correlates the residuals within a run) points at the impact model itself (restitution law,
 //! spin transfer; `pairs_impact.rs`).
 
@@ -693,7 +694,7 @@ fn impact_finding(d: &Draft, p_holm: f64) -> Finding {
     Finding {
         effect: Effect::ImpactSpecificMismatch.id().into(),
         accepted: accepted_imp,
-        form: "mean squared residual within 5 ms after impacts against the rest of the run (impulse rule, restitution law)".into(),
+        form: "mean squared residual within 5 ms after impacts against what the tracking noise gives there (impulse rule, restitution law)".into(),
         parameters,
         evidence: Evidence {
             lr: ratio,

@@ -284,13 +284,13 @@ pub(super) fn impact_decision(ratio: f64, p_holm: f64) -> (bool, String) {
     let large = ratio > MIN_RATIO;
     let words = match (significant, large) {
         (true, true) => format!(
-            "the misfit concentrates after impacts (mean square {ratio:.2}× the rest in the typical run): the impact model misses something"
+            "the misfit concentrates after impacts (mean square {ratio:.2}× what the tracking noise gives there, in the typical run): the impact model misses something"
         ),
         (true, false) => format!(
-            "a significant but small excess after impacts: the mean square within 5 ms is {ratio:.2}× the rest in the typical run (p Holm {p_holm:.1e}), below the {MIN_RATIO}× that counts as an impact-model misfit"
+            "a significant but small excess after impacts: the mean square within 5 ms is {ratio:.2}× what the tracking noise gives there in the typical run (p Holm {p_holm:.1e}), below the {MIN_RATIO}× that counts as an impact-model misfit"
         ),
         (false, _) => format!(
-            "no significant misfit specific to impacts (mean square {ratio:.2}× the rest in the typical run, p Holm {p_holm:.2})"
+            "no significant misfit specific to impacts (mean square {ratio:.2}× what the tracking noise gives there in the typical run, p Holm {p_holm:.2})"
         ),
     };
     (significant && large, words)

@@ -160,7 +160,7 @@ fn closed_form_test(effect: &str, e: &Evidence) -> Option<String> {
     let stat = finite(e.lr).map_or("—".into(), |x| sig(x, 3));
     Some(match Effect::from_id(effect) {
         Some(Effect::ImpactSpecificMismatch) => format!(
-            "t test over runs: mean-square residual within 5 ms of an impact over the rest, typical run = {stat}"
+            "t test over runs: mean-square residual within 5 ms of an impact over what the tracking noise gives there, typical run = {stat}"
         ),
         Some(Effect::RestitutionLaw | Effect::PairFrictionSlipSpeed) if !e.lr.is_finite() => {
             "not tested".into()
