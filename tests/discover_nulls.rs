@@ -92,3 +92,37 @@ fn speed_dependent_noise_nulls_are_silent() {
 fn quantized_noise_nulls_are_silent() {
     silent("locked", seeds());
 }
+
+/// The noise's growth with speed is measured, not only tolerated: on six blur nulls (white
+/// noise σ plus σ|v|/v_ref, so c = σ/v_ref) discovery keeps the blur in at least five, each kept
+/// c within 25 % of the truth and their mean within 10 %. (Measured at this test's writing:
+/// 0.88–1.04 of the truth; on 60 ms runs in mixed noise 0.79–1.05, one of six not kept.)
+#[test]
+fn the_blur_is_measured_near_its_truth() {
+    let mut ratios = Vec::new();
+    let mut lines = Vec::new();
+    for seed in 500..506u64 {
+        let c = case(seed, SIZE, "blur", &[], false);
+        let (sigma, v_ref) = c.spec.noise.blur.expect("a blur noise");
+        let truth = sigma / v_ref;
+        let d = discover_case(&c, seed);
+        let read = d.tracking_blur.as_ref().map(|b| b.noise_per_speed_s);
+        lines.push(format!("seed {seed}: c {truth:.3e}, read {read:?}"));
+        if let Some(r) = read {
+            ratios.push(r / truth);
+        }
+    }
+    let text = lines.join("\n");
+    eprintln!("{text}");
+    assert!(
+        ratios.len() >= 5,
+        "blur kept in {}/6:\n{text}",
+        ratios.len()
+    );
+    assert!(
+        ratios.iter().all(|r| (0.75..=1.25).contains(r)),
+        "{ratios:?}\n{text}"
+    );
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    assert!((mean - 1.0).abs() <= 0.1, "mean {mean}\n{text}");
+}
