@@ -1,5 +1,7 @@
-//! Whether a fitted term is physics: a search that ended at its bound resolves nothing, and a
-//! dissipation that pushes the particle forward is no dissipation.
+//! Whether a fitted term is physics: a search that ended at its bound resolves nothing, a size
+//! that ended at the edge of what its form can mean (μ varying by 90 % of itself) is a form bent
+//! to absorb something else, and a dissipation that pushes the particle forward is no
+//! dissipation.
 //!
 //! The groove and the air are passive: every acceleration that depends on the particle's speed
 //! alone (the drag in any of its forms, a rolling resistance, a smooth force in v) takes energy
@@ -10,7 +12,7 @@
 //! in words instead of reported as a propulsion. Forces that depend on position (a potential) or
 //! on time (a drive) carry no sign rule.
 
-use super::estimates::scale_at_bound;
+use super::estimates::{scale_at_bound, side_of_bound};
 use super::model::Model;
 use super::sim::{Drag, SimModel};
 use super::G_MPS2;
@@ -21,7 +23,29 @@ const SPEED_POINTS: usize = 64;
 
 /// Why the last term of `m` is no physical finding, or None when it is admissible.
 pub fn refusal(m: &Model) -> Option<String> {
-    scale_at_bound(m).or_else(|| not_passive(m))
+    scale_at_bound(m)
+        .or_else(|| size_at_bound(m))
+        .or_else(|| not_passive(m))
+}
+
+/// The refusal of a last term whose size ended at a bound its form marks as no physical limit
+/// (`Form::refused_at_bound`), or None.
+fn size_at_bound(m: &Model) -> Option<String> {
+    let i = m.spec.extras.len().checked_sub(1)?;
+    let off = m.spec.extra_offset(i);
+    let e = &m.spec.extras[i];
+    let n = e.params().len();
+    (0..n).find_map(|j| {
+        let info = &m.params[off + j];
+        let x = m.fit.global[off + j];
+        (e.refused_at_bound(j) && side_of_bound(x, info, 1e-2).is_some()).then(|| {
+            format!(
+                "rejected: its {} ended at its bound ({x:.3}): {} this large is a form bent to absorb something else, not physics",
+                info.name,
+                e.size_name()
+            )
+        })
+    })
 }
 
 /// The acceleration of `sim` that depends on the signed speed `v` alone (m/s²).

@@ -57,7 +57,7 @@ pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
 }
 
 /// Which bound `x` sits at (`Some(true)` the lower), within `rel` of the parameter's range.
-fn side_of_bound(x: f64, info: &ParamInfo, rel: f64) -> Option<bool> {
+pub fn side_of_bound(x: f64, info: &ParamInfo, rel: f64) -> Option<bool> {
     let tol = rel * (info.hi - info.lo);
     if x <= info.lo + tol {
         Some(true)

@@ -24,6 +24,9 @@ pub struct Track {
     pub z: Vec<f64>,
     pub v: Vec<f64>,
     pub phase: Vec<Phase>,
+    /// The acceleration friction gives at each grid point while sliding (0 elsewhere): the
+    /// response of a relative change of μ is that of this force.
+    pub friction: Vec<f64>,
     gain: Vec<f64>,
     damp: Vec<f64>,
     /// Factor applied to δv after step k (1 except at a slide → roll switch).
@@ -78,6 +81,17 @@ impl Track {
                 }
             })
             .collect();
+        let friction: Vec<f64> = (0..n)
+            .map(|k| match tr.phase[k] {
+                Phase::Sliding => {
+                    let slip = tr.v_mps[k] - s * tr.va_mps[k];
+                    let dir = tr.v_mps[k].signum();
+                    let mu = pm.friction.kinetic(slip) * pm.variation.factor(tr.z_m[k], dir, slip);
+                    -slip.signum() * G_MPS2 * mu / s
+                }
+                _ => 0.0,
+            })
+            .collect();
         let mut jump = vec![1.0; n];
         for ev in &tr.events {
             if ev.from == Phase::Sliding && ev.to == Phase::Rolling {
@@ -112,6 +126,7 @@ impl Track {
             z: tr.z_m,
             v: tr.v_mps,
             phase: tr.phase,
+            friction,
             gain,
             damp,
             jump,

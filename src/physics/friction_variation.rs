@@ -1,10 +1,11 @@
 //! How the groove's friction coefficient varies beyond its law in the slip speed: a factor on μ
 //! by the direction of motion, by the position in the lab and by the slip speed.
 //!
-//! `μ_eff = μ(u) · (1 + δ_dir·dir) · (1 + p₁ P₁(x) + p₂ P₂(x)) · (1 + β (|u|/u_ref − 1))`, with
-//! `dir = ±1` the direction of motion, `x = (z − z_mid)/half_span` held in [−1, 1] and P₁, P₂ the
-//! Legendre polynomials (a gradient and a curvature over the observed stretch of groove), `u` the
-//! slip speed. The factor never goes below zero. It acts wherever friction acts: on the sliding
+//! `μ_eff = μ(u) · (1 + δ_dir·dir) · (1 + p₁ P₁(x) + p₂ P₂(x)) · (1 + A sin(k z + φ))
+//! · (1 + β (|u|/u_ref − 1))`, with `dir = ±1` the direction of motion, `x = (z − z_mid)/half_span`
+//! held in [−1, 1] and P₁, P₂ the Legendre polynomials (a gradient and a curvature over the
+//! observed stretch of groove), A, k, φ a periodic variation along the groove fixed in the lab
+//! (a machining pattern, a texture), `u` the slip speed. The factor never goes below zero. It acts wherever friction acts: on the sliding
 //! motion and on what friction can hold while rolling (at zero slip), and nowhere else, which is
 //! what sets it apart from a force: a pure rolling phase does not feel it.
 
@@ -21,6 +22,9 @@ pub struct FrictionVariation {
     pub half_span_m: f64,
     /// Relative gradient and curvature over that stretch (Legendre P₁, P₂ coefficients).
     pub by_position: [f64; 2],
+    /// A periodic variation along the lab: relative amplitude A, wavenumber k (1/m), phase φ
+    /// (rad); μ × (1 + A sin(k z + φ)). Zero amplitude: none.
+    pub periodic: [f64; 3],
     /// Reference slip speed of the slip variation (m/s; 0: none).
     pub u_ref_mps: f64,
     /// Relative change of μ per u_ref of slip speed, about u_ref.
@@ -39,6 +43,10 @@ impl FrictionVariation {
         if self.half_span_m > 0.0 {
             let x = ((z_m - self.z_mid_m) / self.half_span_m).clamp(-1.0, 1.0);
             f *= 1.0 + self.by_position[0] * x + self.by_position[1] * 0.5 * (3.0 * x * x - 1.0);
+        }
+        let [amp, k, phase] = self.periodic;
+        if amp != 0.0 {
+            f *= 1.0 + amp * (k * z_m + phase).sin();
         }
         if self.u_ref_mps > 0.0 {
             f *= 1.0 + self.by_slip * (slip_mps.abs() / self.u_ref_mps - 1.0);
@@ -80,5 +88,12 @@ mod tests {
         assert!((slip.factor(0.0, 1.0, 0.0) - 1.3).abs() < 1e-12);
         assert!((slip.factor(0.0, 1.0, 0.02) - 0.7).abs() < 1e-12);
         assert_eq!(slip.factor(0.0, 1.0, 0.1), 0.0, "never below zero");
+        let wave = FrictionVariation {
+            periodic: [0.1, 1000.0, 0.5],
+            ..none
+        };
+        let z = (std::f64::consts::FRAC_PI_2 - 0.5) / 1000.0;
+        assert!((wave.factor(z, -1.0, 0.0) - 1.1).abs() < 1e-12, "the crest");
+        assert!((wave.factor(z + std::f64::consts::PI / 1000.0, 1.0, 0.0) - 0.9).abs() < 1e-12);
     }
 }

@@ -178,6 +178,12 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn search(&self, _s: &Search) -> (Option<Trial>, Option<Typical>) {
         (None, None)
     }
+    /// True for a parameter whose bounds are no physical limit but the edge of what the form can
+    /// mean (μ varying by 90 % of itself along the groove): a fit that ends there has bent the
+    /// form to absorb something else, and the term is refused (`admissible.rs`).
+    fn refused_at_bound(&self, _param: usize) -> bool {
+        false
+    }
     /// A named form screened at a few trial scales (the best kept) instead of one secant: where
     /// its parameters start and, per trial, the parameters stepped and where to.
     fn scale_trials(&self) -> Option<(Vec<f64>, Vec<Vec<(usize, f64)>>)> {

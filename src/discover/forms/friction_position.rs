@@ -49,6 +49,9 @@ impl Form for FrictionPosition {
     fn position_dependent(&self) -> bool {
         true
     }
+    fn refused_at_bound(&self, _param: usize) -> bool {
+        true
+    }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
         let (z_mid_m, half_span_m) = (self.z_mid_m, self.half_span_m);
         let est = Estimate::new;

@@ -11,6 +11,7 @@
 //! - `friction_slip.rs`: μ of the slip speed, linear about a reference speed
 //! - `friction_direction.rs`: μ by the direction of motion
 //! - `friction_position.rs`: μ along the groove
+//! - `friction_periodic.rs`: μ periodic along the groove (wavelength searched)
 //! - `distortion.rs`: The camera's positions distorted across the image (a measurement)
 //! - `periodic_z.rs`: A force periodic in z, fixed in the lab (wavelength searched)
 //! - `localized.rs`: A localized force fixed in the lab (centre and width searched)
@@ -93,6 +94,7 @@ registry! {
     self::friction_slip::FrictionSlip,
     self::friction_direction::FrictionDirection,
     self::friction_position::FrictionPosition,
+    self::friction_periodic::FrictionPeriodic,
     self::distortion::Distortion,
     self::periodic_z::PeriodicZ,
     self::localized::Localized,
