@@ -121,3 +121,40 @@ fn particles_that_differ_are_named_so_mu() {
 fn particles_that_differ_are_named_so_size() {
     assert_named_and_sized(7, "ar1", "size_spread");
 }
+
+/// μ periodic along the groove (a texture of 1–8 mm wavelength, the simulator's own law), six
+/// datasets at 5× its limit over six noises: a friction along z is accepted in at least four;
+/// where the periodic form is the one chosen (in at least two), its relative amplitude is within
+/// 15 % in at least half. Not yet asserted, because not so: nothing else beside it (a particle
+/// spread or a second friction form came with it in two of six at this test's writing) and the
+/// periodic form over μ's gradient and curvature (P1 + P2 bent to 80 % of μ took two). Before
+/// the friction place had a periodic form, the bench named this shape 0/5.
+#[test]
+fn a_friction_along_the_groove_is_named_a_friction() {
+    let noises = ["white", "ar1", "blur", "locked", "outliers", "mixture"];
+    let (mut place, mut periodic, mut sized, mut said) = (0, 0, 0, Vec::new());
+    for (k, noise) in noises.into_iter().enumerate() {
+        let (alone, worst, s) = discovered(40 + k as u64, noise, "mu_position", 5.0);
+        said.push(format!(
+            "{noise}: alone {alone}, size error {worst:.2}: {s:?}"
+        ));
+        if s.iter()
+            .any(|a| a.starts_with("friction/position_dependent_friction"))
+        {
+            place += 1;
+        }
+        // the size error is that of `delta_mu_rel`, which only the periodic form gives
+        if worst.is_finite() {
+            periodic += 1;
+            if worst < 0.15 {
+                sized += 1;
+            }
+        }
+    }
+    let text = said.join("\n");
+    eprintln!("{text}");
+    assert!(
+        place >= 4 && periodic >= 2 && 2 * sized >= periodic,
+        "friction along z in {place}/6, periodic form in {periodic}, sized {sized}:\n{text}"
+    );
+}
