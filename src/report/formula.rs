@@ -5,7 +5,7 @@
 //! pipe. A form this file does not know is shown as written.
 
 /// The ASCII formula of each form of discovery's library, and the same formula in TeX.
-const FORMULAS: [(&str, &str); 14] = [
+const FORMULAS: [(&str, &str); 15] = [
     ("a = -v/(T0 + T'|v|)", r"a = -v/(T_0 + T'\lvert v\rvert)"),
     ("a = -v/T - c v|v|", r"a = -v/T - c\,v\lvert v\rvert"),
     ("a = -c g sign(v)", r"a = -c\,g\,\text{sign}(v)"),
@@ -34,6 +34,10 @@ const FORMULAS: [(&str, &str); 14] = [
     (
         "mu (1 + p1 P1(x) + p2 P2(x))",
         r"\mu(1 + p_1 P_1(x) + p_2 P_2(x))",
+    ),
+    (
+        "mu (1 + A sin(2 pi z / lambda + phi))",
+        r"\mu(1 + A\,\text{sin}(2\pi z/\lambda + \phi))",
     ),
     (
         "z_meas = z + a2 P2(x) + a3 P3(x)",
@@ -78,6 +82,10 @@ mod tests {
         assert_eq!(
             form("periodic in z: a = A sin(2 pi z / lambda + phi), fixed in the lab"),
             r"periodic in z: $a = A\,\text{sin}(2\pi z/\lambda + \phi)$, fixed in the lab"
+        );
+        assert_eq!(
+            form("periodic mu(z) along the groove: mu (1 + A sin(2 pi z / lambda + phi)), fixed in the lab"),
+            r"periodic mu(z) along the groove: $\mu(1 + A\,\text{sin}(2\pi z/\lambda + \phi))$, fixed in the lab"
         );
         assert_eq!(
             form("probe: T drifts with |v0|"),
