@@ -22,6 +22,7 @@
 //! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
 //! - `pairs.rs`: Discovery on pairs
 //! - `pair_force.rs`: The test for a force between the two particles of a pair
+//! - `pair_noise.rs`: The pairs' tracking noise over the time a signature lasts (long-run variance)
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
@@ -69,7 +70,8 @@
 //!    propose starting values (`proposal.rs`).
 //! 3. **Forms.** Drags (quadratic, saturating), a rolling resistance, a tilt, forces periodic or
 //!    localized in lab z, a force periodic in time with a phase per run (`timeforce.rs`), μ(u) of
-//!    the slip speed (saturating or linear), μ by direction, μ along the groove, a distortion; a
+//!    the slip speed (saturating or linear), μ by direction, μ along the groove (periodic, or its
+//!    gradient and curvature), a distortion; a
 //!    spline in one variable is the fallback (`unexplained`). Each form is a type in a file of
 //!    `forms/` (`Form`: place, parameters in SI units with bounds and sign, how it enters the
 //!    integrator, its screen, its sentence and estimates), listed once in its registry.
