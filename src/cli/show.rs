@@ -40,15 +40,7 @@ pub fn show(
         )));
     };
     let Some(spec) = pipeline.stages.get(stage) else {
-        return Err(EngineError::Usage(format!(
-            "no stage `{stage}`; stages: {}",
-            pipeline
-                .stages
-                .keys()
-                .cloned()
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+        return Err(pipeline.no_stage(stage));
     };
     if !spec.outputs.contains_key(output) {
         return Err(EngineError::Usage(format!(

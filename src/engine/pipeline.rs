@@ -81,6 +81,15 @@ impl Pipeline {
         }
     }
 
+    /// The usage error for a stage name the pipeline does not define, with the names it does.
+    pub fn no_stage(&self, name: &str) -> super::EngineError {
+        super::EngineError::Usage(format!(
+            "no stage `{name}` in {}; stages: {}",
+            self.show(&self.config_path),
+            self.stages.keys().cloned().collect::<Vec<_>>().join(", ")
+        ))
+    }
+
     /// A path shown relative to the project root when it lies inside it.
     pub fn show(&self, path: &std::path::Path) -> String {
         path.strip_prefix(&self.root)

@@ -49,16 +49,7 @@ pub struct RunSummary {
 fn check_names(pipeline: &Pipeline, names: &[String]) -> Result<(), EngineError> {
     for n in names {
         if !pipeline.stages.contains_key(n) {
-            return Err(EngineError::Usage(format!(
-                "no stage `{n}` in {}; stages: {}",
-                pipeline.show(&pipeline.config_path),
-                pipeline
-                    .stages
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
+            return Err(pipeline.no_stage(n));
         }
     }
     Ok(())
