@@ -1,9 +1,10 @@
 //! The whole-run collision analysis of a dataset, per material: the joint fit of every
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
-//! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
+//! (`restitution_law`; a law the spec holds from discovery is kept, not chosen), and the profile
+//! of μ_pp (`profile`). What goes into summary.json.
 
 use super::profile::{default_grid, profile_and_lowest};
-use super::restitution_law::{choose_law, with_chosen};
+use super::restitution_law::{choose_law, held_choice, with_chosen};
 use super::warm_start::{carry_laws, Start};
 use super::wholerun::{
     fit_group, fit_group_with, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG,
@@ -123,10 +124,14 @@ pub fn analyze_material_from(
         ),
         None => (spec.clone(), fit_group(runs, spec, None, opts.max_iter)),
     };
-    let mut notes = Vec::new();
+    let mut notes = carried_notes(&spec);
+    // a law the spec holds (discovery's) is not chosen
     let choices: Vec<LawChoice> = [Setup::Rolling, Setup::Contact]
         .into_iter()
-        .filter_map(|s| choose_law(runs, &first, s, opts.folds, opts.step_iter))
+        .filter_map(|s| match spec.held_law(s) {
+            Some(_) => held_choice(runs, &spec, s),
+            None => choose_law(runs, &first, s, opts.folds, opts.step_iter),
+        })
         .collect();
     let chosen = with_chosen(&spec, &choices);
     let best = if chosen == spec {
@@ -209,6 +214,7 @@ pub fn analyze_material_from(
         ),
         tp_s_per_mps: est(&best, TP),
         mu_pp: est(&best, MU_PP),
+        mu_pp_slip: best.spec.slip,
         profile,
         restitution: choices,
         deviance: best.cost(),
@@ -216,6 +222,27 @@ pub fn analyze_material_from(
         runs: whole_runs,
         notes,
     }
+}
+
+/// What the spec carries from discovery's impact laws, in words (none for the chapter's model):
+/// a held restitution law is not fitted, and μ_pp with a slip-speed dependence is its value at
+/// the reference slip speed.
+fn carried_notes(spec: &FitSpec) -> Vec<String> {
+    let mut out = Vec::new();
+    for (setup, name) in [(Setup::Rolling, "rolling"), (Setup::Contact, "contact")] {
+        if spec.held_law(setup).is_some() {
+            out.push(format!(
+                "the {name} setup's restitution law is the one discovery accepted, held as it gave it from the impacts' own C (not refitted, so its uncertainty is not in the other parameters' errors)"
+            ));
+        }
+    }
+    if let Some(s) = spec.slip {
+        out.push(format!(
+            "μ_pp depends on the slip speed u at the contact as discovery accepted (its shape held, normalised at u_ref = {:.1} mm/s): μ_pp and its profile are μ_pp at u_ref",
+            1e3 * s.u_ref_mps
+        ));
+    }
+    out
 }
 
 /// Words for profile fits that stopped at their iteration limit (None when every one

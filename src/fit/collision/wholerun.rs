@@ -3,7 +3,9 @@
 //! and the sliding and rolling of both particles between them), fitted to both tracks at once.
 //!
 //! Shared per material: μ_pg, the drag (saturating v/(T0 + T'|v|), linear, or held at the single
-//! runs' physics), μ_pp, and one restitution law C(v) per setup. Per run: the striker's start
+//! runs' physics), μ_pp, and one restitution law C(v) per setup (a candidate form's two slots
+//! fitted, or a law discovery accepted held as given; μ_pp may carry discovery's dependence on
+//! the slip speed, μ_pp then being its value at the reference slip speed). Per run: the striker's start
 //! position and kick speed, the gap to the target (rolling setup; the contact setup starts
 //! touching) and the kick time within the frame before the first sample. The simulator locates
 //! every phase switch and impact as an event, so positions are continuous in the parameters and
@@ -17,13 +19,15 @@ use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairForce, PairParams, PairTrajectory, Restitution,
-    State, Term,
+    SlipFriction, State, Term,
 };
 use crate::recording::{Recording, Setup};
 
 impl LawForm {
     /// The law from its two parameter slots (a, b): constant (c, —), linear (c0, slope),
-    /// saturating (c_inf, ln v_ref).
+    /// saturating (c_inf, ln v_ref). A law held from discovery has no slots: `FitSpec` holds it
+    /// itself (`held_laws`) and never asks here; asked, it is undetermined (C NaN, so a fit
+    /// that lost it misfits every impact instead of simulating some other law).
     pub fn law(self, a: f64, b: f64) -> Restitution {
         match self {
             LawForm::Constant => Restitution::Constant(a),
@@ -35,6 +39,7 @@ impl LawForm {
                 c0: a,
                 v_ref_mps: b.exp(),
             },
+            LawForm::HeldFromDiscovery => Restitution::Constant(f64::NAN),
         }
     }
 
@@ -52,6 +57,8 @@ impl LawForm {
                 spec(0.5, 0.0, 1.0, 1e-5),
                 spec(0.08f64.ln(), 1e-3f64.ln(), 3.0f64.ln(), 1e-5),
             ],
+            // no slots: held at 0
+            LawForm::HeldFromDiscovery => [spec(0.0, 0.0, 0.0, 1e-5), spec(0.0, 0.0, 0.0, 1e-5)],
         }
     }
 }
@@ -120,6 +127,14 @@ pub const Z1: usize = 0;
 pub const GAP: usize = 1;
 pub const V0: usize = 2;
 pub const T_KICK: usize = 3;
+
+/// The index of `setup` in `FitSpec::laws` and `held_laws`.
+pub fn setup_index(setup: Setup) -> usize {
+    match setup {
+        Setup::Rolling => 0,
+        Setup::Contact => 1,
+    }
+}
 
 fn law_slot(setup: Setup) -> usize {
     match setup {
@@ -289,8 +304,15 @@ impl PairRun {
 pub struct FitSpec {
     pub groove: Groove,
     pub drag: DragSpec,
-    /// Law forms of the rolling and the contact setup.
+    /// Law forms of the rolling and the contact setup (`HeldFromDiscovery` where `held_laws`
+    /// holds the law).
     pub laws: [LawForm; 2],
+    /// Laws held as given (discovery's accepted restitution laws; `FitSpec::hold_law`), per
+    /// setup as `laws`: their slots are held and unused.
+    pub held_laws: [Option<Restitution>; 2],
+    /// μ_pp depending on the slip speed, carried from discovery; μ_pp is then its value at the
+    /// reference slip speed. None: one μ_pp.
+    pub slip: Option<SlipFriction>,
     /// Hold μ_pp at this value (the profile), or fit it.
     pub mu_pp_held: Option<f64>,
     /// Fit the contact distance (`CONTACT`, a factor on the diameter) instead of holding it at 1.
@@ -306,6 +328,8 @@ impl FitSpec {
             groove,
             drag: DragSpec::Saturating,
             laws: [LawForm::Saturating, LawForm::Saturating],
+            held_laws: [None, None],
+            slip: None,
             mu_pp_held: None,
             free_contact: false,
             pair_force: None,
@@ -332,10 +356,19 @@ impl FitSpec {
     }
 
     fn law_form(&self, setup: Setup) -> LawForm {
-        match setup {
-            Setup::Rolling => self.laws[0],
-            Setup::Contact => self.laws[1],
-        }
+        self.laws[setup_index(setup)]
+    }
+
+    /// Hold `law` for the runs of `setup` instead of fitting a form's slots.
+    pub fn hold_law(&mut self, setup: Setup, law: Restitution) {
+        let i = setup_index(setup);
+        self.laws[i] = LawForm::HeldFromDiscovery;
+        self.held_laws[i] = Some(law);
+    }
+
+    /// The law held for `setup`, if any.
+    pub fn held_law(&self, setup: Setup) -> Option<Restitution> {
+        self.held_laws[setup_index(setup)]
     }
 
     /// The one-particle model at shared parameters `p`.
@@ -370,10 +403,14 @@ impl FitSpec {
     pub fn pair(&self, p: &[f64], setup: Setup, diameter_m: f64) -> PairParams {
         let i = law_slot(setup);
         PairParams {
-            restitution: self.law_form(setup).law(p[i], p[i + 1]),
+            restitution: match self.held_law(setup) {
+                Some(law) => law,
+                None => self.law_form(setup).law(p[i], p[i + 1]),
+            },
             mu_pp: p[MU_PP],
             radius_m: 0.5 * diameter_m * FitSpec::contact(p),
             force: self.force(p),
+            slip: self.slip,
         }
     }
 

@@ -1,7 +1,8 @@
 //! Figs. 4.4a–c: the target's spin change against its velocity change (slope μ_pp·k), and the
 //! coefficient of restitution against impact speed per material, rolling and contact setups,
 //! with the whole-run law chosen under the accepted physics where `refit` made the fits again,
-//! and the impacts' own law (discovery's map) where discovery accepted one outside the candidates.
+//! and the impacts' own law (discovery's map) where discovery accepted one outside the candidates
+//! (which the refit then holds, drawn as its whole-run law).
 
 use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::collision_summary::LawForm;
@@ -202,8 +203,12 @@ pub fn render_bc(
             }
             let accepted = crate::report::sections::under_accepted::whole_run_of(d, material)
                 .and_then(|m| law_of(m, *contact));
-            if let Some((law, _)) = accepted {
-                let label = format!("{setup}: whole-run law under the accepted physics");
+            if let Some((law, form)) = accepted {
+                let label = if form == LawForm::HeldFromDiscovery {
+                    format!("{setup}: under the accepted physics, discovery's law held")
+                } else {
+                    format!("{setup}: whole-run law under the accepted physics")
+                };
                 line(&mut c, law_curve(&law, v_hi), col, 1, true, Some(&label))?;
             }
             if let Some(map) = impact_law_map(d, material, *contact) {
@@ -243,7 +248,8 @@ fn law_curve(law: &Restitution, v_hi: f64) -> Vec<(f64, f64)> {
 }
 
 /// The restitution law a material's whole-run fit chose for the setup (the baseline's fit, or
-/// the one made again under the physics discovery accepted), and its form; None without one.
+/// the one made again under the physics discovery accepted, which may hold discovery's law), and
+/// its form; None without one.
 fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)> {
     let setup = if contact {
         Setup::Contact
@@ -251,9 +257,7 @@ fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)>
         Setup::Rolling
     };
     let choice = m.restitution.iter().find(|c| c.setup == setup)?;
-    let cand = choice.chosen_candidate()?;
-    let [a, b] = cand.slots()?;
-    Some((cand.form.law(a, b), cand.form))
+    Some((choice.law()?, choice.chosen))
 }
 
 #[cfg(test)]

@@ -64,6 +64,13 @@ fn laws_text(m: &MaterialWholeRun) -> String {
     m.restitution
         .iter()
         .map(|c| {
+            if let Some(law) = &c.held {
+                return format!(
+                    "{}: {}",
+                    serde_name(&c.setup),
+                    crate::report::impact_laws::held_law(law)
+                );
+            }
             let params: Vec<String> = c
                 .chosen_candidate()
                 .map(|cand| {
