@@ -125,11 +125,18 @@ pub fn accepted_impact_laws(d: &Diagnosis) -> (Vec<Carried<'_>>, Vec<String>) {
         let Some(m) = f.where_.get("material").and_then(|m| m.as_str()) else {
             continue;
         };
-        let law = match Effect::from_id(&f.effect) {
+        let (law, what) = match Effect::from_id(&f.effect) {
             Some(Effect::RestitutionLaw) => {
-                restitution_of(f).map(|(s, r)| ImpactLaw::Restitution(s, r))
+                let setup = f.where_.get("setup").and_then(|s| s.as_str()).unwrap_or("?");
+                (
+                    restitution_of(f).map(|(s, r)| ImpactLaw::Restitution(s, r)),
+                    format!("restitution law of the {m} pairs ({setup} setup)"),
+                )
             }
-            Some(Effect::PairFrictionSlipSpeed) => slip_of(f).map(ImpactLaw::SlipFriction),
+            Some(Effect::PairFrictionSlipSpeed) => (
+                slip_of(f).map(ImpactLaw::SlipFriction),
+                format!("dependence of the {m} pairs' μ_pp on the slip speed"),
+            ),
             _ => continue,
         };
         match law {
@@ -139,8 +146,7 @@ pub fn accepted_impact_laws(d: &Diagnosis) -> (Vec<Carried<'_>>, Vec<String>) {
                 finding: f,
             }),
             Err(why) => notes.push(format!(
-                "the {} of the {m} pairs that discovery accepted is not carried: {why}",
-                f.effect.replace('_', " ")
+                "the {what} that discovery accepted is not carried: {why}"
             )),
         }
     }

@@ -303,4 +303,32 @@ mod tests {
         assert_eq!(impact_law_map(&d, "316", true), None);
         assert_eq!(impact_law_map(&d, "440c", false), None);
     }
+
+    /// A law held from discovery is the law drawn, under its form's name.
+    #[test]
+    fn a_held_law_is_the_law_drawn() {
+        use crate::physics::LnMap;
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let summary: crate::artifacts::Summary =
+            serde_json::from_slice(&std::fs::read(root.join("reports/summary.json")).unwrap())
+                .unwrap();
+        let mut m = summary.collisions.unwrap().whole_run.unwrap().materials[0].clone();
+        let (law, form) = law_of(&m, true).expect("the shipped fit chose a contact law");
+        assert_ne!(form, LawForm::HeldFromDiscovery);
+        assert!(law.at(0.1) > 0.0 && law.at(0.1) <= 1.0);
+        let held = Restitution::Map(LnMap::new(&[0.05, 0.2], &[0.9, 0.7]).unwrap());
+        let c = m
+            .restitution
+            .iter_mut()
+            .find(|c| c.setup == Setup::Contact)
+            .unwrap();
+        c.chosen = LawForm::HeldFromDiscovery;
+        c.candidates.clear();
+        c.held = Some(held);
+        assert_eq!(law_of(&m, true), Some((held, LawForm::HeldFromDiscovery)));
+        // a held form whose law is missing draws nothing rather than another law
+        m.restitution.iter_mut().for_each(|c| c.held = None);
+        let contact = m.restitution.iter().find(|c| c.setup == Setup::Contact);
+        assert_eq!(contact.and_then(|c| c.law()), None);
+    }
 }
