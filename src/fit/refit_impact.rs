@@ -127,7 +127,11 @@ pub fn accepted_impact_laws(d: &Diagnosis) -> (Vec<Carried<'_>>, Vec<String>) {
         };
         let (law, what) = match Effect::from_id(&f.effect) {
             Some(Effect::RestitutionLaw) => {
-                let setup = f.where_.get("setup").and_then(|s| s.as_str()).unwrap_or("?");
+                let setup = f
+                    .where_
+                    .get("setup")
+                    .and_then(|s| s.as_str())
+                    .unwrap_or("?");
                 (
                     restitution_of(f).map(|(s, r)| ImpactLaw::Restitution(s, r)),
                     format!("restitution law of the {m} pairs ({setup} setup)"),

@@ -256,7 +256,10 @@ mod tests {
         let read = |f: &str| std::fs::read(root.join(f)).unwrap();
         let mut u: UnderAccepted =
             serde_json::from_slice(&read("under_accepted_physics.json")).unwrap();
-        let c = u.collisions.as_mut().expect("the shipped refit has the pairs");
+        let c = u
+            .collisions
+            .as_mut()
+            .expect("the shipped refit has the pairs");
         c.unchanged.clear();
         let m = c
             .whole_run
