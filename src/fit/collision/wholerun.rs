@@ -5,11 +5,12 @@
 //! Shared per material: μ_pg, the drag (saturating v/(T0 + T'|v|), linear, or held at the single
 //! runs' physics), μ_pp, and one restitution law C(v) per setup (a candidate form's two slots
 //! fitted, or a law discovery accepted held as given; μ_pp may carry discovery's dependence on
-//! the slip speed, μ_pp then being its value at the reference slip speed). Per run: the striker's start
-//! position and kick speed, the gap to the target (rolling setup; the contact setup starts
-//! touching) and the kick time within the frame before the first sample. The simulator locates
-//! every phase switch and impact as an event, so positions are continuous in the parameters and
-//! the finite-difference derivatives of `lsq::block` see the events move, not jump.
+//! the slip speed, μ_pp then being its value at the reference slip speed). Per run: the
+//! striker's start position and kick speed, the gap to the target (rolling setup; the contact
+//! setup starts touching) and the kick time within the frame before the first sample. The
+//! simulator locates every phase switch and impact as an event, so positions are continuous in
+//! the parameters and the finite-difference derivatives of `lsq::block` see the events move, not
+//! jump.
 
 use super::detect::{median, noise_scale_m, robust_line};
 use super::model::TrackData;
