@@ -412,7 +412,7 @@ fn the_refit_holds_an_accepted_restitution_law_and_its_numbers_come_closer_to_th
             let setup = serde_json::to_value(choice.setup).unwrap();
             let is_held = held.iter().any(|h| setup == *h);
             assert_eq!(
-                choice.chosen == LawForm::HeldFromDiscovery && choice.held.is_some(),
+                choice.chosen == LawForm::FromDiscovery && choice.discovered.is_some(),
                 is_held,
                 "{choice:?}"
             );

@@ -1,6 +1,6 @@
 //! The collision aggregates of summary.json: μ_pp and the restitution curves over the impacts
 //! (`CollisionSummary`), and the whole-run pair fits per material with their μ_pp profile and
-//! the restitution law chosen per setup, or held from discovery under the accepted physics
+//! the restitution law chosen per setup, or taken from discovery under the accepted physics
 //! (`WholeRunSummary`). Written by `fit::collision`, read by the report.
 
 use super::collision_fit::{Contact, PreImpactSource};
@@ -96,10 +96,11 @@ pub enum LawForm {
     Linear,
     /// C = c_inf + (1 − c_inf) e^{−v/v_ref} (see `physics`).
     Saturating,
-    /// Not chosen among the candidates: the law discovery accepted for these impacts, held as
-    /// it gave it (`LawChoice::held`; the `refit` stage), not fitted: its values come from the
-    /// impacts' own C (each run's piecewise fit).
-    HeldFromDiscovery,
+    /// Not chosen among the candidates: the law discovery accepted for these impacts
+    /// (`LawChoice::discovered`; the `refit` stage): a named form held as discovery gave it from
+    /// the impacts' own C, a map with its nodes' speeds held and its values refitted in the
+    /// whole-run fit, started from discovery's.
+    FromDiscovery,
 }
 
 impl LawForm {
@@ -107,13 +108,13 @@ impl LawForm {
     pub const ALL: [LawForm; 3] = [LawForm::Constant, LawForm::Linear, LawForm::Saturating];
 
     /// Names of its parameters (SI units in the names) and how slot b maps to them; none for a
-    /// law held from discovery (its parameters are its own, `LawChoice::held`).
+    /// law held from discovery (its parameters are its own, `LawChoice::discovered`).
     pub fn parameter_names(self) -> &'static [&'static str] {
         match self {
             LawForm::Constant => &["c"],
             LawForm::Linear => &["c0", "slope_per_mps"],
             LawForm::Saturating => &["c_inf", "v_ref_mps"],
-            LawForm::HeldFromDiscovery => &[],
+            LawForm::FromDiscovery => &[],
         }
     }
 }
@@ -139,12 +140,12 @@ pub struct LawChoice {
     pub n_runs: usize,
     pub folds: usize,
     pub chosen: LawForm,
-    /// Empty when the law is held from discovery (`chosen` is then `held_from_discovery`).
+    /// Empty when the law is discovery's (`chosen` is then `from_discovery`).
     pub candidates: Vec<LawCandidate>,
-    /// The law held, when `chosen` is `held_from_discovery`: discovery's map or the named form
-    /// it accepted (`physics::Restitution`).
+    /// The law used, when `chosen` is `from_discovery`: the named form discovery accepted, or
+    /// its map at the values the whole-run fit gave its nodes (`physics::Restitution`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub held: Option<Restitution>,
+    pub discovered: Option<Restitution>,
 }
 
 impl LawCandidate {
@@ -177,9 +178,9 @@ impl LawChoice {
         self.candidates.iter().find(|c| c.form == self.chosen)
     }
 
-    /// The law the fit used: the chosen candidate's at its all-runs values, or the one held.
+    /// The law the fit used: the chosen candidate's at its all-runs values, or discovery's.
     pub fn law(&self) -> Option<Restitution> {
-        if let Some(h) = self.held {
+        if let Some(h) = self.discovered {
             return Some(h);
         }
         let cand = self.chosen_candidate()?;

@@ -3,9 +3,10 @@
 //! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
 //! the restitution laws refitted, the μ_pp profile redone), a force between the particles that
 //! the pairs of a material were found to feel carried into that material's fits, and the impact
-//! laws discovery accepted (`refit_impact`): a restitution law of a material and setup held in
-//! that setup's fits in place of the candidates (the named form, else discovery's map; held as
-//! discovery gave it from the impacts' own C, not refitted), and μ_pp depending on the slip speed
+//! laws discovery accepted (`refit_impact`): a restitution law of a material and setup used in
+//! that setup's fits in place of the candidates (the named form, held as discovery gave it from
+//! the impacts' own C; else discovery's map, its nodes' speeds held and its values refitted from
+//! discovery's), and μ_pp depending on the slip speed
 //! carried as its shape, μ_pp(u) = μ_pp · s(u)/s(u_ref), u_ref the map's median node, so that
 //! the fitted μ_pp and its profile are μ_pp at u_ref. Those fits start from the baseline's
 //! (summary.json's `collisions.whole_run`: its shared values, chosen laws and each run's kick;

@@ -1,5 +1,5 @@
 //! The impact laws discovery accepted (`discover::impact`), read back from their findings as the
-//! whole-run fits carry them: a restitution law per material and setup, held in that setup's
+//! whole-run fits carry them: a restitution law per material and setup, used in that setup's
 //! fits (the named form when discovery named one, else its map), and μ_pp's dependence on the
 //! slip speed per material, carried as its shape normalised at the map's median node.
 
@@ -11,7 +11,7 @@ use crate::recording::Setup;
 /// One accepted impact law, as carried.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ImpactLaw {
-    /// The restitution law of one setup of the material's pairs, held.
+    /// The restitution law of one setup of the material's pairs.
     Restitution(Setup, Restitution),
     /// μ_pp(u) = μ_pp · s(u)/s(u_ref).
     SlipFriction(SlipFriction),

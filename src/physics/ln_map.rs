@@ -69,6 +69,25 @@ impl LnMap {
         &self.value[..self.n]
     }
 
+    /// The number of nodes.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Always false: a map has at least one node.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The same nodes with the values `values` (as many as nodes; missing ones keep theirs).
+    pub fn with_values(&self, values: &[f64]) -> LnMap {
+        let mut out = *self;
+        for (v, x) in out.value[..self.n].iter_mut().zip(values) {
+            *v = *x;
+        }
+        out
+    }
+
     /// The speed of the middle node (the upper of the two middle ones for an even count).
     pub fn median_speed_mps(&self) -> f64 {
         self.ln_speed[self.n / 2].exp()
@@ -121,6 +140,12 @@ mod tests {
         assert!((m.at(-0.1) - 0.8).abs() < 1e-12, "the speed's magnitude");
         assert_eq!((m.at(1e-4), m.at(0.0), m.at(10.0)), (0.2, 0.2, 0.5));
         assert_eq!(m.median_speed_mps(), 0.1f64.ln().exp());
+        let moved = m.with_values(&[0.3, 0.6, 0.9]);
+        assert_eq!(
+            (moved.len(), moved.values()),
+            (3, [0.3, 0.6, 0.9].as_slice())
+        );
+        assert_eq!(moved.speeds_mps(), m.speeds_mps());
         let one = LnMap::new(&[0.05], &[0.7]).unwrap();
         assert_eq!((one.at(0.001), one.at(1.0)), (0.7, 0.7));
     }

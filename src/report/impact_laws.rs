@@ -1,5 +1,5 @@
-//! The impact laws the whole-run fits carried from discovery (a restitution law held, μ_pp
-//! depending on the slip speed), in words.
+//! The impact laws the whole-run fits carried from discovery (a restitution law, μ_pp depending
+//! on the slip speed), in words.
 
 use crate::physics::{Restitution, SlipFriction, SlipShape};
 use crate::report::value::sig;
@@ -18,11 +18,12 @@ fn nodes(speeds_mps: &[f64], values: &[f64]) -> String {
         .join(", ")
 }
 
-/// A held restitution law in words, with its parameters.
-pub fn held_law(law: &Restitution) -> String {
+/// A restitution law taken from discovery in words, with its parameters (a map at its
+/// refitted values).
+pub fn discovered_law(law: &Restitution) -> String {
     match *law {
         Restitution::Map(m) => format!(
-            "discovery's map, held: C = {} (linear in ln v between the nodes, the end values beyond)",
+            "discovery's map, its values refitted: C = {} (linear in ln v between the nodes, the end values beyond)",
             nodes(&m.speeds_mps(), m.values())
         ),
         Restitution::Viscoelastic { a } => {
@@ -105,8 +106,8 @@ mod tests {
     fn carried_laws_are_said_with_their_numbers() {
         let h = Restitution::Map(LnMap::new(&[0.02, 0.05], &[0.81, 0.62]).unwrap());
         assert_eq!(
-            held_law(&h),
-            "discovery's map, held: C = 0.810 at 20.0 mm/s, 0.620 at 50.0 mm/s (linear in ln v between the nodes, the end values beyond)"
+            discovered_law(&h),
+            "discovery's map, its values refitted: C = 0.810 at 20.0 mm/s, 0.620 at 50.0 mm/s (linear in ln v between the nodes, the end values beyond)"
         );
         let w = SlipFriction {
             shape: SlipShape::Weakening {

@@ -39,7 +39,7 @@ fn law_parameters(
     };
     let mut parameters = BTreeMap::from([(names[0].to_string(), linear(a, se(ia)))]);
     match form {
-        LawForm::Constant | LawForm::HeldFromDiscovery => {}
+        LawForm::Constant | LawForm::FromDiscovery => {}
         LawForm::Linear => {
             parameters.insert(names[1].into(), linear(b, se(ib)));
         }
@@ -163,7 +163,7 @@ pub fn choose_law(
         folds: k,
         chosen,
         candidates,
-        held: None,
+        discovered: None,
     })
 }
 
@@ -175,10 +175,10 @@ pub fn with_chosen(spec: &FitSpec, choices: &[LawChoice]) -> FitSpec {
         if spec.held_law(c.setup).is_some() {
             continue;
         }
-        match (c.chosen, c.held) {
-            (LawForm::HeldFromDiscovery, Some(law)) => out.hold_law(c.setup, law),
+        match (c.chosen, c.discovered) {
+            (LawForm::FromDiscovery, Some(law)) => out.hold_law(c.setup, law),
             // a held form without its law (not written by this crate): the default form
-            (LawForm::HeldFromDiscovery, None) => {}
+            (LawForm::FromDiscovery, None) => {}
             (form, _) => out.laws[setup_index(c.setup)] = form,
         }
     }
@@ -194,8 +194,8 @@ pub fn held_choice(runs: &[PairRun], spec: &FitSpec, setup: Setup) -> Option<Law
         setup,
         n_runs,
         folds: 0,
-        chosen: LawForm::HeldFromDiscovery,
+        chosen: LawForm::FromDiscovery,
         candidates: Vec::new(),
-        held: Some(held),
+        discovered: Some(held),
     })
 }

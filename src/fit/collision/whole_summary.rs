@@ -1,6 +1,6 @@
 //! The whole-run collision analysis of a dataset, per material: the joint fit of every
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
-//! (`restitution_law`; a law the spec holds from discovery is kept, not chosen), and the profile
+//! (`restitution_law`; a law the spec takes from discovery is kept, not chosen), and the profile
 //! of μ_pp (`profile`). What goes into summary.json.
 
 use super::profile::{default_grid, profile_and_lowest};
@@ -16,7 +16,7 @@ use crate::artifacts::collision_summary::{
 use crate::artifacts::estimate::Estimate;
 use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
 use crate::lsq::Termination;
-use crate::physics::{Groove, Phase};
+use crate::physics::{Groove, Phase, Restitution};
 use crate::recording::{Experiment, Recording, Setup};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -190,6 +190,11 @@ pub fn analyze_material_from(
     if let Some(note) = unconverged_profile_note(&profile, opts.step_iter) {
         notes.push(note);
     }
+    // discovery's laws at the values the fit gave them (a map's refitted nodes)
+    let mut choices = choices;
+    for c in choices.iter_mut().filter(|c| c.discovered.is_some()) {
+        c.discovered = Some(best.spec.law_at(&best.result.shared, c.setup));
+    }
     let n_points: usize = runs.iter().map(PairRun::n_samples).sum();
     let whole_runs = runs
         .iter()
@@ -225,15 +230,20 @@ pub fn analyze_material_from(
 }
 
 /// What the spec carries from discovery's impact laws, in words (none for the chapter's model):
-/// a held restitution law is not fitted, and μ_pp with a slip-speed dependence is its value at
-/// the reference slip speed.
+/// a map's node values are refitted, a named form is held, and μ_pp with a slip-speed dependence
+/// is its value at the reference slip speed.
 fn carried_notes(spec: &FitSpec) -> Vec<String> {
     let mut out = Vec::new();
     for (setup, name) in [(Setup::Rolling, "rolling"), (Setup::Contact, "contact")] {
-        if spec.held_law(setup).is_some() {
-            out.push(format!(
-                "the {name} setup's restitution law is the one discovery accepted, held as it gave it from the impacts' own C (not refitted, so its uncertainty is not in the other parameters' errors)"
-            ));
+        match spec.held_law(setup) {
+            Some(Restitution::Map(m)) => out.push(format!(
+                "the {name} setup's restitution law is the map discovery accepted, its values at the {} nodes refitted here from discovery's (the nodes' speeds held; C held at the end values beyond them)",
+                m.len()
+            )),
+            Some(_) => out.push(format!(
+                "the {name} setup's restitution law is the named form discovery accepted, held as it gave it from the impacts' own C (not refitted, so its uncertainty is not in the other parameters' errors)"
+            )),
+            None => {}
         }
     }
     if let Some(s) = spec.slip {

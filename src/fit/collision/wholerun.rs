@@ -4,8 +4,9 @@
 //!
 //! Shared per material: μ_pg, the drag (saturating v/(T0 + T'|v|), linear, or held at the single
 //! runs' physics), μ_pp, and one restitution law C(v) per setup (a candidate form's two slots
-//! fitted, or a law discovery accepted held as given; μ_pp may carry discovery's dependence on
-//! the slip speed, μ_pp then being its value at the reference slip speed). Per run: the
+//! fitted, or the law discovery accepted: a named form held as given, a map with its node
+//! values refitted; μ_pp may carry discovery's dependence on the slip speed, μ_pp then being its
+//! value at the reference slip speed). Per run: the
 //! striker's start position and kick speed, the gap to the target (rolling setup; the contact
 //! setup starts touching) and the kick time within the frame before the first sample. The
 //! simulator locates every phase switch and impact as an event, so positions are continuous in
@@ -20,7 +21,7 @@ use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairForce, PairParams, PairTrajectory, Restitution,
-    SlipFriction, State, Term,
+    SlipFriction, State, Term, MAX_MAP_NODES,
 };
 use crate::recording::{Recording, Setup};
 
@@ -40,7 +41,7 @@ impl LawForm {
                 c0: a,
                 v_ref_mps: b.exp(),
             },
-            LawForm::HeldFromDiscovery => Restitution::Constant(f64::NAN),
+            LawForm::FromDiscovery => Restitution::Constant(f64::NAN),
         }
     }
 
@@ -59,7 +60,7 @@ impl LawForm {
                 spec(0.08f64.ln(), 1e-3f64.ln(), 3.0f64.ln(), 1e-5),
             ],
             // no slots: held at 0
-            LawForm::HeldFromDiscovery => [spec(0.0, 0.0, 0.0, 1e-5), spec(0.0, 0.0, 0.0, 1e-5)],
+            LawForm::FromDiscovery => [spec(0.0, 0.0, 0.0, 1e-5), spec(0.0, 0.0, 0.0, 1e-5)],
         }
     }
 }
@@ -113,6 +114,12 @@ pub const PF_AMP: usize = 9;
 pub const PF_LN_RANGE: usize = 10;
 pub const PF_EXPONENT: usize = 11;
 pub const N_SHARED: usize = 12;
+/// The node values of a map law discovery accepted (`FitSpec::hold_law` with a
+/// `Restitution::Map`), refitted here, after the `N_SHARED` parameters when the spec holds a map
+/// (the chapter's fits have none, so their parameters are exactly as before): `MAX_MAP_NODES`
+/// slots for the rolling setup's map, then as many for the contact setup's (held at 0 where
+/// there is none).
+pub const MAP: usize = N_SHARED;
 
 /// Start values of a force between the particles, (A, ln λ, n): none, over 40 µm, n = 3.
 pub const PAIR_FORCE_START: [f64; 3] = [0.0, -10.126631103850338, 3.0];
@@ -135,6 +142,11 @@ pub fn setup_index(setup: Setup) -> usize {
         Setup::Rolling => 0,
         Setup::Contact => 1,
     }
+}
+
+/// The first slot of `setup`'s map node values.
+fn map_slot(setup: Setup) -> usize {
+    MAP + setup_index(setup) * MAX_MAP_NODES
 }
 
 fn law_slot(setup: Setup) -> usize {
@@ -305,11 +317,12 @@ impl PairRun {
 pub struct FitSpec {
     pub groove: Groove,
     pub drag: DragSpec,
-    /// Law forms of the rolling and the contact setup (`HeldFromDiscovery` where `held_laws`
+    /// Law forms of the rolling and the contact setup (`FromDiscovery` where `held_laws`
     /// holds the law).
     pub laws: [LawForm; 2],
-    /// Laws held as given (discovery's accepted restitution laws; `FitSpec::hold_law`), per
-    /// setup as `laws`: their slots are held and unused.
+    /// Laws discovery accepted (`FitSpec::hold_law`), per setup as `laws`, in place of a form's
+    /// slots (held, unused): a named form held as given, a map at its nodes' speeds with its
+    /// values refitted (`MAP`, started from discovery's).
     pub held_laws: [Option<Restitution>; 2],
     /// μ_pp depending on the slip speed, carried from discovery; μ_pp is then its value at the
     /// reference slip speed. None: one μ_pp.
@@ -363,7 +376,7 @@ impl FitSpec {
     /// Hold `law` for the runs of `setup` instead of fitting a form's slots.
     pub fn hold_law(&mut self, setup: Setup, law: Restitution) {
         let i = setup_index(setup);
-        self.laws[i] = LawForm::HeldFromDiscovery;
+        self.laws[i] = LawForm::FromDiscovery;
         self.held_laws[i] = Some(law);
     }
 
@@ -400,14 +413,24 @@ impl FitSpec {
         }
     }
 
+    /// The restitution law of `setup` at shared parameters `p`: a held map at its refitted node
+    /// values, a held named form as held, else the form's from its slots.
+    pub fn law_at(&self, p: &[f64], setup: Setup) -> Restitution {
+        let i = law_slot(setup);
+        match self.held_law(setup) {
+            Some(Restitution::Map(m)) => {
+                let j = map_slot(setup);
+                Restitution::Map(m.with_values(p.get(j..j + m.len()).unwrap_or(&[])))
+            }
+            Some(law) => law,
+            None => self.law_form(setup).law(p[i], p[i + 1]),
+        }
+    }
+
     /// The contact parameters of a run of `setup` at shared parameters `p`.
     pub fn pair(&self, p: &[f64], setup: Setup, diameter_m: f64) -> PairParams {
-        let i = law_slot(setup);
         PairParams {
-            restitution: match self.held_law(setup) {
-                Some(law) => law,
-                None => self.law_form(setup).law(p[i], p[i + 1]),
-            },
+            restitution: self.law_at(p, setup),
             mu_pp: p[MU_PP],
             radius_m: 0.5 * diameter_m * FitSpec::contact(p),
             force: self.force(p),
@@ -460,6 +483,27 @@ impl FitSpec {
             }
             Some((PairForceShape::PowerLaw, _)) => out.extend(force),
         }
+        // a held map's node values, from discovery's (C of the impacts; kept within [0, 1.5],
+        // the law clamps C to [0, 1]); the slots of no map are held at 0
+        let maps = self
+            .held_laws
+            .iter()
+            .any(|l| matches!(l, Some(Restitution::Map(_))));
+        for setup in [Setup::Rolling, Setup::Contact]
+            .into_iter()
+            .filter(|_| maps)
+        {
+            let values = match self.held_law(setup) {
+                Some(Restitution::Map(m)) => m.values().to_vec(),
+                _ => Vec::new(),
+            };
+            for k in 0..MAX_MAP_NODES {
+                out.push(match values.get(k) {
+                    Some(&c) => spec(c.clamp(0.0, 1.5), 0.0, 1.5, 1e-5),
+                    None => hold(spec(0.0, 0.0, 0.0, 1e-5), 0.0),
+                });
+            }
+        }
         match self.drag {
             DragSpec::Saturating | DragSpec::SaturatingWith(_) => {}
             DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
@@ -479,8 +523,15 @@ impl FitSpec {
         for setup in [Setup::Rolling, Setup::Contact] {
             if !runs.iter().any(|r| r.setup == setup) {
                 let i = law_slot(setup);
-                out[i] = hold(out[i], out[i].start);
-                out[i + 1] = hold(out[i + 1], out[i + 1].start);
+                let j = map_slot(setup);
+                let map = if out.len() > j {
+                    j..j + MAX_MAP_NODES
+                } else {
+                    j..j
+                };
+                for k in [i, i + 1].into_iter().chain(map) {
+                    out[k] = hold(out[k], out[k].start);
+                }
             }
         }
         if let Some(mu) = self.mu_pp_held {
@@ -506,11 +557,16 @@ impl BlockProblem for Problem<'_> {
         residuals(&self.runs[b], self.spec, shared, own, out);
     }
     fn uses(&self, b: usize, i: usize) -> bool {
-        if !(LAW..CONTACT).contains(&i) {
-            return true;
+        let setup = self.runs[b].setup;
+        if (LAW..CONTACT).contains(&i) {
+            let slot = law_slot(setup);
+            return i == slot || i == slot + 1;
         }
-        let slot = law_slot(self.runs[b].setup);
-        i == slot || i == slot + 1
+        if i >= MAP {
+            let j = map_slot(setup);
+            return (j..j + MAX_MAP_NODES).contains(&i);
+        }
+        true
     }
 }
 

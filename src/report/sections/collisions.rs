@@ -147,9 +147,9 @@ fn law_words(r: &Restitution) -> String {
             sig(slope_per_mps, 4)
         ),
         // laws beyond the candidates, in the words of the laws carried from discovery
-        other => crate::report::impact_laws::held_law(&other)
+        other => crate::report::impact_laws::discovered_law(&other)
             .replace(", held from discovery", "")
-            .replace("discovery's map, held: ", "map: "),
+            .replace("discovery's map, its values refitted: ", "map: "),
     }
 }
 

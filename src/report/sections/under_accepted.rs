@@ -64,11 +64,11 @@ fn laws_text(m: &MaterialWholeRun) -> String {
     m.restitution
         .iter()
         .map(|c| {
-            if let Some(law) = &c.held {
+            if let Some(law) = &c.discovered {
                 return format!(
                     "{}: {}",
                     serde_name(&c.setup),
-                    crate::report::impact_laws::held_law(law)
+                    crate::report::impact_laws::discovered_law(law)
                 );
             }
             let params: Vec<String> = c
@@ -119,7 +119,7 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     ));
     let carried = |effect: &str| u.terms.iter().any(|t| t.effect == effect);
     if carried("restitution_law") {
-        b.para("A restitution law discovery accepted outside the candidates is held in the whole-run fits of its material and setup as discovery gave it from the impacts' own C (its named form, else its map), not chosen among the candidates nor refitted; the other setups still choose among the candidates.");
+        b.para("A restitution law discovery accepted outside the candidates is used in the whole-run fits of its material and setup instead of a candidate: its named form held as discovery gave it from the impacts' own C, else its map, the nodes' speeds held and their values refitted with the runs; the other setups still choose among the candidates.");
     }
     if carried("pair_friction_slip_speed") {
         b.para("μ_pp depending on the slip speed, which discovery accepted, is carried as its shape s(u), normalised at a reference slip speed: μ_pp(u) = μ_pp · s(u)/s(u_ref), so that the μ_pp below and its profile are μ_pp at u_ref (each material's note gives it).");
@@ -248,10 +248,10 @@ mod tests {
     use crate::artifacts::under_accepted::CarriedTerm;
     use crate::physics::{LnMap, Restitution};
 
-    /// The shipped report's inputs with the 316 pairs refitted holding a map in the rolling
-    /// setup: the section says the law held in words and with its numbers.
+    /// The shipped report's inputs with the 316 pairs refitted with a map in the rolling setup:
+    /// the section says the law in words and with its numbers.
     #[test]
-    fn a_law_held_from_discovery_is_said_in_words() {
+    fn a_law_from_discovery_is_said_in_words() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports");
         let read = |f: &str| std::fs::read(root.join(f)).unwrap();
         let mut u: UnderAccepted =
@@ -272,9 +272,9 @@ mod tests {
             .iter_mut()
             .find(|c| c.setup == crate::recording::Setup::Rolling)
             .unwrap();
-        rolling.chosen = LawForm::HeldFromDiscovery;
+        rolling.chosen = LawForm::FromDiscovery;
         rolling.candidates.clear();
-        rolling.held = Some(Restitution::Map(
+        rolling.discovered = Some(Restitution::Map(
             LnMap::new(&[0.01, 0.03, 0.07], &[0.99, 0.79, 0.61]).unwrap(),
         ));
         u.terms.push(CarriedTerm {
@@ -289,9 +289,9 @@ mod tests {
         };
         let text = format!("{:?}", block(&d, &BTreeMap::new()).unwrap());
         assert!(
-            text.contains("rolling: discovery's map, held: C = 0.990 at 10.0 mm/s, 0.790 at 30.0 mm/s, 0.610 at 70.0 mm/s"),
+            text.contains("rolling: discovery's map, its values refitted: C = 0.990 at 10.0 mm/s, 0.790 at 30.0 mm/s, 0.610 at 70.0 mm/s"),
             "{text}"
         );
-        assert!(text.contains("is held in the whole-run fits of its material and setup"));
+        assert!(text.contains("is used in the whole-run fits of its material and setup"));
     }
 }

@@ -214,14 +214,14 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     );
     for m in mats {
         for c in &m.restitution {
-            if let Some(law) = &c.held {
+            if let Some(law) = &c.discovered {
                 laws.push(vec![
                     m.material.clone(),
                     serde_name(&c.setup),
                     c.n_runs.to_string(),
                     format!("**{}**", serde_name(&c.chosen)),
-                    crate::report::impact_laws::held_law(law),
-                    "— (not chosen: held)".into(),
+                    crate::report::impact_laws::discovered_law(law),
+                    "— (not chosen: discovery's)".into(),
                 ]);
             }
             for cand in &c.candidates {
