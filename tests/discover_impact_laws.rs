@@ -6,7 +6,8 @@
 //! saturating law and whose μ_pp is constant (sticking or slipping) stay silent on 20 seeds over
 //! six tracker noises. Rates, not fixtures: each test runs over the noises and asserts a count.
 //! Then the refit (`fit::refit`) carrying an accepted law into the whole-run pair fits brings
-//! μ_pp and μ_pg closer to the truth than the baseline's choice among the candidates.
+//! μ_pp and μ_pg closer to the truth than the baseline's choice among the candidates (white noise,
+//! three seeds each).
 
 #[allow(dead_code)]
 #[path = "support/indsim/mod.rs"]
