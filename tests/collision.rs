@@ -65,6 +65,7 @@ fn record(case: &Case) -> (Recording, Vec<Impact>) {
         mu_pp: case.mu_pp,
         radius_m: R_M,
         force: None,
+        slip: None,
     };
     let traj = simulate_pair(&Model::baseline(MU_PG, T_DRAG_S), &pair, init, &t_sim);
     let offset = rng.random_range(-2e-3..2e-3);
@@ -473,6 +474,7 @@ fn shipped_truth(run: &str, material: &str, setup: Setup) -> Vec<Impact> {
         mu_pp,
         radius_m,
         force: None,
+        slip: None,
     };
     let mut impacts = simulate_pair(&model, &pair, init, &t).impacts;
     impacts.iter_mut().for_each(|im| im.t_s -= delay_s);

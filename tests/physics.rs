@@ -480,6 +480,7 @@ fn a_particle_at_rest_starts_when_a_force_in_time_outgrows_the_hold() {
         mu_pp: 0.3,
         radius_m: 150e-6,
         force: None,
+        slip: None,
     };
     let far = State {
         z_m: 0.01,
@@ -592,6 +593,7 @@ fn rolling_pair(
         mu_pp,
         radius_m: 150e-6,
         force: None,
+        slip: None,
     };
     let init = [
         State {
@@ -668,6 +670,7 @@ fn pair_ends_up_rolling_2r_apart() {
             mu_pp: 1.4,
             radius_m: 150e-6,
             force: None,
+            slip: None,
         };
         let (s, r) = (
             State {
@@ -711,6 +714,7 @@ fn contact_pair_collides_at_once() {
         mu_pp: 1.4,
         radius_m: 150e-6,
         force: None,
+        slip: None,
     };
     let init = [
         State {

@@ -1,11 +1,12 @@
 //! The collision aggregates of summary.json: μ_pp and the restitution curves over the impacts
 //! (`CollisionSummary`), and the whole-run pair fits per material with their μ_pp profile and
-//! the restitution law chosen per setup (`WholeRunSummary`). Written by `fit::collision`, read by
-//! the report.
+//! the restitution law chosen per setup, or taken from discovery under the accepted physics
+//! (`WholeRunSummary`). Written by `fit::collision`, read by the report.
 
 use super::collision_fit::{Contact, PreImpactSource};
 use super::estimate::Estimate;
 use crate::lsq::Termination;
+use crate::physics::{Restitution, SlipFriction};
 use crate::recording::Setup;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -95,17 +96,25 @@ pub enum LawForm {
     Linear,
     /// C = c_inf + (1 − c_inf) e^{−v/v_ref} (see `physics`).
     Saturating,
+    /// Not chosen among the candidates: the law discovery accepted for these impacts
+    /// (`LawChoice::discovered`; the `refit` stage): a named form held as discovery gave it from
+    /// the impacts' own C, a map with its nodes' speeds held and its values refitted in the
+    /// whole-run fit, started from discovery's.
+    FromDiscovery,
 }
 
 impl LawForm {
+    /// The candidates the whole-run fits choose among.
     pub const ALL: [LawForm; 3] = [LawForm::Constant, LawForm::Linear, LawForm::Saturating];
 
-    /// Names of its parameters (SI units in the names) and how slot b maps to them.
+    /// Names of its parameters (SI units in the names) and how slot b maps to them; none for a
+    /// law held from discovery (its parameters are its own, `LawChoice::discovered`).
     pub fn parameter_names(self) -> &'static [&'static str] {
         match self {
             LawForm::Constant => &["c"],
             LawForm::Linear => &["c0", "slope_per_mps"],
             LawForm::Saturating => &["c_inf", "v_ref_mps"],
+            LawForm::FromDiscovery => &[],
         }
     }
 }
@@ -131,7 +140,12 @@ pub struct LawChoice {
     pub n_runs: usize,
     pub folds: usize,
     pub chosen: LawForm,
+    /// Empty when the law is discovery's (`chosen` is then `from_discovery`).
     pub candidates: Vec<LawCandidate>,
+    /// The law used, when `chosen` is `from_discovery`: the named form discovery accepted, or
+    /// its map at the values the whole-run fit gave its nodes (`physics::Restitution`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discovered: Option<Restitution>,
 }
 
 impl LawCandidate {
@@ -162,6 +176,16 @@ impl LawCandidate {
 impl LawChoice {
     pub fn chosen_candidate(&self) -> Option<&LawCandidate> {
         self.candidates.iter().find(|c| c.form == self.chosen)
+    }
+
+    /// The law the fit used: the chosen candidate's at its all-runs values, or discovery's.
+    pub fn law(&self) -> Option<Restitution> {
+        if let Some(h) = self.discovered {
+            return Some(h);
+        }
+        let cand = self.chosen_candidate()?;
+        let [a, b] = cand.slots()?;
+        Some(cand.form.law(a, b))
     }
 }
 
@@ -305,6 +329,10 @@ pub struct MaterialWholeRun {
     pub tp_s_per_mps: Estimate,
     /// μ_pp of the best fit (its standard error is meaningful only with an interval).
     pub mu_pp: Estimate,
+    /// μ_pp's dependence on the slip speed carried from discovery (`refit`): `mu_pp` and the
+    /// profile are then μ_pp at its `u_ref_mps`. Absent: one μ_pp.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu_pp_slip: Option<SlipFriction>,
     pub profile: MuPpProfile,
     pub restitution: Vec<LawChoice>,
     /// Deviance (χ² units) and residual RMS in noise units over all runs.

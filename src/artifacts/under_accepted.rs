@@ -1,5 +1,6 @@
 //! under_accepted_physics.json (output of `refit`): the chapter's numbers again, with every
-//! single-run term that discovery accepted carried, in the shape of summary.json's sections.
+//! single-run term that discovery accepted carried (and into the pair fits a force between the
+//! particles and the impact laws it accepted), in the shape of summary.json's sections.
 
 use super::estimate::Estimate;
 use super::summary::WholeRunSummary;
@@ -7,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// One accepted term carried by the refit: its effect and form as diagnosis.json names them,
-/// with the values it is carried at.
+/// with the values it is carried at (a restitution map: its value at each node,
+/// `restitution_map_at_<mm/s>_mmps`; μ_pp against the slip speed: also the reference slip speed
+/// `mu_pp_reference_slip_speed_mps` at which the fitted μ_pp applies).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CarriedTerm {
     pub effect: String,
@@ -47,15 +50,17 @@ pub struct CollisionsUnder {
     /// whose accepted physics the pair model cannot carry is left out (see `notes`).
     pub whole_run: WholeRunSummary,
     /// Materials whose whole-run fits already carried every accepted term, so the baseline's
-    /// numbers are theirs unchanged (a saturating drag only: the whole-run model's own).
+    /// numbers are theirs unchanged (a saturating drag only, the whole-run model's own, and no
+    /// force or impact law for their pairs).
     pub unchanged: Vec<String>,
 }
 
 /// under_accepted_physics.json.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct UnderAccepted {
-    /// Whether discovery accepted any single-run physics; when false, nothing is refitted and
-    /// `single` and `collisions` are null.
+    /// Whether discovery accepted any physics the refit carries (a single-run term, a force
+    /// between the particles, an impact law); when false, nothing is refitted and `single` and
+    /// `collisions` are null.
     pub accepted: bool,
     /// The accepted terms carried, in diagnosis.json's order.
     pub terms: Vec<CarriedTerm>,

@@ -10,6 +10,7 @@
 //! - `options.rs`: Options of every fit
 //! - `quality.rs`: Fit quality as data
 //! - `refit.rs`: The chapter's numbers under the physics discovery accepted
+//! - `refit_impact.rs`: The impact laws discovery accepted, read back from their findings as the whole-run fits carry them
 //! - `regression.rs`: Means over runs
 //! - `residual_stats.rs`: Pooled statistics of re-simulation residuals
 //! - `residuals.rs`: Re-simulation of a run with its fitted parameters
@@ -74,6 +75,7 @@ pub mod model;
 pub mod options;
 pub mod quality;
 pub mod refit;
+pub mod refit_impact;
 pub mod regression;
 pub mod residual_stats;
 pub mod residuals;

@@ -1,15 +1,22 @@
 //! The chapter's numbers under the physics discovery accepted: the single runs' μ_pg and drag line
 //! from discovery's joint fit (which carries every accepted term), and the whole-run pair fits
 //! made again with the accepted terms other than drag held (μ_pg, the saturating drag, μ_pp and
-//! the restitution laws refitted, the μ_pp profile redone), and a force between the particles
-//! that the pairs of a material were found to feel carried into that material's fits. Those
-//! fits start from the baseline's (summary.json's `collisions.whole_run`: its shared values,
-//! chosen laws and each run's kick; `collision::warm_start`), not from the defaults.
+//! the restitution laws refitted, the μ_pp profile redone), a force between the particles that
+//! the pairs of a material were found to feel carried into that material's fits, and the impact
+//! laws discovery accepted (`refit_impact`): a restitution law of a material and setup used in
+//! that setup's fits in place of the candidates (the named form, held as discovery gave it from
+//! the impacts' own C; else discovery's map, its nodes' speeds held and its values refitted from
+//! discovery's), and μ_pp depending on the slip speed
+//! carried as its shape, μ_pp(u) = μ_pp · s(u)/s(u_ref), u_ref the map's median node, so that
+//! the fitted μ_pp and its profile are μ_pp at u_ref. Those fits start from the baseline's
+//! (summary.json's `collisions.whole_run`: its shared values, chosen laws and each run's kick;
+//! `collision::warm_start`), not from the defaults.
 
 use super::collision::warm_start::from_summary;
 use super::collision::whole_summary::{analyze_material_from, WholeRunOptions};
 use super::collision::wholerun::{DragSpec, FitSpec, PairRun};
-use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
+use super::refit_impact::{accepted_impact_laws, Carried, ImpactLaw};
+use crate::artifacts::diagnosis::{Diagnosis, Finding};
 use crate::artifacts::summary::{MaterialWholeRun, WholeRunSummary};
 use crate::artifacts::under_accepted::{
     CarriedTerm, CollisionsUnder, DragTimeLine, SingleMaterial, SingleUnder, UnderAccepted,
@@ -18,7 +25,7 @@ use crate::artifacts::Estimate;
 use crate::discover::forms;
 use crate::discover::pair_force::carried_from;
 use crate::discover::pairs::single_run_physics;
-use crate::physics::{Groove, Term};
+use crate::physics::{Groove, Restitution, Term};
 use crate::recording::{Experiment, Recording};
 use std::collections::BTreeMap;
 
@@ -29,27 +36,6 @@ pub fn accepted_terms(d: &Diagnosis) -> Vec<&Finding> {
     d.findings
         .iter()
         .filter(|f| f.accepted && forms::read(f).is_some())
-        .collect()
-}
-
-/// Notes for the impact laws discovery accepted (a restitution law outside the candidates, μ_pp
-/// depending on the slip speed): the whole-run fits hold the chapter's candidate laws and one
-/// μ_pp, so these are reported by discovery and drawn, not carried.
-fn impact_laws_not_carried(d: &Diagnosis) -> Vec<String> {
-    d.findings
-        .iter()
-        .filter(|f| f.accepted)
-        .filter_map(|f| {
-            let m = f.where_.get("material")?.as_str()?;
-            match Effect::from_id(&f.effect)? {
-                Effect::RestitutionLaw => {
-                    let setup = f.where_.get("setup").and_then(|s| s.as_str()).unwrap_or("");
-                    Some(format!("the restitution law discovery found outside the candidates for the {m} pairs ({setup} setup) is not carried: the whole-run fits choose among the chapter's candidate laws; its map is in the discovery section and in Figs. 4.4b–c"))
-                }
-                Effect::PairFrictionSlipSpeed => Some(format!("μ_pp of the {m} pairs depending on the slip speed, which discovery accepted, is not carried: the whole-run fits hold one μ_pp per material")),
-                _ => None,
-            }
-        })
         .collect()
 }
 
@@ -101,6 +87,7 @@ fn pair_runs(recordings: &[Recording]) -> BTreeMap<String, Vec<PairRun>> {
 /// `collisions.whole_run`) gives the materials whose fits already carry it.
 fn collisions_under(
     d: &Diagnosis,
+    laws: &[Carried],
     recordings: &[Recording],
     baseline: Option<&WholeRunSummary>,
     groove: Groove,
@@ -141,17 +128,31 @@ fn collisions_under(
             .filter(|f| f.where_.get("material").and_then(|v| v.as_str()) == Some(m.as_str()))
             .find_map(carried_from);
         let kept = baseline.and_then(|b| b.materials.iter().find(|w| &w.material == m));
-        if let (true, None, Some(kept)) = (others.is_empty(), force, kept) {
+        let own_laws: Vec<&ImpactLaw> = laws
+            .iter()
+            .filter(|c| &c.material == m)
+            .map(|c| &c.law)
+            .collect();
+        if let (true, None, true, Some(kept)) =
+            (others.is_empty(), force, own_laws.is_empty(), kept)
+        {
             // nothing beyond the drag: the baseline's fit is this very fit
             materials.push(kept.clone());
             unchanged.push(m.clone());
             continue;
         }
-        let spec = FitSpec {
+        let mut spec = FitSpec {
             drag: DragSpec::SaturatingWith(others),
             pair_force: force,
             ..FitSpec::new(groove)
         };
+        // the impact laws discovery accepted for these pairs
+        for law in own_laws {
+            match law {
+                ImpactLaw::Restitution(setup, r) => spec.hold_law(*setup, *r),
+                ImpactLaw::SlipFriction(s) => spec.slip = Some(*s),
+            }
+        }
         // the baseline's fit of these runs is the start: the accepted terms move it little
         let start = kept.map(|k| from_summary(k, runs, &spec));
         materials.push(analyze_material_from(m, runs, &spec, opts, start.as_ref()));
@@ -174,10 +175,12 @@ pub fn under_accepted(
     groove: Groove,
     opts: &WholeRunOptions,
 ) -> UnderAccepted {
-    // the single runs' terms, then any force between the particles of a material's pairs
+    // the single runs' terms, then any force between the particles of a material's pairs, then
+    // the impact laws
     let mut accepted = accepted_terms(d);
     accepted.extend(d.findings.iter().filter(|f| carried_from(f).is_some()));
-    let not_carried = impact_laws_not_carried(d);
+    let (laws, not_carried) = accepted_impact_laws(d);
+    accepted.extend(laws.iter().map(|c| c.finding));
     if accepted.is_empty() {
         let lead = if not_carried.is_empty() {
             "discovery accepted no physics: the baseline's numbers are the analysis' numbers, and nothing is refitted"
@@ -196,19 +199,40 @@ pub fn under_accepted(
     }
     let terms = accepted
         .iter()
-        .map(|f| CarriedTerm {
-            effect: f.effect.clone(),
-            form: f.form.clone(),
-            parameters: f
+        .map(|f| {
+            let mut parameters: BTreeMap<String, f64> = f
                 .parameters
                 .iter()
                 .map(|(k, e)| (k.clone(), e.value))
-                .collect(),
+                .collect();
+            // a map is carried at its nodes' values (named as discovery names them), μ_pp against
+            // the slip speed normalised at u_ref
+            match laws
+                .iter()
+                .find(|c| std::ptr::eq(c.finding, *f))
+                .map(|c| &c.law)
+            {
+                Some(ImpactLaw::Restitution(_, Restitution::Map(m))) => {
+                    for (v, c) in m.speeds_mps().iter().zip(m.values()) {
+                        let at = 1e3 * v;
+                        parameters.insert(format!("restitution_map_at_{at:.0}_mmps"), *c);
+                    }
+                }
+                Some(ImpactLaw::SlipFriction(s)) => {
+                    parameters.insert("mu_pp_reference_slip_speed_mps".into(), s.u_ref_mps);
+                }
+                _ => {}
+            }
+            CarriedTerm {
+                effect: f.effect.clone(),
+                form: f.form.clone(),
+                parameters,
+            }
         })
         .collect();
     let mut notes = not_carried;
     let single = Some(single_under(d)).filter(|s| !s.materials.is_empty());
-    let collisions = collisions_under(d, recordings, baseline, groove, opts, &mut notes);
+    let collisions = collisions_under(d, &laws, recordings, baseline, groove, opts, &mut notes);
     UnderAccepted {
         accepted: true,
         terms,
@@ -235,10 +259,37 @@ mod tests {
     }
 
     #[test]
-    fn an_accepted_impact_law_is_said_not_carried() {
+    fn accepted_impact_laws_are_carried_terms_not_notes() {
         let mut d = crate::artifacts::diagnosis::shipped();
         for f in &mut d.findings {
             f.accepted = f.effect == "restitution_law" && f.where_["material"] == "316";
+        }
+        let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
+        assert!(u.accepted, "{:?}", u.notes);
+        // one term per accepted group (316: rolling and contact), carried at the map's values
+        let effects: Vec<&str> = u.terms.iter().map(|t| t.effect.as_str()).collect();
+        assert_eq!(effects, ["restitution_law", "restitution_law"]);
+        for (t, setup) in u.terms.iter().zip(["rolling", "contact"]) {
+            let f = d
+                .findings
+                .iter()
+                .find(|f| f.accepted && f.where_["setup"] == setup)
+                .unwrap();
+            let values: Vec<f64> =
+                serde_json::from_value(f.where_["map"]["values"].clone()).unwrap();
+            let carried: Vec<f64> = t.parameters.values().copied().collect();
+            assert!(
+                t.parameters
+                    .keys()
+                    .all(|k| k.starts_with("restitution_map_at_")),
+                "{t:?}"
+            );
+            assert_eq!(carried.len(), values.len(), "{t:?}");
+        }
+        assert!(u.notes.is_empty(), "{:?}", u.notes);
+        // a finding without its map cannot be carried: said, with why
+        for f in &mut d.findings {
+            f.where_.remove("map");
         }
         let u = under_accepted(&d, &[], None, Groove::CHAPTER, &WholeRunOptions::default());
         assert!(!u.accepted && u.terms.is_empty());
@@ -247,14 +298,11 @@ mod tests {
             "{:?}",
             u.notes
         );
-        // one note per accepted group (316: rolling and contact)
-        let laws = u
+        let why = u
             .notes
             .iter()
-            .filter(|n| n.contains("is not carried"))
-            .count();
-        assert_eq!(laws, 2, "{:?}", u.notes);
-        assert!(u.notes.iter().any(|n| n.contains("rolling setup")));
+            .filter(|n| n.contains("is not carried: its finding has no map"));
+        assert_eq!(why.count(), 2, "{:?}", u.notes);
     }
 
     #[test]

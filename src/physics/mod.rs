@@ -11,6 +11,7 @@
 //! - `groove.rs`: The groove geometry
 //! - `hermite.rs`: Interpolation inside one integration step
 //! - `impulse.rs`: The collision impulse between two equal spheres in the groove
+//! - `ln_map.rs`: A law given by its values at a few speeds, piecewise linear in the logarithm of the speed
 //! - `mode.rs`: The motion modes of one particle
 //! - `model.rs`: A one-particle model (groove, friction law, extra terms) and the particle state
 //! - `pair.rs`: Two equal particles in one groove
@@ -19,6 +20,7 @@
 //! - `restitution.rs`: The coefficient of restitution C as a function of the impact speed
 //! - `rk.rs`: One Dormand–Prince 5(4) step for an autonomous ODE
 //! - `simulate.rs`: Event-driven simulation of one particle under any `Model`
+//! - `slip_friction.rs`: μ_pp depending on the slip speed at the contact
 //! - `spline.rs`: A smooth force given by a cubic B-spline in one variable
 //! - `terms.rs`: Composable extra physics along the groove
 //! - `trajectory.rs`: The sampled result of a one-particle simulation, with its phase switches
@@ -137,6 +139,7 @@ mod friction_variation;
 mod groove;
 mod hermite;
 pub mod impulse;
+mod ln_map;
 mod mode;
 mod model;
 mod pair;
@@ -145,6 +148,7 @@ mod phase;
 mod restitution;
 mod rk;
 mod simulate;
+mod slip_friction;
 mod spline;
 mod terms;
 mod trajectory;
@@ -154,12 +158,14 @@ pub use constants::G_MPS2;
 pub use friction::Friction;
 pub use friction_variation::FrictionVariation;
 pub use groove::Groove;
+pub use ln_map::{LnMap, MAX_NODES as MAX_MAP_NODES};
 pub use model::{Model, State};
 pub use pair::{simulate_pair, Impact, PairParams, PairTrajectory, V_TOGETHER_MPS};
 pub use pair_force::PairForce;
 pub use phase::Phase;
 pub use restitution::Restitution;
 pub use simulate::simulate;
+pub use slip_friction::{SlipFriction, SlipShape};
 pub use spline::{basis as spline_basis, n_basis as spline_n_basis, SplineForce, Variable};
 pub use terms::Term;
 pub use trajectory::{SwitchEvent, Trajectory};

@@ -4,12 +4,16 @@
 //! The cascade of an ideal rolling pair is infinite but converges (Zeno): once the approach speed
 //! at an impact is below `V_TOGETHER_MPS` (or after `MAX_IMPACTS`), the impact is completed by
 //! giving both particles their mean v and va, so they move on together in contact.
+//!
+//! μ_pp is one number, or (`PairParams::slip`) a function of the slip speed at the contact,
+//! |v_a1 + v_a2| before each impact, through which the impulse is then applied.
 
 use super::advance::{advance, Sampler};
 use super::impulse::collide;
 use super::mode::{start, Mode};
 use super::pair_force::PairForce;
 use super::rk::Tolerance;
+use super::slip_friction::SlipFriction;
 use super::{Model, Phase, Restitution, State, SwitchEvent, Trajectory};
 use serde::{Deserialize, Serialize};
 
@@ -36,15 +40,28 @@ const TOL: Tolerance<7> = Tolerance {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PairParams {
     pub restitution: Restitution,
-    /// Particle–particle Coulomb friction.
+    /// Particle–particle Coulomb friction (at `slip.u_ref_mps` when it depends on the slip
+    /// speed).
     pub mu_pp: f64,
     pub radius_m: f64,
     /// A force between the particles before they touch (none in the chapter's model).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub force: Option<PairForce>,
+    /// μ_pp depending on the slip speed at the contact (`mu_pp` is its value at the reference
+    /// slip speed); None: one μ_pp, as in the chapter.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slip: Option<SlipFriction>,
 }
 
 impl PairParams {
+    /// μ_pp at an impact whose spins before sum to `va_sum` (the slip speed is its magnitude).
+    pub fn mu_pp_at(&self, va_sum: f64) -> f64 {
+        match self.slip {
+            Some(s) => self.mu_pp * s.factor(va_sum),
+            None => self.mu_pp,
+        }
+    }
+
     /// The accelerations from the pair force on particles 0 and 1 in state `y` (particle `l`
     /// at lower z), 0 without one.
     fn ext(&self, y: &[f64], (l, r): (usize, usize)) -> [f64; 2] {
@@ -280,7 +297,7 @@ fn impact(
         (0.0, false, [vm, vm], [vam, vam])
     } else {
         let c = pair.restitution.at(approach);
-        let kick = collide(v, va, c, pair.mu_pp, model.groove.k);
+        let kick = collide(v, va, c, pair.mu_pp_at(va[0] + va[1]), model.groove.k);
         (c, kick.slip, kick.v, kick.va)
     };
     for (idx, p) in [l, r].into_iter().enumerate() {
@@ -337,6 +354,54 @@ mod tests {
     use crate::physics::Groove;
 
     #[test]
+    fn mu_pp_follows_the_slip_speed_when_it_depends_on_it() {
+        use crate::physics::{SlipFriction, SlipShape};
+        let mut pair = PairParams {
+            restitution: Restitution::Constant(0.9),
+            mu_pp: 0.3,
+            radius_m: 150e-6,
+            force: None,
+            slip: None,
+        };
+        assert_eq!(pair.mu_pp_at(0.2), 0.3);
+        pair.slip = Some(SlipFriction {
+            shape: SlipShape::Weakening {
+                slip_scale_mps: 0.05,
+            },
+            u_ref_mps: 0.05,
+        });
+        assert!((pair.mu_pp_at(-0.05) - 0.3).abs() < 1e-15);
+        assert!((pair.mu_pp_at(0.15) - 0.15).abs() < 1e-15);
+        // a rolling striker into a resting target slips at μ_pp(u) of its spin: the target's
+        // spin change is μ_pp(u) k J
+        let model = Model::baseline(0.337, 0.08);
+        let s = Groove::CHAPTER.s;
+        let init = [
+            State {
+                z_m: 0.0,
+                v_mps: 0.05,
+                va_mps: 0.05 / s,
+            },
+            State {
+                z_m: 3.001e-4,
+                v_mps: 0.0,
+                va_mps: 0.0,
+            },
+        ];
+        let t = [0.0, 1e-4];
+        let first = |p: &PairParams| simulate_pair(&model, p, init, &t).impacts[0].clone();
+        let im = first(&pair);
+        let u = im.pre[0].va_mps + im.pre[1].va_mps;
+        let j = 0.5 * 1.9 * (im.pre[0].v_mps - im.pre[1].v_mps);
+        assert!(im.slip);
+        let dva = im.post[1].va_mps - im.pre[1].va_mps;
+        let want = pair.mu_pp_at(u) * model.groove.k * j;
+        assert!((dva.abs() - want).abs() < 1e-12 * want, "{dva} vs {want}");
+        let constant = first(&PairParams { slip: None, ..pair });
+        assert!((constant.post[1].va_mps - im.post[1].va_mps).abs() > 1e-6);
+    }
+
+    #[test]
     fn a_joined_pair_costs_no_more_events() {
         // rolling striker into a resting target: a cascade, then the pair moves on together
         let model = Model::baseline(0.337, 0.08);
@@ -345,6 +410,7 @@ mod tests {
             mu_pp: 1.4,
             radius_m: 150e-6,
             force: None,
+            slip: None,
         };
         let s = Groove::CHAPTER.s;
         let init = [

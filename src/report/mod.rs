@@ -10,6 +10,7 @@
 //! - `date.rs`: A calendar date
 //! - `diff.rs`: Two results compared number by number
 //! - `html.rs`: The HTML page (report.html)
+//! - `impact_laws.rs`: The impact laws the whole-run fits carried from discovery, in words
 //! - `formula.rs`: Discovery's forms written as formulas
 //! - `inputs.rs`: Everything the figures and pages show
 //! - `markdown.rs`: The Markdown page
@@ -39,6 +40,7 @@ pub mod diff;
 pub mod figures;
 pub mod formula;
 pub mod html;
+pub mod impact_laws;
 pub mod inputs;
 pub mod markdown;
 pub mod mathml;

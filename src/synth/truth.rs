@@ -221,6 +221,7 @@ impl Truth {
             mu_pp: self.pair.mu_pp,
             radius_m: 0.5 * material.diameter_m,
             force: None,
+            slip: None,
         }
     }
 }

@@ -20,8 +20,9 @@
 //! the slip speed or weakening as a/(1 + u/u0)) that fit as well as the map (F test p ≥ 0.05)
 //! with no parameter at the end of its search,
 //! fewest parameters first; two that fit equally are a tie, said in words; none: the map is the
-//! answer, its values reported. Where a force between the particles was accepted for the
-//! material, a restitution law that passes is a tie with it, said on both findings (an attraction
+//! answer, its values reported (an accepted power law also writes its reference speed,
+//! `POWER_LAW_REFERENCE`, so that the refit can carry it; `fit::refit_impact`). Where a force
+//! between the particles was accepted for the material, a restitution law that passes is a tie with it, said on both findings (an attraction
 //! of short range slows the parting pair as a sticking contact does), and the force is kept.
 //! Too few impacts (fewer than 8 with their own C, 6 slipping ones)
 //! is said in words, not tested.
@@ -42,6 +43,10 @@ use crate::stats::abs_scale;
 use points::impact_points;
 use std::collections::BTreeMap;
 use weighted::{f_test, fit, map_nodes, Fit, Pt, Shape};
+
+/// Where an accepted power law's reference speed is written on its finding (`where`): the
+/// impacts' geometric mean speed, at which `restitution_c_at_mean_speed` is C.
+pub const POWER_LAW_REFERENCE: &str = "power_law_reference_speed_mps";
 
 /// Family-wise error rate of each law's test (Holm over its groups).
 pub const ALPHA: f64 = 0.01;
@@ -593,6 +598,12 @@ impl LawTest {
             };
             if accepted {
                 form = self.shape_words(t);
+                if let Some((f, _)) = t.named.as_ref().filter(|n| n.0.shape == Shape::PowerLaw) {
+                    where_.insert(
+                        POWER_LAW_REFERENCE.into(),
+                        serde_json::json!(f.nodes[0].exp()),
+                    );
+                }
             }
         }
         Finding {

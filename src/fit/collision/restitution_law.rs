@@ -2,10 +2,12 @@
 //! (constant, linear, saturating) fitted to the runs of that setup with the rest of the shared
 //! physics held at the material's best fit, and chosen by its error on held-out runs
 //! (k-fold over runs: the law is fitted on the other runs, then only the held-out runs' own
-//! parameters are fitted). Intervals are ±1.96 standard errors of the all-runs fit.
+//! parameters are fitted). Intervals are ±1.96 standard errors of the all-runs fit. A setup
+//! whose law the spec holds (the law discovery accepted, under `refit`) is not chosen: its
+//! choice says the law held (`held_choice`).
 
 use super::wholerun::{
-    fit_group_with, fit_own_only, law_slots, law_start, FitSpec, GroupFit, PairRun,
+    fit_group_with, fit_own_only, law_slots, law_start, setup_index, FitSpec, GroupFit, PairRun,
 };
 use crate::artifacts::collision_summary::{LawCandidate, LawChoice, LawForm};
 use crate::artifacts::estimate::{Estimate, Interval};
@@ -37,7 +39,7 @@ fn law_parameters(
     };
     let mut parameters = BTreeMap::from([(names[0].to_string(), linear(a, se(ia)))]);
     match form {
-        LawForm::Constant => {}
+        LawForm::Constant | LawForm::FromDiscovery => {}
         LawForm::Linear => {
             parameters.insert(names[1].into(), linear(b, se(ib)));
         }
@@ -114,10 +116,7 @@ pub fn choose_law(
     let k = folds.clamp(2, sub.len());
     let (ia, ib) = law_slots(setup);
     let free = |i: usize| i == ia || i == ib;
-    let slot = match setup {
-        Setup::Rolling => 0,
-        Setup::Contact => 1,
-    };
+    let slot = setup_index(setup);
     let mut candidates = Vec::new();
     for form in LawForm::ALL {
         let mut spec = best.spec.clone();
@@ -164,18 +163,39 @@ pub fn choose_law(
         folds: k,
         chosen,
         candidates,
+        discovered: None,
     })
 }
 
-/// The spec with each setup's chosen law form.
+/// The spec with each setup's chosen law form; a setup whose law `spec` holds keeps it, and a
+/// choice that holds a law (`LawChoice::held`) holds it.
 pub fn with_chosen(spec: &FitSpec, choices: &[LawChoice]) -> FitSpec {
     let mut out = spec.clone();
     for c in choices {
-        let slot = match c.setup {
-            Setup::Rolling => 0,
-            Setup::Contact => 1,
-        };
-        out.laws[slot] = c.chosen;
+        if spec.held_law(c.setup).is_some() {
+            continue;
+        }
+        match (c.chosen, c.discovered) {
+            (LawForm::FromDiscovery, Some(law)) => out.hold_law(c.setup, law),
+            // a held form without its law (not written by this crate): the default form
+            (LawForm::FromDiscovery, None) => {}
+            (form, _) => out.laws[setup_index(c.setup)] = form,
+        }
     }
     out
+}
+
+/// The choice of a setup whose law `spec` holds (the law discovery accepted): nothing chosen,
+/// nothing fitted; None when no run has this setup or no law is held.
+pub fn held_choice(runs: &[PairRun], spec: &FitSpec, setup: Setup) -> Option<LawChoice> {
+    let held = spec.held_law(setup)?;
+    let n_runs = runs.iter().filter(|r| r.setup == setup).count();
+    (n_runs > 0).then_some(LawChoice {
+        setup,
+        n_runs,
+        folds: 0,
+        chosen: LawForm::FromDiscovery,
+        candidates: Vec::new(),
+        discovered: Some(held),
+    })
 }

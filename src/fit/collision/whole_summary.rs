@@ -1,9 +1,10 @@
 //! The whole-run collision analysis of a dataset, per material: the joint fit of every
 //! collision run (`wholerun`), the restitution law of each setup chosen by held-out error
-//! (`restitution_law`), and the profile of μ_pp (`profile`). What goes into summary.json.
+//! (`restitution_law`; a law the spec takes from discovery is kept, not chosen), and the profile
+//! of μ_pp (`profile`). What goes into summary.json.
 
 use super::profile::{default_grid, profile_and_lowest};
-use super::restitution_law::{choose_law, with_chosen};
+use super::restitution_law::{choose_law, held_choice, with_chosen};
 use super::warm_start::{carry_laws, Start};
 use super::wholerun::{
     fit_group, fit_group_with, simulate_run, DragSpec, FitSpec, GroupFit, PairRun, LN_T0, MU_PG,
@@ -15,7 +16,7 @@ use crate::artifacts::collision_summary::{
 use crate::artifacts::estimate::Estimate;
 use crate::fit::residual_stats::SINCE_IMPACT_EDGES_S;
 use crate::lsq::Termination;
-use crate::physics::{Groove, Phase};
+use crate::physics::{Groove, Phase, Restitution};
 use crate::recording::{Experiment, Recording, Setup};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -123,10 +124,14 @@ pub fn analyze_material_from(
         ),
         None => (spec.clone(), fit_group(runs, spec, None, opts.max_iter)),
     };
-    let mut notes = Vec::new();
+    let mut notes = carried_notes(&spec);
+    // a law the spec holds (discovery's) is not chosen
     let choices: Vec<LawChoice> = [Setup::Rolling, Setup::Contact]
         .into_iter()
-        .filter_map(|s| choose_law(runs, &first, s, opts.folds, opts.step_iter))
+        .filter_map(|s| match spec.held_law(s) {
+            Some(_) => held_choice(runs, &spec, s),
+            None => choose_law(runs, &first, s, opts.folds, opts.step_iter),
+        })
         .collect();
     let chosen = with_chosen(&spec, &choices);
     let best = if chosen == spec {
@@ -185,6 +190,11 @@ pub fn analyze_material_from(
     if let Some(note) = unconverged_profile_note(&profile, opts.step_iter) {
         notes.push(note);
     }
+    // discovery's laws at the values the fit gave them (a map's refitted nodes)
+    let mut choices = choices;
+    for c in choices.iter_mut().filter(|c| c.discovered.is_some()) {
+        c.discovered = Some(best.spec.law_at(&best.result.shared, c.setup));
+    }
     let n_points: usize = runs.iter().map(PairRun::n_samples).sum();
     let whole_runs = runs
         .iter()
@@ -209,6 +219,7 @@ pub fn analyze_material_from(
         ),
         tp_s_per_mps: est(&best, TP),
         mu_pp: est(&best, MU_PP),
+        mu_pp_slip: best.spec.slip,
         profile,
         restitution: choices,
         deviance: best.cost(),
@@ -216,6 +227,32 @@ pub fn analyze_material_from(
         runs: whole_runs,
         notes,
     }
+}
+
+/// What the spec carries from discovery's impact laws, in words (none for the chapter's model):
+/// a map's node values are refitted, a named form is held, and μ_pp with a slip-speed dependence
+/// is its value at the reference slip speed.
+fn carried_notes(spec: &FitSpec) -> Vec<String> {
+    let mut out = Vec::new();
+    for (setup, name) in [(Setup::Rolling, "rolling"), (Setup::Contact, "contact")] {
+        match spec.held_law(setup) {
+            Some(Restitution::Map(m)) => out.push(format!(
+                "the {name} setup's restitution law is the map discovery accepted, its values at the {} nodes refitted here from discovery's (the nodes' speeds held; C held at the end values beyond them)",
+                m.len()
+            )),
+            Some(_) => out.push(format!(
+                "the {name} setup's restitution law is the named form discovery accepted, held as it gave it from the impacts' own C (not refitted, so its uncertainty is not in the other parameters' errors)"
+            )),
+            None => {}
+        }
+    }
+    if let Some(s) = spec.slip {
+        out.push(format!(
+            "μ_pp depends on the slip speed u at the contact as discovery accepted (its shape held, normalised at u_ref = {:.1} mm/s): μ_pp and its profile are μ_pp at u_ref",
+            1e3 * s.u_ref_mps
+        ));
+    }
+    out
 }
 
 /// Words for profile fits that stopped at their iteration limit (None when every one

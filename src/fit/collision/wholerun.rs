@@ -3,11 +3,15 @@
 //! and the sliding and rolling of both particles between them), fitted to both tracks at once.
 //!
 //! Shared per material: μ_pg, the drag (saturating v/(T0 + T'|v|), linear, or held at the single
-//! runs' physics), μ_pp, and one restitution law C(v) per setup. Per run: the striker's start
-//! position and kick speed, the gap to the target (rolling setup; the contact setup starts
-//! touching) and the kick time within the frame before the first sample. The simulator locates
-//! every phase switch and impact as an event, so positions are continuous in the parameters and
-//! the finite-difference derivatives of `lsq::block` see the events move, not jump.
+//! runs' physics), μ_pp, and one restitution law C(v) per setup (a candidate form's two slots
+//! fitted, or the law discovery accepted: a named form held as given, a map with its node
+//! values refitted; μ_pp may carry discovery's dependence on the slip speed, μ_pp then being its
+//! value at the reference slip speed). Per run: the
+//! striker's start position and kick speed, the gap to the target (rolling setup; the contact
+//! setup starts touching) and the kick time within the frame before the first sample. The
+//! simulator locates every phase switch and impact as an event, so positions are continuous in
+//! the parameters and the finite-difference derivatives of `lsq::block` see the events move, not
+//! jump.
 
 use super::detect::{median, noise_scale_m, robust_line};
 use super::model::TrackData;
@@ -17,13 +21,15 @@ use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
     simulate_pair, Friction, Groove, Model, PairForce, PairParams, PairTrajectory, Restitution,
-    State, Term,
+    SlipFriction, State, Term, MAX_MAP_NODES,
 };
 use crate::recording::{Recording, Setup};
 
 impl LawForm {
     /// The law from its two parameter slots (a, b): constant (c, —), linear (c0, slope),
-    /// saturating (c_inf, ln v_ref).
+    /// saturating (c_inf, ln v_ref). A law held from discovery has no slots: `FitSpec` holds it
+    /// itself (`held_laws`) and never asks here; asked, it is undetermined (C NaN, so a fit
+    /// that lost it misfits every impact instead of simulating some other law).
     pub fn law(self, a: f64, b: f64) -> Restitution {
         match self {
             LawForm::Constant => Restitution::Constant(a),
@@ -35,6 +41,7 @@ impl LawForm {
                 c0: a,
                 v_ref_mps: b.exp(),
             },
+            LawForm::FromDiscovery => Restitution::Constant(f64::NAN),
         }
     }
 
@@ -52,6 +59,8 @@ impl LawForm {
                 spec(0.5, 0.0, 1.0, 1e-5),
                 spec(0.08f64.ln(), 1e-3f64.ln(), 3.0f64.ln(), 1e-5),
             ],
+            // no slots: held at 0
+            LawForm::FromDiscovery => [spec(0.0, 0.0, 0.0, 1e-5), spec(0.0, 0.0, 0.0, 1e-5)],
         }
     }
 }
@@ -105,6 +114,12 @@ pub const PF_AMP: usize = 9;
 pub const PF_LN_RANGE: usize = 10;
 pub const PF_EXPONENT: usize = 11;
 pub const N_SHARED: usize = 12;
+/// The node values of a map law discovery accepted (`FitSpec::hold_law` with a
+/// `Restitution::Map`), refitted here, after the `N_SHARED` parameters when the spec holds a map
+/// (the chapter's fits have none, so their parameters are exactly as before): `MAX_MAP_NODES`
+/// slots for the rolling setup's map, then as many for the contact setup's (held at 0 where
+/// there is none).
+pub const MAP: usize = N_SHARED;
 
 /// Start values of a force between the particles, (A, ln λ, n): none, over 40 µm, n = 3.
 pub const PAIR_FORCE_START: [f64; 3] = [0.0, -10.126631103850338, 3.0];
@@ -120,6 +135,19 @@ pub const Z1: usize = 0;
 pub const GAP: usize = 1;
 pub const V0: usize = 2;
 pub const T_KICK: usize = 3;
+
+/// The index of `setup` in `FitSpec::laws` and `held_laws`.
+pub fn setup_index(setup: Setup) -> usize {
+    match setup {
+        Setup::Rolling => 0,
+        Setup::Contact => 1,
+    }
+}
+
+/// The first slot of `setup`'s map node values.
+fn map_slot(setup: Setup) -> usize {
+    MAP + setup_index(setup) * MAX_MAP_NODES
+}
 
 fn law_slot(setup: Setup) -> usize {
     match setup {
@@ -289,8 +317,16 @@ impl PairRun {
 pub struct FitSpec {
     pub groove: Groove,
     pub drag: DragSpec,
-    /// Law forms of the rolling and the contact setup.
+    /// Law forms of the rolling and the contact setup (`FromDiscovery` where `held_laws`
+    /// holds the law).
     pub laws: [LawForm; 2],
+    /// Laws discovery accepted (`FitSpec::hold_law`), per setup as `laws`, in place of a form's
+    /// slots (held, unused): a named form held as given, a map at its nodes' speeds with its
+    /// values refitted (`MAP`, started from discovery's).
+    pub held_laws: [Option<Restitution>; 2],
+    /// μ_pp depending on the slip speed, carried from discovery; μ_pp is then its value at the
+    /// reference slip speed. None: one μ_pp.
+    pub slip: Option<SlipFriction>,
     /// Hold μ_pp at this value (the profile), or fit it.
     pub mu_pp_held: Option<f64>,
     /// Fit the contact distance (`CONTACT`, a factor on the diameter) instead of holding it at 1.
@@ -306,6 +342,8 @@ impl FitSpec {
             groove,
             drag: DragSpec::Saturating,
             laws: [LawForm::Saturating, LawForm::Saturating],
+            held_laws: [None, None],
+            slip: None,
             mu_pp_held: None,
             free_contact: false,
             pair_force: None,
@@ -332,10 +370,19 @@ impl FitSpec {
     }
 
     fn law_form(&self, setup: Setup) -> LawForm {
-        match setup {
-            Setup::Rolling => self.laws[0],
-            Setup::Contact => self.laws[1],
-        }
+        self.laws[setup_index(setup)]
+    }
+
+    /// Hold `law` for the runs of `setup` instead of fitting a form's slots.
+    pub fn hold_law(&mut self, setup: Setup, law: Restitution) {
+        let i = setup_index(setup);
+        self.laws[i] = LawForm::FromDiscovery;
+        self.held_laws[i] = Some(law);
+    }
+
+    /// The law held for `setup`, if any.
+    pub fn held_law(&self, setup: Setup) -> Option<Restitution> {
+        self.held_laws[setup_index(setup)]
     }
 
     /// The one-particle model at shared parameters `p`.
@@ -366,14 +413,28 @@ impl FitSpec {
         }
     }
 
+    /// The restitution law of `setup` at shared parameters `p`: a held map at its refitted node
+    /// values, a held named form as held, else the form's from its slots.
+    pub fn law_at(&self, p: &[f64], setup: Setup) -> Restitution {
+        let i = law_slot(setup);
+        match self.held_law(setup) {
+            Some(Restitution::Map(m)) => {
+                let j = map_slot(setup);
+                Restitution::Map(m.with_values(p.get(j..j + m.len()).unwrap_or(&[])))
+            }
+            Some(law) => law,
+            None => self.law_form(setup).law(p[i], p[i + 1]),
+        }
+    }
+
     /// The contact parameters of a run of `setup` at shared parameters `p`.
     pub fn pair(&self, p: &[f64], setup: Setup, diameter_m: f64) -> PairParams {
-        let i = law_slot(setup);
         PairParams {
-            restitution: self.law_form(setup).law(p[i], p[i + 1]),
+            restitution: self.law_at(p, setup),
             mu_pp: p[MU_PP],
             radius_m: 0.5 * diameter_m * FitSpec::contact(p),
             force: self.force(p),
+            slip: self.slip,
         }
     }
 
@@ -422,6 +483,27 @@ impl FitSpec {
             }
             Some((PairForceShape::PowerLaw, _)) => out.extend(force),
         }
+        // a held map's node values, from discovery's (C of the impacts; kept within [0, 1.5],
+        // the law clamps C to [0, 1]); the slots of no map are held at 0
+        let maps = self
+            .held_laws
+            .iter()
+            .any(|l| matches!(l, Some(Restitution::Map(_))));
+        for setup in [Setup::Rolling, Setup::Contact]
+            .into_iter()
+            .filter(|_| maps)
+        {
+            let values = match self.held_law(setup) {
+                Some(Restitution::Map(m)) => m.values().to_vec(),
+                _ => Vec::new(),
+            };
+            for k in 0..MAX_MAP_NODES {
+                out.push(match values.get(k) {
+                    Some(&c) => spec(c.clamp(0.0, 1.5), 0.0, 1.5, 1e-5),
+                    None => hold(spec(0.0, 0.0, 0.0, 1e-5), 0.0),
+                });
+            }
+        }
         match self.drag {
             DragSpec::Saturating | DragSpec::SaturatingWith(_) => {}
             DragSpec::Linear => out[TP] = hold(out[TP], 0.0),
@@ -441,8 +523,15 @@ impl FitSpec {
         for setup in [Setup::Rolling, Setup::Contact] {
             if !runs.iter().any(|r| r.setup == setup) {
                 let i = law_slot(setup);
-                out[i] = hold(out[i], out[i].start);
-                out[i + 1] = hold(out[i + 1], out[i + 1].start);
+                let j = map_slot(setup);
+                let map = if out.len() > j {
+                    j..j + MAX_MAP_NODES
+                } else {
+                    j..j
+                };
+                for k in [i, i + 1].into_iter().chain(map) {
+                    out[k] = hold(out[k], out[k].start);
+                }
             }
         }
         if let Some(mu) = self.mu_pp_held {
@@ -468,11 +557,16 @@ impl BlockProblem for Problem<'_> {
         residuals(&self.runs[b], self.spec, shared, own, out);
     }
     fn uses(&self, b: usize, i: usize) -> bool {
-        if !(LAW..CONTACT).contains(&i) {
-            return true;
+        let setup = self.runs[b].setup;
+        if (LAW..CONTACT).contains(&i) {
+            let slot = law_slot(setup);
+            return i == slot || i == slot + 1;
         }
-        let slot = law_slot(self.runs[b].setup);
-        i == slot || i == slot + 1
+        if i >= MAP {
+            let j = map_slot(setup);
+            return (j..j + MAX_MAP_NODES).contains(&i);
+        }
+        true
     }
 }
 

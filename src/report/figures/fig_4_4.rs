@@ -1,7 +1,8 @@
 //! Figs. 4.4a–c: the target's spin change against its velocity change (slope μ_pp·k), and the
 //! coefficient of restitution against impact speed per material, rolling and contact setups,
 //! with the whole-run law chosen under the accepted physics where `refit` made the fits again,
-//! and the impacts' own law (discovery's map) where discovery accepted one outside the candidates.
+//! and the impacts' own law (discovery's map) where discovery accepted one outside the candidates
+//! (which the refit then takes, drawn as its whole-run law).
 
 use super::common::{legend, line, linear_chart, render, scatter_runs, span};
 use crate::artifacts::collision_summary::LawForm;
@@ -202,8 +203,12 @@ pub fn render_bc(
             }
             let accepted = crate::report::sections::under_accepted::whole_run_of(d, material)
                 .and_then(|m| law_of(m, *contact));
-            if let Some((law, _)) = accepted {
-                let label = format!("{setup}: whole-run law under the accepted physics");
+            if let Some((law, form)) = accepted {
+                let label = if form == LawForm::FromDiscovery {
+                    format!("{setup}: under the accepted physics, discovery's law")
+                } else {
+                    format!("{setup}: whole-run law under the accepted physics")
+                };
                 line(&mut c, law_curve(&law, v_hi), col, 1, true, Some(&label))?;
             }
             if let Some(map) = impact_law_map(d, material, *contact) {
@@ -243,7 +248,8 @@ fn law_curve(law: &Restitution, v_hi: f64) -> Vec<(f64, f64)> {
 }
 
 /// The restitution law a material's whole-run fit chose for the setup (the baseline's fit, or
-/// the one made again under the physics discovery accepted), and its form; None without one.
+/// the one made again under the physics discovery accepted, which may take discovery's law), and
+/// its form; None without one.
 fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)> {
     let setup = if contact {
         Setup::Contact
@@ -251,9 +257,7 @@ fn law_of(m: &MaterialWholeRun, contact: bool) -> Option<(Restitution, LawForm)>
         Setup::Rolling
     };
     let choice = m.restitution.iter().find(|c| c.setup == setup)?;
-    let cand = choice.chosen_candidate()?;
-    let [a, b] = cand.slots()?;
-    Some((cand.form.law(a, b), cand.form))
+    Some((choice.law()?, choice.chosen))
 }
 
 #[cfg(test)]
@@ -298,5 +302,33 @@ mod tests {
         assert!(map.windows(2).all(|w| w[0].0 < w[1].0), "{map:?}");
         assert_eq!(impact_law_map(&d, "316", true), None);
         assert_eq!(impact_law_map(&d, "440c", false), None);
+    }
+
+    /// A law taken from discovery is the law drawn, under its form's name.
+    #[test]
+    fn a_law_from_discovery_is_the_law_drawn() {
+        use crate::physics::LnMap;
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let summary: crate::artifacts::Summary =
+            serde_json::from_slice(&std::fs::read(root.join("reports/summary.json")).unwrap())
+                .unwrap();
+        let mut m = summary.collisions.unwrap().whole_run.unwrap().materials[0].clone();
+        let (law, form) = law_of(&m, true).expect("the shipped fit chose a contact law");
+        assert_ne!(form, LawForm::FromDiscovery);
+        assert!(law.at(0.1) > 0.0 && law.at(0.1) <= 1.0);
+        let held = Restitution::Map(LnMap::new(&[0.05, 0.2], &[0.9, 0.7]).unwrap());
+        let c = m
+            .restitution
+            .iter_mut()
+            .find(|c| c.setup == Setup::Contact)
+            .unwrap();
+        c.chosen = LawForm::FromDiscovery;
+        c.candidates.clear();
+        c.discovered = Some(held);
+        assert_eq!(law_of(&m, true), Some((held, LawForm::FromDiscovery)));
+        // a form from discovery whose law is missing draws nothing rather than another law
+        m.restitution.iter_mut().for_each(|c| c.discovered = None);
+        let contact = m.restitution.iter().find(|c| c.setup == Setup::Contact);
+        assert_eq!(contact.and_then(|c| c.law()), None);
     }
 }

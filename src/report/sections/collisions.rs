@@ -146,6 +146,10 @@ fn law_words(r: &Restitution) -> String {
             sig(c0, 4),
             sig(slope_per_mps, 4)
         ),
+        // laws beyond the candidates, in the words of the laws carried from discovery
+        other => crate::report::impact_laws::discovered_law(&other)
+            .replace(", held from discovery", "")
+            .replace("discovery's map, its values refitted: ", "map: "),
     }
 }
 

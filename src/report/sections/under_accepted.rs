@@ -64,6 +64,13 @@ fn laws_text(m: &MaterialWholeRun) -> String {
     m.restitution
         .iter()
         .map(|c| {
+            if let Some(law) = &c.discovered {
+                return format!(
+                    "{}: {}",
+                    serde_name(&c.setup),
+                    crate::report::impact_laws::discovered_law(law)
+                );
+            }
             let params: Vec<String> = c
                 .chosen_candidate()
                 .map(|cand| {
@@ -110,6 +117,13 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
         "Discovery accepted {}. The single runs' μ_pg and drag come from its joint fit of every single run with these terms fitted jointly; the whole-run pair fits are made again with every accepted force other than the drag held at its fitted values (μ_pg, the saturating drag, μ_pp and the restitution laws refitted, the μ_pp profile redone). The report trusts this column: discovery accepted each term by its likelihood ratio against a null from the runs' own noise and by better predictions of held-out runs, so the baseline leaves out physics the recordings show, and its numbers can be biased by it. The baseline column is kept for comparison with the chapter.",
         terms.join("; ")
     ));
+    let carried = |effect: &str| u.terms.iter().any(|t| t.effect == effect);
+    if carried("restitution_law") {
+        b.para("A restitution law discovery accepted outside the candidates is used in the whole-run fits of its material and setup instead of a candidate: its named form held as discovery gave it from the impacts' own C, else its map, the nodes' speeds held and their values refitted with the runs; the other setups still choose among the candidates.");
+    }
+    if carried("pair_friction_slip_speed") {
+        b.para("μ_pp depending on the slip speed, which discovery accepted, is carried as its shape s(u), normalised at a reference slip speed: μ_pp(u) = μ_pp · s(u)/s(u_ref), so that the μ_pp below and its profile are μ_pp at u_ref (each material's note gives it).");
+    }
     for n in &u.notes {
         b.para(format!(
             "{n}; for this material the baseline's numbers stand."
@@ -224,5 +238,60 @@ fn holds_1_4(v: &ProfileVerdict) -> bool {
         ProfileVerdict::LowerBound { lo } => lo <= 1.4,
         ProfileVerdict::UpperBound { hi } => 1.4 <= hi,
         ProfileVerdict::Unconstrained => true,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::artifacts::collision_summary::LawForm;
+    use crate::artifacts::under_accepted::CarriedTerm;
+    use crate::physics::{LnMap, Restitution};
+
+    /// The shipped report's inputs with the 316 pairs refitted with a map in the rolling setup:
+    /// the section says the law in words and with its numbers.
+    #[test]
+    fn a_law_from_discovery_is_said_in_words() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports");
+        let read = |f: &str| std::fs::read(root.join(f)).unwrap();
+        let mut u: UnderAccepted =
+            serde_json::from_slice(&read("under_accepted_physics.json")).unwrap();
+        let c = u
+            .collisions
+            .as_mut()
+            .expect("the shipped refit has the pairs");
+        c.unchanged.clear();
+        let m = c
+            .whole_run
+            .materials
+            .iter_mut()
+            .find(|m| m.material == "316")
+            .unwrap();
+        let rolling = m
+            .restitution
+            .iter_mut()
+            .find(|c| c.setup == crate::recording::Setup::Rolling)
+            .unwrap();
+        rolling.chosen = LawForm::FromDiscovery;
+        rolling.candidates.clear();
+        rolling.discovered = Some(Restitution::Map(
+            LnMap::new(&[0.01, 0.03, 0.07], &[0.99, 0.79, 0.61]).unwrap(),
+        ));
+        u.terms.push(CarriedTerm {
+            effect: "restitution_law".into(),
+            form: "C depends on the impact speed".into(),
+            parameters: BTreeMap::new(),
+        });
+        let d = ReportData {
+            summary: Some(serde_json::from_slice(&read("summary.json")).unwrap()),
+            under_accepted: Some(u),
+            ..ReportData::default()
+        };
+        let text = format!("{:?}", block(&d, &BTreeMap::new()).unwrap());
+        assert!(
+            text.contains("rolling: discovery's map, its values refitted: C = 0.990 at 10.0 mm/s, 0.790 at 30.0 mm/s, 0.610 at 70.0 mm/s"),
+            "{text}"
+        );
+        assert!(text.contains("is used in the whole-run fits of its material and setup"));
     }
 }

@@ -214,6 +214,16 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Option<Block> {
     );
     for m in mats {
         for c in &m.restitution {
+            if let Some(law) = &c.discovered {
+                laws.push(vec![
+                    m.material.clone(),
+                    serde_name(&c.setup),
+                    c.n_runs.to_string(),
+                    format!("**{}**", serde_name(&c.chosen)),
+                    crate::report::impact_laws::discovered_law(law),
+                    "— (not chosen: discovery's)".into(),
+                ]);
+            }
             for cand in &c.candidates {
                 let form = serde_name(&cand.form);
                 let params: Vec<String> = cand.ordered().into_iter().map(fmt_param).collect();
