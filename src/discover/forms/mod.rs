@@ -12,6 +12,7 @@
 //! - `friction_direction.rs`: μ by the direction of motion
 //! - `friction_position.rs`: μ along the groove
 //! - `friction_periodic.rs`: μ periodic along the groove (wavelength searched)
+//! - `wavelength.rs`: What the two forms periodic in z share (their search, amplitude and phase)
 //! - `distortion.rs`: The camera's positions distorted across the image (a measurement)
 //! - `periodic_z.rs`: A force periodic in z, fixed in the lab (wavelength searched)
 //! - `localized.rs`: A localized force fixed in the lab (centre and width searched)
@@ -30,6 +31,7 @@
 //! accepted model to other experiments.
 
 mod form;
+mod wavelength;
 
 pub use self::form::{as_fitted, p, Entry, Fitted, Form, ParamInfo, Place, Reading, Search};
 use crate::artifacts::diagnosis::Finding;

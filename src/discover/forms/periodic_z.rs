@@ -2,12 +2,11 @@
 //! c·cos(k(z − z_ref)), its wavenumber k searched in [k_lo, k_hi].
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::wavelength;
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
-use crate::discover::spectral::k_grid;
+use crate::discover::screen_sums::{Trial, Typical};
 use crate::physics::{Term, Variable};
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
@@ -64,60 +63,24 @@ impl Form for PeriodicZ {
         true
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
-        let est = Estimate::new;
+        let [amp, wavelength, phase] =
+            wavelength::amplitude_wavelength_phase(f.x, f.se, self.z_ref_m);
         let mut out = BTreeMap::new();
-        let (k, a, b) = (f.x[0], f.x[1], f.x[2]);
-        let (sk, sa, sb) = (f.se[0], f.se[1], f.se[2]);
-        let amp = a.hypot(b).max(1e-300);
-        let amp_se = ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp;
-        out.insert("amplitude_mps2".into(), est(amp, amp_se));
-        out.insert("peak_accel_mps2".into(), est(amp, amp_se));
-        out.insert(
-            "wavelength_m".into(),
-            est(TAU / k, TAU * sk / (k * k)),
-        );
-        let phase = (b.atan2(a) - k * self.z_ref_m).rem_euclid(TAU);
-        let phase_se =
-            (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp)).hypot(self.z_ref_m * sk);
-        out.insert("phase_rad".into(), est(phase, phase_se));
+        out.insert("amplitude_mps2".into(), amp);
+        out.insert("peak_accel_mps2".into(), amp);
+        out.insert("wavelength_m".into(), wavelength);
+        out.insert("phase_rad".into(), phase);
         out
     }
     fn searched(&self) -> bool {
         true
     }
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
-        let (prep, v, rg, reps) = (s.prep, s.v, s.rg, s.reps.clone());
         let z_ref = self.z_ref_m;
-        let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
-            .into_iter()
-            .filter(|k| *k >= self.k_lo && *k <= self.k_hi)
-            .collect();
-        let trials: Vec<Option<Trial>> = ks
-            .par_iter()
-            .map(|&k| {
-                let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
-                    let z = p.track.variable(Variable::Z);
-                    let fs: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).sin()).collect();
-                    let fc: Vec<f64> = z.iter().map(|z| (k * (z - z_ref)).cos()).collect();
-                    Some(vec![
-                        p.column(p.track.respond_values(&fs)),
-                        p.column(p.track.respond_values(&fc)),
-                    ])
-                })?;
-                Some((
-                    lr,
-                    vec![k, b[0], b[1]],
-                    vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
-                ))
-            })
-            .collect();
-        let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(
-            |(se, t)| Typical::Se {
-                se,
-                at: format!("at a wavelength of {:.3} mm", 1e3 * TAU / t.1[0]),
-            },
-        );
-        (best_of(trials, reps.len()), typical)
+        wavelength::search(s, self.k_lo, self.k_hi, |p, g, k| {
+            let z = p.track.variable(Variable::Z);
+            Some(z.iter().map(|z| g(k * (z - z_ref))).collect())
+        })
     }
     fn wanted(&self) -> Wanted {
         Wanted {
@@ -139,23 +102,13 @@ impl Form for PeriodicZ {
         lower: bool,
         _materials: &[String],
     ) -> Option<String> {
-        (info.name == "k_per_m").then(|| format!(
-            "the wavelength ({:.3} mm) is the {} the search allows: the data resolve no {} period, so wavelength and amplitude describe the observed stretch rather than a period",
-            1e3 * TAU / x,
-            if lower { "longest" } else { "shortest" },
-            if lower { "longer" } else { "shorter" }
-        ))
+        wavelength::bound_note(x, info, lower)
     }
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((0, "wavelength"))
     }
     fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
-        (!lower).then(|| {
-            format!(
-                "its wavelength ran to the shortest the search allows ({:.3} mm)",
-                1e3 * TAU / x
-            )
-        })
+        wavelength::at_fine_end(x, lower)
     }
     fn detection_size(
         &self,
