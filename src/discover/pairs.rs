@@ -1026,5 +1026,8 @@ mod tests {
         );
         let (accepted, words) = impact_decision(1.8, 1e-6);
         assert!(accepted && words.contains("misses something"), "{words}");
+        // no run with samples on both sides of the split: said as untested, not as no misfit
+        let (accepted, words) = impact_decision(f64::NAN, 1.0);
+        assert!(!accepted && words.contains("not tested"), "{words}");
     }
 }

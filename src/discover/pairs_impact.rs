@@ -226,10 +226,9 @@ pub(super) fn split_by_impact(runs: &[PairRun], fit: &GroupFit) -> ImpactSplit {
         pooled.merge(&bins);
     }
     let ratio = if log_ratios.is_empty() {
-        // too few samples for the noise's own ratio: the residuals' alone
-        pooled
-            .log_ratio()
-            .map_or(pooled.near.mean() / pooled.far.mean().max(1e-12), f64::exp)
+        // no run has enough samples on both sides: the pooled samples, or none (NaN, said as
+        // too few samples by `impact_decision`)
+        pooled.log_ratio().map_or(f64::NAN, f64::exp)
     } else {
         (log_ratios.iter().sum::<f64>() / log_ratios.len() as f64).exp()
     };
@@ -280,6 +279,12 @@ pub(super) fn impact_p_value(log_ratios: &[f64]) -> f64 {
 /// p-value: a misfit needs both significance (p < α) and size (ratio > `MIN_RATIO`); a
 /// significant but small excess is said as such, not as "no misfit".
 pub(super) fn impact_decision(ratio: f64, p_holm: f64) -> (bool, String) {
+    if !ratio.is_finite() {
+        return (
+            false,
+            format!("too few samples after impacts (under {MIN_SAMPLES} on a side) to compare them with the tracking noise there: not tested"),
+        );
+    }
     let significant = p_holm < ALPHA;
     let large = ratio > MIN_RATIO;
     let words = match (significant, large) {
