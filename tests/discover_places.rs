@@ -35,7 +35,18 @@ fn shape(name: &str) -> usize {
 /// what it accepted (place/effect: form, and its parameters), whether that names the truth alone,
 /// and the worst relative error of the sizes it gives for the truth's (per material, say).
 fn discovered(seed: u64, noise: &str, name: &str, multiple: f64) -> (bool, f64, Vec<String>) {
-    let c = case(seed, SIZE, noise, &[(shape(name), multiple)], false);
+    discovered_at(SIZE, seed, noise, name, multiple)
+}
+
+/// `discovered` on datasets of `size`.
+fn discovered_at(
+    size: Size,
+    seed: u64,
+    noise: &str,
+    name: &str,
+    multiple: f64,
+) -> (bool, f64, Vec<String>) {
+    let c = case(seed, size, noise, &[(shape(name), multiple)], false);
     let d = discover_case(&c, seed);
     let found = accepted(&serde_json::to_string(&d).unwrap()).unwrap();
     let mut said: Vec<String> = found
@@ -75,8 +86,8 @@ fn assert_named(seed: u64, noise: &str, name: &str) {
 }
 
 /// Named, and each material's spread (relative to its μ, or the radii's) within 40 % of the
-/// drawn one: the standard deviation of 12 particles is known to about 21 % from the sample
-/// alone, the noise aside.
+/// spread its 12 particles were given (their sample standard deviation, not the law's width):
+/// each run's μ and T carry their own noise, which the estimate removes only on average.
 fn assert_named_and_sized(seed: u64, noise: &str, name: &str) {
     let (named, worst, said) = discovered(seed, noise, name, 8.0);
     assert!(
@@ -157,4 +168,26 @@ fn a_friction_along_the_groove_is_named_a_friction() {
         place >= 4 && periodic >= 2 && 2 * sized >= periodic,
         "friction along z in {place}/6, periodic form in {periodic}, sized {sized}:\n{text}"
     );
+}
+
+/// A force along the groove with no named shape (the simulator's sum of five waves of 1–10 mm
+/// with random amplitudes), four datasets of the bench's size (60 runs) at 6× its limit over
+/// four noises: named as one finding — a map in z, with any named forms in z as its parts — in
+/// at least two. Before the map could stand in for the named forms or take them as parts, the
+/// bench named this shape 0/4 at 3× or more: a tilt, a wave and a bump came out as three
+/// findings. Not yet more: on 24 runs of this file's size it is named in 1 of 4, and where no
+/// map passes, the named forms stand (a wave of 0.9 mm with a bump of −4 m/s² where no run went
+/// came out on one).
+#[test]
+fn a_force_field_along_the_groove_is_one_finding() {
+    let noises = ["white", "ar1", "blur", "locked"];
+    let (mut named, mut said) = (0, Vec::new());
+    for (k, noise) in noises.into_iter().enumerate() {
+        let (alone, _, s) = discovered_at(bed::draw::FULL_SIZE, 60 + k as u64, noise, "field_z", 6.0);
+        said.push(format!("{noise}: named {alone}: {s:?}"));
+        named += usize::from(alone);
+    }
+    let text = said.join("\n");
+    eprintln!("{text}");
+    assert!(named >= 2, "a field in z named in {named}/4:\n{text}");
 }

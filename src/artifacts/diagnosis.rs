@@ -199,9 +199,10 @@ pub struct ForceMap {
     /// Largest |accel| / se over the grid.
     #[serde(with = "super::nan_null")]
     pub max_abs_z: f64,
-    /// The spline (lo, hi, basis size, coefficients; absent for the phase map): not serialized.
+    /// The spline (lo, knot spacing, segments, coefficients, and the weight of its
+    /// second-difference penalty in χ² per (m/s²)²; absent for the phase map): not serialized.
     #[serde(skip)]
-    pub spline: Option<(f64, f64, usize, Vec<f64>)>,
+    pub spline: Option<(f64, f64, usize, Vec<f64>, f64)>,
 }
 
 impl ForceMap {

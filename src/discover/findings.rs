@@ -140,6 +140,7 @@ pub(super) fn findings_of(
         let mut w = BTreeMap::new();
         if let Some(i) = sel.current.spec.extras.iter().position(|e| *e == acc.extra) {
             row.parameters = reported_parameters(&sel.current, i, ctx.materials, ctx.runs);
+            super::consolidate::field_size(sel, &acc.extra, ctx.runs, &mut row.parameters);
             let notes = bound_notes(&sel.current, i, ctx.materials);
             if !notes.is_empty() {
                 w.insert("at_bound".to_string(), serde_json::json!(notes));
@@ -166,7 +167,7 @@ pub(super) fn findings_of(
             final_score,
         ));
     }
-    for acc in &sel.removed {
+    for acc in sel.parts.iter().chain(&sel.removed) {
         let mut w = BTreeMap::new();
         w.insert("drift_probes".to_string(), probes_json(&acc.probes_after));
         findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));

@@ -57,7 +57,9 @@ fn local_bounds(run: &RunData) -> [(f64, f64); N_LOCAL] {
 /// Forward-difference steps of z0, t0, v0.
 const LOCAL_STEPS: [f64; N_LOCAL] = [1e-8, 1e-7, 1e-7];
 
-/// The runs as blocks of whitened residuals (predicted − observed)/σ, 0 at dropped samples.
+/// The runs as blocks of whitened residuals (predicted − observed)/σ, 0 at dropped samples,
+/// and after them, when a term is penalized (a spline's smoothness), one block of its
+/// pseudo-residuals with no parameters of its own.
 struct Runs<'a> {
     spec: &'a Spec,
     runs: &'a [RunData],
@@ -65,19 +67,40 @@ struct Runs<'a> {
     affects: Vec<Vec<bool>>,
     /// z0 only shifts the trajectory (no position-dependent force).
     z0_offset: bool,
+    /// Number of penalty pseudo-residuals, and which globals they depend on.
+    penalty_len: usize,
+    penalized: Vec<bool>,
+}
+
+/// Every extra term's penalty pseudo-residuals at globals `g`, in order.
+fn penalty_residuals(spec: &Spec, g: &[f64]) -> Vec<f64> {
+    spec.extras
+        .iter()
+        .enumerate()
+        .flat_map(|(i, e)| {
+            let o = spec.extra_offset(i);
+            e.penalty(&g[o..o + e.params().len()])
+        })
+        .collect()
 }
 
 impl BlockProblem for Runs<'_> {
     fn n_blocks(&self) -> usize {
-        self.runs.len()
+        self.runs.len() + usize::from(self.penalty_len > 0)
     }
 
     fn n_residuals(&self, b: usize) -> usize {
-        self.runs[b].t_s.len()
+        match self.runs.get(b) {
+            Some(r) => r.t_s.len(),
+            None => self.penalty_len,
+        }
     }
 
     fn residuals(&self, b: usize, shared: &[f64], own: &[f64], out: &mut [f64]) {
-        let run = &self.runs[b];
+        let Some(run) = self.runs.get(b) else {
+            out.copy_from_slice(&penalty_residuals(self.spec, shared));
+            return;
+        };
         let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
         predict(self.spec, shared, &l, run, out);
         let w = 1.0 / run.sigma_m;
@@ -87,14 +110,19 @@ impl BlockProblem for Runs<'_> {
     }
 
     fn uses(&self, b: usize, i: usize) -> bool {
-        self.affects[self.runs[b].material][i]
+        match self.runs.get(b) {
+            Some(r) => self.affects[r.material][i],
+            None => self.penalized[i],
+        }
     }
 
     fn own_column(&self, b: usize, k: usize, _: &[f64], _: &[f64], out: &mut [f64]) -> bool {
         if k != 0 || !self.z0_offset {
             return false;
         }
-        let run = &self.runs[b];
+        let Some(run) = self.runs.get(b) else {
+            return false;
+        };
         let w = 1.0 / run.sigma_m;
         for (o, keep) in out.iter_mut().zip(&run.keep) {
             *o = if *keep { w } else { 0.0 };
@@ -124,11 +152,20 @@ pub fn fit_joint(
             on
         })
         .collect();
+    let mut penalized = vec![false; ng];
+    for (i, e) in spec.extras.iter().enumerate() {
+        let (o, n) = (spec.extra_offset(i), e.params().len());
+        if !e.penalty(&start_g[o..o + n]).is_empty() {
+            penalized[o..o + n].iter_mut().for_each(|p| *p = true);
+        }
+    }
     let problem = Runs {
         spec,
         runs,
         affects,
         z0_offset: !spec.position_dependent(),
+        penalty_len: penalty_residuals(spec, start_g).len(),
+        penalized,
     };
     let shared: Vec<ParamSpec> = params
         .iter()
@@ -148,7 +185,7 @@ pub fn fit_joint(
             }
         })
         .collect();
-    let own: Vec<Vec<ParamSpec>> = runs
+    let mut own: Vec<Vec<ParamSpec>> = runs
         .iter()
         .zip(start_l)
         .map(|(run, l)| {
@@ -173,13 +210,17 @@ pub fn fit_joint(
         cost_tol: 1e-9,
         rel_tol: 1e-7,
     };
+    if problem.penalty_len > 0 {
+        own.push(Vec::new());
+    }
     let res = minimize_blocks(&problem, &shared, &own, &settings);
-    let chi2 = res.cost();
+    // the data's χ², without the penalty's block
+    let chi2_run: Vec<f64> = res.block_cost[..runs.len()].to_vec();
+    let chi2: f64 = chi2_run.iter().sum();
     let dof = runs.iter().map(|r| r.n_used()).sum::<usize>() as f64
         - (ng * usize::from(ctl.free_global) + N_LOCAL * runs.len()) as f64;
     let scale = (chi2 / dof.max(1.0)).max(1.0);
-    let local: Vec<[f64; N_LOCAL]> = res
-        .own
+    let local: Vec<[f64; N_LOCAL]> = res.own[..runs.len()]
         .iter()
         .map(|o| o.as_slice().try_into().expect("three locals"))
         .collect();
@@ -209,7 +250,7 @@ pub fn fit_joint(
         global: res.shared,
         local,
         chi2,
-        chi2_run: res.block_cost,
+        chi2_run,
         global_se,
         iterations: res.iterations,
         converged: res.termination.is_converged(),

@@ -5,6 +5,7 @@
 //! - `admissible.rs`: Whether a fitted term is physics (its search resolved it; a dissipation never pushes)
 //! - `blur.rs`: Tracking noise that grows with speed (motion blur)
 //! - `candidate.rs`: The joint model's parameter layout (`Spec`), a run's physics and predictions
+//! - `consolidate.rs`: One cause, one term: named forces of one variable that its force map outpredicts give way to the map
 //! - `cv.rs`: Leave-runs-out cross-validation of the simulated trajectories
 //! - `data.rs`: The runs discovery works on
 //! - `detection.rs`: Detection limits
@@ -84,7 +85,10 @@
 //!    held-out runs better (`cv.rs`, paired per-run t). The strongest passing term is added,
 //!    earlier terms re-tested (backward elimination), and the search repeats. When no single
 //!    term passes, or only a searched force does, pairs of named forms are tried (of the
-//!    searched force's place when one passed: `forward.rs`).
+//!    searched force's place when one passed: `forward.rs`). Then, for z and for v, the force
+//!    map fitted in place of the accepted forces of that variable replaces them when it predicts
+//!    held-out runs better (`consolidate.rs`): a field or a step along the groove is one map,
+//!    not a tilt, a wave and a bump.
 //! 5. **Sanity.** A term must be physics (`admissible.rs`): a drag that pushes, a form whose
 //!    scale ends at the fine end of its search, are refused; a parameter at a bound is said in
 //!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept.
@@ -105,6 +109,7 @@
 pub mod admissible;
 pub mod blur;
 pub mod candidate;
+mod consolidate;
 pub mod cv;
 pub mod data;
 pub mod detection;

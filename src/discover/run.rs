@@ -132,7 +132,7 @@ impl Ctx<'_> {
     }
 
     /// The force maps of `model` alone.
-    fn force_maps(&self, model: &Model) -> Proposals {
+    pub(super) fn force_maps(&self, model: &Model) -> Proposals {
         self.proposals(
             model,
             Wanted {
@@ -145,7 +145,7 @@ impl Ctx<'_> {
     }
 
     /// What every round reads.
-    fn setting(&self) -> Setting<'_> {
+    pub(super) fn setting(&self) -> Setting<'_> {
         Setting {
             materials: self.materials,
             runs: self.runs,
@@ -157,7 +157,7 @@ impl Ctx<'_> {
         }
     }
 
-    fn cross_validate(&self, model: &Model) -> CvResult {
+    pub(super) fn cross_validate(&self, model: &Model) -> CvResult {
         cross_validate(
             &model.spec,
             &model.params,
@@ -176,6 +176,7 @@ impl Selection {
             current_cv: base_cv.clone(),
             accepted: Vec::new(),
             removed: Vec::new(),
+            parts: Vec::new(),
             table: Vec::new(),
             last_rows: Vec::new(),
             last_probes: Vec::new(),
@@ -481,6 +482,9 @@ pub fn discover_reporting(
     say("mapping what is left (force maps in z, v, t and phase)");
     let (fallback, maps_after) = model_what_is_left(&mut sel, &ctx);
     ctx.trace("fallback done");
+    say("trying a map in z and in v in place of the named forces of each");
+    let (fallback, maps_after) = super::consolidate::consolidate(&mut sel, fallback, maps_after, &ctx);
+    ctx.trace("maps in place of named forms tried");
     say("residuals and drift before and after");
     let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
     let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);

@@ -41,6 +41,9 @@ pub(super) struct Selection {
     pub(super) current_cv: CvResult,
     pub(super) accepted: Vec<Accepted>,
     pub(super) removed: Vec<Accepted>,
+    /// Named terms still in the model that are reported as parts of one field in z with the
+    /// map accepted beside them (`consolidate.rs`).
+    pub(super) parts: Vec<Accepted>,
     /// Every candidate and probe row of every round.
     pub(super) table: Vec<CandidateRow>,
     /// The candidates of the last round (none accepted) and its probes.

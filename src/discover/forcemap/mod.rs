@@ -57,8 +57,9 @@ fn solve(m: &[f64], pen: &[f64], c: &[f64], p: usize) -> Option<(Vec<f64>, Vec<f
     Some((th, l))
 }
 
-/// The fitted map: coefficients, inverse penalized normal matrix, λ, edf, χ² drop, CV gain, RSS.
-type MapFit = (Vec<f64>, Vec<f64>, f64, f64, f64, f64, f64);
+/// The fitted map: coefficients, inverse penalized normal matrix, λ, edf, χ² drop, CV gain, RSS,
+/// and the penalty's weight in χ² per (m/s²)² of second difference (λ times the mean diagonal).
+type MapFit = (Vec<f64>, Vec<f64>, f64, f64, f64, f64, f64, f64);
 
 fn quad(m: &[f64], th: &[f64], p: usize) -> f64 {
     let mut s = 0.0;
@@ -167,7 +168,7 @@ fn fit_map(
     let rss = yy - 2.0 * dot(&th, &c) + quad(&m, &th, p);
     let (th0, _) = solve(&m, &pen_at(0.0, true), &c, p)?;
     let rss0 = yy - 2.0 * dot(&th0, &c) + quad(&m, &th0, p);
-    Some((th, inv, lam, edf, rss0 - rss, ss0 - ss, rss))
+    Some((th, inv, lam, edf, rss0 - rss, ss0 - ss, rss, lam * mean_diag))
 }
 
 /// Range of a variable over the sampled, moving part of every run.
@@ -226,7 +227,7 @@ pub fn force_map(
             piece(&cols, &p.y)
         })
         .collect();
-    let (th, inv, lambda, edf, chi2_drop, cv_gain, rss) =
+    let (th, inv, lambda, edf, chi2_drop, cv_gain, rss, weight) =
         fit_map(&pieces, n_glob, n_b, true, fold, k)?;
     let p = n_glob + n_b;
     let scale = (rss / (n_obs as f64 - edf - n_glob as f64).max(1.0))
@@ -272,7 +273,7 @@ pub fn force_map(
         chi2_drop,
         cv_gain,
         max_abs_z,
-        spline: Some((lo, dx, segments, coefs)),
+        spline: Some((lo, dx, segments, coefs, weight)),
     })
 }
 
@@ -296,7 +297,7 @@ pub fn phase_map(prep: &[Prepared], fold: &[usize], k: usize, n_obs: usize) -> O
             piece(&cols, &p.y)
         })
         .collect();
-    let (th, inv, lambda, edf, chi2_drop, cv_gain, rss) =
+    let (th, inv, lambda, edf, chi2_drop, cv_gain, rss, _) =
         fit_map(&pieces, n_glob, 2, false, fold, k)?;
     let p = n_glob + 2;
     let scale = (rss / (n_obs as f64 - edf - n_glob as f64).max(1.0))

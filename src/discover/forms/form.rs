@@ -168,6 +168,28 @@ pub trait Form: std::fmt::Debug + Send + Sync {
         false
     }
 
+    /// Pseudo-residuals the term adds to the joint fit's χ² at parameters `x` (a smoothness
+    /// penalty, in noise units); none for a form with fixed shape.
+    fn penalty(&self, _x: &[f64]) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// The one variable whose force map can stand for this term (a force of z fixed in the lab,
+    /// a force of the speed), None for a term that is no force of one variable. A constant
+    /// force along the groove (the tilt) says z.
+    fn map_variable(&self) -> Option<crate::physics::Variable> {
+        use crate::physics::Variable;
+        if self.place() != Place::Force {
+            None
+        } else if self.position_dependent() {
+            Some(Variable::Z)
+        } else if self.speed_dependent() {
+            Some(Variable::V)
+        } else {
+            None
+        }
+    }
+
     /// True for a form searched over a grid of trials (a scale: wavelength, width, frequency,
     /// or a spline's coefficients) rather than screened along its secant.
     fn searched(&self) -> bool {

@@ -23,6 +23,10 @@ impl Form for GrooveTilt {
     fn place(&self) -> Place {
         Place::Force
     }
+    /// A constant force along the groove: the mean of a force map in z.
+    fn map_variable(&self) -> Option<crate::physics::Variable> {
+        Some(crate::physics::Variable::Z)
+    }
     fn form(&self) -> String {
         "tilt: a = -g sin(alpha)".into()
     }

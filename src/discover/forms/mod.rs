@@ -185,6 +185,7 @@ mod tests {
                 lo: rg.z_lo,
                 dx: rg.span() / 16.0,
                 segments: 16,
+                penalty: 1.0,
             }
             .into(),
         );

@@ -299,7 +299,6 @@ fn build(
     let base = base(seed, size, pair, noise, rng);
     let mut spec = base.clone();
     let mut truths = Vec::new();
-    let names: Vec<&str> = base.materials.iter().map(|m| m.name).collect();
     let basis = if shapes.is_empty() {
         None
     } else {
@@ -316,7 +315,7 @@ fn build(
             want,
         );
         effect.apply(&mut spec);
-        truths.push(effect.truth(&names, got));
+        truths.push(effect.truth(&base, got));
     }
     Case {
         index,

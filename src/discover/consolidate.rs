@@ -1,0 +1,284 @@
+//! One cause, one term: the named forces of one variable that a force map in it outpredicts
+//! are replaced by the map.
+//!
+//! Forward selection adds named forms one at a time, so a force along the groove with no named
+//! shape (a field of several wavelengths, a step) comes out as a tilt, a wave and a bump
+//! together, and a force that rises and falls with speed as a drag. After the selection, for z
+//! and for v in turn, the accepted forces of that variable (`Form::map_variable`: forces fixed
+//! in the lab and the tilt, their mean, for z; drags and a resistance for v) are set aside with
+//! any fallback map of the same variable; the force map of what is left is fitted in their place
+//! as a spline and screened and cross-validated like any candidate. It replaces them when it
+//! predicts held-out runs better than they do, by a paired t over the runs above its one-sided
+//! 1 % critical value (a term is added at 5 %: the map has more freedom, and the forms it would
+//! replace passed every test); where the named forms predict as well the simpler stay, and the
+//! map's row says so. When a fallback map of that variable stood beside them, the map alone
+//! replaces the two when it predicts as well as both (paired t of map and forms over the map
+//! within the 5 % critical value): one map, not a map and the forms it holds. When the forms
+//! are still needed beside the map in z (a wave shorter than the map's knots can follow), the
+//! forms and the map are one force along the groove and are reported so: one finding whose
+//! size is their sum's where the runs go, the forms its parts (in the model, not findings).
+
+use super::candidate::Extra;
+use super::cv::paired_t;
+use super::forcemap::ForceMap;
+use super::forms;
+use super::forward::{run_round, LazyProposals, CV_LEVEL};
+use super::model::Model;
+use super::selection::{Accepted, Ctx, Selection};
+use super::data::RunData;
+use crate::artifacts::diagnosis::Estimate;
+use crate::physics::{Term, Variable};
+use crate::stats::dist::t_upper_quantile;
+use std::collections::BTreeMap;
+
+/// One-sided level of the paired t at which a map replaces named forms that passed.
+pub const REPLACE_LEVEL: f64 = 0.01;
+
+/// Tries, for z and then v, the map in place of the accepted forces of that variable; returns
+/// the map accepted last (or the fallback, unchanged) and the force maps of the final model.
+pub(super) fn consolidate(
+    sel: &mut Selection,
+    fallback: Option<Accepted>,
+    maps: Vec<ForceMap>,
+    ctx: &Ctx,
+) -> (Option<Accepted>, Vec<ForceMap>) {
+    if !ctx.opts.nonparametric {
+        return (fallback, maps);
+    }
+    let (mut fallback, mut changed) = (fallback, false);
+    for var in [Variable::Z, Variable::V] {
+        let group: Vec<usize> = (0..sel.accepted.len())
+            .filter(|&a| sel.accepted[a].extra.map_variable() == Some(var))
+            .collect();
+        if group.is_empty() {
+            continue;
+        }
+        let beside = fallback
+            .as_ref()
+            .is_some_and(|f| f.extra.map_variable() == Some(var));
+        let replaced = replace(sel, &group, beside.then(|| fallback.as_ref()).flatten(), var, ctx);
+        if replaced.is_none() && beside && var == Variable::Z {
+            let map = fallback.as_mut().expect("the fallback beside the forms");
+            absorb(sel, &group, map);
+            continue;
+        }
+        if let Some(map) = replaced {
+            if beside {
+                let mut gone = fallback.take().expect("the fallback beside the forms");
+                gone.row.accepted = false;
+                gone.row.evidence.decision = format!(
+                    "replaced by the map in {} fitted in place of it and the named forms beside it",
+                    var_name(var)
+                );
+                sel.removed.push(gone);
+            } else if let Some(f) = fallback.take() {
+                // a map of another variable stays: it is in the current model
+                sel.accepted.push(f);
+            }
+            fallback = Some(map);
+            changed = true;
+        }
+    }
+    if !changed {
+        return (fallback, maps);
+    }
+    let after = ctx.force_maps(&sel.current).maps;
+    (fallback, after)
+}
+
+fn var_name(var: Variable) -> &'static str {
+    match var {
+        Variable::Z => "z",
+        Variable::V => "v",
+        Variable::T => "t",
+    }
+}
+
+/// The current model without the extras `drop` (refitted once, from the current values).
+fn without_all(current: &Model, drop: &[&Extra], ctx: &Ctx) -> Model {
+    let mut m = current.clone();
+    for e in drop {
+        if let Some(i) = m.spec.extras.iter().position(|x| x == *e) {
+            m = m.without(i, ctx.materials, ctx.runs, 40);
+        }
+    }
+    m
+}
+
+/// The map in `var` fitted in place of accepted terms `group` (and of `beside`, a fallback map
+/// of the same variable): when it replaces them, they move to the removed terms, the model
+/// becomes the map's, and the map's accepted term is returned.
+fn replace(
+    sel: &mut Selection,
+    group: &[usize],
+    beside: Option<&Accepted>,
+    var: Variable,
+    ctx: &Ctx,
+) -> Option<Accepted> {
+    let mut drop: Vec<&Extra> = group.iter().map(|&a| &sel.accepted[a].extra).collect();
+    drop.extend(beside.map(|b| &b.extra));
+    let base = without_all(&sel.current, &drop, ctx);
+    let base_cv = ctx.cross_validate(&base);
+    let props = ctx.force_maps(&base);
+    let map = props
+        .maps
+        .iter()
+        .find(|m| m.variable == var_name(var) && m.spline.is_some())?
+        .clone();
+    let spline = Extra::from(forms::Spline::on(&map, var)?);
+    sel.round += 1;
+    let r = run_round(
+        sel.round,
+        &base,
+        &base_cv,
+        std::slice::from_ref(&spline),
+        &[],
+        &LazyProposals::ready(props),
+        &ctx.setting(),
+    );
+    let names: Vec<String> = drop.iter().map(|e| e.form()).collect();
+    let names = names.join("; ");
+    let mut rows = r.rows.clone();
+    let Some((i, model, cv)) = r.accepted else {
+        for row in &mut rows {
+            row.evidence.decision = format!(
+                "{} — tried as a map in {} in place of {names}",
+                row.evidence.decision,
+                var_name(var)
+            );
+        }
+        sel.table.extend(rows);
+        return None;
+    };
+    let df = ctx.runs.len().saturating_sub(1) as f64;
+    let (t_gain, t_loss) = (
+        paired_t(&sel.current_cv, &cv),
+        paired_t(&cv, &sel.current_cv),
+    );
+    let (replaces, why) = if beside.is_some() {
+        let crit = t_upper_quantile(CV_LEVEL, df);
+        (
+            t_loss <= crit,
+            format!(
+                "the map alone predicts held-out runs as well as the map and the named forms together (paired t of both over the map {t_loss:.2}, within its critical value {crit:.2})"
+            ),
+        )
+    } else {
+        let crit = t_upper_quantile(REPLACE_LEVEL, df);
+        (
+            cv.cv_rms_m < sel.current_cv.cv_rms_m && t_gain > crit,
+            format!(
+                "the map predicts held-out runs better than the named forms (paired t {t_gain:.2}, above its 1 % critical value {crit:.2})"
+            ),
+        )
+    };
+    if !replaces {
+        rows[i].accepted = false;
+        rows[i].evidence.decision = if beside.is_some() {
+            format!(
+                "not kept: fitted in place of {names}, the map in {} alone predicts held-out runs worse than they do together (paired t {t_loss:.2}, above {:.2}); they stay",
+                var_name(var),
+                t_upper_quantile(CV_LEVEL, df)
+            )
+        } else {
+            format!(
+                "not kept: fitted in place of {names}, the map in {} does not predict held-out runs better than they do (paired t {t_gain:.2}, needs {:.2}); the named forms, simpler, stand",
+                var_name(var),
+                t_upper_quantile(REPLACE_LEVEL, df)
+            )
+        };
+        sel.table.extend(rows);
+        return None;
+    }
+    rows[i].evidence.decision = format!(
+        "accepted in place of {names}: {why}; no named form has this shape"
+    );
+    sel.table.extend(rows.iter().cloned());
+    let before = sel.current.score(ctx.runs, Some(&sel.current_cv));
+    let after = model.score(ctx.runs, Some(&cv));
+    for &a in group.iter().rev() {
+        let mut gone = sel.accepted.remove(a);
+        gone.row.accepted = false;
+        gone.row.evidence.decision = format!(
+            "replaced by a map in {}: {why}",
+            var_name(var)
+        );
+        sel.removed.push(gone);
+    }
+    sel.current = model;
+    sel.current_cv = cv;
+    Some(Accepted {
+        row: rows[i].clone(),
+        before,
+        after,
+        probes_after: vec![],
+        null: r.nulls[i].clone(),
+        extra: spline,
+    })
+}
+
+/// Reports accepted terms `group` (forces of z) as parts of one field in z with `map`, the map
+/// in z accepted beside them: they stay in the model and leave the findings.
+fn absorb(sel: &mut Selection, group: &[usize], map: &mut Accepted) {
+    let names: Vec<String> = group
+        .iter()
+        .map(|&a| sel.accepted[a].extra.form())
+        .collect();
+    let names = names.join("; ");
+    for &a in group.iter().rev() {
+        let mut part = sel.accepted.remove(a);
+        part.row.accepted = false;
+        part.row.evidence.decision = format!(
+            "{}; part of one field in z: a map in z then took up what the named forms left, so the force along the groove has no single named shape and is reported once, as the field",
+            part.row.evidence.decision
+        );
+        sel.parts.push(part);
+    }
+    map.row.form = format!(
+        "{}; with {names}: one field in z, their sum",
+        map.row.form
+    );
+    map.row.evidence.decision = format!(
+        "{}; the named forms in z accepted before it are its parts: one force along the groove with no single named shape, sized as their sum",
+        map.row.evidence.decision
+    );
+}
+
+/// The whole field in z of `model` at `z`: the tilt, the waves, bumps and map in z.
+fn field_in_z(m: &super::sim::SimModel, z: f64) -> f64 {
+    let waves: f64 = m
+        .position
+        .iter()
+        .map(|(a, k, ph)| a * (k * z + ph).sin())
+        .sum();
+    let terms: f64 = m
+        .terms
+        .iter()
+        .filter(|t| match t {
+            Term::LocalizedForce { .. } | Term::PositionForce { .. } => true,
+            Term::Spline(s) => s.variable == Variable::Z,
+            _ => false,
+        })
+        .map(|t| t.accel(z, 0.0, 0.0))
+        .sum();
+    m.tilt_mps2 + waves + terms
+}
+
+/// The size of the field in z where the runs go (peak, where, RMS, covered fraction), replacing
+/// the map's own in `out`, when `map` is a map in z with parts.
+pub(super) fn field_size(
+    sel: &Selection,
+    map: &Extra,
+    runs: &[RunData],
+    out: &mut BTreeMap<String, Estimate>,
+) {
+    let Extra::Spline(sp) = map else {
+        return;
+    };
+    if sp.variable != Variable::Z || sel.parts.is_empty() {
+        return;
+    }
+    let m = &sel.current;
+    let sim = m.spec.sim_model(&m.fit.global, 0, 0.0);
+    sp.size_over_runs(&|z| field_in_z(&sim, z), runs, out);
+}
