@@ -188,6 +188,18 @@ fn replace(
             )
         };
         sel.table.extend(rows);
+        let crit = t_upper_quantile(CV_LEVEL, df);
+        if beside.is_none() && t_gain.abs() <= crit {
+            // neither predicts held-out runs better: a tie, said on the forms that stay
+            for &a in group {
+                sel.accepted[a].row.evidence.decision.push_str(&format!(
+                    "; tie: a map in {} fitted in place of {names} predicts held-out runs as well (paired t {t_gain:.2}, within {crit:.2}): these data cannot tell the named form{} from a force of {} with no named shape, and the named, simpler, is kept",
+                    var_name(var),
+                    if group.len() > 1 { "s" } else { "" },
+                    var_name(var)
+                ));
+            }
+        }
         return None;
     }
     rows[i].evidence.decision = format!(

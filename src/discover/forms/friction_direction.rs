@@ -30,7 +30,7 @@ impl Form for FrictionDirection {
         "a difference of friction by direction"
     }
     fn params(&self) -> Vec<ParamInfo> {
-        vec![p("delta_dir", 0.0, -0.9, 0.9, 1e-5)]
+        vec![p("delta_mu_rel", 0.0, -0.9, 0.9, 1e-5)]
     }
     fn enter(&self, x: &[f64], e: &mut Entry) {
         e.model.variation.by_direction = x[0];
@@ -38,7 +38,7 @@ impl Form for FrictionDirection {
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
         let mut out = BTreeMap::new();
         let d = f.x[0];
-        out.insert("delta_dir".into(), Estimate::new(d, f.se[0]));
+        out.insert("delta_mu_rel".into(), Estimate::new(d, f.se[0]));
         for (k, name) in f.materials.iter().enumerate() {
             let mu = f.global[k];
             out.insert(
