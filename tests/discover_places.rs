@@ -183,7 +183,8 @@ fn a_force_field_along_the_groove_is_one_finding() {
     let noises = ["white", "ar1", "blur", "locked"];
     let (mut named, mut said) = (0, Vec::new());
     for (k, noise) in noises.into_iter().enumerate() {
-        let (alone, _, s) = discovered_at(bed::draw::FULL_SIZE, 60 + k as u64, noise, "field_z", 6.0);
+        let (alone, _, s) =
+            discovered_at(bed::draw::FULL_SIZE, 60 + k as u64, noise, "field_z", 6.0);
         said.push(format!("{noise}: named {alone}: {s:?}"));
         named += usize::from(alone);
     }

@@ -20,12 +20,12 @@
 
 use super::candidate::Extra;
 use super::cv::paired_t;
+use super::data::RunData;
 use super::forcemap::ForceMap;
 use super::forms;
 use super::forward::{run_round, LazyProposals, CV_LEVEL};
 use super::model::Model;
 use super::selection::{Accepted, Ctx, Selection};
-use super::data::RunData;
 use crate::artifacts::diagnosis::Estimate;
 use crate::physics::{Term, Variable};
 use crate::stats::dist::t_upper_quantile;
@@ -56,7 +56,7 @@ pub(super) fn consolidate(
         let beside = fallback
             .as_ref()
             .is_some_and(|f| f.extra.map_variable() == Some(var));
-        let replaced = replace(sel, &group, beside.then(|| fallback.as_ref()).flatten(), var, ctx);
+        let replaced = replace(sel, &group, fallback.as_ref().filter(|_| beside), var, ctx);
         if replaced.is_none() && beside && var == Variable::Z {
             let map = fallback.as_mut().expect("the fallback beside the forms");
             absorb(sel, &group, map);
@@ -202,19 +202,15 @@ fn replace(
         }
         return None;
     }
-    rows[i].evidence.decision = format!(
-        "accepted in place of {names}: {why}; no named form has this shape"
-    );
+    rows[i].evidence.decision =
+        format!("accepted in place of {names}: {why}; no named form has this shape");
     sel.table.extend(rows.iter().cloned());
     let before = sel.current.score(ctx.runs, Some(&sel.current_cv));
     let after = model.score(ctx.runs, Some(&cv));
     for &a in group.iter().rev() {
         let mut gone = sel.accepted.remove(a);
         gone.row.accepted = false;
-        gone.row.evidence.decision = format!(
-            "replaced by a map in {}: {why}",
-            var_name(var)
-        );
+        gone.row.evidence.decision = format!("replaced by a map in {}: {why}", var_name(var));
         sel.removed.push(gone);
     }
     sel.current = model;
@@ -246,10 +242,7 @@ fn absorb(sel: &mut Selection, group: &[usize], map: &mut Accepted) {
         );
         sel.parts.push(part);
     }
-    map.row.form = format!(
-        "{}; with {names}: one field in z, their sum",
-        map.row.form
-    );
+    map.row.form = format!("{}; with {names}: one field in z, their sum", map.row.form);
     map.row.evidence.decision = format!(
         "{}; the named forms in z accepted before it are its parts: one force along the groove with no single named shape, sized as their sum",
         map.row.evidence.decision

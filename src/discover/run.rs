@@ -483,7 +483,8 @@ pub fn discover_reporting(
     let (fallback, maps_after) = model_what_is_left(&mut sel, &ctx);
     ctx.trace("fallback done");
     say("trying a map in z and in v in place of the named forces of each");
-    let (fallback, maps_after) = super::consolidate::consolidate(&mut sel, fallback, maps_after, &ctx);
+    let (fallback, maps_after) =
+        super::consolidate::consolidate(&mut sel, fallback, maps_after, &ctx);
     ctx.trace("maps in place of named forms tried");
     say("residuals and drift before and after");
     let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);

@@ -168,7 +168,16 @@ fn fit_map(
     let rss = yy - 2.0 * dot(&th, &c) + quad(&m, &th, p);
     let (th0, _) = solve(&m, &pen_at(0.0, true), &c, p)?;
     let rss0 = yy - 2.0 * dot(&th0, &c) + quad(&m, &th0, p);
-    Some((th, inv, lam, edf, rss0 - rss, ss0 - ss, rss, lam * mean_diag))
+    Some((
+        th,
+        inv,
+        lam,
+        edf,
+        rss0 - rss,
+        ss0 - ss,
+        rss,
+        lam * mean_diag,
+    ))
 }
 
 /// Range of a variable over the sampled, moving part of every run.
