@@ -11,12 +11,14 @@
 //! predicts held-out runs better than they do, by a paired t over the runs above its one-sided
 //! 1 % critical value (a term is added at 5 %: the map has more freedom, and the forms it would
 //! replace passed every test); where the named forms predict as well the simpler stay, and the
-//! map's row says so. When a fallback map of that variable stood beside them, the map alone
-//! replaces the two when it predicts as well as both (paired t of map and forms over the map
-//! within the 5 % critical value): one map, not a map and the forms it holds. When the forms
-//! are still needed beside the map in z (a wave shorter than the map's knots can follow), the
-//! forms and the map are one force along the groove and are reported so: one finding whose
-//! size is their sum's where the runs go, the forms its parts (in the model, not findings).
+//! forms say the tie. When a fallback map of that variable stood beside them, the map alone
+//! replaces the two when it predicts held-out runs as well as both (paired t of both over it
+//! within its 5 % critical value); otherwise, in z, the forms and the map are one force along
+//! the groove (a wave shorter than the map's knots can follow, say, beside it) and are reported
+//! so: one finding whose size is their sum's where the runs go, the forms its parts (in the
+//! model, not findings). Held-out runs judge the map
+//! against the model with the forms; only beside a fallback map is the model without them
+//! cross-validated.
 
 use super::candidate::Extra;
 use super::cv::paired_t;
@@ -118,7 +120,6 @@ fn replace(
     let mut drop: Vec<&Extra> = group.iter().map(|&a| &sel.accepted[a].extra).collect();
     drop.extend(beside.map(|b| &b.extra));
     let base = without_all(&sel.current, &drop, ctx);
-    let base_cv = ctx.cross_validate(&base);
     let props = ctx.force_maps(&base);
     let map = props
         .maps
@@ -126,11 +127,18 @@ fn replace(
         .find(|m| m.variable == var_name(var) && m.spline.is_some())?
         .clone();
     let spline = Extra::from(forms::Spline::on(&map, var)?);
+    // held-out runs judge the map against the model with the forms it would replace; beside a
+    // fallback map of its variable, against the model without either (the map alone must then
+    // predict as well as both), the only case that cross-validates that model
+    let judge_cv = match beside {
+        Some(_) => ctx.cross_validate(&base),
+        None => sel.current_cv.clone(),
+    };
     sel.round += 1;
     let r = run_round(
         sel.round,
         &base,
-        &base_cv,
+        &judge_cv,
         std::slice::from_ref(&spline),
         &[],
         &LazyProposals::ready(props),
@@ -139,67 +147,62 @@ fn replace(
     let names: Vec<String> = drop.iter().map(|e| e.form()).collect();
     let names = names.join("; ");
     let mut rows = r.rows.clone();
+    let df = ctx.runs.len().saturating_sub(1) as f64;
+    let (crit5, crit1) = (
+        t_upper_quantile(CV_LEVEL, df),
+        t_upper_quantile(REPLACE_LEVEL, df),
+    );
+    let place = format!("a map in {} fitted in place of {names}", var_name(var));
+    // held-out runs judged the map against the model with the forms (`run_round`'s 5 % test)
     let Some((i, model, cv)) = r.accepted else {
+        let t = rows.first().and_then(|row| row.evidence.cv_paired_t);
         for row in &mut rows {
-            row.evidence.decision = format!(
-                "{} — tried as a map in {} in place of {names}",
-                row.evidence.decision,
-                var_name(var)
-            );
+            row.evidence.decision = format!("{} — tried as {place}", row.evidence.decision);
         }
         sel.table.extend(rows);
+        if let (None, Some(t)) = (beside, t) {
+            if t.abs() <= crit5 {
+                // neither predicts held-out runs better: a tie, said on the forms that stay
+                for &a in group {
+                    sel.accepted[a].row.evidence.decision.push_str(&format!(
+                        "; tie: {place} predicts held-out runs as well (paired t {t:.2}, within {crit5:.2}): these data cannot tell the named form{} from a force of {} with no named shape, and the named, simpler, is kept",
+                        if group.len() > 1 { "s" } else { "" },
+                        var_name(var)
+                    ));
+                }
+            }
+        }
         return None;
     };
-    let df = ctx.runs.len().saturating_sub(1) as f64;
-    let (t_gain, t_loss) = (
-        paired_t(&sel.current_cv, &cv),
-        paired_t(&cv, &sel.current_cv),
-    );
+    let t_gain = paired_t(&sel.current_cv, &cv);
     let (replaces, why) = if beside.is_some() {
-        let crit = t_upper_quantile(CV_LEVEL, df);
+        let t_loss = paired_t(&cv, &sel.current_cv);
         (
-            t_loss <= crit,
+            t_loss <= crit5,
             format!(
-                "the map alone predicts held-out runs as well as the map and the named forms together (paired t of both over the map {t_loss:.2}, within its critical value {crit:.2})"
+                "the map alone predicts held-out runs as well as the map and the named forms together (paired t of both over the map {t_loss:.2}, within {crit5:.2})"
             ),
         )
     } else {
-        let crit = t_upper_quantile(REPLACE_LEVEL, df);
         (
-            cv.cv_rms_m < sel.current_cv.cv_rms_m && t_gain > crit,
+            t_gain > crit1,
             format!(
-                "the map predicts held-out runs better than the named forms (paired t {t_gain:.2}, above its 1 % critical value {crit:.2})"
+                "the map predicts held-out runs better than the named forms (paired t {t_gain:.2}, above its 1 % critical value {crit1:.2})"
             ),
         )
     };
     if !replaces {
         rows[i].accepted = false;
-        rows[i].evidence.decision = if beside.is_some() {
-            format!(
-                "not kept: fitted in place of {names}, the map in {} alone predicts held-out runs worse than they do together (paired t {t_loss:.2}, above {:.2}); they stay",
-                var_name(var),
-                t_upper_quantile(CV_LEVEL, df)
-            )
-        } else {
-            format!(
-                "not kept: fitted in place of {names}, the map in {} does not predict held-out runs better than they do (paired t {t_gain:.2}, needs {:.2}); the named forms, simpler, stand",
-                var_name(var),
-                t_upper_quantile(REPLACE_LEVEL, df)
-            )
+        rows[i].evidence.decision = match beside {
+            Some(_) => format!(
+                "not kept: {place} and the map beside them predicts held-out runs worse alone than they do together (paired t {:.2}, above {crit5:.2}); they stay",
+                paired_t(&cv, &sel.current_cv)
+            ),
+            None => format!(
+                "not kept: {place} predicts held-out runs better than they do (paired t {t_gain:.2}), but not beyond the 1 % critical value {crit1:.2} a map needs to replace named forms that passed; the named forms, simpler, stand"
+            ),
         };
         sel.table.extend(rows);
-        let crit = t_upper_quantile(CV_LEVEL, df);
-        if beside.is_none() && t_gain.abs() <= crit {
-            // neither predicts held-out runs better: a tie, said on the forms that stay
-            for &a in group {
-                sel.accepted[a].row.evidence.decision.push_str(&format!(
-                    "; tie: a map in {} fitted in place of {names} predicts held-out runs as well (paired t {t_gain:.2}, within {crit:.2}): these data cannot tell the named form{} from a force of {} with no named shape, and the named, simpler, is kept",
-                    var_name(var),
-                    if group.len() > 1 { "s" } else { "" },
-                    var_name(var)
-                ));
-            }
-        }
         return None;
     }
     rows[i].evidence.decision =

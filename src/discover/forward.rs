@@ -349,6 +349,12 @@ impl Trials<'_> {
                     "refused: each run's own mu and T take up the misfit it fits (differences between particles), and a phase per run fits any run's own misfit".into(),
                 );
             }
+            if self.refused[i].is_some() {
+                // a refused term cannot pass whatever held-out runs say: not cross-validated
+                // (its paired t is NaN and its row gives none)
+                self.cv_of[i] = Some((self.current_cv.clone(), f64::NAN));
+                return (false, self.current_cv.clone());
+            }
             let (_, mut cv, mut t) = self.held_out(&self.fitted[i]);
             if self.all[i].run_phase() {
                 // each held-out run's phase is fitted on that run: charge what it takes from
@@ -669,11 +675,11 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
         return "rejected: likelihood ratio (first order) within its bootstrap null".into();
     }
     if let Some((cv, t)) = &tr.cv_of[i] {
+        if let Some(why) = &tr.refused[i] {
+            return format!("{why} (not cross-validated)");
+        }
         ev.cv_paired_t = Some(*t);
         ev.cv_rms_m = Some(cv.cv_rms_m);
-        if let Some(why) = &tr.refused[i] {
-            return why.clone();
-        }
         if tr.displaced == Some(i) {
             return "passes both tests, but two named terms fitted together predict held-out runs as well with fixed shapes: they are named instead".into();
         }

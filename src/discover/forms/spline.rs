@@ -201,6 +201,11 @@ impl Form for Spline {
         .map(|(lr, b, vv)| (lr, b, vv.iter().map(|x| x.sqrt()).collect()));
         (trial, None)
     }
+    /// None of its own: the screen's estimate and the force map's curve start it (a spline
+    /// that vanishes everywhere is a third fit of every coefficient that neither needs).
+    fn starts(&self) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
     fn proposed(&self, p: &Proposals) -> Vec<Vec<f64>> {
         let name = match self.variable {
             Variable::Z => "z",
