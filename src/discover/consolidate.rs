@@ -165,9 +165,9 @@ fn replace(
                 // neither predicts held-out runs better: a tie, said on the forms that stay
                 for &a in group {
                     sel.accepted[a].row.evidence.decision.push_str(&format!(
-                        "; tie: {place} predicts held-out runs as well (paired t {t:.2}, within {crit5:.2}): these data cannot tell the named form{} from a force of {} with no named shape, and the named, simpler, is kept",
+                        "; tied with a map in {v} of no named shape: {place} predicts held-out runs as well (paired t {t:.2}, within {crit5:.2}), so these data cannot tell the named form{} from a force of {v} with no named shape, and the named, simpler, is kept",
                         if group.len() > 1 { "s" } else { "" },
-                        var_name(var)
+                        v = var_name(var)
                     ));
                 }
             }
