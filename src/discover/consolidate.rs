@@ -96,7 +96,8 @@ fn var_name(var: Variable) -> &'static str {
     }
 }
 
-/// The current model without the extras `drop` (refitted once, from the current values).
+/// The current model without the extras `drop` (refitted after each removal, from the values
+/// before it).
 fn without_all(current: &Model, drop: &[&Extra], ctx: &Ctx) -> Model {
     let mut m = current.clone();
     for e in drop {

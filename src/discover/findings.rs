@@ -167,7 +167,17 @@ pub(super) fn findings_of(
             final_score,
         ));
     }
-    for acc in sel.parts.iter().chain(&sel.removed) {
+    for acc in &sel.parts {
+        // a part of a field is still in the model: its values are the final fit's
+        let mut row = acc.row.clone();
+        if let Some(i) = sel.current.spec.extras.iter().position(|e| *e == acc.extra) {
+            row.parameters = reported_parameters(&sel.current, i, ctx.materials, ctx.runs);
+        }
+        let mut w = BTreeMap::new();
+        w.insert("part_of".to_string(), serde_json::json!("field in z"));
+        findings.push(finding(&row, acc.before.clone(), acc.after.clone(), w));
+    }
+    for acc in &sel.removed {
         let mut w = BTreeMap::new();
         w.insert("drift_probes".to_string(), probes_json(&acc.probes_after));
         findings.push(finding(&acc.row, acc.before.clone(), acc.after.clone(), w));

@@ -289,3 +289,50 @@ fn size_where_runs_go(sp: &Spline, at: &dyn Fn(f64) -> f64, runs: &[RunData]) ->
         covered: n as f64 / 201.0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spline(lo: f64, hi: f64, segments: usize) -> Spline {
+        Spline {
+            variable: Variable::Z,
+            lo,
+            dx: (hi - lo) / segments as f64,
+            segments,
+            penalty: 0.0,
+        }
+    }
+
+    /// A map's curve carried onto other knots: the same knots give the same coefficients, and
+    /// knots halved over the same range (the coarse spline lies in the fine one's space) the
+    /// same curve.
+    #[test]
+    fn a_maps_curve_is_carried_onto_other_knots() {
+        let coarse = spline(0.0, 0.01, 4);
+        let coefs = [0.3, -0.1, 0.5, 0.2, -0.4, 0.1, 0.0];
+        let same = coarse.resampled(0.0, 0.0025, 4, &coefs).unwrap();
+        for (a, b) in same.iter().zip(&coefs) {
+            assert!((a - b).abs() < 1e-9, "{same:?}");
+        }
+        let fine = spline(0.0, 0.01, 8);
+        let c = fine.resampled(0.0, 0.0025, 4, &coefs).unwrap();
+        assert_eq!(c.len(), 11);
+        let (a, b) = (coarse.force(&coefs), fine.force(&c));
+        let range = (0..=100).map(|k| a.at(k as f64 * 1e-4).abs()).fold(0.0, f64::max);
+        for k in 0..=100 {
+            let x = k as f64 * 1e-4;
+            assert!((a.at(x) - b.at(x)).abs() < 1e-6 * range, "at {x}: {} vs {}", a.at(x), b.at(x));
+        }
+    }
+
+    /// The penalty is the second differences of the coefficients, scaled by the weight's root,
+    /// and nothing without a weight.
+    #[test]
+    fn the_penalty_is_the_weighted_second_differences() {
+        let mut s = spline(0.0, 0.01, 2);
+        assert!(s.penalty(&[1.0, 2.0, 4.0, 8.0, 16.0]).is_empty());
+        s.penalty = 4.0;
+        assert_eq!(s.penalty(&[1.0, 2.0, 4.0, 8.0, 16.0]), vec![2.0, 4.0, 8.0]);
+    }
+}
