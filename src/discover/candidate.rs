@@ -102,6 +102,7 @@ impl Spec {
             tilt_mps2: 0.0,
             position: Vec::new(),
             terms: Vec::new(),
+            phased_term: None,
             variation: Default::default(),
             distortion: None,
         };

@@ -264,7 +264,9 @@ fn field_in_z(m: &super::sim::SimModel, z: f64) -> f64 {
         .terms
         .iter()
         .filter(|t| match t {
-            Term::LocalizedForce { .. } | Term::PositionForce { .. } => true,
+            Term::LocalizedForce { .. } | Term::PositionForce { .. } | Term::StepForce { .. } => {
+                true
+            }
             Term::Spline(s) => s.variable == Variable::Z,
             _ => false,
         })

@@ -69,11 +69,11 @@
 //!    (`response.rs`): a force map against lab z, signed v, time since the kick and the phase
 //!    (`forcemap/`), periodograms in z and in time (`spectral.rs`) and a bump scan. They only
 //!    propose starting values (`proposal.rs`).
-//! 3. **Forms.** Drags (quadratic, saturating), a rolling resistance, a tilt, forces periodic or
-//!    localized in lab z, a force periodic in time with a phase per run (`timeforce.rs`), μ(u) of
-//!    the slip speed (saturating or linear), μ by direction, μ along the groove (periodic, or its
-//!    gradient and curvature), a distortion; a
-//!    spline in one variable is the fallback (`unexplained`). Each form is a type in a file of
+//! 3. **Forms.** Drags (quadratic, saturating), a rolling resistance, a tilt, forces in lab z
+//!    (periodic, localized, a step), a force periodic in time with a phase per run
+//!    (`timeforce.rs`) or one phase for every run (locked to the kick), μ(u) of the slip speed
+//!    (saturating or linear), μ by direction, μ along the groove (periodic, or its gradient and
+//!    curvature), a distortion; a spline in one variable is the fallback (`unexplained`). Each form is a type in a file of
 //!    `forms/` (`Form`: place, parameters in SI units with bounds and sign, how it enters the
 //!    integrator, its screen, its sentence and estimates), listed once in its registry.
 //! 4. **Decide.** Each candidate's first-order likelihood ratio (`screen.rs`, maximised over a

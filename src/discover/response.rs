@@ -334,6 +334,7 @@ mod tests {
             tilt_mps2: 0.0,
             position: vec![],
             terms: vec![],
+            phased_term: None,
             variation: Default::default(),
             distortion: None,
         }

@@ -36,6 +36,9 @@ pub struct SimModel {
     /// Further physics terms (localized, time-periodic and spline forces), passed to the
     /// integrator as they are.
     pub terms: Vec<crate::physics::Term>,
+    /// The index in `terms` of the force periodic in time whose phase each run profiles
+    /// (`timeforce.rs`); a force periodic in time with one phase for every run is not it.
+    pub phased_term: Option<usize>,
     /// How μ varies with direction, position and slip speed (none by default).
     pub variation: crate::physics::FrictionVariation,
     /// What the camera does to the positions (None: it records them as they are).

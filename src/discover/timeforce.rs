@@ -47,12 +47,10 @@ pub fn best_phase(k: &[f64; 5]) -> f64 {
         .rem_euclid(TAU)
 }
 
-/// The index, amplitude and frequency of the time-periodic force of `m`, if it has one.
+/// The index, amplitude and frequency of the time-periodic force of `m` with a phase per run,
+/// if it has one.
 pub(super) fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
-    let idx = m
-        .terms
-        .iter()
-        .position(|t| matches!(t, Term::TimePeriodicForce { .. }))?;
+    let idx = m.phased_term?;
     let Term::TimePeriodicForce {
         amp_mps2, freq_hz, ..
     } = m.terms[idx]
@@ -102,6 +100,7 @@ fn run_columns(
     let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
     let mut without = m.clone();
     without.terms.remove(idx);
+    without.phased_term = None;
     let mut z0 = vec![0.0; tt.len()];
     let mut v = vec![0.0; tt.len()];
     without.simulate(l[0], l[2], &tt, &mut z0, Some(&mut v), None);

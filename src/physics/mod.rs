@@ -167,5 +167,5 @@ pub use restitution::Restitution;
 pub use simulate::simulate;
 pub use slip_friction::{SlipFriction, SlipShape};
 pub use spline::{basis as spline_basis, n_basis as spline_n_basis, SplineForce, Variable};
-pub use terms::Term;
+pub use terms::{step_shape, Term};
 pub use trajectory::{SwitchEvent, Trajectory};

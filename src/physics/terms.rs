@@ -32,6 +32,13 @@ pub enum Term {
         centre_m: f64,
         width_m: f64,
     },
+    /// A step fixed in the lab (the joint of two pieces of groove at different slopes):
+    /// `amp (1 + tanh((z − z_s)/(2w)))/2`, nothing below the step and `amp` above it.
+    StepForce {
+        amp_mps2: f64,
+        z_step_m: f64,
+        width_m: f64,
+    },
     /// Force periodic in the time since the kick (a vibration): `amp sin(2π f t + φ)`.
     /// A truth file may give each run its own φ (`[physics] time_phase_per_run = true`).
     TimePeriodicForce {
@@ -74,6 +81,11 @@ impl Term {
                 let u = (z_m - centre_m) / width_m;
                 amp_mps2 * (-0.5 * u * u).exp()
             }
+            Term::StepForce {
+                amp_mps2,
+                z_step_m,
+                width_m,
+            } => amp_mps2 * step_shape((z_m - z_step_m) / width_m),
             Term::TimePeriodicForce {
                 amp_mps2,
                 freq_hz,
@@ -125,8 +137,14 @@ impl Term {
             Term::GrooveTilt { .. } => "groove tilt",
             Term::PositionForce { .. } => "position-dependent force",
             Term::LocalizedForce { .. } => "localized force",
+            Term::StepForce { .. } => "step force",
             Term::TimePeriodicForce { .. } => "time-periodic force",
             Term::Spline(_) => "spline force",
         }
     }
+}
+
+/// The shape of a step of unit height and width: 0 far below, 1 far above, ½ at u = 0.
+pub fn step_shape(u: f64) -> f64 {
+    0.5 * (1.0 + (0.5 * u).tanh())
 }

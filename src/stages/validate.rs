@@ -102,7 +102,7 @@ pub fn effect_id(term: &Term) -> Option<Effect> {
         }
         Term::RollingResistance { .. } => Some(Effect::RollingResistance),
         Term::GrooveTilt { .. } => Some(Effect::GrooveTilt),
-        Term::PositionForce { .. } | Term::LocalizedForce { .. } => {
+        Term::PositionForce { .. } | Term::LocalizedForce { .. } | Term::StepForce { .. } => {
             Some(Effect::PositionDependentForce)
         }
         Term::TimePeriodicForce { .. } => Some(Effect::TimeDependentForce),

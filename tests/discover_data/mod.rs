@@ -65,6 +65,7 @@ impl Truth {
                 .map(|(a, lambda, ph)| vec![(a, 2.0 * std::f64::consts::PI / lambda, ph)])
                 .unwrap_or_default(),
             terms: vec![],
+            phased_term: None,
             variation: Default::default(),
             distortion: None,
         }

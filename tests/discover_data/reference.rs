@@ -267,6 +267,7 @@ mod tests {
             tilt_mps2: 0.0,
             position: vec![],
             terms: vec![],
+            phased_term: None,
             variation: Default::default(),
             distortion: None,
         }

@@ -16,7 +16,9 @@
 //! - `distortion.rs`: The camera's positions distorted across the image (a measurement)
 //! - `periodic_z.rs`: A force periodic in z, fixed in the lab (wavelength searched)
 //! - `localized.rs`: A localized force fixed in the lab (centre and width searched)
+//! - `step_z.rs`: A step in the force along the groove, fixed in the lab (place and width searched)
 //! - `time_periodic.rs`: A force periodic in time with a phase per run (frequency searched)
+//! - `time_common.rs`: A force periodic in time with one phase for every run, locked to the kick
 //! - `position_force.rs`: A force in z as a Fourier series over the observed range
 //! - `spline.rs`: The nonparametric fallback, a spline in one variable (`unexplained`)
 //! - `speed_drift_t.rs`: Probe: T drifting with the run's speed
@@ -100,7 +102,9 @@ registry! {
     self::distortion::Distortion,
     self::periodic_z::PeriodicZ,
     self::localized::Localized,
+    self::step_z::StepZ,
     self::time_periodic::TimePeriodic,
+    self::time_common::TimeCommon,
     self::position_force::PositionForce,
     self::spline::Spline,
     self::speed_drift_t::SpeedDriftT,
@@ -299,6 +303,7 @@ mod tests {
             [
                 "periodic_z",
                 "localized",
+                "step_z",
                 "quadratic_drag",
                 "saturating_drag"
             ]

@@ -51,6 +51,7 @@ impl Form for TimePeriodic {
         ]
     }
     fn enter(&self, x: &[f64], e: &mut Entry) {
+        e.model.phased_term = Some(e.model.terms.len());
         e.model.terms.push(Term::TimePeriodicForce {
             amp_mps2: x[1],
             freq_hz: x[0],

@@ -335,6 +335,42 @@ impl Effect {
             .collect()
     }
 
+    /// The peak of the random field over the stretches of groove that two single runs or more
+    /// of `spec` go through (its size is its peak over the whole field of view, much of which,
+    /// between the runs that start at either end, no run may reach).
+    fn field_peak_where_runs_go(&self, spec: &DatasetSpec) -> f64 {
+        let modes = self.field_modes();
+        let stretches: Vec<(f64, f64)> = spec
+            .render(true)
+            .iter()
+            .filter(|r| r.experiment == "single")
+            .map(|r| {
+                let z = r.tracks.iter().flatten().map(|f| f.z_m);
+                (
+                    z.clone().fold(f64::INFINITY, f64::min),
+                    z.fold(f64::NEG_INFINITY, f64::max),
+                )
+            })
+            .collect();
+        (0..=1200)
+            .map(|i| i as f64 * 1e-5)
+            .filter(|&z| {
+                stretches
+                    .iter()
+                    .filter(|(lo, hi)| *lo <= z && z <= *hi)
+                    .count()
+                    >= 2
+            })
+            .map(|z| {
+                modes
+                    .iter()
+                    .map(|(a, k, ph)| a * (k * z + ph).sin())
+                    .sum::<f64>()
+                    .abs()
+            })
+            .fold(0.0, f64::max)
+    }
+
     /// The spread the particles of each material of `spec` were given, relative to their mean
     /// (sample standard deviation over the material's single runs): the truth of a finding that
     /// "the particles differ by this much" is the spread of these particles, not the width of
@@ -392,7 +428,7 @@ impl Effect {
             ),
             "field_z" => (
                 s(&["map in z", "spline in z", "field in z"]),
-                vec![v("peak_accel_mps2", x)],
+                vec![v("peak_accel_mps2", self.field_peak_where_runs_go(spec))],
             ),
             "time_common_phase" | "time_run_phase" => (
                 s(&["periodic in time"]),
@@ -400,7 +436,10 @@ impl Effect {
             ),
             "speed_bump" => (
                 s(&["map in v", "spline in v", "in speed"]),
-                vec![v("peak_accel_mps2", x)],
+                vec![v(
+                    "peak_accel_mps2",
+                    speed_bump_beyond_drag(spec, x, p[0], p[1]),
+                )],
             ),
             "mu_slip_rising" => (s(&["mu(u)", "slip speed"]), vec![v("v_c_mps", x)]),
             "mu_material" => {
@@ -415,7 +454,10 @@ impl Effect {
             "mu_patch" => (s(&["in z", "mu(z", "patch"]), vec![v("delta_mu", p[2] * x)]),
             "mu_direction" => (s(&["direction"]), vec![v("delta_mu_rel", p[0] * x)]),
             "scale" => (s(&["scale"]), vec![v("scale_error", p[0] * x)]),
-            "distortion" => (s(&["distortion"]), vec![v("distortion", p[0] * x)]),
+            "distortion" => (
+                s(&["distortion"]),
+                vec![v("peak_shift_m", distortion_shift(spec, p[0] * x))],
+            ),
             "time_base" => (
                 s(&["time base", "frame rate", "timing"]),
                 vec![v("time_error", p[0] * x)],
@@ -448,4 +490,72 @@ impl Effect {
             at_plausible_max: self.size >= self.plausible_max() * (1.0 - 1e-9),
         }
     }
+}
+
+/// The shift a distortion κ about the image centre makes beyond a length scale and an offset,
+/// over the stretch of groove the single runs of `spec` are seen on: its peak (signed). The
+/// camera puts lab z at c + (z − c)(1 + κu²), u = (z − c)/c, c the image centre; the recordings
+/// say neither c nor the field of view, and on the observed stretch z = z_mid + h·x the shift
+/// κc·u³ is a cubic in x whose constant and linear parts are each run's offset and a length
+/// scale (μ, T, z0 and v0 take them exactly). What is left, a₂P₂(x) + a₃P₃(x) with
+/// a₂ = 2κcαβ², a₃ = 2κcβ³/5 (α = (z_mid − c)/c, β = h/c), is all the data can show of κ.
+fn distortion_shift(spec: &DatasetSpec, kappa: f64) -> f64 {
+    let c = 0.5 * spec.camera.fov_m;
+    let image = |z: f64| {
+        let u = (z - c) / c;
+        c + (z - c) * (1.0 + kappa * u * u)
+    };
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for run in spec
+        .render(true)
+        .iter()
+        .filter(|r| r.experiment == "single")
+    {
+        for f in run.tracks.iter().flatten() {
+            lo = lo.min(image(f.z_m));
+            hi = hi.max(image(f.z_m));
+        }
+    }
+    let (alpha, beta) = ((0.5 * (lo + hi) - c) / c, 0.5 * (hi - lo) / c);
+    let (a2, a3) = (
+        2.0 * kappa * c * alpha * beta * beta,
+        0.4 * kappa * c * beta.powi(3),
+    );
+    (0..=400)
+        .map(|j| {
+            let x = -1.0 + j as f64 / 200.0;
+            a2 * 0.5 * (3.0 * x * x - 1.0) + a3 * 0.5 * (5.0 * x.powi(3) - 3.0 * x)
+        })
+        .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a })
+}
+
+/// The peak of a speed bump (amplitude `amp` at speed `v_c`, width `w`) beyond a linear drag,
+/// over the speeds two single runs or more of `spec` go through (down to rest from the second
+/// fastest kick, both ways). A part proportional to v is a change of the drag time T, which each material's own T
+/// takes exactly, so no finding can size it: the truth is the bump less its least-squares line
+/// through zero over those speeds, as a map in v is sized.
+fn speed_bump_beyond_drag(spec: &DatasetSpec, amp: f64, v_c: f64, w: f64) -> f64 {
+    // speeds two runs or more go through: down to the second fastest kick each way
+    let mut v0: Vec<f64> = spec
+        .runs
+        .iter()
+        .filter(|r| r.experiment == "single")
+        .map(|r| r.v0)
+        .collect();
+    v0.sort_by(f64::total_cmp);
+    let lo = v0.get(1).copied().unwrap_or(0.0).min(0.0);
+    let hi = v0.iter().rev().nth(1).copied().unwrap_or(0.0).max(0.0);
+    let points: Vec<(f64, f64)> = (0..=200)
+        .map(|j| {
+            let v = lo + (hi - lo) * j as f64 / 200.0;
+            let x = (v.abs() - v_c) / w;
+            (v, -amp * v.signum() * (-0.5 * x * x).exp())
+        })
+        .collect();
+    let sxx: f64 = points.iter().map(|(v, _)| v * v).sum();
+    let k = points.iter().map(|(v, a)| v * a).sum::<f64>() / sxx;
+    points
+        .iter()
+        .map(|(v, a)| (a - k * v).abs())
+        .fold(0.0, f64::max)
 }

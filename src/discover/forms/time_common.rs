@@ -1,0 +1,149 @@
+//! A force periodic in time with one phase for every run, locked to the kick (a vibration the
+//! laser pulse sets off in the mount): a(t) = s·sin(2πft) + c·cos(2πft), t since the kick, its
+//! frequency searched.
+//!
+//! Unlike the form with a phase per run (`time_periodic`), nothing here is fitted run by run,
+//! so it is screened coherently over the runs like a force in z and cross-validated like any
+//! term, and it may go down to one period in the longest run: a push common to every run in
+//! the lab, whichever way each run moves, is neither a drag (which turns with the motion) nor a
+//! tilt (which does not change in time).
+
+use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use crate::artifacts::diagnosis::Estimate;
+use crate::discover::ranges::{Proposals, Ranges, Wanted};
+use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
+use crate::discover::spectral::f_grid;
+use crate::physics::Term;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::f64::consts::TAU;
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TimeCommon {
+    pub f_lo: f64,
+    pub f_hi: f64,
+}
+
+impl Form for TimeCommon {
+    /// Frequencies from one period in the longest run up to the sampling's.
+    fn offer(_n_materials: usize, rg: &Ranges) -> Option<Self> {
+        Some(TimeCommon {
+            f_lo: 1.0 / rg.duration_s,
+            f_hi: 1.05 * rg.f_max_hz,
+        })
+    }
+    fn name(&self) -> &'static str {
+        "time_common"
+    }
+    fn effect(&self) -> Option<&'static str> {
+        Some("time_dependent_force")
+    }
+    fn place(&self) -> Place {
+        Place::Force
+    }
+    fn form(&self) -> String {
+        "periodic in time, one phase for every run: a = A sin(2 pi f t + phi), t since the kick"
+            .into()
+    }
+    fn size_name(&self) -> &'static str {
+        "a periodic force in time locked to the kick"
+    }
+    fn params(&self) -> Vec<ParamInfo> {
+        let (f_lo, f_hi) = (self.f_lo, self.f_hi);
+        vec![
+            p("frequency_hz", 0.5 * (f_lo + f_hi), f_lo, f_hi, 1e-7 * f_hi),
+            p("sin_mps2", 0.0, -5.0, 5.0, 1e-4),
+            p("cos_mps2", 0.0, -5.0, 5.0, 1e-4),
+        ]
+    }
+    fn enter(&self, x: &[f64], e: &mut Entry) {
+        let (f, a, b) = (x[0], x[1], x[2]);
+        let amp = a.hypot(b);
+        if amp > 0.0 {
+            e.model.terms.push(Term::TimePeriodicForce {
+                amp_mps2: amp,
+                freq_hz: f,
+                phase_rad: b.atan2(a),
+            });
+        }
+    }
+    fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
+        let (a, b) = (f.x[1], f.x[2]);
+        let (sa, sb) = (f.se[1], f.se[2]);
+        let amp = a.hypot(b).max(1e-300);
+        let amp = Estimate::new(amp, ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp);
+        let phase = Estimate::new(
+            b.atan2(a).rem_euclid(TAU),
+            ((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp.value * amp.value),
+        );
+        let mut out = BTreeMap::new();
+        out.insert("frequency_hz".into(), Estimate::new(f.x[0], f.se[0]));
+        out.insert("amplitude_mps2".into(), amp.clone());
+        out.insert("peak_accel_mps2".into(), amp);
+        out.insert("phase_rad".into(), phase);
+        out
+    }
+    fn searched(&self) -> bool {
+        true
+    }
+    /// At each frequency of the grid, the runs' responses to sin and cos of 2πft regressed on
+    /// the prepared runs coherently (one pair shared by every run).
+    fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
+        let (prep, v, rg, reps) = (s.prep, s.v, s.rg, s.reps.clone());
+        let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
+            .into_iter()
+            .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
+            .collect();
+        let trials: Vec<Option<Trial>> = fs
+            .par_iter()
+            .map(|&f| {
+                let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
+                    let (rs, rc) = p.track.respond_time(TAU * f);
+                    Some(vec![p.column(rs), p.column(rc)])
+                })?;
+                Some((
+                    lr,
+                    vec![f, b[0], b[1]],
+                    vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
+                ))
+            })
+            .collect();
+        let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(
+            |(se, t)| Typical::Se {
+                se,
+                at: format!("at {:.0} Hz", t.1[0]),
+            },
+        );
+        (best_of(trials, reps.len()), typical)
+    }
+    fn wanted(&self) -> Wanted {
+        Wanted {
+            t: true,
+            ..Wanted::default()
+        }
+    }
+    fn proposed(&self, p: &Proposals) -> Vec<Vec<f64>> {
+        p.t.iter()
+            .flat_map(|s| s.peaks.iter())
+            .map(|pk| vec![pk.omega / TAU, pk.coef[0], pk.coef[1]])
+            .collect()
+    }
+    fn scale(&self) -> Option<(usize, &'static str)> {
+        Some((0, "frequency"))
+    }
+    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+        (!lower).then(|| format!("its frequency ran to the highest the search allows ({x:.1} Hz)"))
+    }
+    fn detection_size(
+        &self,
+        se: &[f64],
+        typical_se: Option<f64>,
+    ) -> Option<(&'static str, &'static str, f64, f64)> {
+        Some((
+            "amplitude_mps2",
+            "m/s²",
+            typical_se.unwrap_or(se[1].hypot(se[2]) / 2f64.sqrt()),
+            1.0,
+        ))
+    }
+}
