@@ -9,6 +9,7 @@
 //! tilt (which does not change in time).
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::wavelength;
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
@@ -68,14 +69,10 @@ impl Form for TimeCommon {
         }
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
-        let (a, b) = (f.x[1], f.x[2]);
-        let (sa, sb) = (f.se[1], f.se[2]);
-        let amp = a.hypot(b).max(1e-300);
-        let amp = Estimate::new(amp, ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp);
-        let phase = Estimate::new(
-            b.atan2(a).rem_euclid(TAU),
-            ((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp.value * amp.value),
-        );
+        // the pair's amplitude and phase as a wave's in z, with ω in place of k and t0 = 0
+        let x = [TAU * f.x[0], f.x[1], f.x[2]];
+        let se = [TAU * f.se[0], f.se[1], f.se[2]];
+        let [amp, _, phase] = wavelength::amplitude_wavelength_phase(&x, &se, 0.0);
         let mut out = BTreeMap::new();
         out.insert("frequency_hz".into(), Estimate::new(f.x[0], f.se[0]));
         out.insert("amplitude_mps2".into(), amp.clone());
