@@ -69,9 +69,10 @@ impl Form for TimeCommon {
         }
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
-        // the pair's amplitude and phase as a wave's in z, with ω in place of k and t0 = 0
+        // the pair's amplitude and phase as a wave's in z, with ω in place of k; the phase is
+        // at t = 0, so the frequency's error does not enter it (nor the period, not used)
         let x = [TAU * f.x[0], f.x[1], f.x[2]];
-        let se = [TAU * f.se[0], f.se[1], f.se[2]];
+        let se = [0.0, f.se[1], f.se[2]];
         let [amp, _, phase] = wavelength::amplitude_wavelength_phase(&x, &se, 0.0);
         let mut out = BTreeMap::new();
         out.insert("frequency_hz".into(), Estimate::new(f.x[0], f.se[0]));
