@@ -341,16 +341,10 @@ impl Trials<'_> {
             let start = std::time::Instant::now();
             self.fitted[i] = self.full(i);
             self.refused[i] = refusal(&self.fitted[i]);
-            if self.refused[i].is_none()
-                && self.all[i].run_phase()
-                && self.particles_differ()
-                && self.particles_differ_beside(i)
-            {
+            if self.refused[i].is_none() && self.all[i].run_phase() && self.particles_differ() {
                 // a phase per run fits whatever misfit a run has of its own; when each run's own
-                // μ and T take that misfit up, with the term in the model as without it, it is a
-                // difference between particles, said by the particle check on the final model (a
-                // vibration's misfit, which each run's μ and T take up only in part, leaves them
-                // once the term is in: a 186 Hz one of 0.35 m/s² was refused before this)
+                // μ and T take that misfit up, it is a difference between particles, said by the
+                // particle check on the final model
                 self.refused[i] = Some(
                     "refused: each run's own mu and T take up the misfit it fits (differences between particles), and a phase per run fits any run's own misfit".into(),
                 );
@@ -414,19 +408,6 @@ impl Trials<'_> {
             self.particles_differ = Some(c.is_some_and(|c| c.differ));
         }
         self.particles_differ.unwrap_or(false)
-    }
-
-    /// Whether the particle check says the runs differ in μ and T under candidate `i`'s full
-    /// fit (the current model with the term).
-    fn particles_differ_beside(&self, i: usize) -> bool {
-        super::particles::check(
-            &self.fitted[i],
-            self.set.runs,
-            self.set.materials,
-            self.set.opts.alpha,
-            self.set.opts.seed ^ 0x005E_ED0F_9A27,
-        )
-        .is_some_and(|c| c.differ)
     }
 
     /// When no significant candidate passes the held-out check alone, two of the strongest
