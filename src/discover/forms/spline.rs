@@ -51,7 +51,7 @@ impl Spline {
 
     /// The size of force `at` (a function of this spline's variable) where the runs go, on
     /// this spline's range and knot spacing: peak (and where), RMS, and the fraction of the
-    /// range near a sample; in v beyond its part proportional to v, a linear drag that the drag
+    /// range that two runs or more go through; in v beyond its part proportional to v, a linear drag that the drag
     /// time takes (`linear_drag_part_per_s`, the slope set aside).
     pub fn size_over_runs(
         &self,
@@ -280,9 +280,8 @@ fn size_where_runs_go(sp: &Spline, at: &dyn Fn(f64) -> f64, runs: &[RunData]) ->
         stretch[id] = (stretch[id].0.min(x), stretch[id].1.max(x));
     }
     // a point is where runs go when two runs or more go through it: what only one run shows is
-    // that run's own z0, t0 and v0 over again (the fastest run's first frames held a map in v
-    // at 0.12 m/s² beside a 0.005 m/s² bump, and a map in z read 0.010 against 0.006 m/s² at
-    // the end of a stretch only one run reached)
+    // that run's own z0, t0 and v0 over again (on two bench fields of 0.006 m/s², a map in z
+    // read 0.010 and 0.041 m/s² where one run went, 0.007 and 0.010 without those stretches)
     let near = |x: f64| stretch.iter().filter(|(lo, hi)| *lo <= x && x <= *hi).count() >= 2;
     let mut points: Vec<(f64, f64)> = (0..=200)
         .map(|j| sp.lo + (hi - sp.lo) * j as f64 / 200.0)
