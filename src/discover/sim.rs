@@ -33,7 +33,7 @@ pub struct SimModel {
     pub tilt_mps2: f64,
     /// Position-dependent force terms: a = amp·sin(kz·z + phase), as (amp_mps2, kz_per_m, phase_rad).
     pub position: Vec<(f64, f64, f64)>,
-    /// Further physics terms (localized, time-periodic and spline forces), passed to the
+    /// Further physics terms (localized, step, time-periodic and spline forces), passed to the
     /// integrator as they are.
     pub terms: Vec<crate::physics::Term>,
     /// The index in `terms` of the force periodic in time whose phase each run profiles

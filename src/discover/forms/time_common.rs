@@ -12,10 +12,9 @@ use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use super::wavelength;
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
+use crate::discover::screen_sums::{Trial, Typical};
 use crate::discover::spectral::f_grid;
 use crate::physics::Term;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
@@ -87,32 +86,19 @@ impl Form for TimeCommon {
     /// At each frequency of the grid, the runs' responses to sin and cos of 2πft regressed on
     /// the prepared runs coherently (one pair shared by every run).
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
-        let (prep, v, rg, reps) = (s.prep, s.v, s.rg, s.reps.clone());
-        let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
+        let fs: Vec<f64> = f_grid(s.rg.duration_s, s.rg.f_max_hz)
             .into_iter()
             .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
             .collect();
-        let trials: Vec<Option<Trial>> = fs
-            .par_iter()
-            .map(|&f| {
-                let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
-                    let (rs, rc) = p.track.respond_time(TAU * f);
-                    Some(vec![p.column(rs), p.column(rc)])
-                })?;
-                Some((
-                    lr,
-                    vec![f, b[0], b[1]],
-                    vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
-                ))
-            })
-            .collect();
-        let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(
-            |(se, t)| Typical::Se {
-                se,
-                at: format!("at {:.0} Hz", t.1[0]),
+        wavelength::pair_scan(
+            s,
+            &fs,
+            |p, f| {
+                let (rs, rc) = p.track.respond_time(TAU * f);
+                Some(vec![p.column(rs), p.column(rc)])
             },
-        );
-        (best_of(trials, reps.len()), typical)
+            |f| format!("at {f:.0} Hz"),
+        )
     }
     fn wanted(&self) -> Wanted {
         Wanted {

@@ -1,5 +1,6 @@
 //! What the two forms periodic in lab z share (a force, `periodic_z`; friction,
-//! `friction_periodic`): their wavenumber search, the amplitude and phase of a fitted (sin, cos)
+//! `friction_periodic`) and the force periodic in time locked to the kick (`time_common`): their
+//! coherent (sin, cos) scan, the amplitude and phase of a fitted (sin, cos)
 //! pair, and the words for a wavelength at the end of its search.
 
 use super::form::{ParamInfo, Search};
@@ -17,34 +18,53 @@ pub fn search<F>(s: &Search, k_lo: f64, k_hi: f64, values: F) -> (Option<Trial>,
 where
     F: Fn(&Prepared, fn(f64) -> f64, f64) -> Option<Vec<f64>> + Sync,
 {
-    let (prep, v, rg, reps) = (s.prep, s.v, s.rg, s.reps.clone());
-    let ks: Vec<f64> = k_grid(rg.span(), rg.lambda_min_m)
+    let ks: Vec<f64> = k_grid(s.rg.span(), s.rg.lambda_min_m)
         .into_iter()
         .filter(|k| *k >= k_lo && *k <= k_hi)
         .collect();
-    let trials: Vec<Option<Trial>> = ks
+    pair_scan(
+        s,
+        &ks,
+        |p, k| {
+            let fs = values(p, f64::sin, k)?;
+            let fc = values(p, f64::cos, k)?;
+            Some(vec![
+                p.column(p.track.respond_values(&fs)),
+                p.column(p.track.respond_values(&fc)),
+            ])
+        },
+        |k| format!("at a wavelength of {:.3} mm", 1e3 * TAU / k),
+    )
+}
+
+/// A coherent scan of a (sin, cos) pair over `grid` (wavenumbers, frequencies): at each value
+/// x, a run's two response columns `columns(p, x)` (None: the run takes no part), regressed on
+/// the prepared runs with one pair shared by every run; each trial's estimate is (x, sin, cos),
+/// and the most sensitive trial is said by `at(x)`.
+pub fn pair_scan<C, A>(
+    s: &Search,
+    grid: &[f64],
+    columns: C,
+    at: A,
+) -> (Option<Trial>, Option<Typical>)
+where
+    C: Fn(&Prepared, f64) -> Option<Vec<Vec<f64>>> + Sync,
+    A: Fn(f64) -> String,
+{
+    let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
+    let trials: Vec<Option<Trial>> = grid
         .par_iter()
-        .map(|&k| {
-            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| {
-                let fs = values(p, f64::sin, k)?;
-                let fc = values(p, f64::cos, k)?;
-                Some(vec![
-                    p.column(p.track.respond_values(&fs)),
-                    p.column(p.track.respond_values(&fc)),
-                ])
-            })?;
+        .map(|&x| {
+            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| columns(p, x))?;
             Some((
                 lr,
-                vec![k, b[0], b[1]],
+                vec![x, b[0], b[1]],
                 vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
             ))
         })
         .collect();
-    let typical =
-        most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt()).map(|(se, t)| Typical::Se {
-            se,
-            at: format!("at a wavelength of {:.3} mm", 1e3 * TAU / t.1[0]),
-        });
+    let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt())
+        .map(|(se, t)| Typical::Se { se, at: at(t.1[0]) });
     (best_of(trials, reps.len()), typical)
 }
 
