@@ -58,7 +58,16 @@ pub(super) fn consolidate(
         let beside = fallback
             .as_ref()
             .is_some_and(|f| f.extra.map_variable() == Some(var));
-        let replaced = replace(sel, &group, fallback.as_ref().filter(|_| beside), var, ctx);
+        // the force maps of the current model, while no replacement has changed it
+        let now = (!changed).then_some(maps.as_slice());
+        let replaced = replace(
+            sel,
+            &group,
+            fallback.as_ref().filter(|_| beside),
+            var,
+            now,
+            ctx,
+        );
         if replaced.is_none() && beside && var == Variable::Z {
             let map = fallback.as_mut().expect("the fallback beside the forms");
             absorb(sel, &group, map);
@@ -116,18 +125,29 @@ fn replace(
     group: &[usize],
     beside: Option<&Accepted>,
     var: Variable,
+    maps_now: Option<&[ForceMap]>,
     ctx: &Ctx,
 ) -> Option<Accepted> {
     let mut drop: Vec<&Extra> = group.iter().map(|&a| &sel.accepted[a].extra).collect();
     drop.extend(beside.map(|b| &b.extra));
     let base = without_all(&sel.current, &drop, ctx);
-    let props = ctx.force_maps(&base);
+    let mut props = ctx.force_maps(&base);
     let map = props
         .maps
-        .iter()
-        .find(|m| m.variable == var_name(var) && m.spline.is_some())?
-        .clone();
-    let spline = Extra::from(forms::Spline::on(&map, var)?);
+        .iter_mut()
+        .find(|m| m.variable == var_name(var) && m.spline.is_some())?;
+    let form = forms::Spline::on(map, var)?;
+    let now = match maps_now {
+        Some(m) => m.to_vec(),
+        None => ctx.force_maps(&sel.current).maps,
+    };
+    if let (Some(start), Some(sp)) = (
+        start_in_place(&form, &sel.current, &base, &now, var, ctx),
+        map.spline.as_mut(),
+    ) {
+        sp.3 = start;
+    }
+    let spline = Extra::from(form);
     // held-out runs judge the map against the model with the forms it would replace; beside a
     // fallback map of its variable, against the model without either (the map alone must then
     // predict as well as both), the only case that cross-validates that model
@@ -227,6 +247,41 @@ fn replace(
         null: r.nulls[i].clone(),
         extra: spline,
     })
+}
+
+/// Where a fit in full of the map in place of named forms starts: the force those forms give
+/// beyond what the model without them keeps (the two models' accelerations apart, on the map's
+/// basis), plus the map of what the model with them leaves (`maps_now`). The map of the model
+/// without them is the same force linearized about trajectories without it: for a strong
+/// force (a drag that halves the speeds) it starts far off, and the fit took tens of
+/// iterations. None when the two cannot be evaluated on the map's basis.
+fn start_in_place(
+    form: &forms::Spline,
+    with: &Model,
+    without: &Model,
+    maps_now: &[ForceMap],
+    var: Variable,
+    ctx: &Ctx,
+) -> Option<Vec<f64>> {
+    let v0 = super::forward::median_speed(&with.fit.local);
+    let z_mid = 0.5 * (ctx.rg.z_lo + ctx.rg.z_hi);
+    let physics = |m: &Model| m.spec.sim_model(&m.fit.global, 0, v0).to_physics();
+    let (a, b) = (physics(with), physics(without));
+    let at = |m: &crate::physics::Model, x: f64| match var {
+        Variable::Z => m.accel(x, 0.0, 0.0),
+        Variable::V => m.accel(z_mid, x, 0.0),
+        Variable::T => m.accel(z_mid, 0.0, x),
+    };
+    let mut start = form.projected(&|x| at(&a, x) - at(&b, x), form.segments)?;
+    let left = maps_now
+        .iter()
+        .find(|m| m.variable == var_name(var))
+        .and_then(|m| m.spline.as_ref())
+        .and_then(|(lo, dx, segments, coefs, _)| form.resampled(*lo, *dx, *segments, coefs));
+    if let Some(left) = left {
+        start.iter_mut().zip(&left).for_each(|(s, l)| *s += l);
+    }
+    start.iter().all(|c| c.is_finite()).then_some(start)
 }
 
 /// Reports accepted terms `group` (forces of z) as parts of one field in z with `map`, the map

@@ -300,6 +300,12 @@ impl Trials<'_> {
         let e = self.all[i];
         let n = e.params().len();
         let fitted = &self.fitted[i].fit.global;
+        if e.proposal_supersedes_screen() {
+            let proposed = data_starts(e, self.props.get());
+            if !proposed.is_empty() {
+                return proposed;
+            }
+        }
         let mut starts = vec![clamp_to(e, &fitted[fitted.len() - n..])];
         if e.searched() {
             starts.extend(data_starts(e, self.props.get()));

@@ -32,6 +32,7 @@ use crate::lsq::Termination;
 use crate::physics::{Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use crate::stats::dist::chi2_sf;
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// A difference of physics between the pairs and the single runs must also be this large to
@@ -756,25 +757,31 @@ pub fn check_pairs(
 ) -> (Vec<Finding>, Vec<String>) {
     let mut notes = Vec::new();
     let mut drafts = Vec::new();
-    let by_material = pair_runs_by_material(recordings);
-    for (material, runs) in &by_material {
-        let Some(single) = physics.get(material) else {
-            notes.push(format!(
+    let by_material: Vec<(String, Vec<PairRun>)> =
+        pair_runs_by_material(recordings).into_iter().collect();
+    // the materials are independent: tested side by side, kept in their order
+    let tested: Vec<_> = by_material
+        .par_iter()
+        .map(|(material, runs)| {
+            let single = physics.get(material)?;
+            Some(test_material(
+                material, runs, single, groove, max_iter, None,
+            ))
+        })
+        .collect();
+    for ((material, runs), draft) in by_material.iter().zip(tested) {
+        match (physics.get(material), draft) {
+            (Some(single), Some(d)) => drafts.push((runs, single, d)),
+            _ => notes.push(format!(
                 "collision runs of {material}: no single-run physics of this material to test"
-            ));
-            continue;
-        };
-        drafts.push((
-            runs,
-            single,
-            test_material(material, runs, single, groove, max_iter, None),
-        ));
+            )),
+        }
     }
     // a force between the particles, from each material's held fit; an accepted one is carried
     // into both tests of that material, made again (the force would read as a mismatch of
     // friction and drag or as a misfit after impacts)
     let forces: Vec<ForceTest> = drafts
-        .iter()
+        .par_iter()
         .map(|(runs, _, d)| {
             test_force(
                 &d.material,

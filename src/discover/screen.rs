@@ -258,6 +258,7 @@ pub fn screen(
         .enumerate()
         .map(|(i, e)| {
             let name = short(e);
+            let clock = std::time::Instant::now();
             let (t, typical, exact) = if e.searched() {
                 (ctl.say)(&format!(
                     "candidate {}/{n} {name}: replicates 0/{} done",
@@ -298,6 +299,9 @@ pub fn screen(
                 let (t, exact) = named_trial(e, current, runs, prep, &null_pred, &v);
                 (t, None, exact)
             };
+            if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
+                eprintln!("screen: {name} took {:.2} s", clock.elapsed().as_secs_f64());
+            }
             t.map(|(lr, estimate, se)| Screened {
                 lr: lr[0],
                 replicates: lr[1..].to_vec(),

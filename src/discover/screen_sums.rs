@@ -170,6 +170,14 @@ impl Sums {
     }
 
     pub(super) fn add(&mut self, cols: &[Vec<f64>], p: &Prepared, v: &Vectors, yr: &[Vec<f64>]) {
+        self.add_design(cols, p, v);
+        for (r, yb) in yr[self.reps.clone()].iter().enumerate() {
+            self.add_replicate(r, cols, yb);
+        }
+    }
+
+    /// A run's columns against each other and against the shared parameters' columns.
+    fn add_design(&mut self, cols: &[Vec<f64>], p: &Prepared, v: &Vectors) {
         let (q, k) = (self.q, v.kept.len());
         for a in 0..q {
             for b in a..q {
@@ -183,18 +191,21 @@ impl Sums {
                 self.xtg[a * k + g] += dot(&cols[a], &p.glob[jg]);
             }
         }
-        // one pass over each replicate for two columns at a time
-        for (xty, yb) in self.xty.iter_mut().zip(&yr[self.reps.clone()]) {
-            let mut a = 0;
-            while a + 1 < q {
-                let (s0, s1) = dot2(&cols[a], &cols[a + 1], yb);
-                xty[a] += s0;
-                xty[a + 1] += s1;
-                a += 2;
-            }
-            if a < q {
-                xty[a] += dot(&cols[a], yb);
-            }
+    }
+
+    /// A run's columns against its replicate `r` of `reps` (`yb`): one pass over the
+    /// replicate for two columns at a time.
+    fn add_replicate(&mut self, r: usize, cols: &[Vec<f64>], yb: &[f64]) {
+        let (q, xty) = (self.q, &mut self.xty[r]);
+        let mut a = 0;
+        while a + 1 < q {
+            let (s0, s1) = dot2(&cols[a], &cols[a + 1], yb);
+            xty[a] += s0;
+            xty[a + 1] += s1;
+            a += 2;
+        }
+        if a < q {
+            xty[a] += dot(&cols[a], yb);
         }
     }
 
@@ -393,6 +404,55 @@ where
         }
     }
     s
+}
+
+/// Trials per pass over a run's replicates in `coherent_scan` (at most).
+const SCAN_BLOCK: usize = 16;
+
+/// `coherent` at every trial `x` of `grid` (`cols(p, x)` a run's columns there), the same
+/// numbers trial by trial, but a run's replicates are read once for a block of trials instead
+/// of once per trial: they are tens of megabytes over the runs, far more than the caches
+/// hold, and reading them was the scan's cost.
+pub(super) fn coherent_scan<X, F>(
+    prep: &[Prepared],
+    v: &Vectors,
+    q: usize,
+    reps: Range<usize>,
+    grid: &[X],
+    cols: F,
+) -> Vec<Option<(Vec<f64>, Vec<f64>, Vec<f64>)>>
+where
+    X: Sync,
+    F: Fn(&Prepared, &X) -> Option<Vec<Vec<f64>>> + Sync,
+{
+    // blocks small enough that every core has several
+    let block = (grid.len() / (4 * rayon::current_num_threads()).max(1)).clamp(1, SCAN_BLOCK);
+    grid.par_chunks(block)
+        .flat_map_iter(|xs| {
+            let mut sums: Vec<Sums> = xs
+                .iter()
+                .map(|_| Sums::new(q, v.kept.len(), reps.clone()))
+                .collect();
+            for (p, yr) in prep.iter().zip(&v.y) {
+                let c: Vec<Option<Vec<Vec<f64>>>> = xs.iter().map(|x| cols(p, x)).collect();
+                for (s, c) in sums.iter_mut().zip(&c) {
+                    if let Some(c) = c {
+                        s.add_design(c, p, v);
+                    }
+                }
+                for (r, yb) in yr[reps.clone()].iter().enumerate() {
+                    for (s, c) in sums.iter_mut().zip(&c) {
+                        if let Some(c) = c {
+                            s.add_replicate(r, c, yb);
+                        }
+                    }
+                }
+            }
+            sums.into_iter()
+                .map(|s| s.solve(v, &[]))
+                .collect::<Vec<_>>()
+        })
+        .collect()
 }
 
 /// Coherent trial (`coherent_sums`) solved.

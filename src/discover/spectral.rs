@@ -68,8 +68,8 @@ fn z_power(prep: &[Prepared], z_ref: f64, kk: f64) -> (f64, [f64; 2]) {
         let z = p.track.variable(crate::physics::Variable::Z);
         let fs: Vec<f64> = z.iter().map(|z| (kk * (z - z_ref)).sin()).collect();
         let fc: Vec<f64> = z.iter().map(|z| (kk * (z - z_ref)).cos()).collect();
-        let xs = p.column(p.track.respond_values(&fs));
-        let xc = p.column(p.track.respond_values(&fc));
+        let (rs, rc) = p.track.respond_values_pair(&fs, &fc);
+        let (xs, xc) = (p.column(rs), p.column(rc));
         a[0] += dot(&xs, &xs);
         a[1] += dot(&xs, &xc);
         a[2] += dot(&xc, &xc);

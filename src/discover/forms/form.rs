@@ -220,6 +220,13 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn proposed(&self, _p: &Proposals) -> Vec<Vec<f64>> {
         vec![]
     }
+    /// True when what the residuals propose (`proposed`) is this form's screen estimate made
+    /// smooth, so that a fit in full starts from the proposal alone when there is one (a
+    /// spline: its force map's coefficients, where the screen's unpenalized estimate runs to
+    /// its bounds at speeds or places no run reaches and only slows the fit).
+    fn proposal_supersedes_screen(&self) -> bool {
+        false
+    }
     /// The form's own starting values: where it vanishes, plus a few for a nonlinear scale.
     fn starts(&self) -> Vec<Vec<f64>> {
         vec![self.params().iter().map(|p| p.start).collect()]

@@ -4,9 +4,8 @@
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{bump_column, bump_trials, Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
+use crate::discover::screen_sums::{best_of, coherent_scan, most_sensitive, Trial, Typical};
 use crate::physics::Term;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -75,19 +74,20 @@ impl Form for Localized {
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
         let trials = bump_trials(s.rg, self.w_lo, self.w_hi);
-        let out: Vec<Option<Trial>> = trials
-            .par_iter()
-            .map(|&(c, w)| {
-                let (lr, b, var) = coherent(prep, v, 1, reps.clone(), &[], |p| {
-                    bump_column(p, c, w).map(|x| vec![x])
-                })?;
-                Some((
-                    lr,
-                    vec![b[0], c, w],
-                    vec![var[0].sqrt(), f64::NAN, f64::NAN],
-                ))
-            })
-            .collect();
+        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, |p, &(c, w)| {
+            bump_column(p, c, w).map(|x| vec![x])
+        })
+        .into_iter()
+        .zip(&trials)
+        .map(|(t, &(c, w))| {
+            let (lr, b, var) = t?;
+            Some((
+                lr,
+                vec![b[0], c, w],
+                vec![var[0].sqrt(), f64::NAN, f64::NAN],
+            ))
+        })
+        .collect();
         let typical = most_sensitive(&out, |se| se[0]).map(|(se, t)| Typical::Se {
             se,
             at: format!(

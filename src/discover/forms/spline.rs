@@ -72,13 +72,25 @@ impl Spline {
 
     /// Coefficients on this spline's knots closest (least squares over a fine grid) to the
     /// spline on another's: a map's curve as this spline's start.
-    fn resampled(&self, lo: f64, dx: f64, segments: usize, coefs: &[f64]) -> Option<Vec<f64>> {
+    pub fn resampled(
+        &self,
+        lo: f64,
+        dx: f64,
+        segments: usize,
+        coefs: &[f64],
+    ) -> Option<Vec<f64>> {
         let map = SplineForce {
             variable: self.variable,
             lo_x: lo,
             dx,
             coefs_mps2: coefs.to_vec(),
         };
+        self.projected(&|x| map.at(x), segments)
+    }
+
+    /// The coefficients on this spline's basis nearest (least squares at 8 points per basis
+    /// function and per `segments` of the source, evenly over the range) to force `f`.
+    pub fn projected(&self, f: &dyn Fn(f64) -> f64, segments: usize) -> Option<Vec<f64>> {
         let nb = spline_n_basis(self.segments);
         let (mut m, mut c) = (vec![0.0; nb * nb], vec![0.0; nb]);
         let points = 8 * (nb + segments);
@@ -87,7 +99,7 @@ impl Spline {
             let b: Vec<f64> = (0..nb)
                 .map(|j| spline_basis(self.lo, self.dx, self.segments, j, x))
                 .collect();
-            let y = map.at(x);
+            let y = f(x);
             for i in 0..nb {
                 c[i] += b[i] * y;
                 for j in 0..nb {
@@ -209,6 +221,9 @@ impl Form for Spline {
     /// that vanishes everywhere is a third fit of every coefficient that neither needs).
     fn starts(&self) -> Vec<Vec<f64>> {
         Vec::new()
+    }
+    fn proposal_supersedes_screen(&self) -> bool {
+        true
     }
     fn proposed(&self, p: &Proposals) -> Vec<Vec<f64>> {
         let name = match self.variable {

@@ -8,9 +8,8 @@
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
+use crate::discover::screen_sums::{best_of, coherent_scan, most_sensitive, Trial, Typical};
 use crate::physics::{step_shape, Term, Variable};
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -98,21 +97,22 @@ impl Form for StepZ {
     /// prepared runs coherently (one height shared by every run).
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
-        let out: Vec<Option<Trial>> = self
-            .trials()
-            .par_iter()
-            .map(|&(zs, w)| {
-                let (lr, b, var) = coherent(prep, v, 1, reps.clone(), &[], |p| {
-                    let z = p.track.variable(Variable::Z);
-                    let f: Vec<f64> = z.iter().map(|zz| step_shape((zz - zs) / w)).collect();
-                    // a run that never comes near the step's upper side feels nothing
-                    f.iter()
-                        .any(|x| *x > 1e-3)
-                        .then(|| vec![p.column(p.track.respond_values(&f))])
-                })?;
-                Some((lr, vec![b[0], zs, w], vec![var[0].sqrt(), f64::NAN, f64::NAN]))
-            })
-            .collect();
+        let trials = self.trials();
+        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, |p, &(zs, w)| {
+            let z = p.track.variable(Variable::Z);
+            let f: Vec<f64> = z.iter().map(|zz| step_shape((zz - zs) / w)).collect();
+            // a run that never comes near the step's upper side feels nothing
+            f.iter()
+                .any(|x| *x > 1e-3)
+                .then(|| vec![p.column(p.track.respond_values(&f))])
+        })
+        .into_iter()
+        .zip(&trials)
+        .map(|(t, &(zs, w))| {
+            let (lr, b, var) = t?;
+            Some((lr, vec![b[0], zs, w], vec![var[0].sqrt(), f64::NAN, f64::NAN]))
+        })
+        .collect();
         let typical = most_sensitive(&out, |se| se[0]).map(|(se, t)| Typical::Se {
             se,
             at: format!("at z = {:.2} mm", 1e3 * t.1[1]),

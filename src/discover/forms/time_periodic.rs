@@ -93,41 +93,63 @@ impl Form for TimePeriodic {
         let nrep = reps.len();
         // the data (replicate 0) is scanned in every batch, for the noise floor below
         let data_in = reps.start == 0;
+        // a block of frequencies per pass over a run's replicates (`coherent_scan`'s reason)
+        let block = (fs.len() / (4 * rayon::current_num_threads()).max(1)).clamp(1, 16);
         let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = fs
-            .par_iter()
-            .map(|&f| {
-                let mut sb = vec![0.0; nrep];
-                let mut s0 = 0.0;
-                let mut info = Vec::with_capacity(prep.len());
+            .par_chunks(block)
+            .flat_map_iter(|fb| {
+                let mut sb = vec![vec![0.0; nrep]; fb.len()];
+                let mut s0 = vec![0.0; fb.len()];
+                let mut info = vec![Vec::with_capacity(prep.len()); fb.len()];
                 for (p, yr) in prep.iter().zip(&v.y) {
-                    let (rs, rc) = p.track.respond_time(TAU * f);
-                    let xs = p.column(rs);
-                    let xc = p.column(rc);
-                    let a = 0.5 * (dot(&xs, &xs) + dot(&xc, &xc));
-                    if a <= 0.0 {
-                        continue;
-                    }
-                    info.push(a);
-                    for (s, yb) in sb.iter_mut().zip(&yr[reps.clone()]) {
-                        let (bs, bc) = dot2(&xs, &xc, yb);
-                        *s += bs.hypot(bc);
+                    let cols: Vec<Option<(Vec<f64>, Vec<f64>)>> = fb
+                        .iter()
+                        .zip(&mut info)
+                        .map(|(&f, info)| {
+                            let (rs, rc) = p.track.respond_time(TAU * f);
+                            let (xs, xc) = (p.column(rs), p.column(rc));
+                            let a = 0.5 * (dot(&xs, &xs) + dot(&xc, &xc));
+                            (a > 0.0).then(|| {
+                                info.push(a);
+                                (xs, xc)
+                            })
+                        })
+                        .collect();
+                    for (r, yb) in yr[reps.clone()].iter().enumerate() {
+                        for (c, sb) in cols.iter().zip(&mut sb) {
+                            if let Some((xs, xc)) = c {
+                                let (bs, bc) = dot2(xs, xc, yb);
+                                sb[r] += bs.hypot(bc);
+                            }
+                        }
                     }
                     if !data_in {
-                        let (bs, bc) = dot2(&xs, &xc, &yr[0]);
-                        s0 += bs.hypot(bc);
+                        for (c, s0) in cols.iter().zip(&mut s0) {
+                            if let Some((xs, xc)) = c {
+                                let (bs, bc) = dot2(xs, xc, &yr[0]);
+                                *s0 += bs.hypot(bc);
+                            }
+                        }
                     }
                 }
-                let sa: f64 = info.iter().sum();
-                if sa <= 0.0 {
-                    return (None, info, f64::NAN);
-                }
-                let data = if data_in { sb[0] } else { s0 };
-                let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
-                (
-                    Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
-                    info,
-                    data * data / sa,
-                )
+                fb.iter()
+                    .zip(sb)
+                    .zip(s0)
+                    .zip(info)
+                    .map(|(((&f, sb), s0), info)| {
+                        let sa: f64 = info.iter().sum();
+                        if sa <= 0.0 {
+                            return (None, info, f64::NAN);
+                        }
+                        let data = if data_in { sb[0] } else { s0 };
+                        let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
+                        (
+                            Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
+                            info,
+                            data * data / sa,
+                        )
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         // the replicates raised to the noise floor the data show around each frequency: with

@@ -6,9 +6,8 @@
 use super::form::{ParamInfo, Search};
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::response::Prepared;
-use crate::discover::screen_sums::{best_of, coherent, most_sensitive, Trial, Typical};
+use crate::discover::screen_sums::{best_of, coherent_scan, most_sensitive, Trial, Typical};
 use crate::discover::spectral::k_grid;
-use rayon::prelude::*;
 use std::f64::consts::TAU;
 
 /// The search over the grid's wavenumbers in [k_lo, k_hi]: at each k, the runs' responses to
@@ -28,10 +27,8 @@ where
         |p, k| {
             let fs = values(p, f64::sin, k)?;
             let fc = values(p, f64::cos, k)?;
-            Some(vec![
-                p.column(p.track.respond_values(&fs)),
-                p.column(p.track.respond_values(&fc)),
-            ])
+            let (rs, rc) = p.track.respond_values_pair(&fs, &fc);
+            Some(vec![p.column(rs), p.column(rc)])
         },
         |k| format!("at a wavelength of {:.3} mm", 1e3 * TAU / k),
     )
@@ -52,17 +49,19 @@ where
     A: Fn(f64) -> String,
 {
     let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
-    let trials: Vec<Option<Trial>> = grid
-        .par_iter()
-        .map(|&x| {
-            let (lr, b, var) = coherent(prep, v, 2, reps.clone(), &[], |p| columns(p, x))?;
-            Some((
-                lr,
-                vec![x, b[0], b[1]],
-                vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
-            ))
-        })
-        .collect();
+    let trials: Vec<Option<Trial>> =
+        coherent_scan(prep, v, 2, reps.clone(), grid, |p, &x| columns(p, x))
+            .into_iter()
+            .zip(grid)
+            .map(|(t, &x)| {
+                let (lr, b, var) = t?;
+                Some((
+                    lr,
+                    vec![x, b[0], b[1]],
+                    vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
+                ))
+            })
+            .collect();
     let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt())
         .map(|(se, t)| Typical::Se { se, at: at(t.1[0]) });
     (best_of(trials, reps.len()), typical)
