@@ -18,7 +18,8 @@
 //! so: one finding whose size is their sum's where the runs go, the forms its parts (in the
 //! model, not findings). Held-out runs judge the map
 //! against the model with the forms; only beside a fallback map is the model without them
-//! cross-validated.
+//! cross-validated. The map's fit in full starts from the force the forms give (on its basis)
+//! plus what they leave, not from the map linearized about trajectories without them.
 
 use super::candidate::Extra;
 use super::cv::paired_t;

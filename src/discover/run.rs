@@ -764,6 +764,51 @@ mod tests {
         }
     }
 
+    /// A searched form's grid scanned in blocks (each reading a run's replicates once) gives
+    /// every trial the numbers of that trial alone, to the bit: bumps over the grid the
+    /// localized form searches, on the baseline of a small null.
+    #[test]
+    fn a_scan_in_blocks_gives_each_trial_its_own_numbers() {
+        use super::super::candidate::prepare;
+        use super::super::ranges::{bump_column, bump_trials};
+        use super::super::screen_sums::{coherent, coherent_scan, Vectors};
+        let recs = null_small();
+        let opts = Options::default();
+        let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
+        let (baseline, _, _) = fit_baseline(&mut runs, &materials, &opts);
+        let prep = prepare(
+            &baseline.spec,
+            &baseline.params,
+            &baseline.fit.global,
+            &baseline.fit.local,
+            &runs,
+        );
+        let v = Vectors::new(&prep, &runs, 9, 5);
+        let rg = Ranges::of(&runs);
+        let trials = bump_trials(&rg, 0.0, f64::INFINITY);
+        assert!(trials.len() > 20, "{} trials", trials.len());
+        let cols = |p: &super::super::response::Prepared, &(c, w): &(f64, f64)| {
+            bump_column(p, c, w).map(|x| vec![x])
+        };
+        let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+        for reps in [0..10, 4..10] {
+            let scanned = coherent_scan(&prep, &v, 1, reps.clone(), &trials, cols);
+            assert_eq!(scanned.len(), trials.len());
+            for (t, got) in trials.iter().zip(&scanned) {
+                let alone = coherent(&prep, &v, 1, reps.clone(), &[], |p| cols(p, t));
+                match (alone, got) {
+                    (Some(a), Some(g)) => {
+                        assert_eq!(bits(&a.0), bits(&g.0), "{t:?}");
+                        assert_eq!(bits(&a.1), bits(&g.1), "{t:?}");
+                        assert_eq!(bits(&a.2), bits(&g.2), "{t:?}");
+                    }
+                    (None, None) => {}
+                    (a, g) => panic!("{t:?}: alone {a:?}, scanned {g:?}"),
+                }
+            }
+        }
+    }
+
     /// The check of `a_named_terms_computed_null_is_the_law_of_its_replicates` at the runs'
     /// noise as they carry it.
     fn check_named_laws(

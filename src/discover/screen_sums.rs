@@ -2,7 +2,8 @@
 //! and the sums over runs and replicates from which a trial's statistic, estimate and null law
 //! are solved (`Sums`), with the noise covariance they need; the shared parameters' information
 //! with each run's locals projected out (`shared_information`) also gives the joint fit its
-//! errors where its covariance is singular (`profiled_se`).
+//! errors where its covariance is singular (`profiled_se`). A searched form's grid of trials
+//! is scanned in blocks (`coherent_scan`), each block reading a run's replicates once.
 
 use super::data::RunData;
 use super::response::Prepared;
