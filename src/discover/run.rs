@@ -790,12 +790,20 @@ mod tests {
         let cols = |p: &super::super::response::Prepared, &(c, w): &(f64, f64)| {
             bump_column(p, c, w).map(|x| vec![x])
         };
+        // two columns a trial too (a bump and one twice as wide), as a wave's sin and cos
+        let cols2 = |p: &super::super::response::Prepared, &(c, w): &(f64, f64)| {
+            Some(vec![bump_column(p, c, w)?, bump_column(p, c, 2.0 * w)?])
+        };
         let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
-        for reps in [0..10, 4..10] {
-            let scanned = coherent_scan(&prep, &v, 1, reps.clone(), &trials, cols);
+        for (q, reps) in [(1, 0..10), (1, 4..9), (2, 0..10), (2, 3..10)] {
+            let cols = |p: &super::super::response::Prepared, t: &(f64, f64)| match q {
+                1 => cols(p, t),
+                _ => cols2(p, t),
+            };
+            let scanned = coherent_scan(&prep, &v, q, reps.clone(), &trials, cols);
             assert_eq!(scanned.len(), trials.len());
             for (t, got) in trials.iter().zip(&scanned) {
-                let alone = coherent(&prep, &v, 1, reps.clone(), &[], |p| cols(p, t));
+                let alone = coherent(&prep, &v, q, reps.clone(), &[], |p| cols(p, t));
                 match (alone, got) {
                     (Some(a), Some(g)) => {
                         assert_eq!(bits(&a.0), bits(&g.0), "{t:?}");

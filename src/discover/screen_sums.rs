@@ -149,6 +149,65 @@ pub(super) fn dot2(a: &[f64], b: &[f64], c: &[f64]) -> (f64, f64) {
     (s[0] + s[1], s[2] + s[3])
 }
 
+/// `(dot2(a, b, y0), dot2(a, b, y1))` in one pass over `a` and `b`, each summed in `dot2`'s
+/// order (the same bits): the columns are read once for two replicates.
+pub(super) fn dot2_twice(a: &[f64], b: &[f64], y0: &[f64], y1: &[f64]) -> ((f64, f64), (f64, f64)) {
+    let n = a.len().min(b.len()).min(y0.len()).min(y1.len());
+    if y0.len() != y1.len() {
+        return (dot2(a, b, y0), dot2(a, b, y1));
+    }
+    let (a, b, y0, y1) = (&a[..n], &b[..n], &y0[..n], &y1[..n]);
+    let (mut s, mut t) = ([0.0f64; 4], [0.0f64; 4]);
+    let (ca, cb) = (a.chunks_exact(2), b.chunks_exact(2));
+    let (c0, c1) = (y0.chunks_exact(2), y1.chunks_exact(2));
+    let (ra, rb, r0, r1) = (
+        ca.remainder(),
+        cb.remainder(),
+        c0.remainder(),
+        c1.remainder(),
+    );
+    for (((x, y), z), w) in ca.zip(cb).zip(c0).zip(c1) {
+        s[0] += x[0] * z[0];
+        s[1] += x[1] * z[1];
+        s[2] += y[0] * z[0];
+        s[3] += y[1] * z[1];
+        t[0] += x[0] * w[0];
+        t[1] += x[1] * w[1];
+        t[2] += y[0] * w[0];
+        t[3] += y[1] * w[1];
+    }
+    for (((x, y), z), w) in ra.iter().zip(rb).zip(r0).zip(r1) {
+        s[0] += x * z;
+        s[2] += y * z;
+        t[0] += x * w;
+        t[2] += y * w;
+    }
+    ((s[0] + s[1], s[2] + s[3]), (t[0] + t[1], t[2] + t[3]))
+}
+
+/// `(dot(a, y0), dot(a, y1))` in one pass over `a`, each summed in `dot`'s order.
+pub(super) fn dot_twice(a: &[f64], y0: &[f64], y1: &[f64]) -> (f64, f64) {
+    if y0.len() != y1.len() {
+        return (dot(a, y0), dot(a, y1));
+    }
+    let n = a.len().min(y0.len());
+    let (a, y0, y1) = (&a[..n], &y0[..n], &y1[..n]);
+    let (mut s, mut t) = ([0.0f64; 4], [0.0f64; 4]);
+    let (ca, c0, c1) = (a.chunks_exact(4), y0.chunks_exact(4), y1.chunks_exact(4));
+    let (ra, r0, r1) = (ca.remainder(), c0.remainder(), c1.remainder());
+    for ((x, z), w) in ca.zip(c0).zip(c1) {
+        for k in 0..4 {
+            s[k] += x[k] * z[k];
+            t[k] += x[k] * w[k];
+        }
+    }
+    for ((x, z), w) in ra.iter().zip(r0).zip(r1) {
+        s[0] += x * z;
+        t[0] += x * w;
+    }
+    ((s[0] + s[1]) + (s[2] + s[3]), (t[0] + t[1]) + (t[2] + t[3]))
+}
+
 /// Sums over runs for a set of q columns shared by every run (coherent), against the
 /// replicates `reps` (indices into `Vectors::y`; 0 is the data).
 pub(super) struct Sums {
@@ -191,6 +250,27 @@ impl Sums {
             for (g, &jg) in v.kept.iter().enumerate() {
                 self.xtg[a * k + g] += dot(&cols[a], &p.glob[jg]);
             }
+        }
+    }
+
+    /// `add_replicate` for replicates `r` and `r + 1` (`y0`, `y1`), the columns read once.
+    fn add_replicates_two(&mut self, r: usize, cols: &[Vec<f64>], y0: &[f64], y1: &[f64]) {
+        let q = self.q;
+        let (lo, hi) = self.xty.split_at_mut(r + 1);
+        let (x0, x1) = (&mut lo[r], &mut hi[0]);
+        let mut a = 0;
+        while a + 1 < q {
+            let ((s0, s1), (t0, t1)) = dot2_twice(&cols[a], &cols[a + 1], y0, y1);
+            x0[a] += s0;
+            x0[a + 1] += s1;
+            x1[a] += t0;
+            x1[a + 1] += t1;
+            a += 2;
+        }
+        if a < q {
+            let (s, t) = dot_twice(&cols[a], y0, y1);
+            x0[a] += s;
+            x1[a] += t;
         }
     }
 
@@ -441,10 +521,14 @@ where
                         s.add_design(c, p, v);
                     }
                 }
-                for (r, yb) in yr[reps.clone()].iter().enumerate() {
+                // two replicates at a time: each column is read once for both
+                let ys = &yr[reps.clone()];
+                for (pair, two) in ys.chunks(2).enumerate() {
                     for (s, c) in sums.iter_mut().zip(&c) {
-                        if let Some(c) = c {
-                            s.add_replicate(r, c, yb);
+                        match (c, two) {
+                            (Some(c), [y0, y1]) => s.add_replicates_two(2 * pair, c, y0, y1),
+                            (Some(c), [y0]) => s.add_replicate(2 * pair, c, y0),
+                            _ => {}
                         }
                     }
                 }
@@ -514,5 +598,20 @@ mod tests {
         let (s, t) = dot2(&a, &b, &c);
         assert!((s - plain(&a, &c)).abs() < 1e-13);
         assert!((t - plain(&b, &c)).abs() < 1e-13);
+        // two replicates in one pass give each one's bits, odd and even lengths alike
+        for n in [32, 33, 34, 35] {
+            let (y0, y1) = (&c[..n], &a[1..n + 1]);
+            let ((s0, s1), (t0, t1)) = dot2_twice(&a[..n], &b[..n], y0, y1);
+            let (w0, w1) = (dot2(&a[..n], &b[..n], y0), dot2(&a[..n], &b[..n], y1));
+            assert_eq!(
+                [s0, s1, t0, t1].map(f64::to_bits),
+                [w0.0, w0.1, w1.0, w1.1].map(f64::to_bits)
+            );
+            let (u, v) = dot_twice(&b[..n], y0, y1);
+            assert_eq!(
+                [u, v].map(f64::to_bits),
+                [dot(&b[..n], y0), dot(&b[..n], y1)].map(f64::to_bits)
+            );
+        }
     }
 }

@@ -5,7 +5,7 @@ use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::noise_floor::local_floor;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, dot, dot2, Trial, Typical};
+use crate::discover::screen_sums::{best_of, dot, dot2, dot2_twice, Trial, Typical};
 use crate::discover::spectral::f_grid;
 use crate::physics::Term;
 use rayon::prelude::*;
@@ -115,11 +115,21 @@ impl Form for TimePeriodic {
                             })
                         })
                         .collect();
-                    for (r, yb) in yr[reps.clone()].iter().enumerate() {
+                    // two replicates at a time: each column is read once for both
+                    for (pair, two) in yr[reps.clone()].chunks(2).enumerate() {
+                        let r = 2 * pair;
                         for (c, sb) in cols.iter().zip(&mut sb) {
-                            if let Some((xs, xc)) = c {
-                                let (bs, bc) = dot2(xs, xc, yb);
-                                sb[r] += bs.hypot(bc);
+                            match (c, two) {
+                                (Some((xs, xc)), [y0, y1]) => {
+                                    let ((s0, c0), (s1, c1)) = dot2_twice(xs, xc, y0, y1);
+                                    sb[r] += s0.hypot(c0);
+                                    sb[r + 1] += s1.hypot(c1);
+                                }
+                                (Some((xs, xc)), [y0]) => {
+                                    let (bs, bc) = dot2(xs, xc, y0);
+                                    sb[r] += bs.hypot(bc);
+                                }
+                                _ => {}
                             }
                         }
                     }
