@@ -4,6 +4,7 @@
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{bump_column, bump_trials, Proposals, Ranges, Wanted};
+use crate::discover::response::Prepared;
 use crate::discover::screen_sums::{best_of, coherent_scan, most_sensitive, Trial, Typical};
 use crate::physics::Term;
 use std::collections::BTreeMap;
@@ -74,9 +75,8 @@ impl Form for Localized {
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
         let trials = bump_trials(s.rg, self.w_lo, self.w_hi);
-        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, |p, &(c, w)| {
-            bump_column(p, c, w).map(|x| vec![x])
-        })
+        let column = |p: &Prepared, &(c, w): &(f64, f64)| bump_column(p, c, w).map(|x| vec![x]);
+        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, column)
         .into_iter()
         .zip(&trials)
         .map(|(t, &(c, w))| {

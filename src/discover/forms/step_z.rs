@@ -8,6 +8,7 @@
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Ranges, Wanted};
+use crate::discover::response::Prepared;
 use crate::discover::screen_sums::{best_of, coherent_scan, most_sensitive, Trial, Typical};
 use crate::physics::{step_shape, Term, Variable};
 use std::collections::BTreeMap;
@@ -98,14 +99,15 @@ impl Form for StepZ {
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
         let trials = self.trials();
-        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, |p, &(zs, w)| {
+        let column = |p: &Prepared, &(zs, w): &(f64, f64)| {
             let z = p.track.variable(Variable::Z);
             let f: Vec<f64> = z.iter().map(|zz| step_shape((zz - zs) / w)).collect();
             // a run that never comes near the step's upper side feels nothing
             f.iter()
                 .any(|x| *x > 1e-3)
                 .then(|| vec![p.column(p.track.respond_values(&f))])
-        })
+        };
+        let out: Vec<Option<Trial>> = coherent_scan(prep, v, 1, reps.clone(), &trials, column)
         .into_iter()
         .zip(&trials)
         .map(|(t, &(zs, w))| {

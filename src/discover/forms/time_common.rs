@@ -75,7 +75,7 @@ impl Form for TimeCommon {
         let [amp, _, phase] = wavelength::amplitude_wavelength_phase(&x, &se, 0.0);
         let mut out = BTreeMap::new();
         out.insert("frequency_hz".into(), Estimate::new(f.x[0], f.se[0]));
-        out.insert("amplitude_mps2".into(), amp.clone());
+        out.insert("amplitude_mps2".into(), amp);
         out.insert("peak_accel_mps2".into(), amp);
         out.insert("phase_rad".into(), phase);
         out
