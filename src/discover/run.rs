@@ -725,6 +725,22 @@ mod tests {
         }
     }
 
+    /// The single runs of the small null, their baseline fitted, and the runs prepared for the
+    /// screen under it.
+    fn null_small_baseline() -> (Vec<RunData>, Model, Vec<super::super::response::Prepared>) {
+        let opts = Options::default();
+        let (mut runs, materials) = prepare_runs(&null_small(), opts.min_frames);
+        let (baseline, _, _) = fit_baseline(&mut runs, &materials, &opts);
+        let prep = super::super::candidate::prepare(
+            &baseline.spec,
+            &baseline.params,
+            &baseline.fit.global,
+            &baseline.fit.local,
+            &runs,
+        );
+        (runs, baseline, prep)
+    }
+
     /// A named term's null law is computed from its columns and the noise model, and is the law
     /// of its replicates: over 3,000 replicates of the baseline's noise, each named term's and
     /// probe's mean statistic is the law's (within 4 standard errors) and as many replicates
@@ -732,18 +748,7 @@ mod tests {
     /// one-sided (the drags and the resistance: 0 half the time) or not (the tilt, the probes).
     #[test]
     fn a_named_terms_computed_null_is_the_law_of_its_replicates() {
-        use super::super::candidate::prepare;
-        let recs = null_small();
-        let opts = Options::default();
-        let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
-        let (baseline, _, _) = fit_baseline(&mut runs, &materials, &opts);
-        let prep = prepare(
-            &baseline.spec,
-            &baseline.params,
-            &baseline.fit.global,
-            &baseline.fit.local,
-            &runs,
-        );
+        let (mut runs, baseline, prep) = null_small_baseline();
         let vref = median_speed(&baseline.fit.local);
         let mut named: Vec<Extra> = vec![
             QuadraticDrag.into(),
@@ -769,20 +774,9 @@ mod tests {
     /// localized form searches, on the baseline of a small null.
     #[test]
     fn a_scan_in_blocks_gives_each_trial_its_own_numbers() {
-        use super::super::candidate::prepare;
         use super::super::ranges::{bump_column, bump_trials};
         use super::super::screen_sums::{coherent, coherent_scan, Vectors};
-        let recs = null_small();
-        let opts = Options::default();
-        let (mut runs, materials) = prepare_runs(&recs, opts.min_frames);
-        let (baseline, _, _) = fit_baseline(&mut runs, &materials, &opts);
-        let prep = prepare(
-            &baseline.spec,
-            &baseline.params,
-            &baseline.fit.global,
-            &baseline.fit.local,
-            &runs,
-        );
+        let (runs, _, prep) = null_small_baseline();
         let v = Vectors::new(&prep, &runs, 9, 5);
         let rg = Ranges::of(&runs);
         let trials = bump_trials(&rg, 0.0, f64::INFINITY);
