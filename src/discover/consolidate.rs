@@ -138,12 +138,16 @@ fn replace(
         .iter_mut()
         .find(|m| m.variable == var_name(var) && m.spline.is_some())?;
     let form = forms::Spline::on(map, var)?;
+    let fresh;
     let now = match maps_now {
-        Some(m) => m.to_vec(),
-        None => ctx.force_maps(&sel.current).maps,
+        Some(m) => m,
+        None => {
+            fresh = ctx.force_maps(&sel.current).maps;
+            &fresh
+        }
     };
     if let (Some(start), Some(sp)) = (
-        start_in_place(&form, &sel.current, &base, &now, var, ctx),
+        start_in_place(&form, &sel.current, &base, now, var, ctx),
         map.spline.as_mut(),
     ) {
         sp.3 = start;

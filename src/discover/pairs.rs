@@ -764,15 +764,14 @@ pub fn check_pairs(
         .par_iter()
         .map(|(material, runs)| {
             let single = physics.get(material)?;
-            Some(test_material(
-                material, runs, single, groove, max_iter, None,
-            ))
+            let draft = test_material(material, runs, single, groove, max_iter, None);
+            Some((single, draft))
         })
         .collect();
-    for ((material, runs), draft) in by_material.iter().zip(tested) {
-        match (physics.get(material), draft) {
-            (Some(single), Some(d)) => drafts.push((runs, single, d)),
-            _ => notes.push(format!(
+    for ((material, runs), tested) in by_material.iter().zip(tested) {
+        match tested {
+            Some((single, d)) => drafts.push((runs, single, d)),
+            None => notes.push(format!(
                 "collision runs of {material}: no single-run physics of this material to test"
             )),
         }

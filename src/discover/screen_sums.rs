@@ -490,6 +490,12 @@ where
 /// Trials per pass over a run's replicates in `coherent_scan` (at most).
 const SCAN_BLOCK: usize = 16;
 
+/// How many of `trials` a scan takes per pass over a run's replicates: at most `SCAN_BLOCK`,
+/// and few enough that every core has several blocks. The bits do not depend on it.
+pub(super) fn scan_block(trials: usize) -> usize {
+    (trials / (4 * rayon::current_num_threads()).max(1)).clamp(1, SCAN_BLOCK)
+}
+
 /// `coherent` at every trial `x` of `grid` (`cols(p, x)` a run's columns there), the same
 /// numbers trial by trial, but a run's replicates are read once for a block of trials instead
 /// of once per trial: they are tens of megabytes over the runs, far more than the caches
@@ -506,9 +512,7 @@ where
     X: Sync,
     F: Fn(&Prepared, &X) -> Option<Vec<Vec<f64>>> + Sync,
 {
-    // blocks small enough that every core has several
-    let block = (grid.len() / (4 * rayon::current_num_threads()).max(1)).clamp(1, SCAN_BLOCK);
-    grid.par_chunks(block)
+    grid.par_chunks(scan_block(grid.len()))
         .flat_map_iter(|xs| {
             let mut sums: Vec<Sums> = xs
                 .iter()

@@ -51,8 +51,8 @@ impl Spline {
 
     /// The size of force `at` (a function of this spline's variable) where the runs go, on
     /// this spline's range and knot spacing: peak (and where), RMS, and the fraction of the
-    /// range that two runs or more go through; in v beyond its part proportional to v, a linear drag that the drag
-    /// time takes (`linear_drag_part_per_s`, the slope set aside).
+    /// range that two runs or more go through; in v beyond its part proportional to v, a
+    /// linear drag that the drag time takes (`linear_drag_part_per_s`, the slope set aside).
     pub fn size_over_runs(
         &self,
         at: &dyn Fn(f64) -> f64,

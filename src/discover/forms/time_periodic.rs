@@ -5,7 +5,7 @@ use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::Estimate;
 use crate::discover::noise_floor::local_floor;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, dot, dot2, dot2_twice, Trial, Typical};
+use crate::discover::screen_sums::{best_of, dot, dot2, dot2_twice, scan_block, Trial, Typical};
 use crate::discover::spectral::f_grid;
 use crate::physics::Term;
 use rayon::prelude::*;
@@ -94,9 +94,8 @@ impl Form for TimePeriodic {
         // the data (replicate 0) is scanned in every batch, for the noise floor below
         let data_in = reps.start == 0;
         // a block of frequencies per pass over a run's replicates (`coherent_scan`'s reason)
-        let block = (fs.len() / (4 * rayon::current_num_threads()).max(1)).clamp(1, 16);
         let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = fs
-            .par_chunks(block)
+            .par_chunks(scan_block(fs.len()))
             .flat_map_iter(|fb| {
                 let mut sb = vec![vec![0.0; nrep]; fb.len()];
                 let mut s0 = vec![0.0; fb.len()];
