@@ -119,8 +119,14 @@ fn print_draws(args: &Args) {
             .iter()
             .map(|t| format!("{}/{} ×{:.2} {:?}", t.place, t.shape, t.multiple, t.sizes))
             .collect();
+        // the force's range is drawn but not scored: shown so a misfit of it can be read
+        let between = case
+            .spec
+            .pair_force
+            .map(|b| format!(" (pair force drawn as {b:?})"))
+            .unwrap_or_default();
         println!(
-            "dataset {index}: noise {}: {}",
+            "dataset {index}: noise {}: {}{between}",
             case.noise,
             if effects.is_empty() {
                 "null".to_string()

@@ -3,8 +3,9 @@
 //! The effect's signal is the change it makes to the noise-free recorded positions, frame by
 //! frame (the same runs, kicks, frames and field of view with and without it), less what the
 //! baseline's own free parameters can absorb of it: the change is projected, by linear least
-//! squares, off the baseline's sensitivities to each single run's start position, kick speed and
-//! kick time, and to each material's μ and drag time T (shared by the material's runs), all in
+//! squares, off the baseline's sensitivities to each run's start positions, kick speed and kick
+//! time, to each material's μ and drag time T (shared by the material's runs), and, for the
+//! collision runs, to each material's restitution law of each setup and to μ_pp, all in
 //! the metric of the tracker noise's own covariance C (generalized least squares: every series is
 //! whitened by [`Whitener`] first, so AR(1) errors, slow drifts and motion blur count as what
 //! they are, not as white noise of the same size). What remains gives SNR² = Δᵀ C⁻¹ Δ over the
@@ -13,9 +14,13 @@
 //! Discovery does not know the effect's shape: it searches places, forms and their parameters,
 //! and must hold its false alarms on nulls. The limit is therefore set at SNR² = 36 (six standard
 //! deviations along the effect's direction): five standard deviations after a trials factor of
-//! about a hundred independent shapes. Collision runs enter unprojected (whitened alike).
+//! about a hundred independent shapes.
+//!
+//! The collision runs' parameters are projected off as a pair fit frees them: unprojected, an
+//! attraction between the particles that the fitted restitution law absorbs almost whole counted
+//! as 8× its limit, where the pair fit's profile over the force gains a χ² of 4.
 
-use super::dataset::DatasetSpec;
+use super::dataset::{DatasetSpec, RunSpec};
 use super::whiten::Whitener;
 use crate::indsim::writer::RecordedRun;
 use std::collections::BTreeMap;
@@ -28,10 +33,10 @@ const STEP_V0: f64 = 1e-3;
 const STEP_MU: f64 = 1e-3;
 const STEP_T: f64 = 1e-3;
 
-/// Per-run local sensitivities (z0, v0, t0) and global ones (μ, T of the run's material), by
-/// frame, for each single run of a base dataset.
+/// Per-run local sensitivities and the global ones of the run's material, by key (frame, and
+/// particle × [`PARTICLE_KEY`]), for each run of a base dataset.
 pub struct Basis {
-    runs: Vec<Option<RunBasis>>,
+    runs: Vec<RunBasis>,
     materials: usize,
     /// Per run, key (frame + particle × 10⁶, as [`change`] keys) → the clean speed there.
     speeds: Vec<BTreeMap<usize, f64>>,
@@ -61,18 +66,63 @@ fn speeds(run: &RecordedRun) -> BTreeMap<usize, f64> {
 /// The key offset of the second particle of a collision run.
 const PARTICLE_KEY: usize = 1_000_000;
 
-struct RunBasis {
-    material: usize,
-    /// frame → (local columns, the two global columns of its material)
-    rows: BTreeMap<usize, ([f64; 3], [f64; 2])>,
+/// The global columns: each material's μ and T (relative), then each material's restitution
+/// laws of the rolling and the contact setups (c0, relative v_ref), then μ_pp, one for the
+/// dataset (the simulator has one).
+struct Globals {
+    materials: usize,
 }
 
-fn by_frame(run: &RecordedRun) -> BTreeMap<usize, f64> {
-    run.tracks[0].iter().map(|f| (f.frame, f.z_m)).collect()
+impl Globals {
+    fn mu(&self, m: usize) -> usize {
+        2 * m
+    }
+    fn t(&self, m: usize) -> usize {
+        2 * m + 1
+    }
+    /// c0 of material `m`'s law in `setup` (v_ref next to it).
+    fn law(&self, m: usize, setup: &str) -> usize {
+        2 * self.materials + 4 * m + if setup == "contact" { 2 } else { 0 }
+    }
+    fn mu_pp(&self) -> usize {
+        6 * self.materials
+    }
+    fn count(&self) -> usize {
+        6 * self.materials + 1
+    }
+}
+
+/// Steps of the collision runs' finite differences: positions (m), c0 (absolute).
+const STEP_Z: f64 = 1e-6;
+const STEP_C0: f64 = 1e-3;
+const STEP_VREF: f64 = 1e-3;
+const STEP_MU_PP: f64 = 1e-3;
+
+struct RunBasis {
+    /// The global columns of this run's sensitivities, in the order of `rows`' second part.
+    globals: Vec<usize>,
+    /// key → (local columns, global columns); empty for a run that has none.
+    rows: BTreeMap<usize, (Vec<f64>, Vec<f64>)>,
+}
+
+/// Key → z of every track of a rendering.
+fn by_key(run: &RecordedRun) -> BTreeMap<usize, f64> {
+    run.tracks
+        .iter()
+        .enumerate()
+        .flat_map(|(p, t)| t.iter().map(move |f| (f.frame + p * PARTICLE_KEY, f.z_m)))
+        .collect()
 }
 
 impl Basis {
     /// The sensitivities of `base`'s clean recording (finite differences of re-simulations).
+    ///
+    /// A single run's own parameters are its start position, kick speed and kick time; a
+    /// collision run's are the striker's and the target's start positions (the pair's together
+    /// in the contact setup, which starts touching), the kick speed and the kick time, as a pair
+    /// fit frees them. The globals a material shares are μ and T, and for its collision runs the
+    /// restitution law of each setup (c0, v_ref) and μ_pp: the baseline a pair effect must be
+    /// told from is a pair model with its law and μ_pp fitted.
     pub fn new(base: &DatasetSpec) -> Basis {
         let clean = base.render(true);
         let perturbed = |f: &dyn Fn(&mut DatasetSpec)| {
@@ -95,38 +145,93 @@ impl Basis {
         });
         let dframe = 1e-3; // kick time: a shift of the frames by a thousandth of a frame
         let shifted = perturbed(&|s| s.runs.iter_mut().for_each(|r| r.frac += dframe));
+        let pairs = base.runs.iter().any(|r| r.experiment == "collision");
+        let pair_renders = pairs.then(|| {
+            let collisions = |f: &dyn Fn(&mut RunSpec)| {
+                perturbed(&|s| {
+                    s.runs
+                        .iter_mut()
+                        .filter(|r| r.experiment == "collision")
+                        .for_each(f)
+                })
+            };
+            [
+                // the striker (with the target when they start touching)
+                collisions(&|r| {
+                    r.z0[0] += STEP_Z;
+                    if r.setup == "contact" {
+                        r.z0[1] += STEP_Z;
+                    }
+                }),
+                // the target alone (rolling setup)
+                collisions(&|r| {
+                    if r.setup != "contact" {
+                        r.z0[1] += STEP_Z
+                    }
+                }),
+                perturbed(&|s| {
+                    s.materials.iter_mut().for_each(|m| {
+                        m.restitution_rolling.0 += STEP_C0;
+                        m.restitution_contact.0 += STEP_C0;
+                    })
+                }),
+                perturbed(&|s| {
+                    s.materials.iter_mut().for_each(|m| {
+                        m.restitution_rolling.1 *= 1.0 + STEP_VREF;
+                        m.restitution_contact.1 *= 1.0 + STEP_VREF;
+                    })
+                }),
+                perturbed(&|s| s.mu_pp *= 1.0 + STEP_MU_PP),
+            ]
+        });
+        let cols = Globals {
+            materials: base.materials.len(),
+        };
         let runs = base
             .runs
             .iter()
             .enumerate()
             .map(|(i, spec)| {
-                if spec.experiment != "single" {
-                    return None;
+                let z = by_key(&clean[i]);
+                let m = spec.material;
+                let mut locals = vec![(by_key(&dv[i]), STEP_V0 * spec.v0.abs())];
+                locals.push((by_key(&shifted[i]), dframe));
+                let mut globals = vec![
+                    (cols.mu(m), by_key(&dmu[i]), STEP_MU),
+                    (cols.t(m), by_key(&dt[i]), STEP_T),
+                ];
+                let single = spec.experiment == "single";
+                if let (false, Some(r)) = (single, &pair_renders) {
+                    locals.push((by_key(&r[0][i]), STEP_Z));
+                    if spec.setup != "contact" {
+                        locals.push((by_key(&r[1][i]), STEP_Z));
+                    }
+                    let law = cols.law(m, spec.setup);
+                    globals.push((law, by_key(&r[2][i]), STEP_C0));
+                    globals.push((law + 1, by_key(&r[3][i]), STEP_VREF));
+                    globals.push((cols.mu_pp(), by_key(&r[4][i]), STEP_MU_PP));
                 }
-                let (z, v, mu, t, sh) = (
-                    by_frame(&clean[i]),
-                    by_frame(&dv[i]),
-                    by_frame(&dmu[i]),
-                    by_frame(&dt[i]),
-                    by_frame(&shifted[i]),
-                );
                 let rows = z
                     .iter()
+                    .filter(|&(&k, _)| !single || k < PARTICLE_KEY)
                     .filter_map(|(&k, &z0)| {
                         let d = |m: &BTreeMap<usize, f64>, h: f64| m.get(&k).map(|&x| (x - z0) / h);
-                        Some((
-                            k,
-                            (
-                                [1.0, d(&v, STEP_V0 * spec.v0.abs())?, d(&sh, dframe)?],
-                                [d(&mu, STEP_MU)?, d(&t, STEP_T)?],
-                            ),
-                        ))
+                        // a single run's start position moves every frame by as much
+                        let mut l: Vec<f64> = if single { vec![1.0] } else { Vec::new() };
+                        for (m, h) in &locals {
+                            l.push(d(m, *h)?);
+                        }
+                        let g = globals
+                            .iter()
+                            .map(|(_, m, h)| d(m, *h))
+                            .collect::<Option<Vec<f64>>>()?;
+                        Some((k, (l, g)))
                     })
                     .collect();
-                Some(RunBasis {
-                    material: spec.material,
+                RunBasis {
+                    globals: globals.iter().map(|g| g.0).collect(),
                     rows,
-                })
+                }
             })
             .collect();
         Basis {
@@ -169,28 +274,35 @@ impl Basis {
     /// Δᵀ C⁻¹ Δ of the change `delta` (per run, key → Δz) after the projection, and the
     /// baseline parameter shifts of the projection.
     pub fn project(&self, delta: &[BTreeMap<usize, f64>]) -> (f64, Shift) {
-        let ng = 2 * self.materials;
+        let ng = Globals {
+            materials: self.materials,
+        }
+        .count();
         // normal equations, the local blocks eliminated (Schur complement)
         let mut s = vec![vec![0.0; ng]; ng];
         let mut rhs = vec![0.0; ng];
         let mut blocks = Vec::new();
         let mut raw = 0.0;
         for (index, (run, d)) in self.runs.iter().zip(delta).enumerate() {
-            let Some(run) = run else {
-                let keys: Vec<usize> = d.keys().copied().collect();
-                let w = self.whiten(index, &keys, &[d.values().copied().collect()]);
-                raw += w[0].iter().map(|x| x * x).sum::<f64>();
-                continue;
-            };
             // the rows present in both, whitened together
             let keys: Vec<usize> = d
                 .keys()
                 .copied()
                 .filter(|k| run.rows.contains_key(k))
                 .collect();
-            let mut cols = (0..6)
-                .map(|_| Vec::with_capacity(keys.len()))
-                .collect::<Vec<Vec<f64>>>();
+            // a run with no sensitivities counts whole; a frame some perturbed rendering lacks
+            // (the particle leaving the field of view) is left out
+            if run.rows.is_empty() {
+                let keys: Vec<usize> = d.keys().copied().collect();
+                let w = self.whiten(index, &keys, &[d.values().copied().collect()]);
+                raw += w[0].iter().map(|x| x * x).sum::<f64>();
+                continue;
+            }
+            let Some((l0, g0)) = keys.first().map(|k| &run.rows[k]) else {
+                continue;
+            };
+            let (nl, ngr) = (l0.len(), g0.len());
+            let mut cols = vec![Vec::with_capacity(keys.len()); nl + ngr + 1];
             for k in &keys {
                 let (l, g) = &run.rows[k];
                 for (c, x) in cols.iter_mut().zip(l.iter().chain(g).chain([&d[k]])) {
@@ -198,42 +310,35 @@ impl Basis {
                 }
             }
             let w = self.whiten(index, &keys, &cols);
-            let cols: Vec<usize> = vec![2 * run.material, 2 * run.material + 1];
-            let (mut a, mut b, mut c) = ([[0.0; 3]; 3], [[0.0; 2]; 3], [[0.0; 2]; 2]);
-            let (mut ay, mut cy, mut yy) = ([0.0; 3], [0.0; 2], 0.0);
-            for r in 0..keys.len() {
-                let (l, g, y) = ([w[0][r], w[1][r], w[2][r]], [w[3][r], w[4][r]], w[5][r]);
-                yy += y * y;
-                for i in 0..3 {
-                    ay[i] += l[i] * y;
-                    for j in 0..3 {
-                        a[i][j] += l[i] * l[j];
-                    }
-                    for j in 0..2 {
-                        b[i][j] += l[i] * g[j];
-                    }
-                }
-                for i in 0..2 {
-                    cy[i] += g[i] * y;
-                    for j in 0..2 {
-                        c[i][j] += g[i] * g[j];
-                    }
-                }
-            }
-            let a_vec: Vec<Vec<f64>> = a.iter().map(|r| r.to_vec()).collect();
-            // A⁻¹ B and A⁻¹ (Jᵀy)
-            let ainv_b: Vec<Vec<f64>> = (0..2)
-                .map(|j| solve(&a_vec, &[b[0][j], b[1][j], b[2][j]]))
+            let (lw, rest) = w.split_at(nl);
+            let (gw, yw) = rest.split_at(ngr);
+            let y = &yw[0];
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            let a: Vec<Vec<f64>> = lw
+                .iter()
+                .map(|li| lw.iter().map(|lj| dot(li, lj)).collect())
                 .collect();
-            let ainv_y = solve(&a_vec, &ay);
-            for i in 0..2 {
-                rhs[cols[i]] += cy[i] - (0..3).map(|q| b[q][i] * ainv_y[q]).sum::<f64>();
-                for j in 0..2 {
-                    s[cols[i]][cols[j]] +=
-                        c[i][j] - (0..3).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
+            let b: Vec<Vec<f64>> = lw
+                .iter()
+                .map(|li| gw.iter().map(|gj| dot(li, gj)).collect())
+                .collect();
+            let ay: Vec<f64> = lw.iter().map(|li| dot(li, y)).collect();
+            let cy: Vec<f64> = gw.iter().map(|gi| dot(gi, y)).collect();
+            let yy = dot(y, y);
+            // A⁻¹ B (by global column) and A⁻¹ (Lᵀy)
+            let ainv_b: Vec<Vec<f64>> = (0..ngr)
+                .map(|j| solve(&a, &b.iter().map(|r| r[j]).collect::<Vec<_>>()))
+                .collect();
+            let ainv_y = solve(&a, &ay);
+            let gcols = &run.globals;
+            for i in 0..ngr {
+                rhs[gcols[i]] += cy[i] - (0..nl).map(|q| b[q][i] * ainv_y[q]).sum::<f64>();
+                for j in 0..ngr {
+                    s[gcols[i]][gcols[j]] += dot(&gw[i], &gw[j])
+                        - (0..nl).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
                 }
             }
-            blocks.push((index, cols, yy, ay, cy, ainv_y, ainv_b));
+            blocks.push((index, yy, ay, cy, ainv_y, ainv_b));
         }
         // a tiny ridge keeps a material without single runs solvable
         for (i, row) in s.iter_mut().enumerate() {
@@ -243,49 +348,79 @@ impl Basis {
         // the residual sum of squares of each run: yᵀy − (fitted)ᵀ y at the least-squares optimum
         let mut total = raw;
         let mut shift = Shift {
-            locals: vec![None; self.runs.len()],
+            locals: vec![Vec::new(); self.runs.len()],
             globals: g.clone(),
         };
-        for (index, cols, yy, ay, cy, ainv_y, ainv_b) in blocks {
-            let gl = [g[cols[0]], g[cols[1]]];
-            let local: Vec<f64> = (0..3)
-                .map(|q| ainv_y[q] - ainv_b[0][q] * gl[0] - ainv_b[1][q] * gl[1])
+        for (index, yy, ay, cy, ainv_y, ainv_b) in blocks {
+            let gl: Vec<f64> = self.runs[index].globals.iter().map(|&c| g[c]).collect();
+            // (folded term by term, in the order of the columns)
+            let local: Vec<f64> = (0..ay.len())
+                .map(|q| (0..gl.len()).fold(ainv_y[q], |x, j| x - ainv_b[j][q] * gl[j]))
                 .collect();
-            let fitted =
-                (0..3).map(|q| local[q] * ay[q]).sum::<f64>() + gl[0] * cy[0] + gl[1] * cy[1];
+            let fitted = (0..gl.len()).fold(
+                (0..ay.len()).map(|q| local[q] * ay[q]).sum::<f64>(),
+                |x, j| x + gl[j] * cy[j],
+            );
             total += (yy - fitted).max(0.0);
-            shift.locals[index] = Some([local[0], local[1], local[2]]);
+            shift.locals[index] = local;
         }
         (total, shift)
     }
 }
 
-/// The baseline parameter shifts that absorb most of a change: per single run (z0 m, v0 m/s
-/// along its motion, the kick's fraction of a frame), per material (relative μ, relative T).
+/// The baseline parameter shifts that absorb most of a change: per run, its local columns (a
+/// single run's z0 m, v0 relative to its step, the kick's fraction of a frame; a collision run's
+/// v0, kick, the striker's and the target's z0), and the globals (per material relative μ and T
+/// and the laws' c0 and relative v_ref, and the relative μ_pp).
 pub struct Shift {
-    locals: Vec<Option<[f64; 3]>>,
+    locals: Vec<Vec<f64>>,
     globals: Vec<f64>,
 }
 
 impl Shift {
-    /// Moves the single runs of `spec` by the shift.
+    /// Moves the runs and the materials of `spec` by the shift.
     fn apply(&self, spec: &mut DatasetSpec) {
+        let cols = Globals {
+            materials: spec.materials.len(),
+        };
         for (run, local) in spec.runs.iter_mut().zip(&self.locals) {
-            let Some([dz, dv, dframe]) = *local else {
+            if local.is_empty() {
                 continue;
-            };
-            run.z0[0] += dz;
-            run.v0 += dv * run.v0.signum();
-            run.frac += dframe;
+            }
+            if run.experiment == "single" {
+                run.z0[0] += local[0];
+                run.v0 += local[1] * run.v0.signum();
+                run.frac += local[2];
+            } else {
+                run.v0 += local[0] * run.v0.signum();
+                run.frac += local[1];
+                run.z0[0] += local[2];
+                if run.setup == "contact" {
+                    run.z0[1] += local[2];
+                } else if let Some(dz) = local.get(3) {
+                    run.z0[1] += dz;
+                }
+            }
             let (dmu, dt) = (
-                self.globals[2 * run.material],
-                self.globals[2 * run.material + 1],
+                self.globals[cols.mu(run.material)],
+                self.globals[cols.t(run.material)],
             );
             for p in run.physics.iter_mut() {
                 p.mu *= 1.0 + dmu;
                 p.drag = p.drag.with_t_s(p.drag.t_s() * (1.0 + dt));
             }
         }
+        for (m, material) in spec.materials.iter_mut().enumerate() {
+            for (law, setup) in [
+                (&mut material.restitution_rolling, "rolling"),
+                (&mut material.restitution_contact, "contact"),
+            ] {
+                let at = cols.law(m, setup);
+                law.0 += self.globals[at];
+                law.1 *= 1.0 + self.globals[at + 1];
+            }
+        }
+        spec.mu_pp *= 1.0 + self.globals[cols.mu_pp()];
     }
 }
 
