@@ -324,3 +324,67 @@ fn agrees_with_groove_physics_on_the_baseline_within_the_noise() {
         );
     }
 }
+
+/// The largest distance between the two simulators' tracks of a pair (both particles) over 60 ms,
+/// the pair started at `z0` (striker, target) with the striker kicked to `v0`.
+fn pair_disagreement(force: Option<(f64, f64)>, z0: [f64; 2], v0: f64) -> f64 {
+    use groove::physics::{
+        simulate_pair as groove_pair, Model, PairForce, PairParams, Restitution, State,
+    };
+    let mine = Physics::baseline(MU, T);
+    let m = PairModel {
+        radius_m: 150e-6,
+        mu_pp: 1.4,
+        c0: 0.45,
+        v_ref_mps: 0.06,
+        force: force.map(|(amp, range)| indsim::pair::Between::Screened { amp, range }),
+        law: None,
+        mu_pp_weakening_mps: None,
+    };
+    let (fine, _) = simulate_pair([&mine, &mine], &m, z0, v0, 0.07, DT_S);
+    let pair = PairParams {
+        restitution: Restitution::SpeedDependent {
+            c0: 0.45,
+            v_ref_mps: 0.06,
+        },
+        mu_pp: 1.4,
+        radius_m: 150e-6,
+        force: force.map(|(amp_mps2, range_m)| PairForce::Exponential { amp_mps2, range_m }),
+        slip: None,
+    };
+    let t: Vec<f64> = (0..600).map(|i| i as f64 * 1e-4 + 2.5e-5).collect();
+    let at = |z: f64, v: f64| State {
+        z_m: z,
+        v_mps: v,
+        va_mps: 0.0,
+    };
+    let theirs = groove_pair(
+        &Model::baseline(MU, T),
+        &pair,
+        [at(z0[0], v0), at(z0[1], 0.0)],
+        &t,
+    );
+    (0..2)
+        .flat_map(|p| {
+            let (fine, theirs) = (&fine[p], &theirs.particles[p]);
+            t.iter()
+                .zip(&theirs.z_m)
+                .map(move |(&t, &z)| (fine.at(t).0 - z).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn agrees_with_groove_physics_on_pairs_with_and_without_a_force_between_them() {
+    // rolling in from 1 mm, and kicked while touching
+    let setups = [([0.0, 1.3e-3], 0.1), ([0.0, 300e-6], 0.1)];
+    for force in [None, Some((-0.6, 143e-6)), Some((0.03, 136e-6))] {
+        for (z0, v0) in setups {
+            let worst = pair_disagreement(force, z0, v0);
+            assert!(
+                worst < 1e-7,
+                "force {force:?}, start {z0:?}: the simulators differ by {worst:e} m"
+            );
+        }
+    }
+}
