@@ -334,8 +334,8 @@ impl Basis {
             for i in 0..ngr {
                 rhs[gcols[i]] += cy[i] - (0..nl).map(|q| b[q][i] * ainv_y[q]).sum::<f64>();
                 for j in 0..ngr {
-                    s[gcols[i]][gcols[j]] += dot(&gw[i], &gw[j])
-                        - (0..nl).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
+                    s[gcols[i]][gcols[j]] +=
+                        dot(&gw[i], &gw[j]) - (0..nl).map(|q| b[q][i] * ainv_b[j][q]).sum::<f64>();
                 }
             }
             blocks.push((index, yy, ay, cy, ainv_y, ainv_b));
