@@ -13,6 +13,8 @@
 //!
 //! While the particles touch, an attraction is held by the contact itself (the normal force
 //! balances it), so a pair that has come to move together stays together; see `on_particle`.
+//! That normal force presses the contact, whose friction then brakes both spins while they turn
+//! the same way (`pair::PairParams::contact_spin`): a pair held together rolls to rest.
 
 use serde::{Deserialize, Serialize};
 
