@@ -377,7 +377,7 @@ fn pair_disagreement(force: Option<(f64, f64)>, z0: [f64; 2], v0: f64) -> f64 {
 #[test]
 fn agrees_with_groove_physics_on_pairs_with_and_without_a_force_between_them() {
     // rolling in from 1 mm, and kicked while touching, each fast and slow enough for the pair to
-    // end joined (an attraction then holds it together); they agree to better than 1e-7 m
+    // end joined (an attraction then holds it together)
     let setups = [
         ([0.0, 1.3e-3], 0.1),
         ([0.0, 1.3e-3], 0.03),
@@ -386,17 +386,21 @@ fn agrees_with_groove_physics_on_pairs_with_and_without_a_force_between_them() {
         ([0.0, 300e-6], 0.02),
     ];
     // the weak attraction holds the rolling pair together after its cascade of impacts, and the
-    // contact's friction under it brakes the pair to rest (16 µm apart when groove left it out)
-    for force in [
-        None,
-        Some((-0.6, 143e-6)),
-        Some((-0.1, 191e-6)),
-        Some((0.03, 136e-6)),
+    // contact's friction under it brakes the pair to rest (16 µm apart when groove left it out):
+    // within 1e-7 m; the strong ones of the force fit's scan, which groove holds together as one
+    // body where this simulator chatters at the contact, within 2e-6 m (1.4e-6 m measured)
+    for (force, bound) in [
+        (None, 1e-7),
+        (Some((-0.6, 143e-6)), 1e-7),
+        (Some((-0.1, 191e-6)), 1e-7),
+        (Some((0.03, 136e-6)), 1e-7),
+        (Some((-3.0, 100e-6)), 2e-6),
+        (Some((-10.0, 30e-6)), 2e-6),
     ] {
         for (z0, v0) in setups {
             let worst = pair_disagreement(force, z0, v0);
             assert!(
-                worst < 1e-7,
+                worst < bound,
                 "force {force:?}, start {z0:?}: the simulators differ by {worst:e} m"
             );
         }

@@ -165,6 +165,17 @@ impl Mode {
         }
     }
 
+    /// How much `v'` moves per unit of `ext` in this mode: 1 while sliding, the rolling factor
+    /// while rolling or creeping (the groove's friction takes its share), 0 at rest. A pair held
+    /// together shares its contact's normal force between the two by it (`pair`).
+    pub fn ext_gain(&self, m: &Model) -> f64 {
+        match self {
+            Mode::Slide { .. } => 1.0,
+            Mode::Creep { .. } | Mode::Roll { .. } => m.groove.rolling_factor(),
+            Mode::Rest => 0.0,
+        }
+    }
+
     /// Time derivative of `[z, v, va]` at time since the kick `t`.
     pub fn rhs(&self, m: &Model, y: &[f64; 3], t: f64, ext: f64) -> [f64; 3] {
         let g = &m.groove;

@@ -12,9 +12,10 @@
 //! raises an approach speed v to √(v² + 2·2W) at contact (both particles are pulled).
 //!
 //! While the particles touch, an attraction is held by the contact itself (the normal force
-//! balances it), so a pair that has come to move together stays together; see `on_particle`.
-//! That normal force presses the contact, whose friction then brakes both spins while they turn
-//! the same way (`pair::PairParams::contact_spin`): a pair held together rolls to rest.
+//! balances it; see `on_particle`); a pair that has come to move together under an attraction is
+//! held as one body until the contact would pull (`pair`), and the contact's friction brakes both
+//! spins while they turn the same way (`pair::PairParams::contact_friction`): a pair held together
+//! rolls to rest.
 
 use serde::{Deserialize, Serialize};
 

@@ -246,7 +246,8 @@ where
 }
 
 /// Draw the legend box in the given corner, or, when a data point lies under it there, in the
-/// first place of the plot where none does (else where the fewest do).
+/// first corner or middle where none does, else the first place of a 10-pixel grid over the plot
+/// where none does (else where the fewest do).
 pub fn legend<'a, 'b: 'a, X, Y>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, Cartesian2d<X, Y>>,
     pos: SeriesLabelPosition,
@@ -293,9 +294,14 @@ where
         MiddleRight,
         MiddleLeft,
     ];
+    // when every corner and middle covers a point, any place of the plot on a 10-pixel grid
+    let free = (dim.0 as i32 - w - 10).max(0);
+    let tall = (dim.1 as i32 - h - 10).max(0);
+    let grid = (0..=tall / 10).flat_map(|j| (0..=free / 10).map(move |i| (5 + 10 * i, 5 + 10 * j)));
     let spot = order
         .iter()
         .map(place)
+        .chain(grid)
         .enumerate()
         .min_by_key(|(i, at)| (covered(*at), *i))
         .map(|(_, at)| at)

@@ -12,7 +12,8 @@ use crate::report::style;
 use crate::report::value::sig;
 use plotters::prelude::*;
 
-/// √Δχ² above this is drawn at this value (the far ends of the profile rise by thousands).
+/// √Δχ² above this is drawn at this value, without a marker (the far ends of the profile rise by
+/// thousands).
 pub const CLIP: f64 = 12.0;
 
 /// One material's profile: its name, [(μ_pp, deviance)], the deviance threshold of the 95 %
@@ -136,7 +137,9 @@ fn draw(profs: Vec<Profile>, title: &str) -> Result<Option<String>, String> {
                 .map(|&(mu, dev)| (mu, root(dev)))
                 .collect();
             line(&mut c, p.clone(), col, 2, false, None)?;
-            scatter(&mut c, &p, style::marker(m, false), col, true, Some(m))?;
+            // a grid value above the clip has no value to mark: its line runs out of the top
+            let marked: Vec<(f64, f64)> = p.iter().copied().filter(|q| q.1 < CLIP).collect();
+            scatter(&mut c, &marked, style::marker(m, false), col, true, Some(m))?;
         }
         let thr = profs[0].2.sqrt();
         line(
