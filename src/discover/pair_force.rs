@@ -4,7 +4,10 @@
 //!
 //! With the single runs' physics held (the pair check's held fit: μ_pp, the restitution laws and
 //! every run's kick free), a force `a(s)` of the separation s = centre distance − 2R is added in
-//! each named shape of `physics::PairForce` (exponential, power law) and fitted. The decision:
+//! each named shape of `physics::PairForce` (exponential, power law) and fitted: the exponential
+//! from a scan's best starts (`scan_starts`), and when it finds a force, again from about it and
+//! from the scan's best of its sign (`found_starts`); the power law from the exponential. The
+//! decision:
 //! - the deviance gain over the held fit, divided by the inflation of the pairs' residuals
 //!   (their correlation over the milliseconds a force acts, `pair_noise`, or the pair check's
 //!   lag-1 inflation and any misfit the fit leaves, the larger), is a χ² with the shape's free
@@ -73,29 +76,33 @@ fn scan_cost(runs: &[PairRun], held: &GroupFit, start: [f64; 3]) -> f64 {
     cost
 }
 
-/// The scan's starts: the best point of each range, the ranges in the order of their best
-/// points, at most `STARTS`.
-fn scan_starts(runs: &[PairRun], held: &GroupFit) -> Vec<[f64; 3]> {
+/// The scan's best point of each range among amplitudes `amps`, the ranges in the order of their
+/// best points.
+fn scan_ranges(runs: &[PairRun], held: &GroupFit, amps: &[f64]) -> Vec<(f64, [f64; 3])> {
     let mut best: Vec<(f64, [f64; 3])> = SCAN_RANGES_M
         .iter()
         .filter_map(|&l| {
-            SCAN_AMPS_MPS2
-                .iter()
-                .flat_map(|&a| [a, -a])
-                .map(|a| [a, l.ln(), PAIR_FORCE_START[2]])
+            amps.iter()
+                .map(|&a| [a, l.ln(), PAIR_FORCE_START[2]])
                 .map(|s| (scan_cost(runs, held, s), s))
                 .min_by(|a, b| a.0.total_cmp(&b.0))
         })
         .collect();
     best.sort_by(|a, b| a.0.total_cmp(&b.0));
+    best
+}
+
+/// The scan's starts: the best point of each range, the ranges in the order of their best
+/// points, at most `STARTS`.
+fn scan_starts(runs: &[PairRun], held: &GroupFit) -> Vec<[f64; 3]> {
+    let amps: Vec<f64> = SCAN_AMPS_MPS2.iter().flat_map(|&a| [a, -a]).collect();
+    let mut best = scan_ranges(runs, held, &amps);
     // where no point of the scan does better than no force at all, the fit starts there (the held
     // fit's optimum): from the best point it walked back to nothing in 20–30 iterations
     let none = [0.0, PAIR_FORCE_START[1], PAIR_FORCE_START[2]];
-    if best
-        .first()
-        .is_some_and(|b| b.0 >= scan_cost(runs, held, none))
-    {
-        best.insert(0, (f64::NAN, none));
+    let none_cost = scan_cost(runs, held, none);
+    if best.first().is_some_and(|b| b.0 >= none_cost) {
+        best.insert(0, (none_cost, none));
     }
     let starts: Vec<[f64; 3]> = best.into_iter().take(STARTS).map(|(_, s)| s).collect();
     if starts.is_empty() {
@@ -105,16 +112,26 @@ fn scan_starts(runs: &[PairRun], held: &GroupFit) -> Vec<[f64; 3]> {
     }
 }
 
-/// The starts about a force fitted at (A, λ): 3A at λ/1.5 and A/3 at 1.5λ. From no force, a
-/// screened attraction of 3 m/s² over 50 µm between rolling pairs was fitted at 1.1 m/s² over
-/// 77 µm (its work 44 % short), and from 3A at λ/1.5 at the truth.
-fn around(fit: &GroupFit) -> [[f64; 3]; 2] {
+/// The starts of a force found at (A, λ): 3A at λ/1.5 and A/3 at 1.5λ, and the scan's best
+/// `STARTS` ranges among amplitudes of A's sign. From no force, a screened attraction of 3 m/s²
+/// over 50 µm between rolling pairs was fitted at 1.1 m/s² over 77 µm (its work 44 % short), and
+/// from 3A at λ/1.5 at the truth; a bench attraction of 0.63 m/s² over 143 µm in drifting noise
+/// was fitted from no force at 0.0005 m/s², whose multiples are no start either.
+fn found_starts(runs: &[PairRun], held: &GroupFit, fit: &GroupFit) -> Vec<[f64; 3]> {
     let (a, ln_l) = (fit.result.shared[PF_AMP], fit.result.shared[PF_LN_RANGE]);
     let n = PAIR_FORCE_START[2];
-    [
+    let signed: Vec<f64> = SCAN_AMPS_MPS2.iter().map(|&x| x.copysign(a)).collect();
+    let mut starts = vec![
         [3.0 * a, ln_l - 1.5f64.ln(), n],
         [a / 3.0, ln_l + 1.5f64.ln(), n],
-    ]
+    ];
+    starts.extend(
+        scan_ranges(runs, held, &signed)
+            .into_iter()
+            .take(STARTS)
+            .map(|(_, s)| s),
+    );
+    starts
 }
 
 /// The scan's best ranges the exponential's fit may start from: the loss along the range is rough
@@ -336,9 +353,9 @@ pub fn test_force(
     }
     let mut exp = exp.expect("the scan gives at least one start");
     // a force found: the loss is rough along its size too (a recapture after an impact switches
-    // whole runs), so the fit is tried again from three times and a third of its amplitude
+    // whole runs), so the fit is tried again from about it and from the scan's best of its sign
     if chi2_sf((held.cost() - exp.fit.cost()) / inflate, 2.0) < ALPHA {
-        for start in around(&exp.fit) {
+        for start in found_starts(runs, held, &exp.fit) {
             let fit = fit_shape(
                 runs,
                 held,

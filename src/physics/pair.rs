@@ -447,9 +447,8 @@ fn seen_ext(
 }
 
 /// Apply the mode event `fired` (particle, event) at time `t`, then any other mode event whose
-/// function is already below zero there (a force in time starting both at rest at once, a held
-/// pair whose normal force a switch moved): `advance` stops at one event, and a function already
-/// past zero would not fire again. A few passes at most.
+/// function is already below zero there: `advance` stops at one event, and a function already
+/// past zero would not fire again.
 #[allow(clippy::too_many_arguments)]
 fn mode_events(
     model: &Model,
@@ -473,9 +472,15 @@ fn mode_events(
     if let Some((i, k)) = fired {
         switch(y, modes, i, k);
     }
-    for _ in 0..4 {
+    // free, only the other particle's event at the same time (a force in time starting both at
+    // rest at once); held, each switch moves the normal force both particles see
+    let (passes, whose) = match fired {
+        Some((i, _)) if !held => (1, [1 - i, 1 - i]),
+        _ => (4, [0, 1]),
+    };
+    for _ in 0..passes {
         let ext = seen_ext(model, pair, &with_t(y, t), *modes, lr, held);
-        let due = (0..2).find_map(|j| {
+        let due = whose.into_iter().find_map(|j| {
             let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
             let ej = modes[j].events(model, &yj, t, ext[j]);
             (0..ej.len()).find(|&k| ej[k] < 0.0).map(|k| (j, k))
