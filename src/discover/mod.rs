@@ -23,6 +23,7 @@
 //! - `null_distribution.rs`: p-values of a likelihood-ratio statistic from its null law
 //! - `pairs.rs`: Discovery on pairs
 //! - `pair_force.rs`: The test for a force between the two particles of a pair
+//! - `pair_held_out.rs`: Held-out runs for the pair tests
 //! - `pair_noise.rs`: The pairs' tracking noise over the time a signature lasts (long-run variance)
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
@@ -129,6 +130,7 @@ pub mod noise_floor;
 pub mod noise_model;
 pub mod null_distribution;
 pub mod pair_force;
+mod pair_held_out;
 mod pair_noise;
 pub mod pairs;
 mod pairs_impact;

@@ -23,12 +23,13 @@
 //! The size reported: the amplitude at contact A, the range λ, and the work per unit mass over
 //! the whole range W = ∫a ds, which the data fix best when the range is short.
 
+use super::pair_held_out as held_out;
 use super::pair_noise::long_run_factor;
 use super::pairs_impact::{ALPHA, IMPACT_WINDOW_S};
 use crate::artifacts::diagnosis::{Effect, Estimate as Value, Evidence, Finding, ModelScore};
 use crate::fit::collision::wholerun::{
-    fit_group_with, fit_own_only, residuals, FitSpec, GroupFit, PairForceShape, PairRun,
-    PAIR_FORCE_START, PF_AMP, PF_EXPONENT, PF_LN_RANGE,
+    fit_group_with, residuals, FitSpec, GroupFit, PairForceShape, PairRun, PAIR_FORCE_START,
+    PF_AMP, PF_EXPONENT, PF_LN_RANGE,
 };
 use crate::lsq::block::huber_rho;
 use crate::lsq::Termination;
@@ -242,60 +243,6 @@ fn fit_shape(
     )
 }
 
-/// The held-out gains of `chosen`'s force: the held model with and without it fitted on one half
-/// of the runs (from their fits on all), each judged on the other half with only the runs' own
-/// parameters refitted. Both sides learn μ_pp and the restitution laws from the same few runs;
-/// judged against the held fit of all runs instead, the test runs' own impacts favoured the model
-/// without the force (a half of three touching pairs lost 7 to 48 χ² under a force found at p
-/// 1e-55 and more).
-fn held_out(
-    runs: &[PairRun],
-    held: &GroupFit,
-    chosen: &ShapeFit,
-    free: &dyn Fn(usize) -> bool,
-    inflate: f64,
-    max_iter: usize,
-) -> Option<[f64; 2]> {
-    if runs.len() < 4 {
-        return None;
-    }
-    let half = |k: usize| -> Vec<usize> { (0..runs.len()).filter(|i| i % 2 == k).collect() };
-    let pick = |idx: &[usize]| -> Vec<PairRun> { idx.iter().map(|&i| runs[i].clone()).collect() };
-    let own = |f: &GroupFit, idx: &[usize]| -> Vec<Vec<f64>> {
-        idx.iter().map(|&i| f.result.own[i].clone()).collect()
-    };
-    let mut gains = [0.0; 2];
-    for (k, gain) in gains.iter_mut().enumerate() {
-        let (train, test) = (half(k), half(1 - k));
-        let force_train = fit_group_with(
-            &pick(&train),
-            &chosen.fit.spec,
-            &chosen.fit.result.shared,
-            Some(own(&chosen.fit, &train).as_slice()),
-            &|i| free(i) || force_slot(i),
-            max_iter,
-        );
-        let held_train = fit_group_with(
-            &pick(&train),
-            &held.spec,
-            &held.result.shared,
-            Some(own(held, &train).as_slice()),
-            free,
-            max_iter,
-        );
-        let test_runs = pick(&test);
-        let with = fit_own_only(
-            &test_runs,
-            &chosen.fit.spec,
-            &force_train.result.shared,
-            max_iter,
-        );
-        let without = fit_own_only(&test_runs, &held.spec, &held_train.result.shared, max_iter);
-        *gain = (without.cost() - with.cost()) / inflate;
-    }
-    Some(gains)
-}
-
 /// The first parameter of `fit`'s force at its bound, by name.
 fn at_bound(fit: &GroupFit) -> Option<&'static str> {
     let specs = fit.spec.shared_specs(Some(&fit.result.shared), &[]);
@@ -410,7 +357,14 @@ pub fn test_force(
     let p = chi2_sf(lr, k);
     // held-out runs confirm what is significant; below α before Holm nothing can be accepted
     let held_out = if p < ALPHA {
-        held_out(runs, held, &chosen, free, inflate, max_iter)
+        let with_force = |i: usize| free(i) || force_slot(i);
+        held_out::gains(
+            runs,
+            (&chosen.fit, &with_force),
+            (held, free),
+            inflate,
+            max_iter,
+        )
     } else {
         None
     };
