@@ -243,6 +243,12 @@ fn fit_shape(
     )
 }
 
+/// How a force fit ranks among fits from other starts (lower is better): one that ends at a
+/// bound of its range last, then by cost.
+fn rank(fit: &GroupFit) -> (bool, f64) {
+    (at_bound(fit).is_some(), fit.cost())
+}
+
 /// The first parameter of `fit`'s force at its bound, by name.
 fn at_bound(fit: &GroupFit) -> Option<&'static str> {
     let specs = fit.spec.shared_specs(Some(&fit.result.shared), &[]);
@@ -274,21 +280,21 @@ pub fn test_force(
     max_iter: usize,
 ) -> ForceTest {
     let max_iter = max_iter.min(FORCE_ITER);
-    // from the scan's best range, and from the next only when that fit ends at a bound
-    let mut exp: Option<ShapeFit> = None;
-    for start in scan_starts(runs, held) {
-        let fit = fit_shape(
+    let exp_from = |start: [f64; 3]| {
+        fit_shape(
             runs,
             held,
             PairForceShape::Exponential,
             start,
             free,
             max_iter,
-        );
-        let better = exp.as_ref().is_none_or(|e| {
-            (at_bound(&fit).is_some(), fit.cost()) < (at_bound(&e.fit).is_some(), e.fit.cost())
-        });
-        if better {
+        )
+    };
+    // from the scan's best range, and from the next only when that fit ends at a bound
+    let mut exp: Option<ShapeFit> = None;
+    for start in scan_starts(runs, held) {
+        let fit = exp_from(start);
+        if exp.as_ref().is_none_or(|e| rank(&fit) < rank(&e.fit)) {
             exp = Some(ShapeFit {
                 shape: PairForceShape::Exponential,
                 fit,
@@ -303,17 +309,8 @@ pub fn test_force(
     // whole runs), so the fit is tried again from about it and from the scan's best of its sign
     if chi2_sf((held.cost() - exp.fit.cost()) / inflate, 2.0) < ALPHA {
         for start in found_starts(runs, held, &exp.fit) {
-            let fit = fit_shape(
-                runs,
-                held,
-                PairForceShape::Exponential,
-                start,
-                free,
-                max_iter,
-            );
-            if (at_bound(&fit).is_some(), fit.cost())
-                < (at_bound(&exp.fit).is_some(), exp.fit.cost())
-            {
+            let fit = exp_from(start);
+            if rank(&fit) < rank(&exp.fit) {
                 exp.fit = fit;
             }
         }
