@@ -496,8 +496,10 @@ fn test_material(
         contact.result.shared_se(CONTACT) * inflate.sqrt(),
         contact.cost(),
     );
-    // held-out runs confirm what is significant; below α before Holm nothing can be accepted
-    let held_out = if p < ALPHA {
+    // held-out runs confirm what is significant and large enough to count; otherwise nothing
+    // can be accepted, and the four fits would be spent for nothing
+    let counts = size.is_none_or(|(mu, drag)| mu >= MIN_MU || drag >= MIN_DRAG);
+    let held_out = if p < ALPHA && counts {
         held_out::gains(
             runs,
             (&free, &|_| true),
