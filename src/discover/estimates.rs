@@ -99,7 +99,14 @@ pub fn reported_parameters(
     let mut parameters = term_parameters(m, i, materials);
     let off = m.spec.extra_offset(i);
     let e = &m.spec.extras[i];
-    e.report_over_runs(&m.fit.global[off..], runs, &mut parameters);
+    let n = e.params().len();
+    let cov: Vec<Vec<f64>> = m
+        .fit
+        .global_cov
+        .get(off..off + n)
+        .map(|rows| rows.iter().map(|r| r[off..off + n].to_vec()).collect())
+        .unwrap_or_default();
+    e.report_over_runs(&m.fit.global[off..], &cov, runs, &mut parameters);
     if e.run_phase() {
         if let Some(a) = amplitude_over_phases(&m.spec, &m.fit.global, &m.fit.local, runs) {
             for name in ["amplitude_mps2", "peak_accel_mps2"] {

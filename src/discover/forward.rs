@@ -623,6 +623,39 @@ impl Trials<'_> {
         }
     }
 
+    /// Of two forms of one effect, the richer is named only where held-out runs prefer it: each
+    /// form of the accepted term's effect with more parameters and a comparable statistic (as
+    /// `prefer_simpler` reads it) is fitted in full, and named instead when it predicts held-out
+    /// runs better (paired t above its critical value). The order charges each parameter, so a
+    /// curve with one parameter more ranks below a line it explains more than (a Stribeck
+    /// friction behind the line in the slip speed, whose slope is no size of it) and was
+    /// otherwise never fitted.
+    fn prefer_richer(&mut self, order: &[usize], lr: &[f64]) {
+        let Some((b, _)) = self.best.clone() else {
+            return;
+        };
+        let (effect, nb) = (self.all[b].effect(), self.all[b].params().len());
+        let richer: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&j| {
+                self.all[j].effect() == effect
+                    && self.all[j].params().len() > nb
+                    && lr[j] >= 0.5 * lr[b]
+            })
+            .collect();
+        for j in richer {
+            let (passes, cv) = self.check(j);
+            let better = self
+                .best
+                .as_ref()
+                .is_some_and(|(_, b_cv)| paired_t(b_cv, &cv) > self.t_cv);
+            if passes && better {
+                self.best = Some((j, cv));
+            }
+        }
+    }
+
     /// Of two representations that predict held-out runs equally well, the simpler is named; a
     /// representation explains as much only if its statistic is comparable.
     fn prefer_simpler(&mut self, order: &[usize], lr: &[f64]) {
@@ -774,6 +807,7 @@ pub fn run_round(
     };
     tr.strongest(&order);
     trace("fitted and cross-validated the strongest");
+    tr.prefer_richer(&order, &sc.lr);
     tr.prefer_simpler(&order, &sc.lr);
     trace("cross-validated");
     if set.pairs_allowed {

@@ -21,6 +21,9 @@ pub struct Fitted {
     pub chi2_run: Vec<f64>,
     /// Standard errors of the globals from the Jacobian, scaled by √(χ²/dof) when that exceeds 1.
     pub global_se: Vec<f64>,
+    /// Their covariance, scaled as the errors are (empty when the globals were held; NaN where
+    /// the system was singular).
+    pub global_cov: Vec<Vec<f64>>,
     pub iterations: usize,
     pub converged: bool,
 }
@@ -246,12 +249,21 @@ pub fn fit_joint(
             }
         })
         .collect();
+    let global_cov = if ctl.free_global {
+        res.shared_cov
+            .iter()
+            .map(|row| row.iter().map(|c| c * scale).collect())
+            .collect()
+    } else {
+        Vec::new()
+    };
     Fitted {
         global: res.shared,
         local,
         chi2,
         chi2_run,
         global_se,
+        global_cov,
         iterations: res.iterations,
         converged: res.termination.is_converged(),
     }

@@ -183,11 +183,11 @@ fn named_trial(
     null_pred: &[Vec<f64>],
     v: &Vectors,
 ) -> (Option<Trial>, Option<ExactNull>) {
-    if let Some((theta0, trials)) = e.scale_trials() {
+    if let Some(trials) = e.scale_trials() {
         let trials: Vec<Option<Trial>> = trials
             .par_iter()
-            .map(|steps| {
-                secant(current, e, &theta0, steps, runs, prep, null_pred, v).map(
+            .map(|(theta0, steps)| {
+                secant(current, e, theta0, steps, runs, prep, null_pred, v).map(
                     |((lr, _, se), _)| {
                         let mut est = theta0.clone();
                         for &(j, to) in steps {

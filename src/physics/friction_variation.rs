@@ -2,10 +2,11 @@
 //! by the direction of motion, by the position in the lab and by the slip speed.
 //!
 //! `μ_eff = μ(u) · (1 + δ_dir·dir) · (1 + p₁ P₁(x) + p₂ P₂(x)) · (1 + A sin(k z + φ))
-//! · (1 + β (|u|/u_ref − 1))`, with `dir = ±1` the direction of motion, `x = (z − z_mid)/half_span`
+//! · (1 + β (|u|/u_ref − 1)) · (1 + δ_s e^(−|u|/v_s))`, with `dir = ±1` the direction of motion, `x = (z − z_mid)/half_span`
 //! held in [−1, 1] and P₁, P₂ the Legendre polynomials (a gradient and a curvature over the
 //! observed stretch of groove), A, k, φ a periodic variation along the groove fixed in the lab
-//! (a machining pattern, a texture), `u` the slip speed. The factor never goes below zero. It acts wherever friction acts: on the sliding
+//! (a machining pattern, a texture), `u` the slip speed, δ_s and v_s a Stribeck rise of μ
+//! towards zero slip (a static friction 1 + δ_s times the kinetic, falling off over v_s). The factor never goes below zero. It acts wherever friction acts: on the sliding
 //! motion and on what friction can hold while rolling (at zero slip), and nowhere else, which is
 //! what sets it apart from a force: a pure rolling phase does not feel it.
 
@@ -29,6 +30,9 @@ pub struct FrictionVariation {
     pub u_ref_mps: f64,
     /// Relative change of μ per u_ref of slip speed, about u_ref.
     pub by_slip: f64,
+    /// A Stribeck rise at low slip: relative excess δ_s at zero slip and the slip speed v_s
+    /// (m/s) over which it falls off; μ × (1 + δ_s e^(−|u|/v_s)). Zero v_s: none.
+    pub stribeck: [f64; 2],
 }
 
 impl FrictionVariation {
@@ -50,6 +54,10 @@ impl FrictionVariation {
         }
         if self.u_ref_mps > 0.0 {
             f *= 1.0 + self.by_slip * (slip_mps.abs() / self.u_ref_mps - 1.0);
+        }
+        let [excess, v_s] = self.stribeck;
+        if v_s > 0.0 {
+            f *= 1.0 + excess * (-slip_mps.abs() / v_s).exp();
         }
         f.max(0.0)
     }
@@ -88,6 +96,13 @@ mod tests {
         assert!((slip.factor(0.0, 1.0, 0.0) - 1.3).abs() < 1e-12);
         assert!((slip.factor(0.0, 1.0, 0.02) - 0.7).abs() < 1e-12);
         assert_eq!(slip.factor(0.0, 1.0, 0.1), 0.0, "never below zero");
+        let stribeck = FrictionVariation {
+            stribeck: [0.5, 0.01],
+            ..none
+        };
+        assert!((stribeck.factor(0.0, 1.0, 0.0) - 1.5).abs() < 1e-12, "static: 1 + δ_s");
+        assert!((stribeck.factor(0.0, -1.0, -0.01) - (1.0 + 0.5 / std::f64::consts::E)).abs() < 1e-12);
+        assert!((stribeck.factor(0.0, 1.0, 1.0) - 1.0).abs() < 1e-12, "kinetic far above v_s");
         let wave = FrictionVariation {
             periodic: [0.1, 1000.0, 0.5],
             ..none

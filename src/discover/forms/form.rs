@@ -206,9 +206,9 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn refused_at_bound(&self, _param: usize) -> bool {
         false
     }
-    /// A named form screened at a few trial scales (the best kept) instead of one secant: where
-    /// its parameters start and, per trial, the parameters stepped and where to.
-    fn scale_trials(&self) -> Option<(Vec<f64>, Vec<Vec<(usize, f64)>>)> {
+    /// A named form screened at a few trial scales (the best kept) instead of one secant: per
+    /// trial, where its parameters start and the parameters stepped and where to.
+    fn scale_trials(&self) -> Option<Vec<(Vec<f64>, Vec<(usize, f64)>)>> {
         None
     }
 
@@ -256,10 +256,12 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn scale_at_fine_end(&self, _x: f64, _lower: bool) -> Option<String> {
         None
     }
-    /// The reported parameters adjusted with where the runs go (a spline's size over the data).
+    /// The reported parameters adjusted with where the runs go (a spline's size over the data);
+    /// `cov` is the covariance of the term's parameters (empty when the fit gave none).
     fn report_over_runs(
         &self,
         _x: &[f64],
+        _cov: &[Vec<f64>],
         _runs: &[RunData],
         _out: &mut BTreeMap<String, Estimate>,
     ) {

@@ -9,6 +9,7 @@
 //! - `groove_tilt.rs`: A groove tilt, a = −g·sin α
 //! - `velocity_friction.rs`: μ of the slip speed, saturating, v_c per material
 //! - `friction_slip.rs`: μ of the slip speed, linear about a reference speed
+//! - `friction_stribeck.rs`: μ falling with the slip speed from a static value (Stribeck)
 //! - `friction_direction.rs`: μ by the direction of motion
 //! - `friction_position.rs`: μ along the groove
 //! - `friction_periodic.rs`: μ periodic along the groove (wavelength searched)
@@ -96,6 +97,7 @@ registry! {
     self::groove_tilt::GrooveTilt,
     self::velocity_friction::VelocityFriction,
     self::friction_slip::FrictionSlip,
+    self::friction_stribeck::FrictionStribeck,
     self::friction_direction::FrictionDirection,
     self::friction_position::FrictionPosition,
     self::friction_periodic::FrictionPeriodic,

@@ -61,14 +61,17 @@ impl Form for VelocityFriction {
         out
     }
     /// Screened at a few trial scales v_c (the best kept), every material's at once.
-    fn scale_trials(&self) -> Option<(Vec<f64>, Vec<Vec<(usize, f64)>>)> {
+    fn scale_trials(&self) -> Option<Vec<(Vec<f64>, Vec<(usize, f64)>)>> {
         let lo = self.params()[0].lo;
         let theta0 = vec![lo; self.materials];
         let trials = [1e-3f64, 3e-3, 1e-2, 3e-2]
             .iter()
-            .map(|vc| (0..self.materials).map(|m| (m, vc.ln())).collect())
+            .map(|vc| {
+                let steps = (0..self.materials).map(|m| (m, vc.ln())).collect();
+                (theta0.clone(), steps)
+            })
             .collect();
-        Some((theta0, trials))
+        Some(trials)
     }
     fn starts(&self) -> Vec<Vec<f64>> {
         [1e-4f64, 2e-3, 2e-2]
