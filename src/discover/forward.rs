@@ -634,6 +634,10 @@ impl Trials<'_> {
         let Some((b, _)) = self.best.clone() else {
             return;
         };
+        if self.pair.is_some() {
+            // accepted together with a term beside it: the two stand or fall as a pair
+            return;
+        }
         let (effect, nb) = (self.all[b].effect(), self.all[b].params().len());
         let richer: Vec<usize> = order
             .iter()

@@ -73,7 +73,7 @@
 //! 3. **Forms.** Drags (quadratic, saturating), a rolling resistance, a tilt, forces in lab z
 //!    (periodic, localized, a step), a force periodic in time with a phase per run
 //!    (`timeforce.rs`) or one phase for every run (locked to the kick), μ(u) of the slip speed
-//!    (saturating or linear), μ by direction, μ along the groove (periodic, or its gradient and
+//!    (saturating, linear, or falling from a static value: Stribeck), μ by direction, μ along the groove (periodic, or its gradient and
 //!    curvature), a distortion; a spline in one variable is the fallback (`unexplained`). Each form is a type in a file of
 //!    `forms/` (`Form`: place, parameters in SI units with bounds and sign, how it enters the
 //!    integrator, its screen, its sentence and estimates), listed once in its registry.
@@ -83,7 +83,9 @@
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
-//!    held-out runs better (`cv.rs`, paired per-run t). The strongest passing term is added,
+//!    held-out runs better (`cv.rs`, paired per-run t); a richer form of the passing term's
+//!    effect with a comparable statistic is fitted too and named instead only where held-out
+//!    runs prefer it (the order charges each parameter). The strongest passing term is added,
 //!    earlier terms re-tested (backward elimination), and the search repeats. When no single
 //!    term passes, or only a searched force does, pairs of named forms are tried (of the
 //!    searched force's place when one passed: `forward.rs`). Then, for z and for v, the force
@@ -93,6 +95,7 @@
 //! 5. **Sanity.** A term must be physics (`admissible.rs`): a drag that pushes, a form whose
 //!    scale ends at the fine end of its search, are refused; a parameter at a bound is said in
 //!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept.
+//!    A map's peak and RMS are of the curve with its noise taken out (`forms/spline.rs`).
 //!    Drift probes (T or μ drifting with |v0|, a direction asymmetry) say whether a mismatch is
 //!    left unexplained. Every candidate carries its detection limit (90 % power on this dataset,
 //!    `detection.rs`).

@@ -312,7 +312,7 @@ mod tests {
         );
         assert_eq!(
             ask(&["velocity_dependent_friction"]),
-            ["velocity_friction", "friction_slip"]
+            ["velocity_friction", "friction_slip", "friction_stribeck"]
         );
         // every effect the stage can be asked for has a form
         for id in crate::discover::EFFECTS {
