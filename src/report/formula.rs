@@ -5,7 +5,7 @@
 //! pipe. A form this file does not know is shown as written.
 
 /// The ASCII formula of each form of discovery's library, and the same formula in TeX.
-const FORMULAS: [(&str, &str); 15] = [
+const FORMULAS: [(&str, &str); 16] = [
     ("a = -v/(T0 + T'|v|)", r"a = -v/(T_0 + T'\lvert v\rvert)"),
     ("a = -v/T - c v|v|", r"a = -v/T - c\,v\lvert v\rvert"),
     ("a = -c g sign(v)", r"a = -c\,g\,\text{sign}(v)"),
@@ -29,6 +29,10 @@ const FORMULAS: [(&str, &str); 15] = [
     (
         "mu(u) = mu (1 + beta (|u|/u_ref - 1))",
         r"\mu(u) = \mu(1 + \beta(\lvert u\rvert/u_{\text{ref}} - 1))",
+    ),
+    (
+        "mu(u) = mu (1 + delta exp(-|u|/v_s))",
+        r"\mu(u) = \mu(1 + \delta\,\text{exp}(-\lvert u\rvert/v_s))",
     ),
     ("mu (1 + delta dir)", r"\mu(1 + \delta\,\text{dir})"),
     (
