@@ -249,8 +249,8 @@ fn a_step_along_the_groove_is_named_a_step() {
 /// 6× its limit over four noises: named as a friction of the slip speed and nothing else, its
 /// excess δ within 15 %, in at least three. Before the Stribeck form, the bench's one such
 /// dataset was named by the linear law in the slip speed, whose slope is no size of this curve.
-/// On the small datasets of the tests above (12 runs a material), held-out runs tell the curve
-/// from that line in one of four: the simpler line is then named, as it should be.
+/// On the small datasets of the tests above (12 runs a material), before the richer form of an
+/// effect was fitted beside the first to pass, the line was named in three of four.
 #[test]
 fn a_friction_falling_with_slip_is_a_stribeck_curve() {
     let (named, sized, text) =
