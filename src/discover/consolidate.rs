@@ -353,21 +353,19 @@ pub(super) fn field_size(
     let sim = m.spec.sim_model(&m.fit.global, 0, 0.0);
     // the field's gradient in every global, by central differences a thousandth of each
     // global's standard error wide (the field is linear in its amplitudes, smooth in the rest)
-    let shifted: Vec<Option<(super::sim::SimModel, super::sim::SimModel, f64)>> = (0..m
-        .fit
-        .global
-        .len())
-        .map(|i| {
-            let h = 1e-3 * m.fit.global_se.get(i).copied().unwrap_or(0.0);
-            (h.is_finite() && h > 0.0).then(|| {
-                let mut g = m.fit.global.clone();
-                g[i] += h;
-                let up = m.spec.sim_model(&g, 0, 0.0);
-                g[i] -= 2.0 * h;
-                (up, m.spec.sim_model(&g, 0, 0.0), h)
+    let shifted: Vec<Option<(super::sim::SimModel, super::sim::SimModel, f64)>> =
+        (0..m.fit.global.len())
+            .map(|i| {
+                let h = 1e-3 * m.fit.global_se.get(i).copied().unwrap_or(0.0);
+                (h.is_finite() && h > 0.0).then(|| {
+                    let mut g = m.fit.global.clone();
+                    g[i] += h;
+                    let up = m.spec.sim_model(&g, 0, 0.0);
+                    g[i] -= 2.0 * h;
+                    (up, m.spec.sim_model(&g, 0, 0.0), h)
+                })
             })
-        })
-        .collect();
+            .collect();
     let grad = |z: f64| -> Vec<f64> {
         shifted
             .iter()
@@ -378,5 +376,11 @@ pub(super) fn field_size(
             })
             .collect()
     };
-    sp.size_over_runs(&|z| field_in_z(&sim, z), &grad, &m.fit.global_cov, runs, out);
+    sp.size_over_runs(
+        &|z| field_in_z(&sim, z),
+        &grad,
+        &m.fit.global_cov,
+        runs,
+        out,
+    );
 }

@@ -100,9 +100,17 @@ mod tests {
             stribeck: [0.5, 0.01],
             ..none
         };
-        assert!((stribeck.factor(0.0, 1.0, 0.0) - 1.5).abs() < 1e-12, "static: 1 + δ_s");
-        assert!((stribeck.factor(0.0, -1.0, -0.01) - (1.0 + 0.5 / std::f64::consts::E)).abs() < 1e-12);
-        assert!((stribeck.factor(0.0, 1.0, 1.0) - 1.0).abs() < 1e-12, "kinetic far above v_s");
+        assert!(
+            (stribeck.factor(0.0, 1.0, 0.0) - 1.5).abs() < 1e-12,
+            "static: 1 + δ_s"
+        );
+        assert!(
+            (stribeck.factor(0.0, -1.0, -0.01) - (1.0 + 0.5 / std::f64::consts::E)).abs() < 1e-12
+        );
+        assert!(
+            (stribeck.factor(0.0, 1.0, 1.0) - 1.0).abs() < 1e-12,
+            "kinetic far above v_s"
+        );
         let wave = FrictionVariation {
             periodic: [0.1, 1000.0, 0.5],
             ..none
