@@ -740,10 +740,16 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
         if tr.displaced == Some(i) {
             return "passes both tests, but two named terms fitted together predict held-out runs as well with fixed shapes: they are named instead".into();
         }
-        return if tr.best.as_ref().map(|(b, _)| *b == i).unwrap_or(false) {
-            "passes: bootstrap LR test and held-out runs".into()
-        } else {
-            "rejected: held-out runs do not improve".into()
+        return match &tr.best {
+            Some((b, _)) if *b == i => "passes: bootstrap LR test and held-out runs".into(),
+            // it passed on its own, and another form was preferred by held-out runs (a richer
+            // form of its effect, `prefer_richer`); a tie is said over this by `tied`
+            Some((b, b_cv)) if cv.cv_rms_m < tr.current_cv.cv_rms_m && *t > tr.t_cv => format!(
+                "passes both tests, but {} predicts held-out runs better (paired t = {:.2}): it is named instead",
+                tr.all[*b].form(),
+                paired_t(cv, b_cv)
+            ),
+            _ => "rejected: held-out runs do not improve".into(),
         };
     }
     if tr.best.is_some() {
