@@ -274,7 +274,7 @@ struct Trials<'r> {
     /// What the runs' own μ and T explain of the current model's misfit beyond the noise when
     /// the particles differ (`particle_excess`), checked once a round when a term with a phase
     /// per run is fitted.
-    particles_differ: Option<Option<f64>>,
+    particle_check: Option<Option<f64>>,
     /// Each candidate's first-order statistic less its null's mean.
     excess: Vec<f64>,
     best: Option<(usize, CvResult)>,
@@ -417,7 +417,7 @@ impl Trials<'_> {
     /// gives them (the particle check's statistic less its null mean), when the check says the
     /// particles differ; None when they agree (checked once a round).
     fn particle_excess(&mut self) -> Option<f64> {
-        if self.particles_differ.is_none() {
+        if self.particle_check.is_none() {
             let c = super::particles::check(
                 self.current,
                 self.set.runs,
@@ -425,9 +425,9 @@ impl Trials<'_> {
                 self.set.opts.alpha,
                 self.set.opts.seed ^ 0x005E_ED0F_9A27,
             );
-            self.particles_differ = Some(c.filter(|c| c.differ).map(|c| c.lr - c.lr_null_mean));
+            self.particle_check = Some(c.filter(|c| c.differ).map(|c| c.lr - c.lr_null_mean));
         }
-        self.particles_differ.flatten()
+        self.particle_check.flatten()
     }
 
     /// When no significant candidate passes the held-out check alone, two of the strongest
@@ -823,7 +823,7 @@ pub fn run_round(
         fitted: sc.linear.clone(),
         cv_of: vec![None; ne],
         refused: vec![None; ne],
-        particles_differ: None,
+        particle_check: None,
         excess: (0..ne).map(|i| sc.lr[i] - sc.nulls[i].mean).collect(),
         best: None,
         pair: None,

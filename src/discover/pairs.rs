@@ -666,10 +666,17 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
             ),
         );
     }
+    // what held-out runs said of an acceptance: confirmed, or not checked (too few runs)
+    let held_out = match d.held_out {
+        Some([a, b]) => {
+            format!("; confirmed on held-out runs (χ² gains {a:.1} and {b:.1} on the two halves)")
+        }
+        None => "; not checked on held-out runs (fewer than 4 runs to split)".to_string(),
+    };
     let Some((mu, drag)) = d.size else {
         return (
             true,
-            "the pairs move under friction or drag the single runs do not share".to_string(),
+            format!("the pairs move under friction or drag the single runs do not share{held_out}"),
         );
     };
     let pct = |x: f64| 100.0 * x;
@@ -688,7 +695,7 @@ fn physics_decision(d: &Draft, p_holm: f64) -> (bool, String) {
     (
         true,
         format!(
-            "the pairs move under friction or drag the single runs do not share: μ_pg {:.1} % and the drag time up to {:.1} % from the single runs' (a contact distance freed instead, {scale:.4} × the diameter, leaves χ² {contact_chi2:.0} against {:.0})",
+            "the pairs move under friction or drag the single runs do not share: μ_pg {:.1} % and the drag time up to {:.1} % from the single runs' (a contact distance freed instead, {scale:.4} × the diameter, leaves χ² {contact_chi2:.0} against {:.0}){held_out}",
             pct(mu),
             pct(drag),
             d.free.cost()
