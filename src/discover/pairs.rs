@@ -62,8 +62,8 @@ const WORSE: f64 = 1e-6;
 
 /// The one-particle physics the single runs support, per material, from a diagnosis' final
 /// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`) and its accepted forces fixed in the lab (a wave or a bump, read back from their
-/// findings by `forms::lab_forces`). Err, saying why, for a material whose physics the pair fit
+/// `alpha_deg`) and its accepted forces in the lab (a wave or a bump in z, a vibration locked to
+/// the kick, read back from their findings by `forms::lab_forces`). Err, saying why, for a material whose physics the pair fit
 /// cannot carry.
 pub fn single_run_physics(
     params: &BTreeMap<String, f64>,
@@ -98,10 +98,6 @@ pub fn single_run_physics(
     for (prefix, what) in [
         ("ln_vc_mps_", "a velocity-dependent friction"),
         ("sin1", "a Fourier series in z"),
-        (
-            "frequency_hz",
-            "a force in time with its own phase in each run",
-        ),
         ("coef0_mps2", "a spline force (no named form)"),
     ] {
         if has(prefix) {
@@ -110,8 +106,8 @@ pub fn single_run_physics(
             ));
         }
     }
-    // forces fixed in the lab act on the pairs as on the single runs: held at the findings'
-    // values (the same z, so the same force)
+    // forces in the lab act on the pairs as on the single runs: held at the findings' values
+    // (the same z or the same time since the kick, so the same force)
     for f in lab_forces {
         terms.push(f.clone()?);
     }
@@ -961,26 +957,20 @@ pub fn add_pair_findings(
 mod tests {
     use super::single_run_physics;
     use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
-    use crate::discover::forms::{lab_forces, Form, PeriodicZ};
+    use crate::discover::forms::{lab_forces, Form, PeriodicZ, TimeCommon, TimePeriodic};
     use crate::discover::pairs_impact::impact_decision;
     use crate::physics::{Groove, Term};
     use std::collections::BTreeMap;
 
-    fn wave_finding() -> Finding {
-        let p: BTreeMap<String, Estimate> = [
-            ("amplitude_mps2", 0.05),
-            ("wavelength_m", 2e-3),
-            ("phase_rad", 1.0),
-            ("peak_accel_mps2", 0.05),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), Estimate::new(v, 0.001)))
-        .collect();
+    fn finding_of(form: &dyn Form, effect: &str, values: &[(&str, f64)]) -> Finding {
         Finding {
-            effect: "position_dependent_force".into(),
+            effect: effect.into(),
             accepted: true,
-            form: PeriodicZ::default().form(),
-            parameters: p,
+            form: form.form(),
+            parameters: values
+                .iter()
+                .map(|(k, v)| (k.to_string(), Estimate::new(*v, 0.001)))
+                .collect(),
             evidence: Evidence::default(),
             where_: BTreeMap::new(),
             baseline: ModelScore::default(),
@@ -988,33 +978,60 @@ mod tests {
         }
     }
 
-    /// A wave fixed in the lab acts on the pairs too: the held physics carries it (a pair fit
-    /// without it would blame the pairs for the groove); a force in time with a phase per run
-    /// cannot be carried, and the reason says so.
+    fn wave_finding() -> Finding {
+        finding_of(
+            &PeriodicZ::default(),
+            "position_dependent_force",
+            &[
+                ("amplitude_mps2", 0.05),
+                ("wavelength_m", 2e-3),
+                ("phase_rad", 1.0),
+                ("peak_accel_mps2", 0.05),
+            ],
+        )
+    }
+
+    /// A wave fixed in the lab and a vibration locked to the kick act on the pairs too: the
+    /// held physics carries them (a pair fit without them would blame the pairs for the groove
+    /// or the mount); a force in time with a phase per run cannot be carried, and the reason
+    /// says so.
     #[test]
-    fn the_pairs_are_held_at_the_accepted_position_force_or_told_why_not() {
-        let mut params: BTreeMap<String, f64> = [
+    fn the_pairs_are_held_at_the_accepted_forces_in_the_lab_or_told_why_not() {
+        let params: BTreeMap<String, f64> = [
             ("mu_316", 0.337),
             ("t_s_316", 0.07),
             ("k_per_m", 3141.6),
             ("sin_mps2", 0.03),
             ("cos_mps2", 0.04),
+            ("frequency_hz", 120.0),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
         let wave = wave_finding();
-        let held = lab_forces([&wave]);
+        let time = [
+            ("amplitude_mps2", 0.2),
+            ("frequency_hz", 120.0),
+            ("phase_rad", 0.5),
+        ];
+        let common = finding_of(&TimeCommon::default(), "time_dependent_force", &time);
+        let held = lab_forces([&wave, &common]);
         let model = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap();
         assert!(model.terms.contains(&Term::PositionForce {
             amp_mps2: 0.05,
             wavelength_m: 2e-3,
             phase_rad: 1.0
         }));
+        assert!(model.terms.contains(&Term::TimePeriodicForce {
+            amp_mps2: 0.2,
+            freq_hz: 120.0,
+            phase_rad: 0.5
+        }));
         assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
-        params.insert("frequency_hz".into(), 120.0);
+        let per_run = finding_of(&TimePeriodic::default(), "time_dependent_force", &time[..2]);
+        let held = lab_forces([&wave, &per_run]);
         let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
-        assert!(why.contains("force in time"), "{why}");
+        assert!(why.contains("its own phase in each run"), "{why}");
     }
 
     #[test]

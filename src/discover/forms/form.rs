@@ -97,9 +97,9 @@ pub struct Reading {
     /// The form's name (`Form::name`).
     pub form: &'static str,
     pub place: Place,
-    /// The force the form puts on a particle at a place in the lab, held at the finding's values
-    /// (so that other experiments in the same groove can carry it); Err says why it cannot be
-    /// carried. None for a form that is no force fixed in the lab.
+    /// The force the form puts on a particle in the lab, fixed in z or locked to the kick, held
+    /// at the finding's values (so that other experiments in the same groove can carry it); Err
+    /// says why it cannot be carried. None for a form that is no force.
     pub lab_force: Option<Result<Term, String>>,
 }
 
@@ -280,7 +280,8 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn reads(&self, f: &Finding) -> bool {
         Some(f.effect.as_str()) == self.effect() && f.form == self.form()
     }
-    /// The force fixed in the lab that a finding of this form holds, read from its parameters.
+    /// The force in the lab (fixed in z or locked to the kick) that a finding of this form holds,
+    /// read from its parameters.
     fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
         None
     }

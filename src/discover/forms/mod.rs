@@ -141,7 +141,8 @@ pub fn read(f: &Finding) -> Option<Reading> {
         })
 }
 
-/// The forces fixed in the lab that `findings` hold (read back by their forms), in their order:
+/// The forces in the lab (fixed in z or locked to the kick) that `findings` hold (read back by
+/// their forms), in their order:
 /// what another experiment in the same groove carries of discovery's accepted model. Err says
 /// why a finding's force cannot be carried.
 pub fn lab_forces<'a>(

@@ -10,7 +10,7 @@
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use super::wavelength;
-use crate::artifacts::diagnosis::Estimate;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::screen_sums::{Trial, Typical};
 use crate::discover::spectral::f_grid;
@@ -129,5 +129,27 @@ impl Form for TimeCommon {
             typical_se.unwrap_or(se[1].hypot(se[2]) / 2f64.sqrt()),
             1.0,
         ))
+    }
+    /// The vibration acts on the collision runs too: the same mount, set off by the same kind of
+    /// kick, and their times are counted from the striker's kick.
+    fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
+        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
+        Some(
+            match (
+                value("amplitude_mps2"),
+                value("frequency_hz"),
+                value("phase_rad"),
+            ) {
+                (Some(amp), Some(freq), Some(phase)) => Ok(Term::TimePeriodicForce {
+                    amp_mps2: amp,
+                    freq_hz: freq,
+                    phase_rad: phase,
+                }),
+                _ => Err(format!(
+                    "the accepted model has a force in time ({}) the pair fit does not carry",
+                    f.form
+                )),
+            },
+        )
     }
 }

@@ -2,7 +2,7 @@
 //! phase (profiled), its frequency searched.
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
-use crate::artifacts::diagnosis::Estimate;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::noise_floor::local_floor;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::screen_sums::{best_of, dot, dot2, dot2_twice, scan_block, Trial, Typical};
@@ -22,9 +22,9 @@ pub struct TimePeriodic {
 impl Form for TimePeriodic {
     fn offer(_n_materials: usize, rg: &Ranges) -> Option<Self> {
         Some(TimePeriodic {
-            // three periods in the longest run at least: slower, a force in time is one smooth
-            // push per run, which drag, tilt or a force in z explain as well
-            f_lo: 3.0 / rg.duration_s,
+            // one period in the longest run at least, as for the common phase: slower, a force
+            // in time is one smooth push per run, which drag, tilt or a force in z explain
+            f_lo: 1.0 / rg.duration_s,
             f_hi: 1.05 * rg.f_max_hz,
         })
     }
@@ -225,5 +225,11 @@ impl Form for TimePeriodic {
         _typical_se: Option<f64>,
     ) -> Option<(&'static str, &'static str, f64, f64)> {
         Some(("amplitude_mps2", "m/s²", se[1], 1.0))
+    }
+    /// A collision run's own phase is not known from the single runs, and the pair fit frees none.
+    fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
+        Some(Err(
+            "the accepted model has a force in time with its own phase in each run, which the pair fit does not carry".into(),
+        ))
     }
 }
