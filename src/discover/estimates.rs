@@ -79,9 +79,10 @@ pub fn scale_at_bound(m: &Model) -> Option<String> {
     let (idx, what) = e.scale()?;
     let x = m.fit.global[off + idx];
     let lower = side_of_bound(x, &m.params[off + idx], 1e-2)?;
-    // only the fine end: a wave longer, a bump wider or a vibration slower than the search
-    // reaches is still a slow variation the data show (bound_notes says so in words)
-    let text = e.scale_at_fine_end(x, lower)?;
+    // the fine end, and the coarse end only where a form says so: a wave longer, a bump wider
+    // or a common vibration slower than the search reaches is still a slow variation the data
+    // show (bound_notes says so in words); a vibration with its own phase in each run is not
+    let text = e.scale_at_end(x, lower)?;
     Some(format!(
         "rejected: {text}; a {what} at the end of the search is no feature the data resolve"
     ))

@@ -31,7 +31,7 @@ use crate::fit::collision::wholerun::{
     LN_T0, MU_PG, MU_PP, TP,
 };
 use crate::lsq::Termination;
-use crate::physics::{Friction, Groove, Model, Term};
+use crate::physics::{Friction, FrictionVariation, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use crate::stats::dist::chi2_sf;
 use rayon::prelude::*;
@@ -62,12 +62,14 @@ const WORSE: f64 = 1e-6;
 
 /// The one-particle physics the single runs support, per material, from a diagnosis' final
 /// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`) and its accepted forces in the lab (a wave or a bump in z, a vibration locked to
-/// the kick, read back from their findings by `forms::lab_forces`). Err, saying why, for a material whose physics the pair fit
+/// `alpha_deg`), its accepted forces in the lab (a wave or a bump in z, a vibration locked to
+/// the kick, read back from their findings by `forms::lab_forces`) and its friction's accepted
+/// variation (`forms::lab_friction`). Err, saying why, for a material whose physics the pair fit
 /// cannot carry.
 pub fn single_run_physics(
     params: &BTreeMap<String, f64>,
     lab_forces: &[Result<Term, String>],
+    variation: FrictionVariation,
     material: &str,
     groove: Groove,
 ) -> Result<Model, String> {
@@ -114,7 +116,7 @@ pub fn single_run_physics(
     Ok(Model {
         groove,
         friction: Friction::Constant { mu },
-        variation: Default::default(),
+        variation,
         terms,
     })
 }
@@ -276,6 +278,7 @@ fn held_spec(model: &Model, groove: Groove, carried: Carried) -> FitSpec {
     FitSpec {
         drag: DragSpec::Held(model.terms.clone()),
         pair_force: carried,
+        variation: model.variation,
         ..FitSpec::new(groove)
     }
 }
@@ -471,6 +474,7 @@ fn test_material(
             DragSpec::SaturatingWith(others)
         },
         pair_force: carried,
+        variation: model.variation,
         ..FitSpec::new(groove)
     };
     let (held, free) = held_and_free(runs, &free_spec, model, groove, max_iter);
@@ -906,10 +910,11 @@ pub fn add_pair_findings(
             * inflation(rho).sqrt()
     };
     let lab_forces = forms::lab_forces(diagnosis.findings.iter().filter(|f| f.accepted));
+    let lab_friction = forms::lab_friction(diagnosis.findings.iter().filter(|f| f.accepted));
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
-        match single_run_physics(&params, &lab_forces, m, groove) {
+        match single_run_physics(&params, &lab_forces, lab_friction, m, groove) {
             Ok(model) => {
                 let t_key = if params.contains_key(&format!("t0_s_{m}")) {
                     format!("t0_s_{m}")
@@ -959,7 +964,7 @@ mod tests {
     use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
     use crate::discover::forms::{lab_forces, Form, PeriodicZ, TimeCommon, TimePeriodic};
     use crate::discover::pairs_impact::impact_decision;
-    use crate::physics::{Groove, Term};
+    use crate::physics::{FrictionVariation, Groove, Term};
     use std::collections::BTreeMap;
 
     fn finding_of(form: &dyn Form, effect: &str, values: &[(&str, f64)]) -> Finding {
@@ -1016,7 +1021,13 @@ mod tests {
         ];
         let common = finding_of(&TimeCommon::default(), "time_dependent_force", &time);
         let held = lab_forces([&wave, &common]);
-        let model = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap();
+        // the friction's variation along the groove is held as the single runs accepted it
+        let texture = FrictionVariation {
+            periodic: [0.05, 2000.0, 0.3],
+            ..FrictionVariation::default()
+        };
+        let model = single_run_physics(&params, &held, texture, "316", Groove::CHAPTER).unwrap();
+        assert_eq!(model.variation, texture);
         assert!(model.terms.contains(&Term::PositionForce {
             amp_mps2: 0.05,
             wavelength_m: 2e-3,
@@ -1030,7 +1041,8 @@ mod tests {
         assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
         let per_run = finding_of(&TimePeriodic::default(), "time_dependent_force", &time[..2]);
         let held = lab_forces([&wave, &per_run]);
-        let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
+        let why = single_run_physics(&params, &held, Default::default(), "316", Groove::CHAPTER)
+            .unwrap_err();
         assert!(why.contains("its own phase in each run"), "{why}");
     }
 

@@ -104,10 +104,11 @@ fn collisions_under(
         .map(|(k, v)| (k.clone(), v.value))
         .collect();
     let lab_forces = forms::lab_forces(accepted_terms(d));
+    let lab_friction = forms::lab_friction(accepted_terms(d));
     let mut materials: Vec<MaterialWholeRun> = Vec::new();
     let mut unchanged = Vec::new();
     for (m, runs) in &by_material {
-        let model = match single_run_physics(&params, &lab_forces, m, groove) {
+        let model = match single_run_physics(&params, &lab_forces, lab_friction, m, groove) {
             Ok(model) => model,
             Err(why) => {
                 notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));
@@ -115,7 +116,7 @@ fn collisions_under(
             }
         };
         // the pairs' own friction and drag stay free, as in the baseline: what is carried is
-        // every other accepted force
+        // every other accepted force, and the friction's accepted variation
         let others: Vec<Term> = model
             .terms
             .into_iter()
@@ -133,9 +134,12 @@ fn collisions_under(
             .filter(|c| &c.material == m)
             .map(|c| &c.law)
             .collect();
-        if let (true, None, true, Some(kept)) =
-            (others.is_empty(), force, own_laws.is_empty(), kept)
-        {
+        if let (true, None, true, Some(kept)) = (
+            others.is_empty() && model.variation.is_none(),
+            force,
+            own_laws.is_empty(),
+            kept,
+        ) {
             // nothing beyond the drag: the baseline's fit is this very fit
             materials.push(kept.clone());
             unchanged.push(m.clone());
@@ -144,6 +148,7 @@ fn collisions_under(
         let mut spec = FitSpec {
             drag: DragSpec::SaturatingWith(others),
             pair_force: force,
+            variation: model.variation,
             ..FitSpec::new(groove)
         };
         // the impact laws discovery accepted for these pairs

@@ -41,6 +41,36 @@ impl FrictionVariation {
         *self == FrictionVariation::default()
     }
 
+    /// This variation with every part that `part` sets (its fields away from their defaults)
+    /// taken from `part`: the parts of several forms, each setting its own, put together.
+    pub fn with(self, part: FrictionVariation) -> FrictionVariation {
+        let none = FrictionVariation::default();
+        let take =
+            |mine: f64, theirs: f64, default: f64| if theirs != default { theirs } else { mine };
+        FrictionVariation {
+            by_direction: take(self.by_direction, part.by_direction, none.by_direction),
+            z_mid_m: take(self.z_mid_m, part.z_mid_m, none.z_mid_m),
+            half_span_m: take(self.half_span_m, part.half_span_m, none.half_span_m),
+            by_position: if part.by_position != none.by_position {
+                part.by_position
+            } else {
+                self.by_position
+            },
+            periodic: if part.periodic != none.periodic {
+                part.periodic
+            } else {
+                self.periodic
+            },
+            u_ref_mps: take(self.u_ref_mps, part.u_ref_mps, none.u_ref_mps),
+            by_slip: take(self.by_slip, part.by_slip, none.by_slip),
+            stribeck: if part.stribeck != none.stribeck {
+                part.stribeck
+            } else {
+                self.stribeck
+            },
+        }
+    }
+
     /// The factor on μ at lab position `z_m`, direction of motion `dir` and slip speed `slip_mps`.
     pub fn factor(&self, z_m: f64, dir: f64, slip_mps: f64) -> f64 {
         let mut f = 1.0 + self.by_direction * dir.signum();
@@ -66,6 +96,24 @@ impl FrictionVariation {
 #[cfg(test)]
 mod tests {
     use super::FrictionVariation;
+
+    #[test]
+    fn parts_set_by_different_forms_are_put_together() {
+        let dir = FrictionVariation {
+            by_direction: 0.1,
+            ..FrictionVariation::default()
+        };
+        let texture = FrictionVariation {
+            periodic: [0.05, 2000.0, 0.3],
+            ..FrictionVariation::default()
+        };
+        let both = FrictionVariation::default().with(dir).with(texture);
+        assert_eq!(both.by_direction, 0.1);
+        assert_eq!(both.periodic, [0.05, 2000.0, 0.3]);
+        let z: f64 = 0.004;
+        let want = 1.1 * (1.0 + 0.05 * (2000.0 * z + 0.3).sin());
+        assert!((both.factor(z, 1.0, 0.0) - want).abs() < 1e-12);
+    }
 
     #[test]
     fn the_factor_is_one_without_variation_and_follows_each_part() {

@@ -7,7 +7,7 @@ use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::response::Prepared;
 use crate::discover::screen_sums::{Trial, Typical, Vectors};
 use crate::discover::sim::SimModel;
-use crate::physics::Term;
+use crate::physics::{FrictionVariation, Term};
 use std::collections::BTreeMap;
 use std::ops::Range;
 
@@ -101,6 +101,10 @@ pub struct Reading {
     /// at the finding's values (so that other experiments in the same groove can carry it); Err
     /// says why it cannot be carried. None for a form that is no force.
     pub lab_force: Option<Result<Term, String>>,
+    /// The part of the friction's variation the form sets (along the groove, by direction, by
+    /// slip speed), held at the finding's values: the collision runs slide in the same groove.
+    /// None for a form that sets none.
+    pub lab_friction: Option<FrictionVariation>,
 }
 
 /// One form of missing physics (or a drift probe). Every method but the first few has the
@@ -252,8 +256,9 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn scale(&self) -> Option<(usize, &'static str)> {
         None
     }
-    /// Why the scale (at `x`) ran to the fine end of its search, or None where it did not.
-    fn scale_at_fine_end(&self, _x: f64, _lower: bool) -> Option<String> {
+    /// Why the scale (at `x`, at the `lower` end of its search) is no finding there, or None where
+    /// that end still is one (the coarse end of most forms: a slower variation the data show).
+    fn scale_at_end(&self, _x: f64, _lower: bool) -> Option<String> {
         None
     }
     /// The reported parameters adjusted with where the runs go (a spline's size over the data);
@@ -285,6 +290,19 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
         None
     }
+    /// The part of the friction's variation that a finding of this form holds (the fields its
+    /// `enter` sets), read from its parameters.
+    fn lab_friction(&self, _f: &Finding) -> Option<FrictionVariation> {
+        None
+    }
+}
+
+/// The values of finding `f`'s parameters `names`, in that order; None when one is missing.
+pub fn values_of(f: &Finding, names: &[&str]) -> Option<Vec<f64>> {
+    names
+        .iter()
+        .map(|k| f.parameters.get(*k).map(|e| e.value))
+        .collect()
 }
 
 /// Each parameter of `form` as fitted, under its own name.

@@ -1,8 +1,9 @@
 //! μ by the direction of motion: μ_m·(1 + δ·dir) (friction, not a force: it acts while sliding
 //! and on the rolling hold only).
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
 
@@ -34,6 +35,13 @@ impl Form for FrictionDirection {
     }
     fn enter(&self, x: &[f64], e: &mut Entry) {
         e.model.variation.by_direction = x[0];
+    }
+    fn lab_friction(&self, f: &Finding) -> Option<FrictionVariation> {
+        let v = values_of(f, &["delta_mu_rel"])?;
+        Some(FrictionVariation {
+            by_direction: v[0],
+            ..FrictionVariation::default()
+        })
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
         let mut out = BTreeMap::new();

@@ -2,12 +2,12 @@
 //! texture or machining pattern of the groove that friction feels while the particle slides and
 //! a rolling particle does not.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place, Search};
 use super::wavelength;
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::discover::screen_sums::{Trial, Typical};
-use crate::physics::Variable;
+use crate::physics::{FrictionVariation, Variable};
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
@@ -59,6 +59,13 @@ impl Form for FrictionPeriodic {
         // a sin(u) + b cos(u) = A sin(u + atan2(b, a)), u = k (z − z_ref)
         e.model.variation.periodic = [a.hypot(b), k, b.atan2(a) - k * self.z_ref_m];
     }
+    fn lab_friction(&self, f: &Finding) -> Option<FrictionVariation> {
+        let v = values_of(f, &["delta_mu_rel", "wavelength_m", "phase_rad"])?;
+        Some(FrictionVariation {
+            periodic: [v[0], TAU / v[1], v[2]],
+            ..FrictionVariation::default()
+        })
+    }
     fn position_dependent(&self) -> bool {
         true
     }
@@ -108,7 +115,7 @@ impl Form for FrictionPeriodic {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((0, "wavelength"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
         wavelength::at_fine_end(x, lower)
     }
     fn detection_size(

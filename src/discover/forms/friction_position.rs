@@ -1,7 +1,8 @@
 //! μ along the lab: μ_m·(1 + p₁P₁(x) + p₂P₂(x)), x over the observed stretch.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
 
@@ -45,6 +46,15 @@ impl Form for FrictionPosition {
         e.model.variation.z_mid_m = self.z_mid_m;
         e.model.variation.half_span_m = self.half_span_m;
         e.model.variation.by_position = [x[0], x[1]];
+    }
+    fn lab_friction(&self, f: &Finding) -> Option<FrictionVariation> {
+        let v = values_of(f, &["p1_rel", "p2_rel", "z_lo_m", "z_hi_m"])?;
+        Some(FrictionVariation {
+            z_mid_m: 0.5 * (v[2] + v[3]),
+            half_span_m: 0.5 * (v[3] - v[2]),
+            by_position: [v[0], v[1]],
+            ..FrictionVariation::default()
+        })
     }
     fn position_dependent(&self) -> bool {
         true

@@ -1,8 +1,9 @@
 //! μ of the slip speed, linear: μ_m·(1 + β(|u|/u_ref − 1)), rising or falling, about the runs'
 //! median early speed.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
 
@@ -39,6 +40,14 @@ impl Form for FrictionSlip {
     fn enter(&self, x: &[f64], e: &mut Entry) {
         e.model.variation.u_ref_mps = self.u_ref_mps;
         e.model.variation.by_slip = x[0];
+    }
+    fn lab_friction(&self, f: &Finding) -> Option<FrictionVariation> {
+        let v = values_of(f, &["beta_rel", "u_ref_mps"])?;
+        Some(FrictionVariation {
+            u_ref_mps: v[1],
+            by_slip: v[0],
+            ..FrictionVariation::default()
+        })
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
         let u_ref = self.u_ref_mps;

@@ -3,8 +3,9 @@
 //! Fitted as δ_s ≥ 0 and ln v_s; screened at a few trial v_s, since at δ_s = 0 the data say
 //! nothing of v_s.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
+use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
 
@@ -46,6 +47,13 @@ impl Form for FrictionStribeck {
     fn enter(&self, x: &[f64], e: &mut Entry) {
         e.model.variation.stribeck = [x[0], x[1].exp()];
     }
+    fn lab_friction(&self, f: &Finding) -> Option<FrictionVariation> {
+        let v = values_of(f, &["delta_mu_rel", "v_s_mps"])?;
+        Some(FrictionVariation {
+            stribeck: [v[0], v[1]],
+            ..FrictionVariation::default()
+        })
+    }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {
         let vs = f.x[1].exp();
         let mut out = BTreeMap::new();
@@ -81,7 +89,7 @@ impl Form for FrictionStribeck {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((1, "slip speed scale"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
         lower.then(|| {
             format!(
                 "its slip speed scale v_s ran to the slowest the search allows ({:.2} mm/s)",

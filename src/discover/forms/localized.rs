@@ -110,7 +110,7 @@ impl Form for Localized {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((2, "width"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
         lower.then(|| {
             format!(
                 "its width ran to the narrowest the search allows ({:.3} mm)",

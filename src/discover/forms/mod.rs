@@ -39,7 +39,7 @@ mod wavelength;
 pub use self::form::{as_fitted, p, Entry, Fitted, Form, ParamInfo, Place, Reading, Search};
 use crate::artifacts::diagnosis::Finding;
 use crate::discover::ranges::Ranges;
-use crate::physics::Term;
+use crate::physics::{FrictionVariation, Term};
 
 /// The registry: each line names a form's file and type. It declares the file's module and
 /// builds `Extra` (a variant per form), the library (`offered`), the probes and the readers.
@@ -138,6 +138,7 @@ pub fn read(f: &Finding) -> Option<Reading> {
             form: e.name(),
             place: e.place(),
             lab_force: e.lab_force(f),
+            lab_friction: e.lab_friction(f),
         })
 }
 
@@ -152,6 +153,15 @@ pub fn lab_forces<'a>(
         .into_iter()
         .filter_map(|f| read(f)?.lab_force)
         .collect()
+}
+
+/// The variation of the friction that `findings` hold (read back by their forms, each setting
+/// its own part): what another experiment sliding in the same groove carries of it.
+pub fn lab_friction<'a>(findings: impl IntoIterator<Item = &'a Finding>) -> FrictionVariation {
+    findings
+        .into_iter()
+        .filter_map(|f| read(f)?.lab_friction)
+        .fold(FrictionVariation::default(), FrictionVariation::with)
 }
 
 #[cfg(test)]
@@ -287,6 +297,29 @@ mod tests {
                 None => assert!(
                     !(e.position_dependent() && e.place() == Place::Force && e.name() != "spline"),
                     "{}: a force fixed in the lab reads back with its force",
+                    e.name()
+                ),
+            }
+            let fitted = spec.sim_model(&g, 0, 0.1).to_physics().variation;
+            match r.lab_friction {
+                Some(part) => {
+                    let held = FrictionVariation::default().with(part);
+                    assert!(
+                        !held.is_none(),
+                        "{}: its part of μ is no variation",
+                        e.name()
+                    );
+                    for j in 0..=40 {
+                        let z = 0.001 + 0.02 * j as f64 / 40.0;
+                        for (dir, slip) in [(1.0, 0.0), (-1.0, 0.004), (1.0, 0.05)] {
+                            let (a, b) = (fitted.factor(z, dir, slip), held.factor(z, dir, slip));
+                            assert!((a - b).abs() < 1e-9, "{} at z = {z}: {a} vs {b}", e.name());
+                        }
+                    }
+                }
+                None => assert!(
+                    fitted.is_none(),
+                    "{}: a variation of μ reads back with its variation",
                     e.name()
                 ),
             }

@@ -107,7 +107,7 @@ impl Form for PeriodicZ {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((0, "wavelength"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
         wavelength::at_fine_end(x, lower)
     }
     fn detection_size(

@@ -115,7 +115,7 @@ impl Form for TimeCommon {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((0, "frequency"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
         (!lower).then(|| format!("its frequency ran to the highest the search allows ({x:.1} Hz)"))
     }
     fn detection_size(

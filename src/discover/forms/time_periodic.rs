@@ -23,7 +23,8 @@ impl Form for TimePeriodic {
     fn offer(_n_materials: usize, rg: &Ranges) -> Option<Self> {
         Some(TimePeriodic {
             // one period in the longest run at least, as for the common phase: slower, a force
-            // in time is one smooth push per run, which drag, tilt or a force in z explain
+            // in time is one smooth push per run, which drag, tilt or a force in z explain (a
+            // fit that ends at this floor is refused: `scale_at_end`)
             f_lo: 1.0 / rg.duration_s,
             f_hi: 1.05 * rg.f_max_hz,
         })
@@ -216,8 +217,20 @@ impl Form for TimePeriodic {
     fn scale(&self) -> Option<(usize, &'static str)> {
         Some((0, "frequency"))
     }
-    fn scale_at_fine_end(&self, x: f64, lower: bool) -> Option<String> {
-        (!lower).then(|| format!("its frequency ran to the highest the search allows ({x:.1} Hz)"))
+    /// Either end: at the slow one, one period in the longest run, a term with its own phase in
+    /// each run is a free smooth push per run, which takes whatever a run misfits (a wave in z
+    /// crossed at the run's own speed took the place of its wave on the test bed).
+    /// (The caller's "at the end" is 1 % of the whole range, hundreds of Hz: the slow end is taken
+    /// here as within 5 % of the floor.)
+    fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
+        if lower && x > 1.05 * self.f_lo {
+            return None;
+        }
+        Some(if lower {
+            format!("its frequency ran to the lowest the search allows ({x:.1} Hz, one period in the longest run), where a phase of its own in each run makes it one free push per run")
+        } else {
+            format!("its frequency ran to the highest the search allows ({x:.1} Hz)")
+        })
     }
     fn detection_size(
         &self,

@@ -20,8 +20,8 @@ use crate::lsq::block::{minimize_blocks, BlockProblem, BlockResult};
 use crate::lsq::lm::ParamSpec;
 use crate::lsq::lm::{Scale, Settings};
 use crate::physics::{
-    simulate_pair, Friction, Groove, Model, PairForce, PairParams, PairTrajectory, Restitution,
-    SlipFriction, State, Term, MAX_MAP_NODES,
+    simulate_pair, Friction, FrictionVariation, Groove, Model, PairForce, PairParams,
+    PairTrajectory, Restitution, SlipFriction, State, Term, MAX_MAP_NODES,
 };
 use crate::recording::{Recording, Setup};
 
@@ -334,6 +334,9 @@ pub struct FitSpec {
     /// A force between the particles of this shape, fitted (`PF_AMP`…) from these start values
     /// of (A, ln λ, n); none when None.
     pub pair_force: Option<(PairForceShape, [f64; 3])>,
+    /// The variation of μ_pg along the groove, by direction or by slip speed, held (the single
+    /// runs' accepted friction: the pairs slide in the same groove); none by default.
+    pub variation: FrictionVariation,
 }
 
 impl FitSpec {
@@ -347,6 +350,7 @@ impl FitSpec {
             mu_pp_held: None,
             free_contact: false,
             pair_force: None,
+            variation: FrictionVariation::default(),
         }
     }
 
@@ -408,7 +412,7 @@ impl FitSpec {
         Model {
             groove: self.groove,
             friction: Friction::Constant { mu: p[MU_PG] },
-            variation: Default::default(),
+            variation: self.variation,
             terms,
         }
     }
