@@ -246,3 +246,23 @@ impl Form for TimePeriodic {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fit at either end of the frequency search is no finding; the slow end is the floor
+    /// itself (one period in the longest run), not the caller's 1 % of the whole range.
+    #[test]
+    fn a_frequency_at_either_end_of_its_search_is_refused() {
+        let form = TimePeriodic {
+            f_lo: 16.7,
+            f_hi: 5250.0,
+        };
+        let slow = form.scale_at_end(16.7, true).expect("refused at the floor");
+        assert!(slow.contains("lowest") && slow.contains("16.7 Hz"), "{slow}");
+        assert_eq!(form.scale_at_end(37.0, true), None, "37 Hz is inside the search");
+        let fast = form.scale_at_end(5249.0, false).expect("refused at the top");
+        assert!(fast.contains("highest"), "{fast}");
+    }
+}
