@@ -12,6 +12,9 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
+/// A frequency within this factor of the search's floor is at the floor.
+const FLOOR_MARGIN: f64 = 1.05;
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TimePeriodic {
     pub f_lo: f64,
@@ -181,11 +184,13 @@ impl Form for TimePeriodic {
                 }
             }
         }
-        // the most sensitive frequency: the most information over the runs
+        // the most sensitive frequency: the most information over the runs, above the floor (a
+        // fit there is refused, `scale_at_end`, so no limit is said of it)
         let mut top: Option<(f64, usize)> = None;
         for (i, (t, info, _)) in out.iter().enumerate() {
             let sa: f64 = info.iter().sum();
-            if t.is_some() && top.is_none_or(|b| sa > b.0) {
+            let inside = fs[i] > FLOOR_MARGIN * self.f_lo;
+            if t.is_some() && inside && top.is_none_or(|b| sa > b.0) {
                 top = Some((sa, i));
             }
         }
@@ -223,7 +228,7 @@ impl Form for TimePeriodic {
     /// (The caller's "at the end" is 1 % of the whole range, hundreds of Hz: the slow end is taken
     /// here as within 5 % of the floor.)
     fn scale_at_end(&self, x: f64, lower: bool) -> Option<String> {
-        if lower && x > 1.05 * self.f_lo {
+        if lower && x > FLOOR_MARGIN * self.f_lo {
             return None;
         }
         Some(if lower {
