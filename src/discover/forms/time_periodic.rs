@@ -232,7 +232,7 @@ impl Form for TimePeriodic {
             return None;
         }
         Some(if lower {
-            format!("its frequency ran to the lowest the search allows ({x:.1} Hz, one period in the longest run), where a phase of its own in each run makes it one free push per run")
+            format!("its frequency is the lowest the search allows ({x:.1} Hz, one period in the longest run), where a phase of its own in each run makes it one free push per run")
         } else {
             format!("its frequency ran to the highest the search allows ({x:.1} Hz)")
         })
