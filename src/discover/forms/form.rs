@@ -305,6 +305,21 @@ pub fn values_of(f: &Finding, names: &[&str]) -> Option<Vec<f64>> {
         .collect()
 }
 
+/// The force finding `f` holds, made by `term` from its parameters `names` (in that order), or
+/// why the pair fit cannot carry it (a parameter is missing): `Form::lab_force`'s body.
+pub fn carried_force(
+    f: &Finding,
+    names: &[&str],
+    term: impl FnOnce(&[f64]) -> Term,
+) -> Option<Result<Term, String>> {
+    Some(values_of(f, names).map(|v| term(&v)).ok_or_else(|| {
+        format!(
+            "the accepted model has a force ({}) the pair fit does not carry",
+            f.form
+        )
+    }))
+}
+
 /// Each parameter of `form` as fitted, under its own name.
 pub fn as_fitted(form: &dyn Form, f: &Fitted) -> BTreeMap<String, Estimate> {
     form.params()

@@ -1,7 +1,7 @@
 //! A localized force fixed in the lab (a bump, a defect): a(z) = A·exp(−(z − z_c)²/(2w²)), its
 //! centre and width searched.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{bump_column, bump_trials, Proposals, Ranges, Wanted};
 use crate::discover::response::Prepared;
@@ -126,19 +126,10 @@ impl Form for Localized {
         Some(("amplitude_mps2", "m/s²", typical_se.unwrap_or(se[0]), 1.0))
     }
     fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
-        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
-        Some(
-            match (value("amplitude_mps2"), value("centre_m"), value("width_m")) {
-                (Some(amp), Some(centre), Some(width)) => Ok(Term::LocalizedForce {
-                    amp_mps2: amp,
-                    centre_m: centre,
-                    width_m: width,
-                }),
-                _ => Err(format!(
-                    "the accepted model has a position force ({}) the pair fit does not carry",
-                    f.form
-                )),
-            },
-        )
+        carried_force(f, &["amplitude_mps2", "centre_m", "width_m"], |v| Term::LocalizedForce {
+            amp_mps2: v[0],
+            centre_m: v[1],
+            width_m: v[2],
+        })
     }
 }

@@ -1,7 +1,7 @@
 //! A force periodic in z, fixed in the lab (waviness): a(z) = s·sin(k(z − z_ref)) +
 //! c·cos(k(z − z_ref)), its wavenumber k searched in [k_lo, k_hi].
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use super::wavelength;
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
@@ -123,23 +123,10 @@ impl Form for PeriodicZ {
         ))
     }
     fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
-        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
-        Some(
-            match (
-                value("amplitude_mps2"),
-                value("wavelength_m"),
-                value("phase_rad"),
-            ) {
-                (Some(amp), Some(wavelength), Some(phase)) => Ok(Term::PositionForce {
-                    amp_mps2: amp,
-                    wavelength_m: wavelength,
-                    phase_rad: phase,
-                }),
-                _ => Err(format!(
-                    "the accepted model has a position force ({}) the pair fit does not carry",
-                    f.form
-                )),
-            },
-        )
+        carried_force(f, &["amplitude_mps2", "wavelength_m", "phase_rad"], |v| Term::PositionForce {
+            amp_mps2: v[0],
+            wavelength_m: v[1],
+            phase_rad: v[2],
+        })
     }
 }

@@ -5,7 +5,7 @@
 //! stretch in from either end): a step near an end is a constant force over nearly all the runs,
 //! which is the tilt.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Ranges, Wanted};
 use crate::discover::response::Prepared;
@@ -135,19 +135,10 @@ impl Form for StepZ {
         Some(("step_mps2", "m/s²", typical_se.unwrap_or(se[0]), 1.0))
     }
     fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
-        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
-        Some(
-            match (value("step_mps2"), value("z_step_m"), value("width_m")) {
-                (Some(amp), Some(z), Some(width)) => Ok(Term::StepForce {
-                    amp_mps2: amp,
-                    z_step_m: z,
-                    width_m: width,
-                }),
-                _ => Err(format!(
-                    "the accepted model has a position force ({}) the pair fit does not carry",
-                    f.form
-                )),
-            },
-        )
+        carried_force(f, &["step_mps2", "z_step_m", "width_m"], |v| Term::StepForce {
+            amp_mps2: v[0],
+            z_step_m: v[1],
+            width_m: v[2],
+        })
     }
 }

@@ -8,7 +8,7 @@
 //! the lab, whichever way each run moves, is neither a drag (which turns with the motion) nor a
 //! tilt (which does not change in time).
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use super::wavelength;
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
@@ -133,23 +133,12 @@ impl Form for TimeCommon {
     /// The vibration acts on the collision runs too: the same mount, set off by the same kind of
     /// kick, and their times are counted from the striker's kick.
     fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
-        let value = |k: &str| f.parameters.get(k).map(|e| e.value);
-        Some(
-            match (
-                value("amplitude_mps2"),
-                value("frequency_hz"),
-                value("phase_rad"),
-            ) {
-                (Some(amp), Some(freq), Some(phase)) => Ok(Term::TimePeriodicForce {
-                    amp_mps2: amp,
-                    freq_hz: freq,
-                    phase_rad: phase,
-                }),
-                _ => Err(format!(
-                    "the accepted model has a force in time ({}) the pair fit does not carry",
-                    f.form
-                )),
-            },
-        )
+        carried_force(f, &["amplitude_mps2", "frequency_hz", "phase_rad"], |v| {
+            Term::TimePeriodicForce {
+                amp_mps2: v[0],
+                freq_hz: v[1],
+                phase_rad: v[2],
+            }
+        })
     }
 }
