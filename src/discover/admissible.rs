@@ -38,7 +38,9 @@ fn size_at_bound(m: &Model) -> Option<String> {
     (0..n).find_map(|j| {
         let info = &m.params[off + j];
         let x = m.fit.global[off + j];
-        (e.refused_at_bound(j) && side_of_bound(x, info, 1e-2).is_some()).then(|| {
+        side_of_bound(x, info, 1e-2)
+            .is_some_and(|lower| e.refused_at_bound(j, lower))
+            .then(|| {
             format!(
                 "rejected: its {} ended at its bound ({x:.3}): {} this large is a form bent to absorb something else, not physics",
                 info.name,

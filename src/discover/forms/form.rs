@@ -204,10 +204,11 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn search(&self, _s: &Search) -> (Option<Trial>, Option<Typical>) {
         (None, None)
     }
-    /// True for a parameter whose bounds are no physical limit but the edge of what the form can
-    /// mean (μ varying by 90 % of itself along the groove): a fit that ends there has bent the
-    /// form to absorb something else, and the term is refused (`admissible.rs`).
-    fn refused_at_bound(&self, _param: usize) -> bool {
+    /// True for a parameter whose bound (the `lower` one, or the upper) is no physical limit but
+    /// the edge of what the form can mean (μ varying by 90 % of itself along the groove): a fit
+    /// that ends there has bent the form to absorb something else, and the term is refused
+    /// (`admissible.rs`).
+    fn refused_at_bound(&self, _param: usize, _lower: bool) -> bool {
         false
     }
     /// A named form screened at a few trial scales (the best kept) instead of one secant: per

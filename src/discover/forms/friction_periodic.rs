@@ -70,7 +70,7 @@ impl Form for FrictionPeriodic {
         true
     }
     /// Its amplitudes: μ varying by 90 % of itself is no texture.
-    fn refused_at_bound(&self, param: usize) -> bool {
+    fn refused_at_bound(&self, param: usize, _lower: bool) -> bool {
         param > 0
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {

@@ -59,7 +59,7 @@ impl Form for FrictionPosition {
     fn position_dependent(&self) -> bool {
         true
     }
-    fn refused_at_bound(&self, _param: usize) -> bool {
+    fn refused_at_bound(&self, _param: usize, _lower: bool) -> bool {
         true
     }
     fn parameters(&self, f: &Fitted) -> BTreeMap<String, Estimate> {

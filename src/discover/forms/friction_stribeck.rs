@@ -71,9 +71,10 @@ impl Form for FrictionStribeck {
         }
         out
     }
-    /// A δ_s at its ceiling is a form bent to take something else.
-    fn refused_at_bound(&self, param: usize) -> bool {
-        param == 0
+    /// A δ_s at its ceiling (a static friction three times the kinetic) is a form bent to take
+    /// something else; δ_s at 0 is no excess at all, which held-out runs judge.
+    fn refused_at_bound(&self, param: usize, lower: bool) -> bool {
+        param == 0 && !lower
     }
     fn scale_trials(&self) -> Option<Vec<(Vec<f64>, Vec<(usize, f64)>)>> {
         Some(
