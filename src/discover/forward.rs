@@ -355,7 +355,14 @@ impl Trials<'_> {
             if !unfitted {
                 self.fitted[i] = self.full(i);
             }
-            self.refused[i] = refusal(&self.fitted[i]);
+            self.refused[i] = refusal(&self.fitted[i]).map(|why| {
+                if unfitted {
+                    // its parameters are the screen's linear estimate: say so
+                    format!("{why}; at the screen, not fitted in full")
+                } else {
+                    why
+                }
+            });
             let particles = if self.refused[i].is_none() && self.all[i].run_phase() {
                 self.particle_excess()
             } else {
