@@ -20,7 +20,7 @@
 //! correlates the residuals within a run) points at the impact model itself (restitution law,
 //! spin transfer; `pairs_impact.rs`).
 
-use super::forms;
+use super::forms::{self, InTheLab};
 use super::holm::holm;
 use super::impact::test_impact_laws;
 use super::pair_force::{test_force, ForceTest};
@@ -35,7 +35,7 @@ use crate::fit::collision::wholerun::{
     LN_T0, MU_PG, MU_PP, TP,
 };
 use crate::lsq::Termination;
-use crate::physics::{Friction, FrictionVariation, Groove, Model, Term};
+use crate::physics::{Friction, Groove, Model, Term};
 use crate::recording::{Experiment, Recording};
 use crate::stats::dist::chi2_sf;
 use rayon::prelude::*;
@@ -66,14 +66,12 @@ const WORSE: f64 = 1e-6;
 
 /// The one-particle physics the single runs support, per material, from a diagnosis' final
 /// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`), its accepted forces in the lab (a wave or a bump in z, a vibration locked to
-/// the kick, read back from their findings by `forms::lab_forces`) and its friction's accepted
-/// variation (`forms::lab_friction`). Err, saying why, for a material whose physics the pair fit
-/// cannot carry.
+/// `alpha_deg`) and what its findings put in the lab (`forms::in_the_lab`: a wave or a bump in z,
+/// a vibration locked to the kick, the friction's variation). Err, saying why, for a material
+/// whose physics the pair fit cannot carry.
 pub fn single_run_physics(
     params: &BTreeMap<String, f64>,
-    lab_forces: &[Result<Term, String>],
-    variation: FrictionVariation,
+    lab: &InTheLab,
     material: &str,
     groove: Groove,
 ) -> Result<Model, String> {
@@ -114,13 +112,13 @@ pub fn single_run_physics(
     }
     // forces in the lab act on the pairs as on the single runs: held at the findings' values
     // (the same z or the same time since the kick, so the same force)
-    for f in lab_forces {
+    for f in &lab.forces {
         terms.push(f.clone()?);
     }
     Ok(Model {
         groove,
         friction: Friction::Constant { mu },
-        variation,
+        variation: lab.friction,
         terms,
     })
 }
@@ -913,12 +911,11 @@ pub fn add_pair_findings(
             .unwrap_or(0.0)
             * inflation(rho).sqrt()
     };
-    let lab_forces = forms::lab_forces(diagnosis.findings.iter().filter(|f| f.accepted));
-    let lab_friction = forms::lab_friction(diagnosis.findings.iter().filter(|f| f.accepted));
+    let lab = forms::in_the_lab(diagnosis.findings.iter().filter(|f| f.accepted));
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
-        match single_run_physics(&params, &lab_forces, lab_friction, m, groove) {
+        match single_run_physics(&params, &lab, m, groove) {
             Ok(model) => {
                 let t_key = if params.contains_key(&format!("t0_s_{m}")) {
                     format!("t0_s_{m}")
@@ -966,7 +963,9 @@ pub fn add_pair_findings(
 mod tests {
     use super::single_run_physics;
     use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
-    use crate::discover::forms::{lab_forces, Form, PeriodicZ, TimeCommon, TimePeriodic};
+    use crate::discover::forms::{
+        in_the_lab, Form, FrictionPeriodic, PeriodicZ, TimeCommon, TimePeriodic,
+    };
     use crate::discover::pairs_impact::impact_decision;
     use crate::physics::{FrictionVariation, Groove, Term};
     use std::collections::BTreeMap;
@@ -1000,10 +999,10 @@ mod tests {
         )
     }
 
-    /// A wave fixed in the lab and a vibration locked to the kick act on the pairs too: the
-    /// held physics carries them (a pair fit without them would blame the pairs for the groove
-    /// or the mount); a force in time with a phase per run cannot be carried, and the reason
-    /// says so.
+    /// A wave fixed in the lab, a vibration locked to the kick and a texture of the friction act
+    /// on the pairs too: the held physics carries them, read back from their findings (a pair
+    /// fit without them would blame the pairs for the groove or the mount); a force in time with
+    /// a phase per run cannot be carried, and the reason says so.
     #[test]
     fn the_pairs_are_held_at_the_accepted_forces_in_the_lab_or_told_why_not() {
         let params: BTreeMap<String, f64> = [
@@ -1024,14 +1023,27 @@ mod tests {
             ("phase_rad", 0.5),
         ];
         let common = finding_of(&TimeCommon::default(), "time_dependent_force", &time);
-        let held = lab_forces([&wave, &common]);
         // the friction's variation along the groove is held as the single runs accepted it
-        let texture = FrictionVariation {
-            periodic: [0.05, 2000.0, 0.3],
-            ..FrictionVariation::default()
+        let texture = finding_of(
+            &FrictionPeriodic::default(),
+            "position_dependent_friction",
+            &[
+                ("delta_mu_rel", 0.05),
+                ("wavelength_m", std::f64::consts::TAU / 2000.0),
+                ("phase_rad", 0.3),
+            ],
+        );
+        let held = in_the_lab([&wave, &texture, &common]);
+        let model = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap();
+        let [amp, k, phase] = model.variation.periodic;
+        assert!(
+            (amp - 0.05).abs() < 1e-12 && (k - 2000.0).abs() < 1e-9 && (phase - 0.3).abs() < 1e-12
+        );
+        let rest = FrictionVariation {
+            periodic: [0.0; 3],
+            ..model.variation
         };
-        let model = single_run_physics(&params, &held, texture, "316", Groove::CHAPTER).unwrap();
-        assert_eq!(model.variation, texture);
+        assert_eq!(rest, FrictionVariation::default(), "the texture alone");
         assert!(model.terms.contains(&Term::PositionForce {
             amp_mps2: 0.05,
             wavelength_m: 2e-3,
@@ -1044,9 +1056,8 @@ mod tests {
         }));
         assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
         let per_run = finding_of(&TimePeriodic::default(), "time_dependent_force", &time[..2]);
-        let held = lab_forces([&wave, &per_run]);
-        let why = single_run_physics(&params, &held, Default::default(), "316", Groove::CHAPTER)
-            .unwrap_err();
+        let held = in_the_lab([&wave, &per_run]);
+        let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
         assert!(why.contains("its own phase in each run"), "{why}");
     }
 

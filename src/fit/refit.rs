@@ -103,12 +103,11 @@ fn collisions_under(
         .iter()
         .map(|(k, v)| (k.clone(), v.value))
         .collect();
-    let lab_forces = forms::lab_forces(accepted_terms(d));
-    let lab_friction = forms::lab_friction(accepted_terms(d));
+    let lab = forms::in_the_lab(accepted_terms(d));
     let mut materials: Vec<MaterialWholeRun> = Vec::new();
     let mut unchanged = Vec::new();
     for (m, runs) in &by_material {
-        let model = match single_run_physics(&params, &lab_forces, lab_friction, m, groove) {
+        let model = match single_run_physics(&params, &lab, m, groove) {
             Ok(model) => model,
             Err(why) => {
                 notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));

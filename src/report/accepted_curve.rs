@@ -18,9 +18,8 @@ pub fn model_of(d: &ReportData, material: &str) -> Option<Model> {
     let diag = d.diagnosis.as_ref()?;
     let params = parameters(diag, material, sm);
     let accepted = crate::fit::refit::accepted_terms(diag);
-    let lab = crate::discover::forms::lab_forces(accepted.clone());
-    let friction = crate::discover::forms::lab_friction(accepted);
-    crate::discover::pairs::single_run_physics(&params, &lab, friction, material, d.groove).ok()
+    let lab = crate::discover::forms::in_the_lab(accepted);
+    crate::discover::pairs::single_run_physics(&params, &lab, material, d.groove).ok()
 }
 
 /// Discovery's final parameters with `material`'s μ and drag time(s) replaced by the refit's.

@@ -2,8 +2,8 @@
 
 use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::{Estimate, Finding};
-use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
+use crate::physics::FrictionVariation;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -5,8 +5,8 @@
 
 use super::form::{p, values_of, Entry, Fitted, Form, ParamInfo, Place};
 use crate::artifacts::diagnosis::{Estimate, Finding};
-use crate::physics::FrictionVariation;
 use crate::discover::ranges::Ranges;
+use crate::physics::FrictionVariation;
 use std::collections::BTreeMap;
 
 /// The slip speeds the screen tries v_s at (m/s): from a few frames' worth of a sliding

@@ -142,26 +142,30 @@ pub fn read(f: &Finding) -> Option<Reading> {
         })
 }
 
-/// The forces in the lab (fixed in z or locked to the kick) that `findings` hold (read back by
-/// their forms), in their order:
-/// what another experiment in the same groove carries of discovery's accepted model. Err says
-/// why a finding's force cannot be carried.
-pub fn lab_forces<'a>(
-    findings: impl IntoIterator<Item = &'a Finding>,
-) -> Vec<Result<Term, String>> {
-    findings
-        .into_iter()
-        .filter_map(|f| read(f)?.lab_force)
-        .collect()
+/// What another experiment in the same groove (the collision runs) carries of discovery's
+/// accepted model, read back from its findings by their forms.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InTheLab {
+    /// The forces in the lab (fixed in z or locked to the kick), in the findings' order; Err says
+    /// why a finding's force cannot be carried.
+    pub forces: Vec<Result<Term, String>>,
+    /// The friction's variation, each form setting its own part.
+    pub friction: FrictionVariation,
 }
 
-/// The variation of the friction that `findings` hold (read back by their forms, each setting
-/// its own part): what another experiment sliding in the same groove carries of it.
-pub fn lab_friction<'a>(findings: impl IntoIterator<Item = &'a Finding>) -> FrictionVariation {
-    findings
-        .into_iter()
-        .filter_map(|f| read(f)?.lab_friction)
-        .fold(FrictionVariation::default(), FrictionVariation::with)
+/// What `findings` (the accepted ones) put in the lab for another experiment to carry.
+pub fn in_the_lab<'a>(findings: impl IntoIterator<Item = &'a Finding>) -> InTheLab {
+    let readings: Vec<Reading> = findings.into_iter().filter_map(read).collect();
+    InTheLab {
+        forces: readings
+            .iter()
+            .filter_map(|r| r.lab_force.clone())
+            .collect(),
+        friction: readings
+            .iter()
+            .filter_map(|r| r.lab_friction)
+            .fold(FrictionVariation::default(), FrictionVariation::with),
+    }
 }
 
 #[cfg(test)]
