@@ -7,10 +7,35 @@
 
 use super::data::RunData;
 pub use super::data::N_LOCAL;
-use super::forms::{p, Entry};
+use super::forms::{drag_time_names, p, Entry};
 pub use super::forms::{Extra, ParamInfo};
 use super::response::{Prepared, Projector, Track};
 use super::sim::{Drag, SimModel};
+use crate::artifacts::diagnosis::Estimate;
+use std::collections::BTreeMap;
+
+/// A material's own values in a joint model: μ and its drag time (T, or T0 beside a saturating
+/// drag), with their standard errors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OwnValues {
+    pub mu: Estimate,
+    pub t_s: Estimate,
+}
+
+impl OwnValues {
+    /// `material`'s values in `params` (a final model's parameters, named as `Spec::global_params`
+    /// names them: diagnosis.json's `model_parameters`).
+    pub fn of(params: &BTreeMap<String, Estimate>, material: &str) -> Result<OwnValues, String> {
+        let mu = params
+            .get(&format!("mu_{material}"))
+            .ok_or_else(|| format!("no mu_{material} in the accepted model"))?;
+        let t_s = drag_time_names()
+            .into_iter()
+            .find_map(|name| params.get(&format!("{name}_{material}")))
+            .ok_or_else(|| format!("no drag time of {material} in the accepted model"))?;
+        Ok(OwnValues { mu: *mu, t_s: *t_s })
+    }
+}
 
 /// The structure of a joint model: materials and the extra terms.
 #[derive(Clone, Debug, PartialEq)]

@@ -20,6 +20,7 @@
 //! correlates the residuals within a run) points at the impact model itself (restitution law,
 //! spin transfer; `pairs_impact.rs`).
 
+use super::candidate::OwnValues;
 use super::forms::{self, InTheLab};
 use super::holm::holm;
 use super::impact::test_impact_laws;
@@ -64,60 +65,31 @@ const HELD_OUT_FLOOR: f64 = 11.345;
 /// means it stopped at a worse optimum.
 const WORSE: f64 = 1e-6;
 
-/// The one-particle physics the single runs support, per material, from a diagnosis' final
-/// model parameters (`mu_<m>`, `t_s_<m>` or `t0_s_<m>` with `tp_s_per_mps`, `c_per_m`, `c`,
-/// `alpha_deg`) and what its findings put in the lab (`forms::in_the_lab`: a wave or a bump in z,
-/// a vibration locked to the kick, the friction's variation). Err, saying why, for a material
-/// whose physics the pair fit cannot carry.
+/// The one-particle physics the single runs support for one material: its own μ and drag time
+/// (`OwnValues`) and what the accepted findings hold for any particle in the groove, read back by
+/// their forms (`forms::in_the_lab`: a drag's slope or its quadratic part, a resistance, the tilt,
+/// a wave or a bump in z, a vibration locked to the kick, the friction's variation). Err, saying
+/// why, when a finding holds physics the pair fit cannot carry.
 pub fn single_run_physics(
-    params: &BTreeMap<String, f64>,
+    own: &OwnValues,
     lab: &InTheLab,
-    material: &str,
     groove: Groove,
 ) -> Result<Model, String> {
-    let get = |k: &str| params.get(k).copied();
-    let mu = get(&format!("mu_{material}"))
-        .ok_or_else(|| format!("no mu_{material} in the accepted model"))?;
-    let mut terms = Vec::new();
-    if let (Some(t0), Some(tp)) = (get(&format!("t0_s_{material}")), get("tp_s_per_mps")) {
-        terms.push(Term::SaturatingDrag {
-            t0_s: t0,
+    let (t, tp) = (own.t_s.value, lab.drag_slope.as_ref().map(|e| e.value));
+    let mut terms = vec![match tp {
+        Some(tp) => Term::SaturatingDrag {
+            t0_s: t,
             tp_s_per_mps: tp,
-        });
-    } else if let Some(t) = get(&format!("t_s_{material}")) {
-        terms.push(Term::LinearDrag { t_s: t });
-    } else {
-        return Err(format!("no drag time of {material} in the accepted model"));
-    }
-    if let Some(c) = get("c_per_m") {
-        terms.push(Term::QuadraticDrag { c_per_m: c });
-    }
-    if let Some(c) = get("c") {
-        terms.push(Term::RollingResistance { c });
-    }
-    if let Some(a) = get("alpha_deg") {
-        terms.push(Term::GrooveTilt { alpha_deg: a });
-    }
-    let has = |prefix: &str| params.keys().any(|k| k.starts_with(prefix));
-    for (prefix, what) in [
-        ("ln_vc_mps_", "a velocity-dependent friction"),
-        ("sin1", "a Fourier series in z"),
-        ("coef0_mps2", "a spline force (no named form)"),
-    ] {
-        if has(prefix) {
-            return Err(format!(
-                "the accepted model has {what}, which the pair fit does not carry"
-            ));
-        }
-    }
-    // forces in the lab act on the pairs as on the single runs: held at the findings' values
-    // (the same z or the same time since the kick, so the same force)
+        },
+        None => Term::LinearDrag { t_s: t },
+    }];
+    // held at the findings' values: the same z, speed or time since the kick gives the same force
     for f in &lab.forces {
         terms.push(f.clone()?);
     }
     Ok(Model {
         groove,
-        friction: Friction::Constant { mu },
+        friction: Friction::Constant { mu: own.mu.value },
         variation: lab.friction,
         terms,
     })
@@ -892,37 +864,25 @@ pub fn add_pair_findings(
     {
         return;
     }
-    let params: BTreeMap<String, f64> = diagnosis
-        .model_parameters
-        .iter()
-        .map(|(k, v)| (k.clone(), v.value))
-        .collect();
     // the single runs' errors as their joint fit gave them, inflated for the correlation left in
     // the final model's residuals
     let rho = diagnosis
         .residuals_after
         .as_ref()
         .map_or(0.0, |r| r.lag1_autocorrelation);
-    let se = |k: String| {
-        diagnosis
-            .model_parameters
-            .get(&k)
-            .and_then(|e| e.se)
-            .unwrap_or(0.0)
-            * inflation(rho).sqrt()
-    };
+    let se = |e: Option<&Value>| e.and_then(|e| e.se).unwrap_or(0.0) * inflation(rho).sqrt();
     let lab = forms::in_the_lab(diagnosis.findings.iter().filter(|f| f.accepted));
     let mut physics = BTreeMap::new();
     let mut notes = Vec::new();
     for m in &diagnosis.materials {
-        match single_run_physics(&params, &lab, m, groove) {
-            Ok(model) => {
-                let t_key = if params.contains_key(&format!("t0_s_{m}")) {
-                    format!("t0_s_{m}")
-                } else {
-                    format!("t_s_{m}")
-                };
-                let errs = [se(format!("mu_{m}")), se(t_key), se("tp_s_per_mps".into())];
+        let own = OwnValues::of(&diagnosis.model_parameters, m);
+        match own.and_then(|own| Ok((single_run_physics(&own, &lab, groove)?, own))) {
+            Ok((model, own)) => {
+                let errs = [
+                    se(Some(&own.mu)),
+                    se(Some(&own.t_s)),
+                    se(lab.drag_slope.as_ref()),
+                ];
                 physics.insert(m.clone(), (model, errs));
             }
             Err(e) => notes.push(format!("pairs of {m} not tested: {e}")),
@@ -963,8 +923,10 @@ pub fn add_pair_findings(
 mod tests {
     use super::single_run_physics;
     use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
+    use crate::discover::candidate::OwnValues;
     use crate::discover::forms::{
-        in_the_lab, Form, FrictionPeriodic, PeriodicZ, TimeCommon, TimePeriodic,
+        in_the_lab, Form, FrictionPeriodic, GrooveTilt, PeriodicZ, QuadraticDrag,
+        RollingResistance, SaturatingDrag, TimeCommon, TimePeriodic, VelocityFriction,
     };
     use crate::discover::pairs_impact::impact_decision;
     use crate::physics::{FrictionVariation, Groove, Term};
@@ -986,6 +948,68 @@ mod tests {
         }
     }
 
+    /// Material 316's own values in a final model's parameters.
+    fn own_316(values: &[(&str, f64)]) -> OwnValues {
+        let params: BTreeMap<String, Estimate> = values
+            .iter()
+            .map(|(k, v)| (k.to_string(), Estimate::new(*v, 0.001)))
+            .collect();
+        OwnValues::of(&params, "316").expect("316's values")
+    }
+
+    /// The drag, the resistance and the tilt are read back from their findings by their forms,
+    /// not from the final model's parameter names: a saturating drag's T' with each material's
+    /// T0 (its drag time beside it), a quadratic drag, a rolling resistance and the tilt held as
+    /// accepted; a friction of the slip speed cannot be held, and the reason says so.
+    #[test]
+    fn the_drag_resistance_and_tilt_are_read_back_by_their_forms() {
+        let own = own_316(&[("mu_316", 0.337), ("t0_s_316", 0.061), ("t0_s_440c", 0.07)]);
+        assert_eq!(
+            own.t_s.value, 0.061,
+            "T0 is the drag time beside a saturating drag"
+        );
+        let drag = finding_of(
+            &SaturatingDrag,
+            "velocity_dependent_drag",
+            &[("tp_s_per_mps", 0.4), ("t0_s_316", 0.061)],
+        );
+        let quad = finding_of(
+            &QuadraticDrag,
+            "velocity_dependent_drag",
+            &[("c_per_m", 3.0)],
+        );
+        let roll = finding_of(
+            &RollingResistance,
+            "rolling_resistance",
+            &[("coefficient", 2e-4), ("deceleration_mps2", 2e-3)],
+        );
+        let tilt = finding_of(&GrooveTilt, "groove_tilt", &[("alpha_deg", -0.03)]);
+        let held = in_the_lab([&drag, &quad, &roll, &tilt]);
+        let model = single_run_physics(&own, &held, Groove::CHAPTER).unwrap();
+        assert_eq!(
+            model.terms,
+            [
+                Term::SaturatingDrag {
+                    t0_s: 0.061,
+                    tp_s_per_mps: 0.4
+                },
+                Term::QuadraticDrag { c_per_m: 3.0 },
+                Term::RollingResistance { c: 2e-4 },
+                Term::GrooveTilt { alpha_deg: -0.03 },
+            ]
+        );
+        let slip = finding_of(
+            &VelocityFriction::default(),
+            "velocity_dependent_friction",
+            &[("mu_inf_316", 0.34)],
+        );
+        let why =
+            single_run_physics(&own, &in_the_lab([&drag, &slip]), Groove::CHAPTER).unwrap_err();
+        assert!(why.contains("velocity-dependent friction"), "{why}");
+        let missing = OwnValues::of(&BTreeMap::new(), "316").unwrap_err();
+        assert!(missing.contains("no mu_316"), "{missing}");
+    }
+
     fn wave_finding() -> Finding {
         finding_of(
             &PeriodicZ::default(),
@@ -1005,17 +1029,7 @@ mod tests {
     /// a phase per run cannot be carried, and the reason says so.
     #[test]
     fn the_pairs_are_held_at_the_accepted_forces_in_the_lab_or_told_why_not() {
-        let params: BTreeMap<String, f64> = [
-            ("mu_316", 0.337),
-            ("t_s_316", 0.07),
-            ("k_per_m", 3141.6),
-            ("sin_mps2", 0.03),
-            ("cos_mps2", 0.04),
-            ("frequency_hz", 120.0),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect();
+        let own = own_316(&[("mu_316", 0.337), ("t_s_316", 0.07)]);
         let wave = wave_finding();
         let time = [
             ("amplitude_mps2", 0.2),
@@ -1034,7 +1048,7 @@ mod tests {
             ],
         );
         let held = in_the_lab([&wave, &texture, &common]);
-        let model = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap();
+        let model = single_run_physics(&own, &held, Groove::CHAPTER).unwrap();
         let [amp, k, phase] = model.variation.periodic;
         assert!(
             (amp - 0.05).abs() < 1e-12 && (k - 2000.0).abs() < 1e-9 && (phase - 0.3).abs() < 1e-12
@@ -1057,7 +1071,7 @@ mod tests {
         assert!(matches!(model.terms[0], Term::LinearDrag { .. }));
         let per_run = finding_of(&TimePeriodic::default(), "time_dependent_force", &time[..2]);
         let held = in_the_lab([&wave, &per_run]);
-        let why = single_run_physics(&params, &held, "316", Groove::CHAPTER).unwrap_err();
+        let why = single_run_physics(&own, &held, Groove::CHAPTER).unwrap_err();
         assert!(why.contains("its own phase in each run"), "{why}");
     }
 

@@ -22,6 +22,7 @@ use crate::artifacts::under_accepted::{
     CarriedTerm, CollisionsUnder, DragTimeLine, SingleMaterial, SingleUnder, UnderAccepted,
 };
 use crate::artifacts::Estimate;
+use crate::discover::candidate::OwnValues;
 use crate::discover::forms;
 use crate::discover::pair_force::carried_from;
 use crate::discover::pairs::single_run_physics;
@@ -42,25 +43,23 @@ pub fn accepted_terms(d: &Diagnosis) -> Vec<&Finding> {
 /// The single runs of each material under the accepted physics: μ and the drag of discovery's
 /// final joint model (every accepted term fitted jointly over all single runs).
 fn single_under(d: &Diagnosis) -> SingleUnder {
-    let p = &d.model_parameters;
+    let lab = forms::in_the_lab(accepted_terms(d));
+    // beside a quadratic drag T is no line in |v|
+    let quadratic = lab
+        .forces
+        .iter()
+        .any(|t| matches!(t, Ok(Term::QuadraticDrag { .. })));
     let materials = d
         .materials
         .iter()
         .filter_map(|m| {
-            let mu = *p.get(&format!("mu_{m}"))?;
-            let t_line = match (p.get(&format!("t0_s_{m}")), p.get("tp_s_per_mps")) {
-                (Some(t0), Some(tp)) => Some(DragTimeLine {
-                    intercept_s: *t0,
-                    slope_s_per_mps: *tp,
-                }),
-                // a linear drag's line is flat; beside a quadratic drag T is no line in |v|
-                _ if p.contains_key("c_per_m") => None,
-                _ => p.get(&format!("t_s_{m}")).map(|t| DragTimeLine {
-                    intercept_s: *t,
-                    slope_s_per_mps: Estimate::new(0.0, 0.0),
-                }),
-            };
-            Some((m.clone(), SingleMaterial { mu, t_line }))
+            let own = OwnValues::of(&d.model_parameters, m).ok()?;
+            // a linear drag's line is flat
+            let t_line = (!quadratic).then(|| DragTimeLine {
+                intercept_s: own.t_s,
+                slope_s_per_mps: lab.drag_slope.unwrap_or(Estimate::new(0.0, 0.0)),
+            });
+            Some((m.clone(), SingleMaterial { mu: own.mu, t_line }))
         })
         .collect();
     SingleUnder {
@@ -98,16 +97,12 @@ fn collisions_under(
     if by_material.is_empty() {
         return None;
     }
-    let params: BTreeMap<String, f64> = d
-        .model_parameters
-        .iter()
-        .map(|(k, v)| (k.clone(), v.value))
-        .collect();
     let lab = forms::in_the_lab(accepted_terms(d));
     let mut materials: Vec<MaterialWholeRun> = Vec::new();
     let mut unchanged = Vec::new();
     for (m, runs) in &by_material {
-        let model = match single_run_physics(&params, &lab, m, groove) {
+        let own = OwnValues::of(&d.model_parameters, m);
+        let model = match own.and_then(|own| single_run_physics(&own, &lab, groove)) {
             Ok(model) => model,
             Err(why) => {
                 notes.push(format!("the whole-run fits of {m} are not refitted: {why}"));

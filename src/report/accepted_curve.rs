@@ -4,45 +4,28 @@
 
 use super::inputs::ReportData;
 use super::trajectory::Sample;
-use crate::artifacts::Diagnosis;
+use crate::discover::candidate::OwnValues;
 use crate::lsq::dense_fit::minimize;
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
 use crate::physics::{simulate, Model, State};
-use std::collections::BTreeMap;
 
 /// The model of `material` under the accepted physics, when the refit accepted terms and has
 /// this material's single-run numbers; None otherwise (or when the terms cannot be carried).
+/// The material's μ and drag line are the refit's, every other accepted term discovery's.
 pub fn model_of(d: &ReportData, material: &str) -> Option<Model> {
     let u = d.under_accepted.as_ref().filter(|u| u.accepted)?;
     let sm = u.single.as_ref()?.materials.get(material)?;
     let diag = d.diagnosis.as_ref()?;
-    let params = parameters(diag, material, sm);
-    let accepted = crate::fit::refit::accepted_terms(diag);
-    let lab = crate::discover::forms::in_the_lab(accepted);
-    crate::discover::pairs::single_run_physics(&params, &lab, material, d.groove).ok()
-}
-
-/// Discovery's final parameters with `material`'s μ and drag time(s) replaced by the refit's.
-fn parameters(
-    diag: &Diagnosis,
-    material: &str,
-    sm: &crate::artifacts::under_accepted::SingleMaterial,
-) -> BTreeMap<String, f64> {
-    let mut p: BTreeMap<String, f64> = diag
-        .model_parameters
-        .iter()
-        .map(|(k, e)| (k.clone(), e.value))
-        .collect();
-    p.insert(format!("mu_{material}"), sm.mu.value);
+    let mut lab = crate::discover::forms::in_the_lab(crate::fit::refit::accepted_terms(diag));
+    let mut own = OwnValues::of(&diag.model_parameters, material).ok()?;
+    own.mu = sm.mu;
     if let Some(line) = &sm.t_line {
-        if line.slope_s_per_mps.value != 0.0 {
-            p.insert(format!("t0_s_{material}"), line.intercept_s.value);
-            p.insert("tp_s_per_mps".into(), line.slope_s_per_mps.value);
-        } else {
-            p.insert(format!("t_s_{material}"), line.intercept_s.value);
+        own.t_s = line.intercept_s;
+        if lab.drag_slope.is_some() {
+            lab.drag_slope = Some(line.slope_s_per_mps);
         }
     }
-    p
+    crate::discover::pairs::single_run_physics(&own, &lab, d.groove).ok()
 }
 
 /// Positions under `model` at the samples' times, from z0 and v0 at the kick, t0 before the

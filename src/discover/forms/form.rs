@@ -97,10 +97,14 @@ pub struct Reading {
     /// The form's name (`Form::name`).
     pub form: &'static str,
     pub place: Place,
-    /// The force the form puts on a particle in the lab, fixed in z or locked to the kick, held
-    /// at the finding's values (so that other experiments in the same groove can carry it); Err
-    /// says why it cannot be carried. None for a form that is no force.
+    /// The force the form puts on any particle in the groove (a drag, a resistance, the tilt, a
+    /// force fixed in z or locked to the kick), held at the finding's values so that other
+    /// experiments in the same groove can carry it; Err says why this finding cannot be carried.
+    /// None for a form that adds no force of its own.
     pub lab_force: Option<Result<Term, String>>,
+    /// The slope T' of a drag time growing with speed, T = T0 + T'|v| (each material's T0 is its
+    /// own drag time); None for a form that sets none.
+    pub drag_slope: Option<Estimate>,
     /// The part of the friction's variation the form sets (along the groove, by direction, by
     /// slip speed), held at the finding's values: the collision runs slide in the same groove.
     /// None for a form that sets none.
@@ -286,9 +290,15 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn reads(&self, f: &Finding) -> bool {
         Some(f.effect.as_str()) == self.effect() && f.form == self.form()
     }
-    /// The force in the lab (fixed in z or locked to the kick) that a finding of this form holds,
-    /// read from its parameters.
+    /// The force on any particle in the groove that a finding of this form holds (a drag, a
+    /// resistance, the tilt, a force fixed in z or locked to the kick), read from its parameters;
+    /// Err says why another experiment cannot carry this finding.
     fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
+        None
+    }
+    /// The slope T' of the drag time in speed that a finding of this form holds (each material's
+    /// T0 is its own drag time).
+    fn lab_drag_slope(&self, _f: &Finding) -> Option<Estimate> {
         None
     }
     /// The part of the friction's variation that a finding of this form holds (the fields its

@@ -1,9 +1,10 @@
 //! A groove tilt: a = −g·sin α, of a fixed sign in the lab.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::discover::G_MPS2;
+use crate::physics::Term;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -50,5 +51,8 @@ impl Form for GrooveTilt {
         _typical_se: Option<f64>,
     ) -> Option<(&'static str, &'static str, f64, f64)> {
         Some(("alpha_deg", "°", se[0], 1.0))
+    }
+    fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
+        carried_force(f, &["alpha_deg"], |v| Term::GrooveTilt { alpha_deg: v[0] })
     }
 }

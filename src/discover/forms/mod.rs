@@ -37,7 +37,7 @@ mod form;
 mod wavelength;
 
 pub use self::form::{as_fitted, p, Entry, Fitted, Form, ParamInfo, Place, Reading, Search};
-use crate::artifacts::diagnosis::Finding;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::physics::{FrictionVariation, Term};
 
@@ -128,6 +128,14 @@ pub fn library(candidates: &[String], n_materials: usize, rg: &Ranges) -> Vec<Ex
         .collect()
 }
 
+/// The names a material's drag time takes in the joint model (`t_s`, or a form's own, as `t0_s`
+/// beside a saturating drag).
+pub fn drag_time_names() -> Vec<&'static str> {
+    let mut out = vec!["t_s"];
+    out.extend(prototypes().iter().filter_map(|e| e.drag_time_name()));
+    out
+}
+
 /// The form that wrote finding `f`, read back with what it holds; None for a finding no form
 /// writes (differences between particles, the pair checks).
 pub fn read(f: &Finding) -> Option<Reading> {
@@ -139,6 +147,7 @@ pub fn read(f: &Finding) -> Option<Reading> {
             place: e.place(),
             lab_force: e.lab_force(f),
             lab_friction: e.lab_friction(f),
+            drag_slope: e.lab_drag_slope(f),
         })
 }
 
@@ -146,11 +155,14 @@ pub fn read(f: &Finding) -> Option<Reading> {
 /// accepted model, read back from its findings by their forms.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct InTheLab {
-    /// The forces in the lab (fixed in z or locked to the kick), in the findings' order; Err says
-    /// why a finding's force cannot be carried.
+    /// The forces on any particle in the groove (a drag, a resistance, the tilt, a force fixed
+    /// in z or locked to the kick), in the findings' order; Err says why a finding cannot be
+    /// carried.
     pub forces: Vec<Result<Term, String>>,
     /// The friction's variation, each form setting its own part.
     pub friction: FrictionVariation,
+    /// The slope T' of a drag time growing with speed (each material's T0 its own drag time).
+    pub drag_slope: Option<Estimate>,
 }
 
 /// What `findings` (the accepted ones) put in the lab for another experiment to carry.
@@ -165,6 +177,7 @@ pub fn in_the_lab<'a>(findings: impl IntoIterator<Item = &'a Finding>) -> InTheL
             .iter()
             .filter_map(|r| r.lab_friction)
             .fold(FrictionVariation::default(), FrictionVariation::with),
+        drag_slope: readings.iter().find_map(|r| r.drag_slope),
     }
 }
 
@@ -286,23 +299,42 @@ mod tests {
             assert_eq!(r.form, e.name());
             assert_eq!(r.place, e.place());
             assert_eq!(Effect::from_id(effect).unwrap().place(), e.place().id());
-            match r.lab_force {
-                Some(Ok(term)) => {
-                    let with = spec.sim_model(&g, 0, 0.1).to_physics();
-                    let mut held = base.sim_model(&g0, 0, 0.1).to_physics();
-                    held.terms.push(term);
-                    for j in 0..=40 {
-                        let z = 0.001 + 0.02 * j as f64 / 40.0;
-                        let (a, b) = (with.accel(z, 0.1, 0.01), held.accel(z, 0.1, 0.01));
-                        assert!((a - b).abs() < 1e-9, "{} at z = {z}: {a} vs {b}", e.name());
+            // the force held as read back (a drag's slope making each material's T its T0)
+            let mut held = base.sim_model(&g0, 0, 0.1).to_physics();
+            if let Some(tp) = r.drag_slope {
+                for t in &mut held.terms {
+                    if let Term::LinearDrag { t_s } = *t {
+                        *t = Term::SaturatingDrag {
+                            t0_s: t_s,
+                            tp_s_per_mps: tp.value,
+                        };
                     }
                 }
+            }
+            match &r.lab_force {
+                Some(Ok(term)) => held.terms.push(term.clone()),
                 Some(Err(why)) => assert!(why.contains("does not carry"), "{why}"),
                 None => assert!(
                     !(e.position_dependent() && e.place() == Place::Force && e.name() != "spline"),
                     "{}: a force fixed in the lab reads back with its force",
                     e.name()
                 ),
+            }
+            if matches!(r.lab_force, Some(Ok(_))) || r.drag_slope.is_some() {
+                let with = spec.sim_model(&g, 0, 0.1).to_physics();
+                for j in 0..=40 {
+                    let z = 0.001 + 0.02 * j as f64 / 40.0;
+                    for v in [-0.2, 0.1] {
+                        let (a, b) = (with.accel(z, v, 0.01), held.accel(z, v, 0.01));
+                        assert!((a - b).abs() < 1e-9, "{} at z = {z}: {a} vs {b}", e.name());
+                    }
+                }
+            } else if e.place() == Place::Force && e.effect().is_some() {
+                assert!(
+                    matches!(r.lab_force, Some(Err(_))),
+                    "{}: a force reads back with its force or says why not",
+                    e.name()
+                );
             }
             let fitted = spec.sim_model(&g, 0, 0.1).to_physics().variation;
             match r.lab_friction {

@@ -1,8 +1,9 @@
 //! A quadratic drag: a = −v/T − c·v|v|, c of either sign (the total must still oppose the motion).
 
-use super::form::{p, with_drag_times, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{carried_force, p, with_drag_times, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
+use crate::physics::Term;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -46,5 +47,8 @@ impl Form for QuadraticDrag {
         _typical_se: Option<f64>,
     ) -> Option<(&'static str, &'static str, f64, f64)> {
         Some(("c_per_m", "1/m", se[0], 1.0))
+    }
+    fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
+        carried_force(f, &["c_per_m"], |v| Term::QuadraticDrag { c_per_m: v[0] })
     }
 }

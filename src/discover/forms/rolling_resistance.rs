@@ -1,9 +1,10 @@
 //! A rolling resistance: a = −c·g·sign(v), c ≥ 0.
 
-use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use super::form::{carried_force, p, Entry, Fitted, Form, ParamInfo, Place};
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::discover::G_MPS2;
+use crate::physics::Term;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -53,5 +54,8 @@ impl Form for RollingResistance {
         _typical_se: Option<f64>,
     ) -> Option<(&'static str, &'static str, f64, f64)> {
         Some(("deceleration_mps2", "m/s²", se[0], G_MPS2))
+    }
+    fn lab_force(&self, f: &Finding) -> Option<Result<Term, String>> {
+        carried_force(f, &["coefficient"], |v| Term::RollingResistance { c: v[0] })
     }
 }

@@ -1,7 +1,7 @@
 //! A saturating drag: a = −v/(T0 + T'|v|), T' ≥ 0; the per-material T become T0.
 
 use super::form::{p, with_drag_times, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use std::collections::BTreeMap;
 
@@ -49,5 +49,8 @@ impl Form for SaturatingDrag {
         _typical_se: Option<f64>,
     ) -> Option<(&'static str, &'static str, f64, f64)> {
         Some(("tp_s_per_mps", "s²/m", se[0], 1.0))
+    }
+    fn lab_drag_slope(&self, f: &Finding) -> Option<Estimate> {
+        f.parameters.get("tp_s_per_mps").copied()
     }
 }

@@ -273,6 +273,11 @@ impl Form for Spline {
     fn reads(&self, f: &Finding) -> bool {
         Some(f.effect.as_str()) == self.effect() && f.form.starts_with("spline in ")
     }
+    fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
+        Some(Err(
+            "the accepted model has a spline force (no named form), which the pair fit does not carry".into(),
+        ))
+    }
 }
 
 struct SplineSize {

@@ -2,8 +2,9 @@
 //! v_c; a material whose v_c runs to the lower bound keeps a constant μ).
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
+use crate::physics::Term;
 use std::collections::BTreeMap;
 
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -105,5 +106,11 @@ impl Form for VelocityFriction {
                 x.exp()
             )
         })
+    }
+    /// μ of the slip speed per material: the pair fit holds one constant μ.
+    fn lab_force(&self, _f: &Finding) -> Option<Result<Term, String>> {
+        Some(Err(
+            "the accepted model has a velocity-dependent friction, which the pair fit does not carry".into(),
+        ))
     }
 }
