@@ -331,11 +331,13 @@ impl Trials<'_> {
             self.set.opts.folds,
         );
         let t = paired_t(self.current_cv, &cv);
-        (
-            cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv,
-            cv,
-            t,
-        )
+        (self.improves(&cv, t), cv, t)
+    }
+
+    /// Whether a model of held-out error `cv`, paired t `t` against the current model, predicts
+    /// held-out runs better: a lower RMS and t above its critical value.
+    fn improves(&self, cv: &CvResult, t: f64) -> bool {
+        cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv
     }
 
     /// Whether candidate `i`, fitted in full (once), predicts held-out runs better than the
@@ -421,8 +423,7 @@ impl Trials<'_> {
             });
         }
         let (cv, t) = self.cv_of[i].clone().expect("just set");
-        let passes =
-            cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv && self.refused[i].is_none();
+        let passes = self.improves(&cv, t) && self.refused[i].is_none();
         (passes, cv)
     }
 
@@ -724,7 +725,7 @@ fn tied(tr: &Trials, ne: usize) -> Vec<(usize, f64)> {
         .filter(|&j| j != *b && tr.refused[j].is_none())
         .filter_map(|j| {
             let (cv, t_base) = tr.cv_of[j].as_ref()?;
-            let passes = cv.cv_rms_m < tr.current_cv.cv_rms_m && *t_base > tr.t_cv;
+            let passes = tr.improves(cv, *t_base);
             let t = paired_t(cv, b_cv);
             (passes && t <= tr.t_cv).then_some((j, t))
         })
@@ -757,7 +758,7 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
             Some((b, _)) if *b == i => "passes: bootstrap LR test and held-out runs".into(),
             // it passed on its own, and another form was preferred by held-out runs (a richer
             // form of its effect, `prefer_richer`); a tie is said over this by `tied`
-            Some((b, b_cv)) if cv.cv_rms_m < tr.current_cv.cv_rms_m && *t > tr.t_cv => format!(
+            Some((b, b_cv)) if tr.improves(cv, *t) => format!(
                 "passes both tests, but {} predicts held-out runs better (paired t = {:.2}): it is named instead",
                 tr.all[*b].form(),
                 paired_t(cv, b_cv)

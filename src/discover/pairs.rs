@@ -1,9 +1,10 @@
 //! Discovery on pairs: does the single-run physics that discovery accepted also explain the
 //! collision runs? Per material, the whole-run pair fit (`fit::collision::wholerun`) is made
 //! twice: with μ_pg and the drag held at what the single runs gave, and with them free; in both,
-//! the rest of what the single runs accepted acts as accepted (forces fixed in z, a vibration
-//! locked to the kick, the friction's variation along the groove, by direction or by slip
-//! speed), while a force in time with its own phase in each run, whose phase in a collision run
+//! the rest of what the single runs accepted acts as accepted, read back from the findings by
+//! their forms (`forms::in_the_lab`: a drag's slope or quadratic part, a resistance, the tilt,
+//! forces fixed in z, a vibration locked to the kick, the friction's variation along the groove,
+//! by direction or by slip speed), while a force in time with its own phase in each run, whose phase in a collision run
 //! nothing gives, leaves the pairs untested (said in a note). A Wald
 //! χ² of the pairs' (μ_pg, T0, T') against the single runs' values, with both sets of errors
 //! (3 degrees of freedom, Holm over materials, α = 0.01), says whether the pairs move under

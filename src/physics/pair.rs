@@ -24,6 +24,7 @@ use super::rk::Tolerance;
 use super::slip_friction::SlipFriction;
 use super::{Model, Phase, Restitution, State, SwitchEvent, Trajectory};
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
 
 /// Approach speed (m/s) below which an impact ends the cascade: the pair moves on together.
 pub const V_TOGETHER_MPS: f64 = 1e-7;
@@ -77,6 +78,7 @@ fn hold_ext(ext: f64, model: &Model, tau: f64) -> f64 {
 /// A pair an attraction holds together, at one state: the contact's normal force per unit mass
 /// (> 0 presses the two apart; below 0 they part), the contact's spin friction on each particle,
 /// and the force on each from outside its own model (the attraction and the normal force).
+#[derive(Clone, Copy)]
 struct Held {
     normal: f64,
     tau: f64,
@@ -320,9 +322,20 @@ pub fn simulate_pair(
         }
         let part = |yy: &[f64; 7], i: usize| [yy[3 * i], yy[3 * i + 1], yy[3 * i + 2]];
         let stop = if held {
+            // dopri5's last stage of a step and the events are taken at the same state: the
+            // held pair there is solved once
+            let last: Cell<Option<([f64; 7], Held)>> = Cell::new(None);
+            let held_at = |yy: &[f64; 7]| match last.get() {
+                Some((at, hd)) if at == *yy => hd,
+                _ => {
+                    let hd = pair.held(model, ms, yy, (l, r));
+                    last.set(Some((*yy, hd)));
+                    hd
+                }
+            };
             advance(
                 &|yy: &[f64; 7]| {
-                    let hd = pair.held(model, ms, yy, (l, r));
+                    let hd = held_at(yy);
                     let a = ms[0].rhs(model, &part(yy, 0), yy[6], hd.ext[0]);
                     let b = ms[1].rhs(model, &part(yy, 1), yy[6], hd.ext[1]);
                     let (a, b) = (
@@ -334,7 +347,7 @@ pub fn simulate_pair(
                     [a[0], dv, a[2], b[0], dv, b[2], 1.0]
                 },
                 &|yy: &[f64; 7]| {
-                    let hd = pair.held(model, ms, yy, (l, r));
+                    let hd = held_at(yy);
                     let a = ms[0].events(model, &part(yy, 0), yy[6], hd.seen(0, ms[0], model));
                     let b = ms[1].events(model, &part(yy, 1), yy[6], hd.seen(1, ms[1], model));
                     [a[0], a[1], b[0], b[1], hd.normal]
