@@ -5,23 +5,11 @@
 //! A run's Jacobian touches only its own three local columns and the global columns it depends
 //! on, so a step costs one simulation per run per (local or affecting global) parameter; z0 is an
 //! additive offset unless a force depends on position, and then its column is known exactly.
-//!
-//! A force in time with its own phase in each run profiles that phase in every prediction (four
-//! simulations, `timeforce.rs`). A step's columns hold it at the step's base instead and put its
-//! share back from the phase's own column (`lsq::block::BlockProblem::step_residuals`): the
-//! profile projects the run's z0, t0 and v0 out, so the phase follows the globals only, and to
-//! first order the column is exact. The covariance is read from columns that profile afresh.
 
 use super::candidate::{predict, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::sim::SimModel;
-use super::timeforce::{hold_phase, profiled_phase};
 use crate::lsq::block::{minimize_blocks, BlockProblem};
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
-use std::sync::Mutex;
-
-/// The step (rad) of a run's own phase in its residuals' derivative (`held_columns`).
-const PHASE_STEP: f64 = 1e-3;
 
 /// A fitted joint model.
 #[derive(Clone, Debug)]
@@ -85,36 +73,6 @@ struct Runs<'a> {
     /// Number of penalty pseudo-residuals, and which globals they depend on.
     penalty_len: usize,
     penalized: Vec<bool>,
-    /// Per run, the phase of its own that its force in time took at the base point of the last
-    /// step's columns, with that point (`step_residuals`).
-    base_phase: Vec<Mutex<Option<(Vec<f64>, f64)>>>,
-}
-
-impl Runs<'_> {
-    /// Whitened residuals of `run` under `model` at locals `l` into `out`.
-    fn whitened(model: &SimModel, l: &[f64; N_LOCAL], run: &RunData, out: &mut [f64]) {
-        let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
-        model.simulate(l[0], l[2], &tt, out, None, None);
-        let w = 1.0 / run.sigma_m;
-        for ((o, z), keep) in out.iter_mut().zip(&run.z_m).zip(&run.keep) {
-            *o = if *keep { (*o - z) * w } else { 0.0 };
-        }
-    }
-
-    /// The phase of run `b`'s own that its force in time takes at (`shared`, `own`): profiled
-    /// once per point, then read back.
-    fn phase_at(&self, b: usize, shared: &[f64], own: &[f64; N_LOCAL]) -> Option<f64> {
-        let key: Vec<f64> = shared.iter().chain(own).copied().collect();
-        let mut slot = self.base_phase[b].lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((at, phase)) = slot.as_ref() {
-            if *at == key {
-                return Some(*phase);
-            }
-        }
-        let phase = profiled_phase(&self.spec.run_model(shared, own, &self.runs[b]))?;
-        *slot = Some((key, phase));
-        Some(phase)
-    }
 }
 
 /// Every extra term's penalty pseudo-residuals at globals `g`, in order.
@@ -147,53 +105,11 @@ impl BlockProblem for Runs<'_> {
             return;
         };
         let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
-        Self::whitened(&self.spec.run_model(shared, &l, run), &l, run, out);
-    }
-
-    /// A run's own phase of a force in time is held at the base point's: its profile costs four
-    /// simulations, the column one.
-    fn step_residuals(
-        &self,
-        b: usize,
-        base_shared: &[f64],
-        base_own: &[f64],
-        shared: &[f64],
-        own: &[f64],
-        out: &mut [f64],
-    ) {
-        let base: [f64; N_LOCAL] = base_own.try_into().unwrap_or([0.0; N_LOCAL]);
-        let held = match self.runs.get(b) {
-            Some(_) if self.spec.has_run_phase() => self.phase_at(b, base_shared, &base),
-            _ => None,
-        };
-        let Some(phase) = held else {
-            return self.residuals(b, shared, own, out);
-        };
-        let run = &self.runs[b];
-        let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
-        let mut model = self.spec.sim_model(shared, run.material, l[2]);
-        hold_phase(&mut model, phase);
-        Self::whitened(&model, &l, run, out);
-    }
-
-    /// The run's residuals' derivative in its own phase, the one `step_residuals` holds.
-    fn held_columns(&self, b: usize, shared: &[f64], own: &[f64], r: &[f64]) -> Vec<Vec<f64>> {
-        let Some(run) = self.runs.get(b).filter(|_| self.spec.has_run_phase()) else {
-            return Vec::new();
-        };
-        let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
-        let Some(phase) = self.phase_at(b, shared, &l) else {
-            return Vec::new();
-        };
-        let mut model = self.spec.sim_model(shared, run.material, l[2]);
-        hold_phase(&mut model, phase + PHASE_STEP);
-        let mut stepped = vec![0.0; r.len()];
-        Self::whitened(&model, &l, run, &mut stepped);
-        vec![stepped
-            .iter()
-            .zip(r)
-            .map(|(a, b)| (a - b) / PHASE_STEP)
-            .collect()]
+        predict(self.spec, shared, &l, run, out);
+        let w = 1.0 / run.sigma_m;
+        for ((o, z), keep) in out.iter_mut().zip(&run.z_m).zip(&run.keep) {
+            *o = if *keep { (*o - z) * w } else { 0.0 };
+        }
     }
 
     fn uses(&self, b: usize, i: usize) -> bool {
@@ -253,7 +169,6 @@ pub fn fit_joint(
         z0_offset: !spec.position_dependent(),
         penalty_len: penalty_residuals(spec, start_g).len(),
         penalized,
-        base_phase: runs.iter().map(|_| Mutex::new(None)).collect(),
     };
     let shared: Vec<ParamSpec> = params
         .iter()

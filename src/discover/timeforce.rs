@@ -6,7 +6,6 @@
 //! motion responds linearly, so the phase that best fits the recorded positions minimises
 //! `|e − cos φ·δs − sin φ·δc|²` (e the residual without the force, δs and δc the two responses),
 //! a one-dimensional problem solved on a grid and refined; the run's model then carries that phase.
-//! (A fit's derivative columns hold it at their base point: `joint.rs`.)
 //!
 //! The run's z0, t0 and v0 are projected out of e, δs and δc first (as in the screen). A force
 //! switched on at the kick leaves a velocity offset `A cos φ/ω` that grows into a drift of tens of
@@ -180,26 +179,6 @@ pub fn profile_phase(m: &mut SimModel, l: &[f64; N_LOCAL], run: &RunData) {
         freq_hz,
         phase_rad,
     };
-}
-
-/// The phase `profile_phase` gave the force in time of `m`, when it has one of nonzero amplitude.
-pub(super) fn profiled_phase(m: &SimModel) -> Option<f64> {
-    let (idx, amp_mps2, _) = time_term(m)?;
-    match m.terms[idx] {
-        Term::TimePeriodicForce { phase_rad, .. } if amp_mps2 != 0.0 => Some(phase_rad),
-        _ => None,
-    }
-}
-
-/// `m` with its force in time at phase `phase_rad`, not profiled.
-pub(super) fn hold_phase(m: &mut SimModel, phase_rad: f64) {
-    if let Some((idx, amp_mps2, freq_hz)) = time_term(m) {
-        m.terms[idx] = Term::TimePeriodicForce {
-            amp_mps2,
-            freq_hz,
-            phase_rad,
-        };
-    }
 }
 
 /// Points of the phase integral (trapezoid on the circle: exact for the smooth periodic

@@ -21,29 +21,6 @@ pub trait BlockProblem: Sync {
     fn uses(&self, _b: usize, _i: usize) -> bool {
         true
     }
-    /// Residuals of block `b` at (`shared`, `own`), one difference step from (`base_shared`,
-    /// `base_own`), for a derivative column of the steps. The default evaluates them afresh. A
-    /// problem that optimises something inside each evaluation (a parameter profiled per block,
-    /// with the block's own parameters projected out) may hold it at its value at the base, so
-    /// that a column costs one evaluation without the inner optimisation; its share of each
-    /// shared column is then put back to first order from its own derivative (`held_columns`,
-    /// `follow_held`). The covariance is read from exact columns (`residuals`).
-    fn step_residuals(
-        &self,
-        b: usize,
-        _base_shared: &[f64],
-        _base_own: &[f64],
-        shared: &[f64],
-        own: &[f64],
-        out: &mut [f64],
-    ) {
-        self.residuals(b, shared, own, out)
-    }
-    /// ∂r_b/∂(each parameter `step_residuals` holds, at its profiled value) at (`shared`, `own`),
-    /// where the residuals are `r`; none by default.
-    fn held_columns(&self, _b: usize, _shared: &[f64], _own: &[f64], _r: &[f64]) -> Vec<Vec<f64>> {
-        Vec::new()
-    }
     /// ∂r_b/∂own_k at `shared`, `own` into `out` when the problem knows it in closed form (then
     /// true, and the back-end skips that forward difference); false, the default, to difference.
     fn own_column(
@@ -414,10 +391,7 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         r
     }
 
-    /// ∂r_b/∂(one parameter) by a forward difference stepping inward at an upper bound; `exact`
-    /// evaluates the stepped point afresh, else as the problem's steps take it
-    /// (`BlockProblem::step_residuals`).
-    #[allow(clippy::too_many_arguments)]
+    /// ∂r_b/∂(one parameter) by a forward difference stepping inward at an upper bound.
     fn column(
         &self,
         b: usize,
@@ -426,7 +400,6 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         spec: &ParamSpec,
         shared: Option<usize>,
         own: Option<usize>,
-        exact: bool,
     ) -> Vec<f64> {
         let ms = self.shared_specs.len();
         let (mut s2, mut o2) = (x[..ms].to_vec(), self.own(x, b).to_vec());
@@ -443,27 +416,12 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
             }
             _ => unreachable!("a column is of a shared or an own parameter"),
         };
-        let r1 = if exact {
-            self.block_residuals(b, &s2, &o2)
-        } else {
-            let mut r = vec![0.0; r0.len()];
-            self.problem
-                .step_residuals(b, &x[..ms], self.own(x, b), &s2, &o2, &mut r);
-            r
-        };
+        let r1 = self.block_residuals(b, &s2, &o2);
         r1.iter().zip(r0).map(|(a, b)| (a - b) / h).collect()
     }
 
     /// ∂r_b/∂(own parameter `k`): the problem's closed form if it has one, else a difference.
-    fn own_column(
-        &self,
-        b: usize,
-        x: &[f64],
-        r0: &[f64],
-        spec: &ParamSpec,
-        k: usize,
-        exact: bool,
-    ) -> Vec<f64> {
+    fn own_column(&self, b: usize, x: &[f64], r0: &[f64], spec: &ParamSpec, k: usize) -> Vec<f64> {
         let ms = self.shared_specs.len();
         let mut out = vec![0.0; r0.len()];
         if self
@@ -472,38 +430,33 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         {
             out
         } else {
-            self.column(b, x, r0, spec, None, Some(k), exact)
+            self.column(b, x, r0, spec, None, Some(k))
         }
     }
 
-    /// The normal-equation pieces and gradient parts of block `b` (`exact`: see `column`).
+    /// The normal-equation pieces and gradient parts of block `b`.
     fn block_pieces(
         &self,
         b: usize,
         x: &[f64],
         r: &[f64],
         w: &[f64],
-        exact: bool,
     ) -> (Pieces, Vec<f64>, Vec<f64>) {
         let ms = self.shared_specs.len();
         let ja: Vec<Option<Vec<f64>>> = self.own_specs[b]
             .iter()
             .enumerate()
-            .map(|(i, s)| (!s.held()).then(|| self.own_column(b, x, r, s, i, exact)))
+            .map(|(i, s)| (!s.held()).then(|| self.own_column(b, x, r, s, i)))
             .collect();
-        let mut jb: Vec<Option<Vec<f64>>> = self
+        let jb: Vec<Option<Vec<f64>>> = self
             .shared_specs
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 (!s.held() && self.problem.uses(b, i))
-                    .then(|| self.column(b, x, r, s, Some(i), None, exact))
+                    .then(|| self.column(b, x, r, s, Some(i), None))
             })
             .collect();
-        if !exact {
-            let held = self.problem.held_columns(b, &x[..ms], self.own(x, b), r);
-            follow_held(&mut jb, &ja, held);
-        }
         let mo = ja.len();
         let d = |a: &Option<Vec<f64>>, c: &Option<Vec<f64>>| match (a, c) {
             (Some(a), Some(c)) => dot3(a, c, w),
@@ -555,23 +508,12 @@ impl<P: BlockProblem> Model for Flat<'_, P> {
     }
 
     fn normal(&self, x: &[f64], r: &[f64], w: &[f64]) -> BlockNormal {
-        self.normal_with(x, r, w, false)
-    }
-
-    fn final_normal(&self, x: &[f64], r: &[f64], w: &[f64]) -> BlockNormal {
-        self.normal_with(x, r, w, true)
-    }
-}
-
-impl<P: BlockProblem> Flat<'_, P> {
-    /// The normal equations from the blocks' columns (`exact`: see `column`).
-    fn normal_with(&self, x: &[f64], r: &[f64], w: &[f64], exact: bool) -> BlockNormal {
         let ms = self.shared_specs.len();
         let parts: Vec<(Pieces, Vec<f64>, Vec<f64>)> = (0..self.problem.n_blocks())
             .into_par_iter()
             .map(|b| {
                 let range = self.res_offsets[b]..self.res_offsets[b + 1];
-                self.block_pieces(b, x, &r[range.clone()], &w[range], exact)
+                self.block_pieces(b, x, &r[range.clone()], &w[range])
             })
             .collect();
         let mut g = vec![0.0; x.len()];
@@ -600,53 +542,6 @@ impl<P: BlockProblem> Flat<'_, P> {
             live,
         }
     }
-}
-
-/// The shared columns `jb` of a block made the derivatives of residuals whose held parameters
-/// follow the shared ones through their profile: each held parameter h (column q) minimises the
-/// residuals with the block's own parameters (columns `ja`) projected out, so to first order
-/// dh/dθ = −q̃·c/q̃·q̃ (q̃ is q with the own columns projected out, c a shared column) and the
-/// column is c + q·dh/dθ; the own columns are left as they are (dh/d(own) = 0). Exact for one held
-/// parameter; several are taken one at a time.
-fn follow_held(jb: &mut [Option<Vec<f64>>], ja: &[Option<Vec<f64>>], held: Vec<Vec<f64>>) {
-    let ones = vec![1.0; held.first().map_or(0, Vec::len)];
-    let own = weighted_orthonormal(ja.iter().flatten().cloned().collect(), &ones);
-    for q in held {
-        let mut qt = q.clone();
-        for o in &own {
-            let a = dot3(o, &qt, &ones);
-            qt.iter_mut().zip(o).for_each(|(x, o)| *x -= a * o);
-        }
-        let qq = dot3(&qt, &qt, &ones);
-        if !(qq.is_finite() && qq > 0.0) {
-            continue;
-        }
-        for c in jb.iter_mut().flatten() {
-            let a = dot3(&qt, c, &ones) / qq;
-            c.iter_mut().zip(&q).for_each(|(c, q)| *c -= a * q);
-        }
-    }
-}
-
-/// `cols` made orthonormal in the metric of weights `w` (Gram–Schmidt, twice; a column that
-/// nothing is left of is dropped).
-fn weighted_orthonormal(cols: Vec<Vec<f64>>, w: &[f64]) -> Vec<Vec<f64>> {
-    let mut out: Vec<Vec<f64>> = Vec::with_capacity(cols.len());
-    for mut c in cols {
-        let n0 = dot3(&c, &c, w).sqrt();
-        for _ in 0..2 {
-            for q in &out {
-                let a = dot3(q, &c, w);
-                c.iter_mut().zip(q).for_each(|(c, q)| *c -= a * q);
-            }
-        }
-        let n = dot3(&c, &c, w).sqrt();
-        if n.is_finite() && n > 1e-9 * n0 {
-            c.iter_mut().for_each(|c| *c /= n);
-            out.push(c);
-        }
-    }
-    out
 }
 
 /// Minimise Σ_b Σ ρ(r_b) over shared and per-block parameters within their bounds (Huber with
@@ -765,142 +660,6 @@ mod tests {
         let se = res.shared_se(0);
         assert!(se > 0.0 && se < 0.01, "se {se}");
         assert!(res.termination.is_converged(), "{:?}", res.termination);
-    }
-
-    /// Lines y = a_b + s·t + k_b·u(t) per block, u = sin 3t, with k_b profiled inside each
-    /// evaluation (its least-squares value given s, a_b projected out) or, `explicit`, a second own
-    /// parameter; `held` keeps the profiled k_b at its base value in the steps' columns.
-    struct Profiled {
-        lines: Lines,
-        held: bool,
-        explicit: bool,
-    }
-
-    impl Profiled {
-        fn u(&self, i: usize) -> f64 {
-            (3.0 * self.lines.t[i]).sin()
-        }
-        /// k's least-squares value given s, the offset (the own parameter) projected out.
-        fn k_star(&self, b: usize, shared: &[f64]) -> f64 {
-            let n = self.lines.t.len() as f64;
-            let u_mean = (0..self.lines.t.len()).map(|i| self.u(i)).sum::<f64>() / n;
-            let (mut num, mut den) = (0.0, 0.0);
-            for (i, t) in self.lines.t.iter().enumerate() {
-                let u = self.u(i) - u_mean;
-                num += u * (self.lines.y[b][i] - shared[0] * t);
-                den += u * u;
-            }
-            num / den
-        }
-        fn at(&self, b: usize, shared: &[f64], own: &[f64], k: f64, out: &mut [f64]) {
-            for (i, o) in out.iter_mut().enumerate() {
-                let t = self.lines.t[i];
-                *o = (own[0] + shared[0] * t + k * self.u(i) - self.lines.y[b][i]) / 0.01;
-            }
-        }
-    }
-
-    impl BlockProblem for Profiled {
-        fn n_blocks(&self) -> usize {
-            self.lines.n_blocks()
-        }
-        fn n_residuals(&self, b: usize) -> usize {
-            self.lines.n_residuals(b)
-        }
-        fn residuals(&self, b: usize, shared: &[f64], own: &[f64], out: &mut [f64]) {
-            let k = if self.explicit {
-                own[1]
-            } else {
-                self.k_star(b, shared)
-            };
-            self.at(b, shared, own, k, out)
-        }
-        fn step_residuals(
-            &self,
-            b: usize,
-            base_shared: &[f64],
-            _base_own: &[f64],
-            shared: &[f64],
-            own: &[f64],
-            out: &mut [f64],
-        ) {
-            if self.held && !self.explicit {
-                let k = self.k_star(b, base_shared);
-                self.at(b, shared, own, k, out)
-            } else {
-                self.residuals(b, shared, own, out)
-            }
-        }
-        fn held_columns(&self, b: usize, _: &[f64], _: &[f64], _: &[f64]) -> Vec<Vec<f64>> {
-            if !self.held || self.explicit {
-                return Vec::new();
-            }
-            vec![(0..self.n_residuals(b)).map(|i| self.u(i) / 0.01).collect()]
-        }
-    }
-
-    /// A parameter profiled inside each evaluation and held at the base point in the steps'
-    /// columns, its share put back from its own column: the fit ends where the exact columns
-    /// take it, in as many steps, and its errors are the exact ones (those of a fit with the
-    /// inner parameter free, wider than with it held, t and u being correlated).
-    #[test]
-    fn an_inner_parameter_held_in_the_steps_changes_neither_optimum_nor_errors() {
-        let (mut lines, _) = lines();
-        for (b, y) in lines.y.iter_mut().enumerate() {
-            for (i, v) in y.iter_mut().enumerate() {
-                *v += (0.2 + 0.1 * b as f64) * (3.0 * lines.t[i]).sin();
-            }
-        }
-        let fit = |held: bool, explicit: bool| {
-            let problem = Profiled {
-                lines: Lines {
-                    t: lines.t.clone(),
-                    y: lines.y.clone(),
-                },
-                held,
-                explicit,
-            };
-            let own = vec![spec(0.0, -10.0, 10.0); 1 + usize::from(explicit)];
-            // converged well inside the errors compared
-            let tight = Settings {
-                cost_tol: 1e-9,
-                rel_tol: 1e-12,
-                ..settings()
-            };
-            let res = minimize_blocks(&problem, &[spec(0.0, -10.0, 10.0)], &vec![own; 3], &tight);
-            assert!(res.termination.is_converged(), "{:?}", res.termination);
-            res
-        };
-        let held = fit(true, false);
-        let exact = fit(false, false);
-        let free = fit(false, true);
-        let se = free.shared_se(0);
-        for res in [&held, &exact] {
-            assert!(
-                (res.shared[0] - free.shared[0]).abs() < 0.01 * se,
-                "{:?} against {:?} ± {se}",
-                res.shared,
-                free.shared
-            );
-            assert!(
-                (res.shared_se(0) / se - 1.0).abs() < 1e-3,
-                "{} vs {se}",
-                res.shared_se(0)
-            );
-        }
-        // held in the covariance too, k would give the slope the error of a fit with k known
-        // (its three offsets free): smaller
-        let mean = lines.t.iter().sum::<f64>() / lines.t.len() as f64;
-        let sxx: f64 = lines.t.iter().map(|t| ((t - mean) / 0.01).powi(2)).sum();
-        let given_k = 1.0 / (3.0 * sxx).sqrt();
-        assert!(se > 1.05 * given_k, "se {se}, {given_k} given k");
-        // the held columns with the inner parameter's share put back take the exact course
-        assert!(
-            held.iterations <= exact.iterations + 1,
-            "{} iterations held, {} exact",
-            held.iterations,
-            exact.iterations
-        );
     }
 
     /// [`Lines`] with a second shared parameter the residuals do not depend on.

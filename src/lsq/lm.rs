@@ -46,11 +46,6 @@ pub trait Model {
     fn residuals(&self, x: &[f64], out: &mut [f64]);
     /// The normal equations at `x`, where the residuals are `r`, with IRLS weights `w`.
     fn normal(&self, x: &[f64], r: &[f64], w: &[f64]) -> Self::Normal;
-    /// The normal equations the solution's covariance is read from; `normal` unless a model's
-    /// steps take a cheaper Jacobian than the exact one (`block::BlockProblem::step_residuals`).
-    fn final_normal(&self, x: &[f64], r: &[f64], w: &[f64]) -> Self::Normal {
-        self.normal(x, r, w)
-    }
 }
 
 /// Where the residual scale of the Huber weights comes from.
@@ -263,7 +258,7 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
     }
     let scale = scale_of(&r, s.scale);
     huber_weights(&r, s.huber_k * scale, &mut w);
-    let normal = model.final_normal(&x, &r, &w);
+    let normal = model.normal(&x, &r, &w);
     Solution {
         x,
         r,
