@@ -284,8 +284,13 @@ pub fn simulate_pair(
     } else {
         MAX_EVENTS
     };
-    // held together by an attraction (see `hold`)
+    // held together by an attraction (see `PairSim::hold`)
     let mut held = false;
+    let sim = PairSim {
+        model,
+        pair,
+        lr: (l, r),
+    };
     loop {
         #[cfg(test)]
         LOOPS.with(|c| c.set(c.get() + 1));
@@ -293,10 +298,10 @@ pub fn simulate_pair(
         let gap = y[3 * r] - y[3 * l] - two_r;
         let approach = y[3 * l + 1] - y[3 * r + 1];
         if !held && gap <= CONTACT_SLACK * two_r && approach > 0.0 && n_events < max_events {
-            let joined = impact(model, pair, t, &mut y, &mut modes, (l, r), &mut out);
+            let joined = sim.impact(t, &mut y, &mut modes, &mut out);
             n_events += 1;
             if joined {
-                held = hold(model, pair, t, &mut y, &mut modes, (l, r), &mut out);
+                held = sim.hold(t, &mut y, &mut modes, &mut out);
             }
             continue;
         }
@@ -400,17 +405,7 @@ pub fn simulate_pair(
             }
             Some(e) => {
                 let fired = Some((e / 2, e % 2));
-                mode_events(
-                    model,
-                    pair,
-                    t,
-                    &mut y,
-                    &mut modes,
-                    (l, r),
-                    held,
-                    fired,
-                    &mut out,
-                );
+                sim.mode_events(t, &mut y, &mut modes, held, fired, &mut out);
                 if held {
                     // the event's projection moved one particle's speed: both take it
                     let i = e / 2;
@@ -441,67 +436,146 @@ fn note_switch(traj: &mut Trajectory, t_s: f64, from: Mode, to: Mode, y: &[f64; 
     }
 }
 
-/// The force each particle sees in its mode's events at `y`: the pair force, or for a held pair
-/// the attraction and the contact's normal force (and a rolling hold its spin friction).
-fn seen_ext(
-    model: &Model,
-    pair: &PairParams,
-    y: &[f64; 7],
-    modes: [Mode; 2],
-    (l, r): (usize, usize),
-    held: bool,
-) -> [f64; 2] {
-    if held {
-        let hd = pair.held(model, modes, y, (l, r));
-        [hd.seen(0, modes[0], model), hd.seen(1, modes[1], model)]
-    } else {
-        pair.ext(y, (l, r))
-    }
+/// What stays fixed through one pair's simulation: the physics, the pair's parameters, and which
+/// particle is at lower z (`lr.0`) and which at higher (`lr.1`), an order that never changes.
+#[derive(Clone, Copy)]
+struct PairSim<'a> {
+    model: &'a Model,
+    pair: &'a PairParams,
+    lr: (usize, usize),
 }
 
-/// Apply the mode event `fired` (particle, event) at time `t`, then any other mode event whose
-/// function is already below zero there: `advance` stops at one event, and a function already
-/// past zero would not fire again.
-#[allow(clippy::too_many_arguments)]
-fn mode_events(
-    model: &Model,
-    pair: &PairParams,
-    t: f64,
-    y: &mut [f64; 6],
-    modes: &mut [Mode; 2],
-    lr: (usize, usize),
-    held: bool,
-    fired: Option<(usize, usize)>,
-    out: &mut PairTrajectory,
-) {
-    let mut switch = |y: &mut [f64; 6], modes: &mut [Mode; 2], i: usize, k: usize| {
-        let ext = seen_ext(model, pair, &with_t(y, t), *modes, lr, held);
-        let yi = [y[3 * i], y[3 * i + 1], y[3 * i + 2]];
-        let (m, y_new) = modes[i].after_event(model, k, &yi, t, ext[i]);
-        note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
-        modes[i] = m;
-        y[3 * i..3 * i + 3].copy_from_slice(&y_new);
-    };
-    if let Some((i, k)) = fired {
-        switch(y, modes, i, k);
-    }
-    // free, only the other particle's event at the same time (a force in time starting both at
-    // rest at once); held, each switch moves the normal force both particles see
-    let (passes, whose) = match fired {
-        Some((i, _)) if !held => (1, [1 - i, 1 - i]),
-        _ => (4, [0, 1]),
-    };
-    for _ in 0..passes {
-        let ext = seen_ext(model, pair, &with_t(y, t), *modes, lr, held);
-        let due = whose.into_iter().find_map(|j| {
-            let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
-            let ej = modes[j].events(model, &yj, t, ext[j]);
-            (0..ej.len()).find(|&k| ej[k] < 0.0).map(|k| (j, k))
-        });
-        match due {
-            Some((j, k)) if Some((j, k)) != fired => switch(y, modes, j, k),
-            _ => break,
+impl PairSim<'_> {
+    /// The force each particle sees in its mode's events at `y`: the pair force, or for a held
+    /// pair the attraction and the contact's normal force (and a rolling hold its spin friction).
+    fn seen_ext(&self, y: &[f64; 7], modes: [Mode; 2], held: bool) -> [f64; 2] {
+        let model = self.model;
+        if held {
+            let hd = self.pair.held(model, modes, y, self.lr);
+            [hd.seen(0, modes[0], model), hd.seen(1, modes[1], model)]
+        } else {
+            self.pair.ext(y, self.lr)
         }
+    }
+
+    /// Apply the mode event `fired` (particle, event) at time `t`, then any other mode event
+    /// whose function is already below zero there: `advance` stops at one event, and a function
+    /// already past zero would not fire again.
+    fn mode_events(
+        &self,
+        t: f64,
+        y: &mut [f64; 6],
+        modes: &mut [Mode; 2],
+        held: bool,
+        fired: Option<(usize, usize)>,
+        out: &mut PairTrajectory,
+    ) {
+        let model = self.model;
+        let mut switch = |y: &mut [f64; 6], modes: &mut [Mode; 2], i: usize, k: usize| {
+            let ext = self.seen_ext(&with_t(y, t), *modes, held);
+            let yi = [y[3 * i], y[3 * i + 1], y[3 * i + 2]];
+            let (m, y_new) = modes[i].after_event(model, k, &yi, t, ext[i]);
+            note_switch(&mut out.particles[i], t, modes[i], m, &y_new);
+            modes[i] = m;
+            y[3 * i..3 * i + 3].copy_from_slice(&y_new);
+        };
+        if let Some((i, k)) = fired {
+            switch(y, modes, i, k);
+        }
+        // free, only the other particle's event at the same time (a force in time starting both at
+        // rest at once); held, each switch moves the normal force both particles see
+        let (passes, whose) = match fired {
+            Some((i, _)) if !held => (1, [1 - i, 1 - i]),
+            _ => (4, [0, 1]),
+        };
+        for _ in 0..passes {
+            let ext = self.seen_ext(&with_t(y, t), *modes, held);
+            let due = whose.into_iter().find_map(|j| {
+                let yj = [y[3 * j], y[3 * j + 1], y[3 * j + 2]];
+                let ej = modes[j].events(model, &yj, t, ext[j]);
+                (0..ej.len()).find(|&k| ej[k] < 0.0).map(|k| (j, k))
+            });
+            match due {
+                Some((j, k)) if Some((j, k)) != fired => switch(y, modes, j, k),
+                _ => break,
+            }
+        }
+    }
+
+    /// After an impact that ended the cascade (the pair at one speed, touching): whether an
+    /// attraction holds the two together from here, and if so the pair set on that motion, 2R
+    /// apart, each particle's mode settled under the contact's normal force. Without an
+    /// attraction at contact, or where the contact would already pull, the two go on free.
+    fn hold(
+        &self,
+        t: f64,
+        y: &mut [f64; 6],
+        modes: &mut [Mode; 2],
+        out: &mut PairTrajectory,
+    ) -> bool {
+        let (model, pair, (l, r)) = (self.model, self.pair, self.lr);
+        if pair.contact_attraction().is_none()
+            || pair.held(model, *modes, &with_t(y, t), (l, r)).normal < 0.0
+        {
+            return false;
+        }
+        let two_r = 2.0 * pair.radius_m;
+        let mid = 0.5 * (y[3 * l] + y[3 * r]);
+        y[3 * l] = mid - 0.5 * two_r;
+        y[3 * r] = mid + 0.5 * two_r;
+        self.mode_events(t, y, modes, true, None, out);
+        share_speed(model, y, *modes, l, (l, r), two_r);
+        true
+    }
+
+    /// Resolve one impact in place: new velocities, spins and modes of both particles. True when
+    /// it ends the cascade (the pair moves on together).
+    fn impact(
+        &self,
+        t_s: f64,
+        y: &mut [f64; 6],
+        modes: &mut [Mode; 2],
+        out: &mut PairTrajectory,
+    ) -> bool {
+        let (model, pair, (l, r)) = (self.model, self.pair, self.lr);
+        let pre = [state_of(y, 0), state_of(y, 1)];
+        let v = [y[3 * l + 1], y[3 * r + 1]];
+        let va = [y[3 * l + 2], y[3 * r + 2]];
+        let approach = v[0] - v[1];
+        let joined = approach < V_TOGETHER_MPS || out.impacts.len() >= MAX_IMPACTS;
+        let (c, slip, v_new, va_new) = if joined {
+            let vm = 0.5 * (v[0] + v[1]);
+            let vam = 0.5 * (va[0] + va[1]);
+            (0.0, false, [vm, vm], [vam, vam])
+        } else {
+            let c = pair.restitution.at(approach);
+            let kick = collide(v, va, c, pair.mu_pp_at(va[0] + va[1]), model.groove.k);
+            (c, kick.slip, kick.v, kick.va)
+        };
+        for (idx, p) in [l, r].into_iter().enumerate() {
+            y[3 * p + 1] = v_new[idx];
+            y[3 * p + 2] = va_new[idx];
+        }
+        // the mode each particle starts in (a pair that goes on held together is settled again by
+        // `hold`)
+        let ext = pair.ext(y, (l, r));
+        for (idx, p) in [l, r].into_iter().enumerate() {
+            let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx], t_s, ext[p]);
+            let from = modes[p];
+            note_switch_phase(&mut out.particles[p], t_s, from, m, &yi);
+            modes[p] = m;
+            y[3 * p..3 * p + 3].copy_from_slice(&yi);
+        }
+        out.impacts.push(Impact {
+            t_s,
+            v_impact_mps: approach,
+            restitution: c,
+            slip,
+            joined,
+            pre,
+            post: [state_of(y, 0), state_of(y, 1)],
+        });
+        joined
     }
 }
 
@@ -526,84 +600,6 @@ fn share_speed(
     let mid = 0.5 * (y[3 * l] + y[3 * r]);
     y[3 * l] = mid - 0.5 * two_r;
     y[3 * r] = mid + 0.5 * two_r;
-}
-
-/// After an impact that ended the cascade (the pair at one speed, touching): whether an
-/// attraction holds the two together from here, and if so the pair set on that motion, 2R apart,
-/// each particle's mode settled under the contact's normal force. Without an attraction at
-/// contact, or where the contact would already pull, the two go on free.
-fn hold(
-    model: &Model,
-    pair: &PairParams,
-    t: f64,
-    y: &mut [f64; 6],
-    modes: &mut [Mode; 2],
-    (l, r): (usize, usize),
-    out: &mut PairTrajectory,
-) -> bool {
-    if pair.contact_attraction().is_none()
-        || pair.held(model, *modes, &with_t(y, t), (l, r)).normal < 0.0
-    {
-        return false;
-    }
-    let two_r = 2.0 * pair.radius_m;
-    let mid = 0.5 * (y[3 * l] + y[3 * r]);
-    y[3 * l] = mid - 0.5 * two_r;
-    y[3 * r] = mid + 0.5 * two_r;
-    mode_events(model, pair, t, y, modes, (l, r), true, None, out);
-    share_speed(model, y, *modes, l, (l, r), two_r);
-    true
-}
-
-/// Resolve one impact in place: new velocities, spins and modes of both particles. True when it
-/// ends the cascade (the pair moves on together).
-fn impact(
-    model: &Model,
-    pair: &PairParams,
-    t_s: f64,
-    y: &mut [f64; 6],
-    modes: &mut [Mode; 2],
-    (l, r): (usize, usize),
-    out: &mut PairTrajectory,
-) -> bool {
-    let pre = [state_of(y, 0), state_of(y, 1)];
-    let v = [y[3 * l + 1], y[3 * r + 1]];
-    let va = [y[3 * l + 2], y[3 * r + 2]];
-    let approach = v[0] - v[1];
-    let joined = approach < V_TOGETHER_MPS || out.impacts.len() >= MAX_IMPACTS;
-    let (c, slip, v_new, va_new) = if joined {
-        let vm = 0.5 * (v[0] + v[1]);
-        let vam = 0.5 * (va[0] + va[1]);
-        (0.0, false, [vm, vm], [vam, vam])
-    } else {
-        let c = pair.restitution.at(approach);
-        let kick = collide(v, va, c, pair.mu_pp_at(va[0] + va[1]), model.groove.k);
-        (c, kick.slip, kick.v, kick.va)
-    };
-    for (idx, p) in [l, r].into_iter().enumerate() {
-        y[3 * p + 1] = v_new[idx];
-        y[3 * p + 2] = va_new[idx];
-    }
-    // the mode each particle starts in (a pair that goes on held together is settled again by
-    // `hold`)
-    let ext = pair.ext(y, (l, r));
-    for (idx, p) in [l, r].into_iter().enumerate() {
-        let (m, yi) = start(model, y[3 * p], v_new[idx], va_new[idx], t_s, ext[p]);
-        let from = modes[p];
-        note_switch_phase(&mut out.particles[p], t_s, from, m, &yi);
-        modes[p] = m;
-        y[3 * p..3 * p + 3].copy_from_slice(&yi);
-    }
-    out.impacts.push(Impact {
-        t_s,
-        v_impact_mps: approach,
-        restitution: c,
-        slip,
-        joined,
-        pre,
-        post: [state_of(y, 0), state_of(y, 1)],
-    });
-    joined
 }
 
 fn note_switch_phase(traj: &mut Trajectory, t_s: f64, from: Mode, to: Mode, y: &[f64; 3]) {
