@@ -4,8 +4,8 @@
 //! the rest of what the single runs accepted acts as accepted, read back from the findings by
 //! their forms (`forms::in_the_lab`: a drag's slope or quadratic part, a resistance, the tilt,
 //! forces fixed in z, a vibration locked to the kick, the friction's variation along the groove,
-//! by direction or by slip speed), while a force in time with its own phase in each run, whose phase in a collision run
-//! nothing gives, leaves the pairs untested (said in a note). A Wald
+//! by direction or by slip speed), while a force in time with its own phase in each run, whose
+//! phase in a collision run nothing gives, leaves the pairs untested (said in a note). A Wald
 //! χ² of the pairs' (μ_pg, T0, T') against the single runs' values, with both sets of errors
 //! (3 degrees of freedom, Holm over materials, α = 0.01), says whether the pairs move under
 //! physics the single runs do not share, when the difference is also large enough to be physics
@@ -1009,6 +1009,14 @@ mod tests {
         assert!(why.contains("velocity-dependent friction"), "{why}");
         let missing = OwnValues::of(&BTreeMap::new(), "316").unwrap_err();
         assert!(missing.contains("no mu_316"), "{missing}");
+        // a saturating drag whose finding lost its slope is not carried as a linear drag
+        let no_slope = finding_of(
+            &SaturatingDrag,
+            "velocity_dependent_drag",
+            &[("t0_s_316", 0.061)],
+        );
+        let why = single_run_physics(&own, &in_the_lab([&no_slope]), Groove::CHAPTER).unwrap_err();
+        assert!(why.contains("no slope"), "{why}");
     }
 
     fn wave_finding() -> Finding {
