@@ -398,10 +398,8 @@ pub fn simulate_pair(
             // the contact's normal force reached zero: the particles part
             Some(4) if held => held = false,
             Some(4) => {
-                // touching: put them exactly 2R apart about their centre, then the impact fires
-                let mid = 0.5 * (y[3 * l] + y[3 * r]);
-                y[3 * l] = mid - 0.5 * two_r;
-                y[3 * r] = mid + 0.5 * two_r;
+                // touching: put them exactly 2R apart, then the impact fires
+                touch(&mut y, (l, r), two_r);
             }
             Some(e) => {
                 let fired = Some((e / 2, e % 2));
@@ -520,9 +518,7 @@ impl PairSim<'_> {
             return false;
         }
         let two_r = 2.0 * pair.radius_m;
-        let mid = 0.5 * (y[3 * l] + y[3 * r]);
-        y[3 * l] = mid - 0.5 * two_r;
-        y[3 * r] = mid + 0.5 * two_r;
+        touch(y, (l, r), two_r);
         self.mode_events(t, y, modes, true, None, out);
         share_speed(model, y, *modes, l, (l, r), two_r);
         true
@@ -597,6 +593,11 @@ fn share_speed(
         Mode::Rest => y[3 * j + 2] = 0.0,
         _ => {}
     }
+    touch(y, (l, r), two_r);
+}
+
+/// Puts the particles of state `y` (`l` at lower z) exactly `two_r` apart, about their centre.
+fn touch(y: &mut [f64; 6], (l, r): (usize, usize), two_r: f64) {
     let mid = 0.5 * (y[3 * l] + y[3 * r]);
     y[3 * l] = mid - 0.5 * two_r;
     y[3 * r] = mid + 0.5 * two_r;
