@@ -9,6 +9,8 @@
 #        tests/bench/discovery_bed.sh --quick          # three small datasets (minutes)
 #        tests/bench/discovery_bed.sh --from 0 --to 40 # a chunk; rerun to resume
 #        tests/bench/discovery_bed.sh --table          # the tables of the results so far
+#        tests/bench/discovery_bed.sh --from 200 --to 264 --results fresh.jsonl
+#                                                      # draws beyond the set: never tuned on
 # Options: --results FILE (default $CARGO_TARGET_DIR/discovery_bed/results[-quick].jsonl),
 #          --work DIR (scratch folders), --keep (keep each dataset and its reports).
 #          GROOVE_BIN=path skips the release build.
