@@ -163,7 +163,8 @@ impl Effect {
     /// The largest size the experiment makes plausible, where a calibration bounds it: a length
     /// scale or a time base off by more than 5 %, or a distortion of more than 10 % at the image's
     /// edge, would be seen by anyone who calibrates the camera; a friction that falls with slip
-    /// speed is at most twice its sliding value at rest (static against kinetic friction).
+    /// speed is at most twice its sliding value at rest (static against kinetic friction); a
+    /// patch of friction changes it by half at most.
     /// On single runs the scale and the
     /// time base are μ, T, z0 and v0 over again, so their detection limit may lie beyond it;
     /// the dataset then carries the effect below its limit (its multiple says so).
@@ -172,6 +173,10 @@ impl Effect {
             "scale" | "time_base" => 0.05,
             "distortion" => 0.1,
             "mu_slip_falling" => 1.0,
+            // a patch that changes the sliding friction by more than half of itself is another
+            // groove; where the runs barely slide over the patch the size search ran off to a
+            // change of 10⁵ and more (beyond the full set: 217, 249)
+            "mu_patch" => 0.15,
             _ => f64::INFINITY,
         }
     }
