@@ -64,7 +64,8 @@
 //!    AR(1), beside a white part when the runs' lag 2 asks for one — and its outliers come from
 //!    what a sliding local cubic leaves; a noise growing with speed, shared by the dataset, from
 //!    the same: `blur.rs`; a slow drift of the tracker, shared by the
-//!    dataset, from the runs' own fits under each round's model: `slow_noise.rs`). A joint model shares μ and T per material and
+//!    dataset, from the runs' own fits under each round's model, leaving out the few runs it
+//!    cannot explain: `slow_noise.rs`). A joint model shares μ and T per material and
 //!    any accepted terms over all runs, with z0, t0, v0 per run. Its residuals, projected off each
 //!    run's z0, t0, v0, are regressed on each run's linear response to extra forces
 //!    (`response.rs`): a force map against lab z, signed v, time since the kick and the phase
