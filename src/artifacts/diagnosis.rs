@@ -165,6 +165,12 @@ pub struct TrackingBlur {
 pub struct TrackingDrift {
     pub variance_ratio: f64,
     pub time_constant_s: f64,
+    /// Runs it was measured on, and of those left out of its estimate because their wander is
+    /// beyond what a drift shared by the runs explains (they still carry it).
+    #[serde(default)]
+    pub runs: usize,
+    #[serde(default)]
+    pub runs_left_out: usize,
 }
 
 /// Force maps of the baseline and of the final model.

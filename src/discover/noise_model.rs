@@ -54,6 +54,9 @@ impl Fast {
 pub struct Slow {
     pub kappa: f64,
     pub rho: f64,
+    /// Runs left out of its estimate: their wander is beyond what a drift shared by the runs
+    /// explains (`slow_noise::estimate`); they still carry it.
+    pub left_out: usize,
 }
 
 /// One run's whole noise model (noise units).
@@ -209,6 +212,7 @@ mod tests {
         let slow = Slow {
             kappa: 2.0,
             rho: 0.97,
+            left_out: 0,
         };
         for (fast, slow, scale) in [
             (Fast::ar1(0.4), slow, &[][..]),

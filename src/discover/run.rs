@@ -564,6 +564,8 @@ fn tracking_drift(runs: &[RunData]) -> Option<crate::artifacts::diagnosis::Track
     (slow.kappa > 0.0).then(|| crate::artifacts::diagnosis::TrackingDrift {
         variance_ratio: slow.kappa,
         time_constant_s: -1.0 / slow.rho.ln() / median(runs.iter().map(|r| r.fps).collect()),
+        runs: runs.len(),
+        runs_left_out: slow.left_out,
     })
 }
 

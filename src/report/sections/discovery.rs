@@ -661,8 +661,18 @@ pub fn block(d: &ReportData, figs: &BTreeMap<String, String>) -> Block {
 /// tested it.
 /// The slow drift of the tracking noise in words: a measurement, not physics, and what it costs.
 fn tracking_drift_text(t: &crate::artifacts::diagnosis::TrackingDrift) -> String {
+    let on = if t.runs_left_out == 0 {
+        "the runs' own fits".to_string()
+    } else {
+        format!(
+            "the own fits of {} of the {} runs (the other {} wander beyond what a drift shared by the runs explains: a misfit of theirs, not the tracker's, and they carry the drift measured on the others)",
+            t.runs - t.runs_left_out.min(t.runs),
+            t.runs,
+            t.runs_left_out
+        )
+    };
     format!(
-        "The tracking noise also drifts slowly: a part of {:.2}× the variance of each run's frame-scale noise, correlated over {:.1} ms, measured on the runs' own fits under the final model. Every test's null carries it, so it is reported as noise, not physics, and it raises the detection limits of slow shapes (drags, a distortion, differences between particles).",
+        "The tracking noise also drifts slowly: a part of {:.2}× the variance of each run's frame-scale noise, correlated over {:.1} ms, measured on {on} under the final model. Every test's null carries it, so it is reported as noise, not physics, and it raises the detection limits of slow shapes (drags, a distortion, differences between particles).",
         t.variance_ratio,
         1e3 * t.time_constant_s
     )
@@ -719,13 +729,21 @@ mod tests {
 
     #[test]
     fn a_slow_drift_of_the_tracking_noise_is_said_as_noise_with_its_size() {
-        let t = crate::artifacts::diagnosis::TrackingDrift {
+        let mut t = crate::artifacts::diagnosis::TrackingDrift {
             variance_ratio: 1.2197,
             time_constant_s: 0.0128,
+            runs: 60,
+            runs_left_out: 0,
         };
         let text = super::tracking_drift_text(&t);
         assert!(text.contains("1.22×") && text.contains("12.8 ms"), "{text}");
         assert!(text.contains("noise, not physics"), "{text}");
+        assert!(text.contains("the runs' own fits"), "{text}");
+        // runs left out of the estimate are said, with how many it was measured on
+        t.runs_left_out = 4;
+        let text = super::tracking_drift_text(&t);
+        assert!(text.contains("56 of the 60 runs"), "{text}");
+        assert!(text.contains("the other 4 wander"), "{text}");
     }
 
     #[test]
