@@ -665,7 +665,7 @@ fn tracking_drift_text(t: &crate::artifacts::diagnosis::TrackingDrift) -> String
         "the runs' own fits".to_string()
     } else {
         format!(
-            "the own fits of {} of the {} runs (the other {} wander beyond what a drift shared by the runs explains: a misfit of theirs, not the tracker's, and they carry the drift measured on the others)",
+            "the own fits of {} of the {} runs (the other {} wander beyond what a drift shared by the runs explains, so their wander is not read as the tracker's; they carry the drift measured on the others)",
             t.runs - t.runs_left_out.min(t.runs),
             t.runs,
             t.runs_left_out
