@@ -274,20 +274,48 @@ mod tests {
         assert!(kept <= 3, "{kept} of 40 null datasets kept a slow noise");
     }
 
+    /// The first `count` runs given a slow misfit of a hundred noise units (a run whose motion
+    /// its own fit cannot follow), with the fit's columns projected out of it.
+    fn wander_in_first(runs: &mut [Series], count: usize) {
+        for (r, s) in runs.iter_mut().take(count).enumerate() {
+            let n = s.y.len();
+            let mut wander: Vec<f64> = (0..n)
+                .map(|i| 100.0 * (3.0 * (i as f64 / n as f64) + r as f64).sin())
+                .collect();
+            project_out(&orthonormal_basis(s.cols.clone()), &mut wander);
+            s.y.iter_mut().zip(&wander).for_each(|(y, w)| *y += w);
+        }
+    }
+
+    /// A drift of the white noise's variance over 40 samples (ρ_s = e^(−1/40)).
+    fn drift_truth() -> Slow {
+        Slow {
+            kappa: 1.0,
+            rho: (-1.0f64 / 40.0).exp(),
+            left_out: 0,
+        }
+    }
+
+    /// `s` is `drift_truth` within the estimate's errors.
+    fn assert_drift_read(s: Slow, seed: u64) {
+        // the grid's time constants are a factor 2 apart
+        let tau = -1.0 / s.rho.ln();
+        assert!((16.0..=128.0).contains(&tau), "seed {seed}: τ {tau}");
+        // κ traded against τ along the grid: the variance within a factor 2.5
+        assert!(
+            (0.4..2.5).contains(&s.kappa),
+            "seed {seed}: κ {} at τ {tau}",
+            s.kappa
+        );
+    }
+
     #[test]
     fn a_wander_in_a_few_runs_is_not_the_trackers_drift() {
         // 3 runs of 30 carry a slow misfit of a hundred noise units (a run the model cannot
         // follow); the others are the fast noise alone
         for seed in 0..5 {
             let mut runs = dataset(30, 400, Slow::default(), 200 + seed);
-            for (r, s) in runs.iter_mut().take(3).enumerate() {
-                let n = s.y.len();
-                let mut wander: Vec<f64> = (0..n)
-                    .map(|i| 100.0 * (3.0 * (i as f64 / n as f64) + r as f64).sin())
-                    .collect();
-                project_out(&orthonormal_basis(s.cols.clone()), &mut wander);
-                s.y.iter_mut().zip(&wander).for_each(|(y, w)| *y += w);
-            }
+            wander_in_first(&mut runs, 3);
             let (slow, lr) = estimate(&runs);
             assert_eq!(
                 slow.kappa, 0.0,
@@ -301,41 +329,19 @@ mod tests {
     fn a_drift_beside_a_few_wandering_runs_is_measured_on_the_others() {
         // the drift of the test below in every run, and in 3 runs of 40 a misfit of a hundred
         // noise units: those 3 are left out, and the drift is read within the same errors
-        let truth = Slow {
-            kappa: 1.0,
-            rho: (-1.0f64 / 40.0).exp(),
-            left_out: 0,
-        };
+        let truth = drift_truth();
         for seed in 0..5 {
             let mut runs = dataset(40, 500, truth, 300 + seed);
-            for (r, s) in runs.iter_mut().take(3).enumerate() {
-                let n = s.y.len();
-                let mut wander: Vec<f64> = (0..n)
-                    .map(|i| 100.0 * (3.0 * (i as f64 / n as f64) + r as f64).sin())
-                    .collect();
-                project_out(&orthonormal_basis(s.cols.clone()), &mut wander);
-                s.y.iter_mut().zip(&wander).for_each(|(y, w)| *y += w);
-            }
+            wander_in_first(&mut runs, 3);
             let (s, _) = estimate(&runs);
             assert_eq!(s.left_out, 3, "seed {seed}: {} runs left out", s.left_out);
-            let tau = -1.0 / s.rho.ln();
-            assert!((16.0..=128.0).contains(&tau), "seed {seed}: τ {tau}");
-            assert!(
-                (0.4..2.5).contains(&s.kappa),
-                "seed {seed}: κ {} at τ {tau}",
-                s.kappa
-            );
+            assert_drift_read(s, seed);
         }
     }
 
     #[test]
     fn a_slow_drift_is_measured_within_its_errors() {
-        // a drift of the white noise's variance over 40 samples (ρ_s = e^(−1/40))
-        let truth = Slow {
-            kappa: 1.0,
-            rho: (-1.0f64 / 40.0).exp(),
-            left_out: 0,
-        };
+        let truth = drift_truth();
         for seed in 0..5 {
             let (s, lr) = estimate(&dataset(40, 500, truth, 100 + seed));
             assert!(lr > 50.0, "seed {seed}: lr {lr}");
@@ -343,15 +349,7 @@ mod tests {
                 s.left_out, 0,
                 "seed {seed}: a run of the drift itself left out"
             );
-            // the grid's time constants are a factor 2 apart
-            let tau = -1.0 / s.rho.ln();
-            assert!((16.0..=128.0).contains(&tau), "seed {seed}: τ {tau}");
-            // κ traded against τ along the grid: the variance within a factor 2.5
-            assert!(
-                (0.4..2.5).contains(&s.kappa),
-                "seed {seed}: κ {} at τ {tau}",
-                s.kappa
-            );
+            assert_drift_read(s, seed);
         }
     }
 }
