@@ -171,6 +171,10 @@ pub struct TrackingDrift {
     pub runs: usize,
     #[serde(default)]
     pub runs_left_out: usize,
+    /// The band of frequencies (Hz) left out of its estimate for a line that no drift's spectrum
+    /// has, shared by the runs with a phase of their own; (0, 0) when none.
+    #[serde(default)]
+    pub line_hz: (f64, f64),
 }
 
 /// Force maps of the baseline and of the final model.

@@ -282,6 +282,9 @@ struct Trials<'r> {
     pair: Option<(usize, Model, f64)>,
     /// A searched form that passed alone and gave way to the pair.
     displaced: Option<usize>,
+    /// A form with a phase per run whose phases gather about one value, and the chance of
+    /// that under phases of their own (`prefer_locked`): its form with one phase is named.
+    locked: Option<(usize, f64)>,
     /// The pair is a named term and a searched form that passed alone, started again beside it.
     beside_form: bool,
 }
@@ -688,6 +691,59 @@ impl Trials<'_> {
         }
     }
 
+    /// A force with a phase per run whose fitted phases gather about one value (Rayleigh's test
+    /// beyond α) is locked to the kick: its form with one phase for every run is named where that
+    /// passes both tests. Each run's phase absorbs the error of its own kick time (t0), which a
+    /// sliding run's parabola hardly fixes, so held-out runs may prefer the phases per run
+    /// though they are one cause; phases of their own in every run never gather beyond chance.
+    fn prefer_locked(&mut self, order: &[usize]) {
+        let Some((b, _)) = self.best.clone() else {
+            return;
+        };
+        if self.pair.is_some() || !self.all[b].run_phase() {
+            return;
+        }
+        let m = &self.fitted[b];
+        let phases: Vec<f64> = self
+            .set
+            .runs
+            .par_iter()
+            .enumerate()
+            .filter_map(|(r, run)| {
+                let sim = m
+                    .spec
+                    .sim_model(&m.fit.global, run.material, m.fit.local[r][2]);
+                let (idx, amp, _) = super::timeforce::time_term(&sim)?;
+                (amp != 0.0).then(|| {
+                    super::timeforce::best_phase(&super::timeforce::run_sums(
+                        &sim,
+                        idx,
+                        &m.fit.local[r],
+                        run,
+                    ))
+                })
+            })
+            .collect();
+        let p = super::timeforce::phases_uniform_p(&phases);
+        if p >= self.set.opts.alpha {
+            return;
+        }
+        let effect = self.all[b].effect();
+        for &j in order {
+            if j == b || j >= self.cv_of.len() {
+                continue;
+            }
+            if self.all[j].effect() == effect && !self.all[j].run_phase() {
+                let (passes, cv) = self.check(j);
+                if passes {
+                    self.best = Some((j, cv));
+                    self.locked = Some((b, p));
+                    return;
+                }
+            }
+        }
+    }
+
     /// Of two representations that predict held-out runs equally well, the simpler is named; a
     /// representation explains as much only if its statistic is comparable.
     fn prefer_simpler(&mut self, order: &[usize], lr: &[f64]) {
@@ -723,6 +779,8 @@ fn tied(tr: &Trials, ne: usize) -> Vec<(usize, f64)> {
     }
     (0..ne)
         .filter(|&j| j != *b && tr.refused[j].is_none())
+        // the phases per run that gather about one value are said as such, not as a tie
+        .filter(|&j| tr.locked.is_none_or(|l| l.0 != j))
         .filter_map(|j| {
             let (cv, t_base) = tr.cv_of[j].as_ref()?;
             let passes = tr.improves(cv, *t_base);
@@ -751,6 +809,13 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
         }
         ev.cv_paired_t = Some(*t);
         ev.cv_rms_m = Some(cv.cv_rms_m);
+        if let Some((_, p)) = tr.locked.filter(|l| l.0 == i) {
+            let one = tr.best.as_ref().map(|(b, _)| tr.all[*b].form());
+            return format!(
+                "passes both tests, but its phases gather about one value (p = {p:.2e} were each run's its own): the force is locked to the kick, and {} is named instead",
+                one.unwrap_or_default()
+            );
+        }
         if tr.displaced == Some(i) {
             return "passes both tests, but two named terms fitted together predict held-out runs as well with fixed shapes: they are named instead".into();
         }
@@ -842,12 +907,14 @@ pub fn run_round(
         best: None,
         pair: None,
         displaced: None,
+        locked: None,
         beside_form: false,
     };
     tr.strongest(&order);
     trace("fitted and cross-validated the strongest");
     tr.prefer_richer(&order, &sc.lr);
     tr.prefer_simpler(&order, &sc.lr);
+    tr.prefer_locked(&order);
     trace("cross-validated");
     if set.pairs_allowed {
         tr.pairs(&order, &sc.lr);

@@ -57,7 +57,8 @@
 //!    - the **measurement**: a distortion of positions across the image, which changes no
 //!      dynamics (a length scale or a time base is μ, T, z0, v0 over again on single runs);
 //!    - **differences between particles**: μ and T scattering from run to run beyond their errors
-//!      with nothing missing from the equations (`particles.rs`), tested after the terms.
+//!      with nothing missing from the equations (`particles.rs`), tested after the terms
+//!      against the slow drift at the long end of what the data allow.
 //!
 //!    Every place's forms compete in one screen, so the data decide the place, not an order.
 //! 2. **Map.** Each single run is fitted alone (its noise level, its fast noise's shape — an
@@ -65,7 +66,7 @@
 //!    what a sliding local cubic leaves; a noise growing with speed, shared by the dataset, from
 //!    the same: `blur.rs`; a slow drift of the tracker, shared by the
 //!    dataset, from the runs' own fits under each round's model, leaving out the few runs it
-//!    cannot explain: `slow_noise.rs`). A joint model shares μ and T per material and
+//!    cannot explain and a line in its spectrum, which no drift has: `slow_noise.rs`). A joint model shares μ and T per material and
 //!    any accepted terms over all runs, with z0, t0, v0 per run. Its residuals, projected off each
 //!    run's z0, t0, v0, are regressed on each run's linear response to extra forces
 //!    (`response.rs`): a force map against lab z, signed v, time since the kick and the phase

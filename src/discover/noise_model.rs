@@ -57,6 +57,30 @@ pub struct Slow {
     /// Runs left out of its estimate: their wander is beyond what a drift shared by the runs
     /// explains (`slow_noise::estimate`); they still carry it.
     pub left_out: usize,
+    /// The band of frequencies (cycles per kept sample) left out of its estimate for a line no
+    /// drift's spectrum has (`slow_noise::estimate`); (0, 0) when none.
+    pub line: (f64, f64),
+    /// (κ, ρ_s) at the long end of its 99 % confidence set, where the variance at the lowest
+    /// frequencies (κτ) is largest; (0, 0) when none. Its probes have each run's fit's columns
+    /// projected out, so what a run's own μ and T collect from the drift is read from the AR(1)'s
+    /// shape, not seen: a test whose statistic lies in those columns alone (`particles.rs`)
+    /// takes this end (`Slow::cautious`).
+    pub upper: (f64, f64),
+}
+
+impl Slow {
+    /// This noise at the long end of its confidence set (itself when that is not known).
+    pub fn cautious(self) -> Slow {
+        if self.upper.0 > 0.0 {
+            Slow {
+                kappa: self.upper.0,
+                rho: self.upper.1,
+                ..self
+            }
+        } else {
+            self
+        }
+    }
 }
 
 /// One run's whole noise model (noise units).
@@ -212,7 +236,7 @@ mod tests {
         let slow = Slow {
             kappa: 2.0,
             rho: 0.97,
-            left_out: 0,
+            ..Slow::default()
         };
         for (fast, slow, scale) in [
             (Fast::ar1(0.4), slow, &[][..]),

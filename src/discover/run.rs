@@ -561,11 +561,13 @@ pub fn discover_reporting(
 /// The slow tracking noise the runs carry, its correlation time at their median frame rate.
 fn tracking_drift(runs: &[RunData]) -> Option<crate::artifacts::diagnosis::TrackingDrift> {
     let slow = runs.first()?.slow;
+    let fps = median(runs.iter().map(|r| r.fps).collect());
     (slow.kappa > 0.0).then(|| crate::artifacts::diagnosis::TrackingDrift {
         variance_ratio: slow.kappa,
-        time_constant_s: -1.0 / slow.rho.ln() / median(runs.iter().map(|r| r.fps).collect()),
+        time_constant_s: -1.0 / slow.rho.ln() / fps,
         runs: runs.len(),
         runs_left_out: slow.left_out,
+        line_hz: (slow.line.0 * fps, slow.line.1 * fps),
     })
 }
 

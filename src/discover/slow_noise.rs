@@ -18,8 +18,15 @@
 //! a few runs whose motion their own fits cannot follow, and read as the tracker's drift it made
 //! every replicate as rough as those runs, so that every test sat inside its null: the runs
 //! whose probes the shared noise cannot explain are left out of the estimate one at a time
-//! (`estimate`; the report says how many). What is
-//! left of a misfit raises κ, which makes every test more cautious, never less.
+//! (`estimate`; the report says how many). A periodic motion with a phase of its own in every
+//! run (a vibration not locked to the kick) is in every run alike, but its spectrum has a line
+//! where a drift's falls with frequency: a bin of the pooled probes standing above its
+//! neighbours and beyond the fitted noise is left out, with the band around it (`line_band`),
+//! and the noise measured on the rest. What is left of a misfit raises κ, which makes every
+//! test more cautious, never less.
+//! The probes never see a run's own μ and T columns, so the drift's variance there is read from
+//! the AR(1)'s shape; the estimate also gives the long end of its 99 % confidence set
+//! (`Slow::upper`), for the test whose statistic lies in those columns alone.
 
 use super::noise_model::{ar1_cross, Fast, RunNoise, Slow};
 use crate::lsq::dense::{orthonormal_basis, project_out};
@@ -32,6 +39,13 @@ const PROBES: usize = 12;
 const RUN_ALPHA: f64 = 1e-3;
 /// Kept samples per probe at least (a run of 60 samples has 6 probes).
 const SAMPLES_PER_PROBE: usize = 10;
+/// The chance, over the number of frequency bins, below which a bin's excess is a line.
+const LINE_ALPHA: f64 = 1e-3;
+/// Lines left out at most.
+const MAX_LINES: usize = 2;
+/// The χ²₁ 1 % point: how far below its best the likelihood ratio of a time constant may lie
+/// for the time constant to stay in the estimate's confidence set (`Slow::upper`).
+const SET_LR: f64 = 6.63;
 
 /// One run as the estimate sees it: its own fit's residual at its kept samples in noise units,
 /// that fit's columns there (any scaling), and its fast noise (its shape and its scale by
@@ -47,6 +61,8 @@ pub struct Series {
 /// model's expectation per unit κ at each trial ρ_s.
 #[derive(Clone)]
 struct Probe {
+    /// Its frequency, in cycles per kept sample.
+    freq: f64,
     obs: f64,
     fast: f64,
     slow: Vec<f64>,
@@ -65,8 +81,32 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// The probes of one run: its slowest cosines with its fit's columns projected out.
-fn probes(s: &Series, rhos: &[f64]) -> Vec<Probe> {
+/// One probe's unit vector (a slow cosine with the run's fit's columns projected out) and what
+/// of it does not depend on the slow noise.
+struct Shape {
+    u: Vec<f64>,
+    freq: f64,
+    obs: f64,
+    fast: f64,
+}
+
+impl Shape {
+    /// The probe with the slow noise's expectation at each of `rhos`.
+    fn probe(&self, rhos: &[f64]) -> Probe {
+        Probe {
+            freq: self.freq,
+            obs: self.obs,
+            fast: self.fast,
+            slow: rhos
+                .iter()
+                .map(|&r| ar1_cross(&self.u, &self.u, r))
+                .collect(),
+        }
+    }
+}
+
+/// The probes' shapes of one run: its slowest cosines with its fit's columns projected out.
+fn shapes(s: &Series) -> Vec<Shape> {
     let n = s.y.len();
     let k_max = PROBES.min(n / SAMPLES_PER_PROBE);
     let q = orthonormal_basis(s.cols.clone());
@@ -87,12 +127,12 @@ fn probes(s: &Series, rhos: &[f64]) -> Vec<Probe> {
                 scale: &s.scale,
             }
             .fast_cross(&u, &u);
-            let slow = rhos.iter().map(|&r| ar1_cross(&u, &u, r)).collect();
             let b = dot(&u, &s.y);
-            Some(Probe {
+            Some(Shape {
+                freq: k as f64 / (2 * n) as f64,
                 obs: b * b,
                 fast,
-                slow,
+                u,
             })
         })
         .collect()
@@ -123,7 +163,7 @@ fn grid_fit(ps: &[Probe], rhos: &[f64]) -> (Slow, f64) {
                 Slow {
                     kappa: s.exp(),
                     rho,
-                    left_out: 0,
+                    ..Slow::default()
                 },
                 lr,
             );
@@ -142,40 +182,23 @@ fn run_p(ps: &[Probe], j: usize, slow: Slow) -> f64 {
     crate::stats::dist::chi2_sf(d, ps.len() as f64)
 }
 
-/// The slow noise of a dataset and its quasi-likelihood ratio against none (0 when none kept).
-///
-/// The tracker's drift is shared by the runs; a wander that only a few runs show is what their
-/// own fits cannot follow, and read as drift it would make
-/// every replicate as rough as those few runs. So, while a slow part is kept, the run least
-/// consistent with it (its probes' Σ obs/E on the χ² of as many probes, beyond
-/// `RUN_ALPHA` over the number of runs) is left out of the estimate and the noise measured
-/// again, a quarter of the runs at most. The runs left out still carry the noise measured on
-/// the others.
-pub fn estimate(series: &[Series]) -> (Slow, f64) {
-    let rhos = trial_rhos();
-    let per_run: Vec<Vec<Probe>> = series.iter().map(|s| probes(s, &rhos)).collect();
+/// The shared noise fitted on the runs marked `used`, leaving out while a slow part is kept the
+/// run least consistent with it: (the noise, its likelihood ratio, the runs used, how many
+/// left out). None when fewer than 8 probes remain.
+fn leave_out_fit(per_run: &[Vec<Probe>], rhos: &[f64]) -> Option<((Slow, f64), Vec<bool>, usize)> {
     let mut used: Vec<bool> = per_run.iter().map(|p| !p.is_empty()).collect();
     let n_runs = used.iter().filter(|u| **u).count();
-    let gathered = |used: &[bool]| -> Vec<Probe> {
-        per_run
-            .iter()
-            .zip(used)
-            .filter(|(_, u)| **u)
-            .flat_map(|(p, _)| p.iter().cloned())
-            .collect()
-    };
-    let mut best;
     let mut left_out = 0;
     loop {
-        let ps = gathered(&used);
+        let ps = gathered(per_run, &used);
         if ps.len() < 8 {
-            return (Slow::default(), 0.0);
+            return None;
         }
-        best = grid_fit(&ps, &rhos);
+        let best = grid_fit(&ps, rhos);
         if best.1 < KEEP_LR || 4 * (left_out + 1) > n_runs {
-            break;
+            return Some((best, used, left_out));
         }
-        let j = rhos.iter().position(|r| *r == best.0.rho).unwrap_or(0);
+        let j = trial_index(rhos, best.0.rho);
         let worst = per_run
             .iter()
             .enumerate()
@@ -183,50 +206,193 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
             .map(|(i, p)| (i, run_p(p, j, best.0)))
             .fold((usize::MAX, 1.0), |b, x| if x.1 < b.1 { x } else { b });
         if worst.0 == usize::MAX || worst.1 >= RUN_ALPHA / n_runs as f64 {
-            break;
+            return Some((best, used, left_out));
         }
         used[worst.0] = false;
         left_out += 1;
     }
+}
+
+/// The probes of the runs marked `used`, in one list.
+fn gathered(per_run: &[Vec<Probe>], used: &[bool]) -> Vec<Probe> {
+    per_run
+        .iter()
+        .zip(used)
+        .filter(|(_, u)| **u)
+        .flat_map(|(p, _)| p.iter().cloned())
+        .collect()
+}
+
+fn trial_index(rhos: &[f64], rho: f64) -> usize {
+    rhos.iter().position(|r| *r == rho).unwrap_or(0)
+}
+
+/// A line in the probes' spectrum: the band of frequencies (cycles per kept sample) around a
+/// bin whose excess over the fitted noise (trial `j`) no drift explains, or None.
+///
+/// The probes of all runs are pooled by frequency into bins of one probe per run. Each bin's
+/// Σ obs over Σ E is a χ² of its effective degrees of freedom, (Σ E)²/Σ E², over them. A drift's
+/// spectrum falls with frequency; a misfit of its shape (a 1/f wander read as an AR(1)) leaves
+/// the excess at the ends of the probed band, highest at the lowest or the highest bin. A line
+/// (a periodic motion with its own phase in every run) leaves it in between, higher than
+/// both neighbours: only such a bin, beyond `LINE_ALPHA` over the number of bins, is a line,
+/// and the band is it and its neighbours on either side while they stay above the fit.
+fn line_band(ps: &[Probe], j: usize, slow: Slow, per_bin: usize) -> Option<(f64, f64)> {
+    let mut sorted: Vec<&Probe> = ps.iter().collect();
+    sorted.sort_by(|a, b| a.freq.total_cmp(&b.freq));
+    let per_bin = per_bin.max(8);
+    let mut bins: Vec<&[&Probe]> = sorted.chunks(per_bin).collect();
+    if bins.len() >= 2 && bins[bins.len() - 1].len() < per_bin / 2 {
+        // a short last chunk joins the one before it
+        let n = bins.len();
+        let start = sorted.len() - bins[n - 2].len() - bins[n - 1].len();
+        bins.truncate(n - 2);
+        bins.push(&sorted[start..]);
+    }
+    if bins.len() < 3 {
+        return None;
+    }
+    // (excess, its chance) per bin
+    let stats: Vec<(f64, f64)> = bins
+        .iter()
+        .map(|b| {
+            let e: Vec<f64> = b
+                .iter()
+                .map(|p| (p.fast + slow.kappa * p.slow[j]).max(1e-300))
+                .collect();
+            let (se, se2) = (e.iter().sum::<f64>(), e.iter().map(|x| x * x).sum::<f64>());
+            let r = b.iter().map(|p| p.obs).sum::<f64>() / se;
+            let d = se * se / se2;
+            (r, crate::stats::dist::chi2_sf(r * d, d))
+        })
+        .collect();
+    let alpha = LINE_ALPHA / bins.len() as f64;
+    let peak = (1..bins.len() - 1)
+        .filter(|&b| stats[b].0 > stats[b - 1].0 && stats[b].0 > stats[b + 1].0)
+        .filter(|&b| stats[b].1 < alpha)
+        .min_by(|&a, &b| stats[a].1.total_cmp(&stats[b].1))?;
+    let (mut lo, mut hi) = (peak, peak);
+    while lo > 0 && stats[lo - 1].0 > 1.0 {
+        lo -= 1;
+    }
+    while hi + 1 < bins.len() && stats[hi + 1].0 > 1.0 {
+        hi += 1;
+    }
+    Some((bins[lo][0].freq, bins[hi][bins[hi].len() - 1].freq))
+}
+
+/// The slow noise of a dataset and its quasi-likelihood ratio against none (0 when none kept).
+///
+/// The tracker's drift is shared by the runs; a wander that only a few runs show is what their
+/// own fits cannot follow, and read as drift it would make every replicate as rough as those
+/// few runs. So, while a slow part is kept, the run least consistent with it (its probes'
+/// Σ obs/E on the χ² of as many probes, beyond `RUN_ALPHA` over the number of runs) is left
+/// out of the estimate and the noise measured again, a quarter of the runs at most. The runs
+/// left out still carry the noise measured on the others.
+///
+/// A periodic motion with a phase of its own in every run is shared by the runs too, but its
+/// spectrum has a line where a drift's falls: a line found (`line_band`) is left out of the
+/// probes and the noise measured again, two lines at most.
+pub fn estimate(series: &[Series]) -> (Slow, f64) {
+    let rhos = trial_rhos();
+    let runs: Vec<Vec<Shape>> = series.iter().map(shapes).collect();
+    let all: Vec<Vec<Probe>> = runs
+        .iter()
+        .map(|r| r.iter().map(|sh| sh.probe(&rhos)).collect())
+        .collect();
+    let mut bands: Vec<(f64, f64)> = Vec::new();
+    let outside = |f: f64, bands: &[(f64, f64)]| !bands.iter().any(|b| (b.0..=b.1).contains(&f));
+    let (mut best, used, left_out) = loop {
+        let per_run: Vec<Vec<Probe>> = all
+            .iter()
+            .map(|ps| {
+                ps.iter()
+                    .filter(|p| outside(p.freq, &bands))
+                    .cloned()
+                    .collect()
+            })
+            .collect();
+        let Some((best, used, left_out)) = leave_out_fit(&per_run, &rhos) else {
+            return (Slow::default(), 0.0);
+        };
+        if best.1 >= KEEP_LR && bands.len() < MAX_LINES {
+            let n_used = used.iter().filter(|u| **u).count();
+            let j = trial_index(&rhos, best.0.rho);
+            if let Some(band) = line_band(&gathered(&per_run, &used), j, best.0, n_used) {
+                bands.push(band);
+                continue;
+            }
+        }
+        break (best, used, left_out);
+    };
+    if best.1 < KEEP_LR {
+        return (Slow::default(), best.1.max(0.0));
+    }
+    let probes_at = |rho: f64| -> Vec<Probe> {
+        runs.iter()
+            .zip(&used)
+            .filter(|(_, u)| **u)
+            .flat_map(|(r, _)| r.iter())
+            .filter(|sh| outside(sh.freq, &bands))
+            .map(|sh| sh.probe(&[rho]))
+            .collect()
+    };
+    let l0 = loglik(&probes_at(rhos[0]), 0, 0.0);
+    // the best κ at a time constant e^ln_tau: (ρ_s, κ, likelihood ratio)
+    let profile = |ln_tau: f64| -> (f64, f64, f64) {
+        let rho = (-1.0 / ln_tau.exp()).exp();
+        let local = probes_at(rho);
+        let f = |s: f64| -loglik(&local, 0, s.exp());
+        let s = crate::lsq::golden::minimize(f, (1e-2f64).ln(), (1e6f64).ln(), 60);
+        (rho, s.exp(), 2.0 * (loglik(&local, 0, s.exp()) - l0))
+    };
+    let tau = |r: f64| -1.0 / r.ln();
     // the grid's time constants are a factor 2 apart, and the variance a smooth column (a run's
     // μ or T) collects from the drift goes as κτ: refine τ between the best one's neighbours
-    if best.1 > 0.0 {
-        let l0 = loglik(&gathered(&used), 0, 0.0);
-        let j = rhos.iter().position(|r| *r == best.0.rho).unwrap_or(0);
-        let tau = |r: f64| -1.0 / r.ln();
-        let lo = tau(rhos[j.saturating_sub(1)]).ln();
-        let hi = tau(rhos[(j + 1).min(rhos.len() - 1)]).ln();
-        let profile = |ln_tau: f64| -> (f64, f64, f64) {
-            let rho = (-1.0 / ln_tau.exp()).exp();
-            let local: Vec<Probe> = series
-                .iter()
-                .zip(&used)
-                .filter(|(_, u)| **u)
-                .flat_map(|(s, _)| probes(s, &[rho]))
-                .collect();
-            let f = |s: f64| -loglik(&local, 0, s.exp());
-            let s = crate::lsq::golden::minimize(f, (1e-2f64).ln(), (1e6f64).ln(), 60);
-            (rho, s.exp(), 2.0 * (loglik(&local, 0, s.exp()) - l0))
-        };
-        let ln_tau = crate::lsq::golden::minimize(|x| -profile(x).2, lo, hi, 30);
-        let (rho, kappa, lr) = profile(ln_tau);
-        if lr > best.1 {
-            best = (
-                Slow {
-                    kappa,
-                    rho,
-                    left_out: 0,
-                },
-                lr,
-            );
-        }
+    let j = trial_index(&rhos, best.0.rho);
+    let lo = tau(rhos[j.saturating_sub(1)]).ln();
+    let hi = tau(rhos[(j + 1).min(rhos.len() - 1)]).ln();
+    let ln_tau = crate::lsq::golden::minimize(|x| -profile(x).2, lo, hi, 30);
+    let (rho, kappa, lr) = profile(ln_tau);
+    if lr > best.1 {
+        best = (
+            Slow {
+                kappa,
+                rho,
+                ..Slow::default()
+            },
+            lr,
+        );
     }
-    if best.1 >= KEEP_LR {
-        best.0.left_out = left_out;
-        best
+    // the longest time constant the probes allow (the likelihood ratio within `SET_LR` of its
+    // best, the profile taken as falling on either side of it), and its κ
+    let floor = best.1 - SET_LR;
+    let ln_longest = tau(rhos[rhos.len() - 1]).ln();
+    let (mut a, mut b) = (tau(best.0.rho).ln(), ln_longest);
+    best.0.upper = if profile(b).2 >= floor {
+        let (rho, kappa, _) = profile(b);
+        (kappa, rho)
     } else {
-        (Slow::default(), best.1.max(0.0))
-    }
+        for _ in 0..12 {
+            let mid = 0.5 * (a + b);
+            if profile(mid).2 >= floor {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        let (rho, kappa, _) = profile(a);
+        (kappa, rho)
+    };
+    best.0.left_out = left_out;
+    best.0.line = bands.iter().fold((0.0, 0.0), |s, b| {
+        if s.1 == 0.0 {
+            *b
+        } else {
+            (s.0.min(b.0), s.1.max(b.1))
+        }
+    });
+    best
 }
 
 #[cfg(test)]
@@ -292,7 +458,7 @@ mod tests {
         Slow {
             kappa: 1.0,
             rho: (-1.0f64 / 40.0).exp(),
-            left_out: 0,
+            ..Slow::default()
         }
     }
 
@@ -348,6 +514,47 @@ mod tests {
             assert_eq!(
                 s.left_out, 0,
                 "seed {seed}: a run of the drift itself left out"
+            );
+            assert_eq!(s.line, (0.0, 0.0), "seed {seed}: a line in a drift");
+            assert_drift_read(s, seed);
+            // the long end of the confidence set: no shorter than the estimate, and holding at
+            // least the drift's own variance at the lowest frequencies (κτ = 40 samples)
+            let tau = |r: f64| -1.0 / r.ln();
+            let (k_up, tau_up) = (s.upper.0, tau(s.upper.1));
+            assert!(
+                tau_up >= tau(s.rho),
+                "seed {seed}: τ {tau_up} below the estimate's"
+            );
+            assert!(
+                k_up * tau_up >= 40.0,
+                "seed {seed}: κτ {} at the long end",
+                k_up * tau_up
+            );
+        }
+    }
+
+    #[test]
+    fn a_line_with_a_phase_per_run_is_not_the_trackers_drift() {
+        // the drift above, and in every run a sinusoid of one noise unit at 5.3 cycles over a
+        // run of 500 samples, with a phase of its own: the band holding it is left out and the
+        // drift read within the same errors
+        let truth = drift_truth();
+        let f_line = 5.3 / 1000.0;
+        for seed in 0..5 {
+            let mut runs = dataset(40, 500, truth, 400 + seed);
+            for (r, s) in runs.iter_mut().enumerate() {
+                let phase = 2.4 * r as f64 + seed as f64;
+                let mut line: Vec<f64> = (0..500)
+                    .map(|i| (std::f64::consts::TAU * f_line * i as f64 + phase).sin())
+                    .collect();
+                project_out(&orthonormal_basis(s.cols.clone()), &mut line);
+                s.y.iter_mut().zip(&line).for_each(|(y, l)| *y += l);
+            }
+            let (s, _) = estimate(&runs);
+            assert!(
+                s.line.0 <= f_line && f_line <= s.line.1,
+                "seed {seed}: the line at {f_line} outside the band left out {:?}",
+                s.line
             );
             assert_drift_read(s, seed);
         }

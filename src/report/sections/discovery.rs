@@ -671,8 +671,16 @@ fn tracking_drift_text(t: &crate::artifacts::diagnosis::TrackingDrift) -> String
             t.runs_left_out
         )
     };
+    let line = if t.line_hz.1 > 0.0 {
+        format!(
+            " It was measured without the frequencies from {:.1} to {:.1} Hz: there the runs share a line that no drift's spectrum has, each with a phase of its own, which no term of the final model takes up; it is left out of the noise, not explained.",
+            t.line_hz.0, t.line_hz.1
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "The tracking noise also drifts slowly: a part of {:.2}× the variance of each run's frame-scale noise, correlated over {:.1} ms, measured on {on} under the final model. Every test's null carries it, so it is reported as noise, not physics, and it raises the detection limits of slow shapes (drags, a distortion, differences between particles).",
+        "The tracking noise also drifts slowly: a part of {:.2}× the variance of each run's frame-scale noise, correlated over {:.1} ms, measured on {on} under the final model. Every test's null carries it, so it is reported as noise, not physics, and it raises the detection limits of slow shapes (drags, a distortion, differences between particles).{line}",
         t.variance_ratio,
         1e3 * t.time_constant_s
     )
@@ -734,6 +742,7 @@ mod tests {
             time_constant_s: 0.0128,
             runs: 60,
             runs_left_out: 0,
+            line_hz: (0.0, 0.0),
         };
         let text = super::tracking_drift_text(&t);
         assert!(text.contains("1.22×") && text.contains("12.8 ms"), "{text}");
@@ -744,6 +753,12 @@ mod tests {
         let text = super::tracking_drift_text(&t);
         assert!(text.contains("56 of the 60 runs"), "{text}");
         assert!(text.contains("the other 4 wander"), "{text}");
+        assert!(!text.contains("Hz"), "{text}");
+        // a line left out of the estimate is said, as left out, not explained
+        t.line_hz = (25.04, 41.66);
+        let text = super::tracking_drift_text(&t);
+        assert!(text.contains("from 25.0 to 41.7 Hz"), "{text}");
+        assert!(text.contains("not explained"), "{text}");
     }
 
     #[test]
