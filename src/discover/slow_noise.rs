@@ -325,8 +325,8 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
         }
         break (best, used, left_out);
     };
-    if best.1 < KEEP_LR {
-        return (Slow::default(), best.1.max(0.0));
+    if !(best.1 > 0.0) {
+        return (Slow::default(), 0.0);
     }
     let probes_at = |rho: f64| -> Vec<Probe> {
         runs.iter()
@@ -364,15 +364,17 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
             lr,
         );
     }
+    if best.1 < KEEP_LR {
+        return (Slow::default(), best.1);
+    }
     // the longest time constant the probes allow (the likelihood ratio within `SET_LR` of its
     // best, the profile taken as falling on either side of it), and its κ
     let floor = best.1 - SET_LR;
-    let ln_longest = tau(rhos[rhos.len() - 1]).ln();
-    let (mut a, mut b) = (tau(best.0.rho).ln(), ln_longest);
-    best.0.upper = if profile(b).2 >= floor {
-        let (rho, kappa, _) = profile(b);
-        (kappa, rho)
+    let longest = profile(tau(rhos[rhos.len() - 1]).ln());
+    let end = if longest.2 >= floor {
+        longest
     } else {
+        let (mut a, mut b) = (tau(best.0.rho).ln(), tau(longest.0).ln());
         for _ in 0..12 {
             let mid = 0.5 * (a + b);
             if profile(mid).2 >= floor {
@@ -381,9 +383,9 @@ pub fn estimate(series: &[Series]) -> (Slow, f64) {
                 b = mid;
             }
         }
-        let (rho, kappa, _) = profile(a);
-        (kappa, rho)
+        profile(a)
     };
+    best.0.upper = (end.1, end.0);
     best.0.left_out = left_out;
     best.0.line = bands.iter().fold((0.0, 0.0), |s, b| {
         if s.1 == 0.0 {
