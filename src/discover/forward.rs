@@ -812,7 +812,7 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
         if let Some((_, p)) = tr.locked.filter(|l| l.0 == i) {
             let one = tr.best.as_ref().map(|(b, _)| tr.all[*b].form());
             return format!(
-                "passes both tests, but its phases gather about one value (p = {p:.2e} were each run's its own): the force is locked to the kick, and {} is named instead",
+                "passes both tests, but its phases gather about one value (p = {p:.2e} if each run's phase were its own): the force is locked to the kick, and {} is named instead",
                 one.unwrap_or_default()
             );
         }
