@@ -171,8 +171,8 @@ pub struct TrackingDrift {
     pub runs: usize,
     #[serde(default)]
     pub runs_left_out: usize,
-    /// The band of frequencies (Hz) left out of its estimate for a line that no drift's spectrum
-    /// has, shared by the runs with a phase of their own; (0, 0) when none.
+    /// The band of frequencies (Hz) left out of its estimate for a line, shared by the runs,
+    /// that no drift's spectrum has; (0, 0) when none.
     #[serde(default)]
     pub line_hz: (f64, f64),
 }

@@ -673,7 +673,7 @@ fn tracking_drift_text(t: &crate::artifacts::diagnosis::TrackingDrift) -> String
     };
     let line = if t.line_hz.1 > 0.0 {
         format!(
-            " It was measured without the frequencies from {:.1} to {:.1} Hz: there the runs share a line that no drift's spectrum has, each with a phase of its own, which no term of the final model takes up; it is left out of the noise, not explained.",
+            " It was measured without the frequencies from {:.1} to {:.1} Hz: there the runs share a line that no drift's spectrum has, which no term of the final model takes up; it is left out of the noise, not explained.",
             t.line_hz.0, t.line_hz.1
         )
     } else {
