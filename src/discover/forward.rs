@@ -695,7 +695,8 @@ impl Trials<'_> {
     /// beyond α) is locked to the kick: its form with one phase for every run is named where that
     /// passes both tests. Each run's phase absorbs the error of its own kick time (t0), which a
     /// sliding run's parabola hardly fixes, so held-out runs may prefer the phases per run
-    /// though they are one cause; phases of their own in every run never gather beyond chance.
+    /// though they are one cause; phases of their own in every run gather beyond chance at
+    /// rate α only, and then the one-phase form must still pass both tests.
     fn prefer_locked(&mut self, order: &[usize]) {
         let Some((b, _)) = self.best.clone() else {
             return;
@@ -730,7 +731,7 @@ impl Trials<'_> {
         }
         let effect = self.all[b].effect();
         for &j in order {
-            if j == b || j >= self.cv_of.len() {
+            if j == b {
                 continue;
             }
             if self.all[j].effect() == effect && !self.all[j].run_phase() {
