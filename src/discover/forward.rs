@@ -7,7 +7,7 @@
 use super::admissible::refusal;
 use super::candidate::prepare;
 use super::candidate::{Extra, N_LOCAL};
-use super::cv::{cross_validate, folds, paired_t, CvResult};
+use super::cv::{folds, paired_t, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
 use super::estimates::{reported_parameters, scale_at_bound};
@@ -97,6 +97,30 @@ pub struct Round {
     /// Probe rows significant after Holm over the probes.
     pub flagged_probes: Vec<CandidateRow>,
     pub probe_rows: Vec<CandidateRow>,
+    /// The forms tied with the accepted term, to be decided again beside later terms.
+    pub tied: Vec<Tie>,
+}
+
+/// A form that held-out runs could not tell from the accepted term in its round (`tied`).
+pub struct Tie {
+    /// Its row (index into `Round::rows`).
+    pub row: usize,
+    /// Its parameters, fitted in full in the round.
+    pub start: Vec<f64>,
+    /// The round's model with it in place of the accepted term, scored.
+    pub after: ModelScore,
+}
+
+/// Whether a form of `n_new` parameters and held-out error `new` is preferred to one of `n_old`
+/// and `old` (paired t over the runs against `t_cv`): a richer form where held-out runs prefer
+/// it, a simpler one where they cannot tell the two apart, and of two as simple the one with the
+/// lower held-out error.
+pub fn preferred(n_new: usize, new: &CvResult, n_old: usize, old: &CvResult, t_cv: f64) -> bool {
+    match n_new.cmp(&n_old) {
+        std::cmp::Ordering::Greater => paired_t(old, new) > t_cv,
+        std::cmp::Ordering::Less => paired_t(new, old) <= t_cv,
+        std::cmp::Ordering::Equal => new.cv_rms_m < old.cv_rms_m,
+    }
 }
 
 fn row(
@@ -325,13 +349,11 @@ impl Trials<'_> {
     /// Cross-validate `m` against the current model: (held-out RMS better and paired t above
     /// its critical value, the CV, the paired t).
     fn held_out(&self, m: &Model) -> (bool, CvResult, f64) {
-        let cv = cross_validate(
-            &m.spec,
-            &m.params,
+        let cv = m.held_out(
             self.set.runs,
-            &m.fit,
             self.set.fold,
             self.set.opts.folds,
+            self.set.opts.seed,
         );
         let t = paired_t(self.current_cv, &cv);
         (self.improves(&cv, t), cv, t)
@@ -391,31 +413,7 @@ impl Trials<'_> {
                 self.cv_of[i] = Some((self.current_cv.clone(), f64::NAN));
                 return (false, self.current_cv.clone());
             }
-            let (_, mut cv, mut t) = self.held_out(&self.fitted[i]);
-            if self.all[i].run_phase() {
-                // each held-out run's phase is fitted on that run: charge what it takes from
-                // the run's noise alone before comparing
-                let m = &self.fitted[i];
-                let runs = self.set.runs;
-                let gains: Vec<f64> = runs
-                    .par_iter()
-                    .enumerate()
-                    .map(|(r, run)| {
-                        // the phase is irrelevant here (the responses at 0 and π/2 are taken)
-                        let sim = m
-                            .spec
-                            .sim_model(&m.fit.global, run.material, m.fit.local[r][2]);
-                        super::timeforce::noise_gain(
-                            &sim,
-                            &m.fit.local[r],
-                            run,
-                            self.set.opts.seed ^ (r as u64 + 1).wrapping_mul(0x9E37_79B9),
-                        )
-                    })
-                    .collect();
-                cv = super::cv::charged(&cv, &gains, runs);
-                t = paired_t(self.current_cv, &cv);
-            }
+            let (_, cv, t) = self.held_out(&self.fitted[i]);
             self.cv_of[i] = Some((cv, t));
             trace_took(start, || {
                 format!(
@@ -661,6 +659,12 @@ impl Trials<'_> {
     /// curve with one parameter more ranks below a line it explains more than (a Stribeck
     /// friction behind the line in the slip speed, whose slope is no size of it) and was
     /// otherwise never fitted.
+    ///
+    /// A form of the same effect with as many parameters and a comparable statistic is fitted
+    /// too: two such forms often screen alike (a quadratic and a saturating drag at one LR), and
+    /// which ranks first is then the noise's choice. Neither is simpler, so the one with the
+    /// lower held-out error is named; where held-out runs cannot tell them apart (paired t
+    /// within its critical value), `tied` says so.
     fn prefer_richer(&mut self, order: &[usize], lr: &[f64]) {
         let Some((b, _)) = self.best.clone() else {
             return;
@@ -670,22 +674,20 @@ impl Trials<'_> {
             return;
         }
         let (effect, nb) = (self.all[b].effect(), self.all[b].params().len());
-        let richer: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&j| {
-                self.all[j].effect() == effect
-                    && self.all[j].params().len() > nb
-                    && lr[j] >= 0.5 * lr[b]
-            })
-            .collect();
-        for j in richer {
+        let alike = |j: usize| {
+            j != b
+                && self.all[j].effect() == effect
+                && self.all[j].params().len() >= nb
+                && lr[j] >= 0.5 * lr[b]
+        };
+        let others: Vec<usize> = order.iter().copied().filter(|&j| alike(j)).collect();
+        for j in others {
             let (passes, cv) = self.check(j);
-            let better = self
-                .best
-                .as_ref()
-                .is_some_and(|(_, b_cv)| paired_t(b_cv, &cv) > self.t_cv);
-            if passes && better {
+            let Some((k, k_cv)) = self.best.as_ref() else {
+                return;
+            };
+            let (nj, nk) = (self.all[j].params().len(), self.all[*k].params().len());
+            if passes && preferred(nj, &cv, nk, k_cv, self.t_cv) {
                 self.best = Some((j, cv));
             }
         }
@@ -959,6 +961,19 @@ pub fn run_round(
     }
     let partner = tr.pair.as_ref().map(|(b, _, _)| *b);
     let ties = tied(&tr, ne);
+    let kept_ties = ties
+        .iter()
+        .filter_map(|&(j, _)| {
+            let (cv, _) = tr.cv_of[j].as_ref()?;
+            let n = all[j].params().len();
+            let g = &tr.fitted[j].fit.global;
+            Some(Tie {
+                row: j,
+                start: g[g.len() - n..].to_vec(),
+                after: tr.fitted[j].score(set.runs, Some(cv)),
+            })
+        })
+        .collect();
     for &(j, t) in &ties {
         rows[j].evidence.decision = format!(
             "tie: passes both tests and predicts held-out runs as well as the accepted term (paired t = {t:.2}, within its critical value {:.2}): these data cannot tell the two apart",
@@ -972,7 +987,7 @@ pub fn run_round(
             if !ties.is_empty() {
                 let forms: Vec<String> = ties.iter().map(|&(j, _)| all[j].form()).collect();
                 rows[i].evidence.decision.push_str(&format!(
-                    "; tied with {}: these data cannot tell them apart, and this one, simpler or stronger, is in the model",
+                    "; tied with {}: these data cannot tell them apart, and this one (simpler, stronger or of lower held-out error) is in the model",
                     forms.join(" and ")
                 ));
             }
@@ -1012,6 +1027,7 @@ pub fn run_round(
         partner,
         flagged_probes,
         probe_rows,
+        tied: kept_ties,
     }
 }
 

@@ -153,6 +153,7 @@ mod selection;
 pub mod sim;
 pub mod slow_noise;
 pub mod spectral;
+mod ties;
 pub mod timeforce;
 
 pub use crate::artifacts::diagnosis::Diagnosis;

@@ -1,7 +1,7 @@
 //! A fitted joint model (the baseline with its extra terms) and where a term's parameters start.
 
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
-use super::cv::CvResult;
+use super::cv::{charged, cross_validate, CvResult};
 use super::data::RunData;
 use super::joint::{fit_joint, FitControl, Fitted};
 use super::proposal::{needs_proposal, starts as proposal_starts};
@@ -83,6 +83,50 @@ impl Model {
         g.drain(off..off + n);
         let mut spec = self.spec.clone();
         spec.extras.remove(i);
+        Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
+    }
+
+    /// The model's held-out error (`fold` of each run, `folds` folds). A model with a phase per
+    /// run fits each held-out run's phase on that run, so every run is charged what fitting its
+    /// phase takes from its noise alone (`timeforce::noise_gain`, seeded from `seed`): every
+    /// model is judged so, the one a candidate is compared against too, or a term added beside a
+    /// phase per run would be credited the phase's gain.
+    pub fn held_out(&self, runs: &[RunData], fold: &[usize], folds: usize, seed: u64) -> CvResult {
+        let cv = cross_validate(&self.spec, &self.params, runs, &self.fit, fold, folds);
+        if !self.spec.has_run_phase() {
+            return cv;
+        }
+        let gains: Vec<f64> = runs
+            .par_iter()
+            .enumerate()
+            .map(|(r, run)| {
+                // the phase is irrelevant here (the responses at 0 and π/2 are taken)
+                let l = &self.fit.local[r];
+                let sim = self.spec.sim_model(&self.fit.global, run.material, l[2]);
+                let run_seed = seed ^ (r as u64 + 1).wrapping_mul(0x9E37_79B9);
+                super::timeforce::noise_gain(&sim, l, run, run_seed)
+            })
+            .collect();
+        charged(&cv, &gains, runs)
+    }
+
+    /// The model with extra term `i` replaced by `extra`, whose parameters start at `start`,
+    /// refitted from the current values.
+    pub fn replaced(
+        &self,
+        i: usize,
+        extra: &Extra,
+        start: &[f64],
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
+        let off = self.spec.extra_offset(i);
+        let n = self.spec.extras[i].params().len();
+        let mut g = self.fit.global.clone();
+        g.splice(off..off + n, start.iter().copied());
+        let mut spec = self.spec.clone();
+        spec.extras[i] = extra.clone();
         Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
     }
 

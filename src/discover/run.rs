@@ -1,7 +1,7 @@
 //! The whole discovery on a set of recordings: measure, fit the joint baseline, select terms, report.
 
 use super::candidate::{Extra, Spec, N_LOCAL};
-use super::cv::{cross_validate, CvResult};
+use super::cv::CvResult;
 use super::data::{prepare_runs, RunData};
 use super::findings::{drift_of, findings_of, model_parameters};
 use super::forcemap::ForceMap;
@@ -12,7 +12,7 @@ use super::model::Model;
 use super::perrun::{measure_noise, PerRunFit};
 use super::proposal::{propose, wanted_for};
 use super::ranges::{Proposals, Ranges, Wanted};
-use super::selection::{Accepted, Ctx, Selection};
+use super::selection::{Accepted, Ctx, Selection, Tied};
 use super::Options;
 use crate::artifacts::diagnosis::{Diagnosis, ForceMaps, ModelScore, Settings};
 use crate::physics::Variable;
@@ -158,14 +158,7 @@ impl Ctx<'_> {
     }
 
     pub(super) fn cross_validate(&self, model: &Model) -> CvResult {
-        cross_validate(
-            &model.spec,
-            &model.params,
-            self.runs,
-            &model.fit,
-            self.fold,
-            self.opts.folds,
-        )
+        model.held_out(self.runs, self.fold, self.opts.folds, self.opts.seed)
     }
 }
 
@@ -177,6 +170,7 @@ impl Selection {
             accepted: Vec::new(),
             removed: Vec::new(),
             parts: Vec::new(),
+            ties: Vec::new(),
             table: Vec::new(),
             last_rows: Vec::new(),
             last_probes: Vec::new(),
@@ -346,6 +340,21 @@ fn select_terms(baseline: &Model, base_cv: &CvResult, ctx: &Ctx) -> Selection {
         match r.accepted.take() {
             Some((i, model, cv)) if sel.accepted.len() < ctx.opts.max_terms => {
                 sel.accept(&r, i, entries[i].clone(), model, cv, ctx);
+                let before = sel.accepted.last().map(|a| a.before.clone());
+                for t in std::mem::take(&mut r.tied) {
+                    sel.ties.push(Tied {
+                        with: entries[i].clone(),
+                        alt: Accepted {
+                            row: r.rows[t.row].clone(),
+                            before: before.clone().expect("just accepted"),
+                            after: t.after,
+                            probes_after: vec![],
+                            null: r.nulls[t.row].clone(),
+                            extra: entries[t.row].clone(),
+                        },
+                        start: t.start,
+                    });
+                }
                 if let Some(j) = r.partner {
                     sel.accept_partner(&r, j, entries[j].clone());
                 }
@@ -479,6 +488,8 @@ pub fn discover_reporting(
     ctx.trace("baseline cross-validated");
     let mut sel = select_terms(&baseline, &base_cv, &ctx);
     ctx.trace("rounds done");
+    super::ties::redecide(&mut sel, &ctx);
+    ctx.trace("ties decided again");
     say("mapping what is left (force maps in z, v, t and phase)");
     let (fallback, maps_after) = model_what_is_left(&mut sel, &ctx);
     ctx.trace("fallback done");

@@ -23,6 +23,17 @@ pub(super) struct Accepted {
     pub(super) extra: Extra,
 }
 
+/// A form that held-out runs could not tell from an accepted term in its round, decided again
+/// once the later terms are in the model (`ties`).
+pub(super) struct Tied {
+    /// The accepted term it tied with.
+    pub(super) with: Extra,
+    /// It, as it would have been accepted in that round.
+    pub(super) alt: Accepted,
+    /// Its parameters, fitted in full in that round.
+    pub(super) start: Vec<f64>,
+}
+
 /// The data and settings every step of a discovery reads.
 pub(super) struct Ctx<'a> {
     pub(super) runs: &'a [RunData],
@@ -44,6 +55,8 @@ pub(super) struct Selection {
     /// Named terms still in the model that are reported as parts of one field in z with the
     /// map accepted beside them (`consolidate.rs`).
     pub(super) parts: Vec<Accepted>,
+    /// The forms tied with an accepted term in its round.
+    pub(super) ties: Vec<Tied>,
     /// Every candidate and probe row of every round.
     pub(super) table: Vec<CandidateRow>,
     /// The candidates of the last round (none accepted) and its probes.
