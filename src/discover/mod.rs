@@ -40,6 +40,7 @@
 //! - `slow_noise.rs`: The slow part of the tracking noise, a drift over many frames
 //! - `sim.rs`: one-particle trajectories for the discovery fits
 //! - `spectral.rs`: Spectral search
+//! - `ties.rs`: A tie decided again once the later terms are in the model
 //! - `timeforce.rs`: Each run's own phase of a force periodic in time
 //! - `forcemap/`: The force map: the missing acceleration as a smooth function of one variable
 //! - `impact/`: The impact laws of the pairs (restitution, μ_pp against slip speed), read from the impacts
@@ -85,9 +86,10 @@
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
-//!    held-out runs better (`cv.rs`, paired per-run t); a richer form of the passing term's
-//!    effect with a comparable statistic is fitted too and named instead only where held-out
-//!    runs prefer it (the order charges each parameter). The strongest passing term is added,
+//!    held-out runs better (`cv.rs`, paired per-run t; a model with a phase per run is charged
+//!    what its phases take from noise alone); the other forms of the passing term's effect with
+//!    a comparable statistic are fitted too, a richer one named only where held-out runs prefer
+//!    it, one as rich where its held-out error is lower. The strongest passing term is added,
 //!    earlier terms re-tested (backward elimination), and the search repeats. When no single
 //!    term passes, or only a searched force does, pairs of named forms are tried (of the
 //!    searched force's place when one passed: `forward.rs`). Then, for z and for v, the force
@@ -96,7 +98,8 @@
 //!    not a tilt, a wave and a bump.
 //! 5. **Sanity.** A term must be physics (`admissible.rs`): a drag that pushes, a form whose
 //!    scale ends at the fine end of its search, are refused; a parameter at a bound is said in
-//!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept.
+//!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept,
+//!    and decided again beside the terms accepted after them (`ties.rs`).
 //!    A map's peak and RMS are of the curve with its noise taken out (`forms/spline.rs`).
 //!    Drift probes (T or μ drifting with |v0|, a direction asymmetry) say whether a mismatch is
 //!    left unexplained. Every candidate carries its detection limit (90 % power on this dataset,

@@ -138,17 +138,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     alt.row.accepted = true;
     let mut old = std::mem::replace(&mut sel.accepted[a], alt);
     old.row.accepted = false;
-    let (acc, rej) = if t_new > t_cv {
-        (
-            format!("accepted: in round {round} held-out runs could not tell it from {old_form}, which was named; beside the later terms it predicts them better (paired t = {t_new:.2}) and is named instead{flagged}"),
-            format!("rejected: accepted in round {round}, but beside the later terms {new_form} in its place predicts held-out runs better (paired t = {t_new:.2}) and is named instead"),
-        )
-    } else {
-        (
-            format!("accepted: decided again beside the later terms; tied with {old_form}: these data cannot tell them apart (paired t = {t_new:.2}, within its critical value {t_cv:.2}), and this one ({why}) is in the model{flagged}"),
-            format!("tie: accepted in round {round}; beside the later terms {new_form} in its place predicts held-out runs as well (paired t = {t_new:.2}, within its critical value {t_cv:.2}): these data cannot tell the two apart, and {new_form} ({why}) is in the model"),
-        )
-    };
+    let (acc, rej) = swap_words(round, &old_form, &new_form, t_new, t_cv, why, &flagged);
     sel.accepted[a].row.evidence.decision = acc;
     old.row.evidence.decision = rej;
     let row = sel.accepted[a].row.clone();
@@ -156,6 +146,31 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     set_row(sel, &old.row);
     sel.current = model;
     sel.current_cv = cv;
+}
+
+/// The decisions of a tied form named in place of the term accepted in `round` (the new term's,
+/// the old one's), with the new form's paired t `t` over the old beside the later terms: a tie
+/// that stays is said with "tied with" (which the report reads), one told apart is not.
+fn swap_words(
+    round: usize,
+    old_form: &str,
+    new_form: &str,
+    t: f64,
+    t_cv: f64,
+    why: &str,
+    flagged: &str,
+) -> (String, String) {
+    if t > t_cv {
+        (
+            format!("accepted: in round {round} held-out runs could not tell it from {old_form}, which was named; beside the later terms it predicts them better (paired t = {t:.2}) and is named instead{flagged}"),
+            format!("rejected: accepted in round {round}, but beside the later terms {new_form} in its place predicts held-out runs better (paired t = {t:.2}) and is named instead"),
+        )
+    } else {
+        (
+            format!("accepted: decided again beside the later terms; tied with {old_form}: these data cannot tell them apart (paired t = {t:.2}, within its critical value {t_cv:.2}), and this one ({why}) is in the model{flagged}"),
+            format!("tie: accepted in round {round}; beside the later terms {new_form} in its place predicts held-out runs as well (paired t = {t:.2}, within its critical value {t_cv:.2}): these data cannot tell the two apart, and {new_form} ({why}) is in the model"),
+        )
+    }
 }
 
 /// The " (flagged by N probe(s))" an accepted decision ends with, or nothing.
@@ -181,4 +196,87 @@ fn find<'a>(
     sel.table.iter_mut().find(|r| {
         r.evidence.round == row.evidence.round && r.effect == row.effect && r.form == row.form
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cv(per_run: &[f64]) -> CvResult {
+        CvResult {
+            cv_rms_m: per_run.iter().sum::<f64>() / per_run.len() as f64,
+            per_run_msn: per_run.to_vec(),
+        }
+    }
+
+    /// The rule a tie is decided by: a richer form only where held-out runs prefer it beyond
+    /// the critical value, a simpler one unless they prefer the richer so, of two as simple the
+    /// lower held-out error however small the difference.
+    #[test]
+    fn a_richer_form_needs_the_runs_a_simpler_one_a_tie_an_equal_one_the_lower_error() {
+        let t_cv = 1.7;
+        let old = cv(&[1.0, 1.1, 0.9, 1.05, 0.95, 1.0]);
+        // a little better in every run but one: paired t well above 1.7
+        let clearly = cv(&[0.9, 1.0, 0.8, 0.95, 0.85, 1.01]);
+        // better on average by a hair, worse in half the runs: paired t below 1.7
+        let hair = cv(&[0.99, 1.12, 0.88, 1.06, 0.94, 0.99]);
+        assert!(paired_t(&old, &clearly) > t_cv && paired_t(&old, &hair).abs() < t_cv);
+        assert!(hair.cv_rms_m < old.cv_rms_m);
+        assert!(preferred(3, &clearly, 2, &old, t_cv));
+        assert!(!preferred(3, &hair, 2, &old, t_cv));
+        assert!(preferred(1, &hair, 2, &old, t_cv));
+        assert!(!preferred(1, &old, 2, &clearly, t_cv));
+        assert!(preferred(2, &hair, 2, &old, t_cv));
+        assert!(!preferred(2, &old, 2, &hair, t_cv));
+    }
+
+    /// A tie that stays is said so that the report names the form it tied with; one told apart
+    /// is said without "tied with", so the report says no tie.
+    #[test]
+    fn a_swap_within_the_critical_value_is_still_said_as_a_tie() {
+        let (old, new) = (
+            "quadratic: a = -v/T - c v|v|",
+            "saturating: a = -v/(T0 + T'|v|)",
+        );
+        let (acc, rej) = swap_words(
+            1,
+            old,
+            new,
+            0.4,
+            1.67,
+            "as simple",
+            " (flagged by 2 probe(s))",
+        );
+        let named = acc
+            .split("tied with ")
+            .nth(1)
+            .and_then(|r| r.split(':').next());
+        assert_eq!(named, Some("quadratic"), "{acc}");
+        assert!(
+            acc.contains("cannot tell") && acc.ends_with("(flagged by 2 probe(s))"),
+            "{acc}"
+        );
+        assert!(
+            rej.starts_with("tie:") && rej.contains("cannot tell"),
+            "{rej}"
+        );
+        let (acc, rej) = swap_words(1, old, new, 2.5, 1.67, "as simple", "");
+        assert!(
+            !acc.contains("tied with ") && acc.contains("predicts them better"),
+            "{acc}"
+        );
+        assert!(
+            rej.starts_with("rejected:") && !rej.contains("cannot tell"),
+            "{rej}"
+        );
+    }
+
+    #[test]
+    fn the_flagged_probes_are_carried_over() {
+        assert_eq!(
+            flagged_suffix("accepted: x; tied with y: z (flagged by 3 probe(s))"),
+            " (flagged by 3 probe(s))"
+        );
+        assert_eq!(flagged_suffix("accepted: x"), "");
+    }
 }
