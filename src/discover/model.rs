@@ -77,13 +77,7 @@ impl Model {
         runs: &[RunData],
         max_iter: usize,
     ) -> Model {
-        let off = self.spec.extra_offset(i);
-        let n = self.spec.extras[i].params().len();
-        let mut g = self.fit.global.clone();
-        g.drain(off..off + n);
-        let mut spec = self.spec.clone();
-        spec.extras.remove(i);
-        Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
+        self.edited(i, None, materials, runs, max_iter)
     }
 
     /// The model's held-out error (`fold` of each run, `folds` folds). A model with a phase per
@@ -121,12 +115,33 @@ impl Model {
         runs: &[RunData],
         max_iter: usize,
     ) -> Model {
+        self.edited(i, Some((extra, start)), materials, runs, max_iter)
+    }
+
+    /// The model with extra term `i` left out (`with` None) or replaced by a term and its
+    /// starting parameters, refitted from the current values.
+    fn edited(
+        &self,
+        i: usize,
+        with: Option<(&Extra, &[f64])>,
+        materials: &[String],
+        runs: &[RunData],
+        max_iter: usize,
+    ) -> Model {
         let off = self.spec.extra_offset(i);
         let n = self.spec.extras[i].params().len();
         let mut g = self.fit.global.clone();
-        g.splice(off..off + n, start.iter().copied());
         let mut spec = self.spec.clone();
-        spec.extras[i] = extra.clone();
+        match with {
+            None => {
+                g.drain(off..off + n);
+                spec.extras.remove(i);
+            }
+            Some((extra, start)) => {
+                g.splice(off..off + n, start.iter().copied());
+                spec.extras[i] = extra.clone();
+            }
+        }
         Model::fit(spec, materials, runs, &g, &self.fit.local, max_iter)
     }
 
