@@ -32,10 +32,6 @@ pub const FULL_ITERATIONS: usize = 40;
 /// Level of the one-sided paired test that held-out runs improve.
 pub const CV_LEVEL: f64 = 0.05;
 
-/// One-sided level of the signed-rank test that confirms a term the paired t does not: either
-/// test passing confirms, so together they pass a term that does not help at up to 6 %, not 10.
-pub const SIGNED_RANK_LEVEL: f64 = 0.01;
-
 /// A pair of named forms is fitted beside a searched form that passed alone only if its two
 /// first-order likelihood ratios sum to more than the form's divided by this. Where a pair was
 /// the right answer (a rolling resistance and a quadratic drag mistaken for a wave) the sum was
@@ -366,10 +362,10 @@ impl Trials<'_> {
     /// Whether a model of held-out error `cv`, paired t `t` against the current model, predicts
     /// held-out runs better: a lower RMS, and t above its critical value or, where the gain
     /// sits in few runs (which swells the paired t's spread), Wilcoxon's signed-rank test over
-    /// the runs at `SIGNED_RANK_LEVEL`.
+    /// the runs at the same level.
     fn improves(&self, cv: &CvResult, t: f64) -> bool {
         cv.cv_rms_m < self.current_cv.cv_rms_m
-            && (t > self.t_cv || signed_rank_p(self.current_cv, cv) < SIGNED_RANK_LEVEL)
+            && (t > self.t_cv || signed_rank_p(self.current_cv, cv) < CV_LEVEL)
     }
 
     /// Whether candidate `i`, fitted in full (once), predicts held-out runs better than the
