@@ -115,47 +115,6 @@ pub fn charged(cv: &CvResult, gains: &[f64], runs: &[RunData]) -> CvResult {
     }
 }
 
-/// One-sided p of Wilcoxon's signed-rank test that the extension predicts held-out runs better
-/// (per-run improvement base − extended; normal approximation with average ranks for ties,
-/// exact zeros dropped). Unlike the paired t it is not undone by a gain held in few runs: one
-/// run that gains 400 noise units and thirty that gain a few read t 1.5 (the one run's gain
-/// swells the spread more than the mean), while nearly every rank is positive.
-pub fn signed_rank_p(base: &CvResult, ext: &CvResult) -> f64 {
-    let mut d: Vec<f64> = base
-        .per_run_msn
-        .iter()
-        .zip(&ext.per_run_msn)
-        .map(|(a, b)| a - b)
-        .filter(|x| *x != 0.0 && x.is_finite())
-        .collect();
-    let n = d.len();
-    if n < 2 {
-        return 1.0;
-    }
-    d.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
-    let (mut w_plus, mut tie_term) = (0.0, 0.0);
-    let mut i = 0;
-    while i < n {
-        let mut j = i;
-        while j + 1 < n && d[j + 1].abs() == d[i].abs() {
-            j += 1;
-        }
-        // ranks i+1 ..= j+1 share their mean
-        let rank = 0.5 * ((i + 1) + (j + 1)) as f64;
-        let tied = (j - i + 1) as f64;
-        tie_term += tied * tied * tied - tied;
-        w_plus += d[i..=j].iter().filter(|x| **x > 0.0).count() as f64 * rank;
-        i = j + 1;
-    }
-    let nf = n as f64;
-    let mean = nf * (nf + 1.0) / 4.0;
-    let var = nf * (nf + 1.0) * (2.0 * nf + 1.0) / 24.0 - tie_term / 48.0;
-    if var <= 0.0 {
-        return 1.0;
-    }
-    crate::stats::dist::normal_sf((w_plus - mean) / var.sqrt())
-}
-
 /// One-sided paired t of the per-run improvement (base − extended); positive: the extension predicts better.
 pub fn paired_t(base: &CvResult, ext: &CvResult) -> f64 {
     let d: Vec<f64> = base

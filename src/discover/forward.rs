@@ -7,7 +7,7 @@
 use super::admissible::refusal;
 use super::candidate::prepare;
 use super::candidate::{Extra, N_LOCAL};
-use super::cv::{folds, paired_t, signed_rank_p, CvResult};
+use super::cv::{folds, paired_t, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
 use super::estimates::{reported_parameters, scale_at_bound};
@@ -360,12 +360,9 @@ impl Trials<'_> {
     }
 
     /// Whether a model of held-out error `cv`, paired t `t` against the current model, predicts
-    /// held-out runs better: a lower RMS, and t above its critical value or, where the gain
-    /// sits in few runs (which swells the paired t's spread), Wilcoxon's signed-rank test over
-    /// the runs at the same level.
+    /// held-out runs better: a lower RMS and t above its critical value.
     fn improves(&self, cv: &CvResult, t: f64) -> bool {
-        cv.cv_rms_m < self.current_cv.cv_rms_m
-            && (t > self.t_cv || signed_rank_p(self.current_cv, cv) < CV_LEVEL)
+        cv.cv_rms_m < self.current_cv.cv_rms_m && t > self.t_cv
     }
 
     /// Whether candidate `i`, fitted in full (once), predicts held-out runs better than the
@@ -826,10 +823,6 @@ fn decide(i: usize, ne: usize, p_holm: f64, ev: &mut Evidence, tr: &Trials, alph
             return "passes both tests, but two named terms fitted together predict held-out runs as well with fixed shapes: they are named instead".into();
         }
         return match &tr.best {
-            Some((b, _)) if *b == i && *t <= tr.t_cv => format!(
-                "passes: bootstrap LR test and held-out runs, by the signed-rank test over the runs (p = {:.2e}): the gain sits in few runs, which swells the paired t's spread",
-                signed_rank_p(tr.current_cv, cv)
-            ),
             Some((b, _)) if *b == i => "passes: bootstrap LR test and held-out runs".into(),
             // it passed on its own, and another form was preferred by held-out runs (a richer
             // form of its effect, `prefer_richer`); a tie is said over this by `tied`
@@ -991,12 +984,6 @@ pub fn run_round(
         rows[i].accepted = true;
         let Some((b, m, t)) = tr.pair else {
             rows[i].evidence.decision = "accepted: strongest term passing both tests".into();
-            if paired_t(current_cv, &cv) <= tr.t_cv {
-                rows[i].evidence.decision.push_str(&format!(
-                    " (held-out runs by the signed-rank test over the runs, p = {:.2e}: the gain sits in few runs, which swells the paired t's spread)",
-                    signed_rank_p(current_cv, &cv)
-                ));
-            }
             if !ties.is_empty() {
                 let forms: Vec<String> = ties.iter().map(|&(j, _)| all[j].form()).collect();
                 rows[i].evidence.decision.push_str(&format!(
