@@ -118,7 +118,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
             .unwrap_or_default()
             .to_string();
         row.evidence.decision = if still.is_empty() {
-            format!("{head}; tied in its round, told apart beside the later terms, where it predicts held-out runs better than the forms it tied with{flagged}")
+            format!("{head}; tied in its round, and told apart beside the later terms: held-out runs tell it from the forms it tied with there, or those are refused there (each one's row says which){flagged}")
         } else {
             format!("{head}; tied with {}: these data cannot tell them apart, beside the later terms too, and this one (simpler, stronger or of lower held-out error) is in the model{flagged}", still.join(" and "))
         };
