@@ -86,8 +86,9 @@
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
-//!    held-out runs better (`cv.rs`, paired per-run t; a model with a phase per run is charged
-//!    what its phases take from noise alone); the other forms of the passing term's effect with
+//!    held-out runs better (`cv.rs`: a paired t over the runs, or for a first term whose gain
+//!    sits in few runs Wilcoxon's signed-rank test; a model with a phase per run is charged what
+//!    its phases take from noise alone); the other forms of the passing term's effect with
 //!    a comparable statistic are fitted too, a richer one named only where held-out runs prefer
 //!    it, one as rich where its held-out error is lower. The strongest passing term is added,
 //!    earlier terms re-tested (backward elimination), and the search repeats. When no single
