@@ -398,6 +398,7 @@ impl Trials<'_> {
             let unfitted = self.all[i].run_phase() && scale_at_bound(&self.fitted[i]).is_some();
             if !unfitted {
                 self.fitted[i] = self.full(i);
+                trace_took(start, || format!("round {}: the full fit", self.round));
             }
             self.refused[i] = refusal(&self.fitted[i]).map(|why| {
                 if unfitted {

@@ -126,15 +126,31 @@ pub fn needs_proposal(e: &Extra) -> bool {
 }
 
 /// Starting values of a proposed term's parameters (several: the best peaks), held inside its
-/// bounds; where it vanishes when nothing is proposed.
+/// bounds; where it vanishes when nothing is proposed. A peak that puts a parameter beyond its
+/// interval by more than the interval's width is no start: it is something the form cannot be
+/// (a residual peak at kHz whose acceleration is hundreds of m/s², from a micrometre of
+/// tracker noise), and from its bound the fit of a vibration crawled through a fast force
+/// (14 s of a 35 s stage on the bench) to a worse χ² than the screen's start.
 pub fn starts(e: &Extra, p: &Proposals) -> Vec<Vec<f64>> {
+    let params = e.params();
+    let possible = |v: &Vec<f64>| {
+        v.iter().zip(&params).all(|(x, q)| {
+            let w = q.hi - q.lo;
+            *x >= q.lo - w && *x <= q.hi + w
+        })
+    };
     let clamp = |v: Vec<f64>| -> Vec<f64> {
         v.iter()
-            .zip(e.params())
+            .zip(&params)
             .map(|(x, q)| x.clamp(q.lo, q.hi))
             .collect()
     };
-    let out: Vec<Vec<f64>> = e.proposed(p).into_iter().map(clamp).collect();
+    let out: Vec<Vec<f64>> = e
+        .proposed(p)
+        .into_iter()
+        .filter(possible)
+        .map(clamp)
+        .collect();
     if out.is_empty() {
         vec![e.params().iter().map(|q| q.start).collect()]
     } else {
