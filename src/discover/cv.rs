@@ -6,7 +6,9 @@
 //!
 //! Two models are compared run by run (each run's mean squared held-out residual over its
 //! noise): by a paired t, and by Wilcoxon's signed-rank test, which a gain held in few runs
-//! does not undo (the paired t's spread swells with it).
+//! does not undo (the paired t's spread swells with it). The search lets the ranks confirm a
+//! first term only (`forward.rs`): beside accepted terms they count the small gains of a term
+//! that bends one of them as much as large ones.
 
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
