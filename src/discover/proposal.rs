@@ -157,3 +157,54 @@ pub fn starts(e: &Extra, p: &Proposals) -> Vec<Vec<f64>> {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::discover::forms::TimePeriodic;
+    use crate::discover::spectral::{Peak, Spectrum};
+    use std::f64::consts::TAU;
+
+    fn peak(f_hz: f64, amp: f64) -> Peak {
+        Peak {
+            omega: TAU * f_hz,
+            power: 100.0,
+            coef: [amp, 0.0],
+        }
+    }
+
+    /// A vibration proposed within its amplitude's interval, or beyond it by less than the
+    /// interval's width, starts clamped inside it; one beyond by more (a kHz peak of tracker
+    /// noise read as hundreds of m/s²) is no start, and with nothing else proposed the form
+    /// starts where it vanishes.
+    #[test]
+    fn a_proposal_the_form_cannot_be_is_no_start() {
+        let e: Extra = TimePeriodic {
+            f_lo: 10.0,
+            f_hi: 5000.0,
+        }
+        .into();
+        let spectrum = |peaks: Vec<Peak>| Proposals {
+            t: Some(Spectrum {
+                variable: "t".into(),
+                x: vec![],
+                power: vec![],
+                noise_power: 2.0,
+                peaks,
+            }),
+            ..Proposals::default()
+        };
+        let p = spectrum(vec![
+            peak(40.0, 0.03),
+            peak(3500.0, 8.0),
+            peak(3514.0, 490.0),
+        ]);
+        assert_eq!(starts(&e, &p), vec![vec![40.0, 0.03], vec![3500.0, 5.0]]);
+        let default: Vec<f64> = e.params().iter().map(|q| q.start).collect();
+        assert_eq!(default[1], 0.0);
+        assert_eq!(
+            starts(&e, &spectrum(vec![peak(3514.0, 490.0)])),
+            vec![default]
+        );
+    }
+}
