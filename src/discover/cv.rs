@@ -75,6 +75,7 @@ pub fn cross_validate(
             FitControl {
                 max_iter: 8,
                 free_global: true,
+                covariance: false,
             },
         );
         let (te, tel) = pick(&test);
@@ -87,6 +88,7 @@ pub fn cross_validate(
             FitControl {
                 max_iter: 12,
                 free_global: false,
+                covariance: false,
             },
         );
         for (j, &i) in test.iter().enumerate() {

@@ -8,7 +8,7 @@
 
 use super::candidate::{predict, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use crate::lsq::block::{minimize_blocks, BlockProblem};
+use crate::lsq::block::{descend_blocks, minimize_blocks, BlockProblem};
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
 
 /// A fitted joint model.
@@ -34,6 +34,10 @@ pub struct FitControl {
     pub max_iter: usize,
     /// False: the globals stay fixed (held-out runs in cross-validation).
     pub free_global: bool,
+    /// False: no errors or covariance are wanted (a cross-validation fold reads the parameters
+    /// and χ² alone), which spares the Jacobian at the minimum; `global_se` is then NaN for a
+    /// free global and `global_cov` empty.
+    pub covariance: bool,
 }
 
 /// χ² of one run.
@@ -216,7 +220,11 @@ pub fn fit_joint(
     if problem.penalty_len > 0 {
         own.push(Vec::new());
     }
-    let res = minimize_blocks(&problem, &shared, &own, &settings);
+    let res = if ctl.covariance {
+        minimize_blocks(&problem, &shared, &own, &settings)
+    } else {
+        descend_blocks(&problem, &shared, &own, &settings)
+    };
     // the data's χ², without the penalty's block
     let chi2_run: Vec<f64> = res.block_cost[..runs.len()].to_vec();
     let chi2: f64 = chi2_run.iter().sum();
@@ -234,9 +242,10 @@ pub fn fit_joint(
     let mut profiled: Option<Vec<f64>> = None;
     let global_se = (0..ng)
         .map(|i| {
-            let v = res.shared_cov[i][i];
+            let v = res.shared_cov.get(i).map_or(f64::NAN, |row| row[i]);
             match (ctl.free_global, v.is_nan()) {
                 (false, _) => 0.0,
+                (true, true) if !ctl.covariance => f64::NAN,
                 (true, true) => {
                     let se = profiled.get_or_insert_with(|| {
                         let prep =

@@ -36,6 +36,7 @@ impl Model {
             FitControl {
                 max_iter,
                 free_global: true,
+                covariance: true,
             },
         );
         Model { spec, params, fit }

@@ -99,6 +99,7 @@ pub fn fit_each_run(
             let ctl = FitControl {
                 max_iter: 60,
                 free_global: true,
+                covariance: true,
             };
             let f = fit_joint(&spec, &params, std::slice::from_ref(&r), &g, &[l], ctl);
             let n = r.n_used().max(1) as f64;

@@ -555,31 +555,72 @@ pub fn minimize_blocks<P: BlockProblem>(
     let flat = Flat::new(problem, shared_specs, own_specs);
     let specs = flat.specs();
     let sol = lm::minimize(&flat, &specs, settings);
-    let ms = shared_specs.len();
     let free: Vec<bool> = specs.iter().map(|s| !s.held()).collect();
     let (shared_cov, own_se, singular) = sol.normal.covariance(&free);
-    let mut termination = sol.termination;
-    if singular && ms > 0 {
-        termination = Termination::Singular;
+    let mut res = block_result(
+        &flat,
+        sol.x,
+        &sol.r,
+        sol.termination,
+        sol.iterations,
+        settings,
+    );
+    if singular && !shared_specs.is_empty() {
+        res.termination = Termination::Singular;
     }
-    let block_cost = (0..problem.n_blocks())
+    res.shared_cov = shared_cov;
+    res.own_se = own_se;
+    res
+}
+
+/// [`minimize_blocks`] without the covariance (`shared_cov` and `own_se` empty, and no test of
+/// the normal equations' singularity): the same minimum one Jacobian sooner, for a fit whose
+/// parameters and cost are all that is read (a cross-validation fold).
+pub fn descend_blocks<P: BlockProblem>(
+    problem: &P,
+    shared_specs: &[ParamSpec],
+    own_specs: &[Vec<ParamSpec>],
+    settings: &Settings,
+) -> BlockResult {
+    let flat = Flat::new(problem, shared_specs, own_specs);
+    let sol = lm::descend(&flat, &flat.specs(), settings);
+    block_result(
+        &flat,
+        sol.x,
+        &sol.r,
+        sol.termination,
+        sol.iterations,
+        settings,
+    )
+}
+
+/// The solution at `x` (residuals `r`), its covariance not yet filled in.
+fn block_result<P: BlockProblem>(
+    flat: &Flat<P>,
+    x: Vec<f64>,
+    r: &[f64],
+    termination: Termination,
+    iterations: usize,
+    settings: &Settings,
+) -> BlockResult {
+    let block_cost = (0..flat.problem.n_blocks())
         .map(|b| {
-            sol.r[flat.res_offsets[b]..flat.res_offsets[b + 1]]
+            r[flat.res_offsets[b]..flat.res_offsets[b + 1]]
                 .iter()
                 .map(|u| huber_rho(*u, settings.huber_k))
                 .sum()
         })
         .collect();
     BlockResult {
-        shared: sol.x[..ms].to_vec(),
-        own: (0..own_specs.len())
-            .map(|b| flat.own(&sol.x, b).to_vec())
+        shared: x[..flat.shared_specs.len()].to_vec(),
+        own: (0..flat.own_specs.len())
+            .map(|b| flat.own(&x, b).to_vec())
             .collect(),
-        shared_cov,
-        own_se,
+        shared_cov: Vec::new(),
+        own_se: Vec::new(),
         block_cost,
         termination,
-        iterations: sol.iterations,
+        iterations,
     }
 }
 
@@ -660,6 +701,23 @@ mod tests {
         let se = res.shared_se(0);
         assert!(se > 0.0 && se < 0.01, "se {se}");
         assert!(res.termination.is_converged(), "{:?}", res.termination);
+    }
+
+    #[test]
+    fn descending_without_the_covariance_reaches_the_same_minimum() {
+        let (problem, _) = lines();
+        let shared = [spec(0.0, -10.0, 10.0)];
+        let own = vec![vec![spec(0.0, -10.0, 10.0)]; 3];
+        let full = minimize_blocks(&problem, &shared, &own, &settings());
+        let bare = descend_blocks(&problem, &shared, &own, &settings());
+        // the same steps from the same start: the same bits, only the covariance left out
+        assert_eq!(bare.shared, full.shared);
+        assert_eq!(bare.own, full.own);
+        assert_eq!(bare.block_cost, full.block_cost);
+        assert_eq!(bare.iterations, full.iterations);
+        assert_eq!(bare.termination, full.termination);
+        assert!(bare.shared_cov.is_empty() && bare.own_se.is_empty());
+        assert_eq!(full.shared_cov.len(), 1);
     }
 
     /// [`Lines`] with a second shared parameter the residuals do not depend on.

@@ -179,8 +179,25 @@ fn bounded_step<N: Normal>(
 }
 
 /// Minimise Σ ρ(r) over `specs` by rounds of IRLS (weights and scale from the round's start),
-/// each a bounded Levenberg–Marquardt on Σ w r²; the termination is the last round's.
+/// each a bounded Levenberg–Marquardt on Σ w r²; the termination is the last round's. The
+/// solution carries the normal equations at the minimum, for the covariance.
 pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solution<M::Normal> {
+    let d = descend(model, specs, s);
+    let normal = model.normal(&d.x, &d.r, &d.w);
+    Solution {
+        x: d.x,
+        r: d.r,
+        w: d.w,
+        scale: d.scale,
+        normal,
+        termination: d.termination,
+        iterations: d.iterations,
+    }
+}
+
+/// [`minimize`] without the normal equations at the minimum: the same point and residuals for
+/// a caller that needs no covariance (one Jacobian fewer, the costliest part of a short fit).
+pub fn descend<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solution<()> {
     let n = model.n_residuals();
     let mut x: Vec<f64> = specs
         .iter()
@@ -258,13 +275,12 @@ pub fn minimize<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Solut
     }
     let scale = scale_of(&r, s.scale);
     huber_weights(&r, s.huber_k * scale, &mut w);
-    let normal = model.normal(&x, &r, &w);
     Solution {
         x,
         r,
         w,
         scale,
-        normal,
+        normal: (),
         termination,
         iterations,
     }
