@@ -51,6 +51,13 @@ pub fn run_chi2(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData) -> f6
         .sum()
 }
 
+/// The damping each joint fit starts from. Discovery's fits start near their minimum (the
+/// screen's linear estimate, the residuals' proposals, the whole data's minimum for a fold), so
+/// the Gauss–Newton step is nearly right from the first iteration; the driver's usual 1e-3
+/// shrank it along the correlated directions (a map's coefficients, a drag time beside a map in
+/// v), and a fold of a map in v took five or six Jacobians where three do.
+const START_DAMPING: f64 = 1e-6;
+
 /// Bounds of z0 (free), t0 (within one frame) and v0 (±10 m/s).
 fn local_bounds(run: &RunData) -> [(f64, f64); N_LOCAL] {
     let frame = if run.fps > 0.0 { 1.0 / run.fps } else { 1e-3 };
@@ -216,6 +223,7 @@ pub fn fit_joint(
         scale: Scale::Fixed(1.0),
         cost_tol: 1e-9,
         rel_tol: 1e-7,
+        damping: START_DAMPING,
     };
     if problem.penalty_len > 0 {
         own.push(Vec::new());

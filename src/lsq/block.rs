@@ -657,6 +657,7 @@ mod tests {
             scale: Scale::Fixed(1.0),
             cost_tol: 1e-3,
             rel_tol: 1e-6,
+            damping: 1e-3,
         }
     }
 

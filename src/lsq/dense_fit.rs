@@ -192,6 +192,7 @@ mod tests {
             scale: Scale::Mad { floor: 1e-9 },
             cost_tol: 1e-3,
             rel_tol: 1e-10,
+            damping: 1e-3,
         }
     }
 
@@ -215,6 +216,52 @@ mod tests {
             specs,
             &settings(),
         )
+    }
+
+    /// Two nearly parallel columns (a line and the same line bent by 0.1 %), exact data: the
+    /// minimum is one Gauss–Newton step away, and the damping the descent starts from decides
+    /// how many steps it takes to get there.
+    #[test]
+    fn a_small_starting_damping_takes_the_gauss_newton_step_at_once() {
+        let t: Vec<f64> = (0..40).map(|i| i as f64 * 0.05).collect();
+        let col2 = |t: f64| t + 1e-3 * t * t;
+        let y: Vec<f64> = t.iter().map(|&t| 0.3 * t - 0.2 * col2(t)).collect();
+        let fit = |damping: f64| {
+            let s = Settings {
+                max_iter: 60,
+                rounds: 1,
+                huber_k: f64::INFINITY,
+                scale: Scale::Fixed(1.0),
+                cost_tol: 1e-20,
+                rel_tol: 0.0,
+                damping,
+            };
+            minimize(
+                |p, out| {
+                    for (i, &ti) in t.iter().enumerate() {
+                        out[i] = p[0] * ti + p[1] * col2(ti) - y[i];
+                    }
+                },
+                t.len(),
+                &[spec(0.0, -10.0, 10.0), spec(0.0, -10.0, 10.0)],
+                &s,
+            )
+        };
+        let (usual, small) = (fit(1e-3), fit(1e-9));
+        for res in [&usual, &small] {
+            assert!((res.params[0] - 0.3).abs() < 1e-3, "{:?}", res.params);
+            assert!((res.params[1] + 0.2).abs() < 1e-3, "{:?}", res.params);
+        }
+        // along the near-dependent direction a damping of 1e-3 of the diagonal shortens every
+        // step: 16 iterations here where the nearly undamped step needs 4 (the minimum, then
+        // steps of rounding)
+        assert!(small.iterations <= 4, "{} iterations", small.iterations);
+        assert!(
+            usual.iterations >= 2 * small.iterations,
+            "{} against {}",
+            usual.iterations,
+            small.iterations
+        );
     }
 
     #[test]

@@ -70,6 +70,11 @@ pub struct Settings {
     /// `cost_tol`·scale² (a χ² change no statistic can see) plus `rel_tol`·cost.
     pub cost_tol: f64,
     pub rel_tol: f64,
+    /// The damping λ (a fraction of the normal matrix's diagonal) each round starts from: 1e-3
+    /// for a start far from the minimum; a fit started at a linear estimate or a neighbouring
+    /// minimum takes the Gauss–Newton step sooner from a smaller one (a refused step costs one
+    /// evaluation of the residuals, a Jacobian many).
+    pub damping: f64,
 }
 
 /// The minimum the driver found, with the state the back-end needs for its covariance.
@@ -213,7 +218,7 @@ pub fn descend<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Soluti
         let scale = scale_of(&r, s.scale);
         huber_weights(&r, s.huber_k * scale, &mut w);
         let mut cost = weighted_cost(&r, &w);
-        let mut lambda = 1e-3;
+        let mut lambda = s.damping;
         termination = Termination::MaxIterations;
         for _ in 0..s.max_iter {
             iterations += 1;
@@ -340,6 +345,7 @@ mod tests {
             scale: Scale::Fixed(1.0),
             cost_tol: 1e-9,
             rel_tol: 0.0,
+            damping: 1e-3,
         };
         minimize(&NanNormal { nan_gradient }, &[spec], &s)
     }

@@ -80,6 +80,7 @@ pub fn fit_curve(model: &Model, s: &[Sample], start: (f64, f64, f64)) -> Option<
         scale: Scale::Mad { floor: 1e-8 },
         cost_tol: 1e-6,
         rel_tol: 1e-12,
+        damping: 1e-3,
     };
     let fit = minimize(
         |p, out| {

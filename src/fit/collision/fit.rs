@@ -170,6 +170,7 @@ impl Fitter<'_> {
             },
             cost_tol: 1e-3,
             rel_tol: 1e-10,
+            damping: 1e-3,
         };
         let res = minimize(
             |p, out| layout.residuals(p, out),

@@ -615,6 +615,7 @@ fn settings(max_iter: usize) -> Settings {
         scale: Scale::Fixed(1.0),
         cost_tol: 1e-3,
         rel_tol: 1e-6,
+        damping: 1e-3,
     }
 }
 
