@@ -264,6 +264,33 @@ mod tests {
         );
     }
 
+    /// Rosenbrock's valley from its classic far start: the first Gauss–Newton steps overshoot
+    /// and must be damped well beyond 1e-3 of the diagonal; a descent that starts from a tiny
+    /// damping still gets there (it is given the tries that bring it up to 1e-3 on top).
+    #[test]
+    fn a_tiny_starting_damping_still_damps_a_far_start() {
+        let s = Settings {
+            max_iter: 200,
+            rounds: 1,
+            huber_k: f64::INFINITY,
+            scale: Scale::Fixed(1.0),
+            cost_tol: 1e-24,
+            rel_tol: 0.0,
+            damping: 1e-12,
+        };
+        let res = minimize(
+            |p, out| {
+                out[0] = 10.0 * (p[1] - p[0] * p[0]);
+                out[1] = 1.0 - p[0];
+            },
+            2,
+            &[spec(-1.2, -10.0, 10.0), spec(1.0, -10.0, 10.0)],
+            &s,
+        );
+        assert!((res.params[0] - 1.0).abs() < 1e-6, "{:?}", res.params);
+        assert!((res.params[1] - 1.0).abs() < 1e-6, "{:?}", res.params);
+    }
+
     #[test]
     fn fits_a_line_with_an_outlier() {
         let t: Vec<f64> = (0..50).map(|i| i as f64 * 0.1).collect();

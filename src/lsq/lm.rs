@@ -219,6 +219,9 @@ pub fn descend<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Soluti
         huber_weights(&r, s.huber_k * scale, &mut w);
         let mut cost = weighted_cost(&r, &w);
         let mut lambda = s.damping;
+        // a step is tried at up to twelve dampings from 1e-3 up (×4 each); a smaller start gets
+        // the tries that bring it to 1e-3 on top, so a bad start reaches the damping it did
+        let tries = 12 + (1e-3 / s.damping).log(4.0).ceil().clamp(0.0, 30.0) as usize;
         termination = Termination::MaxIterations;
         for _ in 0..s.max_iter {
             iterations += 1;
@@ -235,7 +238,7 @@ pub fn descend<M: Model>(model: &M, specs: &[ParamSpec], s: &Settings) -> Soluti
                 break;
             }
             let mut improved = false;
-            for _ in 0..12 {
+            for _ in 0..tries {
                 let Some(step) = bounded_step(&normal, lambda, &x, specs, on.clone()) else {
                     lambda *= 10.0;
                     continue;
