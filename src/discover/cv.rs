@@ -12,7 +12,7 @@
 
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::joint::{fit_joint, FitControl, Fitted};
+use super::joint::{fit_joint, FitControl, Fitted, NEAR_DAMPING};
 use serde::Serialize;
 
 /// Held-out error of one model.
@@ -76,6 +76,7 @@ pub fn cross_validate(
                 max_iter: 8,
                 free_global: true,
                 covariance: false,
+                damping: NEAR_DAMPING,
             },
         );
         let (te, tel) = pick(&test);
@@ -89,6 +90,7 @@ pub fn cross_validate(
                 max_iter: 12,
                 free_global: false,
                 covariance: false,
+                damping: NEAR_DAMPING,
             },
         );
         for (j, &i) in test.iter().enumerate() {

@@ -38,7 +38,22 @@ pub struct FitControl {
     /// and χ² alone), which spares the Jacobian at the minimum; `global_se` is then NaN for a
     /// free global and `global_cov` empty.
     pub covariance: bool,
+    /// The damping the descent starts from (`lm::Settings::damping`): [`USUAL_DAMPING`], or
+    /// [`NEAR_DAMPING`] for a fit that starts at a neighbouring minimum.
+    pub damping: f64,
 }
+
+/// The driver's usual starting damping, for a fit whose start may be far from its minimum (a
+/// screen's linear estimate, a proposal, one run's μ and T from the material's).
+pub const USUAL_DAMPING: f64 = 1e-3;
+
+/// The starting damping of a cross-validation fold, which starts at the whole data's minimum:
+/// the Gauss–Newton step is nearly right from the first iteration, and 1e-3 shrank it along
+/// the correlated directions (a map's coefficients, a drag time beside a map in v), so a fold
+/// of a map in v took five or six Jacobians where three do. Not for a start that may be far:
+/// one run's μ and T fitted from a tiny damping took steps to their bounds and stayed there
+/// (the shipped data's drift of T with the kick speed read t = −0.8 instead of above 5).
+pub const NEAR_DAMPING: f64 = 1e-6;
 
 /// χ² of one run.
 pub fn run_chi2(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData) -> f64 {
@@ -50,13 +65,6 @@ pub fn run_chi2(spec: &Spec, g: &[f64], l: &[f64; N_LOCAL], run: &RunData) -> f6
         .map(|i| ((run.z_m[i] - z[i]) * w).powi(2))
         .sum()
 }
-
-/// The damping each joint fit starts from. Discovery's fits start near their minimum (the
-/// screen's linear estimate, the residuals' proposals, the whole data's minimum for a fold), so
-/// the Gauss–Newton step is nearly right from the first iteration; the driver's usual 1e-3
-/// shrank it along the correlated directions (a map's coefficients, a drag time beside a map in
-/// v), and a fold of a map in v took five or six Jacobians where three do.
-const START_DAMPING: f64 = 1e-6;
 
 /// Bounds of z0 (free), t0 (within one frame) and v0 (±10 m/s).
 fn local_bounds(run: &RunData) -> [(f64, f64); N_LOCAL] {
@@ -223,7 +231,7 @@ pub fn fit_joint(
         scale: Scale::Fixed(1.0),
         cost_tol: 1e-9,
         rel_tol: 1e-7,
-        damping: START_DAMPING,
+        damping: ctl.damping,
     };
     if problem.penalty_len > 0 {
         own.push(Vec::new());

@@ -3,7 +3,7 @@
 use super::candidate::{Extra, ParamInfo, Spec, N_LOCAL};
 use super::cv::{charged, cross_validate, CvResult};
 use super::data::RunData;
-use super::joint::{fit_joint, FitControl, Fitted};
+use super::joint::{fit_joint, FitControl, Fitted, USUAL_DAMPING};
 use super::proposal::{needs_proposal, starts as proposal_starts};
 use super::ranges::Proposals;
 use crate::artifacts::diagnosis::ModelScore;
@@ -37,6 +37,7 @@ impl Model {
                 max_iter,
                 free_global: true,
                 covariance: true,
+                damping: USUAL_DAMPING,
             },
         );
         Model { spec, params, fit }

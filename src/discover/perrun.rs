@@ -4,7 +4,7 @@
 use super::candidate::predict;
 use super::candidate::{ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::joint::{fit_joint, FitControl};
+use super::joint::{fit_joint, FitControl, USUAL_DAMPING};
 use super::noise_model::Slow;
 use super::slow_noise::Series;
 use rayon::prelude::*;
@@ -100,6 +100,7 @@ pub fn fit_each_run(
                 max_iter: 60,
                 free_global: true,
                 covariance: true,
+                damping: USUAL_DAMPING,
             };
             let f = fit_joint(&spec, &params, std::slice::from_ref(&r), &g, &[l], ctl);
             let n = r.n_used().max(1) as f64;
