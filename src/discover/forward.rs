@@ -10,7 +10,7 @@ use super::candidate::{Extra, N_LOCAL};
 use super::cv::{folds, paired_t, signed_rank_p, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
-use super::estimates::{reported_parameters, scale_at_bound};
+use super::estimates::{bound_notes, reported_parameters, scale_at_bound};
 use super::holm::holm;
 use super::model::{data_starts, Model};
 use super::null_distribution::{empirical_p, NullFit};
@@ -115,15 +115,29 @@ pub struct Tie {
     pub after: ModelScore,
 }
 
-/// Whether a form of `n_new` parameters and held-out error `new` is preferred to one of `n_old`
-/// and `old` (paired t over the runs against `t_cv`): a richer form where held-out runs prefer
-/// it, a simpler one where they cannot tell the two apart, and of two as simple the one with the
-/// lower held-out error.
-pub fn preferred(n_new: usize, new: &CvResult, n_old: usize, old: &CvResult, t_cv: f64) -> bool {
-    match n_new.cmp(&n_old) {
-        std::cmp::Ordering::Greater => paired_t(old, new) > t_cv,
-        std::cmp::Ordering::Less => paired_t(new, old) <= t_cv,
-        std::cmp::Ordering::Equal => new.cv_rms_m < old.cv_rms_m,
+/// One side of [`preferred`]: a form's parameter count, held-out error, and whether one of its
+/// parameters ended at a bound of its search (`estimates::bound_notes`).
+pub struct Side<'a> {
+    pub n: usize,
+    pub cv: &'a CvResult,
+    pub pinned: bool,
+}
+
+/// Whether form `new` is preferred to `old` (paired t over the runs against `t_cv`): a richer
+/// form where held-out runs prefer it, a simpler one where they cannot tell the two apart. Of
+/// two as simple, one with a parameter at a bound of its search is named only where held-out
+/// runs prefer it (a bump whose centre ran to the end of the groove, 4 mm wide, is a step seen
+/// from one side: the data do not place it, and the two came out a hair apart either way
+/// between builds), else the one with the lower held-out error.
+pub fn preferred(new: Side, old: Side, t_cv: f64) -> bool {
+    match new.n.cmp(&old.n) {
+        std::cmp::Ordering::Greater => paired_t(old.cv, new.cv) > t_cv,
+        std::cmp::Ordering::Less => paired_t(new.cv, old.cv) <= t_cv,
+        std::cmp::Ordering::Equal => match (new.pinned, old.pinned) {
+            (false, true) => paired_t(new.cv, old.cv) <= t_cv,
+            (true, false) => paired_t(old.cv, new.cv) > t_cv,
+            _ => new.cv.cv_rms_m < old.cv.cv_rms_m,
+        },
     }
 }
 
@@ -704,11 +718,22 @@ impl Trials<'_> {
             let Some((k, k_cv)) = self.best.as_ref() else {
                 return;
             };
-            let (nj, nk) = (self.all[j].params().len(), self.all[*k].params().len());
-            if passes && preferred(nj, &cv, nk, k_cv, self.t_cv) {
+            let side = |i: usize, cv| Side {
+                n: self.all[i].params().len(),
+                cv,
+                pinned: self.pinned(i),
+            };
+            if passes && preferred(side(j, &cv), side(*k, k_cv), self.t_cv) {
                 self.best = Some((j, cv));
             }
         }
+    }
+
+    /// Whether candidate `i`, fitted in full, has a parameter at a bound of its search.
+    fn pinned(&self, i: usize) -> bool {
+        let m = &self.fitted[i];
+        let last = m.spec.extras.len().saturating_sub(1);
+        !m.spec.extras.is_empty() && !bound_notes(m, last, self.set.materials).is_empty()
     }
 
     /// A force with a phase per run whose fitted phases gather about one value (Rayleigh's test
@@ -1015,7 +1040,7 @@ pub fn run_round(
             if !ties.is_empty() {
                 let forms: Vec<String> = ties.iter().map(|&(j, _)| all[j].form()).collect();
                 rows[i].evidence.decision.push_str(&format!(
-                    "; tied with {}: these data cannot tell them apart, and this one (simpler, stronger or of lower held-out error) is in the model",
+                    "; tied with {}: these data cannot tell them apart, and this one (simpler, stronger, inside its bounds or of lower held-out error) is in the model",
                     forms.join(" and ")
                 ));
             }

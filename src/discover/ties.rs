@@ -6,14 +6,15 @@
 //! the selection, each tied form is put in place of the accepted term it tied with, in the
 //! final model, refitted and cross-validated; it is named instead where held-out runs prefer it
 //! by the rule of its round (`forward::preferred`: a richer form only on a paired t above its
-//! critical value, a simpler one where they cannot tell, of two as simple the one of lower
-//! held-out error). Both rows say what was decided again and how, and a tie that stays is
+//! critical value, a simpler one where they cannot tell; of two as simple, one with a parameter
+//! at a bound only on such a t, else the one of lower held-out error). Both rows say what was decided again and how, and a tie that stays is
 //! still said as one. A term accepted in the last round was decided beside every other term
 //! already, and keeps its round's decision.
 
 use super::admissible::refusal;
 use super::cv::{paired_t, CvResult};
-use super::forward::{preferred, CV_LEVEL, FULL_ITERATIONS};
+use super::estimates::bound_notes;
+use super::forward::{preferred, Side, CV_LEVEL, FULL_ITERATIONS};
 use super::model::Model;
 use super::selection::{Ctx, Selection, Tied};
 use crate::stats::dist::t_upper_quantile;
@@ -61,6 +62,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     ));
     let old_cv = sel.current_cv.clone();
     let n_old = sel.accepted[a].extra.params().len();
+    let old_pinned = !bound_notes(&sel.current, i, ctx.materials).is_empty();
     // each tied form's paired t against the accepted term beside the later terms (None: refused)
     let mut outcome: Vec<Option<f64>> = vec![None; tied.len()];
     // (index into tied, model, its CV) of the form preferred so far; None: the accepted term
@@ -79,11 +81,24 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
         }
         let cv = ctx.cross_validate(&m);
         outcome[k] = Some(paired_t(&old_cv, &cv));
-        let (n_k, k_cv) = match &best {
-            Some((b, _, b_cv)) => (tied[*b].alt.extra.params().len(), b_cv),
-            None => (n_old, &old_cv),
+        let kept = match &best {
+            Some((b, bm, b_cv)) => Side {
+                n: tied[*b].alt.extra.params().len(),
+                cv: b_cv,
+                pinned: !bound_notes(bm, i, ctx.materials).is_empty(),
+            },
+            None => Side {
+                n: n_old,
+                cv: &old_cv,
+                pinned: old_pinned,
+            },
         };
-        if preferred(t.alt.extra.params().len(), &cv, n_k, k_cv, t_cv) {
+        let new = Side {
+            n: t.alt.extra.params().len(),
+            cv: &cv,
+            pinned: !bound_notes(&m, i, ctx.materials).is_empty(),
+        };
+        if preferred(new, kept, t_cv) {
             best = Some((k, m, cv));
         }
     }
@@ -120,7 +135,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
         row.evidence.decision = if still.is_empty() {
             format!("{head}; tied in its round, and told apart beside the later terms: held-out runs tell it from the forms it tied with there, or those are refused there (each one's row says which){flagged}")
         } else {
-            format!("{head}; tied with {}: these data cannot tell them apart, beside the later terms too, and this one (simpler, stronger or of lower held-out error) is in the model{flagged}", still.join(" and "))
+            format!("{head}; tied with {}: these data cannot tell them apart, beside the later terms too, and this one (simpler, stronger, inside its bounds or of lower held-out error) is in the model{flagged}", still.join(" and "))
         };
         let row = row.clone();
         set_row(sel, &row);
@@ -132,6 +147,9 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     let new_form = new.alt.extra.form();
     let why = match new.alt.extra.params().len().cmp(&n_old) {
         std::cmp::Ordering::Less => "simpler",
+        _ if old_pinned && bound_notes(&model, i, ctx.materials).is_empty() => {
+            "as simple and inside its bounds where the other ran to one"
+        }
         _ => "as simple and of lower held-out error",
     };
     let mut alt = new.alt;
@@ -222,12 +240,22 @@ mod tests {
         let hair = cv(&[0.99, 1.12, 0.88, 1.06, 0.94, 0.99]);
         assert!(paired_t(&old, &clearly) > t_cv && paired_t(&old, &hair).abs() < t_cv);
         assert!(hair.cv_rms_m < old.cv_rms_m);
-        assert!(preferred(3, &clearly, 2, &old, t_cv));
-        assert!(!preferred(3, &hair, 2, &old, t_cv));
-        assert!(preferred(1, &hair, 2, &old, t_cv));
-        assert!(!preferred(1, &old, 2, &clearly, t_cv));
-        assert!(preferred(2, &hair, 2, &old, t_cv));
-        assert!(!preferred(2, &old, 2, &hair, t_cv));
+        let side = |n: usize, cv, pinned: bool| Side { n, cv, pinned };
+        let free = |n: usize, cv| side(n, cv, false);
+        assert!(preferred(free(3, &clearly), free(2, &old), t_cv));
+        assert!(!preferred(free(3, &hair), free(2, &old), t_cv));
+        assert!(preferred(free(1, &hair), free(2, &old), t_cv));
+        assert!(!preferred(free(1, &old), free(2, &clearly), t_cv));
+        assert!(preferred(free(2, &hair), free(2, &old), t_cv));
+        assert!(!preferred(free(2, &old), free(2, &hair), t_cv));
+        // of two as simple, one with a parameter at a bound needs the runs, and the other is
+        // named unless the runs prefer the pinned one: a hair's lower error does not decide
+        assert!(!preferred(side(2, &hair, true), free(2, &old), t_cv));
+        assert!(preferred(free(2, &old), side(2, &hair, true), t_cv));
+        assert!(preferred(side(2, &clearly, true), free(2, &old), t_cv));
+        assert!(!preferred(free(2, &old), side(2, &clearly, true), t_cv));
+        // both pinned: the lower error, as between two free ones
+        assert!(preferred(side(2, &hair, true), side(2, &old, true), t_cv));
     }
 
     /// A tie that stays is said so that the report names the form it tied with; one told apart

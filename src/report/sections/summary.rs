@@ -285,7 +285,7 @@ mod tests {
         let lead = block(&d).lead.unwrap();
         assert!(!lead.contains("cannot tell"), "{lead}");
         let f = diag.findings.iter_mut().find(|f| f.accepted).unwrap();
-        f.evidence.decision = "accepted: strongest term passing both tests; tied with quadratic: these data cannot tell them apart, and this one (simpler, stronger or of lower held-out error) is in the model".into();
+        f.evidence.decision = "accepted: strongest term passing both tests; tied with quadratic: these data cannot tell them apart, and this one (simpler, stronger, inside its bounds or of lower held-out error) is in the model".into();
         let d = ReportData {
             diagnosis: Some(diag),
             ..ReportData::default()
