@@ -99,8 +99,9 @@
 //!    not a tilt, a wave and a bump.
 //! 5. **Sanity.** A term must be physics (`admissible.rs`): a drag that pushes, a form whose
 //!    scale ends at the fine end of its search, are refused; a parameter at a bound is said in
-//!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept,
-//!    and decided again beside the terms accepted after them (`ties.rs`).
+//!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept
+//!    (of two as simple, the one with no parameter at a bound), and decided again beside the
+//!    terms accepted after them (`ties.rs`).
 //!    A map's peak and RMS are of the curve with its noise taken out (`forms/spline.rs`).
 //!    Drift probes (T or μ drifting with |v0|, a direction asymmetry) say whether a mismatch is
 //!    left unexplained. Every candidate carries its detection limit (90 % power on this dataset,
