@@ -7,9 +7,9 @@
 //! final model, refitted and cross-validated; it is named instead where held-out runs prefer it
 //! by the rule of its round (`forward::preferred`: a richer form only on a paired t above its
 //! critical value, a simpler one where they cannot tell; of two as simple, one with a parameter
-//! at a bound only on such a t, else the one of lower held-out error). Both rows say what was decided again and how, and a tie that stays is
-//! still said as one. A term accepted in the last round was decided beside every other term
-//! already, and keeps its round's decision.
+//! at a bound only on such a t, else the one of lower held-out error). Both rows say what was
+//! decided again and how, and a tie that stays is still said as one. A term accepted in the last
+//! round was decided beside every other term already, and keeps its round's decision.
 
 use super::admissible::refusal;
 use super::cv::{paired_t, CvResult};

@@ -71,9 +71,10 @@ pub struct Settings {
     pub cost_tol: f64,
     pub rel_tol: f64,
     /// The damping λ (a fraction of the normal matrix's diagonal) each round starts from: 1e-3
-    /// for a start far from the minimum; a fit started at a linear estimate or a neighbouring
-    /// minimum takes the Gauss–Newton step sooner from a smaller one (a refused step costs one
-    /// evaluation of the residuals, a Jacobian many).
+    /// for a start that may be far from the minimum; a fit started at a neighbouring minimum
+    /// takes the Gauss–Newton step sooner from a smaller one (a refused step costs one
+    /// evaluation of the residuals, a Jacobian many), but from a far start its first accepted
+    /// steps can run parameters to their bounds.
     pub damping: f64,
 }
 
