@@ -56,6 +56,26 @@ pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
     notes
 }
 
+/// Whether extra term `i` of `m` has a parameter other than its scale at a bound of its search
+/// (as `bound_notes` says it): a centre or a place the data pushed to the end of the groove is a
+/// feature they do not place (a bump centred at the end of the observed stretch is a step seen
+/// from one side). A scale at its fine end is not counted: a step sharper than the search
+/// resolves is still a step there.
+pub fn placed_at_bound(m: &Model, i: usize) -> bool {
+    let off = m.spec.extra_offset(i);
+    let e = &m.spec.extras[i];
+    let scale = e.scale().map(|(k, _)| k);
+    (0..e.params().len())
+        .filter(|&k| Some(k) != scale)
+        .any(|k| {
+            let (x, info) = (m.fit.global[off + k], &m.params[off + k]);
+            match side_of_bound(x, info, 1e-6) {
+                None => false,
+                Some(lower) => !(lower && info.start == info.lo && !e.notes_start_bound()),
+            }
+        })
+}
+
 /// Which bound `x` sits at (`Some(true)` the lower), within `rel` of the parameter's range.
 pub fn side_of_bound(x: f64, info: &ParamInfo, rel: f64) -> Option<bool> {
     let tol = rel * (info.hi - info.lo);

@@ -10,7 +10,7 @@ use super::candidate::{Extra, N_LOCAL};
 use super::cv::{folds, paired_t, signed_rank_p, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
-use super::estimates::{bound_notes, reported_parameters, scale_at_bound};
+use super::estimates::{placed_at_bound, reported_parameters, scale_at_bound};
 use super::holm::holm;
 use super::model::{data_starts, Model};
 use super::null_distribution::{empirical_p, NullFit};
@@ -115,8 +115,8 @@ pub struct Tie {
     pub after: ModelScore,
 }
 
-/// One side of [`preferred`]: a form's parameter count, held-out error, and whether one of its
-/// parameters ended at a bound of its search (`estimates::bound_notes`).
+/// One side of [`preferred`]: a form's parameter count, held-out error, and whether a parameter
+/// other than its scale ended at a bound of its search (`estimates::placed_at_bound`).
 pub struct Side<'a> {
     pub n: usize,
     pub cv: &'a CvResult,
@@ -125,8 +125,8 @@ pub struct Side<'a> {
 
 /// Whether form `new` is preferred to `old` (paired t over the runs against `t_cv`): a richer
 /// form where held-out runs prefer it, a simpler one where they cannot tell the two apart. Of
-/// two as simple, one with a parameter at a bound of its search is named only where held-out
-/// runs prefer it (a bump whose centre ran to the end of the groove, 4 mm wide, is a step seen
+/// two as simple, one with a parameter other than its scale at a bound of its search is named
+/// only where held-out runs prefer it (a bump whose centre ran to the end of the groove, 4 mm wide, is a step seen
 /// from one side: the data do not place it, and the two came out a hair apart either way
 /// between builds), else the one with the lower held-out error.
 pub fn preferred(new: Side, old: Side, t_cv: f64) -> bool {
@@ -729,11 +729,11 @@ impl Trials<'_> {
         }
     }
 
-    /// Whether candidate `i`, fitted in full, has a parameter at a bound of its search.
+    /// Whether candidate `i`, fitted in full, has a parameter other than its scale at a bound
+    /// of its search (`estimates::placed_at_bound`).
     fn pinned(&self, i: usize) -> bool {
         let m = &self.fitted[i];
-        let last = m.spec.extras.len().saturating_sub(1);
-        !m.spec.extras.is_empty() && !bound_notes(m, last, self.set.materials).is_empty()
+        !m.spec.extras.is_empty() && placed_at_bound(m, m.spec.extras.len() - 1)
     }
 
     /// A force with a phase per run whose fitted phases gather about one value (Rayleigh's test

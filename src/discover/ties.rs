@@ -6,14 +6,14 @@
 //! the selection, each tied form is put in place of the accepted term it tied with, in the
 //! final model, refitted and cross-validated; it is named instead where held-out runs prefer it
 //! by the rule of its round (`forward::preferred`: a richer form only on a paired t above its
-//! critical value, a simpler one where they cannot tell; of two as simple, one with a parameter
-//! at a bound only on such a t, else the one of lower held-out error). Both rows say what was
+//! critical value, a simpler one where they cannot tell; of two as simple, one placed at a bound
+//! only on such a t, else the one of lower held-out error). Both rows say what was
 //! decided again and how, and a tie that stays is still said as one. A term accepted in the last
 //! round was decided beside every other term already, and keeps its round's decision.
 
 use super::admissible::refusal;
 use super::cv::{paired_t, CvResult};
-use super::estimates::bound_notes;
+use super::estimates::placed_at_bound;
 use super::forward::{preferred, Side, CV_LEVEL, FULL_ITERATIONS};
 use super::model::Model;
 use super::selection::{Ctx, Selection, Tied};
@@ -62,7 +62,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     ));
     let old_cv = sel.current_cv.clone();
     let n_old = sel.accepted[a].extra.params().len();
-    let old_pinned = !bound_notes(&sel.current, i, ctx.materials).is_empty();
+    let old_pinned = placed_at_bound(&sel.current, i);
     // each tied form's paired t against the accepted term beside the later terms (None: refused)
     let mut outcome: Vec<Option<f64>> = vec![None; tied.len()];
     // (index into tied, model, its CV) of the form preferred so far; None: the accepted term
@@ -85,7 +85,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
             Some((b, bm, b_cv)) => Side {
                 n: tied[*b].alt.extra.params().len(),
                 cv: b_cv,
-                pinned: !bound_notes(bm, i, ctx.materials).is_empty(),
+                pinned: placed_at_bound(bm, i),
             },
             None => Side {
                 n: n_old,
@@ -96,7 +96,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
         let new = Side {
             n: t.alt.extra.params().len(),
             cv: &cv,
-            pinned: !bound_notes(&m, i, ctx.materials).is_empty(),
+            pinned: placed_at_bound(&m, i),
         };
         if preferred(new, kept, t_cv) {
             best = Some((k, m, cv));
@@ -147,7 +147,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     let new_form = new.alt.extra.form();
     let why = match new.alt.extra.params().len().cmp(&n_old) {
         std::cmp::Ordering::Less => "simpler",
-        _ if old_pinned && bound_notes(&model, i, ctx.materials).is_empty() => {
+        _ if old_pinned && !placed_at_bound(&model, i) => {
             "as simple and inside its bounds where the other ran to one"
         }
         _ => "as simple and of lower held-out error",
