@@ -59,8 +59,8 @@ pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
 /// Whether extra term `i` of `m` has a parameter other than its scale at a bound of its search
 /// (as `bound_notes` says it): a centre or a place the data pushed to the end of the groove is a
 /// feature they do not place (a bump centred at the end of the observed stretch is a step seen
-/// from one side). A scale at its fine end is not counted: a step sharper than the search
-/// resolves is still a step there.
+/// from one side). Its scale is not counted at either end: a step sharper than the search
+/// resolves is still a step there, and a scale at an end is judged by `scale_at_bound`.
 pub fn placed_at_bound(m: &Model, i: usize) -> bool {
     let off = m.spec.extra_offset(i);
     let e = &m.spec.extras[i];
