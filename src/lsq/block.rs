@@ -557,14 +557,7 @@ pub fn minimize_blocks<P: BlockProblem>(
     let sol = lm::minimize(&flat, &specs, settings);
     let free: Vec<bool> = specs.iter().map(|s| !s.held()).collect();
     let (shared_cov, own_se, singular) = sol.normal.covariance(&free);
-    let mut res = block_result(
-        &flat,
-        sol.x,
-        &sol.r,
-        sol.termination,
-        sol.iterations,
-        settings,
-    );
+    let mut res = block_result(&flat, &sol, settings);
     if singular && !shared_specs.is_empty() {
         res.termination = Termination::Singular;
     }
@@ -584,25 +577,16 @@ pub fn descend_blocks<P: BlockProblem>(
 ) -> BlockResult {
     let flat = Flat::new(problem, shared_specs, own_specs);
     let sol = lm::descend(&flat, &flat.specs(), settings);
-    block_result(
-        &flat,
-        sol.x,
-        &sol.r,
-        sol.termination,
-        sol.iterations,
-        settings,
-    )
+    block_result(&flat, &sol, settings)
 }
 
-/// The solution at `x` (residuals `r`), its covariance not yet filled in.
-fn block_result<P: BlockProblem>(
+/// The driver's solution `sol` by block, its covariance not yet filled in.
+fn block_result<P: BlockProblem, N>(
     flat: &Flat<P>,
-    x: Vec<f64>,
-    r: &[f64],
-    termination: Termination,
-    iterations: usize,
+    sol: &lm::Solution<N>,
     settings: &Settings,
 ) -> BlockResult {
+    let (x, r) = (&sol.x, &sol.r);
     let block_cost = (0..flat.problem.n_blocks())
         .map(|b| {
             r[flat.res_offsets[b]..flat.res_offsets[b + 1]]
@@ -614,13 +598,13 @@ fn block_result<P: BlockProblem>(
     BlockResult {
         shared: x[..flat.shared_specs.len()].to_vec(),
         own: (0..flat.own_specs.len())
-            .map(|b| flat.own(&x, b).to_vec())
+            .map(|b| flat.own(x, b).to_vec())
             .collect(),
         shared_cov: Vec::new(),
         own_se: Vec::new(),
         block_cost,
-        termination,
-        iterations,
+        termination: sol.termination,
+        iterations: sol.iterations,
     }
 }
 
