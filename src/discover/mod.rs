@@ -41,6 +41,7 @@
 //! - `sim.rs`: one-particle trajectories for the discovery fits
 //! - `spectral.rs`: Spectral search
 //! - `ties.rs`: A tie decided again once the later terms are in the model
+//! - `time_scan.rs`: The frequency scan the two forms periodic in time share
 //! - `timeforce.rs`: Each run's own phase of a force periodic in time
 //! - `forcemap/`: The force map: the missing acceleration as a smooth function of one variable
 //! - `impact/`: The impact laws of the pairs (restitution, μ_pp against slip speed), read from the impacts
@@ -159,6 +160,7 @@ pub mod sim;
 pub mod slow_noise;
 pub mod spectral;
 mod ties;
+mod time_scan;
 pub mod timeforce;
 
 pub use crate::artifacts::diagnosis::Diagnosis;

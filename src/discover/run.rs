@@ -826,6 +826,62 @@ mod tests {
         }
     }
 
+    /// The frequency scan the two forms periodic in time share gives each the numbers of its
+    /// own pass, to the bit: the coherent sums solved as `coherent` solves them alone, and each
+    /// replicate's Σ|b| over runs as the runs' own projections sum, with the data in the batch
+    /// and out of it; a second request for the same batch is the first one's scan.
+    #[test]
+    fn the_shared_time_scan_gives_each_form_its_own_numbers() {
+        use super::super::screen_sums::{coherent, dot, dot2, Vectors};
+        use super::super::spectral::f_grid;
+        use super::super::time_scan::TimeMemo;
+        use std::f64::consts::TAU;
+        let (runs, _, prep) = null_small_baseline();
+        let v = Vectors::new(&prep, &runs, 9, 5);
+        let rg = Ranges::of(&runs);
+        let grid: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
+            .into_iter()
+            .step_by(7)
+            .collect();
+        assert!(grid.len() > 20, "{} frequencies", grid.len());
+        let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+        let memo = TimeMemo::default();
+        for reps in [0..10, 3..10] {
+            let scan = memo.get(&prep, &v, reps.clone(), &grid);
+            assert!(std::sync::Arc::ptr_eq(
+                &scan,
+                &memo.get(&prep, &v, reps.clone(), &grid)
+            ));
+            for (&f, at) in grid.iter().zip(&scan.at) {
+                let cols = |p: &super::super::response::Prepared| {
+                    let (rs, rc) = p.track.respond_time(TAU * f);
+                    Some(vec![p.column(rs), p.column(rc)])
+                };
+                let alone = coherent(&prep, &v, 2, reps.clone(), &[], cols).map(|a| bits(&a.0));
+                assert_eq!(
+                    alone,
+                    at.coherent.solve(&v, &[]).map(|g| bits(&g.0)),
+                    "{f} Hz"
+                );
+                let (mut sb, mut data) = (vec![0.0; reps.len()], 0.0);
+                for (p, yr) in prep.iter().zip(&v.y) {
+                    let c = cols(p).unwrap();
+                    if 0.5 * (dot(&c[0], &c[0]) + dot(&c[1], &c[1])) > 0.0 {
+                        for (s, y) in sb.iter_mut().zip(&yr[reps.clone()]) {
+                            let (bs, bc) = dot2(&c[0], &c[1], y);
+                            *s += bs.hypot(bc);
+                        }
+                        let (bs, bc) = dot2(&c[0], &c[1], &yr[0]);
+                        data += bs.hypot(bc);
+                    }
+                }
+                assert_eq!(bits(&sb), bits(&at.per_run), "{f} Hz");
+                let data_out = if reps.start == 0 { 0.0 } else { data };
+                assert_eq!(data_out.to_bits(), at.per_run_data.to_bits(), "{f} Hz");
+            }
+        }
+    }
+
     /// The check of `a_named_terms_computed_null_is_the_law_of_its_replicates` at the runs'
     /// noise as they carry it.
     fn check_named_laws(

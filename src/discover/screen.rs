@@ -27,6 +27,7 @@ use super::ranges::Ranges;
 use super::response::Prepared;
 pub use super::screen_sums::Typical;
 use super::screen_sums::{best_of, coherent_sums, one_sided, Trial, Vectors};
+use super::time_scan::TimeMemo;
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -253,6 +254,7 @@ pub fn screen(
         .collect();
     let first = 0..(FIRST_BATCH + 1).min(nrep);
     let n = extras.len();
+    let time = TimeMemo::default();
     extras
         .iter()
         .enumerate()
@@ -271,6 +273,7 @@ pub fn screen(
                         v: &v,
                         rg,
                         reps,
+                        time: &time,
                     })
                 };
                 let (t, typical) = search(first.clone());

@@ -237,7 +237,7 @@ impl Sums {
     }
 
     /// A run's columns against each other and against the shared parameters' columns.
-    fn add_design(&mut self, cols: &[Vec<f64>], p: &Prepared, v: &Vectors) {
+    pub(super) fn add_design(&mut self, cols: &[Vec<f64>], p: &Prepared, v: &Vectors) {
         let (q, k) = (self.q, v.kept.len());
         for a in 0..q {
             for b in a..q {
@@ -250,6 +250,14 @@ impl Sums {
             for (g, &jg) in v.kept.iter().enumerate() {
                 self.xtg[a * k + g] += dot(&cols[a], &p.glob[jg]);
             }
+        }
+    }
+
+    /// A run's projections `b` (one per column) on replicate `r` of `reps`, computed by the
+    /// caller (`time_scan`, which shares them between two forms).
+    pub(super) fn add_projections(&mut self, r: usize, b: &[f64]) {
+        for (x, b) in self.xty[r].iter_mut().zip(b) {
+            *x += b;
         }
     }
 

@@ -7,9 +7,11 @@ use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::response::Prepared;
 use crate::discover::screen_sums::{Trial, Typical, Vectors};
 use crate::discover::sim::SimModel;
+use crate::discover::time_scan::{TimeMemo, TimeScan};
 use crate::physics::{FrictionVariation, Term};
 use std::collections::BTreeMap;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// Name, start, bounds and finite-difference step of one parameter (SI units, named with them).
 #[derive(Clone, Debug)]
@@ -83,12 +85,22 @@ pub struct Fitted<'a> {
 }
 
 /// What a searched form's screen works on: the prepared runs, the noise replicates (`reps` of
-/// them, 0 the data) and the ranges the data allow.
+/// them, 0 the data), the ranges the data allow, and the round's frequency scans (`time`),
+/// which the forms periodic in time share.
 pub struct Search<'a> {
     pub prep: &'a [Prepared],
     pub v: &'a Vectors,
     pub rg: &'a Ranges,
     pub reps: Range<usize>,
+    pub time: &'a TimeMemo,
+}
+
+impl Search<'_> {
+    /// The frequency scan of `grid` over this search's replicates (`time_scan`), computed by
+    /// the first form that asks.
+    pub fn time_scan(&self, grid: &[f64]) -> Arc<TimeScan> {
+        self.time.get(self.prep, self.v, self.reps.clone(), grid)
+    }
 }
 
 /// A finding of `diagnosis.json` read back as the form that wrote it (`forms::read`).

@@ -84,21 +84,20 @@ impl Form for TimeCommon {
         true
     }
     /// At each frequency of the grid, the runs' responses to sin and cos of 2πft regressed on
-    /// the prepared runs coherently (one pair shared by every run).
+    /// the prepared runs coherently (one pair shared by every run), from the round's shared
+    /// scan (`time_scan`).
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let fs: Vec<f64> = f_grid(s.rg.duration_s, s.rg.f_max_hz)
             .into_iter()
             .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
             .collect();
-        wavelength::pair_scan(
-            s,
-            &fs,
-            |p, f| {
-                let (rs, rc) = p.track.respond_time(TAU * f);
-                Some(vec![p.column(rs), p.column(rc)])
-            },
-            |f| format!("at {f:.0} Hz"),
-        )
+        let solved = s
+            .time_scan(&fs)
+            .at
+            .iter()
+            .map(|at| at.coherent.solve(s.v, &[]))
+            .collect();
+        wavelength::pair_trials(solved, &fs, s.reps.len(), |f| format!("at {f:.0} Hz"))
     }
     fn wanted(&self) -> Wanted {
         Wanted {

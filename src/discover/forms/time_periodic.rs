@@ -5,10 +5,9 @@ use super::form::{p, Entry, Fitted, Form, ParamInfo, Place, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::noise_floor::local_floor;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
-use crate::discover::screen_sums::{best_of, dot, dot2, dot2_twice, scan_block, Trial, Typical};
+use crate::discover::screen_sums::{best_of, Trial, Typical};
 use crate::discover::spectral::f_grid;
 use crate::physics::Term;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
@@ -89,80 +88,32 @@ impl Form for TimePeriodic {
     /// drops χ² by Σ(2α|b_r| − α²a_r), at best (Σ|b_r|)²/Σa_r. A free amplitude per run would
     /// absorb any structure at all one run at a time; the shared one does not.
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
-        let (prep, v, rg, reps) = (s.prep, s.v, s.rg, s.reps.clone());
+        let (rg, reps) = (s.rg, s.reps.clone());
         let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
             .into_iter()
             .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
             .collect();
         let nrep = reps.len();
-        // the data (replicate 0) is scanned in every batch, for the noise floor below
+        // the data (replicate 0) is in every batch's scan, for the noise floor below
         let data_in = reps.start == 0;
-        // a block of frequencies per pass over a run's replicates (`coherent_scan`'s reason)
-        let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = fs
-            .par_chunks(scan_block(fs.len()))
-            .flat_map_iter(|fb| {
-                let mut sb = vec![vec![0.0; nrep]; fb.len()];
-                let mut s0 = vec![0.0; fb.len()];
-                let mut info = vec![Vec::with_capacity(prep.len()); fb.len()];
-                for (p, yr) in prep.iter().zip(&v.y) {
-                    let cols: Vec<Option<(Vec<f64>, Vec<f64>)>> = fb
-                        .iter()
-                        .zip(&mut info)
-                        .map(|(&f, info)| {
-                            let (rs, rc) = p.track.respond_time(TAU * f);
-                            let (xs, xc) = (p.column(rs), p.column(rc));
-                            let a = 0.5 * (dot(&xs, &xs) + dot(&xc, &xc));
-                            (a > 0.0).then(|| {
-                                info.push(a);
-                                (xs, xc)
-                            })
-                        })
-                        .collect();
-                    // two replicates at a time: each column is read once for both
-                    for (pair, two) in yr[reps.clone()].chunks(2).enumerate() {
-                        let r = 2 * pair;
-                        for (c, sb) in cols.iter().zip(&mut sb) {
-                            match (c, two) {
-                                (Some((xs, xc)), [y0, y1]) => {
-                                    let ((s0, c0), (s1, c1)) = dot2_twice(xs, xc, y0, y1);
-                                    sb[r] += s0.hypot(c0);
-                                    sb[r + 1] += s1.hypot(c1);
-                                }
-                                (Some((xs, xc)), [y0]) => {
-                                    let (bs, bc) = dot2(xs, xc, y0);
-                                    sb[r] += bs.hypot(bc);
-                                }
-                                _ => {}
-                            }
-                        }
-                    }
-                    if !data_in {
-                        for (c, s0) in cols.iter().zip(&mut s0) {
-                            if let Some((xs, xc)) = c {
-                                let (bs, bc) = dot2(xs, xc, &yr[0]);
-                                *s0 += bs.hypot(bc);
-                            }
-                        }
-                    }
+        let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = s
+            .time_scan(&fs)
+            .at
+            .iter()
+            .zip(&fs)
+            .map(|(at, &f)| {
+                let (sb, info) = (&at.per_run, at.info.clone());
+                let sa: f64 = info.iter().sum();
+                if sa <= 0.0 {
+                    return (None, info, f64::NAN);
                 }
-                fb.iter()
-                    .zip(sb)
-                    .zip(s0)
-                    .zip(info)
-                    .map(|(((&f, sb), s0), info)| {
-                        let sa: f64 = info.iter().sum();
-                        if sa <= 0.0 {
-                            return (None, info, f64::NAN);
-                        }
-                        let data = if data_in { sb[0] } else { s0 };
-                        let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
-                        (
-                            Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
-                            info,
-                            data * data / sa,
-                        )
-                    })
-                    .collect::<Vec<_>>()
+                let data = if data_in { sb[0] } else { at.per_run_data };
+                let lr: Vec<f64> = sb.iter().map(|b| b * b / sa).collect();
+                (
+                    Some((lr, vec![f, sb[0] / sa], vec![f64::NAN, 1.0 / sa.sqrt()])),
+                    info,
+                    data * data / sa,
+                )
             })
             .collect();
         // the replicates raised to the noise floor the data show around each frequency: with

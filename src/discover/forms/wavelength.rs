@@ -49,22 +49,37 @@ where
     A: Fn(f64) -> String,
 {
     let (prep, v, reps) = (s.prep, s.v, s.reps.clone());
-    let trials: Vec<Option<Trial>> =
-        coherent_scan(prep, v, 2, reps.clone(), grid, |p, &x| columns(p, x))
-            .into_iter()
-            .zip(grid)
-            .map(|(t, &x)| {
-                let (lr, b, var) = t?;
-                Some((
-                    lr,
-                    vec![x, b[0], b[1]],
-                    vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
-                ))
-            })
-            .collect();
+    let solved = coherent_scan(prep, v, 2, reps.clone(), grid, |p, &x| columns(p, x));
+    pair_trials(solved, grid, reps.len(), at)
+}
+
+/// The trials of a coherent (sin, cos) scan solved at each value of `grid` (`Sums::solve`'s
+/// statistic per replicate, coefficients and variances; None: no trial there), each estimate
+/// (x, sin, cos), over `n_rep` replicates; the most sensitive trial is said by `at(x)`.
+pub fn pair_trials<A>(
+    solved: Vec<Option<(Vec<f64>, Vec<f64>, Vec<f64>)>>,
+    grid: &[f64],
+    n_rep: usize,
+    at: A,
+) -> (Option<Trial>, Option<Typical>)
+where
+    A: Fn(f64) -> String,
+{
+    let trials: Vec<Option<Trial>> = solved
+        .into_iter()
+        .zip(grid)
+        .map(|(t, &x)| {
+            let (lr, b, var) = t?;
+            Some((
+                lr,
+                vec![x, b[0], b[1]],
+                vec![f64::NAN, var[0].sqrt(), var[1].sqrt()],
+            ))
+        })
+        .collect();
     let typical = most_sensitive(&trials, |se| se[1].hypot(se[2]) / 2f64.sqrt())
         .map(|(se, t)| Typical::Se { se, at: at(t.1[0]) });
-    (best_of(trials, reps.len()), typical)
+    (best_of(trials, n_rep), typical)
 }
 
 /// The amplitude, wavelength and phase (about z = 0) of a sin(k(z − z_ref)) + b cos(k(z − z_ref))
