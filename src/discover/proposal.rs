@@ -12,6 +12,7 @@ use super::forcemap::{force_map, phase_map};
 use super::ranges::{bump_column, bump_trials, Proposals, Ranges, Wanted};
 use super::response::{dot, Prepared};
 use super::spectral::{f_grid, k_grid, t_spectrum, z_spectrum};
+use super::time_scan::resolvable;
 use crate::physics::Variable;
 use rayon::prelude::*;
 
@@ -88,9 +89,10 @@ pub fn propose(
     let z = wanted
         .z
         .then(|| z_spectrum(&prep, rg.z_ref(), &k_grid(rg.span(), rg.lambda_min_m)));
-    let t = wanted
-        .t
-        .then(|| t_spectrum(&prep, &f_grid(rg.duration_s, rg.f_max_hz)));
+    let t = wanted.t.then(|| {
+        let fs = f_grid(rg.duration_s, rg.f_max_hz);
+        t_spectrum(&prep, &fs[..resolvable(&prep, &fs)])
+    });
     let bumps = if wanted.bump {
         bump_scan(&prep, rg)
     } else {

@@ -852,7 +852,9 @@ mod tests {
                 &scan,
                 &memo.get(&prep, &v, reps.clone(), &grid)
             ));
-            for (&f, at) in grid.iter().zip(&scan.at) {
+            assert_eq!(scan.grid, grid[..scan.grid.len()]);
+            assert_eq!(scan.at.len(), scan.grid.len());
+            for (&f, at) in scan.grid.iter().zip(&scan.at) {
                 let cols = |p: &super::super::response::Prepared| {
                     let (rs, rc) = p.track.respond_time(TAU * f);
                     Some(vec![p.column(rs), p.column(rc)])
@@ -880,6 +882,45 @@ mod tests {
                 assert_eq!(data_out.to_bits(), at.per_run_data.to_bits(), "{f} Hz");
             }
         }
+    }
+
+    /// The time scan stops where a force at the forms' amplitude bound would stand below two
+    /// standard errors: at every frequency asked beyond its grid the amplitude's error, from
+    /// the runs' own responses, is above half the bound, and at its most sensitive frequency
+    /// far below; on the small null's 1 kHz sampling that leaves out most of the grid.
+    #[test]
+    fn the_time_scan_stops_where_no_force_could_be_seen() {
+        use super::super::response::dot;
+        use super::super::screen_sums::Vectors;
+        use super::super::spectral::f_grid;
+        use super::super::time_scan::{TimeMemo, AMPLITUDE_BOUND_MPS2};
+        use std::f64::consts::TAU;
+        let (runs, _, prep) = null_small_baseline();
+        let v = Vectors::new(&prep, &runs, 3, 5);
+        let rg = Ranges::of(&runs);
+        let grid = f_grid(rg.duration_s, rg.f_max_hz);
+        let scan = TimeMemo::default().get(&prep, &v, 0..4, &grid);
+        let se = |f: f64| {
+            let a: f64 = prep
+                .iter()
+                .map(|p| {
+                    let (rs, rc) = p.track.respond_time(TAU * f);
+                    let (xs, xc) = (p.column(rs), p.column(rc));
+                    0.5 * (dot(&xs, &xs) + dot(&xc, &xc))
+                })
+                .sum();
+            1.0 / a.sqrt()
+        };
+        let kept = scan.grid.len();
+        assert!(
+            kept > 10 && kept < grid.len(),
+            "{kept} of {} kept",
+            grid.len()
+        );
+        for &f in grid[kept..].iter().step_by(5) {
+            assert!(2.0 * se(f) > AMPLITUDE_BOUND_MPS2, "{f} Hz: se {}", se(f));
+        }
+        assert!(20.0 * se(scan.grid[kept / 4]) < AMPLITUDE_BOUND_MPS2);
     }
 
     /// The check of `a_named_terms_computed_null_is_the_law_of_its_replicates` at the runs'

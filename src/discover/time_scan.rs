@@ -8,6 +8,14 @@
 //! and computing the responses was each form's whole cost, so one pass fills both sums, and
 //! the second form of a round reads the first one's (`TimeMemo`). Every number is summed in
 //! the order each form summed it alone, so the scan gives the same bits as two passes.
+//!
+//! The scan stops where no force the forms allow could be seen: a run's response to a force at
+//! f falls as 1/f² once f is above its slowest motions, and above the frequency where even a
+//! force at the forms' amplitude bound would stand less than `RESOLVED_SE` standard errors
+//! above the noise (those errors from the data's own responses, on every `COARSE_STEP`-th
+//! frequency), trials only add look-elsewhere to the null; the periodogram that proposes the
+//! forms' starts stops there too (`proposal.rs`). On the shipped recordings that is about
+//! three fifths of the grid up to the sampling's Nyquist frequency.
 
 use super::response::Prepared;
 use super::screen_sums::{dot, dot2, dot2_twice, scan_block, Sums, Vectors};
@@ -15,6 +23,17 @@ use rayon::prelude::*;
 use std::f64::consts::TAU;
 use std::ops::Range;
 use std::sync::{Arc, Mutex};
+
+/// The largest amplitude (m/s²) of the forms periodic in time: 0.5 g, a violent vibration.
+pub const AMPLITUDE_BOUND_MPS2: f64 = 5.0;
+
+/// A frequency is scanned while a force at `AMPLITUDE_BOUND_MPS2` stands at least this many
+/// standard errors of its amplitude there: at 2, its expected statistic (4) is far below what
+/// any test passes after the look-elsewhere of hundreds of frequencies.
+const RESOLVED_SE: f64 = 2.0;
+
+/// The coarse pass that finds the top of the scan looks at every this many frequencies.
+const COARSE_STEP: usize = 16;
 
 /// What one frequency of the scan gathered over the runs.
 pub struct AtFrequency {
@@ -29,11 +48,26 @@ pub struct AtFrequency {
     pub(super) info: Vec<f64>,
 }
 
-/// The scan of `grid` over the replicates `reps` of `v`.
+/// The scan of `asked` (a grid of frequencies) over the replicates `reps` of `v`: its first
+/// frequencies up to where a force could still be seen (`grid`), and what each gathered (`at`).
 pub struct TimeScan {
+    pub(super) asked: Vec<f64>,
     pub(super) grid: Vec<f64>,
     pub(super) reps: Range<usize>,
     pub(super) at: Vec<AtFrequency>,
+}
+
+impl TimeScan {
+    /// Where the scan stopped short of the grid asked, in words for a detection limit ("; ..."),
+    /// or nothing when it went to the end.
+    pub fn top_words(&self) -> String {
+        match self.grid.last() {
+            Some(f) if self.grid.len() < self.asked.len() => format!(
+                "; searched up to {f:.0} Hz, above which even a force of {AMPLITUDE_BOUND_MPS2} m/s² would stand below {RESOLVED_SE} standard errors"
+            ),
+            _ => String::new(),
+        }
+    }
 }
 
 /// A round's scans, kept for the second form that asks for the same grid and replicates.
@@ -43,7 +77,8 @@ pub struct TimeMemo {
 }
 
 impl TimeMemo {
-    /// The scan of `grid` over `reps`, computed on the first request.
+    /// The scan of `grid` over `reps`, computed on the first request (its top frequency
+    /// found once for every batch of replicates).
     pub fn get(
         &self,
         prep: &[Prepared],
@@ -52,16 +87,46 @@ impl TimeMemo {
         grid: &[f64],
     ) -> Arc<TimeScan> {
         let mut scans = self.scans.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(s) = scans.iter().find(|s| s.reps == reps && s.grid == grid) {
+        if let Some(s) = scans.iter().find(|s| s.reps == reps && s.asked == grid) {
             return Arc::clone(s);
         }
+        let kept = match scans.iter().find(|s| s.asked == grid) {
+            Some(s) => s.grid.len(),
+            None => resolvable(prep, grid),
+        };
         let s = Arc::new(TimeScan {
-            grid: grid.to_vec(),
-            at: scan(prep, v, reps.clone(), grid),
+            asked: grid.to_vec(),
+            grid: grid[..kept].to_vec(),
+            at: scan(prep, v, reps.clone(), &grid[..kept]),
             reps,
         });
         scans.push(Arc::clone(&s));
         s
+    }
+}
+
+/// How many of `grid`'s first frequencies a force at the amplitude bound could be seen at:
+/// up to the coarse frequency after the highest one where it stands `RESOLVED_SE` standard
+/// errors (the amplitude's error 1/√Σa over the runs, a as in `AtFrequency::info`); all of
+/// them when no coarse frequency does.
+pub(super) fn resolvable(prep: &[Prepared], grid: &[f64]) -> usize {
+    let coarse: Vec<usize> = (0..grid.len()).step_by(COARSE_STEP).collect();
+    let info: Vec<f64> = coarse
+        .par_iter()
+        .map(|&i| {
+            prep.iter()
+                .map(|p| {
+                    let (rs, rc) = p.track.respond_time(TAU * grid[i]);
+                    let (xs, xc) = (p.column(rs), p.column(rc));
+                    0.5 * (dot(&xs, &xs) + dot(&xc, &xc))
+                })
+                .sum()
+        })
+        .collect();
+    let seen = |a: &f64| *a > 0.0 && RESOLVED_SE / a.sqrt() <= AMPLITUDE_BOUND_MPS2;
+    match info.iter().rposition(seen) {
+        Some(j) => coarse.get(j + 1).map_or(grid.len(), |&i| i + 1),
+        None => grid.len(),
     }
 }
 

@@ -14,6 +14,7 @@ use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::screen_sums::{Trial, Typical};
 use crate::discover::spectral::f_grid;
+use crate::discover::time_scan::AMPLITUDE_BOUND_MPS2;
 use crate::physics::Term;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
@@ -52,8 +53,8 @@ impl Form for TimeCommon {
         let (f_lo, f_hi) = (self.f_lo, self.f_hi);
         vec![
             p("frequency_hz", 0.5 * (f_lo + f_hi), f_lo, f_hi, 1e-7 * f_hi),
-            p("sin_mps2", 0.0, -5.0, 5.0, 1e-4),
-            p("cos_mps2", 0.0, -5.0, 5.0, 1e-4),
+            p("sin_mps2", 0.0, -AMPLITUDE_BOUND_MPS2, AMPLITUDE_BOUND_MPS2, 1e-4),
+            p("cos_mps2", 0.0, -AMPLITUDE_BOUND_MPS2, AMPLITUDE_BOUND_MPS2, 1e-4),
         ]
     }
     fn enter(&self, x: &[f64], e: &mut Entry) {
@@ -87,17 +88,20 @@ impl Form for TimeCommon {
     /// the prepared runs coherently (one pair shared by every run), from the round's shared
     /// scan (`time_scan`).
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
-        let fs: Vec<f64> = f_grid(s.rg.duration_s, s.rg.f_max_hz)
+        let asked: Vec<f64> = f_grid(s.rg.duration_s, s.rg.f_max_hz)
             .into_iter()
             .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
             .collect();
-        let solved = s
-            .time_scan(&fs)
-            .at
-            .iter()
-            .map(|at| at.coherent.solve(s.v, &[]))
-            .collect();
-        wavelength::pair_trials(solved, &fs, s.reps.len(), |f| format!("at {f:.0} Hz"))
+        // the frequencies where a force could be seen (`time_scan`)
+        let scan = s.time_scan(&asked);
+        let solved = scan.at.iter().map(|at| at.coherent.solve(s.v, &[])).collect();
+        wavelength::pair_trials(solved, &scan.grid, s.reps.len(), |f| {
+            let top = scan.top_words();
+            match top.strip_prefix("; ") {
+                Some(t) => format!("at {f:.0} Hz ({t})"),
+                None => format!("at {f:.0} Hz"),
+            }
+        })
     }
     fn wanted(&self) -> Wanted {
         Wanted {

@@ -7,6 +7,7 @@ use crate::discover::noise_floor::local_floor;
 use crate::discover::ranges::{Proposals, Ranges, Wanted};
 use crate::discover::screen_sums::{best_of, Trial, Typical};
 use crate::discover::spectral::f_grid;
+use crate::discover::time_scan::AMPLITUDE_BOUND_MPS2;
 use crate::physics::Term;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
@@ -50,7 +51,7 @@ impl Form for TimePeriodic {
         let (f_lo, f_hi) = (self.f_lo, self.f_hi);
         vec![
             p("frequency_hz", 0.5 * (f_lo + f_hi), f_lo, f_hi, 1e-3),
-            p("amplitude_mps2", 0.0, 0.0, 5.0, 1e-4),
+            p("amplitude_mps2", 0.0, 0.0, AMPLITUDE_BOUND_MPS2, 1e-4),
         ]
     }
     fn enter(&self, x: &[f64], e: &mut Entry) {
@@ -89,18 +90,20 @@ impl Form for TimePeriodic {
     /// absorb any structure at all one run at a time; the shared one does not.
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let (rg, reps) = (s.rg, s.reps.clone());
-        let fs: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
+        let asked: Vec<f64> = f_grid(rg.duration_s, rg.f_max_hz)
             .into_iter()
             .filter(|f| *f >= self.f_lo && *f <= self.f_hi)
             .collect();
+        // the frequencies where a force could be seen (`time_scan`)
+        let scan = s.time_scan(&asked);
+        let fs = &scan.grid;
         let nrep = reps.len();
         // the data (replicate 0) is in every batch's scan, for the noise floor below
         let data_in = reps.start == 0;
-        let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = s
-            .time_scan(&fs)
+        let mut out: Vec<(Option<Trial>, Vec<f64>, f64)> = scan
             .at
             .iter()
-            .zip(&fs)
+            .zip(fs)
             .map(|(at, &f)| {
                 let (sb, info) = (&at.per_run, at.info.clone());
                 let sa: f64 = info.iter().sum();
@@ -149,8 +152,9 @@ impl Form for TimePeriodic {
             a: out[i].1.clone(),
             floor: floor[i],
             at: format!(
-                "at {:.0} Hz (higher at higher frequencies, as f² far above)",
-                fs[i]
+                "at {:.0} Hz (higher at higher frequencies, as f² far above{})",
+                fs[i],
+                scan.top_words()
             ),
         });
         (
