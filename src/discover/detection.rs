@@ -7,7 +7,7 @@
 //! can be anything from the grid's best to its worst (a force in time must grow as f² to move the
 //! positions as much, so near the Nyquist limit it hardly moves them), and a limit read there says
 //! more about the noise than about the dataset. A median over the trials is no better: over a
-//! frequency grid spaced evenly up to the Nyquist limit it sits at kHz (72 m/s² on the shipped data).
+//! frequency grid spaced evenly it sits among the high frequencies, where the information is least.
 
 use super::candidate::Extra;
 use super::model::Model;

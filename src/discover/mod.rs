@@ -85,7 +85,8 @@
 //!    searched form's trials) is compared with its null from replicates of each run's measured
 //!    noise (`noise_model.rs`: its fast part, its blur and the slow drift) pushed through the same projections, or with a computed law for named terms
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
-//!    show (`noise_floor.rs`). Holm at α = 0.01 over the candidates; the strongest significant
+//!    show (`noise_floor.rs`), and the two time forms share one frequency scan, which stops where
+//!    a force at their amplitude bound would stand below two standard errors (`time_scan.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
 //!    held-out runs better (`cv.rs`: a paired t over the runs, or for a first term whose gain
 //!    sits in few runs Wilcoxon's signed-rank test; a model with a phase per run is charged what
