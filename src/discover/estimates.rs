@@ -36,14 +36,10 @@ pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
     let mut notes = Vec::new();
     for k in 0..n {
         let (x, info) = (m.fit.global[off + k], &m.params[off + k]);
-        let Some(lower) = side_of_bound(x, info, 1e-6) else {
+        let Some(lower) = pinned(m, i, k) else {
             continue;
         };
-        // a term that starts where it vanishes, at its bound, is not reported as pinned there
         let e = &m.spec.extras[i];
-        if lower && info.start == info.lo && !e.notes_start_bound() {
-            continue;
-        }
         notes.push(match e.bound_note(k, x, info, lower, materials) {
             Some(note) => note,
             None => format!(
@@ -62,18 +58,22 @@ pub fn bound_notes(m: &Model, i: usize, materials: &[String]) -> Vec<String> {
 /// from one side). Its scale is not counted at either end: a step sharper than the search
 /// resolves is still a step there, and a scale at an end is judged by `scale_at_bound`.
 pub fn placed_at_bound(m: &Model, i: usize) -> bool {
-    let off = m.spec.extra_offset(i);
     let e = &m.spec.extras[i];
     let scale = e.scale().map(|(k, _)| k);
     (0..e.params().len())
         .filter(|&k| Some(k) != scale)
-        .any(|k| {
-            let (x, info) = (m.fit.global[off + k], &m.params[off + k]);
-            match side_of_bound(x, info, 1e-6) {
-                None => false,
-                Some(lower) => !(lower && info.start == info.lo && !e.notes_start_bound()),
-            }
-        })
+        .any(|k| pinned(m, i, k).is_some())
+}
+
+/// The bound (`Some(true)` the lower) parameter `k` of extra term `i` of `m` is pinned at; a
+/// term that starts where it vanishes, at its bound, is not pinned there (unless the form says
+/// so: `notes_start_bound`).
+fn pinned(m: &Model, i: usize, k: usize) -> Option<bool> {
+    let off = m.spec.extra_offset(i);
+    let (x, info) = (m.fit.global[off + k], &m.params[off + k]);
+    let lower = side_of_bound(x, info, 1e-6)?;
+    let vanishes_there = lower && info.start == info.lo && !m.spec.extras[i].notes_start_bound();
+    (!vanishes_there).then_some(lower)
 }
 
 /// Which bound `x` sits at (`Some(true)` the lower), within `rel` of the parameter's range.

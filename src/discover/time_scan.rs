@@ -14,8 +14,8 @@
 //! force at the forms' amplitude bound would stand less than `RESOLVED_SE` standard errors
 //! above the noise (those errors from the data's own responses, on every `COARSE_STEP`-th
 //! frequency), trials only add look-elsewhere to the null; the periodogram that proposes the
-//! forms' starts stops there too (`proposal.rs`). On the shipped recordings that is about
-//! three fifths of the grid up to the sampling's Nyquist frequency.
+//! forms' starts stops there too (`proposal.rs`). On the shipped recordings the scan ends near
+//! 2.3 kHz, under half of the way to the sampling's Nyquist frequency.
 
 use super::response::Prepared;
 use super::screen_sums::{dot, dot2, dot2_twice, scan_block, Sums, Vectors};
