@@ -126,9 +126,9 @@ pub struct Side<'a> {
 /// Whether form `new` is preferred to `old` (paired t over the runs against `t_cv`): a richer
 /// form where held-out runs prefer it, a simpler one where they cannot tell the two apart. Of
 /// two as simple, one with a parameter other than its scale at a bound of its search is named
-/// only where held-out runs prefer it (a bump whose centre ran to the end of the groove, 4 mm wide, is a step seen
-/// from one side: the data do not place it, and the two came out a hair apart either way
-/// between builds), else the one with the lower held-out error.
+/// only where held-out runs prefer it (a bump whose centre ran to the end of the groove, 4 mm
+/// wide, is a step seen from one side: the data do not place it, and the two came out a hair
+/// apart either way between builds), else the one with the lower held-out error.
 pub fn preferred(new: Side, old: Side, t_cv: f64) -> bool {
     match new.n.cmp(&old.n) {
         std::cmp::Ordering::Greater => paired_t(old.cv, new.cv) > t_cv,

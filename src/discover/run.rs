@@ -886,14 +886,14 @@ mod tests {
 
     /// The time scan stops where a force at the forms' amplitude bound would stand below two
     /// standard errors: at every frequency asked beyond its grid the amplitude's error, from
-    /// the runs' own responses, is above half the bound, and at its most sensitive frequency
-    /// far below; on the small null's 1 kHz sampling that leaves out most of the grid.
+    /// the runs' own responses, is above half the bound; at the last frequency of the coarse
+    /// pass it kept, at most half; at its most sensitive frequency far below.
     #[test]
     fn the_time_scan_stops_where_no_force_could_be_seen() {
         use super::super::response::dot;
         use super::super::screen_sums::Vectors;
         use super::super::spectral::f_grid;
-        use super::super::time_scan::{TimeMemo, AMPLITUDE_BOUND_MPS2};
+        use super::super::time_scan::{TimeMemo, AMPLITUDE_BOUND_MPS2, COARSE_STEP};
         use std::f64::consts::TAU;
         let (runs, _, prep) = null_small_baseline();
         let v = Vectors::new(&prep, &runs, 3, 5);
@@ -921,6 +921,13 @@ mod tests {
             assert!(2.0 * se(f) > AMPLITUDE_BOUND_MPS2, "{f} Hz: se {}", se(f));
         }
         assert!(20.0 * se(scan.grid[kept / 4]) < AMPLITUDE_BOUND_MPS2);
+        // and not before: the last frequency of the coarse pass that was kept resolves the bound
+        let last_seen = grid[kept - 1 - COARSE_STEP];
+        assert!(
+            2.0 * se(last_seen) <= AMPLITUDE_BOUND_MPS2,
+            "{last_seen} Hz: se {}",
+            se(last_seen)
+        );
     }
 
     /// The check of `a_named_terms_computed_null_is_the_law_of_its_replicates` at the runs'

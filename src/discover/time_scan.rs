@@ -33,7 +33,7 @@ pub const AMPLITUDE_BOUND_MPS2: f64 = 5.0;
 const RESOLVED_SE: f64 = 2.0;
 
 /// The coarse pass that finds the top of the scan looks at every this many frequencies.
-const COARSE_STEP: usize = 16;
+pub(super) const COARSE_STEP: usize = 16;
 
 /// What one frequency of the scan gathered over the runs.
 pub struct AtFrequency {
@@ -58,15 +58,16 @@ pub struct TimeScan {
 }
 
 impl TimeScan {
-    /// Where the scan stopped short of the grid asked, in words for a detection limit ("; ..."),
-    /// or nothing when it went to the end.
-    pub fn top_words(&self) -> String {
-        match self.grid.last() {
-            Some(f) if self.grid.len() < self.asked.len() => format!(
-                "; searched up to {f:.0} Hz, above which even a force of {AMPLITUDE_BOUND_MPS2} m/s² would stand below {RESOLVED_SE} standard errors"
-            ),
-            _ => String::new(),
-        }
+    /// Where the scan stopped short of the grid asked, in words for a detection limit; None
+    /// when it went to the end.
+    pub fn stopped_short(&self) -> Option<String> {
+        let f = self
+            .grid
+            .last()
+            .filter(|_| self.grid.len() < self.asked.len())?;
+        Some(format!(
+            "searched up to {f:.0} Hz, above which even a force of {AMPLITUDE_BOUND_MPS2} m/s² would stand below {RESOLVED_SE} standard errors"
+        ))
     }
 }
 
@@ -105,6 +106,15 @@ impl TimeMemo {
     }
 }
 
+/// A run's (projected, whitened) responses to sin and cos of 2πft, and their information about
+/// an amplitude, a = (x_s·x_s + x_c·x_c)/2.
+fn responses(p: &Prepared, f: f64) -> (Vec<Vec<f64>>, f64) {
+    let (rs, rc) = p.track.respond_time(TAU * f);
+    let c = vec![p.column(rs), p.column(rc)];
+    let a = 0.5 * (dot(&c[0], &c[0]) + dot(&c[1], &c[1]));
+    (c, a)
+}
+
 /// How many of `grid`'s first frequencies a force at the amplitude bound could be seen at:
 /// up to the coarse frequency after the highest one where it stands `RESOLVED_SE` standard
 /// errors (the amplitude's error 1/√Σa over the runs, a as in `AtFrequency::info`); all of
@@ -113,15 +123,7 @@ pub(super) fn resolvable(prep: &[Prepared], grid: &[f64]) -> usize {
     let coarse: Vec<usize> = (0..grid.len()).step_by(COARSE_STEP).collect();
     let info: Vec<f64> = coarse
         .par_iter()
-        .map(|&i| {
-            prep.iter()
-                .map(|p| {
-                    let (rs, rc) = p.track.respond_time(TAU * grid[i]);
-                    let (xs, xc) = (p.column(rs), p.column(rc));
-                    0.5 * (dot(&xs, &xs) + dot(&xc, &xc))
-                })
-                .sum()
-        })
+        .map(|&i| prep.iter().map(|p| responses(p, grid[i]).1).sum())
         .collect();
     let seen = |a: &f64| *a > 0.0 && RESOLVED_SE / a.sqrt() <= AMPLITUDE_BOUND_MPS2;
     match info.iter().rposition(seen) {
@@ -151,9 +153,7 @@ fn scan(prep: &[Prepared], v: &Vectors, reps: Range<usize>, grid: &[f64]) -> Vec
                     .iter()
                     .zip(&mut out)
                     .map(|(&f, o)| {
-                        let (rs, rc) = p.track.respond_time(TAU * f);
-                        let c = vec![p.column(rs), p.column(rc)];
-                        let a = 0.5 * (dot(&c[0], &c[0]) + dot(&c[1], &c[1]));
+                        let (c, a) = responses(p, f);
                         if a > 0.0 {
                             o.info.push(a);
                         }

@@ -96,8 +96,7 @@ impl Form for TimeCommon {
         let scan = s.time_scan(&asked);
         let solved = scan.at.iter().map(|at| at.coherent.solve(s.v, &[])).collect();
         wavelength::pair_trials(solved, &scan.grid, s.reps.len(), |f| {
-            let top = scan.top_words();
-            match top.strip_prefix("; ") {
+            match scan.stopped_short() {
                 Some(t) => format!("at {f:.0} Hz ({t})"),
                 None => format!("at {f:.0} Hz"),
             }

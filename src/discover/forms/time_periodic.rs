@@ -154,7 +154,9 @@ impl Form for TimePeriodic {
             at: format!(
                 "at {:.0} Hz (higher at higher frequencies, as f² far above{})",
                 fs[i],
-                scan.top_words()
+                scan.stopped_short()
+                    .map(|t| format!("; {t}"))
+                    .unwrap_or_default()
             ),
         });
         (
