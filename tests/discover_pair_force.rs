@@ -105,10 +105,12 @@ fn accepted_work(findings: &[Finding], effect: &str) -> BTreeMap<String, f64> {
 /// screened force is its exponential, the inverse power its power law), and the liquid bridge,
 /// a linear fall cut off at its rupture that neither shape holds, within 50 % (an exponential of
 /// the bridge's work misfits the rolling pairs 8× worse than one of half that work: 0.54 of the
-/// work measured); at least 7 of the 10 (force, material) pairs are named; no pair is said to
-/// move under friction or drag of its own. Known miss: touching pairs under the strong
-/// screened attraction, where every start of the fit ends at a weak force that held-out runs do
-/// not confirm (their misfit concentrates after impacts, and the impact test says so).
+/// work measured); at least 7 of the 10 (force, material) pairs are named; a screened force
+/// named in both materials (at least two of the three) is sized with one range for both,
+/// within 15 % of the truth; no pair is said to move under friction or drag of its own. Known
+/// miss: touching pairs under the strong screened attraction, where every start of the fit ends
+/// at a weak force that held-out runs do not confirm (their misfit concentrates after impacts,
+/// and the impact test says so).
 #[test]
 fn a_force_between_the_particles_is_named_with_its_work() {
     let cases = [
@@ -149,7 +151,7 @@ fn a_force_between_the_particles_is_named_with_its_work() {
             },
         ),
     ];
-    let (mut named, mut wrong, mut report) = (0, Vec::new(), Vec::new());
+    let (mut named, mut shared, mut wrong, mut report) = (0, 0, Vec::new(), Vec::new());
     for (k, (noise, b)) in cases.into_iter().enumerate() {
         let c = pairs_case(100 + k as u64, noise, Some(b));
         let findings = pair_findings(&c);
@@ -169,6 +171,24 @@ fn a_force_between_the_particles_is_named_with_its_work() {
             }
         }
         named += found.len();
+        // a screened force named in both materials, in its own shape, is sized with one range
+        if let (Between::Screened { range, .. }, 2) = (b, found.len()) {
+            let ranges: Vec<f64> = findings
+                .iter()
+                .filter(|f| f.accepted && f.effect == "force_between_particles")
+                .filter(|f| f.where_.contains_key("shared_range"))
+                .map(|f| f.parameters["pair_range_m"].value)
+                .collect();
+            shared += 1;
+            if ranges.len() != 2
+                || ranges[0] != ranges[1]
+                || (ranges[0] - range).abs() > 0.15 * range
+            {
+                wrong.push(format!(
+                    "{b:?}: ranges {ranges:?}, not one range within 15 % of {range:e}"
+                ));
+            }
+        }
         for m in accepted_work(&findings, "pair_physics_mismatch").keys() {
             wrong.push(format!(
                 "{b:?}, {m}: said to move under friction or drag of its own"
@@ -178,6 +198,10 @@ fn a_force_between_the_particles_is_named_with_its_work() {
     eprintln!("{}", report.join("\n"));
     assert!(wrong.is_empty(), "{wrong:#?}\n{}", report.join("\n"));
     assert!(named >= 7, "{named}/10 named:\n{}", report.join("\n"));
+    assert!(
+        shared >= 2,
+        "{shared} screened forces named in both materials"
+    );
 }
 
 /// Pairs with nothing between them, in ten seeds over the tracker noises (correlated, blurred,

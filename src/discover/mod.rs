@@ -25,6 +25,7 @@
 //! - `pair_force.rs`: The test for a force between the two particles of a pair
 //! - `pair_held_out.rs`: Held-out runs for the pair tests
 //! - `pair_noise.rs`: The pairs' tracking noise over the time a signature lasts (long-run variance)
+//! - `pair_range.rs`: One range for the force between the particles of every material
 //! - `pairs_impact.rs`: The impact-specific test of the collision runs
 //! - `particles.rs`: Differences between particles: μ and T varying from run to run beyond the noise
 //! - `perrun.rs`: Per-run fits: each run alone with its own μ and T
@@ -113,7 +114,8 @@
 //!    The collision runs are checked by `pairs.rs`: the pairs fitted with μ_pg and drag held at
 //!    the single runs' accepted physics against free (Wald χ², a contact-distance fit that names
 //!    a length calibration), residuals after impacts (`pairs_impact.rs`), and a force between the
-//!    particles before they touch, in their separation (`pair_force.rs`); the impacts' own C and
+//!    particles before they touch, in their separation (`pair_force.rs`; one range for every
+//!    material unless that costs more than chance, `pair_range.rs`); the impacts' own C and
 //!    μ_pp against their speeds, a map beside the chapter's candidate laws (`impact/`).
 //!
 //! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times on stderr (not in any
@@ -144,6 +146,7 @@ pub mod null_distribution;
 pub mod pair_force;
 mod pair_held_out;
 mod pair_noise;
+mod pair_range;
 pub mod pairs;
 mod pairs_impact;
 mod particles;

@@ -25,6 +25,7 @@
 
 use super::pair_held_out as held_out;
 use super::pair_noise::long_run_factor;
+use super::pair_range::{share_range, Member, SharedRange};
 use super::pairs_impact::{ALPHA, IMPACT_WINDOW_S};
 use crate::artifacts::diagnosis::{Effect, Estimate as Value, Evidence, Finding, ModelScore};
 use crate::fit::collision::wholerun::{
@@ -220,6 +221,9 @@ pub struct ForceTest {
     pub at_bound: Option<&'static str>,
     pub held_cost: f64,
     pub inflate: f64,
+    /// One range shared with the other materials' forces (`pair_range`), the chosen fit then
+    /// being the one at that range.
+    pub shared_range: Option<SharedRange>,
 }
 
 /// Fits the force of `shape` to `runs` from `start` (A, ln λ, n) with the physics of `held`
@@ -250,7 +254,7 @@ fn rank(fit: &GroupFit) -> (bool, f64) {
 }
 
 /// The first parameter of `fit`'s force at its bound, by name.
-fn at_bound(fit: &GroupFit) -> Option<&'static str> {
+pub(super) fn at_bound(fit: &GroupFit) -> Option<&'static str> {
     let specs = fit.spec.shared_specs(Some(&fit.result.shared), &[]);
     [
         (PF_AMP, "amplitude"),
@@ -376,7 +380,72 @@ pub fn test_force(
         held_out,
         held_cost: held.cost(),
         inflate,
+        shared_range: None,
     }
+}
+
+/// One range for every material whose pairs accept an exponential force at Holm p-values
+/// `p_holm` (`pair_range`; `runs` each test's runs, `free` the shared slots the held fit
+/// frees): when it is a tie with the ranges apart and no amplitude ends at its bound, each such
+/// test keeps its fit at the shared range.
+pub fn share_ranges(
+    tests: &mut [ForceTest],
+    p_holm: &[f64],
+    runs: &[&[PairRun]],
+    free: &(dyn Fn(usize) -> bool + Sync),
+    max_iter: usize,
+) {
+    let picked: Vec<usize> = (0..tests.len())
+        .filter(|&k| {
+            tests[k].chosen.shape == PairForceShape::Exponential && tests[k].decision(p_holm[k]).0
+        })
+        .collect();
+    let members: Vec<Member> = picked
+        .iter()
+        .map(|&k| Member {
+            material: &tests[k].material,
+            fit: &tests[k].chosen.fit,
+            inflate: tests[k].inflate,
+            runs: runs[k],
+        })
+        .collect();
+    let Some(shared) = share_range(&members, free, max_iter.min(FORCE_ITER)) else {
+        return;
+    };
+    if shared.iter().any(|(_, fit)| at_bound(fit).is_some()) {
+        return;
+    }
+    for (&k, (range, fit)) in picked.iter().zip(shared) {
+        tests[k].shared_range = Some(range);
+        tests[k].chosen.fit = fit;
+    }
+}
+
+/// The decision's clause for a range shared with the other materials.
+fn shared_words(r: &SharedRange) -> String {
+    let apart: Vec<String> = r
+        .apart_m
+        .iter()
+        .map(|(m, l)| format!("{:.0} µm ({m})", l * 1e6))
+        .collect();
+    let range = r.ln_range.exp() * 1e6;
+    let cost = if r.chi2 < -1.0 {
+        format!(
+            "one range of {range:.0} µm fits better (χ² lower by {:.1}: a fit apart had stopped in a worse minimum)",
+            -r.chi2
+        )
+    } else {
+        format!(
+            "one range of {range:.0} µm costs χ²({}) = {:.1} (p {:.2}), which chance explains",
+            r.dof,
+            r.chi2.max(0.0),
+            r.p
+        )
+    };
+    format!(
+        "; one range for every material's pairs: fitted apart the ranges were {}, and {cost}, so the range is shared and this material's amplitude fitted at it",
+        apart.join(" and "),
+    )
 }
 
 impl ForceTest {
@@ -454,9 +523,10 @@ impl ForceTest {
                 } else {
                     String::new()
                 };
+                let shared = self.shared_range.as_ref().map_or(String::new(), shared_words);
                 (
                     true,
-                    format!("{kind} between the particles before they touch: confirmed on held-out runs (χ² gains {a:.1} and {b:.1} on the two halves){tie}"),
+                    format!("{kind} between the particles before they touch: confirmed on held-out runs (χ² gains {a:.1} and {b:.1} on the two halves){tie}{shared}"),
                 )
             }
         }
@@ -469,15 +539,22 @@ impl ForceTest {
         let sh = &self.chosen.fit.result.shared;
         let se = |i: usize| self.chosen.fit.result.shared_se(i) * self.inflate.sqrt();
         let range = sh[PF_LN_RANGE].exp();
+        // at a shared range, the range's own error moves the amplitude along the profile
+        let (amp_se, range_se, work_se) = match &self.shared_range {
+            None => (se(PF_AMP), range * se(PF_LN_RANGE), self.work_se()),
+            Some(s) => {
+                let along = s.amp_slope * s.ln_range_se;
+                let work_along = (s.amp_slope + sh[PF_AMP]) * range * s.ln_range_se;
+                (
+                    se(PF_AMP).hypot(along),
+                    range * s.ln_range_se,
+                    self.work_se().hypot(work_along),
+                )
+            }
+        };
         let mut parameters = BTreeMap::new();
-        parameters.insert(
-            "pair_amplitude_mps2".into(),
-            Value::new(sh[PF_AMP], se(PF_AMP)),
-        );
-        parameters.insert(
-            "pair_range_m".into(),
-            Value::new(range, range * se(PF_LN_RANGE)),
-        );
+        parameters.insert("pair_amplitude_mps2".into(), Value::new(sh[PF_AMP], amp_se));
+        parameters.insert("pair_range_m".into(), Value::new(range, range_se));
         if self.chosen.shape == PairForceShape::PowerLaw {
             parameters.insert(
                 "pair_exponent".into(),
@@ -486,7 +563,7 @@ impl ForceTest {
         }
         parameters.insert(
             "pair_work_m2ps2".into(),
-            Value::new(f.work_m2ps2(), self.work_se()),
+            Value::new(f.work_m2ps2(), work_se),
         );
         let form = match self.chosen.shape {
             PairForceShape::Exponential => {
@@ -512,6 +589,20 @@ impl ForceTest {
         }
         if let Some([a, b]) = self.held_out {
             where_.insert("held_out_chi2_gain".into(), serde_json::json!([a, b]));
+        }
+        if let Some(r) = &self.shared_range {
+            let apart: BTreeMap<&str, f64> =
+                r.apart_m.iter().map(|(m, l)| (m.as_str(), *l)).collect();
+            where_.insert(
+                "shared_range".into(),
+                serde_json::json!({
+                    "range_m": r.ln_range.exp(),
+                    "ranges_apart_m": apart,
+                    "chi2_of_sharing": r.chi2,
+                    "degrees_of_freedom": r.dof,
+                    "p": r.p,
+                }),
+            );
         }
         where_.insert(
             "other_shape_chi2".into(),

@@ -25,7 +25,7 @@ use super::candidate::OwnValues;
 use super::forms::{self, InTheLab};
 use super::holm::holm;
 use super::impact::test_impact_laws;
-use super::pair_force::{test_force, ForceTest};
+use super::pair_force::{share_ranges, test_force, ForceTest};
 use super::pair_held_out as held_out;
 use super::pairs_impact::{
     impact_decision, impact_p_value, split_by_impact, ALPHA, IMPACT_WINDOW_S,
@@ -809,6 +809,9 @@ pub fn check_pairs(
         })
         .collect();
     let p_force = holm(&forces.iter().map(|f| f.p).collect::<Vec<_>>());
+    let mut forces = forces;
+    let force_runs: Vec<&[PairRun]> = drafts.iter().map(|(runs, _, _)| runs.as_slice()).collect();
+    share_ranges(&mut forces, &p_force, &force_runs, &not_physics, max_iter);
     let mut findings = Vec::new();
     let drafts: Vec<Draft> = drafts
         .into_iter()
