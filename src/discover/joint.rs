@@ -8,7 +8,8 @@
 
 use super::candidate::{predict, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use crate::lsq::block::{descend_blocks, minimize_blocks, BlockProblem};
+use super::timeforce::{hold_phase, profile_with_direction};
+use crate::lsq::block::{descend_blocks, minimize_blocks, BlockProblem, Linear};
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
 
 /// A fitted joint model.
@@ -126,10 +127,7 @@ impl BlockProblem for Runs<'_> {
         };
         let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
         predict(self.spec, shared, &l, run, out);
-        let w = 1.0 / run.sigma_m;
-        for ((o, z), keep) in out.iter_mut().zip(&run.z_m).zip(&run.keep) {
-            *o = if *keep { (*o - z) * w } else { 0.0 };
-        }
+        whiten(out, run);
     }
 
     fn uses(&self, b: usize, i: usize) -> bool {
@@ -137,6 +135,27 @@ impl BlockProblem for Runs<'_> {
             Some(r) => self.affects[r.material][i],
             None => self.penalized[i],
         }
+    }
+
+    fn linearize(&self, b: usize, shared: &[f64], own: &[f64]) -> Option<Box<dyn Linear + '_>> {
+        let run = self.runs.get(b)?;
+        if !self.spec.has_run_phase() {
+            return None;
+        }
+        let l: [f64; N_LOCAL] = own.try_into().ok()?;
+        let mut m = self.spec.sim_model(shared, run.material, l[2]);
+        let (phase, g, g_hat) = profile_with_direction(&mut m, &l, run)?;
+        let gg = g_hat.iter().map(|x| x * x).sum::<f64>();
+        (gg > 0.0).then(|| {
+            Box::new(AtPhase {
+                spec: self.spec,
+                run,
+                phase,
+                g,
+                g_hat,
+                gg,
+            }) as Box<dyn Linear>
+        })
     }
 
     fn own_column(&self, b: usize, k: usize, _: &[f64], _: &[f64], out: &mut [f64]) -> bool {
@@ -151,6 +170,53 @@ impl BlockProblem for Runs<'_> {
             *o = if *keep { w } else { 0.0 };
         }
         true
+    }
+}
+
+/// A run's residuals with its own phase held where the profile put it (`profile_with_direction`):
+/// the phase's direction `g` (∂z/∂φ, metres) and the direction it was profiled along, `g_hat`
+/// (z0, t0 and v0 projected out), with |g_hat|² = `gg`. A column at the held phase becomes the
+/// profiled one's by taking off `g` times the phase's first-order move, −(g_hat·column)/gg
+/// (Gauss–Newton: the misfit's own curvature left out). z0 and v0 barely move the phase; t0
+/// does, by −2πf a second, since the force's clock starts at the kick.
+struct AtPhase<'a> {
+    spec: &'a Spec,
+    run: &'a RunData,
+    phase: f64,
+    g: Vec<f64>,
+    g_hat: Vec<f64>,
+    gg: f64,
+}
+
+impl Linear for AtPhase<'_> {
+    fn residuals(&self, shared: &[f64], own: &[f64], out: &mut [f64]) {
+        let l: [f64; N_LOCAL] = own.try_into().expect("a run has three local parameters");
+        let mut m = self.spec.sim_model(shared, self.run.material, l[2]);
+        hold_phase(&mut m, self.phase);
+        let tt: Vec<f64> = self.run.t_s.iter().map(|t| t + l[1]).collect();
+        m.simulate(l[0], l[2], &tt, out, None, None);
+        whiten(out, self.run);
+    }
+
+    fn project(&self, column: &mut [f64]) {
+        let along = self
+            .g_hat
+            .iter()
+            .zip(column.iter())
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / self.gg;
+        for (c, g) in column.iter_mut().zip(&self.g) {
+            *c -= along * g;
+        }
+    }
+}
+
+/// (prediction − observation)/σ at the kept samples of `run`, 0 at the dropped ones.
+fn whiten(out: &mut [f64], run: &RunData) {
+    let w = 1.0 / run.sigma_m;
+    for ((o, z), keep) in out.iter_mut().zip(&run.z_m).zip(&run.keep) {
+        *o = if *keep { (*o - z) * w } else { 0.0 };
     }
 }
 

@@ -80,10 +80,7 @@ pub(super) fn time_term(m: &SimModel) -> Option<(usize, f64, f64)> {
 /// residual without the force, s and c the responses to the force at its amplitude with phase
 /// 0 and π/2, all with the run's z0, t0 and v0 projected out (metres², not noise units).
 pub(super) fn run_sums(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunData) -> [f64; 5] {
-    let Some((e, s, c)) = run_columns(m, idx, l, run) else {
-        return [0.0; 5];
-    };
-    sums(&e, &s, &c)
+    run_columns(m, idx, l, run).map_or([0.0; 5], |k| sums(&k.e, &k.s, &k.c))
 }
 
 /// (ss, sc, cc, es, ec) of the three columns.
@@ -99,14 +96,22 @@ fn sums(e: &[f64], s: &[f64], c: &[f64]) -> [f64; 5] {
     k
 }
 
-/// The residual without the force `idx` of `m` and the responses to it at phase 0 and π/2, at
-/// the run's kept samples with its z0, t0 and v0 projected out (metres), and the local basis.
-fn run_columns(
-    m: &SimModel,
-    idx: usize,
-    l: &[f64; N_LOCAL],
-    run: &RunData,
-) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+/// A run's columns for its phase (metres).
+struct Columns {
+    /// The residual without the force and the responses to it at phase 0 and π/2, at the kept
+    /// samples with the run's z0, t0 and v0 projected out.
+    e: Vec<f64>,
+    s: Vec<f64>,
+    c: Vec<f64>,
+    /// The two responses at every sample, nothing projected out.
+    raw_s: Vec<f64>,
+    raw_c: Vec<f64>,
+    /// The kept samples' indices.
+    kept: Vec<usize>,
+}
+
+/// The columns of `run` for the force `idx` of `m` (`Columns`).
+fn run_columns(m: &SimModel, idx: usize, l: &[f64; N_LOCAL], run: &RunData) -> Option<Columns> {
     let Term::TimePeriodicForce {
         amp_mps2, freq_hz, ..
     } = m.terms[idx]
@@ -145,7 +150,15 @@ fn run_columns(
         project_out(&basis, &mut x);
         x
     };
-    Some((column(&run.z_m), column(&zs), column(&zc)))
+    let raw = |z: &[f64]| -> Vec<f64> { z.iter().zip(&z0).map(|(a, b)| a - b).collect() };
+    Some(Columns {
+        e: column(&run.z_m),
+        s: column(&zs),
+        c: column(&zc),
+        raw_s: raw(&zs),
+        raw_c: raw(&zc),
+        kept,
+    })
 }
 
 /// Noise replicates of [`noise_gain`].
@@ -164,7 +177,7 @@ pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) ->
     if amp == 0.0 || !(run.sigma_m > 0.0) {
         return 0.0;
     }
-    let Some((e, s, c)) = run_columns(m, idx, l, run) else {
+    let Some(Columns { e, s, c, .. }) = run_columns(m, idx, l, run) else {
         return 0.0;
     };
     let model = run.noise();
@@ -183,18 +196,51 @@ pub fn noise_gain(m: &SimModel, l: &[f64; N_LOCAL], run: &RunData, seed: u64) ->
 
 /// Set the phase of the time-periodic force in `m` to the one that fits `run` best.
 pub fn profile_phase(m: &mut SimModel, l: &[f64; N_LOCAL], run: &RunData) {
-    let Some((idx, amp_mps2, freq_hz)) = time_term(m) else {
+    let Some((idx, amp_mps2, _)) = time_term(m) else {
         return;
     };
     if amp_mps2 == 0.0 {
         return;
     }
-    let phase_rad = best_phase(&run_sums(m, idx, l, run));
-    m.terms[idx] = Term::TimePeriodicForce {
-        amp_mps2,
-        freq_hz,
-        phase_rad,
-    };
+    hold_phase(m, best_phase(&run_sums(m, idx, l, run)));
+}
+
+/// Hold the phase of the time-periodic force of `m` with a phase per run at `phase_rad`.
+pub fn hold_phase(m: &mut SimModel, phase_rad: f64) {
+    if let Some((idx, amp_mps2, freq_hz)) = time_term(m) {
+        m.terms[idx] = Term::TimePeriodicForce {
+            amp_mps2,
+            freq_hz,
+            phase_rad,
+        };
+    }
+}
+
+/// The run's own phase and its direction, for the joint fit's derivatives: set the phase of
+/// `m`'s force to the one that fits `run` best (as [`profile_phase`]) and return it with
+/// ∂z/∂φ at every sample (`g`, metres per radian, zero where a sample is dropped) and the same
+/// with z0, t0 and v0 projected out (`g_hat`, the direction the phase is profiled along). None
+/// without such a force or at zero amplitude, when the phase is no parameter.
+pub fn profile_with_direction(
+    m: &mut SimModel,
+    l: &[f64; N_LOCAL],
+    run: &RunData,
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let (idx, amp_mps2, _) = time_term(m)?;
+    if amp_mps2 == 0.0 {
+        return None;
+    }
+    let cols = run_columns(m, idx, l, run)?;
+    let phase = best_phase(&sums(&cols.e, &cols.s, &cols.c));
+    hold_phase(m, phase);
+    let (sn, cs) = phase.sin_cos();
+    let mut g = vec![0.0; run.t_s.len()];
+    let mut g_hat = vec![0.0; run.t_s.len()];
+    for (j, &i) in cols.kept.iter().enumerate() {
+        g[i] = -sn * cols.raw_s[i] + cs * cols.raw_c[i];
+        g_hat[i] = -sn * cols.s[j] + cs * cols.c[j];
+    }
+    Some((phase, g, g_hat))
 }
 
 /// Points of the phase integral (trapezoid on the circle: exact for the smooth periodic

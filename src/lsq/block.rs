@@ -33,6 +33,23 @@ pub trait BlockProblem: Sync {
     ) -> bool {
         false
     }
+    /// Block `b`'s residuals for the forward differences of its Jacobian at (`shared`, `own`),
+    /// when they differ from [`BlockProblem::residuals`]: a problem that profiles a parameter of
+    /// its own out of each block's residuals (fits it inside each prediction) holds it at the
+    /// point's value here, one evaluation a column instead of a profile, and projects its
+    /// direction out of every column (Kaufman's variable projection: the same derivatives to
+    /// first order). None, the default, differences the residuals themselves.
+    fn linearize(&self, _b: usize, _shared: &[f64], _own: &[f64]) -> Option<Box<dyn Linear + '_>> {
+        None
+    }
+}
+
+/// A block's residuals with a profiled parameter held (`BlockProblem::linearize`).
+pub trait Linear {
+    /// The residuals at (`shared`, `own`) with the profiled parameter held.
+    fn residuals(&self, shared: &[f64], own: &[f64], out: &mut [f64]);
+    /// Turn a column at the held value into the profiled residuals' column.
+    fn project(&self, column: &mut [f64]);
 }
 
 /// The solution.
@@ -391,7 +408,9 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         r
     }
 
-    /// ∂r_b/∂(one parameter) by a forward difference stepping inward at an upper bound.
+    /// ∂r_b/∂(one parameter) by a forward difference stepping inward at an upper bound, of the
+    /// residuals `lin` holds when given.
+    #[allow(clippy::too_many_arguments)]
     fn column(
         &self,
         b: usize,
@@ -400,6 +419,7 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         spec: &ParamSpec,
         shared: Option<usize>,
         own: Option<usize>,
+        lin: Option<&dyn Linear>,
     ) -> Vec<f64> {
         let ms = self.shared_specs.len();
         let (mut s2, mut o2) = (x[..ms].to_vec(), self.own(x, b).to_vec());
@@ -416,12 +436,27 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
             }
             _ => unreachable!("a column is of a shared or an own parameter"),
         };
-        let r1 = self.block_residuals(b, &s2, &o2);
+        let r1 = match lin {
+            Some(lin) => {
+                let mut r = vec![0.0; r0.len()];
+                lin.residuals(&s2, &o2, &mut r);
+                r
+            }
+            None => self.block_residuals(b, &s2, &o2),
+        };
         r1.iter().zip(r0).map(|(a, b)| (a - b) / h).collect()
     }
 
     /// ∂r_b/∂(own parameter `k`): the problem's closed form if it has one, else a difference.
-    fn own_column(&self, b: usize, x: &[f64], r0: &[f64], spec: &ParamSpec, k: usize) -> Vec<f64> {
+    fn own_column(
+        &self,
+        b: usize,
+        x: &[f64],
+        r0: &[f64],
+        spec: &ParamSpec,
+        k: usize,
+        lin: Option<&dyn Linear>,
+    ) -> Vec<f64> {
         let ms = self.shared_specs.len();
         let mut out = vec![0.0; r0.len()];
         if self
@@ -430,7 +465,7 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         {
             out
         } else {
-            self.column(b, x, r0, spec, None, Some(k))
+            self.column(b, x, r0, spec, None, Some(k), lin)
         }
     }
 
@@ -443,18 +478,33 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         w: &[f64],
     ) -> (Pieces, Vec<f64>, Vec<f64>) {
         let ms = self.shared_specs.len();
+        let lin = self.problem.linearize(b, &x[..ms], self.own(x, b));
+        let lin = lin.as_deref();
         let ja: Vec<Option<Vec<f64>>> = self.own_specs[b]
             .iter()
             .enumerate()
-            .map(|(i, s)| (!s.held()).then(|| self.own_column(b, x, r, s, i)))
+            .map(|(i, s)| {
+                (!s.held()).then(|| {
+                    let mut c = self.own_column(b, x, r, s, i, lin);
+                    if let Some(lin) = lin {
+                        lin.project(&mut c);
+                    }
+                    c
+                })
+            })
             .collect();
         let jb: Vec<Option<Vec<f64>>> = self
             .shared_specs
             .iter()
             .enumerate()
             .map(|(i, s)| {
-                (!s.held() && self.problem.uses(b, i))
-                    .then(|| self.column(b, x, r, s, Some(i), None))
+                (!s.held() && self.problem.uses(b, i)).then(|| {
+                    let mut c = self.column(b, x, r, s, Some(i), None, lin);
+                    if let Some(lin) = lin {
+                        lin.project(&mut c);
+                    }
+                    c
+                })
             })
             .collect();
         let mo = ja.len();
