@@ -8,7 +8,7 @@
 
 use super::candidate::{predict, ParamInfo, Spec, N_LOCAL};
 use super::data::RunData;
-use super::timeforce::{hold_phase, profile_with_direction};
+use super::timeforce::{hold_phase, profile_with_direction, project_phase};
 use crate::lsq::block::{descend_blocks, minimize_blocks, BlockProblem, Linear};
 use crate::lsq::lm::{ParamSpec, Scale, Settings};
 
@@ -175,10 +175,9 @@ impl BlockProblem for Runs<'_> {
 
 /// A run's residuals with its own phase held where the profile put it (`profile_with_direction`):
 /// the phase's direction `g` (∂z/∂φ, metres) and the direction it was profiled along, `g_hat`
-/// (z0, t0 and v0 projected out), with |g_hat|² = `gg`. A column at the held phase becomes the
-/// profiled one's by taking off `g` times the phase's first-order move, −(g_hat·column)/gg
-/// (Gauss–Newton: the misfit's own curvature left out). z0 and v0 barely move the phase; t0
-/// does, by −2πf a second, since the force's clock starts at the kick.
+/// (z0, t0 and v0 projected out), with |g_hat|² = `gg`, both in metres (`project_phase` turns a
+/// column in any units). z0 and v0 barely move the phase; t0 does, by −2πf a second, since the
+/// force's clock starts at the kick.
 struct AtPhase<'a> {
     spec: &'a Spec,
     run: &'a RunData,
@@ -199,16 +198,7 @@ impl Linear for AtPhase<'_> {
     }
 
     fn project(&self, column: &mut [f64]) {
-        let along = self
-            .g_hat
-            .iter()
-            .zip(column.iter())
-            .map(|(a, b)| a * b)
-            .sum::<f64>()
-            / self.gg;
-        for (c, g) in column.iter_mut().zip(&self.g) {
-            *c -= along * g;
-        }
+        project_phase(column, &self.g, &self.g_hat, self.gg);
     }
 }
 
