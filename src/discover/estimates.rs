@@ -65,6 +65,15 @@ pub fn placed_at_bound(m: &Model, i: usize) -> bool {
         .any(|k| pinned(m, i, k).is_some())
 }
 
+/// Whether extra term `i` of `m` is held back in a tie: a parameter other than its scale at a
+/// bound of its search (`placed_at_bound`), or a term physical only over the data's speeds
+/// (`Form::physical_only_within_data`).
+pub fn held_back(m: &Model, i: usize) -> bool {
+    let off = m.spec.extra_offset(i);
+    let e = &m.spec.extras[i];
+    placed_at_bound(m, i) || e.physical_only_within_data(&m.fit.global[off..off + e.params().len()])
+}
+
 /// The bound (`Some(true)` the lower) parameter `k` of extra term `i` of `m` is pinned at; a
 /// term that starts where it vanishes, at its bound, is not pinned there (unless the form says
 /// so: `notes_start_bound`).

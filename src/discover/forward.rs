@@ -10,7 +10,7 @@ use super::candidate::{Extra, N_LOCAL};
 use super::cv::{folds, paired_t, signed_rank_p, CvResult};
 use super::data::RunData;
 use super::detection::detection_limit;
-use super::estimates::{placed_at_bound, reported_parameters, scale_at_bound};
+use super::estimates::{held_back, reported_parameters, scale_at_bound};
 use super::holm::holm;
 use super::model::{data_starts, Model};
 use super::null_distribution::{empirical_p, NullFit};
@@ -115,8 +115,9 @@ pub struct Tie {
     pub after: ModelScore,
 }
 
-/// One side of [`preferred`]: a form's parameter count, held-out error, and whether a parameter
-/// other than its scale ended at a bound of its search (`estimates::placed_at_bound`).
+/// One side of [`preferred`]: a form's parameter count, held-out error, and whether it is held
+/// back (`estimates::held_back`: a parameter other than its scale at a bound of its search, or
+/// a term physical only over the speeds the runs reach).
 pub struct Side<'a> {
     pub n: usize,
     pub cv: &'a CvResult,
@@ -125,10 +126,11 @@ pub struct Side<'a> {
 
 /// Whether form `new` is preferred to `old` (paired t over the runs against `t_cv`): a richer
 /// form where held-out runs prefer it, a simpler one where they cannot tell the two apart. Of
-/// two as simple, one with a parameter other than its scale at a bound of its search is named
-/// only where held-out runs prefer it (a bump whose centre ran to the end of the groove, 4 mm
-/// wide, is a step seen from one side: the data do not place it, and the two came out a hair
-/// apart either way between builds), else the one with the lower held-out error.
+/// two as simple, one held back is named only where held-out runs prefer it (a bump whose
+/// centre ran to the end of the groove, 4 mm wide, is a step seen from one side: the data do
+/// not place it; a quadratic drag with c < 0 beside a saturating one pushes the particle above
+/// some speed: the two had come out a hair apart either way between builds), else the one with
+/// the lower held-out error.
 pub fn preferred(new: Side, old: Side, t_cv: f64) -> bool {
     match new.n.cmp(&old.n) {
         std::cmp::Ordering::Greater => paired_t(old.cv, new.cv) > t_cv,
@@ -729,11 +731,10 @@ impl Trials<'_> {
         }
     }
 
-    /// Whether candidate `i`, fitted in full, has a parameter other than its scale at a bound
-    /// of its search (`estimates::placed_at_bound`).
+    /// Whether candidate `i`, fitted in full, is held back in a tie (`estimates::held_back`).
     fn pinned(&self, i: usize) -> bool {
         let m = &self.fitted[i];
-        !m.spec.extras.is_empty() && placed_at_bound(m, m.spec.extras.len() - 1)
+        !m.spec.extras.is_empty() && held_back(m, m.spec.extras.len() - 1)
     }
 
     /// A force with a phase per run whose fitted phases gather about one value (Rayleigh's test
@@ -1040,7 +1041,7 @@ pub fn run_round(
             if !ties.is_empty() {
                 let forms: Vec<String> = ties.iter().map(|&(j, _)| all[j].form()).collect();
                 rows[i].evidence.decision.push_str(&format!(
-                    "; tied with {}: these data cannot tell them apart, and this one (simpler, stronger, inside its bounds or of lower held-out error) is in the model",
+                    "; tied with {}: these data cannot tell them apart, and this one (simpler, stronger, inside its bounds, physical at every speed or of lower held-out error) is in the model",
                     forms.join(" and ")
                 ));
             }

@@ -13,7 +13,7 @@
 
 use super::admissible::refusal;
 use super::cv::{paired_t, CvResult};
-use super::estimates::placed_at_bound;
+use super::estimates::{held_back, placed_at_bound};
 use super::forward::{preferred, Side, CV_LEVEL, FULL_ITERATIONS};
 use super::model::Model;
 use super::selection::{Ctx, Selection, Tied};
@@ -62,7 +62,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     ));
     let old_cv = sel.current_cv.clone();
     let n_old = sel.accepted[a].extra.params().len();
-    let old_pinned = placed_at_bound(&sel.current, i);
+    let old_pinned = held_back(&sel.current, i);
     // each tied form's paired t against the accepted term beside the later terms (None: refused)
     let mut outcome: Vec<Option<f64>> = vec![None; tied.len()];
     // (index into tied, model, its CV) of the form preferred so far; None: the accepted term
@@ -85,7 +85,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
             Some((b, bm, b_cv)) => Side {
                 n: tied[*b].alt.extra.params().len(),
                 cv: b_cv,
-                pinned: placed_at_bound(bm, i),
+                pinned: held_back(bm, i),
             },
             None => Side {
                 n: n_old,
@@ -96,7 +96,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
         let new = Side {
             n: t.alt.extra.params().len(),
             cv: &cv,
-            pinned: placed_at_bound(&m, i),
+            pinned: held_back(&m, i),
         };
         if preferred(new, kept, t_cv) {
             best = Some((k, m, cv));
@@ -135,7 +135,7 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
         row.evidence.decision = if still.is_empty() {
             format!("{head}; tied in its round, and told apart beside the later terms: held-out runs tell it from the forms it tied with there, or those are refused there (each one's row says which){flagged}")
         } else {
-            format!("{head}; tied with {}: these data cannot tell them apart, beside the later terms too, and this one (simpler, stronger, inside its bounds or of lower held-out error) is in the model{flagged}", still.join(" and "))
+            format!("{head}; tied with {}: these data cannot tell them apart, beside the later terms too, and this one (simpler, stronger, inside its bounds, physical at every speed or of lower held-out error) is in the model{flagged}", still.join(" and "))
         };
         let row = row.clone();
         set_row(sel, &row);
@@ -147,8 +147,11 @@ fn decide(sel: &mut Selection, a: usize, tied: Vec<Tied>, t_cv: f64, ctx: &Ctx) 
     let new_form = new.alt.extra.form();
     let why = match new.alt.extra.params().len().cmp(&n_old) {
         std::cmp::Ordering::Less => "simpler",
-        _ if old_pinned && !placed_at_bound(&model, i) => {
+        _ if old_pinned && placed_at_bound(&sel.current, i) && !held_back(&model, i) => {
             "as simple and inside its bounds where the other ran to one"
+        }
+        _ if old_pinned && !held_back(&model, i) => {
+            "as simple and physical at every speed where the other is only over the runs' speeds"
         }
         _ => "as simple and of lower held-out error",
     };

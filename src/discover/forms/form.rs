@@ -220,6 +220,13 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn search(&self, _s: &Search) -> (Option<Trial>, Option<Typical>) {
         (None, None)
     }
+    /// True when the term at parameters `x` is physical only over the speeds the runs reach (a
+    /// quadratic drag with c < 0 opposes the motion up to v = 1/(T|c|) and pushes the particle
+    /// beyond): of two forms the data cannot tell apart, such a one is named only where held-out
+    /// runs prefer it (`forward::preferred`), the other being physical at every speed.
+    fn physical_only_within_data(&self, _x: &[f64]) -> bool {
+        false
+    }
     /// True for a parameter whose bound (the `lower` one, or the upper) is no physical limit but
     /// the edge of what the form can mean (μ varying by 90 % of itself along the groove): a fit
     /// that ends there has bent the form to absorb something else, and the term is refused

@@ -41,6 +41,9 @@ impl Form for QuadraticDrag {
     fn speed_dependent(&self) -> bool {
         true
     }
+    fn physical_only_within_data(&self, x: &[f64]) -> bool {
+        x[0] < 0.0
+    }
     fn detection_size(
         &self,
         se: &[f64],
