@@ -88,7 +88,9 @@
 //!    (`null_distribution.rs`); a time force's replicates are raised to the noise floor the data
 //!    show (`noise_floor.rs`), and the two time forms share one frequency scan, which stops where
 //!    a force at their amplitude bound would stand below two standard errors (`time_scan.rs`). Holm at α = 0.01 over the candidates; the strongest significant
-//!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt) and must predict
+//!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt; a phase per run is
+//!    profiled in each prediction and held in the Jacobian's differences, its direction
+//!    projected out: Kaufman's variable projection) and must predict
 //!    held-out runs better (`cv.rs`: a paired t over the runs, or for a first term whose gain
 //!    sits in few runs Wilcoxon's signed-rank test; a model with a phase per run is charged what
 //!    its phases take from noise alone); the other forms of the passing term's effect with
@@ -103,8 +105,9 @@
 //! 5. **Sanity.** A term must be physics (`admissible.rs`): a drag that pushes, a form whose
 //!    scale ends at the fine end of its search, are refused; a parameter at a bound is said in
 //!    words; two forms that held-out runs cannot tell apart are said as a tie, the simpler kept
-//!    (of two as simple, the one with no parameter at a bound), and decided again beside the
-//!    terms accepted after them (`ties.rs`).
+//!    (of two as simple, the one with no parameter at a bound and physical at every speed, not
+//!    only the runs': a quadratic drag with c < 0 pushes above 1/(T|c|)), and decided again
+//!    beside the terms accepted after them (`ties.rs`).
 //!    A map's peak and RMS are of the curve with its noise taken out (`forms/spline.rs`).
 //!    Drift probes (T or μ drifting with |v0|, a direction asymmetry) say whether a mismatch is
 //!    left unexplained. Every candidate carries its detection limit (90 % power on this dataset,
