@@ -55,3 +55,18 @@ impl Form for QuadraticDrag {
         carried_force(f, &["c_per_m"], |v| Term::QuadraticDrag { c_per_m: v[0] })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quadratic drag with c < 0 pushes the particle above 1/(T|c|): physical only over the
+    /// speeds the runs reach, and held back in a tie; with c ≥ 0 it opposes the motion at every
+    /// speed.
+    #[test]
+    fn a_quadratic_drag_that_weakens_with_speed_is_physical_only_within_the_data() {
+        assert!(QuadraticDrag.physical_only_within_data(&[-28.0]));
+        assert!(!QuadraticDrag.physical_only_within_data(&[0.0]));
+        assert!(!QuadraticDrag.physical_only_within_data(&[5.0]));
+    }
+}
