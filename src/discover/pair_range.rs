@@ -150,6 +150,10 @@ pub fn share_range(
             );
             let cov = &at.result.shared_cov;
             let var = cov[PF_LN_RANGE][PF_LN_RANGE];
+            // a range the material does not determine leaves the error unknown, not zero
+            if !(var > 0.0 && var.is_finite()) {
+                return (f64::NAN, 0.0);
+            }
             (1.0 / (var * m.inflate), cov[PF_AMP][PF_LN_RANGE] / var)
         })
         .collect();
