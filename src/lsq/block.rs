@@ -42,6 +42,20 @@ pub trait BlockProblem: Sync {
     fn linearize(&self, _b: usize, _shared: &[f64], _own: &[f64]) -> Option<Box<dyn Linear + '_>> {
         None
     }
+    /// Block `b`'s columns at (`shared`, `own`) that the problem knows to first order without a
+    /// difference (None entries are differenced): parameters that enter the model linearly,
+    /// whose columns one linearization of the block gives all at once, for the steps and the
+    /// covariance alike. None, the default, differences them all.
+    fn known_columns(&self, _b: usize, _shared: &[f64], _own: &[f64]) -> Option<Known> {
+        None
+    }
+}
+
+/// Columns a problem knows without differences (`BlockProblem::known_columns`), by shared and
+/// by own index.
+pub struct Known {
+    pub shared: Vec<Option<Vec<f64>>>,
+    pub own: Vec<Option<Vec<f64>>>,
 }
 
 /// A block's residuals with a profiled parameter held (`BlockProblem::linearize`).
@@ -480,12 +494,17 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         let ms = self.shared_specs.len();
         let lin = self.problem.linearize(b, &x[..ms], self.own(x, b));
         let lin = lin.as_deref();
+        let mut known = self.problem.known_columns(b, &x[..ms], self.own(x, b));
         let ja: Vec<Option<Vec<f64>>> = self.own_specs[b]
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 (!s.held()).then(|| {
-                    let mut c = self.own_column(b, x, r, s, i, lin);
+                    let given = known.as_mut().and_then(|k| k.own.get_mut(i)?.take());
+                    let mut c = match given {
+                        Some(c) => c,
+                        None => self.own_column(b, x, r, s, i, lin),
+                    };
                     if let Some(lin) = lin {
                         lin.project(&mut c);
                     }
@@ -499,7 +518,11 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
             .enumerate()
             .map(|(i, s)| {
                 (!s.held() && self.problem.uses(b, i)).then(|| {
-                    let mut c = self.column(b, x, r, s, Some(i), None, lin);
+                    let given = known.as_mut().and_then(|k| k.shared.get_mut(i)?.take());
+                    let mut c = match given {
+                        Some(c) => c,
+                        None => self.column(b, x, r, s, Some(i), None, lin),
+                    };
                     if let Some(lin) = lin {
                         lin.project(&mut c);
                     }
