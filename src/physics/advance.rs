@@ -10,6 +10,41 @@ use super::rk::{dopri5, Tolerance};
 /// Largest step (s): keeps the interpolant far more accurate than any camera.
 const H_MAX_S: f64 = 1e-3;
 
+/// Most Runge–Kutta steps (tried or taken) in one simulation beyond those its step cap forces.
+/// A smooth run takes a few hundred to a few thousand; a model whose error control asks for steps
+/// near rounding (a pair that a fit pushed where its contact chatters) would otherwise crawl for
+/// hours. Past the budget the simulation stops where it is and holds that state at every later
+/// sample: a misfit the fit sees.
+pub(crate) const MAX_STEPS: usize = 100_000;
+
+/// What one simulation carries from one smooth piece to the next: the step size and the steps it
+/// has left.
+pub(crate) struct Pace {
+    pub h: f64,
+    pub steps_left: usize,
+}
+
+impl Pace {
+    /// A simulation to `t_end_s` whose pieces may be capped at steps of `finest_cap_s` (rest under
+    /// a vibration): a first step of 0.1 ms, and `MAX_STEPS` beside twice the steps the cap forces.
+    pub(crate) fn new(t_end_s: f64, finest_cap_s: f64) -> Pace {
+        let capped = (2.0 * t_end_s.max(0.0) / finest_cap_s).ceil().min(1e9);
+        Pace {
+            h: 1e-4,
+            steps_left: MAX_STEPS + if capped.is_finite() { capped as usize } else { 0 },
+        }
+    }
+
+    /// Count one step; false once none is left.
+    fn take(&mut self) -> bool {
+        if self.steps_left == 0 {
+            return false;
+        }
+        self.steps_left -= 1;
+        true
+    }
+}
+
 /// Where a piece ended: at `t_s` with state `y`, because of `event` (None: end time reached).
 pub(crate) struct Stop<const N: usize> {
     pub t_s: f64,
@@ -39,9 +74,10 @@ impl<F> Sampler<'_, F> {
 }
 
 /// Integrate from (`t0`, `y0`) until `t_end` or the first event, filling samples on the way.
-/// `h` carries the step size from one piece to the next; no step is longer than `h_max` (nor
+/// `pace` carries the step size from one piece to the next; no step is longer than `h_max` (nor
 /// than `H_MAX_S`): an event the error control cannot see coming (rest ending where a vibration
-/// outgrows the hold, while nothing moves) is missed if a step can span it.
+/// outgrows the hold, while nothing moves) is missed if a step can span it. When `pace` runs out
+/// of steps every pending sample gets the state reached and the piece ends there with no event.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])>(
     rhs: &impl Fn(&[f64; N]) -> [f64; N],
@@ -51,7 +87,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     t_end: f64,
     sampler: &mut Sampler<'_, F>,
     tol: &Tolerance<N>,
-    h: &mut f64,
+    pace: &mut Pace,
     h_max: f64,
 ) -> Stop<N> {
     sampler.fill_until(t0, |_| y0);
@@ -60,11 +96,15 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     let mut e0 = events(&y);
     let mut rejects = 0;
     while t < t_end {
-        let h_try = h.min(H_MAX_S).min(h_max).min(t_end - t);
+        if !pace.take() {
+            sampler.fill_until(t_end, |_| y);
+            break;
+        }
+        let h_try = pace.h.min(H_MAX_S).min(h_max).min(t_end - t);
         let step = dopri5(rhs, &y, &f, h_try, tol);
         let min_h = 1e-14 * t.abs().max(1e-3);
         if step.err > 1.0 && h_try > min_h && rejects < 200 {
-            *h = h_try * (0.9 * step.err.powf(-0.2)).max(0.1);
+            pace.h = h_try * (0.9 * step.err.powf(-0.2)).max(0.1);
             rejects += 1;
             continue;
         }
@@ -97,7 +137,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
             if short.err > 1.0 && h_ev > min_h && rejects < 200 {
                 // the step to the event is itself too coarse (e.g. friction that changes fast
                 // near zero slip): approach the event with smaller steps first
-                *h = 0.5 * h_ev;
+                pace.h = 0.5 * h_ev;
                 rejects += 1;
                 continue;
             }
@@ -120,11 +160,74 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
         y = step.y;
         f = step.f;
         e0 = e1;
-        *h = h_try * (0.9 * step.err.max(1e-10).powf(-0.2)).clamp(0.2, 5.0);
+        pace.h = h_try * (0.9 * step.err.max(1e-10).powf(-0.2)).clamp(0.2, 5.0);
     }
     Stop {
         t_s: t,
         y,
         event: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TOL1: Tolerance<2> = Tolerance {
+        atol: [1e-12, 1e-12],
+        rtol: 1e-10,
+    };
+
+    /// Run `rhs` on `[y, t]` from y = 1 at t = 0 to 10 ms, sampled at 0, 5 and 10 ms.
+    fn run(rhs: impl Fn(&[f64; 2]) -> [f64; 2]) -> (Stop<2>, Vec<(usize, f64)>, Pace) {
+        let times = [0.0, 0.005, 0.01];
+        let mut got = Vec::new();
+        let mut sampler = Sampler {
+            times: &times,
+            next: 0,
+            store: |i: usize, y: &[f64; 2]| got.push((i, y[0])),
+        };
+        let mut pace = Pace::new(0.01, f64::INFINITY);
+        let stop = advance(
+            &rhs,
+            &|y: &[f64; 2]| [y[0] + 1.0],
+            0.0,
+            [1.0, 0.0],
+            0.01,
+            &mut sampler,
+            &TOL1,
+            &mut pace,
+            f64::INFINITY,
+        );
+        (stop, got, pace)
+    }
+
+    #[test]
+    fn a_smooth_piece_reaches_its_end_well_within_the_budget() {
+        let (stop, got, pace) = run(|y| [-100.0 * y[0], 1.0]);
+        assert_eq!(stop.event, None);
+        assert_eq!(stop.t_s, 0.01);
+        let used = MAX_STEPS - pace.steps_left;
+        let capped = Pace::new(0.01, 1e-7).steps_left - MAX_STEPS;
+        assert!((200_000..=200_001).contains(&capped), "{capped}");
+        assert!(used < 200, "{used} steps for a decay over one time constant");
+        assert_eq!(got.len(), 3);
+        let want = (-1.0f64).exp();
+        assert!((got[2].1 - want).abs() < 1e-8 * want, "{got:?}");
+    }
+
+    #[test]
+    fn a_stiff_piece_stops_at_the_budget_and_holds_its_state_at_every_later_sample() {
+        // a relaxation time of 1 ns: an explicit step is stable only below about 3 ns, so the
+        // 10 ms piece would take millions of steps
+        let (stop, got, pace) = run(|y| [-1e9 * (y[0] - 0.5), 1.0]);
+        assert_eq!(pace.steps_left, 0);
+        assert_eq!(stop.event, None);
+        assert!(stop.t_s < 0.01, "stopped at {} s", stop.t_s);
+        let idx: Vec<usize> = got.iter().map(|g| g.0).collect();
+        assert_eq!(idx, [0, 1, 2], "every sample is filled once");
+        // the held state is the relaxed one, 0.5, reached long before the budget ran out
+        assert!((got[1].1 - 0.5).abs() < 1e-6 && got[2].1 == got[1].1, "{got:?}");
+        assert!((stop.y[0] - got[2].1).abs() == 0.0);
     }
 }

@@ -16,7 +16,7 @@
 //! μ_pp is one number, or (`PairParams::slip`) a function of the slip speed at the contact,
 //! |v_a1 + v_a2| before each impact, through which the impulse is then applied.
 
-use super::advance::{advance, Sampler};
+use super::advance::{advance, Pace, Sampler};
 use super::impulse::collide;
 use super::mode::{start, Mode};
 use super::pair_force::PairForce;
@@ -276,7 +276,7 @@ pub fn simulate_pair(
         y[3 * i..3 * i + 3].copy_from_slice(&yi);
     }
     let mut t = 0.0;
-    let mut h = 1e-4;
+    let mut pace = Pace::new(t_end, Mode::Rest.step_cap(model));
     let mut next = 0;
     let mut n_events = 0;
     let max_events = if pair.force.is_some() {
@@ -362,7 +362,7 @@ pub fn simulate_pair(
                 t_end,
                 &mut sampler,
                 &TOL,
-                &mut h,
+                &mut pace,
                 ms[0].step_cap(model).min(ms[1].step_cap(model)),
             )
         } else {
@@ -385,7 +385,7 @@ pub fn simulate_pair(
                 t_end,
                 &mut sampler,
                 &TOL,
-                &mut h,
+                &mut pace,
                 ms[0].step_cap(model).min(ms[1].step_cap(model)),
             )
         };

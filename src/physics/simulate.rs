@@ -1,6 +1,6 @@
 //! Event-driven simulation of one particle under any `Model`, sampled at requested times.
 
-use super::advance::{advance, Sampler};
+use super::advance::{advance, Pace, Sampler};
 use super::mode::{start, Mode};
 use super::rk::Tolerance;
 use super::{Model, State, SwitchEvent, Trajectory};
@@ -35,7 +35,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
     };
     let (mut mode, mut y) = start(model, init.z_m, init.v_mps, init.va_mps, 0.0, 0.0);
     let mut t = 0.0;
-    let mut h = 1e-4;
+    let mut pace = Pace::new(t_end, Mode::Rest.step_cap(model));
     let mut next = 0;
     let mut switches = 0;
     loop {
@@ -63,7 +63,7 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
             t_end,
             &mut sampler,
             &TOL,
-            &mut h,
+            &mut pace,
             mode.step_cap(model),
         );
         next = sampler.next;
