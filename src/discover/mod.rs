@@ -90,7 +90,8 @@
 //!    a force at their amplitude bound would stand below two standard errors (`time_scan.rs`). Holm at α = 0.01 over the candidates; the strongest significant
 //!    ones are fitted in full (`joint.rs`, block-sparse Levenberg–Marquardt; a phase per run is
 //!    profiled in each prediction and held in the Jacobian's differences, its direction
-//!    projected out: Kaufman's variable projection) and must predict
+//!    projected out: Kaufman's variable projection; the columns of what enters through the
+//!    force, and of t0 and v0, come from each run's linear response) and must predict
 //!    held-out runs better (`cv.rs`: a paired t over the runs, or for a first term whose gain
 //!    sits in few runs Wilcoxon's signed-rank test; a model with a phase per run is charged what
 //!    its phases take from noise alone); the other forms of the passing term's effect with

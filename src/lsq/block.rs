@@ -1,8 +1,9 @@
 //! The block-arrow back-end of the [`lm`] driver: shared parameters plus one block of
 //! own parameters per group of residuals (a run), forward-difference Jacobians per block in
-//! parallel, and the normal equations solved through the Schur complement on the shared
-//! parameters. Residuals are expected whitened (in units of each run's noise), so the cost is a
-//! χ²-like deviance.
+//! parallel (but for the columns a problem knows in closed form or to first order, its
+//! `own_column` and `known_columns`), and the normal equations solved through the Schur
+//! complement on the shared parameters. Residuals are expected whitened (in units of each run's
+//! noise), so the cost is a χ²-like deviance.
 
 use super::dense;
 use super::fd::inward_step;
@@ -42,6 +43,21 @@ pub trait BlockProblem: Sync {
     fn linearize(&self, _b: usize, _shared: &[f64], _own: &[f64]) -> Option<Box<dyn Linear + '_>> {
         None
     }
+    /// Block `b`'s columns at (`shared`, `own`) that the problem knows to first order without a
+    /// difference (None entries are differenced): parameters that enter the model linearly,
+    /// whose columns one linearization of the block gives all at once. Used for the steps; the
+    /// covariance at the minimum differences every column. None, the default, differences
+    /// them all.
+    fn known_columns(&self, _b: usize, _shared: &[f64], _own: &[f64]) -> Option<Known> {
+        None
+    }
+}
+
+/// Columns a problem knows without differences (`BlockProblem::known_columns`), by shared and
+/// by own index.
+pub struct Known {
+    pub shared: Vec<Option<Vec<f64>>>,
+    pub own: Vec<Option<Vec<f64>>>,
 }
 
 /// A block's residuals with a profiled parameter held (`BlockProblem::linearize`).
@@ -369,6 +385,9 @@ struct Flat<'a, P> {
     /// Offsets of each block's own parameters and residuals in the flat vectors.
     param_offsets: Vec<usize>,
     res_offsets: Vec<usize>,
+    /// Whether the columns the problem knows (`BlockProblem::known_columns`) stand for their
+    /// differences: while descending, not for the covariance at the minimum.
+    known_columns: bool,
 }
 
 impl<'a, P: BlockProblem> Flat<'a, P> {
@@ -389,6 +408,7 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
             own_specs,
             param_offsets,
             res_offsets,
+            known_columns: true,
         }
     }
 
@@ -480,12 +500,21 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
         let ms = self.shared_specs.len();
         let lin = self.problem.linearize(b, &x[..ms], self.own(x, b));
         let lin = lin.as_deref();
+        let mut known = if self.known_columns {
+            self.problem.known_columns(b, &x[..ms], self.own(x, b))
+        } else {
+            None
+        };
         let ja: Vec<Option<Vec<f64>>> = self.own_specs[b]
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 (!s.held()).then(|| {
-                    let mut c = self.own_column(b, x, r, s, i, lin);
+                    let given = known.as_mut().and_then(|k| k.own.get_mut(i)?.take());
+                    let mut c = match given {
+                        Some(c) => c,
+                        None => self.own_column(b, x, r, s, i, lin),
+                    };
                     if let Some(lin) = lin {
                         lin.project(&mut c);
                     }
@@ -499,7 +528,11 @@ impl<'a, P: BlockProblem> Flat<'a, P> {
             .enumerate()
             .map(|(i, s)| {
                 (!s.held() && self.problem.uses(b, i)).then(|| {
-                    let mut c = self.column(b, x, r, s, Some(i), None, lin);
+                    let given = known.as_mut().and_then(|k| k.shared.get_mut(i)?.take());
+                    let mut c = match given {
+                        Some(c) => c,
+                        None => self.column(b, x, r, s, Some(i), None, lin),
+                    };
                     if let Some(lin) = lin {
                         lin.project(&mut c);
                     }
@@ -602,9 +635,20 @@ pub fn minimize_blocks<P: BlockProblem>(
     own_specs: &[Vec<ParamSpec>],
     settings: &Settings,
 ) -> BlockResult {
-    let flat = Flat::new(problem, shared_specs, own_specs);
+    let mut flat = Flat::new(problem, shared_specs, own_specs);
     let specs = flat.specs();
-    let sol = lm::minimize(&flat, &specs, settings);
+    let d = lm::descend(&flat, &specs, settings);
+    // the covariance from differences of every column: the known ones serve the steps
+    flat.known_columns = false;
+    let sol = lm::Solution {
+        normal: flat.normal(&d.x, &d.r, &d.w),
+        x: d.x,
+        r: d.r,
+        w: d.w,
+        scale: d.scale,
+        termination: d.termination,
+        iterations: d.iterations,
+    };
     let free: Vec<bool> = specs.iter().map(|s| !s.held()).collect();
     let (shared_cov, own_se, singular) = sol.normal.covariance(&free);
     let mut res = block_result(&flat, &sol, settings);

@@ -87,9 +87,16 @@ impl SplineForce {
         let hi = self.lo_x + n as f64 * self.dx;
         let u = (x.clamp(self.lo_x, hi) - self.lo_x) / self.dx;
         let i = (u.floor() as usize).min(n - 1);
-        (i..i + 4)
-            .map(|j| self.coefs_mps2[j] * b3(u - j as f64 + 3.0))
-            .sum()
+        // the four basis functions alive on knot interval i, at its fraction t: b3(t + 3 − k)
+        // for k = 0..4 written out (this is the integrator's inner loop under a spline force)
+        let t = u - i as f64;
+        let (t2, s) = (t * t, 1.0 - t);
+        let c = &self.coefs_mps2[i..i + 4];
+        (c[0] * s * s * s
+            + c[1] * (3.0 * t2 * t - 6.0 * t2 + 4.0)
+            + c[2] * (-3.0 * t2 * t + 3.0 * t2 + 3.0 * t + 1.0)
+            + c[3] * t2 * t)
+            / 6.0
     }
 
     /// Acceleration at (z, v, t).
@@ -131,5 +138,32 @@ mod tests {
             );
         }
         assert!((sp.at(-3.0) - 2.0).abs() < 1e-12, "held at the lower end");
+    }
+
+    #[test]
+    fn the_written_out_sum_is_the_basis_sum() {
+        let segments = 5;
+        let coefs: Vec<f64> = (0..n_basis(segments))
+            .map(|j| ((j * 7 + 3) % 11) as f64 - 4.5)
+            .collect();
+        let sp = SplineForce {
+            variable: Variable::V,
+            lo_x: -0.02,
+            dx: 0.01,
+            coefs_mps2: coefs.clone(),
+        };
+        for k in 0..=240 {
+            // beyond both ends, on every knot and between them
+            let x = -0.04 + 0.09 * k as f64 / 240.0;
+            let by_basis: f64 = (0..coefs.len())
+                .map(|j| coefs[j] * basis(-0.02, 0.01, segments, j, x))
+                .sum();
+            // `basis` takes the upper end 1e-12 of an interval inside it
+            assert!(
+                (sp.at(x) - by_basis).abs() < 1e-10,
+                "at {x}: {} against {by_basis}",
+                sp.at(x)
+            );
+        }
     }
 }

@@ -194,6 +194,14 @@ pub trait Form: std::fmt::Debug + Send + Sync {
         Vec::new()
     }
 
+    /// True when the term's parameters enter the model through the acceleration alone (no
+    /// friction, no measurement, no phase of each run's own): the joint fit then takes their
+    /// columns from each run's linear response to ∂a/∂x along its fitted motion, one
+    /// simulation for all of them instead of one each (`joint.rs`).
+    fn through_force(&self) -> bool {
+        self.place() == Place::Force && !self.run_phase()
+    }
+
     /// The one variable whose force map can stand for this term (a force of z fixed in the lab,
     /// a force of the speed), None for a term that is no force of one variable. A constant
     /// force along the groove (the tilt) says z.
