@@ -28,10 +28,11 @@ impl Pace {
     /// A simulation to `t_end_s` whose pieces may be capped at steps of `finest_cap_s` (rest under
     /// a vibration): a first step of 0.1 ms, and `MAX_STEPS` beside twice the steps the cap forces.
     pub(crate) fn new(t_end_s: f64, finest_cap_s: f64) -> Pace {
-        let capped = (2.0 * t_end_s.max(0.0) / finest_cap_s).ceil().min(1e9);
+        // `as` saturates (and takes NaN, a zero time over a zero cap, to 0)
+        let capped = (2.0 * t_end_s.max(0.0) / finest_cap_s).ceil().min(1e9) as usize;
         Pace {
             h: 1e-4,
-            steps_left: MAX_STEPS + if capped.is_finite() { capped as usize } else { 0 },
+            steps_left: MAX_STEPS + capped,
         }
     }
 
@@ -210,7 +211,10 @@ mod tests {
         let used = MAX_STEPS - pace.steps_left;
         let capped = Pace::new(0.01, 1e-7).steps_left - MAX_STEPS;
         assert!((200_000..=200_001).contains(&capped), "{capped}");
-        assert!(used < 200, "{used} steps for a decay over one time constant");
+        assert!(
+            used < 200,
+            "{used} steps for a decay over one time constant"
+        );
         assert_eq!(got.len(), 3);
         let want = (-1.0f64).exp();
         assert!((got[2].1 - want).abs() < 1e-8 * want, "{got:?}");
@@ -227,7 +231,10 @@ mod tests {
         let idx: Vec<usize> = got.iter().map(|g| g.0).collect();
         assert_eq!(idx, [0, 1, 2], "every sample is filled once");
         // the held state is the relaxed one, 0.5, reached long before the budget ran out
-        assert!((got[1].1 - 0.5).abs() < 1e-6 && got[2].1 == got[1].1, "{got:?}");
-        assert!((stop.y[0] - got[2].1).abs() == 0.0);
+        assert!(
+            (got[1].1 - 0.5).abs() < 1e-6 && got[2].1 == got[1].1,
+            "{got:?}"
+        );
+        assert_eq!(stop.y[0], got[2].1);
     }
 }
