@@ -122,8 +122,8 @@
 //!    material unless that costs more than chance, `pair_range.rs`); the impacts' own C and
 //!    μ_pp against their speeds, a map beside the chapter's candidate laws (`impact/`).
 //!
-//! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times on stderr (not in any
-//! output).
+//! `GROOVE_DISCOVER_TRACE=1` prints each round's steps with their times, and how many simulations
+//! have stopped at their step budget (`physics::budget_stops`), on stderr (not in any output).
 
 pub mod admissible;
 pub mod blur;

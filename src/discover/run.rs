@@ -111,8 +111,9 @@ impl Ctx<'_> {
     fn trace(&self, what: &str) {
         if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
             eprintln!(
-                "discover: {what} at {:.2} s",
-                self.t0.elapsed().as_secs_f64()
+                "discover: {what} at {:.2} s ({} simulations stopped at their step budget so far)",
+                self.t0.elapsed().as_secs_f64(),
+                crate::physics::budget_stops()
             );
         }
     }

@@ -17,6 +17,15 @@ const H_MAX_S: f64 = 1e-3;
 /// sample: a misfit the fit sees.
 pub(crate) const MAX_STEPS: usize = 100_000;
 
+/// Simulations in this process that stopped at their step budget (for traces; never in outputs,
+/// which must not depend on what else the process ran).
+static BUDGET_STOPS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// How many simulations in this process have stopped at their step budget so far.
+pub fn budget_stops() -> u64 {
+    BUDGET_STOPS.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// What one simulation carries from one smooth piece to the next: the step size and the steps it
 /// has left.
 pub(crate) struct Pace {
@@ -98,6 +107,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     let mut rejects = 0;
     while t < t_end {
         if !pace.take() {
+            BUDGET_STOPS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             sampler.fill_until(t_end, |_| y);
             break;
         }
@@ -224,8 +234,11 @@ mod tests {
     fn a_stiff_piece_stops_at_the_budget_and_holds_its_state_at_every_later_sample() {
         // a relaxation time of 1 ns: an explicit step is stable only below about 3 ns, so the
         // 10 ms piece would take millions of steps
+        let before = budget_stops();
         let (stop, got, pace) = run(|y| [-1e9 * (y[0] - 0.5), 1.0]);
         assert_eq!(pace.steps_left, 0);
+        // other tests may stop at theirs meanwhile: at least this one is counted
+        assert!(budget_stops() > before, "the stop is counted");
         assert_eq!(stop.event, None);
         assert!(stop.t_s < 0.01, "stopped at {} s", stop.t_s);
         let idx: Vec<usize> = got.iter().map(|g| g.0).collect();

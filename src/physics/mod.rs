@@ -153,6 +153,7 @@ mod spline;
 mod terms;
 mod trajectory;
 
+pub use advance::budget_stops;
 pub use baseline::Baseline;
 pub use constants::G_MPS2;
 pub use friction::Friction;
