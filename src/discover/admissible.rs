@@ -113,18 +113,8 @@ mod tests {
 
     fn sim(drag: Drag) -> SimModel {
         SimModel {
-            s: 0.5779,
-            k: 2.5,
-            mu: 0.3,
-            vc_mps: None,
             drag,
-            roll_c: 0.0,
-            tilt_mps2: 0.0,
-            position: vec![],
-            terms: vec![],
-            phased_term: None,
-            variation: Default::default(),
-            distortion: None,
+            ..SimModel::baseline(0.5779, 2.5, 0.3, 0.05)
         }
     }
 

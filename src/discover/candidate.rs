@@ -117,20 +117,7 @@ impl Spec {
     pub fn sim_model(&self, g: &[f64], material: usize, v0_mps: f64) -> SimModel {
         let mu = g[material];
         let t_s = g[self.n_materials + material];
-        let m = SimModel {
-            s: self.s,
-            k: self.k,
-            mu,
-            vc_mps: None,
-            drag: Drag::Quadratic { t_s, c_per_m: 0.0 },
-            roll_c: 0.0,
-            tilt_mps2: 0.0,
-            position: Vec::new(),
-            terms: Vec::new(),
-            phased_term: None,
-            variation: Default::default(),
-            distortion: None,
-        };
+        let m = SimModel::baseline(self.s, self.k, mu, t_s);
         let mut e = Entry {
             model: m,
             mu,

@@ -193,3 +193,64 @@ fn amplitude_over_phases(
     // the scale in [0, 2] that maximises it (the profiled amplitude is scale 1, and above)
     Some(crate::lsq::golden::minimize(|x| -total(x), 0.0, 2.0, 50) * amp)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::discover::forms::{Extra, Localized};
+    use crate::discover::joint;
+
+    /// A model of one material and a localized force at `x` = (amplitude, centre, width), its
+    /// centre searched over 0–10 mm and its width over 0.1–5 mm.
+    fn bump_at(x: [f64; 3]) -> Model {
+        let spec = Spec {
+            n_materials: 1,
+            s: 0.5,
+            k: 2.5,
+            extras: vec![Extra::from(Localized {
+                z_lo: 0.0,
+                z_hi: 0.01,
+                w_lo: 1e-4,
+                w_hi: 5e-3,
+            })],
+        };
+        let params = spec.global_params(&["316".to_string()]);
+        let mut global = vec![0.3, 0.08];
+        global.extend(x);
+        let n = global.len();
+        Model {
+            spec,
+            params,
+            fit: joint::Fitted {
+                global,
+                local: vec![],
+                chi2: 0.0,
+                chi2_run: vec![],
+                global_se: vec![0.0; n],
+                global_cov: vec![],
+                iterations: 1,
+                converged: true,
+            },
+        }
+    }
+
+    #[test]
+    fn a_term_placed_at_an_end_of_its_search_is_said_to_be_and_its_scale_there_is_not() {
+        // inside every range: placed
+        assert!(!placed_at_bound(&bump_at([0.1, 4e-3, 1e-3]), 0));
+        // its centre at either end of the groove's stretch
+        assert!(placed_at_bound(&bump_at([0.1, 0.0, 1e-3]), 0));
+        assert!(placed_at_bound(&bump_at([0.1, 0.01, 1e-3]), 0));
+        // within 10⁻⁶ of the range counts as at the end; 10⁻³ of it does not
+        assert!(placed_at_bound(&bump_at([0.1, 0.01 - 1e-9, 1e-3]), 0));
+        assert!(!placed_at_bound(&bump_at([0.1, 0.01 - 1e-5, 1e-3]), 0));
+        // the width is the scale: at either end it is judged elsewhere, not here
+        assert!(!placed_at_bound(&bump_at([0.1, 4e-3, 1e-4]), 0));
+        assert!(!placed_at_bound(&bump_at([0.1, 4e-3, 5e-3]), 0));
+        // an amplitude pushed to its limit is a parameter at a bound too
+        assert!(placed_at_bound(&bump_at([-5.0, 4e-3, 1e-3]), 0));
+        // and a held-back term is one placed at a bound
+        assert!(held_back(&bump_at([0.1, 0.0, 1e-3]), 0));
+        assert!(!held_back(&bump_at([0.1, 4e-3, 1e-3]), 0));
+    }
+}

@@ -351,7 +351,6 @@ impl Prepared {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::discover::sim::Drag;
     use crate::physics::Term;
 
     fn run_of(t: &[f64]) -> RunData {
@@ -370,23 +369,7 @@ mod tests {
     }
 
     fn base() -> SimModel {
-        SimModel {
-            s: (70.6f64.to_radians() / 2.0).sin(),
-            k: 2.5,
-            mu: 0.3,
-            vc_mps: None,
-            drag: Drag::Quadratic {
-                t_s: 0.05,
-                c_per_m: 0.0,
-            },
-            roll_c: 0.0,
-            tilt_mps2: 0.0,
-            position: vec![],
-            terms: vec![],
-            phased_term: None,
-            variation: Default::default(),
-            distortion: None,
-        }
+        SimModel::baseline((70.6f64.to_radians() / 2.0).sin(), 2.5, 0.3, 0.05)
     }
 
     /// The linear response agrees with finite differences of the integrator within a few %.

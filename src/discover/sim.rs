@@ -73,6 +73,25 @@ pub enum Motion {
 }
 
 impl SimModel {
+    /// The chapter's model alone: Coulomb friction μ and a linear drag of time T, in a groove of
+    /// sin(θ/2) = `s` and m R²/I = `k`, with no further term.
+    pub fn baseline(s: f64, k: f64, mu: f64, t_s: f64) -> SimModel {
+        SimModel {
+            s,
+            k,
+            mu,
+            vc_mps: None,
+            drag: Drag::Quadratic { t_s, c_per_m: 0.0 },
+            roll_c: 0.0,
+            tilt_mps2: 0.0,
+            position: Vec::new(),
+            terms: Vec::new(),
+            phased_term: None,
+            variation: Default::default(),
+            distortion: None,
+        }
+    }
+
     /// The same physics as a `physics::Model` (for cross-checks against the event-driven integrator).
     pub fn to_physics(&self) -> crate::physics::Model {
         use crate::physics::{Friction, Groove, Model, Term};

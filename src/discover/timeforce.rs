@@ -281,32 +281,19 @@ pub(super) fn log_marginal(k: &[f64; 5], scale: f64, var: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::discover::sim::Drag;
 
     /// A run of 50 ms at 10 kHz under a vibration of 0.5 m/s² at 120 Hz with its own phase,
     /// recorded with a slow wiggle of 0.2 µm the model lacks (so the misfit is not zero), and
     /// its model.
     fn vibrating_run() -> (SimModel, RunData, [f64; N_LOCAL]) {
         let m = SimModel {
-            s: (70.6f64.to_radians() / 2.0).sin(),
-            k: 2.5,
-            mu: 0.3,
-            vc_mps: None,
-            drag: Drag::Quadratic {
-                t_s: 0.05,
-                c_per_m: 0.0,
-            },
-            roll_c: 0.0,
-            tilt_mps2: 0.0,
-            position: vec![],
             terms: vec![Term::TimePeriodicForce {
                 amp_mps2: 0.5,
                 freq_hz: 120.0,
                 phase_rad: 0.0,
             }],
             phased_term: Some(0),
-            variation: Default::default(),
-            distortion: None,
+            ..SimModel::baseline((70.6f64.to_radians() / 2.0).sin(), 2.5, 0.3, 0.05)
         };
         let l = [1e-3, 0.3e-4, 0.04];
         let t: Vec<f64> = (0..500).map(|k| k as f64 * 1e-4).collect();
