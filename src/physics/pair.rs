@@ -36,7 +36,7 @@ const MAX_IMPACTS: usize = 1000;
 /// more (a nanometre, a thousandth of what a tracker resolves) starts a cascade of bounces no
 /// camera sees, and the pair is joined at once. Resolved one by one, such a cascade took hundreds
 /// of bounces at approach speeds of 10⁻⁷ m/s, each in hundreds of steps, until the simulation's
-/// step budget ran out (a refit of 60 pairs under a fitted attraction stopped there 600 times).
+/// step budget ran out (one refit under a fitted attraction stopped there 621 times).
 const JOIN_GAP_M: f64 = 1e-9;
 /// Overlap (relative to 2R) that counts as touching: rounding never starts a false impact.
 const CONTACT_SLACK: f64 = 1e-9;
