@@ -663,6 +663,33 @@ mod tests {
         ]
     }
 
+    /// The impact at which `tr` joined, after checking that it is the last one and that from it
+    /// on the two are 2R apart at one speed at every sample of `t`.
+    fn held_from_the_join(tr: &PairTrajectory, t: &[f64]) -> usize {
+        let joined = tr
+            .impacts
+            .iter()
+            .position(|i| i.joined)
+            .expect("the pair joins");
+        assert_eq!(joined + 1, tr.impacts.len(), "no impact once held");
+        let t_join = tr.impacts[joined].t_s;
+        let (a, b) = (&tr.particles[0], &tr.particles[1]);
+        assert_eq!(a.t_s.len(), t.len(), "every sample filled");
+        for k in (0..t.len()).filter(|&k| t[k] > t_join) {
+            assert!(
+                ((b.z_m[k] - a.z_m[k]) - 300e-6).abs() < 1e-12,
+                "apart at {}",
+                t[k]
+            );
+            assert!(
+                (b.v_mps[k] - a.v_mps[k]).abs() < 1e-12,
+                "speeds at {}",
+                t[k]
+            );
+        }
+        joined
+    }
+
     #[test]
     fn mu_pp_follows_the_slip_speed_when_it_depends_on_it() {
         use crate::physics::{SlipFriction, SlipShape};
@@ -749,12 +776,8 @@ mod tests {
         let tr = simulate_pair(&model, &pair, init, &t);
         let loops = LOOPS.with(|c| c.get());
         let opens = |v: f64| (0.95 * v).powi(2) / (4.0 * a.abs());
-        let joined = tr
-            .impacts
-            .iter()
-            .position(|i| i.joined)
-            .expect("the pair joins");
-        assert_eq!(joined + 1, tr.impacts.len(), "no impact once held");
+        // held from the join on: 2R apart at one speed, every sample filled
+        let joined = held_from_the_join(&tr, &t);
         // every bounce before could open more than a nanometre; the joined one could not
         for im in &tr.impacts[..joined] {
             assert!(opens(im.v_impact_mps) >= JOIN_GAP_M, "{im:?}");
@@ -764,17 +787,6 @@ mod tests {
         // 5 cm/s to 0.7 mm/s at 0.95 a bounce is about 85 bounces, each with its flight
         assert!(joined < 120, "{joined} bounces");
         assert!(loops < 4 * tr.impacts.len() + 50, "{loops} loops");
-        // held from the join on: 2R apart, and every sample filled
-        assert_eq!(tr.particles[0].t_s.len(), t.len());
-        let (p, q) = (&tr.particles[0], &tr.particles[1]);
-        let t_join = tr.impacts[joined].t_s;
-        for k in (0..t.len()).filter(|&k| t[k] > t_join) {
-            assert!(
-                ((q.z_m[k] - p.z_m[k]) - 300e-6).abs() < 1e-12,
-                "apart at {}",
-                t[k]
-            );
-        }
     }
 
     #[test]
@@ -803,27 +815,8 @@ mod tests {
         let tr = simulate_pair(&model, &pair, init, &t);
         let loops = LOOPS.with(|c| c.get());
         assert!(loops < 200, "{loops} loops");
-        let joined = tr
-            .impacts
-            .iter()
-            .position(|i| i.joined)
-            .expect("the pair joins");
-        assert_eq!(joined + 1, tr.impacts.len(), "no impact once held");
         // from the join on: 2R apart at one speed
-        let t_join = tr.impacts[joined].t_s;
-        let (a, b) = (&tr.particles[0], &tr.particles[1]);
-        for k in (0..t.len()).filter(|&k| t[k] > t_join) {
-            assert!(
-                ((b.z_m[k] - a.z_m[k]) - 300e-6).abs() < 1e-12,
-                "apart at {}",
-                t[k]
-            );
-            assert!(
-                (b.v_mps[k] - a.v_mps[k]).abs() < 1e-12,
-                "speeds at {}",
-                t[k]
-            );
-        }
+        held_from_the_join(&tr, &t);
         // the same pair pushed apart instead: free, and the two part
         pair.force = Some(PairForce::Exponential {
             amp_mps2: 3.0,
