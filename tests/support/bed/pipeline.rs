@@ -58,6 +58,7 @@ pub fn run_case(
         sized: false,
         false_accept: false,
         accepted: Vec::new(),
+        estimates: Vec::new(),
         discover_s: discover_seconds(&log),
         run_s: (run_s * 10.0).round() / 10.0,
     };
@@ -76,5 +77,6 @@ pub fn run_case(
         .iter()
         .map(|a| format!("{}/{}: {}", a.place, a.effect, a.form))
         .collect();
+    record.estimates = found.iter().map(|a| a.parameters.clone()).collect();
     Ok(record)
 }

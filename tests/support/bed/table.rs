@@ -26,6 +26,10 @@ pub struct Record {
     pub false_accept: bool,
     /// The accepted findings: `place/effect: form`.
     pub accepted: Vec<String>,
+    /// Each accepted finding's parameters (name, value), in the order of `accepted`: what the
+    /// sizes are read from, kept to see the estimates' bias and scatter beside the truths.
+    #[serde(default)]
+    pub estimates: Vec<Vec<(String, f64)>>,
     /// The discover stage's time (s), when the run reported it.
     pub discover_s: Option<f64>,
     /// The whole pipeline's time (s).
