@@ -390,6 +390,18 @@ fn shipped_data_concealed_effect_is_found_and_t_stops_drifting() {
         f.effect,
         f.form
     );
+    // the drag leaves nothing in v a map could take up, so no map in v is fitted in its place
+    assert!(
+        f.evidence
+            .decision
+            .contains("no map in v was fitted in its place")
+            && !d
+                .candidates
+                .iter()
+                .any(|c| c.form.starts_with("spline in v")),
+        "{}",
+        f.evidence.decision
+    );
     let got = f.parameters["tp_s_per_mps"].value;
     eprintln!(
         "shipped: {} {} T' = {got:.3} (truth {tp}), LR {:.0}, cv_rms {:.3e} -> {:.3e} m",

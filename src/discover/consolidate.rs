@@ -11,7 +11,10 @@
 //! predicts held-out runs better than they do, by a paired t over the runs above its one-sided
 //! 1 % critical value (a term is added at 5 %: the map has more freedom, and the forms it would
 //! replace passed every test); where the named forms predict as well the simpler stay, and the
-//! forms say the tie. When a fallback map of that variable stood beside them, the map alone
+//! forms say the tie. Without a fallback map beside them, the map of what the model with the
+//! forms leaves in that variable is screened first: when it is not significant even at 5 %, the
+//! map in their place (to first order, the forms plus that map) could not predict better, and
+//! it is not fitted (the forms say so). When a fallback map of that variable stood beside them, the map alone
 //! replaces the two when it predicts held-out runs as well as both (paired t of both over it
 //! within its 5 % critical value); otherwise, in z, the forms and the map are one force along
 //! the groove (a wave shorter than the map's knots can follow, say, beside it) and are reported
@@ -26,7 +29,7 @@ use super::cv::paired_t;
 use super::data::RunData;
 use super::forcemap::ForceMap;
 use super::forms;
-use super::forward::{run_round, LazyProposals, CV_LEVEL};
+use super::forward::{run_round, screen_p, LazyProposals, CV_LEVEL};
 use super::model::Model;
 use super::selection::{Accepted, Ctx, Selection};
 use crate::artifacts::diagnosis::Estimate;
@@ -129,6 +132,29 @@ fn replace(
     maps_now: Option<&[ForceMap]>,
     ctx: &Ctx,
 ) -> Option<Accepted> {
+    let fresh;
+    let now = match maps_now {
+        Some(m) => m,
+        None => {
+            fresh = ctx.force_maps(&sel.current).maps;
+            &fresh
+        }
+    };
+    // the round's number (its replicates' seed) is taken whether or not the map is fitted
+    sel.round += 1;
+    if beside.is_none() {
+        let left = now
+            .iter()
+            .find(|m| m.variable == var_name(var))
+            .and_then(|m| forms::Spline::on(m, var));
+        if let Some(left) = left {
+            let p = screen_p(sel.round, &sel.current, &Extra::from(left), &ctx.setting());
+            if p >= CV_LEVEL {
+                say_nothing_left(sel, group, var, p);
+                return None;
+            }
+        }
+    }
     let mut drop: Vec<&Extra> = group.iter().map(|&a| &sel.accepted[a].extra).collect();
     drop.extend(beside.map(|b| &b.extra));
     let base = without_all(&sel.current, &drop, ctx);
@@ -138,14 +164,6 @@ fn replace(
         .iter_mut()
         .find(|m| m.variable == var_name(var) && m.spline.is_some())?;
     let form = forms::Spline::on(map, var)?;
-    let fresh;
-    let now = match maps_now {
-        Some(m) => m,
-        None => {
-            fresh = ctx.force_maps(&sel.current).maps;
-            &fresh
-        }
-    };
     if let (Some(start), Some(sp)) = (
         start_in_place(&form, &sel.current, &base, now, var, ctx),
         map.spline.as_mut(),
@@ -160,7 +178,6 @@ fn replace(
         Some(_) => ctx.cross_validate(&base),
         None => sel.current_cv.clone(),
     };
-    sel.round += 1;
     let r = run_round(
         sel.round,
         &base,
@@ -252,6 +269,21 @@ fn replace(
         null: r.nulls[i].clone(),
         extra: spline,
     })
+}
+
+/// The map in `var` is not fitted in place of the forms `group` when the map of what the model
+/// with them leaves in `var`, screened as a candidate, is not significant even at `CV_LEVEL`
+/// (p-value `p`): to first order the map in their place is the forms plus that map, so it could
+/// not predict held-out runs better than they do at the 1 % a map needs to replace named forms.
+/// Said on each form.
+fn say_nothing_left(sel: &mut Selection, group: &[usize], var: Variable, p: f64) {
+    for &a in group {
+        sel.accepted[a].row.evidence.decision.push_str(&format!(
+            "; no map in {v} was fitted in its place: a map in {v} of what the model leaves is not significant (p = {p:.2}), so to first order a map in place of the named form{s} could predict held-out runs no better",
+            v = var_name(var),
+            s = if group.len() > 1 { "s" } else { "" }
+        ));
+    }
 }
 
 /// Where a fit in full of the map in place of named forms starts: the force those forms give

@@ -43,7 +43,7 @@ pub const SIGNED_RANK_LEVEL: f64 = 0.01;
 const PAIR_GAIN_RATIO: f64 = 1.5;
 
 /// With GROOVE_DISCOVER_TRACE set, print how long `what` took (stderr only, never in outputs).
-fn trace_took(start: std::time::Instant, what: impl FnOnce() -> String) {
+pub(super) fn trace_took(start: std::time::Instant, what: impl FnOnce() -> String) {
     if std::env::var_os("GROOVE_DISCOVER_TRACE").is_some() {
         eprintln!(
             "discover: {} took {:.2} s",
@@ -910,6 +910,17 @@ pub fn runs_under(model: &Model, runs: &[RunData]) -> Option<Vec<RunData>> {
 /// strongest significant candidates in full, cross-validate, prefer the simpler of equals, and
 /// write every row. `props` are the proposals of the current residuals (starts of the forms
 /// that need them), made only if such a form is fitted in full.
+/// The screen's p-value of the one candidate `e` against `current`, as round `round` would read
+/// it (the runs' slow noise under `current`, the round's replicates).
+pub fn screen_p(round: usize, current: &Model, e: &Extra, set: &Setting) -> f64 {
+    let runs_here = runs_under(current, set.runs);
+    let set = &Setting {
+        runs: runs_here.as_deref().unwrap_or(set.runs),
+        ..*set
+    };
+    screen_round(round, current, &[e], set).p[0]
+}
+
 pub fn run_round(
     round: usize,
     current: &Model,

@@ -771,6 +771,8 @@ pub fn check_pairs(
     groove: Groove,
     max_iter: usize,
 ) -> (Vec<Finding>, Vec<String>) {
+    let clock = std::time::Instant::now();
+    let took = |what: &str| super::forward::trace_took(clock, || format!("pairs: {what}"));
     let mut notes = Vec::new();
     let mut drafts = Vec::new();
     let by_material: Vec<(String, Vec<PairRun>)> =
@@ -784,6 +786,7 @@ pub fn check_pairs(
             Some((single, draft))
         })
         .collect();
+    took("materials tested");
     for ((material, runs), tested) in by_material.iter().zip(tested) {
         match tested {
             Some((single, d)) => drafts.push((runs, single, d)),
@@ -808,6 +811,7 @@ pub fn check_pairs(
             )
         })
         .collect();
+    took("forces tested");
     let p_force = holm(&forces.iter().map(|f| f.p).collect::<Vec<_>>());
     let mut forces = forces;
     let force_runs: Vec<&[PairRun]> = drafts.iter().map(|(runs, _, _)| runs.as_slice()).collect();
@@ -835,7 +839,9 @@ pub fn check_pairs(
         .filter(|((_, f), &p)| f.decision(p).0)
         .map(|((d, _), _)| d.material.clone())
         .collect();
+    took("ranges shared, forces carried");
     let laws = test_impact_laws(recordings, groove, &forced);
+    took("impact laws tested");
     say_ties_with_the_force(&mut findings, &laws);
     findings.extend(laws);
     let p_phys = holm(&drafts.iter().map(|d| d.p).collect::<Vec<_>>());
