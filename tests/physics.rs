@@ -813,3 +813,25 @@ fn a_slip_held_by_a_downhill_force_creeps_as_the_stiff_slide_does() {
         );
     }
 }
+
+/// A simulation the error control cannot finish within its step budget says so (`stalled`), and
+/// one that ends normally does not: a force of 1 nm wavelength, crossed at 0.1 m/s, asks for
+/// steps far below its 10 ns period, so the budget covers well under the 20 ms asked for.
+#[test]
+fn a_simulation_that_stops_at_its_step_budget_says_it_stalled() {
+    let t = times(41, 5e-4);
+    let calm = simulate(&model(0.337, vec![]), kick(0.1, 0.0), &t);
+    assert!(!calm.stalled);
+    let rough = model(
+        0.337,
+        vec![Term::PositionForce {
+            amp_mps2: 50.0,
+            wavelength_m: 1e-9,
+            phase_rad: 0.0,
+        }],
+    );
+    let tr = simulate(&rough, kick(0.1, 0.0), &t);
+    assert!(tr.stalled, "the budget covered the whole run");
+    assert_eq!(tr.z_m.len(), t.len(), "every sample is still filled");
+    assert_eq!(tr.z_m[40], tr.z_m[39], "the state reached is held");
+}

@@ -6,8 +6,15 @@ use super::joint::Fitted;
 use super::residual_structure::{structure, RunResiduals, Structure};
 use super::sim::Motion;
 
-/// Residual structure of `fit` over `runs` (kept samples only).
-pub fn locate(spec: &Spec, fit: &Fitted, runs: &[RunData], materials: &[String]) -> Structure {
+/// Residual structure of `fit` over `runs` (kept samples only), and how many runs' simulations
+/// stopped at their step budget before their last frame.
+pub fn locate(
+    spec: &Spec,
+    fit: &Fitted,
+    runs: &[RunData],
+    materials: &[String],
+) -> (Structure, usize) {
+    let mut stalled = 0;
     let per_run: Vec<RunResiduals> = runs
         .iter()
         .zip(&fit.local)
@@ -16,7 +23,8 @@ pub fn locate(spec: &Spec, fit: &Fitted, runs: &[RunData], materials: &[String])
             let tt: Vec<f64> = run.t_s.iter().map(|t| t + l[1]).collect();
             let (mut z, mut v, mut ph) = (vec![0.0; n], vec![0.0; n], vec![Motion::Sliding; n]);
             let model = spec.run_model(&fit.global, l, run);
-            model.simulate(l[0], l[2], &tt, &mut z, Some(&mut v), Some(&mut ph));
+            stalled +=
+                usize::from(model.simulate(l[0], l[2], &tt, &mut z, Some(&mut v), Some(&mut ph)));
             let keep = |i: &usize| run.keep[*i];
             RunResiduals {
                 material: materials[run.material].clone(),
@@ -29,5 +37,38 @@ pub fn locate(spec: &Spec, fit: &Fitted, runs: &[RunData], materials: &[String])
             }
         })
         .collect();
-    structure(&per_run)
+    (structure(&per_run), stalled)
+}
+
+/// What the diagnosis says when the final model's simulations of `stalled` of `runs` runs
+/// stopped at their step budget (empty when none did).
+pub fn stalled_note(stalled: usize, runs: usize) -> String {
+    if stalled == 0 {
+        return String::new();
+    }
+    format!(
+        "the final model's simulation{s} of {stalled} of {runs} runs stopped at the integrator's step budget before the last frame: from there {those} residuals are the integrator's, not the physics', and the fit of {those} run{s} is in doubt",
+        s = if stalled == 1 { "" } else { "s" },
+        those = if stalled == 1 { "its" } else { "their" },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::stalled_note;
+
+    #[test]
+    fn a_stalled_simulation_is_said_and_none_is_silent() {
+        assert_eq!(stalled_note(0, 60), "");
+        let one = stalled_note(1, 60);
+        assert!(
+            one.contains("simulation of 1 of 60 runs") && one.contains("its residuals"),
+            "{one}"
+        );
+        let two = stalled_note(2, 60);
+        assert!(
+            two.contains("simulations of 2 of 60 runs") && two.contains("their"),
+            "{two}"
+        );
+    }
 }

@@ -7,7 +7,7 @@ use super::findings::{drift_of, findings_of, model_parameters};
 use super::forcemap::ForceMap;
 use super::forms;
 use super::forward::{fold_of, median_speed, run_round, runs_under, LazyProposals, Round, Setting};
-use super::locate::locate;
+use super::locate::{locate, stalled_note};
 use super::model::Model;
 use super::perrun::{measure_noise, PerRunFit};
 use super::proposal::{propose, wanted_for};
@@ -499,8 +499,8 @@ pub fn discover_reporting(
         super::consolidate::consolidate(&mut sel, fallback, maps_after, &ctx);
     ctx.trace("maps in place of named forms tried");
     say("residuals and drift before and after");
-    let residuals_before = locate(&baseline.spec, &baseline.fit, &runs, &materials);
-    let residuals_after = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
+    let (residuals_before, _) = locate(&baseline.spec, &baseline.fit, &runs, &materials);
+    let (residuals_after, stalled) = locate(&sel.current.spec, &sel.current.fit, &runs, &materials);
     ctx.trace("residuals located");
     let drift = drift_of(&sel.current, &per_run, &ctx);
     ctx.trace("drift done");
@@ -566,7 +566,7 @@ pub fn discover_reporting(
         tracking_blur: blur.map(|b| crate::artifacts::diagnosis::TrackingBlur {
             noise_per_speed_s: b.gain_s,
         }),
-        note: String::new(),
+        note: stalled_note(stalled, runs.len()),
     }
 }
 

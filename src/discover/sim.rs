@@ -138,7 +138,8 @@ impl SimModel {
     }
 
     /// Positions (and speeds, phases if asked) at sorted times t_s ≥ 0, from z0, v0 and no spin at
-    /// t = 0, by the event-driven integrator of `physics` (adaptive, events located).
+    /// t = 0, by the event-driven integrator of `physics` (adaptive, events located). True when
+    /// the simulation stopped at its step budget before the last time (its state held from there).
     pub fn simulate(
         &self,
         z0_m: f64,
@@ -147,7 +148,7 @@ impl SimModel {
         z_out: &mut [f64],
         v_out: Option<&mut [f64]>,
         phase_out: Option<&mut [Motion]>,
-    ) {
+    ) -> bool {
         let init = crate::physics::State {
             z_m: z0_m,
             v_mps: v0_mps,
@@ -170,5 +171,6 @@ impl SimModel {
                 };
             }
         }
+        traj.stalled
     }
 }

@@ -26,11 +26,12 @@ pub fn budget_stops() -> u64 {
     BUDGET_STOPS.load(std::sync::atomic::Ordering::Relaxed)
 }
 
-/// What one simulation carries from one smooth piece to the next: the step size and the steps it
-/// has left.
+/// What one simulation carries from one smooth piece to the next: the step size, the steps it
+/// has left, and whether it stopped because none was.
 pub(crate) struct Pace {
     pub h: f64,
     pub steps_left: usize,
+    pub stopped: bool,
 }
 
 impl Pace {
@@ -42,6 +43,7 @@ impl Pace {
         Pace {
             h: 1e-4,
             steps_left: MAX_STEPS + capped,
+            stopped: false,
         }
     }
 
@@ -108,6 +110,7 @@ pub(crate) fn advance<const N: usize, const M: usize, F: FnMut(usize, &[f64; N])
     while t < t_end {
         if !pace.take() {
             BUDGET_STOPS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            pace.stopped = true;
             sampler.fill_until(t_end, |_| y);
             break;
         }
@@ -218,6 +221,7 @@ mod tests {
         let (stop, got, pace) = run(|y| [-100.0 * y[0], 1.0]);
         assert_eq!(stop.event, None);
         assert_eq!(stop.t_s, 0.01);
+        assert!(!pace.stopped);
         let used = MAX_STEPS - pace.steps_left;
         let capped = Pace::new(0.01, 1e-7).steps_left - MAX_STEPS;
         assert!((200_000..=200_001).contains(&capped), "{capped}");
@@ -237,6 +241,7 @@ mod tests {
         let before = budget_stops();
         let (stop, got, pace) = run(|y| [-1e9 * (y[0] - 0.5), 1.0]);
         assert_eq!(pace.steps_left, 0);
+        assert!(pace.stopped, "the simulation knows it stopped");
         // other tests may stop at theirs meanwhile: at least this one is counted
         assert!(budget_stops() > before, "the stop is counted");
         assert_eq!(stop.event, None);

@@ -85,5 +85,6 @@ pub fn simulate(model: &Model, init: State, t_s: &[f64]) -> Trajectory {
         y = new_y;
         switches += 1;
     }
+    traj.stalled = pace.stopped;
     traj
 }

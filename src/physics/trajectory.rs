@@ -14,7 +14,9 @@ pub struct SwitchEvent {
     pub va_mps: f64,
 }
 
-/// State and phase at each requested time, plus every switch that happened before the last one.
+/// State and phase at each requested time, plus every switch that happened before the last one,
+/// and whether the simulation stopped at its step budget before the last time (`stalled`: every
+/// later sample then holds the state reached, a misfit that is the integrator's, not the physics').
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Trajectory {
     pub t_s: Vec<f64>,
@@ -23,6 +25,8 @@ pub struct Trajectory {
     pub va_mps: Vec<f64>,
     pub phase: Vec<Phase>,
     pub events: Vec<SwitchEvent>,
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub stalled: bool,
 }
 
 impl Trajectory {
@@ -34,6 +38,7 @@ impl Trajectory {
             va_mps: Vec::with_capacity(n),
             phase: Vec::with_capacity(n),
             events: Vec::new(),
+            stalled: false,
         }
     }
 
