@@ -520,6 +520,26 @@ where
     X: Sync,
     F: Fn(&Prepared, &X) -> Option<Vec<Vec<f64>>> + Sync,
 {
+    coherent_scan_blocks(prep, v, q, reps, grid, |p, xs| {
+        xs.iter().map(|x| cols(p, x)).collect()
+    })
+}
+
+/// `coherent_scan` with a run's columns made for a block of consecutive trials at once
+/// (`cols(p, xs)`, one entry per trial of `xs`), for columns that are cheaper made in sequence
+/// (a wave's values at successive wavenumbers, by rotation).
+pub(super) fn coherent_scan_blocks<X, F>(
+    prep: &[Prepared],
+    v: &Vectors,
+    q: usize,
+    reps: Range<usize>,
+    grid: &[X],
+    cols: F,
+) -> Vec<Option<(Vec<f64>, Vec<f64>, Vec<f64>)>>
+where
+    X: Sync,
+    F: Fn(&Prepared, &[X]) -> Vec<Option<Vec<Vec<f64>>>> + Sync,
+{
     grid.par_chunks(scan_block(grid.len()))
         .flat_map_iter(|xs| {
             let mut sums: Vec<Sums> = xs
@@ -527,7 +547,7 @@ where
                 .map(|_| Sums::new(q, v.kept.len(), reps.clone()))
                 .collect();
             for (p, yr) in prep.iter().zip(&v.y) {
-                let c: Vec<Option<Vec<Vec<f64>>>> = xs.iter().map(|x| cols(p, x)).collect();
+                let c = cols(p, xs);
                 for (s, c) in sums.iter_mut().zip(&c) {
                     if let Some(c) = c {
                         s.add_design(c, p, v);

@@ -7,7 +7,7 @@ use super::wavelength;
 use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::discover::screen_sums::{Trial, Typical};
-use crate::physics::{FrictionVariation, Variable};
+use crate::physics::FrictionVariation;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
 
@@ -93,13 +93,9 @@ impl Form for FrictionPeriodic {
     /// there, nothing while rolling.
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
         let z_ref = self.z_ref_m;
-        wavelength::search(s, self.k_lo, self.k_hi, |p, g, k| {
+        wavelength::search(s, (self.k_lo, self.k_hi), z_ref, |p| {
             let fr = &p.track.friction;
-            if fr.iter().all(|f| *f == 0.0) {
-                return None;
-            }
-            let z = p.track.variable(Variable::Z);
-            Some(z.iter().zip(fr).map(|(z, f)| f * g(k * (z - z_ref))).collect())
+            (!fr.iter().all(|f| *f == 0.0)).then(|| fr.clone())
         })
     }
     fn bound_note(

@@ -76,10 +76,8 @@ impl Form for PeriodicZ {
         true
     }
     fn search(&self, s: &Search) -> (Option<Trial>, Option<Typical>) {
-        let z_ref = self.z_ref_m;
-        wavelength::search(s, self.k_lo, self.k_hi, |p, g, k| {
-            let z = p.track.variable(Variable::Z);
-            Some(z.iter().map(|z| g(k * (z - z_ref))).collect())
+        wavelength::search(s, (self.k_lo, self.k_hi), self.z_ref_m, |p| {
+            Some(vec![1.0; p.track.variable(Variable::Z).len()])
         })
     }
     fn wanted(&self) -> Wanted {
