@@ -14,14 +14,13 @@
 //! forms say the tie. Without a fallback map beside them, the map of what the model with the
 //! forms leaves in that variable is screened first: when it is not significant even at 5 %, the
 //! map in their place (to first order, the forms plus that map) could not predict better, and
-//! it is not fitted (the forms say so). When a fallback map of that variable stood beside them, the map alone
-//! replaces the two when it predicts held-out runs as well as both (paired t of both over it
-//! within its 5 % critical value); otherwise, in z, the forms and the map are one force along
-//! the groove (a wave shorter than the map's knots can follow, say, beside it) and are reported
-//! so: one finding whose size is their sum's where the runs go, the forms its parts (in the
-//! model, not findings). Held-out runs judge the map
-//! against the model with the forms; only beside a fallback map is the model without them
-//! cross-validated. The map's fit in full starts from the force the forms give (on its basis)
+//! it is not fitted (the forms say so). When a fallback map of that variable stood beside them,
+//! the map alone replaces the two when it predicts held-out runs as well as both (paired t of
+//! both over it within its 5 % critical value); otherwise, in z, the forms and the map are one
+//! force along the groove (a wave shorter than the map's knots can follow, say, beside it) and
+//! are reported so: one finding whose size is their sum's where the runs go, the forms its parts
+//! (in the model, not findings). Held-out runs judge the map against the model with the forms;
+//! only beside a fallback map is the model without them cross-validated. The map's fit in full starts from the force the forms give (on its basis)
 //! plus what they leave, not from the map linearized about trajectories without them.
 
 use super::candidate::Extra;

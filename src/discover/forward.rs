@@ -906,10 +906,6 @@ pub fn runs_under(model: &Model, runs: &[RunData]) -> Option<Vec<RunData>> {
     Some(runs.iter().map(|r| RunData { slow, ..r.clone() }).collect())
 }
 
-/// Test `entries` (candidate terms) and `probes` against `current`: screen all, fit the
-/// strongest significant candidates in full, cross-validate, prefer the simpler of equals, and
-/// write every row. `props` are the proposals of the current residuals (starts of the forms
-/// that need them), made only if such a form is fitted in full.
 /// The screen's p-value of the one candidate `e` against `current`, as round `round` would read
 /// it (the runs' slow noise under `current`, the round's replicates).
 pub fn screen_p(round: usize, current: &Model, e: &Extra, set: &Setting) -> f64 {
@@ -921,6 +917,10 @@ pub fn screen_p(round: usize, current: &Model, e: &Extra, set: &Setting) -> f64 
     screen_round(round, current, &[e], set).p[0]
 }
 
+/// Test `entries` (candidate terms) and `probes` against `current`: screen all, fit the
+/// strongest significant candidates in full, cross-validate, prefer the simpler of equals, and
+/// write every row. `props` are the proposals of the current residuals (starts of the forms
+/// that need them), made only if such a form is fitted in full.
 pub fn run_round(
     round: usize,
     current: &Model,
