@@ -114,7 +114,8 @@
 //!    left unexplained. Every candidate carries its detection limit (90 % power on this dataset,
 //!    `detection.rs`).
 //! 6. **Report.** Each finding has its place (`where.place`), form, sizes, evidence and held-out
-//!    gain; the force maps, periodograms and residuals before and after go in `diagnosis.json`.
+//!    gain, and its form says it in physical words (`Form::in_words`: what changed, where, by how
+//!    much), the sentence the report's verdict opens with; the force maps, periodograms and residuals before and after go in `diagnosis.json`.
 //!    The collision runs are checked by `pairs.rs`: the pairs fitted with μ_pg and drag held at
 //!    the single runs' accepted physics against free (Wald χ², a contact-distance fit that names
 //!    a length calibration), residuals after impacts (`pairs_impact.rs`), and a force between the

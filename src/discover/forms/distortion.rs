@@ -2,7 +2,7 @@
 //! linear part is a length scale, which μ and T absorb exactly).
 
 use super::form::{p, Entry, Fitted, Form, ParamInfo, Place};
-use crate::artifacts::diagnosis::Estimate;
+use crate::artifacts::diagnosis::{Estimate, Finding};
 use crate::discover::ranges::Ranges;
 use crate::discover::sim;
 use std::collections::BTreeMap;
@@ -47,6 +47,14 @@ impl Form for Distortion {
     }
     fn size_name(&self) -> &'static str {
         "a distortion of the measured positions"
+    }
+    /// How far the positions are misread, which changes no motion.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value};
+        Some(format!(
+            "the measured positions are shifted by up to {} µm across the image, beyond a length scale and an offset: the measurement, not the motion",
+            num(1e6 * value(f, "peak_shift_m")?.abs())
+        ))
     }
     fn params(&self) -> Vec<ParamInfo> {
         vec![

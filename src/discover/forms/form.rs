@@ -135,6 +135,12 @@ pub trait Form: std::fmt::Debug + Send + Sync {
     fn form(&self) -> String;
     /// What the term's size is called in words ("a groove tilt").
     fn size_name(&self) -> &'static str;
+    /// A finding of this form in physical words, from its parameters: what changed, where and
+    /// by how much ("μ varies by ± 21 % along the groove between z = 0.5 and 11.5 mm in the
+    /// lab"); None when a parameter it needs is missing, or for a probe.
+    fn in_words(&self, _f: &Finding) -> Option<String> {
+        None
+    }
     /// Parameters of the term, starting at the value that makes it vanish (or nearly).
     fn params(&self) -> Vec<ParamInfo>;
     /// How the term enters the physics of a run, at its values `x`.

@@ -30,6 +30,16 @@ impl Form for FrictionDirection {
     fn size_name(&self) -> &'static str {
         "a difference of friction by direction"
     }
+    /// How much higher μ is one way than the other.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{value, with_error};
+        let d = value(f, "delta_mu_rel")?;
+        Some(format!(
+            "μ is {} % higher moving {} and as much lower moving the other way, while sliding and holding",
+            with_error(f, "delta_mu_rel", 1e2)?,
+            if d >= 0.0 { "towards +z" } else { "towards −z" }
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("delta_mu_rel", 0.0, -0.9, 0.9, 1e-5)]
     }

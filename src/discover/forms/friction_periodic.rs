@@ -46,6 +46,15 @@ impl Form for FrictionPeriodic {
     fn size_name(&self) -> &'static str {
         "a periodic variation of friction along the groove"
     }
+    /// The amplitude and wavelength of μ's variation along the groove.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "μ varies by ± {} % along the groove, periodic with a wavelength of {} mm fixed in the lab, while sliding",
+            with_error(f, "delta_mu_rel", 1e2)?,
+            with_error(f, "wavelength_m", 1e3)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let (k_lo, k_hi) = (self.k_lo, self.k_hi);
         vec![

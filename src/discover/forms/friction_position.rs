@@ -36,6 +36,20 @@ impl Form for FrictionPosition {
     fn size_name(&self) -> &'static str {
         "a variation of friction along the groove"
     }
+    /// How much μ varies over the observed stretch, and where it is furthest from its mean.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value, with_error};
+        let peak = value(f, "peak_rel")?;
+        Some(format!(
+            "μ varies by ± {} % along the groove between z = {} and {} mm in the lab, {} % {} at z = {} mm, while sliding",
+            with_error(f, "delta_mu_rel", 1e2)?,
+            num(1e3 * value(f, "z_lo_m")?),
+            num(1e3 * value(f, "z_hi_m")?),
+            num(1e2 * peak.abs()),
+            if peak >= 0.0 { "higher" } else { "lower" },
+            num(1e3 * value(f, "z_at_peak_m")?)
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![
             p("p1_rel", 0.0, -0.9, 0.9, 1e-5),
@@ -76,6 +90,18 @@ impl Form for FrictionPosition {
                 at = z_mid_m + half_span_m * x;
             }
         }
+        // half the range of the relative variation over the stretch: the amplitude "μ varies
+        // by ± δ along the groove" that a periodic μ(z) reports as its A, so the two forms of a
+        // tie say one size; its error from both coefficients' (P1 and P2 are orthogonal over
+        // the stretch, their correlation is left out)
+        let half = half_range(p1, p2);
+        let (h1, h2) = (1e-6f64.max(f.se[0].abs()), 1e-6f64.max(f.se[1].abs()));
+        let g1 = (half_range(p1 + h1, p2) - half_range(p1 - h1, p2)) / (2.0 * h1);
+        let g2 = (half_range(p1, p2 + h2) - half_range(p1, p2 - h2)) / (2.0 * h2);
+        out.insert(
+            "delta_mu_rel".into(),
+            est(half, (g1 * f.se[0]).hypot(g2 * f.se[1])),
+        );
         out.insert("p1_rel".into(), est(p1, f.se[0]));
         out.insert("p2_rel".into(), est(p2, f.se[1]));
         out.insert("peak_rel".into(), est(peak, f64::NAN));
@@ -83,5 +109,43 @@ impl Form for FrictionPosition {
         out.insert("z_lo_m".into(), est(z_mid_m - half_span_m, 0.0));
         out.insert("z_hi_m".into(), est(z_mid_m + half_span_m, 0.0));
         out
+    }
+}
+
+/// Half the range of p₁P₁(x) + p₂P₂(x) over x in [−1, 1]: its extremes are at the ends or at
+/// the parabola's vertex x = −p₁/(3p₂).
+pub fn half_range(p1: f64, p2: f64) -> f64 {
+    let d = |x: f64| p1 * x + p2 * 0.5 * (3.0 * x * x - 1.0);
+    let mut values = vec![d(-1.0), d(1.0)];
+    if p2 != 0.0 {
+        let x = -p1 / (3.0 * p2);
+        if x.abs() < 1.0 {
+            values.push(d(x));
+        }
+    }
+    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+    0.5 * (hi - lo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::half_range;
+
+    #[test]
+    fn the_half_range_is_the_amplitude_of_a_variation_over_the_stretch() {
+        // a line: from −p1 to p1
+        assert!((half_range(0.1, 0.0) - 0.1).abs() < 1e-15);
+        // a parabola centred on the stretch: P2 runs from −1/2 to 1
+        assert!((half_range(0.0, 0.2) - 0.15).abs() < 1e-15);
+        // against a dense grid, vertex inside and outside the stretch
+        for &(p1, p2) in &[(-0.10165, -0.20634), (0.3, 0.05), (0.02, -0.4)] {
+            let d = |x: f64| p1 * x + p2 * 0.5 * (3.0 * x * x - 1.0);
+            let v: Vec<f64> = (0..=20000).map(|j| d(-1.0 + j as f64 / 10000.0)).collect();
+            let want = 0.5
+                * (v.iter().copied().fold(f64::MIN, f64::max)
+                    - v.iter().copied().fold(f64::MAX, f64::min));
+            assert!((half_range(p1, p2) - want).abs() < 1e-8, "{p1} {p2}");
+        }
     }
 }

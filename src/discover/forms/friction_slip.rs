@@ -34,6 +34,16 @@ impl Form for FrictionSlip {
     fn size_name(&self) -> &'static str {
         "a slip-speed dependence of friction"
     }
+    /// μ's change with slip speed, per 10 mm/s.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value};
+        let d = value(f, "dmu_rel_per_mps")?;
+        Some(format!(
+            "μ {} linearly with slip speed, by {} % of itself per 10 mm/s, while sliding",
+            if d >= 0.0 { "rises" } else { "falls" },
+            num(d.abs())
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("beta_rel", 0.0, -0.95, 5.0, 1e-5)]
     }

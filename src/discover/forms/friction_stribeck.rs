@@ -35,6 +35,15 @@ impl Form for FrictionStribeck {
     fn size_name(&self) -> &'static str {
         "a friction falling with slip speed"
     }
+    /// How far above the kinetic μ the static one lies, and over what slip speed it falls.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "μ falls with slip speed from a static value {} % above the kinetic one, over v_s = {} mm/s",
+            with_error(f, "delta_mu_rel", 1e2)?,
+            with_error(f, "v_s_mps", 1e3)?
+        ))
+    }
     /// δ_s from 0 (none) to 2: a static friction three times the kinetic is no metal pair's;
     /// v_s from 0.1 mm/s (slower than any slip a frame resolves) to 0.3 m/s (above every kick,
     /// where the curve is a straight line, the linear form's).

@@ -34,6 +34,17 @@ impl Form for GrooveTilt {
     fn size_name(&self) -> &'static str {
         "a groove tilt"
     }
+    /// The tilt and the constant push it gives.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, towards, value, with_error};
+        let a = -G_MPS2 * value(f, "alpha_deg")?.to_radians().sin();
+        Some(format!(
+            "the groove is tilted by {}°: a constant force of {} m/s² {}",
+            with_error(f, "alpha_deg", 1.0)?,
+            num(a.abs()),
+            towards(a)
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("alpha_deg", 0.0, -10.0, 10.0, 1e-4)]
     }

@@ -42,6 +42,17 @@ impl Form for Localized {
     fn size_name(&self) -> &'static str {
         "a localized force"
     }
+    /// The bump's size, direction, place and width.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{towards, value, with_error};
+        Some(format!(
+            "a force of {} m/s² {} localized at z = {} mm over a width of {} mm, fixed in the lab",
+            with_error(f, "amplitude_mps2", 1.0)?,
+            towards(value(f, "amplitude_mps2")?),
+            with_error(f, "centre_m", 1e3)?,
+            with_error(f, "width_m", 1e3)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let s = self;
         vec![

@@ -14,6 +14,7 @@
 //! - `friction_position.rs`: μ along the groove
 //! - `friction_periodic.rs`: μ periodic along the groove (wavelength searched)
 //! - `wavelength.rs`: What the two forms periodic in z share (their search, amplitude and phase)
+//! - `words.rs`: Numbers in a finding's sentence (`Form::in_words`)
 //! - `distortion.rs`: The camera's positions distorted across the image (a measurement)
 //! - `periodic_z.rs`: A force periodic in z, fixed in the lab (wavelength searched)
 //! - `localized.rs`: A localized force fixed in the lab (centre and width searched)
@@ -35,6 +36,7 @@
 
 mod form;
 mod wavelength;
+mod words;
 
 pub use self::form::{as_fitted, p, Entry, Fitted, Form, ParamInfo, Place, Reading, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
@@ -163,6 +165,12 @@ pub fn read(f: &Finding) -> Option<Reading> {
         })
 }
 
+/// Finding `f` in physical words, by the form that wrote it; None for a finding no form writes
+/// or a form without words.
+pub fn in_words(f: &Finding) -> Option<String> {
+    prototypes().into_iter().find(|e| e.reads(f))?.in_words(f)
+}
+
 /// What another experiment in the same groove (the collision runs) carries of discovery's
 /// accepted model, read back from its findings by their forms.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -271,6 +279,47 @@ mod tests {
             baseline: ModelScore::default(),
             extended: ModelScore::default(),
         }
+    }
+
+    /// Every form's finding is said in physical words with its numbers, by the form that wrote
+    /// it (read back from the finding); a probe, which is never a finding, has none.
+    #[test]
+    fn every_form_says_its_finding_in_words() {
+        let materials = vec!["316".to_string(), "440c".to_string()];
+        let base = Spec {
+            n_materials: 2,
+            s: 0.58,
+            k: 2.5,
+            extras: vec![],
+        };
+        for e in &every_form() {
+            let spec = base.with(e.clone());
+            let mut g = vec![0.3, 0.35, 0.08, 0.09];
+            g.extend(values(e));
+            let f = written(e, &spec, &g, &materials);
+            let words = in_words(&f);
+            if e.effect().is_none() {
+                assert_eq!(words, None, "{}: a probe is no finding", e.name());
+                continue;
+            }
+            let w = words.unwrap_or_else(|| panic!("{}: no words for its finding", e.name()));
+            assert!(
+                w.chars().any(|c| c.is_ascii_digit()) && !w.contains('—') && !w.contains("NaN"),
+                "{}: {w}",
+                e.name()
+            );
+        }
+        // the numbers are the finding's: a μ along the groove of p1 = 0.1, p2 = 0 varies by ± 10 %
+        let e: Extra = FrictionPosition {
+            z_mid_m: 0.006,
+            half_span_m: 0.005,
+        }
+        .into();
+        let spec = base.with(e.clone());
+        let f = written(&e, &spec, &[0.3, 0.35, 0.08, 0.09, 0.1, 0.0], &materials);
+        let w = in_words(&f).unwrap();
+        assert!(w.starts_with("μ varies by ± 10.0 ± 1.00 % along the groove between z = 1.00 and 11.0 mm"), "{w}");
+        assert!(w.contains("10.0 % higher at z = 11.0 mm"), "{w}");
     }
 
     /// Every form's finding reads back as that form, in its place; a force fixed in the lab reads

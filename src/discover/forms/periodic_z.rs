@@ -42,6 +42,15 @@ impl Form for PeriodicZ {
     fn size_name(&self) -> &'static str {
         "a periodic force in z"
     }
+    /// The force's amplitude and wavelength along the groove.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "a force of amplitude {} m/s² periodic along the groove with a wavelength of {} mm, fixed in the lab",
+            with_error(f, "amplitude_mps2", 1.0)?,
+            with_error(f, "wavelength_m", 1e3)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let (k_lo, k_hi) = (self.k_lo, self.k_hi);
         vec![

@@ -34,6 +34,17 @@ impl Form for PositionForce {
     fn size_name(&self) -> &'static str {
         "a periodic force in z"
     }
+    /// The force's largest value over the range it is fitted on.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value};
+        let (lo, span) = (value(f, "z_min_m")?, value(f, "span_m")?);
+        Some(format!(
+            "a force along the groove of up to {} m/s² between z = {} and {} mm, fixed in the lab",
+            num(value(f, "peak_accel_mps2")?),
+            num(1e3 * lo),
+            num(1e3 * (lo + span))
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         (1..=self.harmonics)
             .flat_map(|k| {

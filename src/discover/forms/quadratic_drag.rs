@@ -29,6 +29,17 @@ impl Form for QuadraticDrag {
     fn size_name(&self) -> &'static str {
         "a quadratic drag coefficient"
     }
+    /// The drag's part quadratic in speed, and what it adds at 5 cm/s.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value, with_error};
+        let c = value(f, "c_per_m")?;
+        Some(format!(
+            "the drag grows {} than linearly with speed: beside −v/T a part c·v|v| with c = {} /m ({} m/s² at 5 cm/s)",
+            if c >= 0.0 { "faster" } else { "slower" },
+            with_error(f, "c_per_m", 1.0)?,
+            num(c * 0.05 * 0.05)
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("c_per_m", 0.0, -1e3, 1e3, 1e-2)]
     }

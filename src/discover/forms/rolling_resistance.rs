@@ -30,6 +30,15 @@ impl Form for RollingResistance {
     fn size_name(&self) -> &'static str {
         "a rolling resistance"
     }
+    /// A constant deceleration against the motion.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "a constant force against the motion of {} m/s² (c = {} of g), while sliding and rolling",
+            with_error(f, "deceleration_mps2", 1.0)?,
+            with_error(f, "coefficient", 1.0)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("c", 0.0, 0.0, 0.5, 1e-6)]
     }

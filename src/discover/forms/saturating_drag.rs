@@ -28,6 +28,17 @@ impl Form for SaturatingDrag {
     fn size_name(&self) -> &'static str {
         "a saturating drag slope T'"
     }
+    /// The drag time's growth with speed, and the drag times at rest.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, per_material, value, with_error};
+        let tp = value(f, "tp_s_per_mps")?;
+        Some(format!(
+            "the drag saturates with speed: its time T grows from T0 = {} ms at rest by T' = {} s per m/s ({} ms more at 5 cm/s)",
+            per_material(f, "t0_s", 1e3)?,
+            with_error(f, "tp_s_per_mps", 1.0)?,
+            num(tp * 0.05 * 1e3)
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         vec![p("tp_s_per_mps", 0.0, 0.0, 1e3, 1e-3)]
     }

@@ -160,6 +160,22 @@ impl Form for Spline {
     fn size_name(&self) -> &'static str {
         "a smooth force"
     }
+    /// The map's size where two runs or more go, in its own variable.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{num, value};
+        let var = f.form.strip_prefix("spline in ")?.split(' ').next()?;
+        let (unit, scale) = match var {
+            "z" => ("mm", 1e3),
+            "v" => ("mm/s", 1e3),
+            _ => ("ms", 1e3),
+        };
+        Some(format!(
+            "a force no named form explains, smooth in {var}: up to {} m/s² (RMS {} m/s²) where two runs or more go, largest at {var} = {} {unit}",
+            num(value(f, "peak_accel_mps2")?),
+            num(value(f, "rms_accel_mps2")?),
+            num(scale * value(f, "x_at_peak")?)
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         (0..self.segments + 3)
             .map(|j| p(&format!("coef{j}_mps2"), 0.0, -20.0, 20.0, 1e-4))

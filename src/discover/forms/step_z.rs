@@ -64,6 +64,17 @@ impl Form for StepZ {
     fn size_name(&self) -> &'static str {
         "a step in the force along the groove"
     }
+    /// The force that acts beyond the step, and where the step is.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::{towards, value, with_error};
+        Some(format!(
+            "beyond z = {} mm a force of {} m/s² {} acts, its edge {} mm wide, fixed in the lab",
+            with_error(f, "z_step_m", 1e3)?,
+            with_error(f, "step_mps2", 1.0)?,
+            towards(value(f, "step_mps2")?),
+            with_error(f, "width_m", 1e3)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let s = self;
         vec![

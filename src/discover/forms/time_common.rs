@@ -49,6 +49,15 @@ impl Form for TimeCommon {
     fn size_name(&self) -> &'static str {
         "a periodic force in time locked to the kick"
     }
+    /// The vibration's amplitude and frequency, locked to the kick.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "a vibration locked to the kick: a force of amplitude {} m/s² at {} Hz, one phase for every run",
+            with_error(f, "amplitude_mps2", 1.0)?,
+            with_error(f, "frequency_hz", 1.0)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let (f_lo, f_hi) = (self.f_lo, self.f_hi);
         vec![

@@ -47,6 +47,15 @@ impl Form for TimePeriodic {
     fn size_name(&self) -> &'static str {
         "a periodic force in time"
     }
+    /// The vibration's amplitude and frequency.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::with_error;
+        Some(format!(
+            "a vibration: a force of amplitude {} m/s² at {} Hz, its phase each run's own",
+            with_error(f, "amplitude_mps2", 1.0)?,
+            with_error(f, "frequency_hz", 1.0)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         let (f_lo, f_hi) = (self.f_lo, self.f_hi);
         vec![

@@ -34,6 +34,14 @@ impl Form for VelocityFriction {
     fn size_name(&self) -> &'static str {
         "a velocity-dependent friction"
     }
+    /// The slip speed over which μ rises to its full value, per material.
+    fn in_words(&self, f: &Finding) -> Option<String> {
+        use super::words::per_material;
+        Some(format!(
+            "μ rises with slip speed to its full value over v_c = {} mm/s, while sliding",
+            per_material(f, "v_c_mps", 1e3)?
+        ))
+    }
     fn params(&self) -> Vec<ParamInfo> {
         (0..self.materials)
             .map(|m| p(&format!("ln_vc_mps_{m}"), (1e-4f64).ln(), -14.0, 0.0, 1e-3))

@@ -3,6 +3,7 @@
 
 use super::params::params_text;
 use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
+use crate::report::value::sig;
 
 /// The words a finding's place is said in, with the material of a collision finding.
 fn place_words(f: &Finding) -> String {
@@ -39,14 +40,67 @@ pub fn tied_with(f: &Finding) -> Option<&str> {
     Some(rest.split(':').next().unwrap_or(rest))
 }
 
-/// One sentence for an accepted finding.
+/// Finding `f` in physical words: by the form that wrote it, or for the findings no form
+/// writes (differences between particles, a force between the particles of a pair) from their
+/// own parameters.
+fn in_words(f: &Finding) -> Option<String> {
+    if let Some(w) = crate::discover::forms::in_words(f) {
+        return Some(w);
+    }
+    let pct = |k: &str| f.parameters.get(k).map(|e| e.value * 1e2).filter(|v| v.is_finite());
+    let per_material = |prefix: &str| -> Vec<String> {
+        f.parameters
+            .keys()
+            .filter_map(|k| {
+                let m = k.strip_prefix(prefix)?;
+                let v = pct(k)?;
+                (v > 0.0).then(|| format!("{} % ({m})", sig(v, 2)))
+            })
+            .collect()
+    };
+    match Effect::from_id(&f.effect)? {
+        Effect::ParticleDifferences => {
+            let (mu, size) = (per_material("mu_sd_rel_"), per_material("size_sd_rel_"));
+            let mut parts = Vec::new();
+            if !mu.is_empty() {
+                parts.push(format!("μ by {}", mu.join(", ")));
+            }
+            if !size.is_empty() {
+                parts.push(format!("the drag (the size) by {}", size.join(", ")));
+            }
+            (!parts.is_empty()).then(|| {
+                format!(
+                    "the particles differ from run to run beyond each run's noise, nothing missing from the equations: {} (standard deviations)",
+                    parts.join("; ")
+                )
+            })
+        }
+        Effect::ForceBetweenParticles => {
+            let a = f.parameters.get("pair_amplitude_mps2")?.value;
+            let range = f.parameters.get("pair_range_m")?.value;
+            Some(format!(
+                "the particles of a pair {} each other before they touch: {} m/s² at contact, falling over {} µm of their separation",
+                if a >= 0.0 { "push" } else { "pull" },
+                sig(a.abs(), 3),
+                sig(range * 1e6, 3)
+            ))
+        }
+        _ => None,
+    }
+}
+
+/// One sentence for an accepted finding: its place, in physical words what changed and by how
+/// much, then the form as fitted with its parameters and what held-out runs gained.
 fn sentence(f: &Finding) -> String {
-    let mut s = format!(
-        "In {}: {}, {}",
-        place_words(f),
+    let mut s = format!("In {}: ", place_words(f));
+    if let Some(words) = in_words(f) {
+        s.push_str(&format!("{words}; as fitted, "));
+    }
+    s.push_str(&format!(
+        "{}, {}",
         f.effect.replace('_', " "),
         crate::report::formula::form(&f.form)
-    );
+    ));
     let params = params_text(&f.parameters);
     if !params.is_empty() {
         s.push_str(&format!(" ({params})"));
