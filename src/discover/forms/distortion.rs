@@ -52,7 +52,7 @@ impl Form for Distortion {
     fn in_words(&self, f: &Finding) -> Option<String> {
         use super::words::{num, value};
         Some(format!(
-            "the measured positions are shifted by up to {} µm across the image, beyond a length scale and an offset: the measurement, not the motion",
+            "the measured positions are shifted by up to {} µm across the image, beyond a length scale and an offset, in the measurement and not the motion",
             num(1e6 * value(f, "peak_shift_m")?.abs())
         ))
     }

@@ -39,7 +39,7 @@ impl Form for GrooveTilt {
         use super::words::{num, towards, value, with_error};
         let a = -G_MPS2 * value(f, "alpha_deg")?.to_radians().sin();
         Some(format!(
-            "the groove is tilted by {}°: a constant force of {} m/s² {}",
+            "the groove is tilted by {}°, a constant force of {} m/s² {}",
             with_error(f, "alpha_deg", 1.0)?,
             num(a.abs()),
             towards(a)

@@ -34,7 +34,7 @@ impl Form for QuadraticDrag {
         use super::words::{num, value, with_error};
         let c = value(f, "c_per_m")?;
         Some(format!(
-            "the drag grows {} than linearly with speed: beside −v/T a part c·v|v| with c = {} /m ({} m/s² at 5 cm/s)",
+            "the drag grows {} than linearly with speed, beside −v/T a part c·v|v| with c = {} /m ({} m/s² at 5 cm/s)",
             if c >= 0.0 { "faster" } else { "slower" },
             with_error(f, "c_per_m", 1.0)?,
             num(c * 0.05 * 0.05)

@@ -33,7 +33,7 @@ impl Form for SaturatingDrag {
         use super::words::{num, per_material, value, with_error};
         let tp = value(f, "tp_s_per_mps")?;
         Some(format!(
-            "the drag saturates with speed: its time T grows from T0 = {} ms at rest by T' = {} s per m/s ({} ms more at 5 cm/s)",
+            "the drag saturates with speed, its time T growing from T0 = {} ms at rest by T' = {} s per m/s ({} ms more at 5 cm/s)",
             per_material(f, "t0_s", 1e3)?,
             with_error(f, "tp_s_per_mps", 1.0)?,
             num(tp * 0.05 * 1e3)

@@ -170,7 +170,7 @@ impl Form for Spline {
             _ => ("ms", 1e3),
         };
         Some(format!(
-            "a force no named form explains, smooth in {var}: up to {} m/s² (RMS {} m/s²) where two runs or more go, largest at {var} = {} {unit}",
+            "a force no named form explains, smooth in {var}, up to {} m/s² (RMS {} m/s²) where two runs or more go, largest at {var} = {} {unit}",
             num(value(f, "peak_accel_mps2")?),
             num(value(f, "rms_accel_mps2")?),
             num(scale * value(f, "x_at_peak")?)

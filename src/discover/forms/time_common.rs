@@ -53,7 +53,7 @@ impl Form for TimeCommon {
     fn in_words(&self, f: &Finding) -> Option<String> {
         use super::words::with_error;
         Some(format!(
-            "a vibration locked to the kick: a force of amplitude {} m/s² at {} Hz, one phase for every run",
+            "a vibration locked to the kick, a force of amplitude {} m/s² at {} Hz, one phase for every run",
             with_error(f, "amplitude_mps2", 1.0)?,
             with_error(f, "frequency_hz", 1.0)?
         ))

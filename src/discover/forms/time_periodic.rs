@@ -51,7 +51,7 @@ impl Form for TimePeriodic {
     fn in_words(&self, f: &Finding) -> Option<String> {
         use super::words::with_error;
         Some(format!(
-            "a vibration: a force of amplitude {} m/s² at {} Hz, its phase each run's own",
+            "a vibration, a force of amplitude {} m/s² at {} Hz, its phase each run's own",
             with_error(f, "amplitude_mps2", 1.0)?,
             with_error(f, "frequency_hz", 1.0)?
         ))

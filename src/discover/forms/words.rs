@@ -10,7 +10,14 @@ pub fn num(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
-    let digits = 2 - x.abs().log10().floor() as i32;
+    // the exponent after rounding to three figures (0.99996 is 1.00, not 0.9999…)
+    let rounded = format!("{x:.2e}");
+    let exp: i32 = rounded
+        .rsplit('e')
+        .next()
+        .and_then(|e| e.parse().ok())
+        .unwrap_or(0);
+    let digits = 2 - exp;
     if (-1..=5).contains(&digits) {
         format!("{:.*}", digits.max(0) as usize, x)
     } else {
@@ -70,5 +77,7 @@ mod tests {
         assert_eq!(num(-1234.0), "-1234");
         assert_eq!(num(0.000123), "1.23e-4");
         assert_eq!(num(0.0), "0");
+        assert_eq!(num(0.9999999), "1.00");
+        assert_eq!(num(1.0000000000000002), "1.00");
     }
 }

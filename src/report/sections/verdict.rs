@@ -70,7 +70,7 @@ fn in_words(f: &Finding) -> Option<String> {
             }
             (!parts.is_empty()).then(|| {
                 format!(
-                    "the particles differ from run to run beyond each run's noise, nothing missing from the equations: {} (standard deviations)",
+                    "the particles differ from run to run beyond each run's noise with nothing missing from the equations, {} (standard deviations)",
                     parts.join("; ")
                 )
             })
