@@ -79,8 +79,8 @@ fn in_words(f: &Finding) -> Option<String> {
             let a = f.parameters.get("pair_amplitude_mps2")?.value;
             let range = f.parameters.get("pair_range_m")?.value;
             Some(format!(
-                "the particles of a pair {} each other before they touch: {} m/s² at contact, falling over {} µm of their separation",
-                if a >= 0.0 { "push" } else { "pull" },
+                "a force between the particles of a pair {} before they touch, {} m/s² as they meet and falling over {} µm of their separation",
+                if a >= 0.0 { "pushes them apart" } else { "pulls them together" },
                 sig(a.abs(), 3),
                 sig(range * 1e6, 3)
             ))
