@@ -113,6 +113,12 @@ fn sentence(f: &Finding) -> String {
             after * 1e6
         ));
     }
+    // a size at a bound of its search is a limit the fit pushed against, not an estimate: the
+    // words above must not be read as one
+    let bounds = super::discovery::at_bound(&f.where_);
+    if !bounds.is_empty() {
+        s.push_str(&format!("; at a bound of its search: {}", bounds.join("; ")));
+    }
     if let Some(other) = tied_with(f) {
         s.push_str(&format!(
             "; tied with {other}: these data cannot tell the two apart, and this one is in the model"
