@@ -1,7 +1,7 @@
 //! Section 4: discovery — where the mismatch is, the candidates and their evidence, the accepted
 //! physics, before/after figures, and a comparison with the chapter's own correction (Eq. 4.8).
 
-use super::params::params_text;
+use super::params::{at_bound, params_text};
 use super::{Block, Table};
 use crate::artifacts::diagnosis::{
     CandidateRow, Diagnosis, Effect, Estimate, Evidence, Finding, Structure,
@@ -363,13 +363,6 @@ struct Probe {
     #[serde(default, with = "crate::artifacts::estimate::stderr::map")]
     parameters: BTreeMap<String, Estimate>,
     p_holm: Option<f64>,
-}
-
-/// The parameters of a finding that ended at a bound of their search, in words (`where.at_bound`).
-pub fn at_bound(w: &BTreeMap<String, Value>) -> Vec<String> {
-    w.get("at_bound")
-        .and_then(|l| Vec::<String>::deserialize(l).ok())
-        .unwrap_or_default()
 }
 
 /// Where discovery located the mismatch, in words: the worst residual bins, the residual structure,

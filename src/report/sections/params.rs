@@ -1,7 +1,9 @@
-//! A fitted term's parameters as text: `name = value ± stderr`.
+//! A fitted term's parameters as text: `name = value ± stderr`, and those that ended at a bound.
 
 use crate::artifacts::estimate::Estimate;
 use crate::report::value::sig;
+use serde::Deserialize;
+use serde_json::Value;
 use std::collections::BTreeMap;
 
 fn finite(x: f64) -> Option<f64> {
@@ -26,4 +28,11 @@ pub fn params_text(ps: &BTreeMap<String, Estimate>) -> String {
     } else {
         parts.join(", ")
     }
+}
+
+/// The parameters of a finding that ended at a bound of their search, in words (`where.at_bound`).
+pub fn at_bound(w: &BTreeMap<String, Value>) -> Vec<String> {
+    w.get("at_bound")
+        .and_then(|l| Vec::<String>::deserialize(l).ok())
+        .unwrap_or_default()
 }

@@ -26,7 +26,7 @@ pub fn accepted_findings(diag: &Diagnosis) -> Vec<String> {
         .iter()
         .filter(|f| f.accepted)
         .map(|f| {
-            let bounds = super::discovery::at_bound(&f.where_);
+            let bounds = super::params::at_bound(&f.where_);
             let tie = super::verdict::tied_with(f).map_or(String::new(), |other| {
                 format!(
                     "; but these data cannot tell {} from {other}, which predicts held-out runs as well",

@@ -115,7 +115,7 @@ fn sentence(f: &Finding) -> String {
     }
     // a size at a bound of its search is a limit the fit pushed against, not an estimate: the
     // words above must not be read as one
-    let bounds = super::discovery::at_bound(&f.where_);
+    let bounds = super::params::at_bound(&f.where_);
     if !bounds.is_empty() {
         s.push_str(&format!("; at a bound of its search: {}", bounds.join("; ")));
     }

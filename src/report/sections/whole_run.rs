@@ -39,7 +39,7 @@ pub fn speed_dependent_friction(d: &ReportData, material: &str) -> Option<String
         .iter()
         .find(|f| f.accepted && f.effect == "velocity_dependent_friction")?;
     let floor = format!("v_c of {material} at the search's floor");
-    if super::discovery::at_bound(&f.where_)
+    if super::params::at_bound(&f.where_)
         .iter()
         .any(|n| n.starts_with(&floor))
     {
