@@ -158,7 +158,9 @@ fn a_friction_along_the_groove_is_named_a_friction() {
         // μ's gradient and curvature reports half its range over the stretch under that name,
         // which understates a texture of a wavelength or less (0.81 and 0.72 of the truth here
         // in locked and outlier noise): it sizes the quadratic, not the wave
-        let wave = s.iter().any(|a| a.contains("periodic mu(z) along the groove"));
+        let wave = s
+            .iter()
+            .any(|a| a.contains("periodic mu(z) along the groove"));
         if wave && worst.is_finite() {
             periodic += 1;
             if worst < 0.15 {

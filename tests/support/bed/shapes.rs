@@ -456,7 +456,10 @@ impl Effect {
             }
             "mu_slip_falling" => (s(&["slip speed", "mu(u)"]), vec![v("delta_mu_rel", x)]),
             "mu_position" => (s(&["in z", "mu(z"]), vec![v("delta_mu_rel", x)]),
-            "mu_patch" => (s(&["in z", "mu(z", "patch"]), vec![v("delta_mu_abs", p[2] * x)]),
+            "mu_patch" => (
+                s(&["in z", "mu(z", "patch"]),
+                vec![v("delta_mu_abs", p[2] * x)],
+            ),
             "mu_direction" => (s(&["direction"]), vec![v("delta_mu_rel", p[0] * x)]),
             "scale" => (s(&["scale"]), vec![v("scale_error", p[0] * x)]),
             "distortion" => (
