@@ -92,8 +92,8 @@ impl Form for FrictionPosition {
         }
         // half the range of the relative variation over the stretch: the amplitude "μ varies
         // by ± δ along the groove" that a periodic μ(z) reports as its A, so the two forms of a
-        // tie say one size; its error from both coefficients' (P1 and P2 are orthogonal over
-        // the stretch, their correlation is left out)
+        // tie say one size; its error from both coefficients' errors alone (`Fitted` holds no
+        // covariance, so their correlation is left out)
         let half = half_range(p1, p2);
         let (h1, h2) = (1e-6f64.max(f.se[0].abs()), 1e-6f64.max(f.se[1].abs()));
         let g1 = (half_range(p1 + h1, p2) - half_range(p1 - h1, p2)) / (2.0 * h1);
@@ -114,7 +114,7 @@ impl Form for FrictionPosition {
 
 /// Half the range of p₁P₁(x) + p₂P₂(x) over x in [−1, 1]: its extremes are at the ends or at
 /// the parabola's vertex x = −p₁/(3p₂).
-pub fn half_range(p1: f64, p2: f64) -> f64 {
+fn half_range(p1: f64, p2: f64) -> f64 {
     let d = |x: f64| p1 * x + p2 * 0.5 * (3.0 * x * x - 1.0);
     let mut values = vec![d(-1.0), d(1.0)];
     if p2 != 0.0 {

@@ -36,7 +36,7 @@
 
 mod form;
 mod wavelength;
-mod words;
+pub mod words;
 
 pub use self::form::{as_fitted, p, Entry, Fitted, Form, ParamInfo, Place, Reading, Search};
 use crate::artifacts::diagnosis::{Estimate, Finding};
@@ -319,7 +319,12 @@ mod tests {
         let spec = base.with(e.clone());
         let f = written(&e, &spec, &[0.3, 0.35, 0.08, 0.09, 0.1, 0.02], &materials);
         let w = in_words(&f).unwrap();
-        assert!(w.starts_with("μ varies by ± 10.0 ± 1.00 % along the groove between z = 1.00 and 11.0 mm"), "{w}");
+        assert!(
+            w.starts_with(
+                "μ varies by ± 10.0 ± 1.00 % along the groove between z = 1.00 and 11.0 mm"
+            ),
+            "{w}"
+        );
         assert!(w.contains("12.0 % higher at z = 11.0 mm"), "{w}");
     }
 

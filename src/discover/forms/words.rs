@@ -38,7 +38,10 @@ pub fn with_error(f: &Finding, name: &str, scale: f64) -> Option<String> {
 
 /// The value of parameter `name` of finding `f`.
 pub fn value(f: &Finding, name: &str) -> Option<f64> {
-    f.parameters.get(name).map(|e| e.value).filter(|v| v.is_finite())
+    f.parameters
+        .get(name)
+        .map(|e| e.value)
+        .filter(|v| v.is_finite())
 }
 
 /// Every material's value of a parameter named `<prefix>_<material>`, in units of `scale`:

@@ -3,7 +3,7 @@
 
 use super::params::params_text;
 use crate::artifacts::diagnosis::{Diagnosis, Effect, Finding};
-use crate::report::value::sig;
+use crate::discover::forms::words::{num, per_material};
 
 /// The words a finding's place is said in, with the material of a collision finding.
 fn place_words(f: &Finding) -> String {
@@ -47,30 +47,26 @@ fn in_words(f: &Finding) -> Option<String> {
     if let Some(w) = crate::discover::forms::in_words(f) {
         return Some(w);
     }
-    let pct = |k: &str| f.parameters.get(k).map(|e| e.value * 1e2).filter(|v| v.is_finite());
-    let per_material = |prefix: &str| -> Vec<String> {
-        f.parameters
-            .keys()
-            .filter_map(|k| {
-                let m = k.strip_prefix(prefix)?;
-                let v = pct(k)?;
-                (v > 0.0).then(|| format!("{} % ({m})", sig(v, 2)))
-            })
-            .collect()
-    };
     match Effect::from_id(&f.effect)? {
         Effect::ParticleDifferences => {
-            let (mu, size) = (per_material("mu_sd_rel_"), per_material("size_sd_rel_"));
+            // a spread of each material's particles, in % of its value (0 where none was seen)
+            let spread = |prefix: &str| {
+                let any = f
+                    .parameters
+                    .iter()
+                    .any(|(k, e)| k.starts_with(prefix) && e.value > 0.0);
+                any.then(|| per_material(f, prefix, 1e2)).flatten()
+            };
             let mut parts = Vec::new();
-            if !mu.is_empty() {
-                parts.push(format!("μ by {}", mu.join(", ")));
+            if let Some(mu) = spread("mu_sd_rel") {
+                parts.push(format!("μ: {mu}"));
             }
-            if !size.is_empty() {
-                parts.push(format!("the drag (the size) by {}", size.join(", ")));
+            if let Some(size) = spread("size_sd_rel") {
+                parts.push(format!("the drag (the size): {size}"));
             }
             (!parts.is_empty()).then(|| {
                 format!(
-                    "the particles differ from run to run beyond each run's noise with nothing missing from the equations, {} (standard deviations)",
+                    "the particles differ from run to run beyond each run's noise, and each run's own μ and T leave it at its noise; standard deviations in % of each material's value, {}",
                     parts.join("; ")
                 )
             })
@@ -81,8 +77,8 @@ fn in_words(f: &Finding) -> Option<String> {
             Some(format!(
                 "a force between the particles of a pair {} before they touch, {} m/s² as they meet and falling over {} µm of their separation",
                 if a >= 0.0 { "pushes them apart" } else { "pulls them together" },
-                sig(a.abs(), 3),
-                sig(range * 1e6, 3)
+                num(a.abs()),
+                num(range * 1e6)
             ))
         }
         _ => None,
@@ -117,7 +113,10 @@ fn sentence(f: &Finding) -> String {
     // words above must not be read as one
     let bounds = super::params::at_bound(&f.where_);
     if !bounds.is_empty() {
-        s.push_str(&format!("; at a bound of its search: {}", bounds.join("; ")));
+        s.push_str(&format!(
+            "; at a bound of its search: {}",
+            bounds.join("; ")
+        ));
     }
     if let Some(other) = tied_with(f) {
         s.push_str(&format!(
@@ -152,4 +151,62 @@ pub fn verdict(diag: &Diagnosis) -> Option<String> {
         },
         lines.join(" ")
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sentence;
+    use crate::artifacts::diagnosis::{Estimate, Evidence, Finding, ModelScore};
+    use std::collections::BTreeMap;
+
+    fn finding(effect: &str, parameters: &[(&str, f64)]) -> Finding {
+        Finding {
+            effect: effect.into(),
+            accepted: true,
+            form: String::new(),
+            parameters: parameters
+                .iter()
+                .map(|(k, v)| (k.to_string(), Estimate::new(*v, f64::NAN)))
+                .collect(),
+            evidence: Evidence::default(),
+            where_: BTreeMap::new(),
+            baseline: ModelScore::default(),
+            extended: ModelScore::default(),
+        }
+    }
+
+    /// The findings no form writes are said from their own parameters: a spread per material in
+    /// %, none where none was seen; a pair force's sign, size and range; a size at a bound says so.
+    #[test]
+    fn particles_and_pair_forces_are_said_in_words() {
+        let p = finding(
+            "particle_differences",
+            &[
+                ("mu_sd_rel_316", 0.0203),
+                ("mu_sd_rel_440c", 0.0179),
+                ("size_sd_rel_316", 0.0),
+                ("size_sd_rel_440c", 0.0),
+            ],
+        );
+        let s = sentence(&p);
+        assert!(
+            s.contains("of each material's value, μ: 2.03 (316), 1.79 (440c)"),
+            "{s}"
+        );
+        assert!(!s.contains("the drag (the size)"), "{s}");
+        let mut q = finding(
+            "force_between_particles",
+            &[("pair_amplitude_mps2", -0.2), ("pair_range_m", 8.7e-5)],
+        );
+        q.where_.insert(
+            "at_bound".into(),
+            serde_json::json!(["pair_range_m = 8.7e-5 at its lower bound"]),
+        );
+        let s = sentence(&q);
+        assert!(s.contains("pulls them together before they touch, 0.200 m/s² as they meet and falling over 87.0 µm"), "{s}");
+        assert!(
+            s.ends_with("; at a bound of its search: pair_range_m = 8.7e-5 at its lower bound."),
+            "{s}"
+        );
+    }
 }
